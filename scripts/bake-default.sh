@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# The main job: set up, build, and bake the built-in default sky on the GPU (lavapipe when there is
+# no GPU), printing the coefficients and writing probe.json.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/build.sh
+./build/shprobe bake -o probe.json

@@ -1,0 +1,46 @@
+// Constants and push-constant blocks of the compute modules, shared by C++ and GLSL.
+// Layouts are std430 (push constants) and are pinned by static_asserts in C++.
+#ifndef SHPROBE_GPU_INTERFACE_H
+#define SHPROBE_GPU_INTERFACE_H
+#include "shared.h"
+
+// Highest SH order (number of bands) the modules accept: order 8 is l <= 7, 64 coefficients.
+#define SHPROBE_MAX_ORDER 8
+#define SHPROBE_MAX_COEFFICIENTS (SHPROBE_MAX_ORDER * SHPROBE_MAX_ORDER)
+
+// Specialization constant ids, the same in every module that uses them.
+#define SHPROBE_SPEC_LOCAL_SIZE 0 // workgroup width (x); 1D workgroups
+#define SHPROBE_SPEC_ORDER 1      // SH order 1..SHPROBE_MAX_ORDER
+
+SHPROBE_BEGIN
+
+// project.comp: one dispatch projects texels [firstTexel, firstTexel + texelCount) of a cube map
+// whose texels are stored face after face (Vulkan layer order), rows top to bottom, RGBA32F.
+// The bound input range starts at texel firstTexel. Workgroup g writes its partial sums to
+// partial slot partialOffset + g.
+struct ProjectParams {
+    uint faceSize;
+    uint firstTexel;
+    uint texelCount;
+    uint partialOffset;
+};
+
+// reduce.comp: sums partialCount partial slots into one coefficient set. One workgroup.
+struct ReduceParams {
+    uint partialCount;
+};
+
+// convolve.comp: multiplies coefficient i of band l by bandScale[l] (A_l times an optional window).
+struct ConvolveParams {
+    vec4 bandScale[SHPROBE_MAX_ORDER / 4];
+};
+
+SHPROBE_END
+
+#ifdef __cplusplus
+static_assert(sizeof(shprobe::gpu::ProjectParams) == 16);
+static_assert(sizeof(shprobe::gpu::ReduceParams) == 4);
+static_assert(sizeof(shprobe::gpu::ConvolveParams) == 32);
+#endif
+
+#endif

@@ -1,0 +1,86 @@
+// Cube-map texel geometry, shared by C++ and GLSL. Conventions: README.md, "Conventions", and
+// the Vulkan specification, "Cube Map Face Selection". Layer order and face orientation:
+//
+//              +----+
+//              | +Y |          face 0 +X: ( 1, -b, -a)   face 1 -X: (-1, -b,  a)
+//         +----+----+----+----+  face 2 +Y: ( a,  1,  b)   face 3 -Y: ( a, -1, -b)
+//         | -X | +Z | +X | -Z |  face 4 +Z: ( a, -b,  1)   face 5 -Z: (-a, -b, -1)
+//         +----+----+----+----+
+//              | -Y |          a = 2(i + 0.5)/N - 1 (column), b = 2(j + 0.5)/N - 1 (row, top = 0)
+//              +----+
+#ifndef SHPROBE_TEXEL_GEOMETRY_H
+#define SHPROBE_TEXEL_GEOMETRY_H
+#include "shared.h"
+
+SHPROBE_BEGIN
+
+// Face-local coordinate of the center of texel i (or row j) on an N-wide face, in (-1, 1).
+SHPROBE_FN float texelCenterCoord(uint i, uint faceSize) {
+    return 2.0f * (float(i) + 0.5f) / float(faceSize) - 1.0f;
+}
+
+// Unnormalized direction through face-local point (a, b) of a face.
+SHPROBE_FN vec3 faceDirection(uint face, float a, float b) {
+    switch (face) {
+    case 0u: return vec3(1.0f, -b, -a);
+    case 1u: return vec3(-1.0f, -b, a);
+    case 2u: return vec3(a, 1.0f, b);
+    case 3u: return vec3(a, -1.0f, -b);
+    case 4u: return vec3(a, -b, 1.0f);
+    default: return vec3(-a, -b, -1.0f);
+    }
+}
+
+// atan(t) for 0 <= t <= 0.6 to about an ulp, from arithmetic and sqrt only. GLSL's atan is only
+// required to be within 4096 ulps (Vulkan spec, "Precision of SPIR-V Instructions"), and lavapipe's
+// is 2e-5 relative off, too coarse for texel weights. One half-angle step,
+// atan(t) = 2 atan(t / (1 + sqrt(1 + t^2))), brings t below tan(pi/12) = 0.268, where the odd
+// Taylor series to t^17 is exact in fp32 (the first omitted term is below 1e-10 relative).
+SHPROBE_FN float preciseAtan(float t) {
+    float x = t / (1.0f + sqrt(1.0f + t * t));
+    float x2 = x * x;
+    float series = 1.0f / 17.0f;
+    series = 1.0f / 15.0f - x2 * series;
+    series = 1.0f / 13.0f - x2 * series;
+    series = 1.0f / 11.0f - x2 * series;
+    series = 1.0f / 9.0f - x2 * series;
+    series = 1.0f / 7.0f - x2 * series;
+    series = 1.0f / 5.0f - x2 * series;
+    series = 1.0f / 3.0f - x2 * series;
+    series = 1.0f - x2 * series;
+    return 2.0f * x * series;
+}
+
+// Solid angle of the spherical triangle spanned by p0, p1, p2 (not necessarily unit), given
+// their triple product, for triangles within a cube face (solid angle at most pi/3). Van Oosterom &
+// Strackee (1983):
+//   tan(omega / 2) = |p0.(p1 x p2)| / (|p0||p1||p2| + (p0.p1)|p2| + (p0.p2)|p1| + (p1.p2)|p0|).
+SHPROBE_FN float triangleSolidAngle(vec3 p0, vec3 p1, vec3 p2, float tripleProduct) {
+    float l0 = length(p0);
+    float l1 = length(p1);
+    float l2 = length(p2);
+    float denominator = l0 * l1 * l2 + dot(p0, p1) * l2 + dot(p0, p2) * l1 + dot(p1, p2) * l0;
+    return 2.0f * preciseAtan(abs(tripleProduct) / denominator);
+}
+
+// Exact solid angle of texel (i, j) of an N x N face, accurate in fp32 at every face size.
+// The four-atan2 form of CONVENTIONS.md cancels catastrophically in fp32 (terms near 0.5,
+// result near 4/N^2). Here the texel, with corners (a, b, 1) on the plane z = 1, is split into two
+// triangles whose triple products both equal its area (2/N)^2, taken from N itself rather than from
+// differences of rounded corner coordinates; every term of the denominator is positive and only
+// mildly sensitive to the corners' rounding. No cancellation anywhere: a few ulps of error.
+SHPROBE_FN float texelSolidAngle(uint i, uint j, uint faceSize) {
+    float h = 1.0f / float(faceSize); // half the texel's width in face coordinates
+    float a = texelCenterCoord(i, faceSize);
+    float b = texelCenterCoord(j, faceSize);
+    vec3 p00 = vec3(a - h, b - h, 1.0f);
+    vec3 p10 = vec3(a + h, b - h, 1.0f);
+    vec3 p11 = vec3(a + h, b + h, 1.0f);
+    vec3 p01 = vec3(a - h, b + h, 1.0f);
+    float area = 4.0f * h * h;
+    return triangleSolidAngle(p00, p10, p11, area) + triangleSolidAngle(p00, p11, p01, area);
+}
+
+SHPROBE_END
+
+#endif

@@ -1,0 +1,167 @@
+// `shprobe bake`: environment in, SH radiance or irradiance coefficients out (JSON), on the GPU
+// or with the double-precision CPU reference.
+#include "app/commands.h"
+#include "gpu/projector.h"
+#include "image/environment.h"
+#include "io/atomic_file.h"
+#include "io/probe_file.h"
+#include "sh/basis.h"
+#include "sh/error.h"
+#include "sh/irradiance.h"
+#include "sh/projection.h"
+#include "vk/context.h"
+
+#include <chrono>
+#include <cstdio>
+
+namespace shprobe {
+
+namespace {
+
+constexpr int kDefaultSkyFaceSize = 256;
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+struct BakeResult {
+    ShCoefficients radiance;
+    ShCoefficients irradiance;
+    std::string device; // "cpu reference" or the GPU's name
+    double deviceMilliseconds = 0.0;
+};
+
+Environment loadInput(const BakeOptions& options) {
+    if (!options.input.empty()) {
+        LoadOptions load;
+        load.layout = parseLayout(options.layout);
+        load.faceSize = options.faceSize;
+        load.nonFinite = options.sanitize ? NonFinitePolicy::Replace : NonFinitePolicy::Refuse;
+        return loadEnvironment(options.input, load);
+    }
+    Environment sky;
+    int faceSize = options.faceSize > 0 ? options.faceSize : kDefaultSkyFaceSize;
+    sky.cubemap = makeDefaultSky(faceSize);
+    sky.description = "built-in sky";
+    return sky;
+}
+
+BakeResult bakeOnGpu(const BakeOptions& options, const Cubemap& cubemap) {
+    ContextOptions contextOptions;
+    contextOptions.device = options.device;
+    contextOptions.validation = options.validation;
+    Context context = createContext(contextOptions);
+    BakeResult result;
+    try {
+        Projector projector =
+            createProjector(context, {options.order, options.workgroupSize, options.texelsPerInvocation});
+        try {
+            GpuBake bake = bakeCubemap(context, projector, cubemap);
+            result = {bake.radiance, bake.irradiance, context.info.name, bake.deviceMilliseconds};
+        } catch (...) {
+            destroyProjector(context, projector);
+            throw;
+        }
+        destroyProjector(context, projector);
+    } catch (...) {
+        destroyContext(context);
+        throw;
+    }
+    uint32_t validationMessages = context.validationMessages();
+    destroyContext(context);
+    if (validationMessages > 0)
+        throw Error(ErrorKind::Device, std::to_string(validationMessages) + " Vulkan validation messages (above)");
+    return result;
+}
+
+BakeResult bakeOnCpu(const BakeOptions& options, const Cubemap& cubemap) {
+    BakeResult result;
+    result.radiance = projectCubemap(cubemap, options.order);
+    result.irradiance = convolveIrradiance(result.radiance);
+    result.device = "cpu reference (double)";
+    return result;
+}
+
+void printCoefficients(const ShCoefficients& coefficients) {
+    std::printf("%s coefficients (r g b):\n", quantityName(coefficients.quantity));
+    for (int i = 0; i < int(coefficients.rgb.size()); ++i) {
+        int l = shBand(i);
+        const glm::dvec3& c = coefficients.rgb[i];
+        std::printf("  l=%d m=%+d  %14.6f %14.6f %14.6f\n", l, i - l * (l + 1), c.r, c.g, c.b);
+    }
+}
+
+void printSummary(const BakeOptions& options, const Environment& environment, const BakeResult& result,
+                  double loadMs, double bakeMs) {
+    int n = environment.cubemap.faceSize;
+    std::printf("shprobe bake: %s -> %s\n", environment.description.c_str(), options.output.c_str());
+    std::printf("  backend  %s: %s\n", options.backend.c_str(), result.device.c_str());
+    std::printf("  input    6 x %d x %d texels, order %d (%d coefficients)\n", n, n, options.order,
+                coefficientCount(options.order));
+    if (environment.replacedTexels > 0)
+        std::printf("  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
+    std::printf("  time     load %.1f ms, bake %.1f ms", loadMs, bakeMs);
+    if (result.deviceMilliseconds > 0.0) std::printf(" (GPU %.1f ms)", result.deviceMilliseconds);
+    std::printf("\n");
+}
+
+} // namespace
+
+void addBakeCommand(CLI::App& app, BakeOptions& options) {
+    CLI::App* command = app.add_subcommand("bake", "Project an environment onto SH and write the coefficients");
+    command->add_option("input", options.input,
+                        "Environment: an equirect (2:1) or cross (4:3, 3:4) image, a folder holding px nx py ny "
+                        "pz nz images, or a pattern with {face}; default: the built-in sky");
+    command->add_option("-o,--output", options.output, "Coefficient file (JSON)")->capture_default_str();
+    command->add_option("--order", options.order, "SH order = number of bands (3: 9 coefficients)")
+        ->check(CLI::Range(1, kMaxOrder))
+        ->capture_default_str();
+    command->add_option("--layout", options.layout, "Input layout")
+        ->check(CLI::IsMember({"auto", "equirect", "hcross", "vcross", "faces"}))
+        ->capture_default_str();
+    command->add_option("--face-size", options.faceSize, "Cube-map face size (default: from the input)")
+        ->check(CLI::Range(1, kMaxGpuFaceSize));
+    command->add_option("--backend", options.backend, "gpu (Vulkan compute) or cpu (double reference)")
+        ->check(CLI::IsMember({"gpu", "cpu"}))
+        ->capture_default_str();
+    command->add_flag("--irradiance", options.irradiance, "Write irradiance E_lm = A_l L_lm instead of radiance");
+    command->add_flag("--sanitize", options.sanitize, "Replace NaN and infinite texels with 0 instead of failing");
+    command->add_option("--device", options.device, "Vulkan device index or name part (see `shprobe info`)");
+    command->add_flag("--validation", options.validation, "Enable the Khronos validation layer; fail on messages");
+    command->add_option("--workgroup-size", options.workgroupSize, "GPU projection workgroup width")
+        ->check(CLI::Range(1, 1024))
+        ->capture_default_str();
+    command->add_option("--texels-per-invocation", options.texelsPerInvocation,
+                        "GPU projection texels per invocation (sets the workgroup count)")
+        ->check(CLI::Range(1, 1 << 20))
+        ->capture_default_str();
+    command->add_flag("-q,--quiet", options.quiet, "Print the summary only, not the coefficients");
+}
+
+void runBake(const BakeOptions& options) {
+    checkOutputPath(options.output); // before any work: a failed write must not waste a bake
+
+    Clock::time_point start = Clock::now();
+    Environment environment = loadInput(options);
+    double loadMs = millisecondsSince(start);
+
+    start = Clock::now();
+    BakeResult result = options.backend == "gpu" ? bakeOnGpu(options, environment.cubemap)
+                                                 : bakeOnCpu(options, environment.cubemap);
+    double bakeMs = millisecondsSince(start);
+
+    const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
+    ProbeMetadata metadata;
+    metadata.source = environment.description;
+    metadata.faceSize = environment.cubemap.faceSize;
+    metadata.backend = options.backend;
+    metadata.device = result.device;
+    writeProbeFile(options.output, written, metadata);
+
+    printSummary(options, environment, result, loadMs, bakeMs);
+    if (!options.quiet) printCoefficients(written);
+}
+
+} // namespace shprobe

@@ -1,0 +1,51 @@
+// shprobe: bakes HDR environments into spherical-harmonics light probes on the GPU.
+#include "app/commands.h"
+#include "sh/error.h"
+
+#include <cstdio>
+#include <exception>
+
+namespace {
+
+// Exit codes: 0 success, 2 bad input or usage, 3 output not written, 4 Vulkan device problem.
+int exitCode(shprobe::ErrorKind kind) {
+    switch (kind) {
+    case shprobe::ErrorKind::Input: return 2;
+    case shprobe::ErrorKind::Output: return 3;
+    case shprobe::ErrorKind::Device: return 4;
+    }
+    return 1;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"shprobe: bake HDR environments into spherical-harmonics light probes with Vulkan"};
+    app.require_subcommand(1);
+    shprobe::BakeOptions bake;
+    shprobe::InfoOptions info;
+    shprobe::addBakeCommand(app, bake);
+    shprobe::addInfoCommand(app, info);
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        int code = app.exit(e);
+        return code == 0 ? 0 : 2;
+    }
+
+    try {
+        if (app.got_subcommand("bake")) shprobe::runBake(bake);
+        if (app.got_subcommand("info")) shprobe::runInfo(info);
+    } catch (const shprobe::Error& e) {
+        std::fprintf(stderr, "shprobe: error: %s\n", e.what());
+        return exitCode(e.kind());
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "shprobe: error: out of memory\n");
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "shprobe: internal error: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}

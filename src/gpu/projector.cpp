@@ -1,0 +1,212 @@
+#include "gpu/projector.h"
+
+#include "gpu_interface.h"
+#include "sh/basis.h"
+#include "sh/error.h"
+#include "sh/irradiance.h"
+#include "shprobe/shprobe_spirv.h"
+#include "vk/check.h"
+#include "vk/resources.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace shprobe {
+
+namespace {
+
+constexpr VkDeviceSize kTexelBytes = sizeof(glm::vec4);
+constexpr VkDeviceSize kCoefficientBytes = sizeof(glm::vec4); // rgb + padding, std430 vec4
+
+VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
+    return (value + alignment - 1) / alignment * alignment;
+}
+
+// One projection dispatch: a run of texels small enough for one storage-buffer binding.
+struct Chunk {
+    uint32_t firstTexel;
+    uint32_t texelCount;
+    uint32_t groupCount;
+    uint32_t partialOffset;
+};
+
+std::vector<Chunk> planChunks(const DeviceInfo& device, const ProjectorOptions& options, uint32_t texelCount) {
+    // Chunk starts must meet the storage-buffer offset alignment; whole multiples of 1024 texels do
+    // for every alignment Vulkan allows (at most 256 bytes).
+    VkDeviceSize maxTexels = device.limits.maxStorageBufferRange / kTexelBytes / 1024 * 1024;
+    uint32_t texelsPerGroup = options.workgroupSize * options.texelsPerInvocation;
+    std::vector<Chunk> chunks;
+    uint32_t partials = 0;
+    for (uint32_t first = 0; first < texelCount;) {
+        uint32_t count = uint32_t(std::min<VkDeviceSize>(texelCount - first, maxTexels));
+        uint32_t groups = std::clamp((count + texelsPerGroup - 1) / texelsPerGroup, 1u,
+                                     device.limits.maxComputeWorkGroupCount[0]);
+        chunks.push_back({first, count, groups, partials});
+        partials += groups;
+        first += count;
+    }
+    return chunks;
+}
+
+gpu::ConvolveParams irradianceBandScales(int order) {
+    gpu::ConvolveParams params{};
+    for (int l = 0; l < order; ++l) params.bandScale[l / 4][l % 4] = float(irradianceBandFactor(l));
+    return params;
+}
+
+ShCoefficients readCoefficients(const Buffer& results, VkDeviceSize offset, int order, Quantity quantity) {
+    ShCoefficients coefficients = makeCoefficients(order, quantity);
+    auto* values = reinterpret_cast<const glm::vec4*>(static_cast<const char*>(results.mapped) + offset);
+    for (size_t i = 0; i < coefficients.rgb.size(); ++i) coefficients.rgb[i] = glm::dvec3(glm::vec3(values[i]));
+    return coefficients;
+}
+
+// Everything one bake allocates, destroyed in one place.
+struct BakeResources {
+    Buffer texels;
+    Buffer partials;
+    Buffer results; // radiance at 0, irradiance at irradianceOffset; host-visible
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VkQueryPool timestamps = VK_NULL_HANDLE;
+};
+
+void destroyBakeResources(const Context& context, BakeResources& resources) {
+    if (resources.timestamps) vkDestroyQueryPool(context.device, resources.timestamps, nullptr);
+    if (resources.pool) vkDestroyDescriptorPool(context.device, resources.pool, nullptr);
+    destroyBuffer(context, resources.results);
+    destroyBuffer(context, resources.partials);
+    destroyBuffer(context, resources.texels);
+}
+
+void checkCubemap(const Cubemap& cubemap) {
+    if (cubemap.faceSize < 1 || cubemap.faceSize > kMaxGpuFaceSize)
+        throw Error(ErrorKind::Input, "GPU bake: face size " + std::to_string(cubemap.faceSize) +
+                                          " is outside 1.." + std::to_string(kMaxGpuFaceSize));
+    if (cubemap.texels.size() != size_t(kFaceCount) * cubemap.faceSize * cubemap.faceSize)
+        throw Error(ErrorKind::Input, "GPU bake: the cube map holds " + std::to_string(cubemap.texels.size()) +
+                                          " texels, not 6 x " + std::to_string(cubemap.faceSize) + "^2");
+}
+
+VkQueryPool createTimestampPool(const Context& context) {
+    if (!context.info.timestamps) return VK_NULL_HANDLE;
+    VkQueryPoolCreateInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO;
+    info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    info.queryCount = 2;
+    VkQueryPool pool = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateQueryPool(context.device, &info, nullptr, &pool));
+    return pool;
+}
+
+double readDeviceMilliseconds(const Context& context, VkQueryPool pool) {
+    if (!pool) return 0.0;
+    uint64_t ticks[2] = {};
+    VK_CHECK(vkGetQueryPoolResults(context.device, pool, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    return double(ticks[1] - ticks[0]) * context.info.timestampPeriod * 1e-6;
+}
+
+} // namespace
+
+Projector createProjector(const Context& context, const ProjectorOptions& options) {
+    if (options.order < 1 || options.order > kMaxOrder)
+        throw Error(ErrorKind::Input, "order " + std::to_string(options.order) + " is outside 1.." +
+                                          std::to_string(kMaxOrder));
+    if (options.texelsPerInvocation < 1)
+        throw Error(ErrorKind::Input, "texels per invocation must be at least 1");
+    Projector projector;
+    projector.options = options;
+    uint32_t order = uint32_t(options.order);
+    try {
+        projector.project = createComputeProgram(
+            context, {"project.comp", spirv::project_comp, 2, sizeof(gpu::ProjectParams), options.workgroupSize, order});
+        // The reduction and convolution handle one value per coefficient: a small workgroup is enough.
+        projector.reduce = createComputeProgram(
+            context, {"reduce.comp", spirv::reduce_comp, 2, sizeof(gpu::ReduceParams), 64, order});
+        projector.convolve = createComputeProgram(
+            context, {"convolve.comp", spirv::convolve_comp, 2, sizeof(gpu::ConvolveParams), 64, order});
+    } catch (...) {
+        destroyProjector(context, projector);
+        throw;
+    }
+    return projector;
+}
+
+void destroyProjector(const Context& context, Projector& projector) {
+    destroyComputeProgram(context, projector.convolve);
+    destroyComputeProgram(context, projector.reduce);
+    destroyComputeProgram(context, projector.project);
+}
+
+GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap) {
+    checkCubemap(cubemap);
+    const int order = projector.options.order;
+    const VkDeviceSize coefficientBytes = VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
+    const VkDeviceSize irradianceOffset =
+        alignUp(coefficientBytes, context.info.limits.minStorageBufferOffsetAlignment);
+    const uint32_t texelCount = uint32_t(cubemap.texels.size());
+    const std::vector<Chunk> chunks = planChunks(context.info, projector.options, texelCount);
+    const uint32_t partialSlots = chunks.back().partialOffset + chunks.back().groupCount;
+
+    BakeResources resources;
+    GpuBake bake;
+    try {
+        const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+        resources.texels = createBuffer(context, texelCount * kTexelBytes, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                        MemoryUse::Device, "input texels");
+        resources.partials =
+            createBuffer(context, partialSlots * coefficientBytes, storage, MemoryUse::Device, "partial sums");
+        resources.results = createBuffer(context, irradianceOffset + coefficientBytes, storage, MemoryUse::Readback,
+                                         "coefficients");
+        resources.pool = createDescriptorPool(context, uint32_t(chunks.size()) + 2, 2 * (uint32_t(chunks.size()) + 2));
+        resources.timestamps = createTimestampPool(context);
+        uploadBuffer(context, resources.texels, cubemap.texels.data(), texelCount * kTexelBytes);
+
+        std::vector<VkDescriptorSet> chunkSets;
+        for (const Chunk& chunk : chunks) {
+            BufferRange ranges[] = {{&resources.texels, chunk.firstTexel * kTexelBytes, chunk.texelCount * kTexelBytes},
+                                    {&resources.partials, 0, VK_WHOLE_SIZE}};
+            chunkSets.push_back(createDescriptorSet(context, resources.pool, projector.project, ranges));
+        }
+        BufferRange reduceRanges[] = {{&resources.partials, 0, VK_WHOLE_SIZE},
+                                      {&resources.results, 0, coefficientBytes}};
+        VkDescriptorSet reduceSet = createDescriptorSet(context, resources.pool, projector.reduce, reduceRanges);
+        BufferRange convolveRanges[] = {{&resources.results, 0, coefficientBytes},
+                                        {&resources.results, irradianceOffset, coefficientBytes}};
+        VkDescriptorSet convolveSet = createDescriptorSet(context, resources.pool, projector.convolve, convolveRanges);
+
+        submitAndWait(context, [&](VkCommandBuffer commands) {
+            if (resources.timestamps) {
+                vkCmdResetQueryPool(commands, resources.timestamps, 0, 2);
+                vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, resources.timestamps, 0);
+            }
+            for (size_t i = 0; i < chunks.size(); ++i) {
+                const Chunk& chunk = chunks[i];
+                gpu::ProjectParams params{uint32_t(cubemap.faceSize), chunk.firstTexel, chunk.texelCount,
+                                          chunk.partialOffset};
+                dispatch(commands, projector.project, chunkSets[i], params, chunk.groupCount);
+            }
+            computeWriteBarrier(commands);
+            dispatch(commands, projector.reduce, reduceSet, gpu::ReduceParams{partialSlots}, 1);
+            computeWriteBarrier(commands);
+            dispatch(commands, projector.convolve, convolveSet, irradianceBandScales(order), 1);
+            computeWriteBarrier(commands);
+            if (resources.timestamps)
+                vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, resources.timestamps, 1);
+        });
+
+        invalidateBuffer(context, resources.results);
+        bake.radiance = readCoefficients(resources.results, 0, order, Quantity::Radiance);
+        bake.irradiance = readCoefficients(resources.results, irradianceOffset, order, Quantity::Irradiance);
+        bake.deviceMilliseconds = readDeviceMilliseconds(context, resources.timestamps);
+        bake.workgroups = partialSlots;
+        bake.dispatches = uint32_t(chunks.size());
+    } catch (...) {
+        destroyBakeResources(context, resources);
+        throw;
+    }
+    destroyBakeResources(context, resources);
+    return bake;
+}
+
+} // namespace shprobe

@@ -1,0 +1,41 @@
+// GPU bake: projection of a cube map onto SH (project.comp), reduction of the per-workgroup partial
+// sums (reduce.comp) and the irradiance convolution (convolve.comp), recorded in one command buffer.
+#pragma once
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
+#include "vk/context.h"
+#include "vk/pipeline.h"
+
+namespace shprobe {
+
+struct ProjectorOptions {
+    int order = 3;                       // 1..kMaxOrder
+    uint32_t workgroupSize = 64;         // invocations per workgroup
+    uint32_t texelsPerInvocation = 256;  // sets the workgroup count: more texels, fewer reductions
+};
+
+// Pipelines for one order, created once and reused for any number of bakes.
+struct Projector {
+    ProjectorOptions options;
+    ComputeProgram project;
+    ComputeProgram reduce;
+    ComputeProgram convolve;
+};
+
+Projector createProjector(const Context& context, const ProjectorOptions& options);
+void destroyProjector(const Context& context, Projector& projector);
+
+struct GpuBake {
+    ShCoefficients radiance;
+    ShCoefficients irradiance;
+    double deviceMilliseconds = 0.0; // from timestamps around the dispatches; 0 where unsupported
+    uint32_t workgroups = 0;         // projection workgroups over all dispatches
+    uint32_t dispatches = 0;         // projection dispatches (the input is split to fit buffer limits)
+};
+
+// Largest face the GPU path accepts: texel indices are 32-bit (6 N^2 < 2^32).
+constexpr int kMaxGpuFaceSize = 16384;
+
+GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap);
+
+} // namespace shprobe

@@ -1,0 +1,81 @@
+// Loading HDR environments into cube maps: equirect, horizontal and vertical crosses, six face
+// files, and the built-in procedural sky. Layouts and orientations follow CONVENTIONS.md.
+#pragma once
+#include "sh/cubemap.h"
+#include <array>
+#include <cstddef>
+#include <string>
+
+namespace shprobe {
+
+enum class Layout { Auto, Equirect, HorizontalCross, VerticalCross, Faces };
+
+// "auto", "equirect", "hcross", "vcross", "faces"; throws Error(Input) for anything else.
+Layout parseLayout(const std::string& name);
+const char* layoutName(Layout layout);
+
+// Layout from an image's aspect ratio: 2:1 equirect, 4:3 horizontal cross, 3:4 vertical cross.
+// Throws Error(Input) naming the size when it matches none.
+Layout detectLayout(int width, int height);
+
+// What to do with texels that are NaN or infinite.
+enum class NonFinitePolicy {
+    Refuse,  // throw Error(Input) with their count
+    Replace, // replace them with 0 and report the count
+};
+
+struct LoadOptions {
+    Layout layout = Layout::Auto;
+    int faceSize = 0; // 0: chosen from the input (equirect width / 4, cross or face size)
+    NonFinitePolicy nonFinite = NonFinitePolicy::Refuse;
+};
+
+struct Environment {
+    Cubemap cubemap;
+    Layout layout = Layout::Auto; // the layout actually used
+    std::string description;      // e.g. "sky.exr (equirect 1024x512)"
+    size_t replacedTexels = 0;    // non-finite texels replaced under NonFinitePolicy::Replace
+};
+
+// Reads an image file (any format OpenImageIO reads). 8-bit and 16-bit integer images are taken
+// as sRGB and decoded to linear, unless the file's colour space says linear; float images (EXR,
+// HDR) as linear. 1 channel is grey, 2 grey and alpha; alpha is ignored. Throws Error(Input)
+// naming the file on any failure, and before reading pixels if the image is unreasonably large.
+Image readImage(const std::string& path);
+
+// Resolves the six face files of a folder (px, nx, py, ny, pz, nz with any image extension) or of
+// a pattern containing "{face}". Returns the paths in Face order; throws Error(Input) if one is
+// missing. isFacesSource tells whether a path names such a source (a folder or a pattern).
+std::array<std::string, kFaceCount> resolveFaceFiles(const std::string& path);
+bool isFacesSource(const std::string& path);
+
+// Loads an environment from a file, folder or pattern, as a cube map of options.faceSize.
+Environment loadEnvironment(const std::string& path, const LoadOptions& options);
+
+// Cube map of an equirect map: each texel averages a grid of supersamples (enough to cover the
+// equirect pixels under it), each bilinearly interpolated, wrapping in longitude.
+Cubemap equirectToCubemap(const Image& equirect, int faceSize);
+// Cube map of a cross image (HorizontalCross or VerticalCross), at the cross's own face size.
+Cubemap crossToCubemap(const Image& cross, Layout layout);
+// Resamples every face to a new size (area average when shrinking, bilinear when growing).
+Cubemap resizeCubemap(const Cubemap& cubemap, int faceSize);
+
+// The built-in default environment: a sky gradient, darker ground and a small, very bright sun
+// disc, as radiance in linear units.
+struct SkyParameters {
+    glm::dvec3 sunDirection{0.32, 0.72, -0.61}; // normalized on use
+    double sunAngularRadius = 0.02;             // radians (about 1.1 degrees)
+    glm::dvec3 sunRadiance{20000.0, 18000.0, 15000.0};
+    glm::dvec3 zenith{0.25, 0.45, 1.0};
+    glm::dvec3 horizon{0.9, 0.95, 1.0};
+    glm::dvec3 ground{0.3, 0.25, 0.2};
+};
+glm::dvec3 skyRadiance(const SkyParameters& sky, const glm::dvec3& direction);
+// Each texel holds the sky at its center; texels the sun disc may touch hold the solid-angle mean
+// over a grid fine enough to resolve the disc, so the sun keeps its power at any face size.
+Cubemap makeDefaultSky(int faceSize, const SkyParameters& sky = {});
+
+// Counts texels that are NaN or infinite and applies the policy. Returns the number replaced.
+size_t applyNonFinitePolicy(std::vector<glm::vec4>& texels, NonFinitePolicy policy, const std::string& what);
+
+} // namespace shprobe

@@ -1,0 +1,266 @@
+// Reading environment images through OpenImageIO and loading them as cube maps: single images
+// (equirect or cross) and six face files. Every failure is an Error(Input) naming the file.
+#include "image/environment.h"
+
+#include "sh/error.h"
+
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string_view>
+
+namespace shprobe {
+namespace fs = std::filesystem;
+
+namespace {
+
+// A header can claim any size; refuse before allocating. 2^28 pixels (a 4 GiB RGBA32F image,
+// e.g. 32768 x 8192) is far more than any environment worth reducing to a few SH coefficients.
+constexpr int64_t kMaxImageSide = 65536;
+constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
+
+// File names of the faces in Face order (+X, -X, +Y, -Y, +Z, -Z), and the pattern placeholder.
+constexpr std::array<std::string_view, kFaceCount> kFaceNames{"px", "nx", "py", "ny", "pz", "nz"};
+constexpr std::string_view kFacePlaceholder = "{face}";
+
+std::string sizeText(int width, int height) {
+    return std::to_string(width) + "x" + std::to_string(height);
+}
+
+void checkReadableFile(const std::string& path) {
+    std::error_code error;
+    fs::file_status status = fs::status(path, error);
+    if (!fs::exists(status)) throw Error(ErrorKind::Input, path + ": no such file");
+    if (fs::is_directory(status)) throw Error(ErrorKind::Input, path + ": is a folder, not an image file");
+    if (fs::file_size(path, error) == 0) throw Error(ErrorKind::Input, path + ": the file is empty");
+}
+
+std::unique_ptr<OIIO::ImageInput> openImage(const std::string& path) {
+    // Alpha is ignored, so colour must come as stored: OIIO would otherwise premultiply the
+    // unassociated alpha of PNG and similar formats into it.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path, &config);
+    if (!input)
+        throw Error(ErrorKind::Input,
+                    path + ": not an image OpenImageIO can read (" + OIIO::geterror() + ")");
+    return input;
+}
+
+void checkSpec(const std::string& path, const OIIO::ImageSpec& spec) {
+    if (spec.width < 1 || spec.height < 1)
+        throw Error(ErrorKind::Input,
+                    path + ": the image has no pixels (" + sizeText(spec.width, spec.height) + ")");
+    if (spec.width > kMaxImageSide || spec.height > kMaxImageSide ||
+        int64_t(spec.width) * spec.height > kMaxImagePixels)
+        throw Error(ErrorKind::Input, path + ": the image is " + sizeText(spec.width, spec.height) +
+                                          ", larger than the limit of " + std::to_string(kMaxImageSide) +
+                                          " per side and " + std::to_string(kMaxImagePixels) + " pixels");
+    // Volume and deep images hold more than width x height values per channel.
+    if (spec.depth > 1 || spec.deep)
+        throw Error(ErrorKind::Input, path + ": volume and deep images are not supported");
+    if (spec.nchannels < 1)
+        throw Error(ErrorKind::Input,
+                    path + ": the image has " + std::to_string(spec.nchannels) +
+                        " channels; expected 1 (grey), 2 (grey, alpha), 3 (RGB) or more (RGB, alpha...)");
+}
+
+// Integer images are sRGB-encoded unless the file says otherwise; float images are linear.
+bool isSrgbEncoded(const OIIO::ImageSpec& spec) {
+    if (spec.format.is_floating_point()) return false;
+    std::string space = spec.get_string_attribute("oiio:ColorSpace");
+    bool linear = OIIO::Strutil::icontains(space, "linear") || OIIO::Strutil::istarts_with(space, "lin_");
+    return !linear;
+}
+
+// Reads the first channel (1 or 2 channels: grey, alpha ignored) or the first three (RGB, the
+// rest ignored) straight into the RGBA texels, converted to float (integers normalized to [0, 1]).
+// The unused alpha is set to 1, as in every cube map the library makes.
+Image readPixels(const std::string& path, OIIO::ImageInput& input, const OIIO::ImageSpec& spec) {
+    int channels = spec.nchannels >= 3 ? 3 : 1;
+    Image image = makeImage(spec.width, spec.height);
+    constexpr OIIO::stride_t texelStride = sizeof(glm::vec4);
+    if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, image.texels.data(), texelStride,
+                          texelStride * spec.width))
+        throw Error(ErrorKind::Input, path +
+                                          ": cannot read the pixels; the file may be truncated or corrupt (" +
+                                          input.geterror() + ")");
+    for (glm::vec4& texel : image.texels)
+        texel =
+            channels == 1 ? glm::vec4(texel.r, texel.r, texel.r, 1.0f) : glm::vec4(glm::vec3(texel), 1.0f);
+    return image;
+}
+
+// The exact sRGB EOTF (IEC 61966-2-1), evaluated in double.
+float srgbToLinear(float encoded) {
+    double c = encoded;
+    return float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+}
+
+void decodeSrgb(Image& image) {
+    for (glm::vec4& texel : image.texels)
+        texel = glm::vec4(srgbToLinear(texel.r), srgbToLinear(texel.g), srgbToLinear(texel.b), texel.a);
+}
+
+std::string replaceAll(std::string text, std::string_view from, std::string_view to) {
+    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+        text.replace(at, from.size(), to);
+    return text;
+}
+
+std::string faceFileFromPattern(const std::string& pattern, std::string_view name) {
+    std::string path = replaceAll(pattern, kFacePlaceholder, name);
+    if (!fs::is_regular_file(path))
+        throw Error(ErrorKind::Input, pattern + ": face file " + path + " does not exist");
+    return path;
+}
+
+// The one file of the folder named <name>.<any extension>.
+std::string faceFileInFolder(const std::string& folder, std::string_view name) {
+    std::error_code error;
+    std::vector<std::string> matches;
+    for (const fs::directory_entry& entry : fs::directory_iterator(folder, error))
+        if (entry.is_regular_file() && entry.path().stem() == name) matches.push_back(entry.path().string());
+    if (error) throw Error(ErrorKind::Input, folder + ": cannot list the folder (" + error.message() + ")");
+    std::sort(matches.begin(), matches.end());
+    std::string expected = std::string(name) + ".<extension>";
+    if (matches.empty())
+        throw Error(ErrorKind::Input,
+                    folder + ": no face file " + expected + " (a faces folder holds px, nx, py, ny, pz, nz)");
+    if (matches.size() > 1)
+        throw Error(ErrorKind::Input,
+                    folder + ": both " + matches[0] + " and " + matches[1] + " could be face " + expected);
+    return matches[0];
+}
+
+// Every face square and of the first face's size.
+void checkFaceSizes(const std::array<std::string, kFaceCount>& paths,
+                    const std::array<Image, kFaceCount>& faces) {
+    for (int face = 0; face < kFaceCount; ++face) {
+        const Image& image = faces[size_t(face)];
+        std::string size = sizeText(image.width, image.height);
+        if (image.width != image.height)
+            throw Error(ErrorKind::Input,
+                        paths[size_t(face)] + ": the face is " + size + "; faces must be square");
+        if (image.width != faces[0].width)
+            throw Error(ErrorKind::Input, paths[size_t(face)] + " is " + size + " but " + paths[0] + " is " +
+                                              sizeText(faces[0].width, faces[0].height) +
+                                              "; the six faces must be the same size");
+    }
+}
+
+Cubemap assembleFaces(const std::array<Image, kFaceCount>& faces) {
+    Cubemap cubemap = makeCubemap(faces[0].width);
+    size_t faceTexels = size_t(cubemap.faceSize) * cubemap.faceSize;
+    for (int face = 0; face < kFaceCount; ++face)
+        std::copy(faces[size_t(face)].texels.begin(), faces[size_t(face)].texels.end(),
+                  cubemap.texels.begin() + std::ptrdiff_t(face * faceTexels));
+    return cubemap;
+}
+
+Cubemap resizedTo(Cubemap cubemap, int faceSize) {
+    return faceSize == 0 ? cubemap : resizeCubemap(cubemap, faceSize);
+}
+
+Environment loadFaces(const std::string& source, const LoadOptions& options) {
+    std::array<std::string, kFaceCount> paths = resolveFaceFiles(source);
+    std::array<Image, kFaceCount> faces;
+    size_t replaced = 0;
+    for (int face = 0; face < kFaceCount; ++face) {
+        faces[size_t(face)] = readImage(paths[size_t(face)]);
+        replaced += applyNonFinitePolicy(faces[size_t(face)].texels, options.nonFinite, paths[size_t(face)]);
+    }
+    checkFaceSizes(paths, faces);
+    Environment environment;
+    environment.cubemap = resizedTo(assembleFaces(faces), options.faceSize);
+    environment.layout = Layout::Faces;
+    environment.description = source + " (faces " + sizeText(faces[0].width, faces[0].height) + ")";
+    environment.replacedTexels = replaced;
+    return environment;
+}
+
+// The layout to use: the one asked for, or the one the aspect ratio gives.
+Layout chooseLayout(const Image& image, Layout requested) {
+    if (requested == Layout::Faces)
+        throw Error(ErrorKind::Input, "layout faces needs a folder or a pattern containing {face}");
+    return requested == Layout::Auto ? detectLayout(image.width, image.height) : requested;
+}
+
+Cubemap imageToCubemap(const Image& image, Layout layout, int faceSize) {
+    if (layout == Layout::Equirect)
+        return equirectToCubemap(image, faceSize > 0 ? faceSize : std::max(1, image.width / 4));
+    return resizedTo(crossToCubemap(image, layout), faceSize);
+}
+
+Environment loadSingleImage(const std::string& path, const LoadOptions& options) {
+    Image image = readImage(path);
+    Environment environment;
+    environment.replacedTexels = applyNonFinitePolicy(image.texels, options.nonFinite, path);
+    try {
+        environment.layout = chooseLayout(image, options.layout);
+        environment.cubemap = imageToCubemap(image, environment.layout, options.faceSize);
+    } catch (const Error& error) {
+        throw Error(error.kind(), path + ": " + error.what());
+    }
+    environment.description =
+        path + " (" + layoutName(environment.layout) + " " + sizeText(image.width, image.height) + ")";
+    return environment;
+}
+
+} // namespace
+
+Image readImage(const std::string& path) {
+    checkReadableFile(path);
+    std::unique_ptr<OIIO::ImageInput> input = openImage(path);
+    const OIIO::ImageSpec& spec = input->spec();
+    checkSpec(path, spec);
+    Image image = readPixels(path, *input, spec);
+    if (isSrgbEncoded(spec)) decodeSrgb(image);
+    return image;
+}
+
+bool isFacesSource(const std::string& path) {
+    return path.find(kFacePlaceholder) != std::string::npos || fs::is_directory(path);
+}
+
+std::array<std::string, kFaceCount> resolveFaceFiles(const std::string& path) {
+    bool pattern = path.find(kFacePlaceholder) != std::string::npos;
+    if (!pattern && !fs::is_directory(path))
+        throw Error(ErrorKind::Input, path + ": six face files need a folder or a pattern containing {face}");
+    std::array<std::string, kFaceCount> paths;
+    for (int face = 0; face < kFaceCount; ++face) {
+        std::string_view name = kFaceNames[size_t(face)];
+        paths[size_t(face)] = pattern ? faceFileFromPattern(path, name) : faceFileInFolder(path, name);
+    }
+    return paths;
+}
+
+Environment loadEnvironment(const std::string& path, const LoadOptions& options) {
+    if (options.faceSize < 0)
+        throw Error(ErrorKind::Input, "face size must be positive (or 0 for automatic), not " +
+                                          std::to_string(options.faceSize));
+    bool faces = options.layout == Layout::Faces || (options.layout == Layout::Auto && isFacesSource(path));
+    return faces ? loadFaces(path, options) : loadSingleImage(path, options);
+}
+
+size_t applyNonFinitePolicy(std::vector<glm::vec4>& texels, NonFinitePolicy policy, const std::string& what) {
+    auto nonFinite = [](const glm::vec4& t) {
+        return !std::isfinite(t.r) || !std::isfinite(t.g) || !std::isfinite(t.b);
+    };
+    size_t count = size_t(std::count_if(texels.begin(), texels.end(), nonFinite));
+    if (count == 0) return 0;
+    if (policy == NonFinitePolicy::Refuse)
+        throw Error(ErrorKind::Input,
+                    what + ": " + std::to_string(count) +
+                        " texels are NaN or infinite; use --sanitize to replace them with 0");
+    for (glm::vec4& texel : texels)
+        if (nonFinite(texel)) texel = glm::vec4(0.0f, 0.0f, 0.0f, texel.a);
+    return count;
+}
+
+} // namespace shprobe

@@ -1,0 +1,229 @@
+// Image layouts of environment maps (equirect, crosses) turned into cube maps, and cube-map
+// resizing. Face order, orientation and the cross layouts are those of CONVENTIONS.md.
+#include "image/environment.h"
+
+#include "sh/error.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <glm/vec4.hpp>
+
+namespace shprobe {
+namespace {
+
+struct NamedLayout {
+    Layout layout;
+    const char* name;
+};
+constexpr std::array<NamedLayout, 5> kLayoutNames{{
+    {Layout::Auto, "auto"},
+    {Layout::Equirect, "equirect"},
+    {Layout::HorizontalCross, "hcross"},
+    {Layout::VerticalCross, "vcross"},
+    {Layout::Faces, "faces"},
+}};
+
+// Where a face sits in a cross, in face-size units, and whether it is stored rotated 180 degrees.
+struct CrossSlot {
+    int column;
+    int row;
+    bool rotated;
+};
+// Indexed by Face (+X, -X, +Y, -Y, +Z, -Z). Rows [ . +Y . . ] [ -X +Z +X -Z ] [ . -Y . . ].
+constexpr std::array<CrossSlot, kFaceCount> kHorizontalCross{
+    {{2, 1, false}, {0, 1, false}, {1, 0, false}, {1, 2, false}, {1, 1, false}, {3, 1, false}}};
+// Rows [ . +Y . ] [ -X +Z +X ] [ . -Y . ] [ . -Z . ]. -Z hangs below -Y turned 180 degrees: its
+// own bottom edge (b = 1, where y = -1) goes to the top of its slot, against -Y's bottom edge.
+constexpr std::array<CrossSlot, kFaceCount> kVerticalCross{
+    {{2, 1, false}, {0, 1, false}, {1, 0, false}, {1, 2, false}, {1, 1, false}, {1, 3, true}}};
+
+std::string sizeText(int width, int height) {
+    return std::to_string(width) + "x" + std::to_string(height);
+}
+
+// The face size of a cross, checking that the image has the cross's aspect ratio (4 x 3 or 3 x 4
+// faces; since 3 and 4 are coprime, the ratio alone makes the width a multiple of the columns).
+int crossFaceSize(int width, int height, Layout layout) {
+    bool horizontal = layout == Layout::HorizontalCross;
+    if (!horizontal && layout != Layout::VerticalCross)
+        throw Error(ErrorKind::Input, std::string("layout ") + layoutName(layout) + " is not a cross");
+    int columns = horizontal ? 4 : 3;
+    int rows = horizontal ? 3 : 4;
+    if (width < 1 || width * rows != height * columns)
+        throw Error(ErrorKind::Input, "image is " + sizeText(width, height) + ", but a " +
+                                          layoutName(layout) + " image must be " + std::to_string(columns) +
+                                          ":" + std::to_string(rows));
+    return width / columns;
+}
+
+void copyCrossFace(const Image& cross, CrossSlot slot, int face, Cubemap& cubemap) {
+    int n = cubemap.faceSize;
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            int x = slot.rotated ? n - 1 - i : i;
+            int y = slot.rotated ? n - 1 - j : j;
+            cubemap.at(face, i, j) = cross.at(slot.column * n + x, slot.row * n + y);
+        }
+    }
+}
+
+int wrapIndex(int i, int count) {
+    int r = i % count;
+    return r < 0 ? r + count : r;
+}
+
+// Bilinear sample at continuous pixel coordinates whose pixel centers are at (i + 0.5, j + 0.5):
+// wraps in x (longitude is periodic) and clamps in y (rows stop at the poles).
+glm::dvec3 sampleEquirect(const Image& image, double x, double y) {
+    double sx = x - 0.5;
+    double sy = y - 0.5;
+    double floorX = std::floor(sx);
+    double floorY = std::floor(sy);
+    double tx = sx - floorX;
+    double ty = sy - floorY;
+    int x0 = wrapIndex(int(floorX), image.width);
+    int x1 = wrapIndex(int(floorX) + 1, image.width);
+    int y0 = std::clamp(int(floorY), 0, image.height - 1);
+    int y1 = std::clamp(int(floorY) + 1, 0, image.height - 1);
+    auto texel = [&](int px, int py) { return glm::dvec3(glm::vec3(image.at(px, py))); };
+    glm::dvec3 top = (1.0 - tx) * texel(x0, y0) + tx * texel(x1, y0);
+    glm::dvec3 bottom = (1.0 - tx) * texel(x0, y1) + tx * texel(x1, y1);
+    return (1.0 - ty) * top + ty * bottom;
+}
+
+// Mean of a k x k grid of equirect samples spread evenly over texel (i, j) of a face.
+glm::vec4 equirectTexel(const Image& equirect, int face, int i, int j, int faceSize, int k) {
+    double step = 2.0 / (double(faceSize) * k); // supersample spacing in face coordinates
+    glm::dvec3 sum(0.0);
+    for (int sj = 0; sj < k; ++sj) {
+        for (int si = 0; si < k; ++si) {
+            double a = -1.0 + (i * k + si + 0.5) * step;
+            double b = -1.0 + (j * k + sj + 0.5) * step;
+            PixelPoint p = directionToEquirect(faceDirection(face, a, b), equirect.width, equirect.height);
+            sum += sampleEquirect(equirect, p.x, p.y);
+        }
+    }
+    return glm::vec4(glm::vec3(sum / double(k * k)), 1.0f);
+}
+
+// One output texel of a 1-D resampling: the source texels it reads and their weights.
+struct Tap {
+    int source;
+    double weight;
+};
+using Taps = std::vector<std::vector<Tap>>; // indexed by output texel
+
+// Shrinking: output texel i covers the source interval [i s, (i + 1) s), s = from / to, and
+// averages the source texels under it, each weighted by its overlap (s need not be an integer).
+Taps areaTaps(int from, int to) {
+    double scale = double(from) / to;
+    Taps taps(static_cast<size_t>(to));
+    for (int i = 0; i < to; ++i) {
+        double begin = i * scale;
+        double end = std::min((i + 1) * scale, double(from));
+        for (int s = int(std::floor(begin)); s < from && s < end; ++s) {
+            double overlap = std::min(end, s + 1.0) - std::max(begin, double(s));
+            if (overlap > 0.0) taps[size_t(i)].push_back({s, overlap / (end - begin)});
+        }
+    }
+    return taps;
+}
+
+// Growing: output texel centers map to source coordinate (i + 0.5) s - 0.5 and interpolate the
+// two nearest source texels, clamped at the face's edges.
+Taps bilinearTaps(int from, int to) {
+    double scale = double(from) / to;
+    Taps taps(static_cast<size_t>(to));
+    for (int i = 0; i < to; ++i) {
+        double x = std::clamp((i + 0.5) * scale - 0.5, 0.0, double(from - 1));
+        int x0 = int(std::floor(x));
+        int x1 = std::min(x0 + 1, from - 1);
+        double t = x - x0;
+        taps[size_t(i)] = {{x0, 1.0 - t}, {x1, t}};
+    }
+    return taps;
+}
+
+// Separable resampling of one face: rows first, then columns.
+void resizeFace(const Cubemap& source, int face, const Taps& taps, Cubemap& result) {
+    int from = source.faceSize;
+    int to = result.faceSize;
+    std::vector<glm::dvec4> rows(size_t(to) * from); // `to` columns, `from` rows
+    for (int j = 0; j < from; ++j) {
+        for (int i = 0; i < to; ++i) {
+            glm::dvec4 sum(0.0);
+            for (Tap tap : taps[size_t(i)])
+                sum += tap.weight * glm::dvec4(source.at(face, tap.source, j));
+            rows[size_t(j) * to + i] = sum;
+        }
+    }
+    for (int j = 0; j < to; ++j) {
+        for (int i = 0; i < to; ++i) {
+            glm::dvec4 sum(0.0);
+            for (Tap tap : taps[size_t(j)])
+                sum += tap.weight * rows[size_t(tap.source) * to + i];
+            result.at(face, i, j) = glm::vec4(sum);
+        }
+    }
+}
+
+} // namespace
+
+Layout parseLayout(const std::string& name) {
+    for (const NamedLayout& entry : kLayoutNames)
+        if (name == entry.name) return entry.layout;
+    throw Error(ErrorKind::Input,
+                "unknown layout \"" + name + "\"; expected auto, equirect, hcross, vcross or faces");
+}
+
+const char* layoutName(Layout layout) {
+    for (const NamedLayout& entry : kLayoutNames)
+        if (layout == entry.layout) return entry.name;
+    return "unknown";
+}
+
+Layout detectLayout(int width, int height) {
+    if (width > 0 && height > 0) {
+        if (width == 2 * height) return Layout::Equirect;
+        if (3 * width == 4 * height) return Layout::HorizontalCross;
+        if (4 * width == 3 * height) return Layout::VerticalCross;
+    }
+    throw Error(ErrorKind::Input, "image is " + sizeText(width, height) +
+                                      ", which matches no layout: expected 2:1 (equirect), 4:3 "
+                                      "(hcross) or 3:4 (vcross); or give --layout");
+}
+
+Cubemap crossToCubemap(const Image& cross, Layout layout) {
+    int faceSize = crossFaceSize(cross.width, cross.height, layout);
+    const auto& slots = layout == Layout::HorizontalCross ? kHorizontalCross : kVerticalCross;
+    Cubemap cubemap = makeCubemap(faceSize);
+    for (int face = 0; face < kFaceCount; ++face)
+        copyCrossFace(cross, slots[size_t(face)], face, cubemap);
+    return cubemap;
+}
+
+Cubemap equirectToCubemap(const Image& equirect, int faceSize) {
+    if (equirect.texels.empty()) throw Error(ErrorKind::Input, "the equirect image is empty");
+    Cubemap cubemap = makeCubemap(faceSize); // throws for a face size below 1
+    // A face spans a quarter of the equator, so at the equator a texel covers width / (4 faceSize)
+    // equirect pixels; k supersamples per side are at least that dense.
+    int k = std::max(1, int(std::ceil(double(equirect.width) / (4.0 * faceSize))));
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < faceSize; ++j)
+            for (int i = 0; i < faceSize; ++i)
+                cubemap.at(face, i, j) = equirectTexel(equirect, face, i, j, faceSize, k);
+    return cubemap;
+}
+
+Cubemap resizeCubemap(const Cubemap& cubemap, int faceSize) {
+    if (faceSize == cubemap.faceSize) return cubemap;
+    Cubemap result = makeCubemap(faceSize); // throws for a face size below 1
+    Taps taps = faceSize < cubemap.faceSize ? areaTaps(cubemap.faceSize, faceSize)
+                                            : bilinearTaps(cubemap.faceSize, faceSize);
+    for (int face = 0; face < kFaceCount; ++face)
+        resizeFace(cubemap, face, taps, result);
+    return result;
+}
+
+} // namespace shprobe

@@ -1,0 +1,136 @@
+#include "io/probe_file.h"
+
+#include "io/atomic_file.h"
+#include "sh/basis.h"
+#include "sh/error.h"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace shprobe {
+
+namespace {
+
+using nlohmann::json;
+
+const char* kFormat = "shprobe.sh";
+const int kVersion = 1;
+const char* kConvention = "real-orthonormal-condon-shortley";
+
+[[noreturn]] void fail(const std::string& name, const std::string& problem) {
+    throw Error(ErrorKind::Input, name + ": " + problem);
+}
+
+const json& requireField(const json& root, const char* field, const std::string& name) {
+    auto it = root.find(field);
+    if (it == root.end()) fail(name, std::string("missing field \"") + field + "\"");
+    return *it;
+}
+
+std::string requireString(const json& root, const char* field, const std::string& name) {
+    const json& value = requireField(root, field, name);
+    if (!value.is_string()) fail(name, std::string("field \"") + field + "\" must be a string");
+    return value.get<std::string>();
+}
+
+int requireOrder(const json& root, const std::string& name) {
+    const json& value = requireField(root, "order", name);
+    if (!value.is_number_integer() || value.get<int64_t>() < 1 || value.get<int64_t>() > kMaxOrder)
+        fail(name, "field \"order\" must be an integer from 1 to " + std::to_string(kMaxOrder));
+    return value.get<int>();
+}
+
+Quantity requireQuantity(const json& root, const std::string& name) {
+    std::string quantity = requireString(root, "quantity", name);
+    if (quantity == "radiance") return Quantity::Radiance;
+    if (quantity == "irradiance") return Quantity::Irradiance;
+    fail(name, "field \"quantity\" is \"" + quantity + "\"; expected \"radiance\" or \"irradiance\"");
+}
+
+glm::dvec3 parseRow(const json& row, size_t index, const std::string& name) {
+    std::string where = "coefficients[" + std::to_string(index) + "]";
+    if (!row.is_array() || row.size() != 3) fail(name, where + " must be an array of 3 numbers [r, g, b]");
+    glm::dvec3 rgb;
+    for (int c = 0; c < 3; ++c) {
+        if (!row[c].is_number()) fail(name, where + " must be an array of 3 numbers [r, g, b]");
+        rgb[c] = row[c].get<double>();
+        if (!std::isfinite(rgb[c])) fail(name, where + " holds a value that is not finite");
+    }
+    return rgb;
+}
+
+std::string formatNumber(double value) {
+    std::ostringstream out;
+    out.precision(9); // float coefficients round-trip with 9 significant digits
+    out << value;
+    return out.str();
+}
+
+} // namespace
+
+const char* quantityName(Quantity quantity) { return quantity == Quantity::Radiance ? "radiance" : "irradiance"; }
+
+std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata& metadata) {
+    nlohmann::ordered_json header = nlohmann::ordered_json::object();
+    header["format"] = kFormat;
+    header["version"] = kVersion;
+    header["convention"] = kConvention;
+    header["order"] = coefficients.order;
+    header["quantity"] = quantityName(coefficients.quantity);
+    if (!metadata.source.empty()) header["source"] = metadata.source;
+    if (metadata.faceSize > 0) header["face_size"] = metadata.faceSize;
+    if (!metadata.weighting.empty()) header["weighting"] = metadata.weighting;
+    if (!metadata.backend.empty()) header["backend"] = metadata.backend;
+    if (!metadata.device.empty()) header["device"] = metadata.device;
+
+    // One coefficient row per line, so the file reads like the table it is.
+    std::string text = "{\n";
+    for (const auto& [key, value] : header.items()) text += "  " + json(key).dump() + ": " + value.dump() + ",\n";
+    text += "  \"coefficients\": [\n";
+    for (size_t i = 0; i < coefficients.rgb.size(); ++i) {
+        const glm::dvec3& c = coefficients.rgb[i];
+        text += "    [" + formatNumber(c.r) + ", " + formatNumber(c.g) + ", " + formatNumber(c.b) + "]";
+        text += i + 1 < coefficients.rgb.size() ? ",\n" : "\n";
+    }
+    text += "  ]\n}\n";
+    return text;
+}
+
+void writeProbeFile(const std::string& path, const ShCoefficients& coefficients, const ProbeMetadata& metadata) {
+    writeFileAtomic(path, probeToJson(coefficients, metadata));
+}
+
+ShCoefficients parseProbeJson(std::string_view text, const std::string& name) {
+    json root = json::parse(text, nullptr, false);
+    if (root.is_discarded()) fail(name, "not valid JSON");
+    if (!root.is_object()) fail(name, "the top level must be a JSON object");
+    if (requireString(root, "format", name) != kFormat)
+        fail(name, std::string("field \"format\" must be \"") + kFormat + "\"");
+    const json& version = requireField(root, "version", name);
+    if (!version.is_number_integer() || version.get<int64_t>() != kVersion)
+        fail(name, "field \"version\" must be " + std::to_string(kVersion));
+    std::string convention = requireString(root, "convention", name);
+    if (convention != kConvention)
+        fail(name, "field \"convention\" is \"" + convention + "\"; expected \"" + kConvention + "\"");
+
+    ShCoefficients coefficients = makeCoefficients(requireOrder(root, name), requireQuantity(root, name));
+    const json& rows = requireField(root, "coefficients", name);
+    if (!rows.is_array() || rows.size() != coefficients.rgb.size())
+        fail(name, "field \"coefficients\" must hold " + std::to_string(coefficients.rgb.size()) +
+                       " rows for order " + std::to_string(coefficients.order) + ", not " +
+                       (rows.is_array() ? std::to_string(rows.size()) : std::string("a non-array")));
+    for (size_t i = 0; i < rows.size(); ++i) coefficients.rgb[i] = parseRow(rows[i], i, name);
+    return coefficients;
+}
+
+ShCoefficients readProbeFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(path, "cannot open the file");
+    std::stringstream text;
+    text << in.rdbuf();
+    return parseProbeJson(text.str(), path);
+}
+
+} // namespace shprobe

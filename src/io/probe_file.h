@@ -1,0 +1,29 @@
+// Coefficient files (CONVENTIONS.md, "Coefficient files"): JSON with format "shprobe.sh",
+// version 1, the SH convention, order, quantity and order^2 rows of [r, g, b].
+#pragma once
+#include "sh/coefficients.h"
+#include <string>
+#include <string_view>
+
+namespace shprobe {
+
+// Optional fields written beside the required ones; readers ignore them.
+struct ProbeMetadata {
+    std::string source;  // input description
+    int faceSize = 0;    // 0: not written
+    std::string backend; // "gpu" or "cpu"
+    std::string device;
+    std::string weighting = "exact-solid-angle";
+};
+
+std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata& metadata);
+// Writes atomically; throws Error(Output) naming the file.
+void writeProbeFile(const std::string& path, const ShCoefficients& coefficients, const ProbeMetadata& metadata);
+
+// Parses and validates; throws Error(Input) naming `name` and the offending field.
+ShCoefficients parseProbeJson(std::string_view text, const std::string& name);
+ShCoefficients readProbeFile(const std::string& path);
+
+const char* quantityName(Quantity quantity);
+
+} // namespace shprobe

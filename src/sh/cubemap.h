@@ -1,0 +1,67 @@
+// Environment images held in memory, and the double-precision geometry of their texels.
+// Cube-map face order and orientation are Vulkan's; see shaders/include/texel_geometry.h for the
+// diagram and the face direction table shared with the shaders.
+#pragma once
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+#include <cstddef>
+#include <vector>
+
+namespace shprobe {
+
+enum class Face { PositiveX, NegativeX, PositiveY, NegativeY, PositiveZ, NegativeZ };
+constexpr int kFaceCount = 6;
+
+// Six N x N faces, face after face in Face order, rows top to bottom, RGBA32F (alpha unused).
+// This is also the layout the GPU projection reads.
+struct Cubemap {
+    int faceSize = 0;
+    std::vector<glm::vec4> texels; // kFaceCount * faceSize * faceSize
+
+    glm::vec4& at(int face, int i, int j) { return texels[(size_t(face) * faceSize + j) * faceSize + i]; }
+    const glm::vec4& at(int face, int i, int j) const {
+        return texels[(size_t(face) * faceSize + j) * faceSize + i];
+    }
+};
+Cubemap makeCubemap(int faceSize);
+
+// A W x H image, rows top to bottom, RGBA32F (alpha unused). Equirect maps use this type.
+struct Image {
+    int width = 0;
+    int height = 0;
+    std::vector<glm::vec4> texels;
+
+    glm::vec4& at(int x, int y) { return texels[size_t(y) * width + x]; }
+    const glm::vec4& at(int x, int y) const { return texels[size_t(y) * width + x]; }
+};
+Image makeImage(int width, int height);
+
+// Unit direction through the center of texel (i, j) of a face (CONVENTIONS.md), in double.
+glm::dvec3 texelDirection(int face, int i, int j, int faceSize);
+// Unit direction of face-local point (a, b) in [-1, 1]^2.
+glm::dvec3 faceDirection(int face, double a, double b);
+// Inverse of faceDirection: the face a direction hits and its face-local (a, b) in [-1, 1].
+struct FacePoint {
+    int face;
+    double a;
+    double b;
+};
+FacePoint directionToFace(const glm::dvec3& d);
+
+// Exact solid angle of texel (i, j) of an N x N face: the four-atan2 formula of CONVENTIONS.md,
+// in double (relative error about 1e-9 at N = 4096).
+double texelSolidAngle(int i, int j, int faceSize);
+
+// Equirect (latitude-longitude) maps, CONVENTIONS.md: pixel (i, j) of W x H.
+glm::dvec3 equirectDirection(int i, int j, int width, int height);
+// Continuous pixel coordinates (x in [0, W), y in [0, H], H only at the -Y pole) of a direction;
+// inverse of the above (pixel (i, j) maps back to (i + 0.5, j + 0.5)).
+struct PixelPoint {
+    double x;
+    double y;
+};
+PixelPoint directionToEquirect(const glm::dvec3& d, int width, int height);
+// Exact solid angle of any pixel of row j: (2 pi / W)(cos theta0 - cos theta1).
+double equirectRowSolidAngle(int j, int width, int height);
+
+} // namespace shprobe

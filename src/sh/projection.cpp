@@ -1,0 +1,85 @@
+// Reference projection L_lm = sum_texels L(w) y_lm(w) Omega (Sloan, seed 000, "projection from
+// cube maps"), each texel weighted by its exact solid angle; accumulated in double. Alpha is ignored.
+#include "projection.h"
+
+#include "basis.h"
+#include "error.h"
+
+#include <array>
+#include <string>
+
+namespace shprobe {
+
+namespace {
+
+using BasisValues = std::array<double, coefficientCount(kMaxOrder)>;
+
+ShCoefficients makeRadianceCoefficients(int order) {
+    if (order < 1 || order > kMaxOrder) {
+        throw Error(ErrorKind::Input,
+                    "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
+    }
+    return makeCoefficients(order, Quantity::Radiance);
+}
+
+// Adds one sample's contribution L(w) y_i(w) Omega to every coefficient.
+void accumulateSample(ShCoefficients& sum, const glm::vec4& texel, const glm::dvec3& direction,
+                      double solidAngle, BasisValues& basis) {
+    evalBasis(sum.order, direction, basis);
+    const glm::dvec3 weighted = glm::dvec3(texel.r, texel.g, texel.b) * solidAngle;
+    for (size_t i = 0; i < sum.rgb.size(); ++i)
+        sum.rgb[i] += weighted * basis[i];
+}
+
+// Solid angles of the texels of one face, row after row; all six faces share them.
+std::vector<double> faceSolidAngles(int faceSize) {
+    std::vector<double> solidAngles(size_t(faceSize) * size_t(faceSize));
+    for (int j = 0; j < faceSize; ++j) {
+        for (int i = 0; i < faceSize; ++i)
+            solidAngles[size_t(j) * faceSize + i] = texelSolidAngle(i, j, faceSize);
+    }
+    return solidAngles;
+}
+
+void requireTexelCount(size_t actual, size_t expected, const char* what) {
+    if (actual != expected) {
+        throw Error(ErrorKind::Input, std::string(what) + " holds " + std::to_string(actual) +
+                                          " texels, expected " + std::to_string(expected));
+    }
+}
+
+} // namespace
+
+ShCoefficients projectCubemap(const Cubemap& cubemap, int order) {
+    const int n = cubemap.faceSize;
+    requireTexelCount(cubemap.texels.size(), size_t(kFaceCount) * size_t(n) * size_t(n), "cube map");
+    ShCoefficients sum = makeRadianceCoefficients(order);
+    const std::vector<double> solidAngles = faceSolidAngles(n);
+    BasisValues basis{};
+    for (int face = 0; face < kFaceCount; ++face) {
+        for (int j = 0; j < n; ++j) {
+            for (int i = 0; i < n; ++i) {
+                accumulateSample(sum, cubemap.at(face, i, j), texelDirection(face, i, j, n),
+                                 solidAngles[size_t(j) * n + i], basis);
+            }
+        }
+    }
+    return sum;
+}
+
+ShCoefficients projectEquirect(const Image& equirect, int order) {
+    const int w = equirect.width;
+    const int h = equirect.height;
+    requireTexelCount(equirect.texels.size(), size_t(w) * size_t(h), "equirect image");
+    ShCoefficients sum = makeRadianceCoefficients(order);
+    BasisValues basis{};
+    for (int j = 0; j < h; ++j) {
+        const double rowSolidAngle = equirectRowSolidAngle(j, w, h);
+        for (int i = 0; i < w; ++i) {
+            accumulateSample(sum, equirect.at(i, j), equirectDirection(i, j, w, h), rowSolidAngle, basis);
+        }
+    }
+    return sum;
+}
+
+} // namespace shprobe

@@ -1,0 +1,308 @@
+#include "vk/context.h"
+
+#include "vk/check.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <optional>
+
+namespace shprobe {
+
+namespace {
+
+const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+const char* kNoDeviceHint = "install a Vulkan driver; without a GPU, Mesa's lavapipe works "
+                            "(Debian: apt-get install mesa-vulkan-drivers)";
+
+bool envFlag(const char* name) {
+    const char* value = std::getenv(name);
+    return value && *value && std::strcmp(value, "0") != 0;
+}
+
+bool hasInstanceLayer(const char* name) {
+    uint32_t count = 0;
+    vkEnumerateInstanceLayerProperties(&count, nullptr);
+    std::vector<VkLayerProperties> layers(count);
+    vkEnumerateInstanceLayerProperties(&count, layers.data());
+    return std::any_of(layers.begin(), layers.end(),
+                       [&](const VkLayerProperties& layer) { return std::strcmp(layer.layerName, name) == 0; });
+}
+
+VKAPI_ATTR VkBool32 VKAPI_CALL onValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT,
+                                                   VkDebugUtilsMessageTypeFlagsEXT,
+                                                   const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+    static_cast<ValidationLog*>(user)->messages++;
+    std::fprintf(stderr, "vulkan validation: %s\n", data->pMessage);
+    return VK_FALSE;
+}
+
+VkDebugUtilsMessengerCreateInfoEXT messengerInfo(ValidationLog* log) {
+    VkDebugUtilsMessengerCreateInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    info.messageSeverity =
+        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                       VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                       VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    info.pfnUserCallback = onValidationMessage;
+    info.pUserData = log;
+    return info;
+}
+
+VkInstance createInstance(bool validation, ValidationLog* log) {
+    uint32_t loaderVersion = 0;
+    if (vkEnumerateInstanceVersion(&loaderVersion) != VK_SUCCESS || loaderVersion < VK_API_VERSION_1_1)
+        throw Error(ErrorKind::Device, std::string("no Vulkan 1.1 loader: ") + kNoDeviceHint);
+    if (validation && !hasInstanceLayer(kValidationLayer))
+        throw Error(ErrorKind::Device, "validation requested but the Khronos validation layer is not installed "
+                                       "(Debian: apt-get install vulkan-validationlayers)");
+
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "shprobe";
+    app.apiVersion = VK_API_VERSION_1_1;
+
+    std::vector<const char*> extensions;
+    std::vector<const char*> layers;
+    VkDebugUtilsMessengerCreateInfoEXT debugInfo = messengerInfo(log);
+    VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    if (validation) {
+        layers.push_back(kValidationLayer);
+        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+        info.pNext = &debugInfo; // also reports problems in vkCreateInstance / vkDestroyInstance
+    }
+    info.pApplicationInfo = &app;
+    info.enabledLayerCount = uint32_t(layers.size());
+    info.ppEnabledLayerNames = layers.data();
+    info.enabledExtensionCount = uint32_t(extensions.size());
+    info.ppEnabledExtensionNames = extensions.data();
+
+    VkInstance instance = VK_NULL_HANDLE;
+    VkResult result = vkCreateInstance(&info, nullptr, &instance);
+    if (result == VK_ERROR_INCOMPATIBLE_DRIVER)
+        throw Error(ErrorKind::Device, std::string("no Vulkan driver found: ") + kNoDeviceHint);
+    VK_CHECK(result);
+    return instance;
+}
+
+std::optional<uint32_t> findComputeQueueFamily(VkPhysicalDevice physicalDevice) {
+    uint32_t count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, families.data());
+    // Prefer a compute queue that also does graphics: it is the main queue of most devices.
+    std::optional<uint32_t> computeOnly;
+    for (uint32_t i = 0; i < count; ++i) {
+        if (!(families[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) continue;
+        if (families[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) return i;
+        if (!computeOnly) computeOnly = i;
+    }
+    return computeOnly;
+}
+
+DeviceInfo describeDevice(VkPhysicalDevice physicalDevice, uint32_t index) {
+    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    properties.pNext = &subgroup;
+    vkGetPhysicalDeviceProperties(physicalDevice, &properties.properties);
+    if (properties.properties.apiVersion >= VK_API_VERSION_1_2) subgroup.pNext = &driver;
+    vkGetPhysicalDeviceProperties2(physicalDevice, &properties);
+
+    const VkPhysicalDeviceProperties& p = properties.properties;
+    DeviceInfo info;
+    info.index = index;
+    info.name = p.deviceName;
+    info.type = p.deviceType;
+    info.apiVersion = p.apiVersion;
+    info.driver = driver.driverName[0] ? std::string(driver.driverName) + " " + driver.driverInfo
+                                       : "driver " + std::to_string(p.driverVersion);
+    info.subgroupSize = subgroup.subgroupSize;
+    info.limits = p.limits;
+    info.timestampPeriod = p.limits.timestampPeriod;
+
+    const VkSubgroupFeatureFlags needed = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+    info.subgroupArithmetic = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+                              (subgroup.supportedOperations & needed) == needed;
+    std::optional<uint32_t> family = findComputeQueueFamily(physicalDevice);
+    if (family) {
+        uint32_t count = 0;
+        vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, nullptr);
+        std::vector<VkQueueFamilyProperties> families(count);
+        vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, families.data());
+        info.timestamps = families[*family].timestampValidBits > 0 && p.limits.timestampPeriod > 0.0f;
+    }
+
+    if (p.apiVersion < VK_API_VERSION_1_1)
+        info.unsupportedReason = "Vulkan " + versionString(p.apiVersion) + " (1.1 required)";
+    else if (!family)
+        info.unsupportedReason = "no compute queue";
+    else if (!info.subgroupArithmetic)
+        info.unsupportedReason = "no subgroup arithmetic operations in compute shaders";
+    return info;
+}
+
+int typeRank(VkPhysicalDeviceType type) {
+    switch (type) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1; // lavapipe: slower, but a real device
+    default: return 0;
+    }
+}
+
+std::string lowercase(std::string text) {
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return text;
+}
+
+bool isIndex(const std::string& text) {
+    return !text.empty() && std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+
+const DeviceInfo& findRequestedDevice(const std::vector<DeviceInfo>& devices, const std::string& request) {
+    for (const DeviceInfo& device : devices) {
+        bool matches = isIndex(request) ? device.index == uint32_t(std::stoul(request))
+                                        : lowercase(device.name).find(lowercase(request)) != std::string::npos;
+        if (matches) return device;
+    }
+    throw Error(ErrorKind::Device, "no Vulkan device matches '" + request + "' (see `shprobe info`)");
+}
+
+const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::string& request) {
+    if (devices.empty()) throw Error(ErrorKind::Device, std::string("no Vulkan device found: ") + kNoDeviceHint);
+    if (!request.empty()) {
+        const DeviceInfo& device = findRequestedDevice(devices, request);
+        if (!device.unsupportedReason.empty())
+            throw Error(ErrorKind::Device, "device " + device.name + " cannot be used: " + device.unsupportedReason);
+        return device;
+    }
+    const DeviceInfo* best = nullptr;
+    for (const DeviceInfo& device : devices)
+        if (device.unsupportedReason.empty() && (!best || typeRank(device.type) > typeRank(best->type)))
+            best = &device;
+    if (!best)
+        throw Error(ErrorKind::Device, "no usable Vulkan device: " + devices.front().name + ": " +
+                                           devices.front().unsupportedReason);
+    return *best;
+}
+
+std::vector<VkPhysicalDevice> enumeratePhysicalDevices(VkInstance instance) {
+    uint32_t count = 0;
+    VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
+    std::vector<VkPhysicalDevice> physicalDevices(count);
+    VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, physicalDevices.data()));
+    return physicalDevices;
+}
+
+std::vector<DeviceInfo> describeDevices(const std::vector<VkPhysicalDevice>& physicalDevices) {
+    std::vector<DeviceInfo> devices;
+    for (uint32_t i = 0; i < physicalDevices.size(); ++i) devices.push_back(describeDevice(physicalDevices[i], i));
+    return devices;
+}
+
+std::string requestedDevice(const ContextOptions& options) {
+    const char* fromEnvironment = std::getenv("SHPROBE_DEVICE");
+    return options.device.empty() && fromEnvironment ? fromEnvironment : options.device;
+}
+
+VkDevice createLogicalDevice(VkPhysicalDevice physicalDevice, uint32_t queueFamily) {
+    float priority = 1.0f;
+    VkDeviceQueueCreateInfo queue{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    queue.queueFamilyIndex = queueFamily;
+    queue.queueCount = 1;
+    queue.pQueuePriorities = &priority;
+    VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    info.queueCreateInfoCount = 1;
+    info.pQueueCreateInfos = &queue;
+    VkDevice device = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateDevice(physicalDevice, &info, nullptr, &device));
+    return device;
+}
+
+VkDebugUtilsMessengerEXT createMessenger(VkInstance instance, ValidationLog* log) {
+    auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(instance, "vkCreateDebugUtilsMessengerEXT"));
+    if (!create) throw Error(ErrorKind::Device, "validation: VK_EXT_debug_utils is not available");
+    VkDebugUtilsMessengerCreateInfoEXT info = messengerInfo(log);
+    VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+    VK_CHECK(create(instance, &info, nullptr, &messenger));
+    return messenger;
+}
+
+} // namespace
+
+const char* deviceTypeName(VkPhysicalDeviceType type) {
+    switch (type) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "CPU";
+    default: return "other";
+    }
+}
+
+std::string versionString(uint32_t version) {
+    return std::to_string(VK_API_VERSION_MAJOR(version)) + "." + std::to_string(VK_API_VERSION_MINOR(version)) +
+           "." + std::to_string(VK_API_VERSION_PATCH(version));
+}
+
+std::vector<DeviceInfo> listDevices(const ContextOptions& options) {
+    ValidationLog log;
+    bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
+    VkInstance instance = createInstance(validation, &log);
+    std::vector<DeviceInfo> devices;
+    try {
+        devices = describeDevices(enumeratePhysicalDevices(instance));
+    } catch (...) {
+        vkDestroyInstance(instance, nullptr);
+        throw;
+    }
+    vkDestroyInstance(instance, nullptr);
+    return devices;
+}
+
+Context createContext(const ContextOptions& options) {
+    Context context;
+    bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
+    context.validationLog = std::make_unique<ValidationLog>();
+    context.instance = createInstance(validation, context.validationLog.get());
+    try {
+        if (validation) context.messenger = createMessenger(context.instance, context.validationLog.get());
+        std::vector<VkPhysicalDevice> physicalDevices = enumeratePhysicalDevices(context.instance);
+        context.info = pickDevice(describeDevices(physicalDevices), requestedDevice(options));
+        context.physicalDevice = physicalDevices[context.info.index];
+        context.queueFamily = *findComputeQueueFamily(context.physicalDevice);
+        vkGetPhysicalDeviceMemoryProperties(context.physicalDevice, &context.memory);
+        context.device = createLogicalDevice(context.physicalDevice, context.queueFamily);
+        vkGetDeviceQueue(context.device, context.queueFamily, 0, &context.queue);
+
+        VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+        pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+        pool.queueFamilyIndex = context.queueFamily;
+        VK_CHECK(vkCreateCommandPool(context.device, &pool, nullptr, &context.commandPool));
+    } catch (...) {
+        destroyContext(context);
+        throw;
+    }
+    return context;
+}
+
+void destroyContext(Context& context) {
+    if (context.commandPool) vkDestroyCommandPool(context.device, context.commandPool, nullptr);
+    if (context.device) vkDestroyDevice(context.device, nullptr);
+    if (context.messenger) {
+        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+            vkGetInstanceProcAddr(context.instance, "vkDestroyDebugUtilsMessengerEXT"));
+        destroy(context.instance, context.messenger, nullptr);
+    }
+    if (context.instance) vkDestroyInstance(context.instance, nullptr);
+    context.commandPool = VK_NULL_HANDLE;
+    context.device = VK_NULL_HANDLE;
+    context.messenger = VK_NULL_HANDLE;
+    context.instance = VK_NULL_HANDLE;
+}
+
+} // namespace shprobe

@@ -1,0 +1,67 @@
+// The Vulkan instance, the chosen physical device, a logical device with one compute queue, and
+// the validation messenger. Plain handles; createContext / destroyContext.
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+#include <vulkan/vulkan.h>
+
+namespace shprobe {
+
+struct ContextOptions {
+    // Device to use: an index into listDevices(), or a case-insensitive part of its name.
+    // Empty: the best one (discrete > integrated > virtual > CPU); SHPROBE_DEVICE overrides.
+    std::string device;
+    // Enable the Khronos validation layer (also with SHPROBE_VALIDATION=1). Every message is
+    // printed to stderr and counted; creating the context fails if the layer is missing.
+    bool validation = false;
+};
+
+struct DeviceInfo {
+    uint32_t index = 0;
+    std::string name;
+    VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+    uint32_t apiVersion = 0;
+    std::string driver; // driver name and info
+    uint32_t subgroupSize = 0;
+    bool subgroupArithmetic = false; // basic + arithmetic subgroup ops in compute shaders
+    bool timestamps = false;         // the compute queue can write timestamps
+    float timestampPeriod = 0.0f;    // nanoseconds per tick
+    VkPhysicalDeviceLimits limits{};
+    // Why the device cannot run shprobe (empty when it can).
+    std::string unsupportedReason;
+};
+
+// Counts validation messages; owned by the context and shared with the messenger callback.
+struct ValidationLog {
+    std::atomic<uint32_t> messages{0};
+};
+
+struct Context {
+    VkInstance instance = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+    VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    uint32_t queueFamily = 0;
+    VkQueue queue = VK_NULL_HANDLE;
+    VkCommandPool commandPool = VK_NULL_HANDLE;
+    DeviceInfo info;
+    VkPhysicalDeviceMemoryProperties memory{};
+    std::unique_ptr<ValidationLog> validationLog;
+
+    uint32_t validationMessages() const { return validationLog ? validationLog->messages.load() : 0; }
+};
+
+// Throws Error(Device) with a hint when there is no Vulkan loader, no device, or none usable.
+Context createContext(const ContextOptions& options);
+void destroyContext(Context& context);
+
+// Every physical device with its properties, for `shprobe info` and device selection.
+std::vector<DeviceInfo> listDevices(const ContextOptions& options);
+
+const char* deviceTypeName(VkPhysicalDeviceType type);
+std::string versionString(uint32_t version);
+
+} // namespace shprobe

@@ -1,0 +1,170 @@
+#include "vk/resources.h"
+
+#include "vk/check.h"
+
+#include <cstring>
+
+namespace shprobe {
+
+namespace {
+
+struct MemoryPreference {
+    VkMemoryPropertyFlags required;
+    VkMemoryPropertyFlags preferred;
+};
+
+MemoryPreference memoryPreference(MemoryUse use) {
+    switch (use) {
+    case MemoryUse::Device:
+        return {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT};
+    case MemoryUse::Upload:
+        return {VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT, 0};
+    case MemoryUse::Readback:
+        return {VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT, VK_MEMORY_PROPERTY_HOST_CACHED_BIT};
+    }
+    return {0, 0};
+}
+
+// The memory type allowed by typeBits with all required flags, and the preferred ones if any has
+// them; UINT32_MAX if none.
+uint32_t findMemoryType(const VkPhysicalDeviceMemoryProperties& memory, uint32_t typeBits, MemoryPreference want) {
+    uint32_t fallback = UINT32_MAX;
+    for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
+        VkMemoryPropertyFlags flags = memory.memoryTypes[i].propertyFlags;
+        if (!(typeBits & (1u << i)) || (flags & want.required) != want.required) continue;
+        if ((flags & want.preferred) == want.preferred) return i;
+        if (fallback == UINT32_MAX) fallback = i;
+    }
+    return fallback;
+}
+
+std::string sizeText(VkDeviceSize size) { return std::to_string((size + (1 << 20) - 1) >> 20) + " MiB"; }
+
+VkDeviceMemory allocateMemory(const Context& context, VkMemoryRequirements requirements, uint32_t type,
+                              const char* what) {
+    VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    info.allocationSize = requirements.size;
+    info.memoryTypeIndex = type;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    VkResult result = vkAllocateMemory(context.device, &info, nullptr, &memory);
+    if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
+        throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(requirements.size) + " for " + what +
+                                           ": out of memory on " + context.info.name +
+                                           "; try a smaller --face-size");
+    VK_CHECK(result);
+    return memory;
+}
+
+} // namespace
+
+Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
+                    const char* what) {
+    Buffer buffer;
+    buffer.size = size;
+    VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    info.size = size;
+    info.usage = usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    VK_CHECK(vkCreateBuffer(context.device, &info, nullptr, &buffer.buffer));
+
+    try {
+        VkMemoryRequirements requirements;
+        vkGetBufferMemoryRequirements(context.device, buffer.buffer, &requirements);
+        uint32_t type = findMemoryType(context.memory, requirements.memoryTypeBits, memoryPreference(use));
+        if (type == UINT32_MAX)
+            throw Error(ErrorKind::Device, std::string("no suitable memory type for ") + what);
+        buffer.memory = allocateMemory(context, requirements, type, what);
+        VK_CHECK(vkBindBufferMemory(context.device, buffer.buffer, buffer.memory, 0));
+
+        VkMemoryPropertyFlags flags = context.memory.memoryTypes[type].propertyFlags;
+        buffer.coherent = flags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        if (flags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)
+            VK_CHECK(vkMapMemory(context.device, buffer.memory, 0, VK_WHOLE_SIZE, 0, &buffer.mapped));
+    } catch (...) {
+        destroyBuffer(context, buffer);
+        throw;
+    }
+    return buffer;
+}
+
+void destroyBuffer(const Context& context, Buffer& buffer) {
+    if (buffer.buffer) vkDestroyBuffer(context.device, buffer.buffer, nullptr);
+    if (buffer.memory) vkFreeMemory(context.device, buffer.memory, nullptr); // unmaps implicitly
+    buffer = Buffer{};
+}
+
+void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size) {
+    if (buffer.mapped) {
+        std::memcpy(buffer.mapped, data, size_t(size));
+        if (!buffer.coherent) {
+            VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+            range.memory = buffer.memory;
+            range.size = VK_WHOLE_SIZE;
+            VK_CHECK(vkFlushMappedMemoryRanges(context.device, 1, &range));
+        }
+        return;
+    }
+    Buffer staging = createBuffer(context, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, "staging");
+    try {
+        std::memcpy(staging.mapped, data, size_t(size));
+        submitAndWait(context, [&](VkCommandBuffer commands) {
+            VkBufferCopy region{0, 0, size};
+            vkCmdCopyBuffer(commands, staging.buffer, buffer.buffer, 1, &region);
+        });
+    } catch (...) {
+        destroyBuffer(context, staging);
+        throw;
+    }
+    destroyBuffer(context, staging);
+}
+
+void invalidateBuffer(const Context& context, const Buffer& buffer) {
+    if (buffer.coherent) return;
+    VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+    range.memory = buffer.memory;
+    range.size = VK_WHOLE_SIZE;
+    VK_CHECK(vkInvalidateMappedMemoryRanges(context.device, 1, &range));
+}
+
+void submitAndWait(const Context& context, const std::function<void(VkCommandBuffer)>& record) {
+    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    allocate.commandPool = context.commandPool;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = 1;
+    VkCommandBuffer commands = VK_NULL_HANDLE;
+    VK_CHECK(vkAllocateCommandBuffers(context.device, &allocate, &commands));
+    VkFence fence = VK_NULL_HANDLE;
+    try {
+        VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+        begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+        VK_CHECK(vkBeginCommandBuffer(commands, &begin));
+        record(commands);
+        VK_CHECK(vkEndCommandBuffer(commands));
+
+        VkFenceCreateInfo fenceInfo{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+        VK_CHECK(vkCreateFence(context.device, &fenceInfo, nullptr, &fence));
+        VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        submit.commandBufferCount = 1;
+        submit.pCommandBuffers = &commands;
+        VK_CHECK(vkQueueSubmit(context.queue, 1, &submit, fence));
+        VK_CHECK(vkWaitForFences(context.device, 1, &fence, VK_TRUE, UINT64_MAX));
+    } catch (...) {
+        if (fence) vkDestroyFence(context.device, fence, nullptr);
+        vkFreeCommandBuffers(context.device, context.commandPool, 1, &commands);
+        throw;
+    }
+    vkDestroyFence(context.device, fence, nullptr);
+    vkFreeCommandBuffers(context.device, context.commandPool, 1, &commands);
+}
+
+void computeWriteBarrier(VkCommandBuffer commands) {
+    VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT |
+                             VK_PIPELINE_STAGE_HOST_BIT,
+                         0, 1, &barrier, 0, nullptr, 0, nullptr);
+}
+
+} // namespace shprobe

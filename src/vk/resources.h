@@ -1,0 +1,40 @@
+// Buffers and one-shot command submission. Plain handles; createBuffer / destroyBuffer.
+#pragma once
+#include "vk/context.h"
+#include <functional>
+
+namespace shprobe {
+
+enum class MemoryUse {
+    Device,   // device-local; host-visible too where the device has such memory (UMA, lavapipe)
+    Upload,   // host-visible, coherent: written by the CPU, read by the device
+    Readback, // host-visible, cached where possible: written by the device, read by the CPU
+};
+
+struct Buffer {
+    VkBuffer buffer = VK_NULL_HANDLE;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    VkDeviceSize size = 0;
+    void* mapped = nullptr; // persistently mapped when the memory is host-visible
+    bool coherent = false;
+};
+
+// `what` names the buffer in error messages ("input texels").
+Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
+                    const char* what);
+void destroyBuffer(const Context& context, Buffer& buffer);
+
+// Copies data into the buffer: directly when it is mapped, through a staging buffer otherwise
+// (the buffer then needs VK_BUFFER_USAGE_TRANSFER_DST_BIT).
+void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size);
+// Makes device writes to a mapped buffer visible to the host (no-op for coherent memory).
+void invalidateBuffer(const Context& context, const Buffer& buffer);
+
+// Records commands with `record`, submits them on the context's queue and waits for them.
+void submitAndWait(const Context& context, const std::function<void(VkCommandBuffer)>& record);
+
+// A barrier making compute-shader (and transfer) writes visible to later compute reads, transfers
+// and host reads.
+void computeWriteBarrier(VkCommandBuffer commands);
+
+} // namespace shprobe

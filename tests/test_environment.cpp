@@ -1,0 +1,657 @@
+// Image loading: layouts (equirect, crosses, six faces), sRGB and channel handling, non-finite
+// texels, error messages, cube-map resizing, the default sky and the EXR writer. Test images are
+// written to a temporary folder by each test; no binary file is checked in.
+#include "image/environment.h"
+#include "image/image_write.h"
+#include "sh/error.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <glm/geometric.hpp>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <unistd.h>
+
+namespace shprobe {
+namespace {
+namespace fs = std::filesystem;
+
+// A folder of its own for each test, removed with its contents afterwards.
+class EnvironmentFiles : public ::testing::Test {
+  protected:
+    EnvironmentFiles() {
+        const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        folder_ = fs::temp_directory_path() /
+                  ("shprobe_test_environment_" + std::to_string(getpid()) + "_" + test->name());
+        fs::remove_all(folder_);
+        fs::create_directories(folder_);
+    }
+    ~EnvironmentFiles() override {
+        std::error_code ignored;
+        fs::remove_all(folder_, ignored);
+    }
+    std::string file(const std::string& name) const { return (folder_ / name).string(); }
+    std::string folder() const { return folder_.string(); }
+
+  private:
+    fs::path folder_;
+};
+
+Image filledImage(int width, int height, const std::function<glm::vec3(int, int)>& value) {
+    Image image = makeImage(width, height);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            image.at(x, y) = glm::vec4(value(x, y), 1.0f);
+    return image;
+}
+
+// Writes raw channel data through OpenImageIO, for the channel counts and integer formats that
+// writeImage (RGB float) does not produce. Alpha is written as given, not premultiplied. A colour
+// space, if given, is recorded in the file (PNG: gAMA 1 for "linear").
+template <typename T>
+void writeChannels(const std::string& path, int width, int height, int channels, OIIO::TypeDesc type,
+                   const std::vector<T>& data, const char* colorSpace = nullptr) {
+    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(output) << OIIO::geterror();
+    OIIO::ImageSpec spec(width, height, channels, type);
+    spec.attribute("oiio:UnassociatedAlpha", 1);
+    if (colorSpace) spec.attribute("oiio:ColorSpace", colorSpace);
+    ASSERT_TRUE(output->open(path, spec)) << output->geterror();
+    ASSERT_TRUE(output->write_image(type, data.data())) << output->geterror();
+    ASSERT_TRUE(output->close()) << output->geterror();
+}
+
+void writeText(const std::string& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+}
+
+// The message of the Error(Input) that f must throw.
+std::string inputErrorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& error) {
+        EXPECT_EQ(error.kind(), ErrorKind::Input) << error.what();
+        return error.what();
+    }
+    ADD_FAILURE() << "no Error was thrown";
+    return {};
+}
+
+#define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "message: " << (text)
+
+double angleBetween(const glm::dvec3& a, const glm::dvec3& b) {
+    return std::acos(std::clamp(glm::dot(glm::normalize(a), glm::normalize(b)), -1.0, 1.0));
+}
+
+// The exact sRGB EOTF, written here independently of the code under test.
+double srgbDecoded(double c) {
+    return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+}
+
+// ---- Layout names and detection ---------------------------------------------------------------
+
+TEST(Layouts, DetectedFromTheAspectRatio) {
+    EXPECT_EQ(detectLayout(200, 100), Layout::Equirect);
+    EXPECT_EQ(detectLayout(400, 300), Layout::HorizontalCross);
+    EXPECT_EQ(detectLayout(300, 400), Layout::VerticalCross);
+    std::string message = inputErrorOf([] { detectLayout(500, 400); });
+    EXPECT_CONTAINS(message, "500x400");
+    EXPECT_CONTAINS(message, "2:1");
+}
+
+TEST(Layouts, NamesParseAndPrintBack) {
+    for (Layout layout :
+         {Layout::Auto, Layout::Equirect, Layout::HorizontalCross, Layout::VerticalCross, Layout::Faces})
+        EXPECT_EQ(parseLayout(layoutName(layout)), layout) << layoutName(layout);
+    EXPECT_STREQ(layoutName(Layout::HorizontalCross), "hcross");
+    EXPECT_STREQ(layoutName(Layout::VerticalCross), "vcross");
+    EXPECT_CONTAINS(inputErrorOf([] { parseLayout("sphere"); }), "sphere");
+}
+
+// ---- Crosses ----------------------------------------------------------------------------------
+
+// Cross positions in face-size units, from CONVENTIONS.md, in Face order.
+struct Slot {
+    int column;
+    int row;
+};
+constexpr Slot kHorizontalSlots[kFaceCount] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};
+constexpr Slot kVerticalSlots[kFaceCount] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3}};
+
+// A cross whose every texel holds its own cross coordinates (x, y, 1), so each cube texel says
+// where it was read from. Every region varies, so a flip or rotation of any face shows.
+Image coordinateCross(int columns, int rows, int faceSize) {
+    return filledImage(columns * faceSize, rows * faceSize, [](int x, int y) { return glm::vec3(x, y, 1); });
+}
+
+// Neighbouring texels of the cross that land on the cube must be neighbours on the sphere: that is
+// "each face appears as its own face image would", checked without any table of positions. Two
+// adjacent texel centers are at most one texel width apart, which is at most 2 / N radians.
+void expectCrossNeighboursAdjacent(const Cubemap& cubemap, int crossWidth, int crossHeight) {
+    int n = cubemap.faceSize;
+    std::vector<glm::dvec3> direction(size_t(crossWidth) * crossHeight, glm::dvec3(0.0));
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                glm::vec4 source = cubemap.at(face, i, j);
+                direction[size_t(source.y) * crossWidth + size_t(source.x)] = texelDirection(face, i, j, n);
+            }
+    const double maxNeighbourAngle = 2.0 / n;
+    int pairs = 0;
+    for (int y = 0; y < crossHeight; ++y)
+        for (int x = 0; x < crossWidth; ++x) {
+            glm::dvec3 here = direction[size_t(y) * crossWidth + x];
+            if (here == glm::dvec3(0.0)) continue;
+            for (auto [dx, dy] : {std::pair{1, 0}, std::pair{0, 1}}) {
+                if (x + dx >= crossWidth || y + dy >= crossHeight) continue;
+                glm::dvec3 next = direction[size_t(y + dy) * crossWidth + x + dx];
+                if (next == glm::dvec3(0.0)) continue;
+                ++pairs;
+                EXPECT_LE(angleBetween(here, next), maxNeighbourAngle)
+                    << "cross texels (" << x << ", " << y << ") and (" << x + dx << ", " << y + dy << ")";
+            }
+        }
+    EXPECT_GT(pairs, 0);
+}
+
+TEST_F(EnvironmentFiles, HorizontalCrossLoadsEachFaceUpright) {
+    const int n = 8;
+    writeImage(file("cross.exr"), coordinateCross(4, 3, n));
+    Environment environment = loadEnvironment(file("cross.exr"), {});
+    EXPECT_EQ(environment.layout, Layout::HorizontalCross);
+    ASSERT_EQ(environment.cubemap.faceSize, n);
+    // Face texel (i, j) is the region's texel (i, j): check the top-left and bottom-right corners.
+    for (int face = 0; face < kFaceCount; ++face) {
+        Slot slot = kHorizontalSlots[face];
+        EXPECT_EQ(environment.cubemap.at(face, 0, 0), glm::vec4(slot.column * n, slot.row * n, 1, 1)) << face;
+        EXPECT_EQ(environment.cubemap.at(face, n - 1, n - 1),
+                  glm::vec4(slot.column * n + n - 1, slot.row * n + n - 1, 1, 1))
+            << face;
+    }
+    expectCrossNeighboursAdjacent(environment.cubemap, 4 * n, 3 * n);
+}
+
+TEST_F(EnvironmentFiles, VerticalCrossTurnsNegativeZ) {
+    const int n = 8;
+    writeImage(file("cross.exr"), coordinateCross(3, 4, n));
+    Environment environment = loadEnvironment(file("cross.exr"), {});
+    EXPECT_EQ(environment.layout, Layout::VerticalCross);
+    ASSERT_EQ(environment.cubemap.faceSize, n);
+    for (int face = 0; face < kFaceCount; ++face) {
+        Slot slot = kVerticalSlots[face];
+        // -Z is stored rotated 180 degrees: its face texel (0, 0) is the region's bottom-right one.
+        bool rotated = face == int(Face::NegativeZ);
+        glm::vec4 topLeft(slot.column * n, slot.row * n, 1, 1);
+        glm::vec4 bottomRight(slot.column * n + n - 1, slot.row * n + n - 1, 1, 1);
+        EXPECT_EQ(environment.cubemap.at(face, 0, 0), rotated ? bottomRight : topLeft) << face;
+        EXPECT_EQ(environment.cubemap.at(face, n - 1, n - 1), rotated ? topLeft : bottomRight) << face;
+    }
+    expectCrossNeighboursAdjacent(environment.cubemap, 3 * n, 4 * n);
+}
+
+TEST_F(EnvironmentFiles, CrossResizedOnRequest) {
+    writeImage(file("cross.exr"), filledImage(32, 24, [](int, int) { return glm::vec3(0.5f, 1.5f, 2.5f); }));
+    Environment environment = loadEnvironment(file("cross.exr"), {.faceSize = 5});
+    ASSERT_EQ(environment.cubemap.faceSize, 5);
+    EXPECT_EQ(environment.cubemap.at(3, 4, 2), glm::vec4(0.5f, 1.5f, 2.5f, 1.0f));
+}
+
+// ---- Six face files ---------------------------------------------------------------------------
+
+const char* const kFaceNames[kFaceCount] = {"px", "nx", "py", "ny", "pz", "nz"};
+
+// Face f's texel (i, j) holds (f, i, j).
+Image faceImage(int face, int faceSize) {
+    return filledImage(faceSize, faceSize, [face](int i, int j) { return glm::vec3(face, i, j); });
+}
+
+void expectFacesInOrder(const Cubemap& cubemap, int faceSize) {
+    ASSERT_EQ(cubemap.faceSize, faceSize);
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < faceSize; ++j)
+            for (int i = 0; i < faceSize; ++i)
+                ASSERT_EQ(cubemap.at(face, i, j), glm::vec4(face, i, j, 1)) << face << " " << i << " " << j;
+}
+
+TEST_F(EnvironmentFiles, SixFacesFromAFolder) {
+    fs::create_directory(file("faces"));
+    for (int face = 0; face < kFaceCount; ++face)
+        writeImage(file("faces/" + std::string(kFaceNames[face]) + ".exr"), faceImage(face, 4));
+    writeText(file("faces/readme.txt"), "not a face");
+    EXPECT_TRUE(isFacesSource(file("faces")));
+    Environment environment = loadEnvironment(file("faces"), {});
+    EXPECT_EQ(environment.layout, Layout::Faces);
+    expectFacesInOrder(environment.cubemap, 4);
+}
+
+TEST_F(EnvironmentFiles, SixFacesFromAPattern) {
+    for (int face = 0; face < kFaceCount; ++face)
+        writeImage(file("sky_" + std::string(kFaceNames[face]) + ".exr"), faceImage(face, 4));
+    std::string pattern = file("sky_{face}.exr");
+    EXPECT_TRUE(isFacesSource(pattern));
+    EXPECT_FALSE(isFacesSource(file("sky_px.exr")));
+    Environment environment = loadEnvironment(pattern, {});
+    EXPECT_EQ(environment.layout, Layout::Faces);
+    expectFacesInOrder(environment.cubemap, 4);
+}
+
+TEST_F(EnvironmentFiles, FacesMustExistBeSquareAndMatch) {
+    for (int face = 0; face < kFaceCount - 1; ++face)
+        writeImage(file("sky_" + std::string(kFaceNames[face]) + ".exr"), faceImage(face, 4));
+    EXPECT_CONTAINS(inputErrorOf([&] { loadEnvironment(file("sky_{face}.exr"), {}); }), "sky_nz.exr");
+
+    writeImage(file("sky_nz.exr"), faceImage(5, 8));
+    std::string message = inputErrorOf([&] { loadEnvironment(file("sky_{face}.exr"), {}); });
+    EXPECT_CONTAINS(message, "sky_nz.exr is 8x8");
+    EXPECT_CONTAINS(message, "sky_px.exr is 4x4");
+
+    writeImage(file("sky_nz.exr"), filledImage(4, 3, [](int, int) { return glm::vec3(1); }));
+    message = inputErrorOf([&] { loadEnvironment(file("sky_{face}.exr"), {}); });
+    EXPECT_CONTAINS(message, "sky_nz.exr");
+    EXPECT_CONTAINS(message, "square");
+}
+
+// ---- Equirect ---------------------------------------------------------------------------------
+
+// A smooth function of direction, linear in (x, y, z), so that every face and every latitude
+// sees a different value.
+float smoothRadiance(const glm::dvec3& d) {
+    return float(1.0 + d.x + 2.0 * d.y + 3.0 * d.z);
+}
+
+Image smoothEquirect(int width, int height) {
+    return filledImage(width, height, [&](int i, int j) {
+        return glm::vec3(smoothRadiance(equirectDirection(i, j, width, height)));
+    });
+}
+
+// Mean of smoothRadiance over texel (i, j), on a grid much finer than any supersampling.
+double smoothTexelMean(int face, int i, int j, int faceSize) {
+    const int grid = 16;
+    double sum = 0.0;
+    for (int sj = 0; sj < grid; ++sj)
+        for (int si = 0; si < grid; ++si) {
+            double a = -1.0 + 2.0 * (i + (si + 0.5) / grid) / faceSize;
+            double b = -1.0 + 2.0 * (j + (sj + 0.5) / grid) / faceSize;
+            sum += smoothRadiance(faceDirection(face, a, b));
+        }
+    return sum / (grid * grid);
+}
+
+// Bilinear interpolation of a smooth function sampled every h = 2 pi / W radians errs by up to
+// |f''| h^2 / 8 per axis: with |f''| <= |(1, 2, 3)| = 3.7 and W = 256, 2.8e-4, so 5.6e-4 for both
+// axes (5.0e-4 measured). The test images also pass through float once.
+constexpr double kEquirectInterpolationError = 1e-3;
+
+TEST_F(EnvironmentFiles, EquirectMatchesTheFunctionAtTexelCenters) {
+    writeImage(file("sky.exr"), smoothEquirect(256, 128));
+    Environment environment = loadEnvironment(file("sky.exr"), {});
+    EXPECT_EQ(environment.layout, Layout::Equirect);
+    ASSERT_EQ(environment.cubemap.faceSize, 64); // width / 4
+    EXPECT_CONTAINS(environment.description, "equirect 256x128");
+    double maxError = 0.0;
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < 64; ++j)
+            for (int i = 0; i < 64; ++i) {
+                double expected = smoothRadiance(texelDirection(face, i, j, 64));
+                maxError = std::max(maxError, std::abs(environment.cubemap.at(face, i, j).g - expected));
+            }
+    RecordProperty("max_error", std::to_string(maxError));
+    std::printf("equirect 256x128 -> cube 64: max error %.3g\n", maxError);
+    EXPECT_LT(maxError, kEquirectInterpolationError);
+}
+
+// With small faces each texel averages a grid of supersamples: compare with the texel's mean.
+TEST(Equirect, SmallFacesAverageTheirTexels) {
+    const int faceSize = 8; // 256 / (4 * 8) = 8 supersamples per side
+    Cubemap cubemap = equirectToCubemap(smoothEquirect(256, 128), faceSize);
+    double maxError = 0.0;
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < faceSize; ++j)
+            for (int i = 0; i < faceSize; ++i)
+                maxError = std::max(
+                    maxError, std::abs(cubemap.at(face, i, j).r - smoothTexelMean(face, i, j, faceSize)));
+    std::printf("equirect 256x128 -> cube 8: max error against the texel mean %.3g\n", maxError);
+    EXPECT_LT(maxError, kEquirectInterpolationError);
+}
+
+// Bilinear weights sum to 1 and the texel mean divides by the sample count: only float rounding.
+TEST(Equirect, ConstantStaysConstant) {
+    Cubemap cubemap =
+        equirectToCubemap(filledImage(64, 32, [](int, int) { return glm::vec3(0.7f, 1.1f, 3.0f); }), 7);
+    for (const glm::vec4& texel : cubemap.texels) {
+        EXPECT_NEAR(texel.r, 0.7f, 1e-6f);
+        EXPECT_NEAR(texel.b, 3.0f, 1e-6f);
+    }
+}
+
+TEST_F(EnvironmentFiles, LayoutOverrideMustFitTheImage) {
+    writeImage(file("sky.exr"), smoothEquirect(64, 32));
+    std::string message =
+        inputErrorOf([&] { loadEnvironment(file("sky.exr"), {.layout = Layout::HorizontalCross}); });
+    EXPECT_CONTAINS(message, "sky.exr");
+    EXPECT_CONTAINS(message, "64x32");
+    // A 4:3 image may be read as an equirect if the user says so.
+    writeImage(file("cross.exr"), coordinateCross(4, 3, 2));
+    EXPECT_EQ(loadEnvironment(file("cross.exr"), {.layout = Layout::Equirect}).layout, Layout::Equirect);
+}
+
+// ---- sRGB decoding and channels ---------------------------------------------------------------
+
+// readImage computes the EOTF in double and rounds once to float: agreement to float precision.
+constexpr float kFloatRounding = 1e-7f;
+
+TEST_F(EnvironmentFiles, EightBitImagesAreDecodedFromSrgb) {
+    std::vector<uint8_t> rgb = {128, 128, 128, 0, 10, 255};
+    writeChannels(file("srgb.png"), 2, 1, 3, OIIO::TypeDesc::UINT8, rgb);
+    Image image = readImage(file("srgb.png"));
+    EXPECT_NEAR(image.at(0, 0).r, 0.2158605f, kFloatRounding);
+    EXPECT_NEAR(image.at(0, 0).b, 0.2158605f, kFloatRounding);
+    EXPECT_EQ(image.at(1, 0).r, 0.0f);
+    EXPECT_NEAR(image.at(1, 0).g, srgbDecoded(10.0 / 255.0), kFloatRounding); // linear segment
+    EXPECT_EQ(image.at(1, 0).b, 1.0f);
+}
+
+TEST_F(EnvironmentFiles, IntegerImagesMarkedLinearAreNotDecoded) {
+    writeChannels(file("linear.png"), 1, 1, 3, OIIO::TypeDesc::UINT8, std::vector<uint8_t>{128, 128, 128},
+                  "linear");
+    EXPECT_NEAR(readImage(file("linear.png")).at(0, 0).r, 128.0f / 255.0f, kFloatRounding);
+}
+
+TEST_F(EnvironmentFiles, SixteenBitImagesAreDecodedFromSrgb) {
+    std::vector<uint16_t> rgb = {32768, 1000, 65535};
+    writeChannels(file("srgb16.png"), 1, 1, 3, OIIO::TypeDesc::UINT16, rgb);
+    Image image = readImage(file("srgb16.png"));
+    EXPECT_NEAR(image.at(0, 0).r, srgbDecoded(32768.0 / 65535.0), kFloatRounding);
+    EXPECT_NEAR(image.at(0, 0).g, srgbDecoded(1000.0 / 65535.0), kFloatRounding);
+    EXPECT_EQ(image.at(0, 0).b, 1.0f);
+}
+
+TEST_F(EnvironmentFiles, FloatImagesAreLinear) {
+    std::vector<float> rgb = {0.5f, 2.0f, -0.25f};
+    writeChannels(file("linear.exr"), 1, 1, 3, OIIO::TypeDesc::FLOAT, rgb);
+    EXPECT_EQ(glm::vec3(readImage(file("linear.exr")).at(0, 0)), glm::vec3(0.5f, 2.0f, -0.25f));
+}
+
+TEST_F(EnvironmentFiles, OneChannelIsGrey) {
+    writeChannels(file("grey.exr"), 2, 1, 1, OIIO::TypeDesc::FLOAT, std::vector<float>{0.25f, 3.0f});
+    Image image = readImage(file("grey.exr"));
+    EXPECT_EQ(glm::vec3(image.at(0, 0)), glm::vec3(0.25f));
+    EXPECT_EQ(glm::vec3(image.at(1, 0)), glm::vec3(3.0f));
+}
+
+TEST_F(EnvironmentFiles, TwoChannelsAreGreyAndIgnoredAlpha) {
+    // Alpha 0 must not blacken the grey value (no premultiplication).
+    writeChannels(file("grey_alpha.png"), 1, 1, 2, OIIO::TypeDesc::UINT8, std::vector<uint8_t>{128, 0});
+    EXPECT_NEAR(readImage(file("grey_alpha.png")).at(0, 0).r, 0.2158605f, kFloatRounding);
+    EXPECT_NEAR(readImage(file("grey_alpha.png")).at(0, 0).b, 0.2158605f, kFloatRounding);
+}
+
+TEST_F(EnvironmentFiles, FourChannelsAreRgbAndIgnoredAlpha) {
+    writeChannels(file("rgba.png"), 1, 1, 4, OIIO::TypeDesc::UINT8, std::vector<uint8_t>{255, 128, 0, 0});
+    Image image = readImage(file("rgba.png"));
+    EXPECT_EQ(image.at(0, 0).r, 1.0f);
+    EXPECT_NEAR(image.at(0, 0).g, 0.2158605f, kFloatRounding);
+    EXPECT_EQ(image.at(0, 0).b, 0.0f);
+
+    writeChannels(file("rgba.exr"), 1, 1, 4, OIIO::TypeDesc::FLOAT,
+                  std::vector<float>{1.5f, 2.5f, 3.5f, 0.0f});
+    EXPECT_EQ(glm::vec3(readImage(file("rgba.exr")).at(0, 0)), glm::vec3(1.5f, 2.5f, 3.5f));
+}
+
+// ---- Non-finite texels ------------------------------------------------------------------------
+
+Image equirectWithNonFiniteTexels() {
+    Image image = filledImage(16, 8, [](int, int) { return glm::vec3(1.0f); });
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    image.at(1, 1).r = nan;
+    image.at(2, 3).g = nan;
+    image.at(5, 5) = glm::vec4(nan, nan, nan, 1.0f);
+    image.at(7, 0).b = inf;
+    image.at(9, 7).r = -inf;
+    return image;
+}
+
+TEST_F(EnvironmentFiles, NonFiniteTexelsAreRefusedWithTheirCount) {
+    writeImage(file("nan.exr"), equirectWithNonFiniteTexels());
+    std::string message = inputErrorOf([&] { loadEnvironment(file("nan.exr"), {}); });
+    EXPECT_CONTAINS(message, "nan.exr");
+    EXPECT_CONTAINS(message, "5 texels are NaN or infinite");
+    EXPECT_CONTAINS(message, "--sanitize");
+}
+
+TEST_F(EnvironmentFiles, NonFiniteTexelsAreReplacedOnRequest) {
+    writeImage(file("nan.exr"), equirectWithNonFiniteTexels());
+    Environment environment = loadEnvironment(file("nan.exr"), {.nonFinite = NonFinitePolicy::Replace});
+    EXPECT_EQ(environment.replacedTexels, 5u);
+    for (const glm::vec4& texel : environment.cubemap.texels) {
+        // Replaced before resampling: no NaN spreads, and the zeros only darken, never brighten.
+        EXPECT_TRUE(std::isfinite(texel.r) && std::isfinite(texel.g) && std::isfinite(texel.b));
+        EXPECT_LE(texel.r, 1.0f + kFloatRounding);
+        EXPECT_GE(texel.r, 0.0f);
+    }
+}
+
+TEST(NonFinitePolicy, ReplacesWithZeroAndKeepsNegatives) {
+    std::vector<glm::vec4> texels = {{-2.0f, 1.0f, 0.5f, 1.0f}, {std::nanf(""), 1.0f, 1.0f, 1.0f}};
+    EXPECT_EQ(applyNonFinitePolicy(texels, NonFinitePolicy::Replace, "test"), 1u);
+    EXPECT_EQ(texels[0], glm::vec4(-2.0f, 1.0f, 0.5f, 1.0f));
+    EXPECT_EQ(glm::vec3(texels[1]), glm::vec3(0.0f));
+    // Alpha is not colour: a NaN alpha is not counted.
+    std::vector<glm::vec4> alphaOnly = {{1.0f, 1.0f, 1.0f, std::nanf("")}};
+    EXPECT_EQ(applyNonFinitePolicy(alphaOnly, NonFinitePolicy::Refuse, "test"), 0u);
+}
+
+// ---- Unreadable files -------------------------------------------------------------------------
+
+TEST_F(EnvironmentFiles, MissingFile) {
+    std::string message = inputErrorOf([&] { loadEnvironment(file("absent.exr"), {}); });
+    EXPECT_CONTAINS(message, "absent.exr");
+    EXPECT_CONTAINS(message, "no such file");
+}
+
+TEST_F(EnvironmentFiles, EmptyFile) {
+    writeText(file("empty.exr"), "");
+    std::string message = inputErrorOf([&] { readImage(file("empty.exr")); });
+    EXPECT_CONTAINS(message, "empty.exr");
+    EXPECT_CONTAINS(message, "empty");
+}
+
+TEST_F(EnvironmentFiles, TextFileNamedExr) {
+    writeText(file("notes.exr"), "These are not pixels.\n");
+    std::string message = inputErrorOf([&] { readImage(file("notes.exr")); });
+    EXPECT_CONTAINS(message, "notes.exr");
+    EXPECT_CONTAINS(message, "not an image");
+}
+
+// Cut in half, the file loses part of its header; cut short by a few bytes, only pixels are lost.
+TEST_F(EnvironmentFiles, TruncatedFile) {
+    writeImage(file("half.exr"), smoothEquirect(64, 32));
+    fs::resize_file(file("half.exr"), fs::file_size(file("half.exr")) / 2);
+    EXPECT_CONTAINS(inputErrorOf([&] { readImage(file("half.exr")); }), "half.exr");
+
+    writeImage(file("short.exr"), smoothEquirect(64, 32));
+    fs::resize_file(file("short.exr"), fs::file_size(file("short.exr")) - 10);
+    std::string message = inputErrorOf([&] { readImage(file("short.exr")); });
+    EXPECT_CONTAINS(message, "short.exr");
+    EXPECT_CONTAINS(message, "truncated");
+}
+
+TEST_F(EnvironmentFiles, AspectRatioMatchingNoLayout) {
+    writeImage(file("odd.exr"), filledImage(50, 40, [](int, int) { return glm::vec3(1); }));
+    std::string message = inputErrorOf([&] { loadEnvironment(file("odd.exr"), {}); });
+    EXPECT_CONTAINS(message, "odd.exr");
+    EXPECT_CONTAINS(message, "50x40");
+    EXPECT_CONTAINS(message, "4:3");
+}
+
+// A header may claim a size whose allocation alone would exhaust memory: refused before reading.
+TEST_F(EnvironmentFiles, OversizeHeaderIsRefusedBeforeReading) {
+    writeText(file("huge.ppm"), "P6\n100000 100000\n255\n\x01\x02\x03");
+    std::string message = inputErrorOf([&] { readImage(file("huge.ppm")); });
+    EXPECT_CONTAINS(message, "huge.ppm");
+    EXPECT_CONTAINS(message, "100000x100000");
+    EXPECT_CONTAINS(message, "limit");
+}
+
+// ---- Resizing ---------------------------------------------------------------------------------
+
+Cubemap randomCubemap(int faceSize) {
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> value(0.0f, 4.0f);
+    Cubemap cubemap = makeCubemap(faceSize);
+    for (glm::vec4& texel : cubemap.texels)
+        texel = glm::vec4(value(random), value(random), value(random), 1.0f);
+    return cubemap;
+}
+
+glm::dvec3 faceMean(const Cubemap& cubemap, int face) {
+    glm::dvec3 sum(0.0);
+    for (int j = 0; j < cubemap.faceSize; ++j)
+        for (int i = 0; i < cubemap.faceSize; ++i)
+            sum += glm::dvec3(glm::vec3(cubemap.at(face, i, j)));
+    return sum / double(cubemap.faceSize * cubemap.faceSize);
+}
+
+// Weights sum to 1 in double; one float rounding per texel.
+constexpr double kResizeRounding = 1e-6;
+
+TEST(Resize, KeepsAConstant) {
+    Cubemap constant = makeCubemap(12);
+    for (glm::vec4& texel : constant.texels)
+        texel = glm::vec4(0.3f, 2.0f, 5.0f, 1.0f);
+    for (int size : {1, 5, 7, 12, 13, 31}) {
+        Cubemap resized = resizeCubemap(constant, size);
+        ASSERT_EQ(resized.faceSize, size);
+        for (const glm::vec4& texel : resized.texels) {
+            ASSERT_NEAR(texel.r, 0.3, kResizeRounding) << size;
+            ASSERT_NEAR(texel.b, 5.0, kResizeRounding) << size;
+        }
+    }
+}
+
+// Area averaging covers every source texel with total weight (to / from)^2, so each face's mean
+// is kept, also for ratios that are not integers.
+TEST(Resize, ShrinkingKeepsTheMean) {
+    Cubemap source = randomCubemap(12);
+    for (int size : {1, 4, 5, 7, 11}) {
+        Cubemap resized = resizeCubemap(source, size);
+        for (int face = 0; face < kFaceCount; ++face) {
+            glm::dvec3 before = faceMean(source, face);
+            glm::dvec3 after = faceMean(resized, face);
+            EXPECT_NEAR(after.r, before.r, kResizeRounding * 4) << size;
+            EXPECT_NEAR(after.g, before.g, kResizeRounding * 4) << size;
+        }
+    }
+}
+
+TEST(Resize, HalvingAveragesTwoByTwoBlocks) {
+    Cubemap source = randomCubemap(8);
+    Cubemap half = resizeCubemap(source, 4);
+    glm::vec4 block =
+        (source.at(2, 2, 4) + source.at(2, 3, 4) + source.at(2, 2, 5) + source.at(2, 3, 5)) / 4.0f;
+    EXPECT_NEAR(half.at(2, 1, 2).r, block.r, kResizeRounding * 4);
+    EXPECT_NEAR(half.at(2, 1, 2).g, block.g, kResizeRounding * 4);
+}
+
+// ---- Default sky ------------------------------------------------------------------------------
+
+double luminance(const glm::vec4& texel) {
+    return 0.2126 * texel.r + 0.7152 * texel.g + 0.0722 * texel.b;
+}
+
+TEST(DefaultSky, SunIsBrightAndGroundIsDark) {
+    const int n = 64;
+    SkyParameters sky;
+    Cubemap cubemap = makeDefaultSky(n, sky);
+    glm::dvec3 sun = glm::normalize(sky.sunDirection);
+    double groundSum = 0.0, skySum = 0.0;
+    int groundCount = 0, skyCount = 0;
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                glm::dvec3 d = texelDirection(face, i, j, n);
+                double value = luminance(cubemap.at(face, i, j));
+                double fromSun = angleBetween(d, sun);
+                if (fromSun < sky.sunAngularRadius) {
+                    EXPECT_GT(value, 1000.0) << "inside the sun disc";
+                } else if (fromSun > sky.sunAngularRadius + 3.0 / n) { // clear of texels the disc touches
+                    EXPECT_LT(value, 2.0);
+                    (d.y < 0.0 ? groundSum : skySum) += value;
+                    ++(d.y < 0.0 ? groundCount : skyCount);
+                }
+            }
+    EXPECT_LT(groundSum / groundCount, 0.5 * skySum / skyCount);
+}
+
+// The sun's power is sunRadiance times its cone's solid angle 2 pi (1 - cos r), whatever the face
+// size, even when the disc is smaller than a texel. The coverage grid (8 samples per sun radius,
+// about 200 inside the disc) miscounts the disc's edge by a few tenths of a percent (0.2% measured).
+constexpr double kSunPowerError = 0.01;
+
+TEST(DefaultSky, SunPowerIsKeptAtEveryFaceSize) {
+    SkyParameters sky;
+    SkyParameters sunless = sky;
+    sunless.sunRadiance = glm::dvec3(0.0);
+    double expected = sky.sunRadiance.r * 2.0 * std::numbers::pi * (1.0 - std::cos(sky.sunAngularRadius));
+    for (int n : {1, 4, 16, 64, 256}) {
+        Cubemap with = makeDefaultSky(n, sky);
+        Cubemap without = makeDefaultSky(n, sunless);
+        double power = 0.0;
+        for (int face = 0; face < kFaceCount; ++face)
+            for (int j = 0; j < n; ++j)
+                for (int i = 0; i < n; ++i)
+                    power += texelSolidAngle(i, j, n) * (with.at(face, i, j).r - without.at(face, i, j).r);
+        std::printf("sky face size %d: sun power %.5f, expected %.5f (relative error %.2g)\n", n, power,
+                    expected, power / expected - 1.0);
+        EXPECT_NEAR(power / expected, 1.0, kSunPowerError) << n;
+    }
+}
+
+// ---- Writing ----------------------------------------------------------------------------------
+
+TEST_F(EnvironmentFiles, ExrRoundTripsExactly) {
+    std::mt19937 random(3);
+    std::normal_distribution<float> value(0.0f, 1000.0f);
+    Image image =
+        filledImage(13, 7, [&](int, int) { return glm::vec3(value(random), value(random), value(random)); });
+    writeImage(file("out.exr"), image);
+    Image back = readImage(file("out.exr"));
+    ASSERT_EQ(back.width, 13);
+    ASSERT_EQ(back.height, 7);
+    for (size_t t = 0; t < image.texels.size(); ++t)
+        ASSERT_EQ(glm::vec3(back.texels[t]), glm::vec3(image.texels[t])) << t;
+    // Nothing else is left in the folder: the temporary file was renamed.
+    EXPECT_EQ(std::distance(fs::directory_iterator(folder()), fs::directory_iterator()), 1);
+}
+
+// 8-bit files hold sRGB: writeImage encodes what readImage decodes. 0.2158605 encodes to 128
+// exactly, 0 and 1 to 0 and 255, so these come back to float precision.
+TEST_F(EnvironmentFiles, EightBitFilesRoundTripThroughSrgb) {
+    Image image = filledImage(1, 1, [](int, int) { return glm::vec3(0.0f, 0.2158605f, 1.0f); });
+    writeImage(file("out.png"), image);
+    Image back = readImage(file("out.png"));
+    EXPECT_EQ(back.at(0, 0).r, 0.0f);
+    EXPECT_NEAR(back.at(0, 0).g, 0.2158605f, kFloatRounding);
+    EXPECT_EQ(back.at(0, 0).b, 1.0f);
+}
+
+TEST_F(EnvironmentFiles, WritingIntoAMissingFolderFails) {
+    try {
+        writeImage(file("absent/out.exr"), smoothEquirect(4, 2));
+        ADD_FAILURE() << "no Error was thrown";
+    } catch (const Error& error) {
+        EXPECT_EQ(error.kind(), ErrorKind::Output);
+        EXPECT_CONTAINS(std::string(error.what()), "absent");
+    }
+}
+
+} // namespace
+} // namespace shprobe

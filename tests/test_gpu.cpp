@@ -1,0 +1,224 @@
+// GPU projection and convolution (project.comp, reduce.comp, convolve.comp) against the
+// double-precision CPU reference, on whatever device the context picks (lavapipe in CI, run once
+// per subgroup size 4, 8, 16, 32).
+#include "gpu_test.h"
+
+#include "gpu/projector.h"
+#include "image/environment.h"
+#include "sh/basis.h"
+#include "sh/error.h"
+#include "sh/irradiance.h"
+#include "sh/projection.h"
+#include "shprobe/shprobe_test_spirv.h"
+#include "vk/pipeline.h"
+#include "vk/resources.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <glm/geometric.hpp>
+#include <random>
+
+namespace shprobe::testing {
+namespace {
+
+// fp32 accuracy of the GPU path relative to |L_00| (the largest channel): each texel's weight,
+// direction and basis carry a few ulps (~3e-7 relative, see test_geometry), each invocation sums at
+// most texelsPerInvocation = 256 terms in sequence (error <= 256 ulps worst case, ~16 ulps typical),
+// the workgroup reduction is a tree and the cross-workgroup sum is compensated. Higher bands are
+// scaled by max|y_lm| / y_00 <= 5 at order 8. 2e-6 |L_00| leaves a few times the errors measured
+// (about 3e-7) and is 50 times tighter than a wrong weight or basis entry would give.
+constexpr double kGpuTolerance = 2e-6;
+
+Cubemap noiseCubemap(int faceSize, uint32_t seed) {
+    Cubemap cubemap = makeCubemap(faceSize);
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    for (glm::vec4& texel : cubemap.texels)
+        texel = {uniform(random), uniform(random), uniform(random), 1.0f};
+    return cubemap;
+}
+
+// The built-in sky with one texel 10^5 times brighter than the sky: a sun the size of a texel.
+Cubemap hotSunCubemap(int faceSize) {
+    Cubemap cubemap = makeDefaultSky(faceSize);
+    cubemap.at(2, faceSize / 3, faceSize / 5) = glm::vec4(1e5f, 9e4f, 8e4f, 1.0f);
+    return cubemap;
+}
+
+Cubemap singleTexelCubemap(int faceSize, int face, int i, int j) {
+    Cubemap cubemap = makeCubemap(faceSize);
+    cubemap.at(face, i, j) = glm::vec4(1.0f, 2.0f, 3.0f, 1.0f);
+    return cubemap;
+}
+
+double largestDc(const ShCoefficients& coefficients) {
+    const glm::dvec3& dc = coefficients.rgb[0];
+    return std::max({std::abs(dc.r), std::abs(dc.g), std::abs(dc.b)});
+}
+
+// Largest |gpu - reference| over all coefficients and channels, relative to |L_00|.
+double relativeError(const ShCoefficients& gpu, const ShCoefficients& reference) {
+    double worst = 0.0;
+    for (size_t i = 0; i < reference.rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(worst, std::abs(gpu.rgb[i][c] - reference.rgb[i][c]));
+    return worst / largestDc(reference);
+}
+
+class GpuProjection : public GpuTest {
+  protected:
+    GpuBake bake(const Cubemap& cubemap, const ProjectorOptions& options) {
+        Projector projector = createProjector(context(), options);
+        GpuBake result = bakeCubemap(context(), projector, cubemap);
+        destroyProjector(context(), projector);
+        return result;
+    }
+
+    void expectMatchesReference(const Cubemap& cubemap, int order, const char* what) {
+        GpuBake gpu = bake(cubemap, {.order = order});
+        ShCoefficients reference = projectCubemap(cubemap, order);
+        double error = relativeError(gpu.radiance, reference);
+        EXPECT_LT(error, kGpuTolerance) << what << ", face " << cubemap.faceSize << ", order " << order;
+        RecordProperty(std::string(what) + " order " + std::to_string(order), std::to_string(error));
+    }
+};
+
+TEST_F(GpuProjection, MatchesReferenceOnGeneratedCubemaps) {
+    for (int order : {1, 3, 5, 8}) {
+        expectMatchesReference(noiseCubemap(16, 1), order, "noise");
+        expectMatchesReference(noiseCubemap(33, 2), order, "noise, odd size");
+        expectMatchesReference(hotSunCubemap(64), order, "sky with a hot sun texel");
+        expectMatchesReference(singleTexelCubemap(8, 4, 2, 5), order, "single lit texel");
+        expectMatchesReference(noiseCubemap(1, 3), order, "1x1 faces");
+        expectMatchesReference(noiseCubemap(7, 4), order, "7x7 faces");
+    }
+}
+
+// 6 x 2048^2 RGBA32F is 400 MiB: more than lavapipe's 128 MiB storage-buffer range, so the input is
+// projected in several dispatches, and at 25 M texels accumulation errors are at their largest.
+TEST_F(GpuProjection, MatchesReferenceAtLargeFaces) {
+    Cubemap cubemap = noiseCubemap(2048, 5);
+    GpuBake gpu = bake(cubemap, {.order = 3});
+    EXPECT_GT(gpu.dispatches, 1u) << "the 400 MiB input should need more than one binding";
+    double error = relativeError(gpu.radiance, projectCubemap(cubemap, 3));
+    EXPECT_LT(error, kGpuTolerance);
+    RecordProperty("error 2048 order 3", std::to_string(error));
+}
+
+// White furnace (filament cmgen's test): a constant environment c gives L_00 = c sqrt(4 pi) and,
+// through order 3, zeros: the cube's octahedral symmetry cancels bands 1 to 3 exactly even for
+// texel-center sampling. (Band 4 holds a cube-invariant combination, y_40 with y_44, so there the
+// sampled sum is small but not zero, on the CPU as on the GPU.)
+TEST_F(GpuProjection, ConstantEnvironmentGivesOnlyDcAndPiIrradiance) {
+    const float c = 0.75f;
+    Cubemap cubemap = makeCubemap(32);
+    std::fill(cubemap.texels.begin(), cubemap.texels.end(), glm::vec4(c, c, c, 1.0f));
+    GpuBake gpu = bake(cubemap, {.order = 3});
+    const double l00 = c * std::sqrt(4.0 * M_PI);
+    EXPECT_NEAR(gpu.radiance.rgb[0].r, l00, kGpuTolerance * l00);
+    for (size_t i = 1; i < gpu.radiance.rgb.size(); ++i)
+        EXPECT_NEAR(gpu.radiance.rgb[i].g, 0.0, kGpuTolerance * l00) << "coefficient " << i;
+    // E(n) = pi c for every normal (seed 001: the clamped cosine integrates to pi).
+    EXPECT_NEAR(evaluate(gpu.irradiance, glm::normalize(glm::dvec3(0.2, -0.7, 0.4))).b, M_PI * c,
+                kGpuTolerance * M_PI * c);
+}
+
+TEST_F(GpuProjection, IrradianceIsTheConvolutionOfTheRadiance) {
+    for (int order : {3, 5, 8}) {
+        GpuBake gpu = bake(hotSunCubemap(32), {.order = order});
+        ShCoefficients expected = convolveIrradiance(gpu.radiance);
+        // One float multiply by A_l rounded to float: 2 ulps.
+        for (size_t i = 0; i < expected.rgb.size(); ++i)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(gpu.irradiance.rgb[i][c], expected.rgb[i][c], 2.5e-7 * largestDc(expected))
+                    << "order " << order << " coefficient " << i;
+    }
+}
+
+TEST_F(GpuProjection, SameInputGivesBitIdenticalCoefficients) {
+    Cubemap cubemap = noiseCubemap(64, 6);
+    GpuBake first = bake(cubemap, {.order = 5});
+    GpuBake second = bake(cubemap, {.order = 5});
+    ASSERT_EQ(first.radiance.rgb.size(), second.radiance.rgb.size());
+    EXPECT_EQ(std::memcmp(first.radiance.rgb.data(), second.radiance.rgb.data(),
+                          first.radiance.rgb.size() * sizeof(glm::dvec3)),
+              0);
+}
+
+// Any workgroup width and any amount of work per invocation gives the same sums: this exercises
+// reductions with one subgroup, with more subgroups than a subgroup has lanes, and partial
+// subgroups (widths that are not multiples of the subgroup size).
+TEST_F(GpuProjection, WorkgroupShapesDoNotChangeTheResult) {
+    Cubemap cubemap = noiseCubemap(24, 7);
+    ShCoefficients reference = projectCubemap(cubemap, 4);
+    for (uint32_t width : {1u, 3u, 8u, 32u, 64u, 100u, 256u, 1024u}) {
+        for (uint32_t perInvocation : {1u, 5u, 256u}) {
+            GpuBake gpu =
+                bake(cubemap, {.order = 4, .workgroupSize = width, .texelsPerInvocation = perInvocation});
+            EXPECT_LT(relativeError(gpu.radiance, reference), kGpuTolerance)
+                << "workgroup " << width << ", texels per invocation " << perInvocation;
+        }
+    }
+}
+
+TEST_F(GpuProjection, RejectsBadOrdersAndFaces) {
+    EXPECT_THROW(createProjector(context(), {.order = 0}), Error);
+    EXPECT_THROW(createProjector(context(), {.order = 9}), Error);
+    Projector projector = createProjector(context(), {.order = 3});
+    Cubemap empty;
+    EXPECT_THROW(bakeCubemap(context(), projector, empty), Error);
+    destroyProjector(context(), projector);
+}
+
+// The texel solid angle as the GPU evaluates it (texel_geometry.h compiled to SPIR-V, with the
+// device's own atan and sqrt) against the double four-atan2 formula of CONVENTIONS.md: within
+// 1e-5 relative for every texel of faces 1..64 and of sizes up to 4096.
+class GpuSolidAngles : public GpuTest {
+  protected:
+    double worstRelativeError(const ComputeProgram& program, int faceSize) {
+        VkDeviceSize bytes = VkDeviceSize(faceSize) * faceSize * sizeof(float);
+        Buffer output = createBuffer(context(), bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                     MemoryUse::Readback, "solid angles");
+        VkDescriptorPool pool = createDescriptorPool(context(), 1, 1);
+        BufferRange range{&output, 0, bytes};
+        VkDescriptorSet set = createDescriptorSet(context(), pool, program, std::span(&range, 1));
+        uint32_t groups = std::min<uint32_t>((uint32_t(faceSize) * faceSize + 63) / 64, 4096);
+        submitAndWait(context(), [&](VkCommandBuffer commands) {
+            dispatch(commands, program, set, uint32_t(faceSize), groups);
+            computeWriteBarrier(commands);
+        });
+        invalidateBuffer(context(), output);
+        const float* gpu = static_cast<const float*>(output.mapped);
+        double worst = 0.0;
+        for (int j = 0; j < faceSize; ++j)
+            for (int i = 0; i < faceSize; ++i) {
+                double exact = texelSolidAngle(i, j, faceSize);
+                worst = std::max(worst, std::abs(gpu[size_t(j) * faceSize + i] - exact) / exact);
+            }
+        vkDestroyDescriptorPool(context().device, pool, nullptr);
+        destroyBuffer(context(), output);
+        return worst;
+    }
+};
+
+TEST_F(GpuSolidAngles, EveryTexelMatchesTheDoubleFormula) {
+    ComputeProgram program = createComputeProgram(
+        context(), {"solid_angles.comp", spirv::solid_angles_comp, 1, sizeof(uint32_t), 64, 1});
+    std::vector<int> sizes;
+    for (int n = 1; n <= 64; ++n)
+        sizes.push_back(n);
+    for (int n : {127, 255, 256, 511, 1000, 1024, 2047, 2048, 4096})
+        sizes.push_back(n);
+    double worstOverall = 0.0;
+    for (int n : sizes) {
+        double worst = worstRelativeError(program, n);
+        EXPECT_LT(worst, 1e-5) << "face size " << n;
+        worstOverall = std::max(worstOverall, worst);
+    }
+    RecordProperty("worst relative error", std::to_string(worstOverall));
+    destroyComputeProgram(context(), program);
+}
+
+} // namespace
+} // namespace shprobe::testing
