@@ -337,9 +337,11 @@ TEST_F(EnvironmentFiles, LayoutOverrideMustFitTheImage) {
         inputErrorOf([&] { loadEnvironment(file("sky.exr"), {.layout = Layout::HorizontalCross}); });
     EXPECT_CONTAINS(message, "sky.exr");
     EXPECT_CONTAINS(message, "64x32");
-    // A 4:3 image may be read as an equirect if the user says so.
+    // An equirect must be 2:1: a 4:3 image read as one would be silently stretched.
     writeImage(file("cross.exr"), coordinateCross(4, 3, 2));
-    EXPECT_EQ(loadEnvironment(file("cross.exr"), {.layout = Layout::Equirect}).layout, Layout::Equirect);
+    message = inputErrorOf([&] { loadEnvironment(file("cross.exr"), {.layout = Layout::Equirect}); });
+    EXPECT_CONTAINS(message, "cross.exr");
+    EXPECT_CONTAINS(message, "2:1");
 }
 
 // ---- sRGB decoding and channels ---------------------------------------------------------------
@@ -377,6 +379,31 @@ TEST_F(EnvironmentFiles, FloatImagesAreLinear) {
     std::vector<float> rgb = {0.5f, 2.0f, -0.25f};
     writeChannels(file("linear.exr"), 1, 1, 3, OIIO::TypeDesc::FLOAT, rgb);
     EXPECT_EQ(glm::vec3(readImage(file("linear.exr")).at(0, 0)), glm::vec3(0.5f, 2.0f, -0.25f));
+}
+
+// Radiance .hdr stores RGBE: an 8-bit mantissa per channel with a shared exponent, so values come
+// back linear (no sRGB decode) within half a mantissa step, 1/256 of the largest channel.
+TEST_F(EnvironmentFiles, RadianceHdrImagesAreLinear) {
+    std::vector<float> rgb = {0.5f, 2.0f, 40.0f, 1000.0f, 3.0f, 0.25f};
+    writeChannels(file("sky.hdr"), 2, 1, 3, OIIO::TypeDesc::FLOAT, rgb);
+    Image image = readImage(file("sky.hdr"));
+    for (int x = 0; x < 2; ++x) {
+        float largest = std::max({rgb[3 * x], rgb[3 * x + 1], rgb[3 * x + 2]});
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(image.at(x, 0)[c], rgb[3 * x + c], largest / 256.0f) << "pixel " << x << " channel " << c;
+    }
+}
+
+// JPEG is 8-bit sRGB like PNG. A flat image survives JPEG's DCT quantization up to a code value
+// or so of rounding (the DC term alone): the decode of 128 +- 1.5 bounds the result.
+TEST_F(EnvironmentFiles, JpegImagesAreDecodedFromSrgb) {
+    std::vector<uint8_t> rgb(16 * 16 * 3, 128);
+    writeChannels(file("flat.jpg"), 16, 16, 3, OIIO::TypeDesc::UINT8, rgb);
+    Image image = readImage(file("flat.jpg"));
+    for (const glm::vec4& texel : image.texels) {
+        EXPECT_GT(texel.g, srgbDecoded(126.5 / 255.0));
+        EXPECT_LT(texel.g, srgbDecoded(129.5 / 255.0));
+    }
 }
 
 TEST_F(EnvironmentFiles, OneChannelIsGrey) {

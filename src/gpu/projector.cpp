@@ -9,6 +9,7 @@
 #include "vk/resources.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace shprobe {
@@ -30,11 +31,21 @@ struct Chunk {
     uint32_t partialOffset;
 };
 
+// llvmpipe (lavapipe) ends any loop after 65535 iterations, counting the iterations of nested loops
+// against the outermost one: projecting a texel runs about 1 + n + n(n+1)/2 + n^2 loop iterations
+// at order n (the texel loop, the basis recurrences, the accumulation), and past the limit the sums
+// are silently wrong. Half the limit leaves a margin; other devices lose nothing by the cap.
+uint32_t maxTexelsPerInvocation(int order) {
+    uint32_t n = uint32_t(order);
+    return 32768u / (1u + n + n * (n + 1u) / 2u + n * n);
+}
+
 std::vector<Chunk> planChunks(const DeviceInfo& device, const ProjectorOptions& options, uint32_t texelCount) {
     // Chunk starts must meet the storage-buffer offset alignment; whole multiples of 1024 texels do
     // for every alignment Vulkan allows (at most 256 bytes).
     VkDeviceSize maxTexels = device.limits.maxStorageBufferRange / kTexelBytes / 1024 * 1024;
-    uint32_t texelsPerGroup = options.workgroupSize * options.texelsPerInvocation;
+    uint32_t texelsPerInvocation = std::min(options.texelsPerInvocation, maxTexelsPerInvocation(options.order));
+    uint32_t texelsPerGroup = options.workgroupSize * texelsPerInvocation;
     std::vector<Chunk> chunks;
     uint32_t partials = 0;
     for (uint32_t first = 0; first < texelCount;) {
@@ -54,10 +65,18 @@ gpu::ConvolveParams irradianceBandScales(int order) {
     return params;
 }
 
+// Throws when a coefficient is not finite: finite inputs whose sums overflow fp32 (values near
+// 1e38), or a device that computed garbage; either way no such probe is handed on.
 ShCoefficients readCoefficients(const Buffer& results, VkDeviceSize offset, int order, Quantity quantity) {
     ShCoefficients coefficients = makeCoefficients(order, quantity);
     auto* values = reinterpret_cast<const glm::vec4*>(static_cast<const char*>(results.mapped) + offset);
-    for (size_t i = 0; i < coefficients.rgb.size(); ++i) coefficients.rgb[i] = glm::dvec3(glm::vec3(values[i]));
+    for (size_t i = 0; i < coefficients.rgb.size(); ++i) {
+        glm::vec3 value(values[i]);
+        if (!std::isfinite(value.r) || !std::isfinite(value.g) || !std::isfinite(value.b))
+            throw Error(ErrorKind::Input, "GPU bake: coefficient " + std::to_string(i) +
+                                              " is not finite (input values too large for fp32 sums?)");
+        coefficients.rgb[i] = glm::dvec3(value);
+    }
     return coefficients;
 }
 

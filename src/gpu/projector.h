@@ -11,7 +11,8 @@ namespace shprobe {
 struct ProjectorOptions {
     int order = 3;                       // 1..kMaxOrder
     uint32_t workgroupSize = 64;         // invocations per workgroup
-    uint32_t texelsPerInvocation = 256;  // sets the workgroup count: more texels, fewer reductions
+    uint32_t texelsPerInvocation = 256;  // sets the workgroup count: more texels, fewer reductions;
+                                         // capped by order for lavapipe's loop limit (projector.cpp)
 };
 
 // Pipelines for one order, created once and reused for any number of bakes.

@@ -205,6 +205,10 @@ Cubemap crossToCubemap(const Image& cross, Layout layout) {
 
 Cubemap equirectToCubemap(const Image& equirect, int faceSize) {
     if (equirect.texels.empty()) throw Error(ErrorKind::Input, "the equirect image is empty");
+    // A full sphere spans 360 by 180 degrees; any other shape would be stretched without a word.
+    if (equirect.width != 2 * equirect.height)
+        throw Error(ErrorKind::Input, "image is " + sizeText(equirect.width, equirect.height) +
+                                          ", but an equirect image must be 2:1");
     Cubemap cubemap = makeCubemap(faceSize); // throws for a face size below 1
     // A face spans a quarter of the equator, so at the equator a texel covers width / (4 faceSize)
     // equirect pixels; k supersamples per side are at least that dense.

@@ -73,6 +73,11 @@ std::string formatNumber(double value) {
 const char* quantityName(Quantity quantity) { return quantity == Quantity::Radiance ? "radiance" : "irradiance"; }
 
 std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata& metadata) {
+    // JSON has no NaN or infinity: refuse rather than write a file no reader accepts.
+    for (size_t i = 0; i < coefficients.rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            if (!std::isfinite(coefficients.rgb[i][c]))
+                throw Error(ErrorKind::Input, "coefficient " + std::to_string(i) + " is not finite");
     nlohmann::ordered_json header = nlohmann::ordered_json::object();
     header["format"] = kFormat;
     header["version"] = kVersion;

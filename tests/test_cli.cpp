@@ -1,0 +1,617 @@
+// The shprobe program end to end: it is run as a child process (posix_spawn, arguments passed as
+// an argv array so no path is ever parsed by a shell, stdout and stderr captured into files, the
+// environment passed explicitly). Checks the bake summary and coefficient table, the files it
+// writes (read back with readProbeFile), GPU = CPU through the program, determinism, the exit codes
+// and one-line error messages of the README, that failures leave no file behind and never touch an
+// existing one, `shprobe info`, and layout detection. Test images are written by each test into
+// its own temporary folder; no binary file is checked in.
+//
+// ctest runs this with VK_ICD_FILENAMES = lavapipe and SHPROBE_VALIDATION=1, which the children
+// inherit: any validation message fails their bake. Each GPU bake costs a process start with the
+// validation layer (~0.3-1 s), so images are tiny and there are about ten GPU runs in all.
+#include "image/environment.h"
+#include "image/image_write.h"
+#include "io/probe_file.h"
+#include "sh/basis.h"
+#include "sh/error.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <regex>
+#include <spawn.h>
+#include <sstream>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace shprobe {
+namespace {
+namespace fs = std::filesystem;
+
+#define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "in: " << (text)
+
+// ---- Running the program ----------------------------------------------------------------------
+
+struct RunResult {
+    int exitCode = -1; // the exit status, or 128 + signal if the child was killed
+    std::string out;
+    std::string err;
+    double seconds = 0.0;
+};
+
+// Changes to the inherited environment: a value sets the variable, nullopt removes it.
+using EnvironmentChanges = std::map<std::string, std::optional<std::string>>;
+
+std::string readFile(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+}
+
+// Runs SHPROBE_EXECUTABLE with `args`; stdout and stderr go to files under `logFolder`, stdin is
+// /dev/null. The child's environment is ours with `changes` applied, passed explicitly.
+RunResult runShprobe(const std::vector<std::string>& args, const fs::path& logFolder,
+                     const EnvironmentChanges& changes = {}) {
+    static int runCount = 0;
+    fs::create_directories(logFolder);
+    std::string tag = std::to_string(++runCount);
+    fs::path outPath = logFolder / ("run" + tag + ".stdout");
+    fs::path errPath = logFolder / ("run" + tag + ".stderr");
+
+    std::vector<std::string> argStrings{SHPROBE_EXECUTABLE};
+    argStrings.insert(argStrings.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& arg : argStrings)
+        argv.push_back(arg.data());
+    argv.push_back(nullptr);
+
+    std::vector<std::string> envStrings;
+    for (char** entry = environ; *entry; ++entry) {
+        std::string variable(*entry);
+        std::string name = variable.substr(0, variable.find('='));
+        if (!changes.count(name)) envStrings.push_back(variable);
+    }
+    for (const auto& [name, value] : changes)
+        if (value) envStrings.push_back(name + "=" + *value);
+    std::vector<char*> envp;
+    for (std::string& variable : envStrings)
+        envp.push_back(variable.data());
+    envp.push_back(nullptr);
+
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+
+    RunResult result;
+    auto start = std::chrono::steady_clock::now();
+    pid_t pid = 0;
+    int spawnError = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
+    posix_spawn_file_actions_destroy(&actions);
+    if (spawnError != 0) {
+        ADD_FAILURE() << "cannot start " << argv[0] << ": " << std::strerror(spawnError);
+        return result;
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0)
+        if (errno != EINTR) {
+            ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
+            return result;
+        }
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    result.out = readFile(outPath);
+    result.err = readFile(errPath);
+    return result;
+}
+
+std::string describe(const RunResult& run) {
+    return "exit " + std::to_string(run.exitCode) + "\n--- stdout:\n" + run.out + "--- stderr:\n" + run.err;
+}
+
+std::vector<std::string> linesOf(const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);)
+        lines.push_back(line);
+    return lines;
+}
+
+bool startsWith(const std::string& text, const std::string& prefix) {
+    return text.rfind(prefix, 0) == 0;
+}
+
+// The rows of the coefficient table printed after the summary: "  l=1 m=-1  r g b".
+struct PrintedRow {
+    int l, m;
+    glm::dvec3 rgb;
+};
+std::vector<PrintedRow> printedRows(const std::string& out) {
+    static const std::regex row(R"(^  l=(\d) m=([+-]\d)\s+(\S+)\s+(\S+)\s+(\S+)$)");
+    std::vector<PrintedRow> rows;
+    std::smatch match;
+    for (const std::string& line : linesOf(out))
+        if (std::regex_match(line, match, row))
+            rows.push_back({std::stoi(match[1]),
+                            std::stoi(match[2]),
+                            {std::stod(match[3]), std::stod(match[4]), std::stod(match[5])}});
+    return rows;
+}
+
+// The file's text from "coefficients" on: the rows as written, byte for byte.
+std::string coefficientRowsText(const std::string& json) {
+    size_t at = json.find("\"coefficients\"");
+    return at == std::string::npos ? std::string() : json.substr(at);
+}
+
+// Every entry of a folder, hidden ones (temporary files) included.
+std::vector<std::string> entriesOf(const fs::path& folder) {
+    std::vector<std::string> names;
+    std::error_code ignored;
+    for (const fs::directory_entry& entry : fs::directory_iterator(folder, ignored))
+        names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+// ---- Test images ------------------------------------------------------------------------------
+
+Image filledImage(int width, int height, const std::function<glm::vec3(int, int)>& value) {
+    Image image = makeImage(width, height);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            image.at(x, y) = glm::vec4(value(x, y), 1.0f);
+    return image;
+}
+
+// A smooth, positive, coloured environment with energy in bands 0 to 3, sampled as an equirect.
+Image smoothEquirect(int width, int height) {
+    return filledImage(width, height, [&](int i, int j) {
+        glm::dvec3 d = equirectDirection(i, j, width, height);
+        double base = 2.0 + 0.8 * d.x - 0.5 * d.y + 0.6 * d.z + 0.7 * d.x * d.y + 0.3 * d.z * d.z * d.x;
+        return glm::vec3(float(base), float(base + 0.4 * d.y), float(0.5 * base - 0.3 * d.x * d.z));
+    });
+}
+
+// Raw 8-bit RGB through OpenImageIO (writeImage writes floats); PNG pixels are sRGB-encoded bytes.
+void writeRgb8(const fs::path& path, int width, int height, const std::vector<uint8_t>& rgb) {
+    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(path.string());
+    ASSERT_TRUE(output) << OIIO::geterror();
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    ASSERT_TRUE(output->open(path.string(), spec)) << output->geterror();
+    ASSERT_TRUE(output->write_image(OIIO::TypeDesc::UINT8, rgb.data())) << output->geterror();
+    ASSERT_TRUE(output->close()) << output->geterror();
+}
+
+// The exact sRGB EOTF, written here independently of the code under test.
+double srgbDecoded(double c) {
+    return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+}
+
+constexpr double kY00 = 0.28209479177387814; // 1 / (2 sqrt(pi))
+
+// ---- Fixture ----------------------------------------------------------------------------------
+
+// A folder of its own for each test (inputs, outputs and the children's logs), removed afterwards.
+class Cli : public ::testing::Test {
+  protected:
+    Cli() {
+        const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        folder_ =
+            fs::temp_directory_path() / ("shprobe_test_cli_" + std::to_string(getpid()) + "_" + test->name());
+        fs::remove_all(folder_);
+        fs::create_directories(folder_);
+    }
+    ~Cli() override {
+        std::error_code ignored;
+        // A read-only folder left by a failed test must not stop the cleanup.
+        fs::permissions(folder_ / "readonly", fs::perms::owner_all, ignored);
+        fs::remove_all(folder_, ignored);
+    }
+    std::string file(const std::string& name) const { return (folder_ / name).string(); }
+    fs::path folder() const { return folder_; }
+
+    RunResult run(const std::vector<std::string>& args, const EnvironmentChanges& changes = {}) const {
+        return runShprobe(args, folder_ / "logs", changes);
+    }
+
+    // A successful run: exit 0, nothing on stderr (with the validation layer on, any message would
+    // show there and fail the bake anyway).
+    RunResult runOk(const std::vector<std::string>& args) const {
+        RunResult result = run(args);
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_EQ(result.err, "") << describe(result);
+        return result;
+    }
+
+  private:
+    fs::path folder_;
+};
+
+// ---- 1. The built-in sky ----------------------------------------------------------------------
+
+// `shprobe bake -o OUT.json` (built-in sky, GPU, order 3, radiance) exits 0, prints the summary
+// and the 9 coefficient rows, and writes a file readProbeFile accepts (order 3, radiance, 9 rows)
+// holding the printed values. `--order 5 --irradiance` gives 25 rows of E_lm = A_l L_lm.
+TEST_F(Cli, BakesTheBuiltInSky) {
+    std::string out = file("sky.json");
+    RunResult radiance = runOk({"bake", "-o", out});
+    EXPECT_CONTAINS(radiance.out, "shprobe bake: built-in sky -> " + out);
+    EXPECT_CONTAINS(radiance.out, "backend  gpu: llvmpipe");
+    EXPECT_CONTAINS(radiance.out, "6 x 256 x 256 texels, order 3 (9 coefficients)");
+    EXPECT_CONTAINS(radiance.out, "radiance coefficients (r g b):");
+    std::vector<PrintedRow> rows = printedRows(radiance.out);
+    ASSERT_EQ(rows.size(), 9u) << radiance.out;
+    for (int i = 0; i < 9; ++i) {
+        EXPECT_EQ(rows[i].l, shBand(i));
+        EXPECT_EQ(rows[i].m, i - shBand(i) * (shBand(i) + 1));
+    }
+
+    ShCoefficients file3 = readProbeFile(out);
+    EXPECT_EQ(file3.order, 3);
+    EXPECT_EQ(file3.quantity, Quantity::Radiance);
+    ASSERT_EQ(file3.rgb.size(), 9u);
+    for (int i = 0; i < 9; ++i)
+        for (int c = 0; c < 3; ++c) // the table has 6 decimals
+            EXPECT_NEAR(file3.rgb[i][c], rows[i].rgb[c], 5.1e-7 + 1e-9 * std::abs(rows[i].rgb[c])) << i;
+    EXPECT_GT(file3.rgb[0].r, 0.0);
+
+    std::string out5 = file("sky5.json");
+    RunResult irradiance = runOk({"bake", "--order", "5", "--irradiance", "-o", out5});
+    EXPECT_CONTAINS(irradiance.out, "order 5 (25 coefficients)");
+    EXPECT_CONTAINS(irradiance.out, "irradiance coefficients (r g b):");
+    EXPECT_EQ(printedRows(irradiance.out).size(), 25u) << irradiance.out;
+    ShCoefficients file5 = readProbeFile(out5);
+    EXPECT_EQ(file5.order, 5);
+    EXPECT_EQ(file5.quantity, Quantity::Irradiance);
+    ASSERT_EQ(file5.rgb.size(), 25u);
+    // Same sky: bands 0-2 of the irradiance are A_l times the radiance of the first bake (the two
+    // GPU runs reduce in different orders, hence the fp32-level tolerance); A_3 = 0.
+    const double a[3] = {std::numbers::pi, 2.0 * std::numbers::pi / 3.0, std::numbers::pi / 4.0};
+    double scale = std::abs(file3.rgb[0].r) * std::numbers::pi;
+    for (int i = 0; i < 9; ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(file5.rgb[i][c], a[shBand(i)] * file3.rgb[i][c], 1e-5 * scale) << i;
+    for (int i = 9; i < 16; ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(file5.rgb[i][c], 0.0, 1e-5 * scale) << i;
+}
+
+// ---- 2. GPU = CPU through the program ---------------------------------------------------------
+
+// The same 64x32 equirect EXR (a smooth coloured function) baked with --backend gpu and
+// --backend cpu at order 5 gives the same coefficients to 2e-6 of |L00|. Both processes build the
+// same fp32 cube map (16^2 faces) from the file; they differ only in the projection: the GPU sums
+// 1536 fp32 products L y dOmega (weights within 4.4e-7 relative of the exact solid angle, basis
+// functions to a few fp32 ulps, compensated reduction) against the double reference. For this
+// smooth positive input every term is a few times L00 / texel count at most, so the fp32 error is a
+// few 1e-7 of |L00|; 2e-6 leaves margin while any mistake of weighting, orientation or basis moves
+// a coefficient by far more. The file keeps 9 significant digits, well below that.
+TEST_F(Cli, GpuAndCpuBackendsAgree) {
+    writeImage(file("smooth.exr"), smoothEquirect(64, 32));
+    RunResult gpu =
+        runOk({"bake", file("smooth.exr"), "--order", "5", "--backend", "gpu", "-o", file("gpu.json")});
+    RunResult cpu =
+        runOk({"bake", file("smooth.exr"), "--order", "5", "--backend", "cpu", "-o", file("cpu.json")});
+    EXPECT_CONTAINS(gpu.out, "(equirect 64x32)");
+    EXPECT_CONTAINS(gpu.out, "6 x 16 x 16 texels, order 5 (25 coefficients)");
+    EXPECT_CONTAINS(cpu.out, "backend  cpu: cpu reference");
+
+    ShCoefficients g = readProbeFile(file("gpu.json"));
+    ShCoefficients c = readProbeFile(file("cpu.json"));
+    ASSERT_EQ(g.rgb.size(), 25u);
+    ASSERT_EQ(c.rgb.size(), 25u);
+    double tolerance = 2e-6 * std::abs(c.rgb[0].r);
+    ASSERT_GT(tolerance, 0.0);
+    double worst = 0.0;
+    for (int i = 0; i < 25; ++i)
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(g.rgb[i][k], c.rgb[i][k], tolerance) << "coefficient " << i << " channel " << k;
+            worst = std::max(worst, std::abs(g.rgb[i][k] - c.rgb[i][k]));
+        }
+    std::printf("[ info     ] worst |gpu - cpu| = %.3g = %.3g |L00|\n", worst, worst / std::abs(c.rgb[0].r));
+    // The input has energy beyond band 0: the comparison is not of zeros.
+    EXPECT_GT(std::abs(c.rgb[3].r), 0.1 * std::abs(c.rgb[0].r)); // l=1 m=+1, from the x term
+}
+
+// ---- 3. Determinism ---------------------------------------------------------------------------
+
+// The same input baked twice on the GPU gives byte-identical coefficient rows in the file (the
+// reduction sums in a fixed order on the GPU).
+TEST_F(Cli, GpuBakeIsDeterministic) {
+    writeImage(file("smooth.exr"), smoothEquirect(64, 32));
+    runOk({"bake", file("smooth.exr"), "--order", "8", "-q", "-o", file("first.json")});
+    runOk({"bake", file("smooth.exr"), "--order", "8", "-q", "-o", file("second.json")});
+    std::string first = coefficientRowsText(readFile(file("first.json")));
+    std::string second = coefficientRowsText(readFile(file("second.json")));
+    ASSERT_FALSE(first.empty());
+    EXPECT_EQ(first, second);
+    EXPECT_EQ(readProbeFile(file("first.json")).rgb.size(), 64u);
+}
+
+// ---- 4. Failures ------------------------------------------------------------------------------
+
+struct Failure {
+    std::vector<std::string> args;     // "OUT" is replaced by the output path
+    int exitCode;                      // README table: 2 input or usage, 3 output, 4 device
+    std::vector<std::string> mentions; // parts the message must contain
+    bool usageError = false;           // printed by CLI11: a non-zero exit and the option named
+    EnvironmentChanges environment = {};
+};
+
+class CliFailures : public Cli {
+  protected:
+    // Runs the failure twice: into an empty folder (no file, not even a temporary one, may appear)
+    // and onto an existing output file (left byte for byte as it was). Both runs must exit with the
+    // expected code and print exactly one line, "shprobe: error: ...", holding `mentions`.
+    void expectFailure(const Failure& failure) {
+        SCOPED_TRACE(::testing::Message() << "shprobe " << joined(failure.args));
+        fs::path fresh = folder() / "fresh_out";
+        fs::path existing = folder() / "existing_out";
+        fs::remove_all(fresh);
+        fs::remove_all(existing);
+        fs::create_directories(fresh);
+        fs::create_directories(existing);
+        const std::string before = "{\"an existing probe\": \"must not be touched\"}\n";
+        writeText(existing / "probe.json", before);
+
+        for (const fs::path& output : {fresh / "probe.json", existing / "probe.json"}) {
+            RunResult result = run(withOutput(failure.args, output.string()), failure.environment);
+            expectMessage(failure, result);
+        }
+        EXPECT_EQ(entriesOf(fresh), std::vector<std::string>{}) << "a failed bake left files behind";
+        EXPECT_EQ(entriesOf(existing), std::vector<std::string>{"probe.json"});
+        EXPECT_EQ(readFile(existing / "probe.json"), before) << "a failed bake changed the existing file";
+    }
+
+    static void expectMessage(const Failure& failure, const RunResult& result) {
+        if (failure.usageError) {
+            EXPECT_NE(result.exitCode, 0) << describe(result);
+            for (const std::string& part : failure.mentions)
+                EXPECT_CONTAINS(result.out + result.err, part);
+            return;
+        }
+        if (result.exitCode == 0) {
+            ADD_FAILURE() << "expected exit " << failure.exitCode << ", the run succeeded:\n"
+                          << describe(result);
+            return;
+        }
+        EXPECT_EQ(result.exitCode, failure.exitCode) << describe(result);
+        EXPECT_EQ(linesOf(result.err).size(), 1u) << "exactly one line expected:\n" << result.err;
+        EXPECT_TRUE(startsWith(result.err, "shprobe: error: ")) << result.err;
+        EXPECT_TRUE(result.err.empty() || result.err.back() == '\n') << result.err;
+        for (const std::string& part : failure.mentions)
+            EXPECT_CONTAINS(result.err, part);
+    }
+
+    static std::vector<std::string> withOutput(std::vector<std::string> args, const std::string& output) {
+        for (std::string& arg : args)
+            if (arg == "OUT") arg = output;
+        return args;
+    }
+    static std::string joined(const std::vector<std::string>& args) {
+        std::string text;
+        for (const std::string& arg : args)
+            text += (text.empty() ? "" : " ") + arg;
+        return text;
+    }
+};
+
+// A missing input file: exit 2, the message names the file.
+TEST_F(CliFailures, MissingInputFile) {
+    expectFailure({{"bake", file("nowhere.exr"), "-o", "OUT"}, 2, {file("nowhere.exr"), "no such file"}});
+}
+
+// An empty file named .exr: exit 2, the message names the file and says it is empty.
+TEST_F(CliFailures, EmptyFile) {
+    writeText(file("empty.exr"), "");
+    expectFailure({{"bake", file("empty.exr"), "-o", "OUT"}, 2, {file("empty.exr"), "empty"}});
+}
+
+// A text file named .exr: exit 2, one line naming the file (OpenImageIO's reason included).
+TEST_F(CliFailures, TextFileNamedExr) {
+    writeText(file("notes.exr"), "these are not the pixels you are looking for\n");
+    expectFailure({{"bake", file("notes.exr"), "-o", "OUT"}, 2, {file("notes.exr"), "not an image"}});
+}
+
+// A 50x40 PNG matches no layout (2:1, 4:3, 3:4): exit 2, the message names the file and its size.
+TEST_F(CliFailures, AspectRatioMatchingNoLayout) {
+    writeImage(file("odd.png"), filledImage(50, 40, [](int, int) { return glm::vec3(0.5f); }));
+    expectFailure(
+        {{"bake", file("odd.png"), "-o", "OUT"}, 2, {file("odd.png"), "50x40", "matches no layout"}});
+}
+
+// A faces folder whose -Z face is 8x8 while the others are 4x4: exit 2, naming the odd face file.
+TEST_F(CliFailures, FacesOfDifferentSizes) {
+    const char* names[] = {"px", "nx", "py", "ny", "pz", "nz"};
+    fs::create_directories(folder() / "faces");
+    for (const char* name : names) {
+        int n = std::string(name) == "nz" ? 8 : 4;
+        writeImage(file(std::string("faces/") + name + ".exr"),
+                   filledImage(n, n, [](int, int) { return glm::vec3(1.0f); }));
+    }
+    expectFailure({{"bake", file("faces"), "-o", "OUT"}, 2, {file("faces/nz.exr"), "8x8", "same size"}});
+}
+
+// An EXR with 5 NaN texels is refused with the count (exit 2); with --sanitize it bakes, says how
+// many texels it replaced, and writes finite coefficients.
+TEST_F(CliFailures, NanTexelsRefusedOrSanitized) {
+    Image image = smoothEquirect(64, 32);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int k = 0; k < 5; ++k)
+        image.at(7 + 11 * k, 3 + 5 * k).g = nan;
+    writeImage(file("nan.exr"), image);
+    expectFailure({{"bake", file("nan.exr"), "-o", "OUT"}, 2, {file("nan.exr"), "5 texels", "--sanitize"}});
+
+    RunResult sanitized = runOk({"bake", file("nan.exr"), "--sanitize", "-q", "-o", file("sanitized.json")});
+    EXPECT_CONTAINS(sanitized.out, "replaced 5 NaN/Inf texels");
+    ShCoefficients coefficients = readProbeFile(file("sanitized.json")); // rejects non-finite values
+    EXPECT_EQ(coefficients.rgb.size(), 9u);
+}
+
+// Out-of-range options are usage errors reported by CLI11 before anything runs: non-zero exit,
+// the option named, and no file.
+TEST_F(CliFailures, OptionsOutOfRange) {
+    expectFailure({{"bake", "--order", "0", "-o", "OUT"}, 2, {"--order"}, true});
+    expectFailure({{"bake", "--order", "9", "-o", "OUT"}, 2, {"--order"}, true});
+    expectFailure({{"bake", "--face-size", "0", "-o", "OUT"}, 2, {"--face-size"}, true});
+}
+
+// Output into a missing folder: exit 3, naming the folder, and checked before anything else: with
+// a missing input it is still exit 3 (not 2), without any Vulkan driver still exit 3 (not 4), and
+// the message comes without waiting for a bake.
+TEST_F(CliFailures, OutputIntoMissingFolder) {
+    std::string missing = file("no_such_folder");
+    std::string out = missing + "/probe.json";
+
+    RunResult sky = run({"bake", "-o", out});
+    Failure failure{{}, 3, {missing, "does not exist"}};
+    expectMessage(failure, sky);
+    EXPECT_LT(sky.seconds, 5.0) << "the output folder must be checked before the bake";
+
+    RunResult badInput = run({"bake", file("nowhere.exr"), "-o", out});
+    expectMessage(failure, badInput);
+
+    RunResult noDriver = run({"bake", "-o", out}, {{"VK_ICD_FILENAMES", file("no_such_icd.json")}});
+    expectMessage(failure, noDriver);
+    EXPECT_FALSE(fs::exists(missing));
+}
+
+// Output into a read-only folder: exit 3, naming the folder; an existing file in it is untouched.
+// Root ignores permission bits, so the case is skipped when this process can write there anyway.
+TEST_F(CliFailures, OutputIntoReadOnlyFolder) {
+    fs::path readonly = folder() / "readonly";
+    fs::create_directories(readonly);
+    const std::string before = "old probe\n";
+    writeText(readonly / "probe.json", before);
+    fs::permissions(readonly, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                  fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+    if (access(readonly.c_str(), W_OK) == 0 || std::ofstream(readonly / "probe_test").is_open()) {
+        fs::remove(readonly / "probe_test");
+        GTEST_SKIP() << "running as root (uid " << geteuid()
+                     << "): permission bits do not stop writes, so a read-only folder cannot be made";
+    }
+    Failure failure{{}, 3, {readonly.string(), "not writable"}};
+    RunResult fresh = run({"bake", "-o", (readonly / "new.json").string()});
+    expectMessage(failure, fresh);
+    RunResult existing = run({"bake", "-o", (readonly / "probe.json").string()});
+    expectMessage(failure, existing);
+    EXPECT_EQ(entriesOf(readonly), std::vector<std::string>{"probe.json"});
+    EXPECT_EQ(readFile(readonly / "probe.json"), before);
+}
+
+// No Vulkan driver (VK_ICD_FILENAMES names a missing file, passed to the child explicitly): exit 4
+// and one line that suggests installing a driver / lavapipe; no file. The plain run has the
+// validation layer off, as a user's would be.
+TEST_F(CliFailures, NoVulkanDevice) {
+    EnvironmentChanges noDriver{{"VK_ICD_FILENAMES", file("no_such_icd.json")},
+                                {"VK_DRIVER_FILES", std::nullopt},
+                                {"SHPROBE_VALIDATION", std::nullopt}};
+    expectFailure({{"bake", "--face-size", "8", "-o", "OUT"},
+                   4,
+                   {"Vulkan", "lavapipe", "mesa-vulkan-drivers"},
+                   false,
+                   noDriver});
+
+    // With validation on (as ctest runs), the loader's own diagnostics may come first through the
+    // debug messenger, as "vulkan validation: ..." lines; the error itself is still one line, last.
+    noDriver["SHPROBE_VALIDATION"] = "1";
+    RunResult validated = run({"bake", "--face-size", "8", "-o", file("validated.json")}, noDriver);
+    EXPECT_EQ(validated.exitCode, 4) << describe(validated);
+    std::vector<std::string> lines = linesOf(validated.err);
+    ASSERT_FALSE(lines.empty());
+    EXPECT_TRUE(startsWith(lines.back(), "shprobe: error: ")) << validated.err;
+    EXPECT_CONTAINS(lines.back(), "lavapipe");
+    for (size_t i = 0; i + 1 < lines.size(); ++i)
+        EXPECT_TRUE(startsWith(lines[i], "vulkan validation: ")) << validated.err;
+    EXPECT_FALSE(fs::exists(file("validated.json")));
+}
+
+// ---- 5. shprobe info --------------------------------------------------------------------------
+
+// `shprobe info` exits 0, lists the llvmpipe device with its subgroup size (LP_NATIVE_VECTOR_WIDTH
+// / 32 when that is set) and says the bake uses it.
+TEST_F(Cli, InfoNamesTheDeviceAndItsSubgroupSize) {
+    RunResult info = runOk({"info"});
+    EXPECT_CONTAINS(info.out, "llvmpipe");
+    EXPECT_TRUE(std::regex_search(info.out, std::regex(R"(bake uses device \d+: llvmpipe)"))) << info.out;
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(info.out, match, std::regex(R"(subgroup size (\d+))"))) << info.out;
+    int subgroupSize = std::stoi(match[1]);
+    EXPECT_TRUE(subgroupSize >= 4 && subgroupSize <= 64 && (subgroupSize & (subgroupSize - 1)) == 0)
+        << subgroupSize;
+    if (const char* width = std::getenv("LP_NATIVE_VECTOR_WIDTH")) {
+        EXPECT_EQ(subgroupSize, std::atoi(width) / 32);
+    }
+}
+
+// ---- 6. Layouts -------------------------------------------------------------------------------
+
+// A 64x48 PNG (4:3) is detected as a horizontal cross and baked at its face size 16. +Y (top of
+// the cross) is white, the five other faces grey sRGB 0x80, the unused corners red (never read):
+// L00 = Y00 (4 pi / 6) (sum of the six faces' linear values) exactly, since each face subtends
+// 4 pi / 6, and the only first-band term is along -y_1,-1 = 0.488603 y: L1,-1 < 0, L1,0 = L1,1 = 0.
+TEST_F(Cli, HorizontalCrossIsDetectedAndBaked) {
+    const int n = 16, width = 4 * n, height = 3 * n;
+    std::vector<uint8_t> rgb(size_t(width) * height * 3);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            int column = x / n, row = y / n;
+            bool face = row == 1 || column == 1;
+            bool top = row == 0 && column == 1;
+            uint8_t value = top ? 0xff : 0x80;
+            uint8_t* texel = &rgb[(size_t(y) * width + x) * 3];
+            texel[0] = face ? value : 0xff;
+            texel[1] = face ? value : 0x00;
+            texel[2] = face ? value : 0x00;
+        }
+    writeRgb8(folder() / "cross.png", width, height, rgb);
+
+    RunResult baked = runOk({"bake", file("cross.png"), "-q", "-o", file("cross.json")});
+    EXPECT_CONTAINS(baked.out, "(hcross 64x48)");
+    EXPECT_CONTAINS(baked.out, "6 x 16 x 16 texels");
+    ShCoefficients c = readProbeFile(file("cross.json"));
+    ASSERT_EQ(c.rgb.size(), 9u);
+    double grey = srgbDecoded(128.0 / 255.0);
+    double expectedL00 = kY00 * (4.0 * std::numbers::pi / 6.0) * (1.0 + 5.0 * grey);
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(c.rgb[0][k], expectedL00, 2e-6 * expectedL00) << k;
+        EXPECT_LT(c.rgb[1][k], -0.05 * expectedL00) << k; // l=1 m=-1: the bright +Y face
+        EXPECT_NEAR(c.rgb[2][k], 0.0, 2e-6 * expectedL00) << k;
+        EXPECT_NEAR(c.rgb[3][k], 0.0, 2e-6 * expectedL00) << k;
+    }
+}
+
+// `--layout equirect` on a 4:3 image is refused (exit 2) with a message naming the file, its size
+// and the 2:1 an equirect needs; no file is written.
+TEST_F(CliFailures, EquirectLayoutOnA4To3ImageIsRefused) {
+    writeImage(file("cross.exr"), filledImage(32, 24, [](int, int) { return glm::vec3(1.0f); }));
+    expectFailure({{"bake", file("cross.exr"), "--layout", "equirect", "-q", "-o", "OUT"},
+                   2,
+                   {file("cross.exr"), "32x24", "2:1"}});
+}
+
+} // namespace
+} // namespace shprobe

@@ -1,0 +1,151 @@
+// Coefficient files (README "Conventions", coefficient files): what is written reads back the
+// same, and every malformed or wrong-schema file is refused with a message naming the file and the
+// offending field.
+#include "io/probe_file.h"
+#include "sh/error.h"
+
+#include <filesystem>
+#include <fstream>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace shprobe {
+namespace {
+
+ShCoefficients sampleProbe(int order, Quantity quantity) {
+    ShCoefficients probe = makeCoefficients(order, quantity);
+    for (size_t i = 0; i < probe.rgb.size(); ++i)
+        probe.rgb[i] = glm::dvec3(0.1 * double(i) - 1.0, 1.0 / (double(i) + 3.0), -2.5e-7 * double(i));
+    return probe;
+}
+
+// Values are written with 9 significant digits: the GPU's float coefficients round-trip exactly
+// and doubles to 5e-9 relative.
+constexpr double kWriteRelativePrecision = 5e-9;
+
+TEST(ProbeFile, RoundTripsEveryOrderAndQuantity) {
+    for (int order = 1; order <= 8; ++order)
+        for (Quantity quantity : {Quantity::Radiance, Quantity::Irradiance}) {
+            ShCoefficients probe = sampleProbe(order, quantity);
+            ShCoefficients read = parseProbeJson(probeToJson(probe, {}), "probe.json");
+            ASSERT_EQ(read.order, order);
+            ASSERT_EQ(read.quantity, quantity);
+            ASSERT_EQ(read.rgb.size(), probe.rgb.size());
+            for (size_t i = 0; i < probe.rgb.size(); ++i)
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(read.rgb[i][c], probe.rgb[i][c], kWriteRelativePrecision * std::abs(probe.rgb[i][c]))
+                        << "order " << order << " coefficient " << i;
+        }
+}
+
+TEST(ProbeFile, WritesTheRequiredFieldsFirstAndMetadataAfter) {
+    ProbeMetadata metadata;
+    metadata.source = "sky.exr";
+    metadata.faceSize = 128;
+    metadata.backend = "gpu";
+    nlohmann::json json = nlohmann::json::parse(probeToJson(sampleProbe(3, Quantity::Radiance), metadata));
+    EXPECT_EQ(json["format"], "shprobe.sh");
+    EXPECT_EQ(json["version"], 1);
+    EXPECT_EQ(json["convention"], "real-orthonormal-condon-shortley");
+    EXPECT_EQ(json["order"], 3);
+    EXPECT_EQ(json["quantity"], "radiance");
+    EXPECT_EQ(json["source"], "sky.exr");
+    EXPECT_EQ(json["face_size"], 128);
+    EXPECT_EQ(json["coefficients"].size(), 9u);
+}
+
+TEST(ProbeFile, WritesAtomicallyAndReadsFromDisk) {
+    std::filesystem::path folder = std::filesystem::temp_directory_path() / "shprobe_test_probe_file";
+    std::filesystem::create_directories(folder);
+    std::string path = (folder / "probe.json").string();
+    writeProbeFile(path, sampleProbe(5, Quantity::Irradiance), {});
+    EXPECT_EQ(readProbeFile(path).order, 5);
+    // Only the file itself: the temporary file was renamed into place.
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(folder), {}), 1);
+    std::filesystem::remove_all(folder);
+}
+
+TEST(ProbeFile, UnknownFieldsAreIgnored) {
+    nlohmann::json json = nlohmann::json::parse(probeToJson(sampleProbe(2, Quantity::Radiance), {}));
+    json["timings"] = {{"bake_ms", 12.5}};
+    json["window"] = "none";
+    EXPECT_EQ(parseProbeJson(json.dump(), "probe.json").order, 2);
+}
+
+// Each malformed file names the file and the problem.
+void expectRejected(const std::string& text, const std::string& expectedInMessage) {
+    try {
+        parseProbeJson(text, "bad.json");
+        ADD_FAILURE() << "accepted: " << text;
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), ErrorKind::Input);
+        std::string message = e.what();
+        EXPECT_NE(message.find("bad.json"), std::string::npos) << message;
+        EXPECT_NE(message.find(expectedInMessage), std::string::npos) << message;
+    }
+}
+
+std::string validWith(const std::string& field, const nlohmann::json& value) {
+    nlohmann::json json = nlohmann::json::parse(probeToJson(sampleProbe(3, Quantity::Radiance), {}));
+    json[field] = value;
+    return json.dump();
+}
+
+std::string validWithout(const std::string& field) {
+    nlohmann::json json = nlohmann::json::parse(probeToJson(sampleProbe(3, Quantity::Radiance), {}));
+    json.erase(field);
+    return json.dump();
+}
+
+TEST(ProbeFile, RejectsMalformedJson) {
+    expectRejected("", "not valid JSON");
+    expectRejected("{\"format\": \"shprobe.sh\", ", "not valid JSON");
+    expectRejected("[1, 2, 3]", "JSON object");
+    std::string valid = probeToJson(sampleProbe(3, Quantity::Radiance), {});
+    expectRejected(valid.substr(0, valid.size() / 2), "not valid JSON");
+}
+
+TEST(ProbeFile, RejectsMissingRequiredFields) {
+    for (const char* field : {"format", "version", "convention", "order", "quantity", "coefficients"})
+        expectRejected(validWithout(field), std::string("\"") + field + "\"");
+}
+
+TEST(ProbeFile, RejectsWrongValues) {
+    expectRejected(validWith("format", "other.sh"), "\"format\"");
+    expectRejected(validWith("version", 2), "\"version\"");
+    expectRejected(validWith("convention", "real-orthonormal-no-phase"), "\"convention\"");
+    expectRejected(validWith("quantity", "luminance"), "\"quantity\"");
+    expectRejected(validWith("order", 0), "\"order\"");
+    expectRejected(validWith("order", 9), "\"order\"");
+    expectRejected(validWith("order", 2.5), "\"order\"");
+    expectRejected(validWith("order", 4), "16 rows"); // order 4 needs 16 rows, the file has 9
+}
+
+TEST(ProbeFile, RejectsBadCoefficientRows) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int i = 0; i < 9; ++i) rows.push_back({1.0, 2.0, 3.0});
+    EXPECT_EQ(parseProbeJson(validWith("coefficients", rows), "ok.json").rgb[8].b, 3.0);
+
+    nlohmann::json shortRow = rows;
+    shortRow[4] = {1.0, 2.0};
+    expectRejected(validWith("coefficients", shortRow), "coefficients[4]");
+    nlohmann::json textRow = rows;
+    textRow[7] = {1.0, "two", 3.0};
+    expectRejected(validWith("coefficients", textRow), "coefficients[7]");
+    expectRejected(validWith("coefficients", "none"), "\"coefficients\"");
+    rows.erase(rows.begin());
+    expectRejected(validWith("coefficients", rows), "9 rows");
+}
+
+TEST(ProbeFile, MissingFileIsAnInputError) {
+    try {
+        readProbeFile("/nonexistent/probe.json");
+        ADD_FAILURE();
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), ErrorKind::Input);
+        EXPECT_NE(std::string(e.what()).find("/nonexistent/probe.json"), std::string::npos);
+    }
+}
+
+} // namespace
+} // namespace shprobe
