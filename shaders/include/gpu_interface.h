@@ -14,14 +14,13 @@
 
 SHPROBE_BEGIN
 
-// project.comp: one dispatch projects texels [firstTexel, firstTexel + texelCount) of a cube map
-// whose texels are stored face after face (Vulkan layer order), rows top to bottom, RGBA32F.
-// The bound input range starts at texel firstTexel. Workgroup g writes its partial sums to
-// partial slot partialOffset + g.
+// project.comp: one dispatch projects rows [firstRow, firstRow + rowCount) of all six faces of an
+// N x N cube map (N = faceSize); the bound input holds exactly that band (see project.comp.glsl).
+// Workgroup g writes its partial sums to partial slot partialOffset + g.
 struct ProjectParams {
     uint faceSize;
-    uint firstTexel;
-    uint texelCount;
+    uint firstRow;
+    uint rowCount;
     uint partialOffset;
 };
 

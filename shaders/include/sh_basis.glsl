@@ -1,53 +1,78 @@
-// Real orthonormal SH basis in GLSL, Condon-Shortley phase, flat index l(l+1)+m (CONVENTIONS.md).
-// The includer declares `const uint SH_ORDER` (usually a specialization constant) first; then
-// SH_COEFFICIENTS = SH_ORDER^2 and shEvalBasis(d, y) fills y[0..SH_COEFFICIENTS).
+// Real orthonormal SH basis in GLSL, Condon-Shortley phase, flat index l(l+1)+m (CONVENTIONS in
+// README.md). The includer declares `const uint SH_ORDER` (usually a specialization constant)
+// first; then SH_COEFFICIENTS = SH_ORDER^2 and shEvalBasis(d, y) fills y[0..SH_COEFFICIENTS).
 #ifndef SHPROBE_SH_BASIS_GLSL
 #define SHPROBE_SH_BASIS_GLSL
 
 const uint SH_COEFFICIENTS = SH_ORDER * SH_ORDER;
+// Basis arrays have room for order 8 and only their first SH_COEFFICIENTS entries are written:
+// glslang 12 refuses literal indices into arrays sized by a specialization constant.
+const uint SH_BASIS_CAPACITY = 64u;
 
-// Polynomial in x, y, z, no trigonometry (Lisle & Huang 2007, seed 002 section 2.1):
-// (x + iy)^m = sin^m(theta) (cos m phi + i sin m phi) by complex multiplication, times the
-// normalized associated Legendre factor Pbar_l^m(z) = K_l^m P_l^m(z) / sin^m(theta), which follows
-// the normalized recurrences
-//   Pbar_0^0 = 1/sqrt(4 pi),  Pbar_m^m = -sqrt((2m+1)/(2m)) Pbar_{m-1}^{m-1},
-//   Pbar_{m+1}^m = sqrt(2m+3) z Pbar_m^m,
-//   Pbar_l^m = a (z Pbar_{l-1}^m - b Pbar_{l-2}^m), a = sqrt((4l^2-1)/(l^2-m^2)),
-//   b = sqrt(((l-1)^2-m^2)/(4(l-1)^2-1)).
-// Normalized factors stay near 1, unlike the factorials of K_l^m, so fp32 keeps its digits.
-void shEvalBasis(vec3 d, out float y[SH_COEFFICIENTS]) {
-    const float sqrt2 = 1.41421356237f;
-    float cosTerm = 1.0f; // sin^m(theta) cos(m phi)
-    float sinTerm = 0.0f; // sin^m(theta) sin(m phi)
-    float diagonal = 0.282094791774f; // Pbar_m^m, starting at 1/sqrt(4 pi)
-    for (uint m = 0u; m < SH_ORDER; ++m) {
-        float previous = 0.0f;
-        float current = diagonal;
-        for (uint l = m; l < SH_ORDER; ++l) {
-            if (l == m + 1u) {
-                previous = current;
-                current = sqrt(float(2u * m + 3u)) * d.z * current;
-            } else if (l > m + 1u) {
-                float l2 = float(l * l), m2 = float(m * m), k = float((l - 1u) * (l - 1u));
-                float a = sqrt((4.0f * l2 - 1.0f) / (l2 - m2));
-                float b = sqrt((k - m2) / (4.0f * k - 1.0f));
-                float next = a * (d.z * current - b * previous);
-                previous = current;
-                current = next;
-            }
-            uint center = l * (l + 1u);
-            if (m == 0u) {
-                y[center] = current;
-            } else {
-                y[center + m] = sqrt2 * current * cosTerm;
-                y[center - m] = sqrt2 * current * sinTerm;
-            }
-        }
-        diagonal *= -sqrt(float(2u * m + 3u) / float(2u * m + 2u));
-        float nextCos = cosTerm * d.x - sinTerm * d.y;
-        sinTerm = cosTerm * d.y + sinTerm * d.x;
-        cosTerm = nextCos;
+// Bands 0-4 as closed-form polynomials in x, y, z (Sloan, "Stupid SH Tricks", seed 000, with the
+// signs of CONVENTIONS.md). SH_ORDER is a constant when the pipeline is built, so the bands not
+// needed disappear, and the remaining code is straight-line: no loops, no indexing at run time.
+void shEvalBands0To4(vec3 d, inout float y[SH_BASIS_CAPACITY]) {
+    float x = d.x, yy = d.y, z = d.z;
+    y[0] = 0.282094791774f;
+    if (SH_ORDER < 2u) return;
+    y[1] = -0.488602511903f * yy;
+    y[2] = 0.488602511903f * z;
+    y[3] = -0.488602511903f * x;
+    if (SH_ORDER < 3u) return;
+    float x2 = x * x, y2 = yy * yy, z2 = z * z;
+    y[4] = 1.092548430592f * x * yy;
+    y[5] = -1.092548430592f * yy * z;
+    y[6] = 0.315391565253f * (3.0f * z2 - 1.0f);
+    y[7] = -1.092548430592f * x * z;
+    y[8] = 0.546274215296f * (x2 - y2);
+    if (SH_ORDER < 4u) return;
+    y[9] = -0.590043589927f * yy * (3.0f * x2 - y2);
+    y[10] = 2.890611442641f * x * yy * z;
+    y[11] = -0.457045799464f * yy * (5.0f * z2 - 1.0f);
+    y[12] = 0.373176332590f * z * (5.0f * z2 - 3.0f);
+    y[13] = -0.457045799464f * x * (5.0f * z2 - 1.0f);
+    y[14] = 1.445305721320f * z * (x2 - y2);
+    y[15] = -0.590043589927f * x * (x2 - 3.0f * y2);
+    if (SH_ORDER < 5u) return;
+    y[16] = 2.503342941797f * x * yy * (x2 - y2);
+    y[17] = -1.770130769780f * yy * z * (3.0f * x2 - y2);
+    y[18] = 0.946174695758f * x * yy * (7.0f * z2 - 1.0f);
+    y[19] = -0.669046543557f * yy * z * (7.0f * z2 - 3.0f);
+    y[20] = 0.105785546915f * (35.0f * z2 * z2 - 30.0f * z2 + 3.0f);
+    y[21] = -0.669046543557f * x * z * (7.0f * z2 - 3.0f);
+    y[22] = 0.473087347879f * (x2 - y2) * (7.0f * z2 - 1.0f);
+    y[23] = -1.770130769780f * x * z * (x2 - 3.0f * y2);
+    y[24] = 0.625835735449f * (x2 * (x2 - 3.0f * y2) - y2 * (3.0f * x2 - y2));
+}
+
+// Band l >= 5 from bands l-1 and l-2, by the normalized recurrences of the associated Legendre
+// functions applied to the whole basis values (the cos/sin(m phi) part depends on m only):
+//   y_l,+-l     = -sqrt((2l+1)/(2l)) (x y_l-1,+-(l-1) -+ y y_l-1,-+(l-1))   (complex multiplication)
+//   y_l,+-(l-1) = sqrt(2l+1) z y_l-1,+-(l-1)
+//   y_l,+-m     = a_lm (z y_l-1,+-m - b_lm y_l-2,+-m),  a_lm = sqrt((4l^2-1)/(l^2-m^2)),
+//                 b_lm = sqrt(((l-1)^2-m^2)/(4(l-1)^2-1))
+// (Lisle & Huang 2007, seed 002 section 2.1, in normalized form.)
+void shEvalBand(uint l, vec3 d, inout float y[SH_BASIS_CAPACITY]) {
+    uint c = l * (l + 1u), p = (l - 1u) * l, q = (l - 2u) * (l - 1u);
+    float sectoral = -sqrt(float(2u * l + 1u) / float(2u * l));
+    y[c + l] = sectoral * (d.x * y[p + l - 1u] - d.y * y[p - l + 1u]);
+    y[c - l] = sectoral * (d.x * y[p - l + 1u] + d.y * y[p + l - 1u]);
+    float subdiagonal = sqrt(float(2u * l + 1u)) * d.z;
+    y[c + l - 1u] = subdiagonal * y[p + l - 1u];
+    y[c - l + 1u] = subdiagonal * y[p - l + 1u];
+    for (uint m = 0u; m + 1u < l; ++m) {
+        float l2 = float(l * l), m2 = float(m * m), k = float((l - 1u) * (l - 1u));
+        float a = sqrt((4.0f * l2 - 1.0f) / (l2 - m2));
+        float b = sqrt((k - m2) / (4.0f * k - 1.0f));
+        y[c + m] = a * (d.z * y[p + m] - b * y[q + m]);
+        y[c - m] = a * (d.z * y[p - m] - b * y[q - m]); // m = 0 writes y[c] twice, the same value
     }
+}
+
+void shEvalBasis(vec3 d, out float y[SH_BASIS_CAPACITY]) {
+    shEvalBands0To4(d, y);
+    for (uint l = 5u; l < SH_ORDER; ++l) shEvalBand(l, d, y);
 }
 
 #endif

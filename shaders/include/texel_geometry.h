@@ -19,16 +19,23 @@ SHPROBE_FN float texelCenterCoord(uint i, uint faceSize) {
     return 2.0f * (float(i) + 0.5f) / float(faceSize) - 1.0f;
 }
 
+// The face table applied to v = (a, b, c): c along the face's axis, a and b across it.
+// With c = 1 it gives the unnormalized direction through face-local point (a, b); applied to the
+// normalized (a, b, 1) it gives unit directions, so one normalization serves all six faces.
+SHPROBE_FN vec3 orientToFace(uint face, vec3 v) {
+    switch (face) {
+    case 0u: return vec3(v.z, -v.y, -v.x);
+    case 1u: return vec3(-v.z, -v.y, v.x);
+    case 2u: return vec3(v.x, v.z, v.y);
+    case 3u: return vec3(v.x, -v.z, -v.y);
+    case 4u: return vec3(v.x, -v.y, v.z);
+    default: return vec3(-v.x, -v.y, -v.z);
+    }
+}
+
 // Unnormalized direction through face-local point (a, b) of a face.
 SHPROBE_FN vec3 faceDirection(uint face, float a, float b) {
-    switch (face) {
-    case 0u: return vec3(1.0f, -b, -a);
-    case 1u: return vec3(-1.0f, -b, a);
-    case 2u: return vec3(a, 1.0f, b);
-    case 3u: return vec3(a, -1.0f, -b);
-    case 4u: return vec3(a, -b, 1.0f);
-    default: return vec3(-a, -b, -1.0f);
-    }
+    return orientToFace(face, vec3(a, b, 1.0f));
 }
 
 // atan(t) for 0 <= t <= 0.6 to about an ulp, from arithmetic and sqrt only. GLSL's atan is only

@@ -23,40 +23,66 @@ VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
     return (value + alignment - 1) / alignment * alignment;
 }
 
-// One projection dispatch: a run of texels small enough for one storage-buffer binding.
-struct Chunk {
-    uint32_t firstTexel;
-    uint32_t texelCount;
+// One projection dispatch: a band of rows of all six faces, small enough for one storage-buffer
+// binding. In the uploaded buffer the bands follow each other, each holding its rows face by face.
+struct Band {
+    uint32_t firstRow;
+    uint32_t rowCount;
     uint32_t groupCount;
     uint32_t partialOffset;
+    VkDeviceSize offset; // bytes
+    VkDeviceSize size;   // bytes
 };
 
 // llvmpipe (lavapipe) ends any loop after 65535 iterations, counting the iterations of nested loops
-// against the outermost one: projecting a texel runs about 1 + n + n(n+1)/2 + n^2 loop iterations
-// at order n (the texel loop, the basis recurrences, the accumulation), and past the limit the sums
-// are silently wrong. Half the limit leaves a margin; other devices lose nothing by the cap.
-uint32_t maxTexelsPerInvocation(int order) {
+// against the outermost one, and past the limit the sums are silently wrong. One position (six
+// texels) runs fewer than 1 + 6 (1 + n^2 + n^2 / 2) loop iterations at order n (the position and
+// face loops, the accumulation, the recurrence of bands above 4). Half the limit leaves a margin;
+// other devices lose nothing by the cap.
+uint32_t maxPositionsPerInvocation(int order) {
     uint32_t n = uint32_t(order);
-    return 32768u / (1u + n + n * (n + 1u) / 2u + n * n);
+    return 32768u / (1u + 6u * (1u + n * n + n * n / 2u));
 }
 
-std::vector<Chunk> planChunks(const DeviceInfo& device, const ProjectorOptions& options, uint32_t texelCount) {
-    // Chunk starts must meet the storage-buffer offset alignment; whole multiples of 1024 texels do
-    // for every alignment Vulkan allows (at most 256 bytes).
-    VkDeviceSize maxTexels = device.limits.maxStorageBufferRange / kTexelBytes / 1024 * 1024;
-    uint32_t texelsPerInvocation = std::min(options.texelsPerInvocation, maxTexelsPerInvocation(options.order));
-    uint32_t texelsPerGroup = options.workgroupSize * texelsPerInvocation;
-    std::vector<Chunk> chunks;
+// Rows per band: as many as one binding can hold, a multiple of 8 so that band offsets
+// (96 N firstRow bytes) meet every storage-buffer offset alignment Vulkan allows (at most 256).
+uint32_t rowsPerBand(const DeviceInfo& device, uint32_t faceSize) {
+    VkDeviceSize rowBytes = VkDeviceSize(kFaceCount) * faceSize * kTexelBytes;
+    VkDeviceSize rows = device.limits.maxStorageBufferRange / rowBytes;
+    if (rows >= faceSize) return faceSize;
+    return uint32_t(std::max<VkDeviceSize>(8, rows / 8 * 8));
+}
+
+std::vector<Band> planBands(const DeviceInfo& device, const ProjectorOptions& options, uint32_t faceSize) {
+    uint32_t positionsPerInvocation =
+        std::min((options.texelsPerInvocation + kFaceCount - 1) / kFaceCount, maxPositionsPerInvocation(options.order));
+    uint32_t positionsPerGroup = options.workgroupSize * std::max(positionsPerInvocation, 1u);
+    uint32_t bandRows = rowsPerBand(device, faceSize);
+    std::vector<Band> bands;
     uint32_t partials = 0;
-    for (uint32_t first = 0; first < texelCount;) {
-        uint32_t count = uint32_t(std::min<VkDeviceSize>(texelCount - first, maxTexels));
-        uint32_t groups = std::clamp((count + texelsPerGroup - 1) / texelsPerGroup, 1u,
+    VkDeviceSize offset = 0;
+    for (uint32_t firstRow = 0; firstRow < faceSize; firstRow += bandRows) {
+        uint32_t rows = std::min(bandRows, faceSize - firstRow);
+        uint32_t positions = rows * faceSize;
+        uint32_t groups = std::clamp((positions + positionsPerGroup - 1) / positionsPerGroup, 1u,
                                      device.limits.maxComputeWorkGroupCount[0]);
-        chunks.push_back({first, count, groups, partials});
+        VkDeviceSize size = VkDeviceSize(kFaceCount) * positions * kTexelBytes;
+        bands.push_back({firstRow, rows, groups, partials, offset, size});
         partials += groups;
-        first += count;
+        offset += size;
     }
-    return chunks;
+    return bands;
+}
+
+// Writes the cube map band after band, each band's rows face by face (project.comp's layout).
+void writeBands(const Cubemap& cubemap, const std::vector<Band>& bands, void* destination) {
+    auto* out = static_cast<glm::vec4*>(destination);
+    size_t n = size_t(cubemap.faceSize);
+    for (const Band& band : bands)
+        for (int face = 0; face < kFaceCount; ++face) {
+            const glm::vec4* rows = &cubemap.at(face, 0, int(band.firstRow));
+            out = std::copy(rows, rows + band.rowCount * n, out);
+        }
 }
 
 gpu::ConvolveParams irradianceBandScales(int order) {
@@ -163,29 +189,30 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
     const VkDeviceSize coefficientBytes = VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
     const VkDeviceSize irradianceOffset =
         alignUp(coefficientBytes, context.info.limits.minStorageBufferOffsetAlignment);
-    const uint32_t texelCount = uint32_t(cubemap.texels.size());
-    const std::vector<Chunk> chunks = planChunks(context.info, projector.options, texelCount);
-    const uint32_t partialSlots = chunks.back().partialOffset + chunks.back().groupCount;
+    const VkDeviceSize texelBytes = cubemap.texels.size() * kTexelBytes;
+    const std::vector<Band> bands = planBands(context.info, projector.options, uint32_t(cubemap.faceSize));
+    const uint32_t partialSlots = bands.back().partialOffset + bands.back().groupCount;
 
     BakeResources resources;
     GpuBake bake;
     try {
         const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-        resources.texels = createBuffer(context, texelCount * kTexelBytes, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+        resources.texels = createBuffer(context, texelBytes, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                         MemoryUse::Device, "input texels");
         resources.partials =
             createBuffer(context, partialSlots * coefficientBytes, storage, MemoryUse::Device, "partial sums");
         resources.results = createBuffer(context, irradianceOffset + coefficientBytes, storage, MemoryUse::Readback,
                                          "coefficients");
-        resources.pool = createDescriptorPool(context, uint32_t(chunks.size()) + 2, 2 * (uint32_t(chunks.size()) + 2));
+        resources.pool = createDescriptorPool(context, uint32_t(bands.size()) + 2, 2 * (uint32_t(bands.size()) + 2));
         resources.timestamps = createTimestampPool(context);
-        uploadBuffer(context, resources.texels, cubemap.texels.data(), texelCount * kTexelBytes);
+        writeBuffer(context, resources.texels, texelBytes,
+                    [&](void* destination) { writeBands(cubemap, bands, destination); });
 
-        std::vector<VkDescriptorSet> chunkSets;
-        for (const Chunk& chunk : chunks) {
-            BufferRange ranges[] = {{&resources.texels, chunk.firstTexel * kTexelBytes, chunk.texelCount * kTexelBytes},
+        std::vector<VkDescriptorSet> bandSets;
+        for (const Band& band : bands) {
+            BufferRange ranges[] = {{&resources.texels, band.offset, band.size},
                                     {&resources.partials, 0, VK_WHOLE_SIZE}};
-            chunkSets.push_back(createDescriptorSet(context, resources.pool, projector.project, ranges));
+            bandSets.push_back(createDescriptorSet(context, resources.pool, projector.project, ranges));
         }
         BufferRange reduceRanges[] = {{&resources.partials, 0, VK_WHOLE_SIZE},
                                       {&resources.results, 0, coefficientBytes}};
@@ -199,11 +226,10 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
                 vkCmdResetQueryPool(commands, resources.timestamps, 0, 2);
                 vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, resources.timestamps, 0);
             }
-            for (size_t i = 0; i < chunks.size(); ++i) {
-                const Chunk& chunk = chunks[i];
-                gpu::ProjectParams params{uint32_t(cubemap.faceSize), chunk.firstTexel, chunk.texelCount,
-                                          chunk.partialOffset};
-                dispatch(commands, projector.project, chunkSets[i], params, chunk.groupCount);
+            for (size_t i = 0; i < bands.size(); ++i) {
+                const Band& band = bands[i];
+                gpu::ProjectParams params{uint32_t(cubemap.faceSize), band.firstRow, band.rowCount, band.partialOffset};
+                dispatch(commands, projector.project, bandSets[i], params, band.groupCount);
             }
             computeWriteBarrier(commands);
             dispatch(commands, projector.reduce, reduceSet, gpu::ReduceParams{partialSlots}, 1);
@@ -219,7 +245,7 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
         bake.irradiance = readCoefficients(resources.results, irradianceOffset, order, Quantity::Irradiance);
         bake.deviceMilliseconds = readDeviceMilliseconds(context, resources.timestamps);
         bake.workgroups = partialSlots;
-        bake.dispatches = uint32_t(chunks.size());
+        bake.dispatches = uint32_t(bands.size());
     } catch (...) {
         destroyBakeResources(context, resources);
         throw;

@@ -93,9 +93,9 @@ void destroyBuffer(const Context& context, Buffer& buffer) {
     buffer = Buffer{};
 }
 
-void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size) {
+void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size, const std::function<void(void*)>& fill) {
     if (buffer.mapped) {
-        std::memcpy(buffer.mapped, data, size_t(size));
+        fill(buffer.mapped);
         if (!buffer.coherent) {
             VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
             range.memory = buffer.memory;
@@ -106,7 +106,7 @@ void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDe
     }
     Buffer staging = createBuffer(context, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, "staging");
     try {
-        std::memcpy(staging.mapped, data, size_t(size));
+        fill(staging.mapped);
         submitAndWait(context, [&](VkCommandBuffer commands) {
             VkBufferCopy region{0, 0, size};
             vkCmdCopyBuffer(commands, staging.buffer, buffer.buffer, 1, &region);
@@ -116,6 +116,10 @@ void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDe
         throw;
     }
     destroyBuffer(context, staging);
+}
+
+void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size) {
+    writeBuffer(context, buffer, size, [&](void* destination) { std::memcpy(destination, data, size_t(size)); });
 }
 
 void invalidateBuffer(const Context& context, const Buffer& buffer) {

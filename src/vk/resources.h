@@ -24,8 +24,10 @@ Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlag
                     const char* what);
 void destroyBuffer(const Context& context, Buffer& buffer);
 
-// Copies data into the buffer: directly when it is mapped, through a staging buffer otherwise
-// (the buffer then needs VK_BUFFER_USAGE_TRANSFER_DST_BIT).
+// Fills the first `size` bytes of the buffer with `fill(destination)`: in place when the buffer is
+// mapped, through a staging buffer otherwise (the buffer then needs VK_BUFFER_USAGE_TRANSFER_DST_BIT).
+void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size, const std::function<void(void*)>& fill);
+// writeBuffer with a plain copy of data.
 void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size);
 // Makes device writes to a mapped buffer visible to the host (no-op for coherent memory).
 void invalidateBuffer(const Context& context, const Buffer& buffer);
