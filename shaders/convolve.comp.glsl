@@ -20,15 +20,9 @@ layout(set = 0, binding = 0, std430) readonly buffer Radiance { vec4 radiance[];
 layout(set = 0, binding = 1, std430) writeonly buffer Irradiance { vec4 irradiance[]; };
 layout(push_constant, std430) uniform Push { ConvolveParams params; };
 
-uint bandOf(uint index) {
-    uint l = 0u;
-    while ((l + 1u) * (l + 1u) <= index) ++l;
-    return l;
-}
-
 void main() {
     for (uint i = gl_LocalInvocationIndex; i < SH_COEFFICIENTS; i += gl_WorkGroupSize.x) {
-        uint l = bandOf(i);
+        uint l = bandOfIndex(i);
         irradiance[i] = vec4(radiance[i].rgb * params.bandScale[l / 4u][l % 4u], 0.0f);
     }
 }

@@ -1,6 +1,7 @@
 // The SH basis: golden values, recurrence against closed forms, orthonormality, normalization.
 #include "sh/basis.h"
 #include "sh/error.h"
+#include "test_support.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -8,11 +9,14 @@
 #include <array>
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <vector>
 
 namespace shprobe {
 namespace {
+
+using testing::gaussLegendre;
+using testing::QuadratureNode;
+using testing::randomDirections;
 
 constexpr double kPi = std::numbers::pi;
 
@@ -39,44 +43,6 @@ std::vector<double> basisAt(int order, const glm::dvec3& d) {
     return y;
 }
 
-std::vector<glm::dvec3> randomDirections(int count) {
-    std::mt19937 rng(1234);
-    std::normal_distribution<double> normal;
-    std::vector<glm::dvec3> directions;
-    for (int k = 0; k < count; ++k)
-        directions.push_back(glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng))));
-    return directions;
-}
-
-struct QuadratureNode {
-    double t;
-    double weight;
-};
-
-// Gauss-Legendre nodes on [-1, 1] by Newton's method on P_n (Abramowitz & Stegun 25.4.29):
-// exact for polynomials of degree up to 2n - 1.
-std::vector<QuadratureNode> gaussLegendre(int n) {
-    std::vector<QuadratureNode> nodes;
-    for (int k = 1; k <= n; ++k) {
-        double t = std::cos(kPi * (k - 0.25) / (n + 0.5));
-        double derivative = 0.0;
-        for (int iteration = 0; iteration < 100; ++iteration) {
-            double p0 = 1.0, p1 = t; // Bonnet: (m+1) P_m+1 = (2m+1) t P_m - m P_m-1
-            for (int m = 1; m < n; ++m) {
-                const double p2 = ((2.0 * m + 1.0) * t * p1 - m * p0) / (m + 1.0);
-                p0 = p1;
-                p1 = p2;
-            }
-            derivative = n * (t * p1 - p0) / (t * t - 1.0);
-            const double step = p1 / derivative;
-            t -= step;
-            if (std::abs(step) < 1e-16) break;
-        }
-        nodes.push_back({t, 2.0 / ((1.0 - t * t) * derivative * derivative)});
-    }
-    return nodes;
-}
-
 // Checks: y_i(d) at d = normalize(0.3, -0.5, 0.8) equals the 25 golden values of CONVENTIONS.md,
 // which fix the convention (signs, Condon-Shortley phase, normalization, index order).
 TEST(Basis, GoldenValues) {
@@ -88,7 +54,7 @@ TEST(Basis, GoldenValues) {
 // Checks: every (l, m) of the recurrence equals the hand-written polynomials (Sloan; Brown with
 // Sloan's signs) at 1000 random directions, for every order the closed forms cover.
 TEST(Basis, RecurrenceMatchesClosedForms) {
-    for (const glm::dvec3& d : randomDirections(1000)) {
+    for (const glm::dvec3& d : randomDirections(1000, 1234)) {
         for (int order = 1; order <= 5; ++order) {
             std::vector<double> closedForm(size_t(coefficientCount(order)));
             evalBasisClosedForm(order, d, closedForm);

@@ -14,9 +14,14 @@
 #include "io/probe_file.h"
 #include "sh/basis.h"
 #include "sh/error.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
+#include "sh/rotation.h"
+#include "sh/windowing.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cerrno>
 #include <chrono>
@@ -547,6 +552,113 @@ TEST_F(CliFailures, NoVulkanDevice) {
     for (size_t i = 0; i + 1 < lines.size(); ++i)
         EXPECT_TRUE(startsWith(lines[i], "vulkan validation: ")) << validated.err;
     EXPECT_FALSE(fs::exists(file("validated.json")));
+}
+
+// --device picks a device by its index in `shprobe info` or by a case-insensitive part of its name;
+// a request that matches no device is a device error (exit 4) naming what was asked for.
+TEST_F(Cli, DeviceIsChosenByIndexOrName) {
+    for (const char* device : {"0", "LLVMpipe"}) {
+        RunResult result = runOk({"bake", "--face-size", "4", "--device", device, "-q", "-o", file("device.json")});
+        EXPECT_CONTAINS(result.out, "llvmpipe");
+    }
+}
+
+TEST_F(CliFailures, UnknownDevice) {
+    expectFailure({{"bake", "--face-size", "4", "--device", "no-such-gpu", "-o", "OUT"}, 4, {"no-such-gpu", "shprobe info"}});
+}
+
+// ---- The toolkit through the program: windows, lights, sun extraction, rotate, light ---------
+
+// Largest |a - b| over coefficients and channels, relative to a's largest |L_00| channel.
+double relativeDifference(const ShCoefficients& a, const ShCoefficients& b) {
+    double worst = 0.0, dc = std::max({std::abs(a.rgb[0].r), std::abs(a.rgb[0].g), std::abs(a.rgb[0].b)});
+    for (size_t i = 0; i < a.rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(a.rgb[i][c] - b.rgb[i][c]));
+    return worst / dc;
+}
+
+// The built-in sky's sun rings: its order-5 irradiance goes negative somewhere. `--window dering`
+// finds the weakest window that removes that, on the GPU as on the CPU (the GPU applies it in the
+// convolution shader; both agree to the GPU's fp32 accuracy, 2e-6 of |L_00|), and the written
+// irradiance is non-negative (on 4096 directions plus local refinement, minimumOnSphere).
+TEST_F(Cli, DeringingMakesIrradianceNonNegative) {
+    runOk({"bake", "--order", "5", "--irradiance", "-o", file("plain.json")});
+    runOk({"bake", "--order", "5", "--irradiance", "--window", "dering", "-o", file("gpu.json")});
+    runOk({"bake", "--order", "5", "--irradiance", "--window", "dering", "--backend", "cpu", "-o", file("cpu.json")});
+    ShCoefficients plain = readProbeFile(file("plain.json"));
+    ShCoefficients gpu = readProbeFile(file("gpu.json"));
+    EXPECT_LT(minimumOnSphere(plain).value, 0.0) << "the test needs a sky whose irradiance rings negative";
+    EXPECT_GE(minimumOnSphere(gpu).value, -1e-6 * plain.rgb[0].r);
+    EXPECT_LT(relativeDifference(gpu, readProbeFile(file("cpu.json"))), 2e-6);
+    EXPECT_NEAR(gpu.rgb[0].g, plain.rgb[0].g, 2e-6 * plain.rgb[0].g) << "a window keeps L_00";
+}
+
+// Lights given to `bake` are added to the environment's radiance: the difference between the bakes
+// with and without them is exactly the probe `shprobe light` writes for the same lights (fp32
+// coefficients: 1e-6 relative).
+TEST_F(Cli, BakeLightsEqualTheLightCommand) {
+    std::vector<std::string> lights = {"--directional", "0.3,0.8,-0.5", "3,2,1", "--sphere", "0,1,0", "10",
+                                       "1,1,2", "--ambient", "0.1,0.2,0.3"};
+    std::vector<std::string> withLights = {"bake", "--order", "5", "-o", file("lit.json")};
+    withLights.insert(withLights.end(), lights.begin(), lights.end());
+    std::vector<std::string> lightOnly = {"light", "--order", "5", "-o", file("lights.json")};
+    lightOnly.insert(lightOnly.end(), lights.begin(), lights.end());
+    runOk({"bake", "--order", "5", "-o", file("sky.json")});
+    runOk(withLights);
+    runOk(lightOnly);
+    ShCoefficients sky = readProbeFile(file("sky.json")), lit = readProbeFile(file("lit.json"));
+    ShCoefficients expected = readProbeFile(file("lights.json"));
+    for (size_t i = 0; i < sky.rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(lit.rgb[i][c] - sky.rgb[i][c], expected.rgb[i][c], 1e-6 * std::abs(lit.rgb[0][c]))
+                << "coefficient " << i;
+}
+
+// `--extract-sun` on the built-in sky finds its sun (SkyParameters: direction normalize(0.32, 0.72,
+// -0.61), radius 0.02 rad): direction within 0.1 degree, radius within 2%, written as "sun", and
+// the coefficients are those of the sky without it (L_00 far below the bake with the sun).
+TEST_F(Cli, ExtractSunFindsTheBuiltInSun) {
+    RunResult result = runOk({"bake", "--extract-sun", "-q", "-o", file("rest.json")});
+    EXPECT_CONTAINS(result.out, "sun ");
+    std::ifstream in(file("rest.json"));
+    nlohmann::json json = nlohmann::json::parse(in);
+    ASSERT_TRUE(json.contains("sun")) << json.dump();
+    glm::dvec3 direction(json["sun"]["direction"][0], json["sun"]["direction"][1], json["sun"]["direction"][2]);
+    glm::dvec3 expected = glm::normalize(SkyParameters{}.sunDirection);
+    EXPECT_LT(std::acos(std::min(1.0, glm::dot(direction, expected))) * 180.0 / M_PI, 0.1);
+    EXPECT_NEAR(json["sun"]["angular_radius_degrees"].get<double>(), SkyParameters{}.sunAngularRadius * 180.0 / M_PI,
+                0.02 * SkyParameters{}.sunAngularRadius * 180.0 / M_PI);
+    runOk({"bake", "-q", "-o", file("whole.json")});
+    EXPECT_LT(readProbeFile(file("rest.json")).rgb[0].r, 0.5 * readProbeFile(file("whole.json")).rgb[0].r);
+}
+
+// `shprobe rotate` equals the library's rotation (src/sh/rotation.h, tested against projections of
+// rotated environments) for the Euler, quaternion and matrix forms of the same rotation, a quarter
+// turn about +Y: R = Rz(0) Ry(90) Rz(0) = quaternion (cos 45, 0, sin 45, 0) = [[0,0,1],[0,1,0],[-1,0,0]].
+TEST_F(Cli, RotateTakesEulerQuaternionOrMatrix) {
+    runOk({"bake", "--order", "4", "-q", "-o", file("sky.json")});
+    ShCoefficients sky = readProbeFile(file("sky.json"));
+    ShCoefficients expected = rotate(makeShRotation(rotationFromEulerZYZ(0.0, 90.0, 0.0), 4), sky);
+    const std::vector<std::vector<std::string>> forms = {
+        {"--euler", "0,90,0"}, {"--quat", "0.7071067811865476,0,0.7071067811865476,0"}, {"--matrix", "0,0,1,0,1,0,-1,0,0"}};
+    for (const std::vector<std::string>& form : forms) {
+        runOk({"rotate", file("sky.json"), form[0], form[1], "-o", file("rotated.json")});
+        EXPECT_LT(relativeDifference(readProbeFile(file("rotated.json")), expected), 1e-8) << form[0];
+    }
+}
+
+TEST_F(CliFailures, RotateRefusesBadRotations) {
+    runShprobe({"light", "--ambient", "1,1,1", "-o", file("probe.json")}, folder() / "logs", {});
+    expectFailure({{"rotate", file("probe.json"), "--matrix", "1,0,0,0,1,0,0,0,2", "-o", "OUT"}, 2, {"orthonormal"}});
+    expectFailure({{"rotate", file("probe.json"), "-o", "OUT"}, 2, {"--euler", "--quat", "--matrix"}});
+    expectFailure({{"rotate", file("missing.json"), "--euler", "0,90,0", "-o", "OUT"}, 2, {"missing.json"}});
+}
+
+TEST_F(CliFailures, BadLightsAndWindows) {
+    expectFailure({{"bake", "--directional", "0,1", "1,1,1", "-o", "OUT"}, 2, {"--directional", "3 numbers"}});
+    expectFailure({{"bake", "--sphere", "0,1,0", "-5", "1,1,1", "-o", "OUT"}, 2, {"--sphere", "radius"}});
+    expectFailure({{"bake", "--window", "gauss:3", "-o", "OUT"}, 2, {"--window"}});
+    expectFailure({{"light", "-o", "OUT"}, 2, {"at least one"}});
 }
 
 // ---- 5. shprobe info --------------------------------------------------------------------------

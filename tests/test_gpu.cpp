@@ -4,11 +4,14 @@
 #include "gpu_test.h"
 
 #include "gpu/projector.h"
+#include "gpu/rotator.h"
 #include "image/environment.h"
 #include "sh/basis.h"
 #include "sh/error.h"
 #include "sh/irradiance.h"
 #include "sh/projection.h"
+#include "sh/rotation.h"
+#include "sh/windowing.h"
 #include "shprobe/shprobe_test_spirv.h"
 #include "vk/pipeline.h"
 #include "vk/resources.h"
@@ -162,6 +165,27 @@ TEST_F(GpuProjection, WorkgroupShapesDoNotChangeTheResult) {
     }
 }
 
+// A window scales band l of both outputs by w_l inside convolve.comp: the windowed radiance and
+// irradiance equal the CPU's applyWindow / convolveIrradiance of the reference (same tolerance).
+TEST_F(GpuProjection, WindowIsAppliedByTheConvolutionShader) {
+    Cubemap cubemap = hotSunCubemap(32);
+    for (int order : {3, 5}) {
+        std::vector<double> window = windowFactors(WindowKind::Hanning, 3.5, order);
+        GpuBake gpu = bake(cubemap, {.order = order});
+        Projector projector = createProjector(context(), {.order = order});
+        GpuBake windowed = bakeCubemap(context(), projector, cubemap, window);
+        GpuBake convolved = convolveOnGpu(context(), projector, gpu.radiance, window);
+        destroyProjector(context(), projector);
+
+        ShCoefficients expected = applyWindow(projectCubemap(cubemap, order), window);
+        EXPECT_LT(relativeError(windowed.radiance, expected), kGpuTolerance) << "order " << order;
+        EXPECT_LT(relativeError(windowed.irradiance, convolveIrradiance(expected)), kGpuTolerance) << "order " << order;
+        EXPECT_LT(relativeError(convolved.radiance, expected), kGpuTolerance) << "order " << order;
+        EXPECT_LT(relativeError(convolved.irradiance, convolveIrradiance(expected)), kGpuTolerance) << "order " << order;
+        EXPECT_GT(relativeError(windowed.radiance, gpu.radiance), 1e-2) << "the window changed nothing";
+    }
+}
+
 // lavapipe stops loops after 65535 iterations, nested ones included, and the sums are then silently
 // wrong: asking for far more texels per invocation than that allows must still give the right sums
 // (the projector caps the work per invocation by order).
@@ -229,6 +253,60 @@ TEST_F(GpuSolidAngles, EveryTexelMatchesTheDoubleFormula) {
     }
     RecordProperty("worst relative error", std::to_string(worstOverall));
     destroyComputeProgram(context(), program);
+}
+
+// rotate.comp against the double-precision CPU rotation (src/sh/rotation.h) on random probes. Each
+// output sums at most 2l+1 = 15 products of fp32-rounded matrix entries (|D_mn| <= 1) and
+// coefficients, with about three roundings each: 15 * 3 * 6e-8 < 3e-6 of the largest coefficient.
+constexpr double kGpuRotationTolerance = 3e-6;
+
+std::vector<ShCoefficients> randomProbes(int order, int count, uint32_t seed) {
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+    std::vector<ShCoefficients> probes;
+    for (int p = 0; p < count; ++p) {
+        ShCoefficients probe = makeCoefficients(order, Quantity::Radiance);
+        for (glm::dvec3& c : probe.rgb) c = {uniform(random), uniform(random), uniform(random)};
+        probes.push_back(probe);
+    }
+    return probes;
+}
+
+double largestDifference(const ShCoefficients& a, const ShCoefficients& b) {
+    double worst = 0.0;
+    for (size_t i = 0; i < a.rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(a.rgb[i][c] - b.rgb[i][c]));
+    return worst;
+}
+
+class GpuRotation : public GpuTest {};
+
+TEST_F(GpuRotation, OneRotationForABatchMatchesTheCpu) {
+    for (int order : {1, 3, 5, 8}) {
+        ShRotation rotation = makeShRotation(rotationFromEulerZYZ(30.0, 70.0, -115.0), order);
+        std::vector<ShCoefficients> probes = randomProbes(order, 37, uint32_t(order));
+        Rotator rotator = createRotator(context(), order);
+        std::vector<ShCoefficients> gpu = rotateOnGpu(context(), rotator, std::span(&rotation, 1), probes);
+        destroyRotator(context(), rotator);
+        ASSERT_EQ(gpu.size(), probes.size());
+        for (size_t p = 0; p < probes.size(); ++p)
+            EXPECT_LT(largestDifference(gpu[p], rotate(rotation, probes[p])), kGpuRotationTolerance)
+                << "order " << order << " probe " << p;
+    }
+}
+
+TEST_F(GpuRotation, EachProbeWithItsOwnRotationMatchesTheCpu) {
+    const int order = 5;
+    std::vector<ShCoefficients> probes = randomProbes(order, 12, 99);
+    std::vector<ShRotation> rotations;
+    for (int p = 0; p < 12; ++p)
+        rotations.push_back(makeShRotation(rotationFromEulerZYZ(13.0 * p, 29.0 * p, -7.0 * p), order));
+    Rotator rotator = createRotator(context(), order);
+    std::vector<ShCoefficients> gpu = rotateOnGpu(context(), rotator, rotations, probes);
+    EXPECT_THROW(rotateOnGpu(context(), rotator, std::span(rotations).first(2), probes), Error);
+    destroyRotator(context(), rotator);
+    for (size_t p = 0; p < probes.size(); ++p)
+        EXPECT_LT(largestDifference(gpu[p], rotate(rotations[p], probes[p])), kGpuRotationTolerance) << "probe " << p;
 }
 
 } // namespace

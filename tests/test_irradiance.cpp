@@ -2,17 +2,22 @@
 #include "sh/basis.h"
 #include "sh/error.h"
 #include "sh/irradiance.h"
+#include "test_support.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <vector>
 
 namespace shprobe {
 namespace {
+
+using testing::gaussLegendre;
+using testing::legendre;
+using testing::QuadratureNode;
+using testing::randomDirections;
 
 constexpr double kPi = std::numbers::pi;
 
@@ -24,51 +29,6 @@ constexpr double kQuadratureError = 1e-10;
 // Evaluations sum at most 64 products of order 1 in double, about 1e-15 of rounding; 1e-9 leaves a
 // wide margin while still pinning the exact fractions of the delta-light test.
 constexpr double kEvaluationError = 1e-9;
-
-std::vector<glm::dvec3> randomDirections(int count) {
-    std::mt19937 rng(99);
-    std::normal_distribution<double> normal;
-    std::vector<glm::dvec3> directions;
-    for (int k = 0; k < count; ++k)
-        directions.push_back(glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng))));
-    return directions;
-}
-
-struct QuadratureNode {
-    double t;
-    double weight;
-};
-
-// Legendre polynomial P_l(t) by Bonnet's recurrence (m+1) P_m+1 = (2m+1) t P_m - m P_m-1.
-double legendre(int l, double t) {
-    double p0 = 1.0, p1 = t;
-    if (l == 0) return p0;
-    for (int m = 1; m < l; ++m) {
-        const double p2 = ((2.0 * m + 1.0) * t * p1 - m * p0) / (m + 1.0);
-        p0 = p1;
-        p1 = p2;
-    }
-    return p1;
-}
-
-// Gauss-Legendre nodes on [0, 1] (Newton's method on P_n, Abramowitz & Stegun 25.4.29, then mapped
-// from [-1, 1]): exact for polynomials of degree up to 2n - 1.
-std::vector<QuadratureNode> gaussLegendreUnitInterval(int n) {
-    std::vector<QuadratureNode> nodes;
-    for (int k = 1; k <= n; ++k) {
-        double t = std::cos(kPi * (k - 0.25) / (n + 0.5));
-        double derivative = 0.0;
-        for (int iteration = 0; iteration < 100; ++iteration) {
-            derivative = n * (t * legendre(n, t) - legendre(n - 1, t)) / (t * t - 1.0);
-            const double step = legendre(n, t) / derivative;
-            t -= step;
-            if (std::abs(step) < 1e-16) break;
-        }
-        const double weight = 2.0 / ((1.0 - t * t) * derivative * derivative);
-        nodes.push_back({0.5 * (t + 1.0), 0.5 * weight});
-    }
-    return nodes;
-}
 
 // Checks: A_0..A_8 equal the values CONVENTIONS.md prints (pi, 2pi/3, pi/4, 0, -pi/24, 0, ...).
 TEST(Irradiance, BandFactorValues) {
@@ -87,7 +47,7 @@ TEST(Irradiance, BandFactorValues) {
 // (the clamped cosine max(0, t) against P_l), computed by 16-node Gauss-Legendre on [0, 1], exact
 // for these polynomials of degree <= 17; l = 0..16, twice the bands the project uses.
 TEST(Irradiance, BandFactorMatchesClampedCosineIntegral) {
-    const std::vector<QuadratureNode> nodes = gaussLegendreUnitInterval(16);
+    const std::vector<QuadratureNode> nodes = gaussLegendre(16, 0.0, 1.0);
     for (int l = 0; l <= 16; ++l) {
         double integral = 0.0;
         for (const QuadratureNode& node : nodes)
@@ -104,7 +64,7 @@ TEST(Irradiance, ConstantEnvironmentGivesPiTimesRadiance) {
     radiance.rgb[0] = c * std::sqrt(4.0 * kPi);
     const ShCoefficients irradiance = convolveIrradiance(radiance);
     EXPECT_EQ(irradiance.quantity, Quantity::Irradiance);
-    for (const glm::dvec3& n : randomDirections(200)) {
+    for (const glm::dvec3& n : randomDirections(200, 99)) {
         const glm::dvec3 e = evaluate(irradiance, n);
         EXPECT_NEAR(e.r, kPi * c.r, kEvaluationError);
         EXPECT_NEAR(e.g, kPi * c.g, kEvaluationError);

@@ -14,6 +14,14 @@
 
 SHPROBE_BEGIN
 
+// Band l of flat SH index i = l(l+1) + m: the largest l with l^2 <= i. Integer only: a float sqrt
+// may round a perfect square down on some devices.
+SHPROBE_FN uint bandOfIndex(uint index) {
+    uint l = 0u;
+    while ((l + 1u) * (l + 1u) <= index) ++l;
+    return l;
+}
+
 // project.comp: one dispatch projects rows [firstRow, firstRow + rowCount) of all six faces of an
 // N x N cube map (N = faceSize); the bound input holds exactly that band (see project.comp.glsl).
 // Workgroup g writes its partial sums to partial slot partialOffset + g.
@@ -34,12 +42,20 @@ struct ConvolveParams {
     vec4 bandScale[SHPROBE_MAX_ORDER / 4];
 };
 
+// rotate.comp: rotates probeCount probes. Probe p uses the band matrices that start at float
+// p * matrixStride of the matrix buffer (matrixStride = 0: one rotation for all probes).
+struct RotateParams {
+    uint probeCount;
+    uint matrixStride;
+};
+
 SHPROBE_END
 
 #ifdef __cplusplus
 static_assert(sizeof(shprobe::gpu::ProjectParams) == 16);
 static_assert(sizeof(shprobe::gpu::ReduceParams) == 4);
 static_assert(sizeof(shprobe::gpu::ConvolveParams) == 32);
+static_assert(sizeof(shprobe::gpu::RotateParams) == 8);
 #endif
 
 #endif

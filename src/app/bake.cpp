@@ -1,6 +1,7 @@
 // `shprobe bake`: environment in, SH radiance or irradiance coefficients out (JSON), on the GPU
 // or with the double-precision CPU reference.
 #include "app/commands.h"
+#include "app/toolkit.h"
 #include "gpu/projector.h"
 #include "image/environment.h"
 #include "io/atomic_file.h"
@@ -8,7 +9,9 @@
 #include "sh/basis.h"
 #include "sh/error.h"
 #include "sh/irradiance.h"
+#include "sh/lights.h"
 #include "sh/projection.h"
+#include "sh/windowing.h"
 #include "vk/context.h"
 
 #include <chrono>
@@ -48,6 +51,40 @@ Environment loadInput(const BakeOptions& options) {
     return sky;
 }
 
+// The steps after the projection, the same on either backend: add the analytic lights, then choose
+// the window (de-ringing looks at the radiance with the lights in it).
+struct Finished {
+    ShCoefficients radiance;
+    std::vector<double> window; // empty: none
+};
+
+bool needsFinishing(const BakeOptions& options) { return hasLights(options.lights) || options.window != "none"; }
+
+Finished finish(const BakeOptions& options, ShCoefficients radiance) {
+    addLights(radiance, options.lights);
+    std::optional<std::vector<double>> window = windowFactorsFor(options.window, radiance);
+    return {std::move(radiance), window.value_or(std::vector<double>{})};
+}
+
+BakeResult bakeWithContext(const BakeOptions& options, const Context& context, const Cubemap& cubemap) {
+    Projector projector = createProjector(context, {options.order, options.workgroupSize, options.texelsPerInvocation});
+    BakeResult result;
+    try {
+        GpuBake bake = bakeCubemap(context, projector, cubemap);
+        double deviceMs = bake.deviceMilliseconds;
+        if (needsFinishing(options)) {
+            Finished finished = finish(options, bake.radiance);
+            bake = convolveOnGpu(context, projector, finished.radiance, finished.window); // convolve.comp
+        }
+        result = {bake.radiance, bake.irradiance, context.info.name, deviceMs};
+    } catch (...) {
+        destroyProjector(context, projector);
+        throw;
+    }
+    destroyProjector(context, projector);
+    return result;
+}
+
 BakeResult bakeOnGpu(const BakeOptions& options, const Cubemap& cubemap) {
     ContextOptions contextOptions;
     contextOptions.device = options.device;
@@ -55,16 +92,7 @@ BakeResult bakeOnGpu(const BakeOptions& options, const Cubemap& cubemap) {
     Context context = createContext(contextOptions);
     BakeResult result;
     try {
-        Projector projector =
-            createProjector(context, {options.order, options.workgroupSize, options.texelsPerInvocation});
-        try {
-            GpuBake bake = bakeCubemap(context, projector, cubemap);
-            result = {bake.radiance, bake.irradiance, context.info.name, bake.deviceMilliseconds};
-        } catch (...) {
-            destroyProjector(context, projector);
-            throw;
-        }
-        destroyProjector(context, projector);
+        result = bakeWithContext(options, context, cubemap);
     } catch (...) {
         destroyContext(context);
         throw;
@@ -77,11 +105,32 @@ BakeResult bakeOnGpu(const BakeOptions& options, const Cubemap& cubemap) {
 }
 
 BakeResult bakeOnCpu(const BakeOptions& options, const Cubemap& cubemap) {
+    Finished finished = finish(options, projectCubemap(cubemap, options.order));
     BakeResult result;
-    result.radiance = projectCubemap(cubemap, options.order);
+    result.radiance = finished.window.empty() ? finished.radiance : applyWindow(finished.radiance, finished.window);
     result.irradiance = convolveIrradiance(result.radiance);
     result.device = "cpu reference (double)";
     return result;
+}
+
+// Takes the sun out of the environment when asked; the probe is then of the rest.
+std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& environment) {
+    if (!options.extractSun) return std::nullopt;
+    SunExtraction sun = extractSun(environment.cubemap);
+    if (!sun.found) return std::nullopt;
+    SphericalLight light = sunAsSphericalLight(sun);
+    return ProbeSun{light.direction, light.radiance, light.angularRadius};
+}
+
+void printSun(const std::optional<ProbeSun>& sun) {
+    if (!sun) {
+        std::printf("  sun      none found (nothing compact and far brighter than the sky)\n");
+        return;
+    }
+    std::printf("  sun      direction (%.4f, %.4f, %.4f), radius %.3f deg, radiance (%.4g, %.4g, %.4g): "
+                "written as \"sun\", not in the coefficients\n",
+                sun->direction.x, sun->direction.y, sun->direction.z, sun->angularRadius * 180.0 / M_PI,
+                sun->radiance.r, sun->radiance.g, sun->radiance.b);
 }
 
 void printCoefficients(const ShCoefficients& coefficients) {
@@ -102,6 +151,8 @@ void printSummary(const BakeOptions& options, const Environment& environment, co
                 coefficientCount(options.order));
     if (environment.replacedTexels > 0)
         std::printf("  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
+    if (hasLights(options.lights)) std::printf("  lights   added to the environment's radiance\n");
+    if (options.window != "none") std::printf("  window   %s\n", options.window.c_str());
     std::printf("  time     load %.1f ms, bake %.1f ms", loadMs, bakeMs);
     if (result.deviceMilliseconds > 0.0) std::printf(" (GPU %.1f ms)", result.deviceMilliseconds);
     std::printf("\n");
@@ -138,6 +189,11 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
         ->check(CLI::Range(1, 1 << 20))
         ->capture_default_str();
     command->add_flag("-q,--quiet", options.quiet, "Print the summary only, not the coefficients");
+    command->add_flag("--extract-sun", options.extractSun,
+                      "Take the sun (the brightest compact region) out of the environment and write it beside the "
+                      "probe of the rest, as \"sun\" (direction, radiance, angular radius)");
+    addLightOptions(*command, options.lights);
+    addWindowOption(*command, options.window);
 }
 
 void runBake(const BakeOptions& options) {
@@ -145,6 +201,7 @@ void runBake(const BakeOptions& options) {
 
     Clock::time_point start = Clock::now();
     Environment environment = loadInput(options);
+    std::optional<ProbeSun> sun = takeOutSun(options, environment);
     double loadMs = millisecondsSince(start);
 
     start = Clock::now();
@@ -158,9 +215,12 @@ void runBake(const BakeOptions& options) {
     metadata.faceSize = environment.cubemap.faceSize;
     metadata.backend = options.backend;
     metadata.device = result.device;
+    metadata.window = options.window == "none" ? "" : options.window;
+    metadata.sun = sun;
     writeProbeFile(options.output, written, metadata);
 
     printSummary(options, environment, result, loadMs, bakeMs);
+    if (options.extractSun) printSun(sun);
     if (!options.quiet) printCoefficients(written);
 }
 

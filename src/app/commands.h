@@ -1,9 +1,12 @@
 // The subcommands of the shprobe program. Each adds its options to the parser and runs from a
 // plain options struct; library errors (shprobe::Error) reach main, which prints them.
 #pragma once
+#include "app/toolkit.h"
+
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace shprobe {
 
@@ -21,9 +24,44 @@ struct BakeOptions {
     uint32_t workgroupSize = 64;
     uint32_t texelsPerInvocation = 256;
     bool quiet = false;           // no coefficient table
+    LightOptions lights;          // analytic lights added to the environment's radiance
+    std::string window = "none";  // none | hanning:W | lanczos:W | dering | dering-lanczos
+    bool extractSun = false;      // take the sun out and write it beside the probe
 };
 
 struct InfoOptions {
+    bool validation = false;
+};
+
+struct RenderOptions {
+    std::string input;                 // probe (.json), environment image, or empty: the built-in sky
+    std::string output = "render.png"; // .png/.jpg tonemapped sRGB, .exr/.hdr linear
+    int order = 3;                     // 3 or 5
+    std::string mode = "irradiance";   // radiance | irradiance | l1-nonlinear
+    std::string size;                  // N or WxH; default 512 (with --grid: the cell width, 384)
+    bool grid = false;                 // environment, order-3 and order-5 side by side
+    std::string background = "auto";   // auto | environment | radiance (sh) | shading | color
+    float exposure = 0.0f;             // stops relative to the automatic exposure
+    float yaw = 0.0f;                  // camera orbit, degrees
+    float pitch = 10.0f;
+    int faceSize = 0;                  // environment cube-map face size (0: from the input)
+    bool sanitize = false;
+    std::string device;
+    bool validation = false;
+};
+
+struct ViewOptions {
+    std::string input;                 // like RenderOptions::input
+    std::string size = "960x600";      // window size, N or WxH
+    int order = 3;
+    std::string mode = "irradiance";
+    std::string screenshot;            // save frame --frames to this PNG and exit
+    int frames = 0;                    // > 0: exit after this many frames
+    std::vector<std::string> keys;     // key presses to replay, one per frame (tests, scripts)
+    float exposure = 0.0f;
+    int faceSize = 0;
+    bool sanitize = false;
+    std::string device;
     bool validation = false;
 };
 
@@ -32,5 +70,18 @@ void runBake(const BakeOptions& options);
 
 void addInfoCommand(CLI::App& app, InfoOptions& options);
 void runInfo(const InfoOptions& options);
+
+// "N" (N x N) or "WxH", each 1..16384; throws Error(Input) naming the option otherwise.
+struct ImageSize {
+    uint32_t width = 0;
+    uint32_t height = 0;
+};
+ImageSize parseImageSize(const std::string& text, const char* option);
+
+void addRenderCommand(CLI::App& app, RenderOptions& options);
+void runRender(const RenderOptions& options);
+
+void addViewCommand(CLI::App& app, ViewOptions& options);
+void runView(const ViewOptions& options);
 
 } // namespace shprobe

@@ -1,4 +1,5 @@
 // shprobe: bakes HDR environments into spherical-harmonics light probes on the GPU.
+#include "app/bench.h"
 #include "app/commands.h"
 #include "sh/error.h"
 
@@ -24,8 +25,14 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     shprobe::BakeOptions bake;
     shprobe::InfoOptions info;
+    shprobe::RotateOptions rotate;
+    shprobe::LightCommandOptions light;
+    shprobe::BenchOptions bench;
     shprobe::addBakeCommand(app, bake);
     shprobe::addInfoCommand(app, info);
+    shprobe::addRotateCommand(app, rotate);
+    shprobe::addLightCommand(app, light);
+    shprobe::addBenchCommand(app, bench);
 
     try {
         app.parse(argc, argv);
@@ -37,6 +44,9 @@ int main(int argc, char** argv) {
     try {
         if (app.got_subcommand("bake")) shprobe::runBake(bake);
         if (app.got_subcommand("info")) shprobe::runInfo(info);
+        if (app.got_subcommand("rotate")) shprobe::runRotate(rotate);
+        if (app.got_subcommand("light")) shprobe::runLight(light);
+        if (app.got_subcommand("bench")) shprobe::runBench(bench);
     } catch (const shprobe::Error& e) {
         std::fprintf(stderr, "shprobe: error: %s\n", e.what());
         return exitCode(e.kind());

@@ -9,6 +9,7 @@
 #include "vk/resources.h"
 
 #include <algorithm>
+#include <span>
 #include <cmath>
 #include <vector>
 
@@ -85,10 +86,22 @@ void writeBands(const Cubemap& cubemap, const std::vector<Band>& bands, void* de
         }
 }
 
-gpu::ConvolveParams irradianceBandScales(int order) {
+// Per-band scales for convolve.comp: the window alone (windowed radiance), or A_l times the window
+// (irradiance, E_lm = A_l L_lm). An empty window is no window.
+gpu::ConvolveParams bandScales(int order, std::span<const double> window, Quantity quantity) {
     gpu::ConvolveParams params{};
-    for (int l = 0; l < order; ++l) params.bandScale[l / 4][l % 4] = float(irradianceBandFactor(l));
+    for (int l = 0; l < order; ++l) {
+        double scale = window.empty() ? 1.0 : window[size_t(l)];
+        if (quantity == Quantity::Irradiance) scale *= irradianceBandFactor(l);
+        params.bandScale[l / 4][l % 4] = float(scale);
+    }
     return params;
+}
+
+void checkWindow(int order, std::span<const double> window) {
+    if (!window.empty() && window.size() != size_t(order))
+        throw Error(ErrorKind::Input, "a window of " + std::to_string(window.size()) + " bands for order " +
+                                          std::to_string(order));
 }
 
 // Throws when a coefficient is not finite: finite inputs whose sums overflow fp32 (values near
@@ -106,11 +119,24 @@ ShCoefficients readCoefficients(const Buffer& results, VkDeviceSize offset, int 
     return coefficients;
 }
 
+// The host-visible results buffer: three coefficient sets, each at a storage-buffer-aligned offset.
+struct ResultSlots {
+    VkDeviceSize bytes;  // one coefficient set
+    VkDeviceSize stride; // bytes rounded up to the offset alignment
+    static constexpr int kRawRadiance = 0, kRadiance = 1, kIrradiance = 2, kCount = 3;
+    VkDeviceSize offset(int slot) const { return VkDeviceSize(slot) * stride; }
+};
+
+ResultSlots resultSlots(const Context& context, int order) {
+    VkDeviceSize bytes = VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
+    return {bytes, alignUp(bytes, context.info.limits.minStorageBufferOffsetAlignment)};
+}
+
 // Everything one bake allocates, destroyed in one place.
 struct BakeResources {
     Buffer texels;
     Buffer partials;
-    Buffer results; // radiance at 0, irradiance at irradianceOffset; host-visible
+    Buffer results; // ResultSlots; host-visible
     VkDescriptorPool pool = VK_NULL_HANDLE;
     VkQueryPool timestamps = VK_NULL_HANDLE;
 };
@@ -151,6 +177,37 @@ double readDeviceMilliseconds(const Context& context, VkQueryPool pool) {
     return double(ticks[1] - ticks[0]) * context.info.timestampPeriod * 1e-6;
 }
 
+// Descriptor sets and dispatches of the two convolutions, both reading the raw radiance slot.
+struct Convolutions {
+    VkDescriptorSet radianceSet;
+    VkDescriptorSet irradianceSet;
+};
+
+Convolutions createConvolutions(const Context& context, const Projector& projector, VkDescriptorPool pool,
+                                const Buffer& results, const ResultSlots& slots) {
+    auto setFor = [&](int slot) {
+        BufferRange ranges[] = {{&results, slots.offset(ResultSlots::kRawRadiance), slots.bytes},
+                                {&results, slots.offset(slot), slots.bytes}};
+        return createDescriptorSet(context, pool, projector.convolve, ranges);
+    };
+    return {setFor(ResultSlots::kRadiance), setFor(ResultSlots::kIrradiance)};
+}
+
+void recordConvolutions(VkCommandBuffer commands, const Projector& projector, const Convolutions& convolutions,
+                        std::span<const double> window) {
+    int order = projector.options.order;
+    dispatch(commands, projector.convolve, convolutions.radianceSet, bandScales(order, window, Quantity::Radiance), 1);
+    dispatch(commands, projector.convolve, convolutions.irradianceSet,
+             bandScales(order, window, Quantity::Irradiance), 1);
+    computeWriteBarrier(commands);
+}
+
+void readResults(const Context& context, const Buffer& results, const ResultSlots& slots, int order, GpuBake& bake) {
+    invalidateBuffer(context, results);
+    bake.radiance = readCoefficients(results, slots.offset(ResultSlots::kRadiance), order, Quantity::Radiance);
+    bake.irradiance = readCoefficients(results, slots.offset(ResultSlots::kIrradiance), order, Quantity::Irradiance);
+}
+
 } // namespace
 
 Projector createProjector(const Context& context, const ProjectorOptions& options) {
@@ -183,12 +240,13 @@ void destroyProjector(const Context& context, Projector& projector) {
     destroyComputeProgram(context, projector.project);
 }
 
-GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap) {
+GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap,
+                    std::span<const double> window) {
     checkCubemap(cubemap);
     const int order = projector.options.order;
-    const VkDeviceSize coefficientBytes = VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
-    const VkDeviceSize irradianceOffset =
-        alignUp(coefficientBytes, context.info.limits.minStorageBufferOffsetAlignment);
+    checkWindow(order, window);
+    const ResultSlots slots = resultSlots(context, order);
+    const VkDeviceSize coefficientBytes = slots.bytes;
     const VkDeviceSize texelBytes = cubemap.texels.size() * kTexelBytes;
     const std::vector<Band> bands = planBands(context.info, projector.options, uint32_t(cubemap.faceSize));
     const uint32_t partialSlots = bands.back().partialOffset + bands.back().groupCount;
@@ -201,9 +259,9 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
                                         MemoryUse::Device, "input texels");
         resources.partials =
             createBuffer(context, partialSlots * coefficientBytes, storage, MemoryUse::Device, "partial sums");
-        resources.results = createBuffer(context, irradianceOffset + coefficientBytes, storage, MemoryUse::Readback,
+        resources.results = createBuffer(context, slots.offset(ResultSlots::kCount), storage, MemoryUse::Readback,
                                          "coefficients");
-        resources.pool = createDescriptorPool(context, uint32_t(bands.size()) + 2, 2 * (uint32_t(bands.size()) + 2));
+        resources.pool = createDescriptorPool(context, uint32_t(bands.size()) + 3, 2 * (uint32_t(bands.size()) + 3));
         resources.timestamps = createTimestampPool(context);
         writeBuffer(context, resources.texels, texelBytes,
                     [&](void* destination) { writeBands(cubemap, bands, destination); });
@@ -215,11 +273,9 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
             bandSets.push_back(createDescriptorSet(context, resources.pool, projector.project, ranges));
         }
         BufferRange reduceRanges[] = {{&resources.partials, 0, VK_WHOLE_SIZE},
-                                      {&resources.results, 0, coefficientBytes}};
+                                      {&resources.results, slots.offset(ResultSlots::kRawRadiance), coefficientBytes}};
         VkDescriptorSet reduceSet = createDescriptorSet(context, resources.pool, projector.reduce, reduceRanges);
-        BufferRange convolveRanges[] = {{&resources.results, 0, coefficientBytes},
-                                        {&resources.results, irradianceOffset, coefficientBytes}};
-        VkDescriptorSet convolveSet = createDescriptorSet(context, resources.pool, projector.convolve, convolveRanges);
+        Convolutions convolutions = createConvolutions(context, projector, resources.pool, resources.results, slots);
 
         submitAndWait(context, [&](VkCommandBuffer commands) {
             if (resources.timestamps) {
@@ -234,15 +290,12 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
             computeWriteBarrier(commands);
             dispatch(commands, projector.reduce, reduceSet, gpu::ReduceParams{partialSlots}, 1);
             computeWriteBarrier(commands);
-            dispatch(commands, projector.convolve, convolveSet, irradianceBandScales(order), 1);
-            computeWriteBarrier(commands);
+            recordConvolutions(commands, projector, convolutions, window);
             if (resources.timestamps)
                 vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, resources.timestamps, 1);
         });
 
-        invalidateBuffer(context, resources.results);
-        bake.radiance = readCoefficients(resources.results, 0, order, Quantity::Radiance);
-        bake.irradiance = readCoefficients(resources.results, irradianceOffset, order, Quantity::Irradiance);
+        readResults(context, resources.results, slots, order, bake);
         bake.deviceMilliseconds = readDeviceMilliseconds(context, resources.timestamps);
         bake.workgroups = partialSlots;
         bake.dispatches = uint32_t(bands.size());
@@ -251,6 +304,41 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
         throw;
     }
     destroyBakeResources(context, resources);
+    return bake;
+}
+
+GpuBake convolveOnGpu(const Context& context, const Projector& projector, const ShCoefficients& radiance,
+                      std::span<const double> window) {
+    const int order = projector.options.order;
+    if (radiance.order != order || radiance.quantity != Quantity::Radiance)
+        throw Error(ErrorKind::Input, "GPU convolution: expected order-" + std::to_string(order) + " radiance");
+    checkWindow(order, window);
+    const ResultSlots slots = resultSlots(context, order);
+    std::vector<glm::vec4> raw;
+    for (const glm::dvec3& c : radiance.rgb) raw.emplace_back(glm::vec3(c), 0.0f);
+
+    Buffer results;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    auto release = [&] {
+        if (pool) vkDestroyDescriptorPool(context.device, pool, nullptr);
+        destroyBuffer(context, results);
+    };
+    GpuBake bake;
+    try {
+        results = createBuffer(context, slots.offset(ResultSlots::kCount), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                               MemoryUse::Readback, "coefficients");
+        uploadBuffer(context, results, raw.data(), slots.bytes); // slot 0: the raw radiance
+        pool = createDescriptorPool(context, 2, 4);
+        Convolutions convolutions = createConvolutions(context, projector, pool, results, slots);
+        submitAndWait(context, [&](VkCommandBuffer commands) {
+            recordConvolutions(commands, projector, convolutions, window);
+        });
+        readResults(context, results, slots, order, bake);
+    } catch (...) {
+        release();
+        throw;
+    }
+    release();
     return bake;
 }
 

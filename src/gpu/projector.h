@@ -6,6 +6,8 @@
 #include "vk/context.h"
 #include "vk/pipeline.h"
 
+#include <span>
+
 namespace shprobe {
 
 struct ProjectorOptions {
@@ -37,6 +39,15 @@ struct GpuBake {
 // Largest face the GPU path accepts: texel indices are 32-bit (6 N^2 < 2^32).
 constexpr int kMaxGpuFaceSize = 16384;
 
-GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap);
+// Projects the cube map and convolves the result, in one submission. `window` holds one factor per
+// band (windowing against ringing, see sh/windowing.h); it scales both outputs, as convolve.comp
+// applies it: radiance L_lm w_l and irradiance A_l w_l L_lm. Empty: no window.
+GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap,
+                    std::span<const double> window = {});
+
+// The convolution alone, on radiance computed elsewhere (after lights were added to it, or with a
+// window found from it, as de-ringing does). Fills radiance and irradiance of the result.
+GpuBake convolveOnGpu(const Context& context, const Projector& projector, const ShCoefficients& radiance,
+                      std::span<const double> window = {});
 
 } // namespace shprobe

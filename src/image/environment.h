@@ -65,7 +65,8 @@ Cubemap resizeCubemap(const Cubemap& cubemap, int faceSize);
 struct SkyParameters {
     glm::dvec3 sunDirection{0.32, 0.72, -0.61}; // normalized on use
     double sunAngularRadius = 0.02;             // radians (about 1.1 degrees)
-    glm::dvec3 sunRadiance{20000.0, 18000.0, 15000.0};
+    glm::dvec3 sunRadiance{60000.0, 54000.0, 45000.0}; // bright enough that order-3 and order-5
+                                                        // irradiance ring negative (de-ringing)
     glm::dvec3 zenith{0.25, 0.45, 1.0};
     glm::dvec3 horizon{0.9, 0.95, 1.0};
     glm::dvec3 ground{0.3, 0.25, 0.2};

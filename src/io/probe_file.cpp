@@ -89,6 +89,13 @@ std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata&
     if (!metadata.weighting.empty()) header["weighting"] = metadata.weighting;
     if (!metadata.backend.empty()) header["backend"] = metadata.backend;
     if (!metadata.device.empty()) header["device"] = metadata.device;
+    if (!metadata.window.empty()) header["window"] = metadata.window;
+    if (metadata.sun) {
+        const ProbeSun& sun = *metadata.sun;
+        header["sun"] = {{"direction", {sun.direction.x, sun.direction.y, sun.direction.z}},
+                         {"radiance", {sun.radiance.r, sun.radiance.g, sun.radiance.b}},
+                         {"angular_radius_degrees", sun.angularRadius * 180.0 / M_PI}};
+    }
 
     // One coefficient row per line, so the file reads like the table it is.
     std::string text = "{\n";

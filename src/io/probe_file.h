@@ -2,10 +2,20 @@
 // version 1, the SH convention, order, quantity and order^2 rows of [r, g, b].
 #pragma once
 #include "sh/coefficients.h"
+#include <glm/vec3.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 
 namespace shprobe {
+
+// A sun taken out of the environment (sun extraction), written beside the probe of the rest so that
+// a renderer can add it back analytically.
+struct ProbeSun {
+    glm::dvec3 direction{0.0, 1.0, 0.0}; // unit, towards the sun
+    glm::dvec3 radiance{0.0};            // uniform over its disc
+    double angularRadius = 0.0;          // radians
+};
 
 // Optional fields written beside the required ones; readers ignore them.
 struct ProbeMetadata {
@@ -14,6 +24,8 @@ struct ProbeMetadata {
     std::string backend; // "gpu" or "cpu"
     std::string device;
     std::string weighting = "exact-solid-angle";
+    std::string window;             // e.g. "hanning:4"; empty: none
+    std::optional<ProbeSun> sun;
 };
 
 std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata& metadata);

@@ -1,0 +1,21 @@
+// `shprobe bench`: projection speed against the memory-read bound (bench.cpp).
+#pragma once
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+namespace shprobe {
+
+struct BenchOptions {
+    std::vector<int> faceSizes{64, 256, 1024, 2048};
+    std::vector<int> orders{3, 5, 8};
+    int repeat = 3;
+    int referenceMaxFaceSize = 1024; // the double reference takes seconds beyond this
+    std::string json;
+    std::string device;
+};
+
+void addBenchCommand(CLI::App& app, BenchOptions& options);
+void runBench(const BenchOptions& options);
+
+} // namespace shprobe

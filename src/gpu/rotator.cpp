@@ -1,0 +1,117 @@
+#include "gpu/rotator.h"
+
+#include "gpu_interface.h"
+#include "sh/basis.h"
+#include "sh/error.h"
+#include "shprobe/shprobe_spirv.h"
+#include "vk/resources.h"
+
+#include <glm/vec4.hpp>
+
+namespace shprobe {
+
+namespace {
+
+constexpr uint32_t kWorkgroupSize = 64;
+
+// Floats taken by one rotation's band matrices: sum over l < order of (2l+1)^2.
+size_t matrixFloats(int order) { return size_t(order) * (4 * size_t(order) * order - 1) / 3; }
+
+void checkInputs(const Rotator& rotator, std::span<const ShRotation> rotations,
+                 std::span<const ShCoefficients> probes) {
+    if (rotations.size() != 1 && rotations.size() != probes.size())
+        throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(rotations.size()) + " rotations for " +
+                                          std::to_string(probes.size()) + " probes (give 1 or one per probe)");
+    for (const ShRotation& rotation : rotations)
+        if (rotation.order != rotator.order)
+            throw Error(ErrorKind::Input, "GPU rotation: a rotation of order " + std::to_string(rotation.order) +
+                                              " for a rotator of order " + std::to_string(rotator.order));
+    for (const ShCoefficients& probe : probes)
+        if (probe.order != rotator.order || probe.rgb.size() != size_t(coefficientCount(probe.order)))
+            throw Error(ErrorKind::Input, "GPU rotation: a probe of order " + std::to_string(probe.order) +
+                                              " for a rotator of order " + std::to_string(rotator.order));
+}
+
+std::vector<float> packMatrices(std::span<const ShRotation> rotations) {
+    std::vector<float> packed;
+    for (const ShRotation& rotation : rotations)
+        for (const std::vector<double>& band : rotation.bands) packed.insert(packed.end(), band.begin(), band.end());
+    return packed;
+}
+
+std::vector<glm::vec4> packProbes(std::span<const ShCoefficients> probes) {
+    std::vector<glm::vec4> packed;
+    for (const ShCoefficients& probe : probes)
+        for (const glm::dvec3& c : probe.rgb) packed.emplace_back(glm::vec3(c), 0.0f);
+    return packed;
+}
+
+} // namespace
+
+Rotator createRotator(const Context& context, int order) {
+    if (order < 1 || order > kMaxOrder)
+        throw Error(ErrorKind::Input, "order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxOrder));
+    Rotator rotator;
+    rotator.order = order;
+    rotator.program = createComputeProgram(context, {"rotate.comp", spirv::rotate_comp, 3, sizeof(gpu::RotateParams),
+                                                     kWorkgroupSize, uint32_t(order)});
+    return rotator;
+}
+
+void destroyRotator(const Context& context, Rotator& rotator) { destroyComputeProgram(context, rotator.program); }
+
+std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& rotator,
+                                        std::span<const ShRotation> rotations,
+                                        std::span<const ShCoefficients> probes) {
+    checkInputs(rotator, rotations, probes);
+    if (probes.empty()) return {};
+    const std::vector<float> matrices = packMatrices(rotations);
+    const std::vector<glm::vec4> input = packProbes(probes);
+    const VkDeviceSize matrixBytes = matrices.size() * sizeof(float);
+    const VkDeviceSize probeBytes = input.size() * sizeof(glm::vec4);
+    const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+
+    Buffer matrixBuffer, probeBuffer, rotatedBuffer;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    auto release = [&] {
+        if (pool) vkDestroyDescriptorPool(context.device, pool, nullptr);
+        destroyBuffer(context, rotatedBuffer);
+        destroyBuffer(context, probeBuffer);
+        destroyBuffer(context, matrixBuffer);
+    };
+    std::vector<ShCoefficients> rotated;
+    try {
+        matrixBuffer = createBuffer(context, matrixBytes, usage, MemoryUse::Device, "rotation matrices");
+        probeBuffer = createBuffer(context, probeBytes, usage, MemoryUse::Device, "probes to rotate");
+        rotatedBuffer = createBuffer(context, probeBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback,
+                                     "rotated probes");
+        uploadBuffer(context, matrixBuffer, matrices.data(), matrixBytes);
+        uploadBuffer(context, probeBuffer, input.data(), probeBytes);
+        pool = createDescriptorPool(context, 1, 3);
+        BufferRange ranges[] = {{&matrixBuffer, 0, matrixBytes}, {&probeBuffer, 0, probeBytes},
+                                {&rotatedBuffer, 0, probeBytes}};
+        VkDescriptorSet set = createDescriptorSet(context, pool, rotator.program, ranges);
+
+        uint32_t stride = rotations.size() == 1 ? 0u : uint32_t(matrixFloats(rotator.order));
+        gpu::RotateParams params{uint32_t(probes.size()), stride};
+        uint32_t groups = uint32_t((input.size() + kWorkgroupSize - 1) / kWorkgroupSize);
+        submitAndWait(context, [&](VkCommandBuffer commands) {
+            dispatch(commands, rotator.program, set, params, groups);
+            computeWriteBarrier(commands);
+        });
+        invalidateBuffer(context, rotatedBuffer);
+        auto* values = static_cast<const glm::vec4*>(rotatedBuffer.mapped);
+        for (const ShCoefficients& probe : probes) {
+            ShCoefficients result = makeCoefficients(probe.order, probe.quantity);
+            for (glm::dvec3& c : result.rgb) c = glm::dvec3(glm::vec3(*values++));
+            rotated.push_back(std::move(result));
+        }
+    } catch (...) {
+        release();
+        throw;
+    }
+    release();
+    return rotated;
+}
+
+} // namespace shprobe

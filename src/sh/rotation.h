@@ -1,0 +1,54 @@
+// Rotation of SH coefficients, orders 1..kMaxOrder, in double precision.
+//
+// Convention (CONVENTIONS.md, "Rotations"): rotating a probe f by R gives the coefficients of
+// g(w) = f(R^T w), so a light that came from d comes from R d (column vectors, v' = R v).
+//
+// Each band l is rotated by its own (2l+1) x (2l+1) orthogonal matrix D^l, built from R by the
+// real-basis recurrence of Ivanic & Ruedenberg (J. Phys. Chem. 100, 6342, 1996, with their
+// corrections in J. Phys. Chem. A 102, 9099, 1998), written for the real basis without the
+// Condon-Shortley phase and converted to ours by D'_mn = (-1)^(m+n) D_mn. (Seed 003, Brown, lists
+// corrected equations for the related recursion of Choi, Ivanic, Gordon & Ruedenberg, 1999, which
+// goes through the complex basis, in a sign convention that is not ours.) The tests check the
+// result against exact projections of rotated environments, to 1e-10, through order 8.
+//
+// Matrices: every glm::dmat3 here is the mathematical matrix R acting as v' = R * v. GLM stores it
+// column-major, so element (row r, column c) is R[c][r]. Use rotationFromRowMajor for the 9 numbers of
+// the command line and of files (r00, r01, r02, r10, ...).
+#pragma once
+#include "coefficients.h"
+
+#include <glm/mat3x3.hpp>
+#include <span>
+#include <vector>
+
+namespace shprobe {
+
+// Largest deviation from orthonormality (|R^T R - I| per element) and from det R = +1 accepted.
+constexpr double kRotationTolerance = 1e-6;
+
+// Band-wise rotation matrices. bands[l] holds D^l row-major: entry (m, n), m, n in -l..l, is at
+// (m + l) * (2l + 1) + (n + l), and the rotated coefficients are c'_lm = sum_n D^l_mn c_ln.
+struct ShRotation {
+    int order = 0;
+    std::vector<std::vector<double>> bands; // bands[l].size() == (2l+1)^2, l = 0..order-1
+};
+
+// Throws Error(Input) unless R is orthonormal with det +1, both within kRotationTolerance.
+void validateRotation(const glm::dmat3& R);
+
+// R from 9 numbers, row-major (r00, r01, r02, r10, ...); validated.
+glm::dmat3 rotationFromRowMajor(std::span<const double, 9> rowMajor);
+// R from a unit quaternion (w, x, y, z), v' = q v q*; |q| must be 1 within kRotationTolerance
+// (q is then normalized).
+glm::dmat3 rotationFromQuaternion(double w, double x, double y, double z);
+// R = Rz(gamma) Ry(beta) Rz(alpha), angles in degrees (CONVENTIONS.md; seed 002, eq. 6).
+glm::dmat3 rotationFromEulerZYZ(double alphaDegrees, double betaDegrees, double gammaDegrees);
+
+// The band matrices of R (validated) for order 1..kMaxOrder.
+ShRotation makeShRotation(const glm::dmat3& R, int order);
+
+// Rotated coefficients; the probe's order must equal the rotation's. Works for radiance and
+// irradiance alike (the Lambertian convolution commutes with rotation).
+ShCoefficients rotate(const ShRotation& rotation, const ShCoefficients& coefficients);
+
+} // namespace shprobe
