@@ -25,11 +25,15 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     shprobe::BakeOptions bake;
     shprobe::InfoOptions info;
+    shprobe::RenderOptions render;
+    shprobe::ViewOptions view;
     shprobe::RotateOptions rotate;
     shprobe::LightCommandOptions light;
     shprobe::BenchOptions bench;
     shprobe::addBakeCommand(app, bake);
     shprobe::addInfoCommand(app, info);
+    shprobe::addRenderCommand(app, render);
+    shprobe::addViewCommand(app, view);
     shprobe::addRotateCommand(app, rotate);
     shprobe::addLightCommand(app, light);
     shprobe::addBenchCommand(app, bench);
@@ -44,6 +48,8 @@ int main(int argc, char** argv) {
     try {
         if (app.got_subcommand("bake")) shprobe::runBake(bake);
         if (app.got_subcommand("info")) shprobe::runInfo(info);
+        if (app.got_subcommand("render")) shprobe::runRender(render);
+        if (app.got_subcommand("view")) shprobe::runView(view);
         if (app.got_subcommand("rotate")) shprobe::runRotate(rotate);
         if (app.got_subcommand("light")) shprobe::runLight(light);
         if (app.got_subcommand("bench")) shprobe::runBench(bench);

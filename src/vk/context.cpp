@@ -51,7 +51,8 @@ VkDebugUtilsMessengerCreateInfoEXT messengerInfo(ValidationLog* log) {
     return info;
 }
 
-VkInstance createInstance(bool validation, ValidationLog* log) {
+VkInstance createInstance(bool validation, ValidationLog* log,
+                          const std::vector<std::string>& extraExtensions = {}) {
     uint32_t loaderVersion = 0;
     if (vkEnumerateInstanceVersion(&loaderVersion) != VK_SUCCESS || loaderVersion < VK_API_VERSION_1_1)
         throw Error(ErrorKind::Device, std::string("no Vulkan 1.1 loader: ") + kNoDeviceHint);
@@ -64,6 +65,7 @@ VkInstance createInstance(bool validation, ValidationLog* log) {
     app.apiVersion = VK_API_VERSION_1_1;
 
     std::vector<const char*> extensions;
+    for (const std::string& extension : extraExtensions) extensions.push_back(extension.c_str());
     std::vector<const char*> layers;
     VkDebugUtilsMessengerCreateInfoEXT debugInfo = messengerInfo(log);
     VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
@@ -208,7 +210,10 @@ std::string requestedDevice(const ContextOptions& options) {
     return options.device.empty() && fromEnvironment ? fromEnvironment : options.device;
 }
 
-VkDevice createLogicalDevice(VkPhysicalDevice physicalDevice, uint32_t queueFamily) {
+VkDevice createLogicalDevice(VkPhysicalDevice physicalDevice, uint32_t queueFamily,
+                             const std::vector<std::string>& extensions) {
+    std::vector<const char*> names;
+    for (const std::string& extension : extensions) names.push_back(extension.c_str());
     float priority = 1.0f;
     VkDeviceQueueCreateInfo queue{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
     queue.queueFamilyIndex = queueFamily;
@@ -217,6 +222,8 @@ VkDevice createLogicalDevice(VkPhysicalDevice physicalDevice, uint32_t queueFami
     VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
     info.queueCreateInfoCount = 1;
     info.pQueueCreateInfos = &queue;
+    info.enabledExtensionCount = uint32_t(names.size());
+    info.ppEnabledExtensionNames = names.data();
     VkDevice device = VK_NULL_HANDLE;
     VK_CHECK(vkCreateDevice(physicalDevice, &info, nullptr, &device));
     return device;
@@ -230,6 +237,42 @@ VkDebugUtilsMessengerEXT createMessenger(VkInstance instance, ValidationLog* log
     VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
     VK_CHECK(create(instance, &info, nullptr, &messenger));
     return messenger;
+}
+
+bool hasDeviceExtension(VkPhysicalDevice physicalDevice, const std::string& name) {
+    uint32_t count = 0;
+    vkEnumerateDeviceExtensionProperties(physicalDevice, nullptr, &count, nullptr);
+    std::vector<VkExtensionProperties> extensions(count);
+    vkEnumerateDeviceExtensionProperties(physicalDevice, nullptr, &count, extensions.data());
+    return std::any_of(extensions.begin(), extensions.end(),
+                       [&](const VkExtensionProperties& e) { return name == e.extensionName; });
+}
+
+// Why a device that can bake cannot do what the options add (graphics, extensions, presenting to
+// the surface); empty when it can.
+std::string renderingShortfall(VkPhysicalDevice physicalDevice, const ContextOptions& options,
+                               VkSurfaceKHR surface) {
+    uint32_t family = *findComputeQueueFamily(physicalDevice); // exists: the device can bake
+    uint32_t count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, families.data());
+    if (options.graphics && !(families[family].queueFlags & VK_QUEUE_GRAPHICS_BIT))
+        return "no queue that does both compute and graphics";
+    for (const std::string& extension : options.deviceExtensions)
+        if (!hasDeviceExtension(physicalDevice, extension)) return "no " + extension;
+    VkBool32 presents = VK_FALSE;
+    if (surface) VK_CHECK(vkGetPhysicalDeviceSurfaceSupportKHR(physicalDevice, family, surface, &presents));
+    if (surface && !presents) return "its queue cannot present to the window";
+    return {};
+}
+
+void applyRenderingRequirements(std::vector<DeviceInfo>& devices,
+                                const std::vector<VkPhysicalDevice>& physicalDevices, const ContextOptions& options,
+                                VkSurfaceKHR surface) {
+    for (DeviceInfo& device : devices)
+        if (device.unsupportedReason.empty())
+            device.unsupportedReason = renderingShortfall(physicalDevices[device.index], options, surface);
 }
 
 } // namespace
@@ -268,15 +311,19 @@ Context createContext(const ContextOptions& options) {
     Context context;
     bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
     context.validationLog = std::make_unique<ValidationLog>();
-    context.instance = createInstance(validation, context.validationLog.get());
+    context.instance = createInstance(validation, context.validationLog.get(), options.instanceExtensions);
     try {
         if (validation) context.messenger = createMessenger(context.instance, context.validationLog.get());
+        if (options.createSurface) context.surface = options.createSurface(context.instance);
         std::vector<VkPhysicalDevice> physicalDevices = enumeratePhysicalDevices(context.instance);
-        context.info = pickDevice(describeDevices(physicalDevices), requestedDevice(options));
+        std::vector<DeviceInfo> devices = describeDevices(physicalDevices);
+        applyRenderingRequirements(devices, physicalDevices, options, context.surface);
+        context.info = pickDevice(devices, requestedDevice(options));
         context.physicalDevice = physicalDevices[context.info.index];
         context.queueFamily = *findComputeQueueFamily(context.physicalDevice);
         vkGetPhysicalDeviceMemoryProperties(context.physicalDevice, &context.memory);
-        context.device = createLogicalDevice(context.physicalDevice, context.queueFamily);
+        context.device =
+            createLogicalDevice(context.physicalDevice, context.queueFamily, options.deviceExtensions);
         vkGetDeviceQueue(context.device, context.queueFamily, 0, &context.queue);
 
         VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
@@ -293,6 +340,7 @@ Context createContext(const ContextOptions& options) {
 void destroyContext(Context& context) {
     if (context.commandPool) vkDestroyCommandPool(context.device, context.commandPool, nullptr);
     if (context.device) vkDestroyDevice(context.device, nullptr);
+    if (context.surface) vkDestroySurfaceKHR(context.instance, context.surface, nullptr);
     if (context.messenger) {
         auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
             vkGetInstanceProcAddr(context.instance, "vkDestroyDebugUtilsMessengerEXT"));
@@ -301,6 +349,7 @@ void destroyContext(Context& context) {
     if (context.instance) vkDestroyInstance(context.instance, nullptr);
     context.commandPool = VK_NULL_HANDLE;
     context.device = VK_NULL_HANDLE;
+    context.surface = VK_NULL_HANDLE;
     context.messenger = VK_NULL_HANDLE;
     context.instance = VK_NULL_HANDLE;
 }

@@ -1,8 +1,11 @@
 // The Vulkan instance, the chosen physical device, a logical device with one compute queue, and
 // the validation messenger. Plain handles; createContext / destroyContext.
+// Rendering asks for more through ContextOptions: a queue that also does graphics, extra instance
+// and device extensions, and a window surface the queue must present to.
 #pragma once
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,6 +20,17 @@ struct ContextOptions {
     // Enable the Khronos validation layer (also with SHPROBE_VALIDATION=1). Every message is
     // printed to stderr and counted; creating the context fails if the layer is missing.
     bool validation = false;
+
+    // Rendering: the queue must also do graphics; devices without such a queue are not used.
+    bool graphics = false;
+    // Extensions to enable beyond the ones shprobe needs (e.g. the window system's surface
+    // extensions and VK_KHR_swapchain). Devices without the device extensions are not used.
+    std::vector<std::string> instanceExtensions;
+    std::vector<std::string> deviceExtensions;
+    // Presentation: called once the instance exists, before a device is chosen. The surface it
+    // returns is kept in Context::surface (destroyed by destroyContext) and the chosen queue must
+    // be able to present to it; devices whose queue cannot are not used.
+    std::function<VkSurfaceKHR(VkInstance)> createSurface;
 };
 
 struct DeviceInfo {
@@ -42,6 +56,7 @@ struct ValidationLog {
 struct Context {
     VkInstance instance = VK_NULL_HANDLE;
     VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+    VkSurfaceKHR surface = VK_NULL_HANDLE; // from ContextOptions::createSurface, if any
     VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
     VkDevice device = VK_NULL_HANDLE;
     uint32_t queueFamily = 0;

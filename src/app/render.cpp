@@ -1,0 +1,185 @@
+// `shprobe render`: a sphere lit by a probe (or an environment, baked first), rendered offscreen
+// to EXR (linear) or PNG (tonemapped sRGB); `--grid` puts the environment and its order-3 and
+// order-5 reconstructions and lit spheres side by side.
+#include "app/commands.h"
+#include "render/grid.h"
+#include "render/image_output.h"
+#include "render/offscreen.h"
+#include "render/render_input.h"
+#include "sh/error.h"
+#include "vk/context.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <regex>
+
+namespace shprobe {
+
+namespace {
+
+constexpr uint32_t kDefaultSize = 512;
+constexpr uint32_t kDefaultGridCell = 384;
+constexpr uint32_t kMaxSize = 16384;
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// The background the user asked for, or the best one the input allows.
+Background chooseBackground(const RenderOptions& options, const RenderInput& input,
+                            const ProbeShading& probe) {
+    if (options.background != "auto") return parseBackground(options.background);
+    if (input.environment) return Background::Environment;
+    return probe.hasRadiance ? Background::Radiance : Background::Color;
+}
+
+struct RenderResult {
+    RenderedImage image;
+    RenderInput input;
+    Background background = Background::Color;
+    double renderMilliseconds = 0.0;
+};
+
+// Every band the probe and the renderer share: order 3 uses the first 9 of them.
+int foldOrder(const RenderOptions& options, const ShCoefficients& probe) {
+    return options.grid ? kMaxRenderOrder : std::max(options.order, std::min(probe.order, kMaxRenderOrder));
+}
+
+void renderInput(const Context& context, const RenderOptions& options, ImageSize size, RenderResult& result) {
+    ProbeShading probe =
+        foldProbe(result.input.probe, foldOrder(options, result.input.probe), result.input.name);
+    float exposure = autoExposure(result.input.probe) * std::exp2(options.exposure);
+    OffscreenRenderer renderer = createOffscreenRenderer(context);
+    try {
+        setProbe(renderer.scene, probe);
+        if (result.input.environment) setEnvironment(context, renderer.scene, *result.input.environment);
+        Clock::time_point start = Clock::now();
+        if (options.grid) {
+            result.image = renderGrid(context, renderer, {size.width, exposure});
+        } else {
+            result.background = chooseBackground(options, result.input, probe);
+            Scene scene = sphereScene(orbitCamera(options.yaw, options.pitch, 3.2f), options.order,
+                                      parseShadingMode(options.mode), result.background);
+            scene.backgroundColor = glm::vec3(0.05f);
+            result.image = renderOffscreen(context, renderer, scene, {size.width, size.height}, exposure);
+        }
+        result.renderMilliseconds = millisecondsSince(start);
+    } catch (...) {
+        destroyOffscreenRenderer(context, renderer);
+        throw;
+    }
+    destroyOffscreenRenderer(context, renderer);
+}
+
+// Probe files are read and checked before any device work, environments baked on the device.
+RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
+    RenderResult result;
+    if (isProbeFile(options.input)) {
+        result.input = readProbeInput(options.input);
+        foldProbe(result.input.probe, foldOrder(options, result.input.probe),
+                  result.input.name); // throws early
+    }
+    ContextOptions contextOptions;
+    contextOptions.device = options.device;
+    contextOptions.validation = options.validation;
+    contextOptions.graphics = true;
+    Context context = createContext(contextOptions);
+    try {
+        if (!isProbeFile(options.input))
+            result.input = loadRenderInput(context, options.input, {options.faceSize, options.sanitize});
+        renderInput(context, options, size, result);
+    } catch (...) {
+        destroyContext(context);
+        throw;
+    }
+    uint32_t validationMessages = context.validationMessages();
+    destroyContext(context);
+    if (validationMessages > 0)
+        throw Error(ErrorKind::Device,
+                    std::to_string(validationMessages) + " Vulkan validation messages (above)");
+    return result;
+}
+
+void printSummary(const RenderOptions& options, const RenderResult& result) {
+    std::printf("shprobe render: %s -> %s (%dx%d)\n", result.input.name.c_str(), options.output.c_str(),
+                result.image.linear.width, result.image.linear.height);
+    if (options.grid)
+        std::printf("  grid     environment | order 3 | order 5; spheres: l1-nonlinear | irradiance 3 | "
+                    "irradiance 5\n");
+    else
+        std::printf("  shading  order %d, %s, background %s\n", options.order, options.mode.c_str(),
+                    backgroundName(result.background));
+    std::printf("  time     ");
+    if (result.input.bakeMilliseconds > 0.0) std::printf("bake %.1f ms, ", result.input.bakeMilliseconds);
+    std::printf("render %.1f ms\n", result.renderMilliseconds);
+}
+
+} // namespace
+
+ImageSize parseImageSize(const std::string& text, const char* option) {
+    std::smatch match;
+    ImageSize size;
+    if (std::regex_match(text, match, std::regex(R"((\d{1,5}))"))) {
+        size.width = size.height = uint32_t(std::stoul(match[1]));
+    } else if (std::regex_match(text, match, std::regex(R"((\d{1,5})[xX](\d{1,5}))"))) {
+        size.width = uint32_t(std::stoul(match[1]));
+        size.height = uint32_t(std::stoul(match[2]));
+    }
+    if (size.width < 1 || size.height < 1 || size.width > kMaxSize || size.height > kMaxSize)
+        throw Error(ErrorKind::Input, std::string(option) + " must be N or WxH with sides 1.." +
+                                          std::to_string(kMaxSize) + ", not '" + text + "'");
+    return size;
+}
+
+void addRenderCommand(CLI::App& app, RenderOptions& options) {
+    CLI::App* command =
+        app.add_subcommand("render", "Render a sphere lit by a probe to an image (no window)");
+    command->add_option("input", options.input,
+                        "Probe file (.json) or environment image (baked first); default: the built-in sky");
+    command
+        ->add_option("-o,--output", options.output,
+                     "Image: .png/.jpg (tonemapped sRGB) or .exr/.hdr (linear)")
+        ->capture_default_str();
+    command->add_option("--order", options.order, "SH order: 3 (9 coefficients) or 5 (25)")
+        ->check(CLI::IsMember({3, 5}))
+        ->capture_default_str();
+    command->add_option("--mode", options.mode, "What the sphere shows")
+        ->check(CLI::IsMember({"radiance", "irradiance", "l1-nonlinear"}))
+        ->capture_default_str();
+    command->add_option("--size", options.size,
+                        "Image size N or WxH (default 512; with --grid the cell width, 384)");
+    command->add_flag("--grid", options.grid,
+                      "Environment, order-3 and order-5 reconstructions and lit spheres in one image");
+    command->add_option("--background", options.background, "Background behind the sphere")
+        ->check(CLI::IsMember({"auto", "environment", "radiance", "sh", "shading", "color"}))
+        ->capture_default_str();
+    command->add_option("--exposure", options.exposure, "Exposure in stops relative to the automatic one")
+        ->capture_default_str();
+    command->add_option("--yaw", options.yaw, "Camera yaw around +Y, degrees (0 looks along -Z)")
+        ->capture_default_str();
+    command->add_option("--pitch", options.pitch, "Camera pitch, degrees")
+        ->check(CLI::Range(-85.0, 85.0))
+        ->capture_default_str();
+    command->add_option("--face-size", options.faceSize, "Cube-map face size of an environment input")
+        ->check(CLI::Range(1, kMaxGpuFaceSize));
+    command->add_flag("--sanitize", options.sanitize,
+                      "Replace NaN and infinite texels with 0 instead of failing");
+    command->add_option("--device", options.device, "Vulkan device index or name part (see `shprobe info`)");
+    command->add_flag("--validation", options.validation,
+                      "Enable the Khronos validation layer; fail on messages");
+}
+
+void runRender(const RenderOptions& options) {
+    ImageSize size = parseImageSize(
+        options.size.empty() ? std::to_string(options.grid ? kDefaultGridCell : kDefaultSize) : options.size,
+        "--size");
+    checkRenderOutputPath(options.output); // before any work
+    RenderResult result = renderOnDevice(options, size);
+    writeRenderedImage(options.output, result.image);
+    printSummary(options, result);
+}
+
+} // namespace shprobe

@@ -1,0 +1,57 @@
+// `shprobe view`: the interactive GLFW viewer (src/render/viewer.h); `--screenshot FILE --frames N`
+// saves frame N and exits, for tests and scripts.
+#include "app/commands.h"
+#include "gpu/projector.h"
+#include "render/viewer.h"
+
+namespace shprobe {
+
+void addViewCommand(CLI::App& app, ViewOptions& options) {
+    CLI::App* command =
+        app.add_subcommand("view", "Open a window: environment, lit sphere and torus, orbit camera");
+    command->add_option("input", options.input,
+                        "Probe file (.json) or environment image (baked first); default: the built-in sky");
+    command->add_option("--size", options.size, "Window size, N or WxH")->capture_default_str();
+    command->add_option("--order", options.order, "Initial SH order: 3 or 5 (keys 3, 5)")
+        ->check(CLI::IsMember({3, 5}))
+        ->capture_default_str();
+    command->add_option("--mode", options.mode, "Initial shading mode (key M)")
+        ->check(CLI::IsMember({"radiance", "irradiance", "l1-nonlinear"}))
+        ->capture_default_str();
+    command->add_option("--screenshot", options.screenshot, "Save frame --frames to this PNG and exit");
+    command->add_option("--frames", options.frames, "Exit after this many frames")
+        ->check(CLI::Range(1, 1 << 30));
+    command
+        ->add_option("--keys", options.keys,
+                     "Key presses to replay, one before each frame: 3 5 m b left right + - r q")
+        ->delimiter(',');
+    command->add_option("--exposure", options.exposure, "Exposure in stops relative to the automatic one")
+        ->capture_default_str();
+    command->add_option("--face-size", options.faceSize, "Cube-map face size of an environment input")
+        ->check(CLI::Range(1, kMaxGpuFaceSize));
+    command->add_flag("--sanitize", options.sanitize,
+                      "Replace NaN and infinite texels with 0 instead of failing");
+    command->add_option("--device", options.device, "Vulkan device index or name part (see `shprobe info`)");
+    command->add_flag("--validation", options.validation,
+                      "Enable the Khronos validation layer; fail on messages");
+}
+
+void runView(const ViewOptions& options) {
+    ImageSize size = parseImageSize(options.size, "--size");
+    ViewerOptions viewer;
+    viewer.input = options.input;
+    viewer.inputOptions = {options.faceSize, options.sanitize};
+    viewer.width = size.width;
+    viewer.height = size.height;
+    viewer.view.order = options.order;
+    viewer.view.shading = parseShadingMode(options.mode);
+    viewer.view.exposureStops = options.exposure;
+    viewer.screenshot = options.screenshot;
+    viewer.frames = options.frames;
+    viewer.keys = options.keys;
+    viewer.device = options.device;
+    viewer.validation = options.validation;
+    runViewer(viewer);
+}
+
+} // namespace shprobe

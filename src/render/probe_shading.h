@@ -1,0 +1,67 @@
+// What the render shaders need from a probe, computed once on the CPU: the SH coefficients with
+// the basis constants and the per-band convolution folded in (sh_irradiance.glsl evaluates only
+// polynomials), and the renormalized L1 terms of the non-linear model. Also the double-precision
+// references of the three shading modes, which the tests compare the shaders with.
+#pragma once
+#include "render_interface.h"
+#include "sh/coefficients.h"
+
+#include <array>
+#include <string>
+
+namespace shprobe {
+
+enum class ShadingMode {
+    Radiance,    // L(n): the SH reconstruction of the environment (no convolution, no albedo)
+    Irradiance,  // albedo E(n) / pi, E from the order-3 or order-5 expansion
+    L1NonLinear, // albedo times the non-linear L1 model of E(n) / pi (Geomerics, seed 004)
+};
+
+// "radiance", "irradiance", "l1-nonlinear"; parse throws Error(Input) for anything else.
+const char* shadingModeName(ShadingMode mode);
+ShadingMode parseShadingMode(const std::string& name);
+
+// Orders the render shaders evaluate: 3 to 5 (bands 0..2 always; see sh_irradiance.glsl).
+constexpr int kMinRenderOrder = 3;
+constexpr int kMaxRenderOrder = SHPROBE_RENDER_MAX_ORDER;
+
+// y_i = basisPolynomialScale(i) * basisPolynomial(i, d) for i < 25 (CONVENTIONS.md; Sloan's signs:
+// the odd-m constants are negative). The polynomials are the ones sh_irradiance.glsl evaluates,
+// except that the shader evaluates z^2 for y_20 = k (3 z^2 - 1) (Sloan's split, see there).
+double basisPolynomialScale(int index);
+double basisPolynomial(int index, const glm::dvec3& d);
+
+// Folded coefficients for the shaders (rgb; layout of gpu::RenderUniforms).
+struct ProbeShading {
+    int order = 0;            // bands 0..order-1 are set; the others are 0
+    bool hasRadiance = false; // false for irradiance probes whose bands with A_l = 0 are needed
+    std::array<glm::vec4, SHPROBE_FOLDED_COUNT> radiance{};   // s_l = 1
+    std::array<glm::vec4, SHPROBE_FOLDED_COUNT> irradiance{}; // s_l = A_l / pi
+    std::array<glm::vec4, 4> l1{};                            // R0, R1.x, R1.y, R1.z per channel
+};
+
+// Folds the first `order` bands (1..kMaxRenderOrder) of a radiance or irradiance probe. Radiance
+// of an irradiance probe is E_lm / A_l, unknown where A_l = 0 (l = 3): hasRadiance is then false.
+// Throws Error(Input) naming `name` when the probe has fewer bands than `order`.
+ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string& name);
+
+// The first `order` bands of a probe (order <= probe.order).
+ShCoefficients truncateOrder(const ShCoefficients& probe, int order);
+
+// Renormalized L0 and L1 of radiance (seed 004): R0 = (1/4pi) int L, R1 = (1/4pi) int L w, per channel.
+struct RenormalizedL1 {
+    glm::dvec3 r0;
+    glm::dvec3 r1[3]; // x, y, z components, each rgb
+};
+RenormalizedL1 renormalizedL1(const ShCoefficients& radiance);
+
+// Double references of the shading modes at unit normal n, for a radiance probe of at least
+// `order` bands (albedo 1; the shaders multiply irradiance modes by the albedo).
+glm::dvec3 l1NonLinearOverPi(const ShCoefficients& radiance, const glm::dvec3& n);
+glm::dvec3 shadeReference(const ShCoefficients& radiance, ShadingMode mode, int order, const glm::dvec3& n);
+
+// Linear exposure that maps the probe's mean radiance (its L0 term, Rec. 709 luminance) to a
+// mid grey; 1 for a probe without light.
+float autoExposure(const ShCoefficients& probe);
+
+} // namespace shprobe

@@ -1,0 +1,279 @@
+#include "render/scene_renderer.h"
+
+#include "render/meshes.h"
+#include "render_interface.h"
+#include "sh/error.h"
+#include "vk/check.h"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <glm/matrix.hpp>
+
+namespace shprobe {
+
+namespace {
+
+// Tessellation: fine enough that the silhouette is round at 2k pixels and the interpolated
+// normals stay close to the true ones (the shader renormalizes them).
+constexpr int kSphereSegments = 128;
+constexpr int kSphereRings = 64;
+constexpr float kTorusMajorRadius = 1.3f;
+constexpr float kTorusMinorRadius = 0.22f;
+
+GpuMesh createGpuMesh(const Context& context, const MeshData& mesh) {
+    GpuMesh gpuMesh;
+    try {
+        VkDeviceSize vertexBytes = mesh.vertices.size() * sizeof(MeshVertex);
+        VkDeviceSize indexBytes = mesh.indices.size() * sizeof(uint32_t);
+        gpuMesh.vertices = createBuffer(context, vertexBytes,
+                                        VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                        MemoryUse::Device, "mesh vertices");
+        gpuMesh.indices = createBuffer(context, indexBytes,
+                                       VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                       MemoryUse::Device, "mesh indices");
+        uploadBuffer(context, gpuMesh.vertices, mesh.vertices.data(), vertexBytes);
+        uploadBuffer(context, gpuMesh.indices, mesh.indices.data(), indexBytes);
+        gpuMesh.indexCount = uint32_t(mesh.indices.size());
+    } catch (...) {
+        destroyBuffer(context, gpuMesh.indices);
+        destroyBuffer(context, gpuMesh.vertices);
+        throw;
+    }
+    return gpuMesh;
+}
+
+void destroyGpuMesh(const Context& context, GpuMesh& mesh) {
+    destroyBuffer(context, mesh.indices);
+    destroyBuffer(context, mesh.vertices);
+    mesh.indexCount = 0;
+}
+
+VkSampler createLinearSampler(const Context& context) {
+    VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    info.magFilter = VK_FILTER_LINEAR;
+    info.minFilter = VK_FILTER_LINEAR;
+    info.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    info.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    info.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    VkSampler sampler = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateSampler(context.device, &info, nullptr, &sampler));
+    return sampler;
+}
+
+VkDescriptorPool createScenePool(const Context& context) {
+    std::array<VkDescriptorPoolSize, 2> sizes{
+        {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1}, {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}}};
+    VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    info.maxSets = 1;
+    info.poolSizeCount = uint32_t(sizes.size());
+    info.pPoolSizes = sizes.data();
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateDescriptorPool(context.device, &info, nullptr, &pool));
+    return pool;
+}
+
+void writeEnvironmentDescriptor(const Context& context, const SceneRenderer& renderer) {
+    VkDescriptorImageInfo image{renderer.sampler, renderer.environment.view,
+                                VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    write.dstSet = renderer.set;
+    write.dstBinding = 1;
+    write.descriptorCount = 1;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    write.pImageInfo = &image;
+    vkUpdateDescriptorSets(context.device, 1, &write, 0, nullptr);
+}
+
+VkDescriptorSet createSceneSet(const Context& context, const SceneRenderer& renderer) {
+    VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    allocate.descriptorPool = renderer.pool;
+    allocate.descriptorSetCount = 1;
+    allocate.pSetLayouts = &renderer.pipelines.setLayout;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    VK_CHECK(vkAllocateDescriptorSets(context.device, &allocate, &set));
+    VkDescriptorBufferInfo buffer{renderer.uniforms.buffer, 0, sizeof(gpu::RenderUniforms)};
+    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    write.dstSet = set;
+    write.dstBinding = 0;
+    write.descriptorCount = 1;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+    write.pBufferInfo = &buffer;
+    vkUpdateDescriptorSets(context.device, 1, &write, 0, nullptr);
+    return set;
+}
+
+Cubemap blackCubemap() {
+    Cubemap cubemap;
+    cubemap.faceSize = 1;
+    cubemap.texels.assign(kFaceCount, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    return cubemap;
+}
+
+void checkSceneFits(const SceneRenderer& renderer, const Scene& scene) {
+    if (renderer.probe.order < scene.order)
+        throw Error(ErrorKind::Input, "the probe was folded for order " +
+                                          std::to_string(renderer.probe.order) +
+                                          ", the scene asks for order " + std::to_string(scene.order));
+    bool needsRadiance = scene.shading == ShadingMode::Radiance || scene.background == Background::Radiance;
+    if (needsRadiance && !renderer.probe.hasRadiance)
+        throw Error(ErrorKind::Input, "radiance mode and the radiance background need radiance coefficients; "
+                                      "the probe holds irradiance, whose band 3 is lost (A_3 = 0)");
+    if (scene.background == Background::Environment && !renderer.hasEnvironment)
+        throw Error(ErrorKind::Input,
+                    "the environment background needs an environment image, not a probe file");
+}
+
+gpu::RenderUniforms makeUniforms(const SceneRenderer& renderer, const Scene& scene, VkExtent2D extent) {
+    gpu::RenderUniforms uniforms{};
+    float aspect = float(extent.width) / float(extent.height);
+    uniforms.viewProjection = viewProjection(scene.camera, aspect);
+    uniforms.inverseViewProjection = glm::inverse(uniforms.viewProjection);
+    uniforms.camera = glm::vec4(scene.camera.position, float(scene.camera.projection == Projection::Panorama
+                                                                 ? SHPROBE_PROJECTION_PANORAMA
+                                                                 : SHPROBE_PROJECTION_PERSPECTIVE));
+    uniforms.viewport = glm::vec4(float(extent.width), float(extent.height), 1.0f / float(extent.width),
+                                  1.0f / float(extent.height));
+    uniforms.backgroundColor = glm::vec4(scene.backgroundColor, 1.0f);
+    std::copy(renderer.probe.radiance.begin(), renderer.probe.radiance.end(), uniforms.radiance);
+    std::copy(renderer.probe.irradiance.begin(), renderer.probe.irradiance.end(), uniforms.irradiance);
+    std::copy(renderer.probe.l1.begin(), renderer.probe.l1.end(), uniforms.l1);
+    return uniforms;
+}
+
+void drawObjects(const Context& context, VkCommandBuffer commands, SceneRenderer& renderer,
+                 const Scene& scene) {
+    if (scene.camera.projection == Projection::Panorama || scene.objects.empty()) return;
+    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS,
+                      meshPipeline(context, renderer.pipelines, scene));
+    for (const SceneObject& object : scene.objects) {
+        const GpuMesh& mesh = object.shape == Shape::Sphere ? renderer.sphere : renderer.torus;
+        gpu::ObjectConstants constants{object.model, glm::vec4(object.albedo, 1.0f)};
+        vkCmdPushConstants(commands, renderer.pipelines.layout,
+                           VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(constants),
+                           &constants);
+        VkDeviceSize offset = 0;
+        vkCmdBindVertexBuffers(commands, 0, 1, &mesh.vertices.buffer, &offset);
+        vkCmdBindIndexBuffer(commands, mesh.indices.buffer, 0, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexed(commands, mesh.indexCount, 1, 0, 0, 0);
+    }
+}
+
+} // namespace
+
+SceneRenderer createSceneRenderer(const Context& context) {
+    SceneRenderer renderer;
+    try {
+        renderer.pipelines = createScenePipelines(context);
+        renderer.sphere = createGpuMesh(context, makeSphereMesh(kSphereSegments, kSphereRings));
+        renderer.torus = createGpuMesh(context, makeTorusMesh(kTorusMajorRadius, kTorusMinorRadius, 96, 32));
+        renderer.uniforms =
+            createBuffer(context, sizeof(gpu::RenderUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                         MemoryUse::Upload, "render uniforms");
+        renderer.sampler = createLinearSampler(context);
+        renderer.pool = createScenePool(context);
+        renderer.set = createSceneSet(context, renderer);
+        renderer.environment = createCubeTexture(context, blackCubemap());
+        writeEnvironmentDescriptor(context, renderer);
+    } catch (...) {
+        destroySceneRenderer(context, renderer);
+        throw;
+    }
+    return renderer;
+}
+
+void destroySceneRenderer(const Context& context, SceneRenderer& renderer) {
+    destroyImage(context, renderer.environment);
+    if (renderer.pool) vkDestroyDescriptorPool(context.device, renderer.pool, nullptr);
+    if (renderer.sampler) vkDestroySampler(context.device, renderer.sampler, nullptr);
+    destroyBuffer(context, renderer.uniforms);
+    destroyGpuMesh(context, renderer.torus);
+    destroyGpuMesh(context, renderer.sphere);
+    destroyScenePipelines(context, renderer.pipelines);
+    renderer = SceneRenderer{};
+}
+
+void setProbe(SceneRenderer& renderer, const ProbeShading& probe) {
+    renderer.probe = probe;
+}
+
+void setEnvironment(const Context& context, SceneRenderer& renderer, const Cubemap& cubemap) {
+    GpuImage image = createCubeTexture(context, cubemap);
+    destroyImage(context, renderer.environment);
+    renderer.environment = image;
+    renderer.hasEnvironment = true;
+    writeEnvironmentDescriptor(context, renderer);
+}
+
+SceneTargets createSceneTargets(const Context& context, const SceneRenderer& renderer,
+                                const Tonemapper& tonemapper, VkExtent2D extent) {
+    SceneTargets targets;
+    targets.extent = extent;
+    try {
+        const VkImageUsageFlags attachment = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+        targets.color =
+            createImage(context, {kSceneColorFormat, extent,
+                                  attachment | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                                  false, "scene colour target"});
+        targets.direction =
+            createImage(context, {kSceneDirectionFormat, extent, attachment | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                                  false, "scene direction target"});
+        targets.depth =
+            createImage(context, {renderer.pipelines.depthFormat, extent,
+                                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "depth target"});
+        std::array<VkImageView, 3> views{targets.color.view, targets.direction.view, targets.depth.view};
+        VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+        info.renderPass = renderer.pipelines.renderPass;
+        info.attachmentCount = uint32_t(views.size());
+        info.pAttachments = views.data();
+        info.width = extent.width;
+        info.height = extent.height;
+        info.layers = 1;
+        VK_CHECK(vkCreateFramebuffer(context.device, &info, nullptr, &targets.framebuffer));
+        targets.tonemapInput = createTonemapInput(context, tonemapper, targets.color.view);
+    } catch (...) {
+        destroySceneTargets(context, tonemapper, targets);
+        throw;
+    }
+    return targets;
+}
+
+void destroySceneTargets(const Context& context, const Tonemapper& tonemapper, SceneTargets& targets) {
+    freeTonemapInput(context, tonemapper, targets.tonemapInput);
+    if (targets.framebuffer) vkDestroyFramebuffer(context.device, targets.framebuffer, nullptr);
+    destroyImage(context, targets.depth);
+    destroyImage(context, targets.direction);
+    destroyImage(context, targets.color);
+    targets = SceneTargets{};
+}
+
+void recordScene(const Context& context, VkCommandBuffer commands, SceneRenderer& renderer,
+                 const SceneTargets& targets, const Scene& scene) {
+    checkSceneFits(renderer, scene);
+    gpu::RenderUniforms uniforms = makeUniforms(renderer, scene, targets.extent);
+    std::memcpy(renderer.uniforms.mapped, &uniforms, sizeof(uniforms)); // coherent memory
+
+    std::array<VkClearValue, 3> clears{};
+    clears[2].depthStencil = {1.0f, 0};
+    VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    begin.renderPass = renderer.pipelines.renderPass;
+    begin.framebuffer = targets.framebuffer;
+    begin.renderArea = {{0, 0}, targets.extent};
+    begin.clearValueCount = uint32_t(clears.size());
+    begin.pClearValues = clears.data();
+    vkCmdBeginRenderPass(commands, &begin, VK_SUBPASS_CONTENTS_INLINE);
+    VkViewport viewport{0.0f, 0.0f, float(targets.extent.width), float(targets.extent.height), 0.0f, 1.0f};
+    VkRect2D scissor{{0, 0}, targets.extent};
+    vkCmdSetViewport(commands, 0, 1, &viewport);
+    vkCmdSetScissor(commands, 0, 1, &scissor);
+    vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, renderer.pipelines.layout, 0, 1,
+                            &renderer.set, 0, nullptr);
+    drawObjects(context, commands, renderer, scene); // first: the background only fills what is left
+    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS,
+                      backgroundPipeline(context, renderer.pipelines, scene));
+    vkCmdDraw(commands, 3, 1, 0, 0);
+    vkCmdEndRenderPass(commands);
+}
+
+} // namespace shprobe

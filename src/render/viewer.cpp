@@ -1,0 +1,388 @@
+// The GLFW side of `shprobe view`: window, input and the frame loop. Rendering is the offscreen
+// renderer's scene pass plus the tonemap pass into the swapchain (viewer_frames.cpp).
+#include "render/viewer.h"
+
+#include "render/image_output.h"
+#include "render/scene_renderer.h"
+#include "render/viewer_frames.h"
+#include "sh/error.h"
+#include "sh/rotation.h"
+#include "vk/check.h"
+
+#define GLFW_INCLUDE_VULKAN
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <vector>
+
+namespace shprobe {
+
+namespace {
+
+constexpr float kDegreesPerPixel = 0.3f;
+constexpr float kZoomPerStep = 0.9f;
+constexpr float kRotationStep = 15.0f; // degrees per Left/Right
+constexpr float kExposureStep = 0.5f;  // stops per +/-
+
+// ---- Window and input ------------------------------------------------------------------------
+
+std::string& lastGlfwError() {
+    static std::string message = "unknown GLFW error";
+    return message;
+}
+
+void onGlfwError(int, const char* description) {
+    lastGlfwError() = description;
+}
+
+struct InputEvents {
+    bool dragging = false;
+    double lastX = 0.0, lastY = 0.0;
+    float yawDelta = 0.0f, pitchDelta = 0.0f, zoomSteps = 0.0f;
+    std::vector<int> keys;
+};
+
+InputEvents& eventsOf(GLFWwindow* window) {
+    return *static_cast<InputEvents*>(glfwGetWindowUserPointer(window));
+}
+
+void onKey(GLFWwindow* window, int key, int, int action, int) {
+    if (action == GLFW_PRESS || action == GLFW_REPEAT) eventsOf(window).keys.push_back(key);
+}
+
+void onMouseButton(GLFWwindow* window, int button, int action, int) {
+    InputEvents& events = eventsOf(window);
+    if (button != GLFW_MOUSE_BUTTON_LEFT) return;
+    events.dragging = action == GLFW_PRESS;
+    glfwGetCursorPos(window, &events.lastX, &events.lastY);
+}
+
+void onCursor(GLFWwindow* window, double x, double y) {
+    InputEvents& events = eventsOf(window);
+    if (!events.dragging) return;
+    events.yawDelta -= float(x - events.lastX) * kDegreesPerPixel;
+    events.pitchDelta += float(y - events.lastY) * kDegreesPerPixel;
+    events.lastX = x;
+    events.lastY = y;
+}
+
+void onScroll(GLFWwindow* window, double, double dy) {
+    eventsOf(window).zoomSteps += float(dy);
+}
+
+GLFWwindow* openWindow(const ViewerOptions& options, InputEvents& events) {
+    glfwSetErrorCallback(onGlfwError);
+    if (!glfwInit())
+        throw Error(ErrorKind::Device, "shprobe view needs a display, and there is none (" + lastGlfwError() +
+                                           "): run it in a desktop session or under xvfb-run, or render "
+                                           "images without a window with `shprobe render`");
+    if (!glfwVulkanSupported()) {
+        glfwTerminate();
+        throw Error(ErrorKind::Device, "GLFW found no Vulkan loader; install libvulkan1 and a driver "
+                                       "(`shprobe render` needs no window)");
+    }
+    glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+    GLFWwindow* window =
+        glfwCreateWindow(int(options.width), int(options.height), "shprobe view", nullptr, nullptr);
+    if (!window) {
+        glfwTerminate();
+        throw Error(ErrorKind::Device, "cannot open a window: " + lastGlfwError());
+    }
+    glfwSetWindowUserPointer(window, &events);
+    glfwSetKeyCallback(window, onKey);
+    glfwSetMouseButtonCallback(window, onMouseButton);
+    glfwSetCursorPosCallback(window, onCursor);
+    glfwSetScrollCallback(window, onScroll);
+    return window;
+}
+
+void closeWindow(GLFWwindow* window) {
+    glfwDestroyWindow(window);
+    glfwTerminate();
+}
+
+VkExtent2D framebufferExtent(GLFWwindow* window) {
+    int width = 0, height = 0;
+    glfwGetFramebufferSize(window, &width, &height);
+    return {uint32_t(std::max(width, 0)), uint32_t(std::max(height, 0))};
+}
+
+// Instance extensions for the window's surface, VK_KHR_swapchain, a graphics queue that presents.
+ContextOptions viewerContextOptions(const ViewerOptions& options, GLFWwindow* window) {
+    ContextOptions contextOptions;
+    contextOptions.device = options.device;
+    contextOptions.validation = options.validation;
+    contextOptions.graphics = true;
+    uint32_t count = 0;
+    const char** names = glfwGetRequiredInstanceExtensions(&count);
+    for (uint32_t i = 0; i < count; ++i)
+        contextOptions.instanceExtensions.push_back(names[i]);
+    contextOptions.deviceExtensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+    contextOptions.createSurface = [window](VkInstance instance) {
+        VkSurfaceKHR surface = VK_NULL_HANDLE;
+        VkResult result = glfwCreateWindowSurface(instance, window, nullptr, &surface);
+        if (result != VK_SUCCESS)
+            throw Error(ErrorKind::Device, std::string("cannot create a Vulkan surface for the window: ") +
+                                               vkResultName(result) + " (" + lastGlfwError() + ")");
+        return surface;
+    };
+    return contextOptions;
+}
+
+// The GLFW key of each scripted key name (ViewerOptions::keys).
+std::vector<int> scriptedKeys(const std::vector<std::string>& names) {
+    static const std::pair<const char*, int> kKeys[] = {
+        {"3", GLFW_KEY_3},       {"5", GLFW_KEY_5},         {"m", GLFW_KEY_M},     {"b", GLFW_KEY_B},
+        {"left", GLFW_KEY_LEFT}, {"right", GLFW_KEY_RIGHT}, {"+", GLFW_KEY_EQUAL}, {"-", GLFW_KEY_MINUS},
+        {"r", GLFW_KEY_R},       {"q", GLFW_KEY_Q}};
+    std::vector<int> keys;
+    for (const std::string& name : names) {
+        auto found = std::find_if(std::begin(kKeys), std::end(kKeys),
+                                  [&](const auto& key) { return name == key.first; });
+        if (found == std::end(kKeys))
+            throw Error(ErrorKind::Input, "unknown key '" + name + "' (3, 5, m, b, left, right, +, -, r, q)");
+        keys.push_back(found->second);
+    }
+    return keys;
+}
+
+// ---- The session: what is shown and how it changes -------------------------------------------
+
+struct Session {
+    RenderInput input;
+    std::optional<Projector> projector; // re-bakes a rotated environment
+    SceneRenderer renderer;
+    ViewerFrames frames;
+    ViewState initial;
+    ViewState view;
+    int foldOrder = 3;
+    float autoExposure = 1.0f;
+    std::string device;
+};
+
+bool backgroundAvailable(const Session& session, Background background) {
+    if (background == Background::Environment) return session.input.environment.has_value();
+    if (background == Background::Radiance) return session.renderer.probe.hasRadiance;
+    return true;
+}
+
+bool shadingAvailable(const Session& session, ShadingMode mode) {
+    return mode != ShadingMode::Radiance || session.renderer.probe.hasRadiance;
+}
+
+// A starting view the input can show.
+ViewState usableView(const Session& session, ViewState view) {
+    if (!backgroundAvailable(session, view.background))
+        view.background =
+            backgroundAvailable(session, Background::Radiance) ? Background::Radiance : Background::Shading;
+    if (!shadingAvailable(session, view.shading)) view.shading = ShadingMode::Irradiance;
+    clampView(view);
+    return view;
+}
+
+void nextShading(Session& session) {
+    do
+        session.view.shading = ShadingMode((int(session.view.shading) + 1) % 3);
+    while (!shadingAvailable(session, session.view.shading));
+}
+
+void nextBackground(Session& session) {
+    do
+        session.view.background = Background((int(session.view.background) + 1) % 4);
+    while (!backgroundAvailable(session, session.view.background));
+}
+
+// An environment is re-projected: the original is rotated, baked again, and both are shown. A
+// probe file's coefficients are rotated instead (sh/rotation.h).
+void rotateEnvironment(const Context& context, Session& session, float degrees) {
+    waitForFrame(context, session.frames);
+    session.view.environmentRotationDegrees =
+        std::remainder(session.view.environmentRotationDegrees + degrees, 360.0f);
+    glm::dmat3 rotation = environmentRotation(session.view.environmentRotationDegrees);
+    if (!session.input.environment || !session.projector) {
+        ShCoefficients rotated =
+            rotate(makeShRotation(rotation, session.input.probe.order), session.input.probe);
+        setProbe(session.renderer, foldProbe(rotated, session.foldOrder, session.input.name));
+        return;
+    }
+    Cubemap rotated = rotateCubemap(*session.input.environment, rotation);
+    ShCoefficients probe = bakeRadiance(context, *session.projector, rotated, session.input.bakeMilliseconds);
+    setEnvironment(context, session.renderer, rotated);
+    setProbe(session.renderer, foldProbe(probe, session.foldOrder, session.input.name));
+}
+
+void applyKey(const Context& context, GLFWwindow* window, Session& session, int key) {
+    switch (key) {
+    case GLFW_KEY_3:
+        session.view.order = 3;
+        break;
+    case GLFW_KEY_5:
+        if (session.foldOrder >= 5) session.view.order = 5;
+        break;
+    case GLFW_KEY_M:
+        nextShading(session);
+        break;
+    case GLFW_KEY_B:
+        nextBackground(session);
+        break;
+    case GLFW_KEY_LEFT:
+        rotateEnvironment(context, session, -kRotationStep);
+        break;
+    case GLFW_KEY_RIGHT:
+        rotateEnvironment(context, session, kRotationStep);
+        break;
+    case GLFW_KEY_EQUAL:
+    case GLFW_KEY_KP_ADD:
+        session.view.exposureStops += kExposureStep;
+        break;
+    case GLFW_KEY_MINUS:
+    case GLFW_KEY_KP_SUBTRACT:
+        session.view.exposureStops -= kExposureStep;
+        break;
+    case GLFW_KEY_R:
+        session.view = usableView(session, session.initial);
+        break;
+    case GLFW_KEY_ESCAPE:
+    case GLFW_KEY_Q:
+        glfwSetWindowShouldClose(window, GLFW_TRUE);
+        break;
+    default:
+        break;
+    }
+}
+
+void applyInput(const Context& context, GLFWwindow* window, Session& session, InputEvents& events) {
+    for (int key : events.keys)
+        applyKey(context, window, session, key);
+    events.keys.clear();
+    session.view.yawDegrees += events.yawDelta;
+    session.view.pitchDegrees += events.pitchDelta;
+    session.view.distance *= std::pow(kZoomPerStep, events.zoomSteps);
+    events.yawDelta = events.pitchDelta = events.zoomSteps = 0.0f;
+    clampView(session.view);
+}
+
+void updateTitle(GLFWwindow* window, const Session& session, std::string& shown) {
+    std::string title =
+        viewSummary(session.view, session.input.name, session.input.bakeMilliseconds, session.device);
+    if (title == shown) return;
+    glfwSetWindowTitle(window, title.c_str());
+    shown = title;
+}
+
+void startSession(const Context& context, const ViewerOptions& options, GLFWwindow* window,
+                  Session& session) {
+    session.input = loadRenderInput(context, options.input, options.inputOptions);
+    session.foldOrder = std::min(session.input.probe.order, kMaxRenderOrder);
+    ProbeShading probe =
+        foldProbe(session.input.probe, std::max(options.view.order, session.foldOrder), session.input.name);
+    session.renderer = createSceneRenderer(context);
+    setProbe(session.renderer, probe);
+    if (session.input.environment) {
+        setEnvironment(context, session.renderer, *session.input.environment);
+        session.projector = createProjector(context, {.order = kRenderBakeOrder});
+    }
+    session.autoExposure = autoExposure(session.input.probe);
+    session.initial = usableView(session, options.view);
+    session.view = session.initial;
+    session.device = context.info.name;
+    session.frames = createViewerFrames(context, session.renderer, framebufferExtent(window));
+}
+
+void endSession(const Context& context, Session& session) {
+    destroyViewerFrames(context, session.frames);
+    destroySceneRenderer(context, session.renderer);
+    if (session.projector) destroyProjector(context, *session.projector);
+}
+
+// Draws until the window closes or the requested frames are shown; returns the frames shown.
+int runFrames(const Context& context, const ViewerOptions& options, GLFWwindow* window, Session& session,
+              InputEvents& events) {
+    const std::vector<int> script = scriptedKeys(options.keys);
+    int shown = 0;
+    std::string title;
+    while (!glfwWindowShouldClose(window) && (options.frames <= 0 || shown < options.frames)) {
+        glfwPollEvents();
+        if (size_t(shown) < script.size()) events.keys.push_back(script[size_t(shown)]);
+        applyInput(context, window, session, events);
+        updateTitle(window, session, title);
+        VkExtent2D extent = framebufferExtent(window);
+        if (extent.width == 0 || extent.height == 0) { // minimized
+            glfwWaitEvents();
+            continue;
+        }
+        if (extent.width != session.frames.swapchain.extent.width ||
+            extent.height != session.frames.swapchain.extent.height)
+            recreateSwapchain(context, session.renderer, session.frames, extent);
+        Scene scene = viewScene(session.view);
+        bool last = options.frames > 0 && shown + 1 == options.frames;
+        float exposure = session.autoExposure * std::exp2(session.view.exposureStops);
+        FrameResult result = drawFrame(context, session.renderer, session.frames,
+                                       {&scene, exposure, last && !options.screenshot.empty()});
+        if (result != FrameResult::NotDrawn) ++shown;
+        if (result != FrameResult::Presented)
+            recreateSwapchain(context, session.renderer, session.frames, extent);
+    }
+    return shown;
+}
+
+void saveScreenshot(const Context& context, const ViewerOptions& options, const Session& session, int shown) {
+    if (options.screenshot.empty() || shown < options.frames) return;
+    VkExtent2D extent = session.frames.swapchain.extent;
+    writeDisplayImage(options.screenshot, int(extent.width), int(extent.height),
+                      readCapture(context, session.frames));
+    std::printf("shprobe view: frame %d (%ux%u) saved to %s\n", shown, extent.width, extent.height,
+                options.screenshot.c_str());
+}
+
+void runSession(const Context& context, const ViewerOptions& options, GLFWwindow* window,
+                InputEvents& events) {
+    Session session;
+    try {
+        startSession(context, options, window, session);
+        std::printf("%s\n", viewSummary(session.view, session.input.name, session.input.bakeMilliseconds,
+                                        session.device)
+                                .c_str());
+        std::printf("keys: 3/5 order, M mode, B background, Left/Right rotate environment, +/- exposure, "
+                    "R reset, Esc quit; drag to orbit, scroll to zoom\n");
+        int shown = runFrames(context, options, window, session, events);
+        saveScreenshot(context, options, session, shown);
+    } catch (...) {
+        endSession(context, session);
+        throw;
+    }
+    endSession(context, session);
+}
+
+} // namespace
+
+void runViewer(const ViewerOptions& options) {
+    if (options.frames <= 0 && !options.screenshot.empty())
+        throw Error(ErrorKind::Input, "--screenshot needs --frames N (the frame to save)");
+    if (!options.screenshot.empty()) checkRenderOutputPath(options.screenshot);
+    scriptedKeys(options.keys); // unknown names fail before a window opens
+    InputEvents events;
+    GLFWwindow* window = openWindow(options, events);
+    try {
+        Context context = createContext(viewerContextOptions(options, window));
+        try {
+            runSession(context, options, window, events);
+        } catch (...) {
+            destroyContext(context);
+            throw;
+        }
+        uint32_t messages = context.validationMessages();
+        destroyContext(context);
+        if (messages > 0)
+            throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
+    } catch (...) {
+        closeWindow(window);
+        throw;
+    }
+    closeWindow(window);
+}
+
+} // namespace shprobe

@@ -1,0 +1,36 @@
+// `shprobe view`: a GLFW window showing the environment, a lit sphere and a torus, with an orbit
+// camera (drag with the left mouse button, scroll to zoom) and keys:
+//   3, 5      SH order                 M   next shading mode (radiance, irradiance, l1-nonlinear)
+//   B         next background          Left/Right  rotate the environment by 15 degrees (re-baked)
+//   +, -      exposure by half a stop  R   reset the view        Esc, Q  quit
+// The title shows the settings and the last bake time. The only file that includes GLFW is
+// viewer.cpp; the library's core never links it.
+#pragma once
+#include "render/render_input.h"
+#include "render/view_state.h"
+
+#include <string>
+#include <vector>
+
+namespace shprobe {
+
+struct ViewerOptions {
+    std::string input; // probe (.json), environment image, or empty: the built-in sky
+    RenderInputOptions inputOptions;
+    uint32_t width = 960; // window size (screen coordinates)
+    uint32_t height = 600;
+    ViewState view;         // the initial view (order, mode, exposure...)
+    std::string screenshot; // save the last frame (--frames) to this PNG
+    int frames = 0;         // > 0: exit after this many frames
+    // Key presses to replay, one before each of the first frames (scripts and tests): names as in
+    // the key list above, lower case ("3", "5", "m", "b", "left", "right", "+", "-", "r").
+    std::vector<std::string> keys;
+    std::string device;
+    bool validation = false;
+};
+
+// Runs until the window is closed or `frames` frames were shown. Without a display, throws
+// Error(Device) saying so and pointing at `shprobe render`; unknown key names are Error(Input).
+void runViewer(const ViewerOptions& options);
+
+} // namespace shprobe

@@ -1,0 +1,129 @@
+// The viewer in a real window: ctest runs this under xvfb-run, so GLFW opens an X window and
+// lavapipe presents to it through a swapchain. Each test runs `shprobe view` as a child (validation
+// on) with --frames and --screenshot, and compares the saved frame with the offscreen renderer's
+// image of the same view, rendered here: the two must be the same bytes (both go through the same
+// scene pass and tonemap shader; only the target differs, BGRA swapchain vs RGBA image).
+#include "render_test.h"
+#include "run_program.h"
+#include "test_inputs.h"
+
+#include "gpu/projector.h"
+#include "render/render_input.h"
+#include "render/view_state.h"
+#include "sh/rotation.h"
+
+#include <OpenImageIO/imageio.h>
+#include <cstdlib>
+
+namespace shprobe::testing {
+namespace {
+
+struct Screenshot {
+    int width = 0, height = 0;
+    std::vector<uint8_t> rgb;
+};
+
+Screenshot readScreenshot(const std::string& path) {
+    Screenshot shot;
+    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path);
+    if (!input) return shot;
+    shot.width = input->spec().width;
+    shot.height = input->spec().height;
+    shot.rgb.resize(size_t(shot.width) * shot.height * 3);
+    input->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, shot.rgb.data());
+    return shot;
+}
+
+// Largest difference of any channel of any pixel.
+int largestDifference(const Screenshot& shot, const RenderedImage& image) {
+    int worst = 0;
+    for (size_t p = 0; p < shot.rgb.size() / 3; ++p)
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(
+                worst, std::abs(int(shot.rgb[p * 3 + size_t(c)]) - int(image.display[p * 4 + size_t(c)])));
+    return worst;
+}
+
+class Viewer : public RenderTest {
+  protected:
+    TemporaryFolder folder{"shprobe_render_viewer"};
+
+    Screenshot runViewer(const std::vector<std::string>& args) {
+        if (!std::getenv("DISPLAY")) {
+            ADD_FAILURE() << "no DISPLAY: run this test under xvfb-run (ctest does)";
+            return {};
+        }
+        std::string shot = folder / "shot.png";
+        std::vector<std::string> all{"view"};
+        all.insert(all.end(), args.begin(), args.end());
+        all.insert(all.end(), {"--size", "160x120", "--screenshot", shot});
+        RunResult result = runProgram(all, folder.path() / "logs");
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_NE(result.out.find("saved to " + shot), std::string::npos) << describe(result);
+        return readScreenshot(shot);
+    }
+
+    // The offscreen image of `view` lit by `probe` in front of `environment` (if any).
+    RenderedImage renderView(const ShCoefficients& probe, const ShCoefficients& exposureProbe,
+                             const Cubemap* environment, const ViewState& view, const Screenshot& size) {
+        setProbe(renderer().scene, foldProbe(probe, 5, "probe"));
+        if (environment) setEnvironment(context(), renderer().scene, *environment);
+        float exposure = autoExposure(exposureProbe) * std::exp2(view.exposureStops);
+        return renderOffscreen(context(), renderer(), viewScene(view),
+                               {uint32_t(size.width), uint32_t(size.height)}, exposure);
+    }
+};
+
+TEST_F(Viewer, ScreenshotIsTheOffscreenRenderOfTheSameView) {
+    std::string environment = folder / "env.exr";
+    writeTestEnvironment(environment);
+    Screenshot shot = runViewer({environment, "--frames", "3"});
+    ASSERT_EQ(shot.width, 160);
+    ASSERT_EQ(shot.height, 120);
+
+    RenderInput input = loadRenderInput(context(), environment, {}); // the same deterministic GPU bake
+    RenderedImage image = renderView(input.probe, input.probe, &*input.environment, ViewState{}, shot);
+    EXPECT_EQ(largestDifference(shot, image), 0);
+}
+
+TEST_F(Viewer, KeysChangeOrderModeAndRotateTheEnvironment) {
+    std::string environment = folder / "env.exr";
+    writeTestEnvironment(environment);
+    Screenshot shot = runViewer({environment, "--keys", "5,m,right,+", "--frames", "5"});
+    ASSERT_EQ(shot.width, 160);
+
+    RenderInput input = loadRenderInput(context(), environment, {});
+    ViewState view;
+    view.order = 5;
+    view.shading = ShadingMode::L1NonLinear;
+    view.environmentRotationDegrees = 15.0f;
+    view.exposureStops = 0.5f;
+    Cubemap rotated = rotateCubemap(*input.environment, environmentRotation(15.0f));
+    Projector projector = createProjector(context(), {.order = kRenderBakeOrder});
+    double milliseconds = 0.0;
+    ShCoefficients probe = bakeRadiance(context(), projector, rotated, milliseconds);
+    destroyProjector(context(), projector);
+    RenderedImage image = renderView(probe, input.probe, &rotated, view, shot);
+    EXPECT_EQ(largestDifference(shot, image), 0);
+
+    RenderedImage unrotated = renderView(input.probe, input.probe, &*input.environment, view, shot);
+    EXPECT_GT(largestDifference(shot, unrotated), 10) << "the rotation shows";
+}
+
+TEST_F(Viewer, ProbeFilesRotateTheirCoefficients) {
+    std::string path = folder / "probe.json";
+    ShCoefficients probe = testProbe(5);
+    writeProbeFile(path, probe, {});
+    Screenshot shot = runViewer({path, "--keys", "left", "--frames", "2"});
+    ASSERT_EQ(shot.width, 160);
+
+    ViewState view;
+    view.background = Background::Radiance; // a probe file has no environment
+    view.environmentRotationDegrees = -15.0f;
+    ShCoefficients rotated = rotate(makeShRotation(environmentRotation(-15.0f), 5), probe);
+    RenderedImage image = renderView(rotated, probe, nullptr, view, shot);
+    EXPECT_EQ(largestDifference(shot, image), 0);
+}
+
+} // namespace
+} // namespace shprobe::testing
