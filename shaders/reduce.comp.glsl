@@ -1,15 +1,17 @@
 #version 450
-// Sums the partial slots written by project.comp into one set of SH coefficients, in a fixed
-// order (slot 0, 1, 2, ...), so the same input gives bit-identical coefficients on every run.
-// Thousands of slots are summed in sequence, so the sum is compensated (Kahan 1965): its error
-// stays at a few ulps of the total instead of growing with the slot count. `precise` keeps the
-// compiler from reassociating the compensation away.
+// Sums the partial slots written by project.comp into one set of SH coefficients. Workgroup i sums
+// coefficient i: invocation t adds slots t, t + width, t + 2 width, ..., then invocation 0 adds the
+// invocations' sums in order. The order is fixed, so the same input gives bit-identical
+// coefficients on every run, and each invocation loops partialCount / width times, which keeps
+// lavapipe's 65535-iteration loop limit out of reach for millions of slots. Sums are compensated
+// (Kahan 1965) so their error stays at a few ulps of the total; `precise` keeps the compiler from
+// reassociating the compensation away.
 //
 // Interface (shaders/INTERFACE.md):
 //   set 0, binding 0: readonly buffer, vec4 partials[]: partialCount slots of SH_COEFFICIENTS vec4
 //   set 0, binding 1: writeonly buffer, vec4 coefficients[]: SH_COEFFICIENTS vec4 (rgb, a = 0)
 //   push constants: ReduceParams (gpu_interface.h)
-//   specialization: 0 = workgroup width, 1 = SH order (1..8); dispatch one workgroup.
+//   specialization: 0 = workgroup width, 1 = SH order (1..8); dispatch SH_COEFFICIENTS workgroups.
 #extension GL_GOOGLE_include_directive : require
 
 #include "gpu_interface.h"
@@ -22,16 +24,26 @@ layout(set = 0, binding = 0, std430) readonly buffer Partials { vec4 partials[];
 layout(set = 0, binding = 1, std430) writeonly buffer Coefficients { vec4 coefficients[]; };
 layout(push_constant, std430) uniform Push { ReduceParams params; };
 
+shared vec3 invocationSums[gl_WorkGroupSize.x];
+
+// One step of compensated summation (Kahan 1965): total + value, carrying the lost low bits.
+void addCompensated(inout vec3 total, inout vec3 compensation, vec3 value) {
+    precise vec3 term = value - compensation;
+    precise vec3 next = total + term;
+    compensation = (next - total) - term;
+    total = next;
+}
+
 void main() {
-    for (uint i = gl_LocalInvocationIndex; i < SH_COEFFICIENTS; i += gl_WorkGroupSize.x) {
-        precise vec3 total = vec3(0.0f);
-        precise vec3 compensation = vec3(0.0f);
-        for (uint slot = 0u; slot < params.partialCount; ++slot) {
-            precise vec3 term = partials[slot * SH_COEFFICIENTS + i].rgb - compensation;
-            precise vec3 next = total + term;
-            compensation = (next - total) - term;
-            total = next;
-        }
-        coefficients[i] = vec4(total, 0.0f);
-    }
+    uint coefficient = gl_WorkGroupID.x;
+    vec3 total = vec3(0.0f), compensation = vec3(0.0f);
+    for (uint slot = gl_LocalInvocationIndex; slot < params.partialCount; slot += gl_WorkGroupSize.x)
+        addCompensated(total, compensation, partials[slot * SH_COEFFICIENTS + coefficient].rgb);
+    invocationSums[gl_LocalInvocationIndex] = total;
+    barrier();
+    if (gl_LocalInvocationIndex != 0u) return;
+    total = vec3(0.0f);
+    compensation = vec3(0.0f);
+    for (uint t = 0u; t < gl_WorkGroupSize.x; ++t) addCompensated(total, compensation, invocationSums[t]);
+    coefficients[coefficient] = vec4(total, 0.0f);
 }

@@ -11,6 +11,7 @@
 // validation layer (~0.3-1 s), so images are tiny and there are about ten GPU runs in all.
 #include "image/environment.h"
 #include "image/image_write.h"
+#include "io/probe_export.h"
 #include "io/probe_file.h"
 #include "sh/basis.h"
 #include "sh/error.h"
@@ -659,6 +660,28 @@ TEST_F(CliFailures, BadLightsAndWindows) {
     expectFailure({{"bake", "--sphere", "0,1,0", "-5", "1,1,1", "-o", "OUT"}, 2, {"--sphere", "radius"}});
     expectFailure({{"bake", "--window", "gauss:3", "-o", "OUT"}, 2, {"--window"}});
     expectFailure({{"light", "-o", "OUT"}, 2, {"at least one"}});
+}
+
+// --format binary writes the same coefficients as the JSON file (both hold the GPU's float values:
+// JSON with 9 significant digits, so they agree to 5e-9 relative), and an irradiance map has the
+// documented size; a format the program does not know is a usage error.
+TEST_F(Cli, FormatsHoldTheSameProbe) {
+    runOk({"bake", "--order", "4", "-q", "-o", file("probe.json")});
+    runOk({"bake", "--order", "4", "-q", "--format", "binary", "-o", file("probe.bin")});
+    runOk({"bake", "-q", "--format", "irradiance-cross", "--map-size", "16", "-o", file("cross.exr")});
+    ShCoefficients json = readProbeFile(file("probe.json"));
+    std::vector<ShCoefficients> binary = readBinaryProbes(file("probe.bin"));
+    ASSERT_EQ(binary.size(), 1u);
+    ASSERT_EQ(binary[0].order, 4);
+    for (size_t i = 0; i < json.rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(binary[0].rgb[i][c], json.rgb[i][c], 5e-9 * std::abs(json.rgb[0][c])) << "coefficient " << i;
+    Image cross = readImage(file("cross.exr"));
+    EXPECT_EQ(cross.width, 64);
+    EXPECT_EQ(cross.height, 48);
+    RunResult unknown = run({"bake", "--format", "yaml", "-o", file("probe.yaml")});
+    EXPECT_NE(unknown.exitCode, 0);
+    EXPECT_FALSE(fs::exists(file("probe.yaml")));
 }
 
 // ---- 5. shprobe info --------------------------------------------------------------------------

@@ -5,6 +5,7 @@
 #include "gpu/projector.h"
 #include "image/environment.h"
 #include "io/atomic_file.h"
+#include "io/probe_export.h"
 #include "io/probe_file.h"
 #include "sh/basis.h"
 #include "sh/error.h"
@@ -122,6 +123,15 @@ std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& envi
     return ProbeSun{light.direction, light.radiance, light.angularRadius};
 }
 
+// Writes the probe in the chosen format (probe_file.h, probe_export.h); every writer is atomic.
+void writeOutput(const BakeOptions& options, const ShCoefficients& probe, const ProbeMetadata& metadata) {
+    if (options.format == "json") return writeProbeFile(options.output, probe, metadata);
+    if (options.format == "binary") return writeBinaryProbes(options.output, std::span(&probe, 1));
+    if (options.format == "irradiance-equirect")
+        return writeIrradianceEquirect(options.output, probe, options.mapSize > 0 ? options.mapSize : 512);
+    writeIrradianceCross(options.output, probe, options.mapSize > 0 ? options.mapSize : 128);
+}
+
 void printSun(const std::optional<ProbeSun>& sun) {
     if (!sun) {
         std::printf("  sun      none found (nothing compact and far brighter than the sky)\n");
@@ -189,6 +199,14 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
         ->check(CLI::Range(1, 1 << 20))
         ->capture_default_str();
     command->add_flag("-q,--quiet", options.quiet, "Print the summary only, not the coefficients");
+    command->add_option("--format", options.format,
+                        "json (CONVENTIONS' coefficient file), binary (packed float32, see README), or the "
+                        "irradiance drawn as an EXR map: irradiance-equirect, irradiance-cross")
+        ->check(CLI::IsMember({"json", "binary", "irradiance-equirect", "irradiance-cross"}))
+        ->capture_default_str();
+    command->add_option("--map-size", options.mapSize,
+                        "Irradiance maps: equirect width (even; default 512) or cross face size (default 128)")
+        ->check(CLI::Range(1, 16384));
     command->add_flag("--extract-sun", options.extractSun,
                       "Take the sun (the brightest compact region) out of the environment and write it beside the "
                       "probe of the rest, as \"sun\" (direction, radiance, angular radius)");
@@ -217,7 +235,7 @@ void runBake(const BakeOptions& options) {
     metadata.device = result.device;
     metadata.window = options.window == "none" ? "" : options.window;
     metadata.sun = sun;
-    writeProbeFile(options.output, written, metadata);
+    writeOutput(options, written, metadata);
 
     printSummary(options, environment, result, loadMs, bakeMs);
     if (options.extractSun) printSun(sun);

@@ -27,6 +27,8 @@ struct BakeOptions {
     LightOptions lights;          // analytic lights added to the environment's radiance
     std::string window = "none";  // none | hanning:W | lanczos:W | dering | dering-lanczos
     bool extractSun = false;      // take the sun out and write it beside the probe
+    std::string format = "json";  // json | binary | irradiance-equirect | irradiance-cross
+    int mapSize = 0;              // irradiance maps: equirect width or face size (0: 512 / 128)
 };
 
 struct InfoOptions {

@@ -45,28 +45,47 @@ uint32_t maxPositionsPerInvocation(int order) {
     return 32768u / (1u + 6u * (1u + n * n + n * n / 2u));
 }
 
-// Rows per band: as many as one binding can hold, a multiple of 8 so that band offsets
-// (96 N firstRow bytes) meet every storage-buffer offset alignment Vulkan allows (at most 256).
-uint32_t rowsPerBand(const DeviceInfo& device, uint32_t faceSize) {
+// Positions (texel positions of all six faces) each invocation handles. The request is raised
+// when needed so that all partial slots fit one storage-buffer binding (half of it, leaving room for
+// the rounding of each band's group count), and capped for lavapipe's loop limit; a face size that
+// cannot meet both is refused.
+uint32_t positionsPerInvocation(const DeviceInfo& device, const ProjectorOptions& options, uint32_t faceSize) {
+    VkDeviceSize slotBytes = VkDeviceSize(coefficientCount(options.order)) * kCoefficientBytes;
+    VkDeviceSize maxSlots = device.limits.maxStorageBufferRange / slotBytes / 2;
+    VkDeviceSize positions = VkDeviceSize(faceSize) * faceSize;
+    VkDeviceSize perGroup = (positions + maxSlots - 1) / maxSlots;
+    uint32_t least = uint32_t((perGroup + options.workgroupSize - 1) / options.workgroupSize);
+    uint32_t most = maxPositionsPerInvocation(options.order);
+    if (least > most)
+        throw Error(ErrorKind::Input, "GPU bake: face size " + std::to_string(faceSize) + " at order " +
+                                          std::to_string(options.order) + " needs a workgroup wider than " +
+                                          std::to_string(options.workgroupSize) + " on " + device.name);
+    uint32_t requested = (options.texelsPerInvocation + kFaceCount - 1) / kFaceCount;
+    return std::clamp(requested, std::max(least, 1u), most);
+}
+
+// Rows per band: as many as one binding can hold and one dispatch's workgroup count can cover, a
+// multiple of 8 so that band offsets (96 N firstRow bytes) meet every storage-buffer offset
+// alignment Vulkan allows (at most 256).
+uint32_t rowsPerBand(const DeviceInfo& device, uint32_t faceSize, uint32_t positionsPerGroup) {
     VkDeviceSize rowBytes = VkDeviceSize(kFaceCount) * faceSize * kTexelBytes;
-    VkDeviceSize rows = device.limits.maxStorageBufferRange / rowBytes;
+    VkDeviceSize byBinding = device.limits.maxStorageBufferRange / rowBytes;
+    VkDeviceSize byGroups = VkDeviceSize(device.limits.maxComputeWorkGroupCount[0]) * positionsPerGroup / faceSize;
+    VkDeviceSize rows = std::min(byBinding, byGroups);
     if (rows >= faceSize) return faceSize;
     return uint32_t(std::max<VkDeviceSize>(8, rows / 8 * 8));
 }
 
 std::vector<Band> planBands(const DeviceInfo& device, const ProjectorOptions& options, uint32_t faceSize) {
-    uint32_t positionsPerInvocation =
-        std::min((options.texelsPerInvocation + kFaceCount - 1) / kFaceCount, maxPositionsPerInvocation(options.order));
-    uint32_t positionsPerGroup = options.workgroupSize * std::max(positionsPerInvocation, 1u);
-    uint32_t bandRows = rowsPerBand(device, faceSize);
+    uint32_t positionsPerGroup = options.workgroupSize * positionsPerInvocation(device, options, faceSize);
+    uint32_t bandRows = rowsPerBand(device, faceSize, positionsPerGroup);
     std::vector<Band> bands;
     uint32_t partials = 0;
     VkDeviceSize offset = 0;
     for (uint32_t firstRow = 0; firstRow < faceSize; firstRow += bandRows) {
         uint32_t rows = std::min(bandRows, faceSize - firstRow);
         uint32_t positions = rows * faceSize;
-        uint32_t groups = std::clamp((positions + positionsPerGroup - 1) / positionsPerGroup, 1u,
-                                     device.limits.maxComputeWorkGroupCount[0]);
+        uint32_t groups = (positions + positionsPerGroup - 1) / positionsPerGroup;
         VkDeviceSize size = VkDeviceSize(kFaceCount) * positions * kTexelBytes;
         bands.push_back({firstRow, rows, groups, partials, offset, size});
         partials += groups;
@@ -216,6 +235,10 @@ Projector createProjector(const Context& context, const ProjectorOptions& option
                                           std::to_string(kMaxOrder));
     if (options.texelsPerInvocation < 1)
         throw Error(ErrorKind::Input, "texels per invocation must be at least 1");
+    // project.comp keeps one vec3 (16 bytes in shared memory) per invocation for its reduction.
+    if (VkDeviceSize(options.workgroupSize) * 16 + 16 > context.info.limits.maxComputeSharedMemorySize)
+        throw Error(ErrorKind::Input, "workgroup size " + std::to_string(options.workgroupSize) +
+                                          " needs more shared memory than " + context.info.name + " has");
     Projector projector;
     projector.options = options;
     uint32_t order = uint32_t(options.order);
@@ -288,7 +311,8 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
                 dispatch(commands, projector.project, bandSets[i], params, band.groupCount);
             }
             computeWriteBarrier(commands);
-            dispatch(commands, projector.reduce, reduceSet, gpu::ReduceParams{partialSlots}, 1);
+            dispatch(commands, projector.reduce, reduceSet, gpu::ReduceParams{partialSlots},
+                     uint32_t(coefficientCount(order)));
             computeWriteBarrier(commands);
             recordConvolutions(commands, projector, convolutions, window);
             if (resources.timestamps)

@@ -95,6 +95,10 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
         uint32_t stride = rotations.size() == 1 ? 0u : uint32_t(matrixFloats(rotator.order));
         gpu::RotateParams params{uint32_t(probes.size()), stride};
         uint32_t groups = uint32_t((input.size() + kWorkgroupSize - 1) / kWorkgroupSize);
+        if (groups > context.info.limits.maxComputeWorkGroupCount[0])
+            throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(probes.size()) +
+                                              " probes are more than one dispatch can rotate on " + context.info.name +
+                                              "; rotate them in smaller batches");
         submitAndWait(context, [&](VkCommandBuffer commands) {
             dispatch(commands, rotator.program, set, params, groups);
             computeWriteBarrier(commands);

@@ -3,6 +3,7 @@
 #include "vk/check.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
@@ -62,7 +63,7 @@ VkInstance createInstance(bool validation, ValidationLog* log,
 
     VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
     app.pApplicationName = "shprobe";
-    app.apiVersion = VK_API_VERSION_1_1;
+    app.apiVersion = VK_API_VERSION_1_3; // the highest version used; 1.1 devices work with it too
 
     std::vector<const char*> extensions;
     for (const std::string& extension : extraExtensions) extensions.push_back(extension.c_str());
@@ -164,9 +165,16 @@ bool isIndex(const std::string& text) {
     return !text.empty() && std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); });
 }
 
+// Whether an index as typed ("0", "01") names device `index`; numbers too large for one never do.
+bool requestsIndex(const std::string& request, uint32_t index) {
+    uint32_t value = 0;
+    auto [end, error] = std::from_chars(request.data(), request.data() + request.size(), value);
+    return error == std::errc() && end == request.data() + request.size() && value == index;
+}
+
 const DeviceInfo& findRequestedDevice(const std::vector<DeviceInfo>& devices, const std::string& request) {
     for (const DeviceInfo& device : devices) {
-        bool matches = isIndex(request) ? device.index == uint32_t(std::stoul(request))
+        bool matches = isIndex(request) ? requestsIndex(request, device.index)
                                         : lowercase(device.name).find(lowercase(request)) != std::string::npos;
         if (matches) return device;
     }

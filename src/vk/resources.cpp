@@ -2,6 +2,7 @@
 
 #include "vk/check.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace shprobe {
@@ -25,17 +26,35 @@ MemoryPreference memoryPreference(MemoryUse use) {
     return {0, 0};
 }
 
-// The memory type allowed by typeBits with all required flags, and the preferred ones if any has
-// them; UINT32_MAX if none.
+VkDeviceSize largestDeviceLocalHeap(const VkPhysicalDeviceMemoryProperties& memory) {
+    VkDeviceSize largest = 0;
+    for (uint32_t h = 0; h < memory.memoryHeapCount; ++h)
+        if (memory.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+            largest = std::max(largest, memory.memoryHeaps[h].size);
+    return largest;
+}
+
+// The memory type allowed by typeBits with all required flags: one with the preferred flags too if
+// there is one, else any. Device-local types count only in the largest device-local heap while one
+// there qualifies: on discrete GPUs without resizable BAR the host-visible device-local heap is a
+// 256 MiB window, too small for large inputs. UINT32_MAX if none.
 uint32_t findMemoryType(const VkPhysicalDeviceMemoryProperties& memory, uint32_t typeBits, MemoryPreference want) {
-    uint32_t fallback = UINT32_MAX;
-    for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
-        VkMemoryPropertyFlags flags = memory.memoryTypes[i].propertyFlags;
-        if (!(typeBits & (1u << i)) || (flags & want.required) != want.required) continue;
-        if ((flags & want.preferred) == want.preferred) return i;
-        if (fallback == UINT32_MAX) fallback = i;
-    }
-    return fallback;
+    const VkDeviceSize largestHeap = largestDeviceLocalHeap(memory);
+    auto allowed = [&](uint32_t i) {
+        return (typeBits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & want.required) == want.required;
+    };
+    auto inLargeHeap = [&](uint32_t i) {
+        return !(want.required & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) ||
+               memory.memoryHeaps[memory.memoryTypes[i].heapIndex].size == largestHeap;
+    };
+    auto preferred = [&](uint32_t i) { return (memory.memoryTypes[i].propertyFlags & want.preferred) == want.preferred; };
+    for (auto acceptable : {std::function<bool(uint32_t)>([&](uint32_t i) { return inLargeHeap(i) && preferred(i); }),
+                            std::function<bool(uint32_t)>(inLargeHeap), std::function<bool(uint32_t)>(preferred)})
+        for (uint32_t i = 0; i < memory.memoryTypeCount; ++i)
+            if (allowed(i) && acceptable(i)) return i;
+    for (uint32_t i = 0; i < memory.memoryTypeCount; ++i)
+        if (allowed(i)) return i;
+    return UINT32_MAX;
 }
 
 std::string sizeText(VkDeviceSize size) { return std::to_string((size + (1 << 20) - 1) >> 20) + " MiB"; }
@@ -110,6 +129,7 @@ void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size, cons
         submitAndWait(context, [&](VkCommandBuffer commands) {
             VkBufferCopy region{0, 0, size};
             vkCmdCopyBuffer(commands, staging.buffer, buffer.buffer, 1, &region);
+            computeWriteBarrier(commands); // later submissions' shaders read what the copy wrote
         });
     } catch (...) {
         destroyBuffer(context, staging);
