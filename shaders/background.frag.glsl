@@ -1,10 +1,13 @@
 // Pixels no surface covers: along the view direction d, the environment, its SH reconstruction,
-// the shading of a surface of normal d (albedo 1), or a flat colour (SHPROBE_SPEC_BACKGROUND).
+// the shading of a surface of normal d (albedo 1), or a flat colour (SHPROBE_SPEC_BACKGROUND). The
+// probe's sun, if any (sun_light.h), is in the reconstruction as its disc and in the shading as
+// light; the environment image already holds it.
 // The camera is a perspective one or a panorama (equirect, CONVENTIONS.md) by u.camera.w.
 // Outputs: location 0 colour; location 1 direction (xyz = d, w = SHPROBE_DIRECTION_*).
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #include "render_common.glsl"
+#include "sun_light.h"
 
 layout(set = 0, binding = 1) uniform samplerCube environment;
 
@@ -30,10 +33,11 @@ void main() {
         color = vec4(textureLod(environment, d, 0.0).rgb, 1.0);
         direction = vec4(d, SHPROBE_DIRECTION_NONE);
     } else if (BACKGROUND == SHPROBE_BACKGROUND_RADIANCE) {
-        color = vec4(shRadiance(u.radiance, d, SH_ORDER), 1.0);
+        color = vec4(shRadiance(u.radiance, d, SH_ORDER) + sunShading(u.sun, SHPROBE_SHADING_RADIANCE, d, vec3(1.0)),
+                     1.0);
         direction = vec4(d, SHPROBE_DIRECTION_RADIANCE);
     } else if (BACKGROUND == SHPROBE_BACKGROUND_SHADING) {
-        color = vec4(shadeNormal(d, vec3(1.0)), 1.0);
+        color = vec4(shadeNormal(d, vec3(1.0)) + sunShading(u.sun, SHADING, d, vec3(1.0)), 1.0);
         direction = vec4(d, SHPROBE_DIRECTION_SHADING);
     } else {
         color = vec4(u.backgroundColor.rgb, 1.0);

@@ -137,6 +137,82 @@ TEST(ProbeFile, RejectsBadCoefficientRows) {
     expectRejected(validWith("coefficients", rows), "9 rows");
 }
 
+// ---- The optional sun (bake --extract-sun) -----------------------------------------------------
+
+ProbeSun sampleSun() {
+    ProbeSun sun;
+    sun.direction = glm::dvec3(0.48, 0.6, -0.64); // unit
+    sun.radiance = glm::dvec3(21000.0, 19500.5, 0.0);
+    sun.angularRadius = 1.146 * M_PI / 180.0;
+    return sun;
+}
+
+TEST(ProbeFile, SunRoundTrips) {
+    ProbeMetadata metadata;
+    metadata.sun = sampleSun();
+    ShCoefficients coefficients = sampleProbe(5, Quantity::Radiance);
+    Probe read = parseProbe(probeToJson(coefficients, metadata), "sun.json");
+    ASSERT_TRUE(read.sun.has_value());
+    EXPECT_EQ(read.coefficients.order, 5);
+    EXPECT_EQ(read.coefficients.rgb.size(), coefficients.rgb.size());
+    // nlohmann writes doubles with round-trip precision: the sun reads back to the last bits.
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(read.sun->direction[c], metadata.sun->direction[c], 1e-15);
+        EXPECT_EQ(read.sun->radiance[c], metadata.sun->radiance[c]);
+    }
+    EXPECT_NEAR(read.sun->angularRadius, metadata.sun->angularRadius, 1e-15);
+
+    // Without the field there is no sun, and the coefficients-only readers ignore it.
+    EXPECT_FALSE(parseProbe(probeToJson(coefficients, {}), "plain.json").sun.has_value());
+    EXPECT_EQ(parseProbeJson(probeToJson(coefficients, metadata), "sun.json").order, 5);
+}
+
+TEST(ProbeFile, SunDirectionIsNormalizedOnRead) {
+    nlohmann::json sun = {
+        {"direction", {0.0, 3e-200, -4e-200}}, {"radiance", {1, 2, 3}}, {"angular_radius_degrees", 90}};
+    Probe read = parseProbe(validWith("sun", sun), "sun.json");
+    ASSERT_TRUE(read.sun.has_value());
+    EXPECT_NEAR(read.sun->direction.y, 0.6, 1e-15);
+    EXPECT_NEAR(read.sun->direction.z, -0.8, 1e-15);
+    EXPECT_NEAR(read.sun->angularRadius, M_PI / 2.0, 1e-15);
+    sun["direction"] = {2e300, 0.0, 2e300}; // |d| overflows unless scaled first
+    read = parseProbe(validWith("sun", sun), "sun.json");
+    EXPECT_NEAR(read.sun->direction.x, std::sqrt(0.5), 1e-15);
+}
+
+TEST(ProbeFile, RejectsMalformedSun) {
+    const nlohmann::json good = {
+        {"direction", {0.0, 1.0, 0.0}}, {"radiance", {10.0, 9.0, 8.0}}, {"angular_radius_degrees", 0.5}};
+    EXPECT_TRUE(parseProbe(validWith("sun", good), "ok.json").sun.has_value());
+    auto with = [&](const char* field, const nlohmann::json& value) {
+        nlohmann::json sun = good;
+        sun[field] = value;
+        return validWith("sun", sun);
+    };
+    auto without = [&](const char* field) {
+        nlohmann::json sun = good;
+        sun.erase(field);
+        return validWith("sun", sun);
+    };
+    expectRejected(validWith("sun", "bright"), "\"sun\"");
+    expectRejected(validWith("sun", {1, 2, 3}), "\"sun\"");
+    for (const char* field : {"direction", "radiance", "angular_radius_degrees"})
+        expectRejected(without(field), std::string("\"sun.") + field + "\"");
+    expectRejected(with("direction", {0.0, 0.0, 0.0}), "\"sun.direction\" is the zero vector");
+    expectRejected(with("direction", {1.0, 2.0}), "\"sun.direction\"");
+    expectRejected(with("direction", {1.0, "up", 2.0}), "\"sun.direction\"");
+    expectRejected(with("direction", "up"), "\"sun.direction\"");
+    expectRejected(with("radiance", {1.0, -0.5, 1.0}), "\"sun.radiance\"");
+    expectRejected(with("radiance", {1.0, 1.0}), "\"sun.radiance\"");
+    for (const nlohmann::json& radius :
+         {nlohmann::json(0.0), nlohmann::json(-1.0), nlohmann::json(90.5), nlohmann::json("1")})
+        expectRejected(with("angular_radius_degrees", radius), "\"sun.angular_radius_degrees\"");
+    // Numbers beyond double range ("1e999") are already refused by the JSON parser.
+    std::string huge = with("angular_radius_degrees", 12345.5);
+    expectRejected(huge.replace(huge.find("12345.5"), 7, "1e999"), "not valid JSON");
+    EXPECT_TRUE(parseProbe(with("angular_radius_degrees", 90), "ok.json").sun.has_value()) << "90 is allowed";
+}
+
 TEST(ProbeFile, MissingFileIsAnInputError) {
     try {
         readProbeFile("/nonexistent/probe.json");

@@ -38,6 +38,14 @@
 
 SHPROBE_BEGIN
 
+// A sun beside the probe (a probe file's "sun", from `bake --extract-sun`), added analytically by
+// sun_light.h: a uniform cap of angular radius r.
+struct RenderSun {
+    vec4 direction; // xyz: unit, towards the sun; w: 1 when there is a sun, 0 when not (nothing is added)
+    vec4 radiance;  // rgb: the radiance over its disc
+    vec4 shape;     // sin r, cos r, sin^2 r, 4 sin^2(r/2) (the squared chord from the centre to the edge)
+};
+
 // Set 0, binding 0 (vertex and fragment stages). Written by the CPU before each frame.
 struct RenderUniforms {
     mat4 viewProjection;        // world -> clip (Vulkan: y down, depth 0..1)
@@ -51,6 +59,7 @@ struct RenderUniforms {
     vec4 irradiance[SHPROBE_FOLDED_COUNT]; // s_l = A_l / pi: E(n) / pi
     // Non-linear L1 model (seed 004): [0].rgb = R0, [1..3].rgb = x, y, z of R1 per channel.
     vec4 l1[4];
+    RenderSun sun;
 };
 
 // Push constants of scene.vert/scene.frag: one per drawn object.
@@ -67,7 +76,12 @@ struct TonemapConstants {
 SHPROBE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(shprobe::gpu::RenderUniforms) == 64 * 2 + 16 * 3 + 16 * (2 * SHPROBE_FOLDED_COUNT + 4));
+#include <cstddef>
+static_assert(sizeof(shprobe::gpu::RenderSun) == 48);
+static_assert(sizeof(shprobe::gpu::RenderUniforms) ==
+              64 * 2 + 16 * 3 + 16 * (2 * SHPROBE_FOLDED_COUNT + 4) + 48);
+static_assert(offsetof(shprobe::gpu::RenderUniforms, sun) ==
+              64 * 2 + 16 * 3 + 16 * (2 * SHPROBE_FOLDED_COUNT + 4));
 static_assert(sizeof(shprobe::gpu::ObjectConstants) == 80);
 static_assert(sizeof(shprobe::gpu::TonemapConstants) == 16);
 #endif

@@ -49,9 +49,9 @@ int foldOrder(const RenderOptions& options, const ShCoefficients& probe) {
 }
 
 void renderInput(const Context& context, const RenderOptions& options, ImageSize size, RenderResult& result) {
-    ProbeShading probe =
-        foldProbe(result.input.probe, foldOrder(options, result.input.probe), result.input.name);
-    float exposure = autoExposure(result.input.probe) * std::exp2(options.exposure);
+    ProbeShading probe = foldProbe(result.input.probe, foldOrder(options, result.input.probe),
+                                   result.input.name, result.input.sun);
+    float exposure = autoExposure(result.input.probe, result.input.sun) * std::exp2(options.exposure);
     OffscreenRenderer renderer = createOffscreenRenderer(context);
     try {
         setProbe(renderer.scene, probe);
@@ -79,8 +79,8 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
     RenderResult result;
     if (isProbeFile(options.input)) {
         result.input = readProbeInput(options.input);
-        foldProbe(result.input.probe, foldOrder(options, result.input.probe),
-                  result.input.name); // throws early
+        foldProbe(result.input.probe, foldOrder(options, result.input.probe), result.input.name,
+                  result.input.sun); // throws early
     }
     ContextOptions contextOptions;
     contextOptions.device = options.device;
@@ -112,6 +112,9 @@ void printSummary(const RenderOptions& options, const RenderResult& result) {
     else
         std::printf("  shading  order %d, %s, background %s\n", options.order, options.mode.c_str(),
                     backgroundName(result.background));
+    if (const auto& sun = result.input.sun)
+        std::printf("  sun      direction (%.4f, %.4f, %.4f), radius %.3f deg: added analytically\n",
+                    sun->direction.x, sun->direction.y, sun->direction.z, sun->angularRadius * 180.0 / M_PI);
     std::printf("  time     ");
     if (result.input.bakeMilliseconds > 0.0) std::printf("bake %.1f ms, ", result.input.bakeMilliseconds);
     std::printf("render %.1f ms\n", result.renderMilliseconds);

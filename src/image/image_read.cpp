@@ -19,6 +19,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Library messages may span lines; an error is one line, so their lines are joined with "; ".
+std::string oneLine(std::string text) {
+    while (!text.empty() && text.back() == '\n') text.pop_back();
+    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
+        text.replace(at, 1, "; ");
+    return text;
+}
+
 // A header can claim any size; refuse before allocating. 2^28 pixels (a 4 GiB RGBA32F image,
 // e.g. 32768 x 8192) is far more than any environment worth reducing to a few SH coefficients.
 constexpr int64_t kMaxImageSide = 65536;
@@ -48,7 +56,7 @@ std::unique_ptr<OIIO::ImageInput> openImage(const std::string& path) {
     std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path, &config);
     if (!input)
         throw Error(ErrorKind::Input,
-                    path + ": not an image OpenImageIO can read (" + OIIO::geterror() + ")");
+                    path + ": not an image OpenImageIO can read (" + oneLine(OIIO::geterror()) + ")");
     return input;
 }
 
@@ -87,9 +95,8 @@ Image readPixels(const std::string& path, OIIO::ImageInput& input, const OIIO::I
     constexpr OIIO::stride_t texelStride = sizeof(glm::vec4);
     if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, image.texels.data(), texelStride,
                           texelStride * spec.width))
-        throw Error(ErrorKind::Input, path +
-                                          ": cannot read the pixels; the file may be truncated or corrupt (" +
-                                          input.geterror() + ")");
+        throw Error(ErrorKind::Input, path + ": cannot read the pixels; the file may be truncated or corrupt (" +
+                                          oneLine(input.geterror()) + ")");
     for (glm::vec4& texel : image.texels)
         texel =
             channels == 1 ? glm::vec4(texel.r, texel.r, texel.r, 1.0f) : glm::vec4(glm::vec3(texel), 1.0f);

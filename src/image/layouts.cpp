@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <glm/vec4.hpp>
 
 namespace shprobe {
@@ -50,7 +51,7 @@ int crossFaceSize(int width, int height, Layout layout) {
         throw Error(ErrorKind::Input, std::string("layout ") + layoutName(layout) + " is not a cross");
     int columns = horizontal ? 4 : 3;
     int rows = horizontal ? 3 : 4;
-    if (width < 1 || width * rows != height * columns)
+    if (width < 1 || int64_t(width) * rows != int64_t(height) * columns)
         throw Error(ErrorKind::Input, "image is " + sizeText(width, height) + ", but a " +
                                           layoutName(layout) + " image must be " + std::to_string(columns) +
                                           ":" + std::to_string(rows));
@@ -184,10 +185,11 @@ const char* layoutName(Layout layout) {
 }
 
 Layout detectLayout(int width, int height) {
-    if (width > 0 && height > 0) {
-        if (width == 2 * height) return Layout::Equirect;
-        if (3 * width == 4 * height) return Layout::HorizontalCross;
-        if (4 * width == 3 * height) return Layout::VerticalCross;
+    const int64_t w = width, h = height; // 64-bit: no overflow for any int size
+    if (w > 0 && h > 0) {
+        if (w == 2 * h) return Layout::Equirect;
+        if (3 * w == 4 * h) return Layout::HorizontalCross;
+        if (4 * w == 3 * h) return Layout::VerticalCross;
     }
     throw Error(ErrorKind::Input, "image is " + sizeText(width, height) +
                                       ", which matches no layout: expected 2:1 (equirect), 4:3 "

@@ -4,6 +4,7 @@
 #include "sh/basis.h"
 #include "sh/error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -61,6 +62,47 @@ glm::dvec3 parseRow(const json& row, size_t index, const std::string& name) {
     return rgb;
 }
 
+// "sun": {"direction": [x, y, z], "radiance": [r, g, b], "angular_radius_degrees": a}.
+glm::dvec3 parseSunTriple(const json& sun, const char* field, const std::string& name, bool nonNegative) {
+    std::string where = std::string("field \"sun.") + field + "\"";
+    auto it = sun.find(field);
+    if (it == sun.end()) fail(name, "missing " + where);
+    const json& value = *it;
+    const char* what = nonNegative ? " must be an array of 3 numbers [r, g, b], each >= 0"
+                                   : " must be an array of 3 numbers [x, y, z]";
+    if (!value.is_array() || value.size() != 3) fail(name, where + what);
+    glm::dvec3 triple;
+    for (int c = 0; c < 3; ++c) {
+        if (!value[c].is_number()) fail(name, where + what);
+        triple[c] = value[c].get<double>();
+        if (!std::isfinite(triple[c])) fail(name, where + " holds a value that is not finite");
+        if (nonNegative && triple[c] < 0.0) fail(name, where + what);
+    }
+    return triple;
+}
+
+ProbeSun parseSun(const json& sun, const std::string& name) {
+    if (!sun.is_object())
+        fail(name, "field \"sun\" must be an object with \"direction\", \"radiance\" and "
+                   "\"angular_radius_degrees\"");
+    ProbeSun result;
+    glm::dvec3 direction = parseSunTriple(sun, "direction", name, false);
+    // Scaled by its largest component first, so that neither tiny nor huge components over- or underflow.
+    double largest = std::max({std::abs(direction.x), std::abs(direction.y), std::abs(direction.z)});
+    if (largest == 0.0) fail(name, "field \"sun.direction\" is the zero vector");
+    direction /= largest;
+    result.direction = direction / std::sqrt(direction.x * direction.x + direction.y * direction.y +
+                                             direction.z * direction.z);
+    result.radiance = parseSunTriple(sun, "radiance", name, true);
+    auto radius = sun.find("angular_radius_degrees");
+    if (radius == sun.end()) fail(name, "missing field \"sun.angular_radius_degrees\"");
+    double degrees = radius->is_number() ? radius->get<double>() : std::nan("");
+    if (!(degrees > 0.0 && degrees <= 90.0))
+        fail(name, "field \"sun.angular_radius_degrees\" must be a number in (0, 90]");
+    result.angularRadius = degrees * M_PI / 180.0;
+    return result;
+}
+
 std::string formatNumber(double value) {
     std::ostringstream out;
     out.precision(9); // float coefficients round-trip with 9 significant digits
@@ -114,7 +156,7 @@ void writeProbeFile(const std::string& path, const ShCoefficients& coefficients,
     writeFileAtomic(path, probeToJson(coefficients, metadata));
 }
 
-ShCoefficients parseProbeJson(std::string_view text, const std::string& name) {
+Probe parseProbe(std::string_view text, const std::string& name) {
     json root = json::parse(text, nullptr, false);
     if (root.is_discarded()) fail(name, "not valid JSON");
     if (!root.is_object()) fail(name, "the top level must be a JSON object");
@@ -134,15 +176,23 @@ ShCoefficients parseProbeJson(std::string_view text, const std::string& name) {
                        " rows for order " + std::to_string(coefficients.order) + ", not " +
                        (rows.is_array() ? std::to_string(rows.size()) : std::string("a non-array")));
     for (size_t i = 0; i < rows.size(); ++i) coefficients.rgb[i] = parseRow(rows[i], i, name);
-    return coefficients;
+    Probe probe{std::move(coefficients), std::nullopt};
+    if (auto sun = root.find("sun"); sun != root.end()) probe.sun = parseSun(*sun, name);
+    return probe;
 }
 
-ShCoefficients readProbeFile(const std::string& path) {
+Probe readProbe(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(path, "cannot open the file");
     std::stringstream text;
     text << in.rdbuf();
-    return parseProbeJson(text.str(), path);
+    return parseProbe(text.str(), path);
 }
+
+ShCoefficients parseProbeJson(std::string_view text, const std::string& name) {
+    return parseProbe(text, name).coefficients;
+}
+
+ShCoefficients readProbeFile(const std::string& path) { return readProbe(path).coefficients; }
 
 } // namespace shprobe

@@ -32,7 +32,19 @@ std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata&
 // Writes atomically; throws Error(Output) naming the file.
 void writeProbeFile(const std::string& path, const ShCoefficients& coefficients, const ProbeMetadata& metadata);
 
-// Parses and validates; throws Error(Input) naming `name` and the offending field.
+// A coefficient file as a renderer needs it: the coefficients and, when the file has one, the sun
+// taken out of them (field "sun"; see ProbeSun), to be added back analytically.
+struct Probe {
+    ShCoefficients coefficients;
+    std::optional<ProbeSun> sun;
+};
+
+// Parses and validates; throws Error(Input) naming `name` and the offending field. The optional
+// "sun" is checked when present: "direction" 3 finite numbers, not all 0 (normalized on read),
+// "radiance" 3 finite numbers >= 0, "angular_radius_degrees" in (0, 90].
+Probe parseProbe(std::string_view text, const std::string& name);
+Probe readProbe(const std::string& path);
+// The coefficients only (the sun, if any, is validated and dropped).
 ShCoefficients parseProbeJson(std::string_view text, const std::string& name);
 ShCoefficients readProbeFile(const std::string& path);
 

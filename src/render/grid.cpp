@@ -26,12 +26,19 @@ Scene panoramaCell(const OffscreenRenderer& renderer, int column) {
 }
 
 // Camera yaw that sees the sphere lit from the side: 90 degrees around +Y from the azimuth of the
-// probe's main light (the Rec. 709 luminance of its L1 vector), so the lit side, the terminator
-// and the side away from the light, where orders 3 and 5 differ most, all show.
+// probe's main light (the Rec. 709 luminance of its L1 vector, with the sun's when the probe has
+// one), so the lit side, the terminator and the side away from the light, where orders 3 and 5
+// differ most, all show.
 float sideLitYaw(const ProbeShading& probe) {
     const glm::vec3 luminance(0.2126f, 0.7152f, 0.0722f);
     glm::vec3 light(glm::dot(glm::vec3(probe.l1[1]), luminance), glm::dot(glm::vec3(probe.l1[2]), luminance),
                     glm::dot(glm::vec3(probe.l1[3]), luminance));
+    if (probe.sun) {
+        // R1 = (1/4pi) int L w over the cap = L pi sin^2(r) d / (4 pi).
+        double s = std::sin(probe.sun->angularRadius);
+        light += glm::vec3(glm::normalize(probe.sun->direction) *
+                           (glm::dot(probe.sun->radiance, glm::dvec3(luminance)) * s * s / 4.0));
+    }
     if (glm::length(glm::vec2(light.x, light.z)) < 1e-6f * (1.0f + glm::length(light))) return 0.0f;
     return glm::degrees(std::atan2(light.x, light.z)) + 90.0f;
 }

@@ -181,7 +181,17 @@ ShCoefficients truncateOrder(const ShCoefficients& probe, int order) {
     return truncated;
 }
 
-ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string& name) {
+gpu::RenderSun foldSun(const SphericalLight& sun) {
+    const double r = sun.angularRadius, s = std::sin(r), half = std::sin(0.5 * r);
+    gpu::RenderSun folded{};
+    folded.direction = glm::vec4(glm::vec3(glm::normalize(sun.direction)), 1.0f);
+    folded.radiance = glm::vec4(glm::vec3(sun.radiance), 0.0f);
+    folded.shape = glm::vec4(float(s), float(std::cos(r)), float(s * s), float(4.0 * half * half));
+    return folded;
+}
+
+ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string& name,
+                       const std::optional<SphericalLight>& sun) {
     if (order < 1 || order > kMaxRenderOrder)
         throw Error(ErrorKind::Input, "render order " + std::to_string(order) + " is outside 1.." +
                                           std::to_string(kMaxRenderOrder));
@@ -208,6 +218,20 @@ ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string
             shading.l1[size_t(axis) + 1] = glm::vec4(glm::vec3(l1.r1[axis]), 0.0f);
     } else {
         shading.l1[0] = glm::vec4(glm::vec3(meanRadiance(probe)), 0.0f); // no L1: ambient only
+    }
+    if (sun) {
+        const glm::dvec3& d = sun->direction;
+        const glm::dvec3& sunRadiance = sun->radiance;
+        bool finite = std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z) &&
+                      std::isfinite(sunRadiance.r) && std::isfinite(sunRadiance.g) &&
+                      std::isfinite(sunRadiance.b);
+        if (!finite || glm::length(d) == 0.0 || !std::isfinite(glm::length(d)) ||
+            glm::any(glm::lessThan(sunRadiance, glm::dvec3(0.0))) || !(sun->angularRadius > 0.0) ||
+            sun->angularRadius > 0.5 * kPi)
+            throw Error(ErrorKind::Input, name + ": the sun needs a direction, a finite radiance >= 0 and an "
+                                                 "angular radius in (0, 90] degrees");
+        shading.sun = SphericalLight{glm::normalize(d), sun->angularRadius, sunRadiance};
+        shading.foldedSun = foldSun(*shading.sun);
     }
     return shading;
 }
@@ -257,11 +281,33 @@ glm::dvec3 shadeReference(const ShCoefficients& radiance, ShadingMode mode, int 
     return glm::dvec3(0.0);
 }
 
-float autoExposure(const ShCoefficients& probe) {
+// Snyder (1996), in the form of Lagarde & de Rousiers (2014, sphere area lights); see sun_light.h.
+double sphericalCapIrradiance(double cosTheta, double angularRadius) {
+    const double s = std::sin(angularRadius), s2 = s * s;
+    const double e = std::clamp(cosTheta, -1.0, 1.0);
+    if (e * e >= s2) return kPi * s2 * std::max(e, 0.0);
+    const double sinTheta = std::sqrt(1.0 - e * e);
+    const double x = std::sqrt(1.0 / s2 - 1.0); // cot r
+    const double y = std::clamp(-x * e / sinTheta, -1.0, 1.0);
+    const double q = sinTheta * std::sqrt(1.0 - y * y);
+    return std::max((e * std::acos(y) - x * q) * s2 + std::atan(q / x), 0.0);
+}
+
+glm::dvec3 sunShadeReference(const SphericalLight& sun, ShadingMode mode, const glm::dvec3& n) {
+    const glm::dvec3 d = glm::normalize(sun.direction);
+    if (mode == ShadingMode::Radiance) {
+        const double half = std::sin(0.5 * sun.angularRadius);
+        return glm::dot(n - d, n - d) <= 4.0 * half * half ? sun.radiance : glm::dvec3(0.0);
+    }
+    return sun.radiance * sphericalCapIrradiance(glm::dot(n, d), sun.angularRadius) / kPi;
+}
+
+float autoExposure(const ShCoefficients& probe, const std::optional<SphericalLight>& sun) {
     // A white surface under uniform radiance L reflects L: map the mean radiance to 0.5 before the
     // filmic curve, which leaves room for the brighter side of a lit sphere.
     constexpr double kMidGrey = 0.5;
     glm::dvec3 mean = meanRadiance(probe);
+    if (sun) mean += sun->radiance * capSolidAngle(sun->angularRadius) / (4.0 * kPi);
     double luminance = glm::dot(mean, glm::dvec3(0.2126, 0.7152, 0.0722));
     return luminance > 0.0 && std::isfinite(luminance) ? float(kMidGrey / luminance) : 1.0f;
 }

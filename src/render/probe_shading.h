@@ -1,12 +1,16 @@
 // What the render shaders need from a probe, computed once on the CPU: the SH coefficients with
 // the basis constants and the per-band convolution folded in (sh_irradiance.glsl evaluates only
-// polynomials), and the renormalized L1 terms of the non-linear model. Also the double-precision
-// references of the three shading modes, which the tests compare the shaders with.
+// polynomials), the renormalized L1 terms of the non-linear model, and the sun a probe file may
+// carry beside its coefficients (bake --extract-sun), which the shaders add analytically
+// (shaders/include/sun_light.h). Also the double-precision references of the three shading modes
+// and of the sun, which the tests compare the shaders with.
 #pragma once
 #include "render_interface.h"
 #include "sh/coefficients.h"
+#include "sh/lights.h"
 
 #include <array>
+#include <optional>
 #include <string>
 
 namespace shprobe {
@@ -38,12 +42,20 @@ struct ProbeShading {
     std::array<glm::vec4, SHPROBE_FOLDED_COUNT> radiance{};   // s_l = 1
     std::array<glm::vec4, SHPROBE_FOLDED_COUNT> irradiance{}; // s_l = A_l / pi
     std::array<glm::vec4, 4> l1{};                            // R0, R1.x, R1.y, R1.z per channel
+    std::optional<SphericalLight> sun;                        // not in the coefficients; added analytically
+    gpu::RenderSun foldedSun{};                               // direction.w = 0 without a sun
 };
 
 // Folds the first `order` bands (1..kMaxRenderOrder) of a radiance or irradiance probe. Radiance
 // of an irradiance probe is E_lm / A_l, unknown where A_l = 0 (l = 3): hasRadiance is then false.
-// Throws Error(Input) naming `name` when the probe has fewer bands than `order`.
-ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string& name);
+// Throws Error(Input) naming `name` when the probe has fewer bands than `order`, or when the sun
+// is not a light (radius outside (0, 90] degrees, negative or non-finite radiance, no direction).
+ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string& name,
+                       const std::optional<SphericalLight>& sun = std::nullopt);
+
+// The sun's uniforms: unit direction, radiance, and sin r, cos r, sin^2 r, 4 sin^2(r/2) from the
+// double radius (sin^2(r/2) rather than 1 - cos r, which cancels for small r).
+gpu::RenderSun foldSun(const SphericalLight& sun);
 
 // The first `order` bands of a probe (order <= probe.order).
 ShCoefficients truncateOrder(const ShCoefficients& probe, int order);
@@ -60,8 +72,18 @@ RenormalizedL1 renormalizedL1(const ShCoefficients& radiance);
 glm::dvec3 l1NonLinearOverPi(const ShCoefficients& radiance, const glm::dvec3& n);
 glm::dvec3 shadeReference(const ShCoefficients& radiance, ShadingMode mode, int order, const glm::dvec3& n);
 
-// Linear exposure that maps the probe's mean radiance (its L0 term, Rec. 709 luminance) to a
-// mid grey; 1 for a probe without light.
-float autoExposure(const ShCoefficients& probe);
+// E / L: the irradiance per unit radiance of a uniform cap of angular radius r (0 < r <= pi/2)
+// at a normal whose cosine with the cap's centre is cosTheta, i.e. the projected solid angle of the
+// part of the cap above the horizon: pi sin^2(r) cosTheta when all of it is above, 0 when all is
+// below, and Snyder's closed form in between (see sun_light.h), evaluated as written in double.
+double sphericalCapIrradiance(double cosTheta, double angularRadius);
+
+// What the sun adds at unit normal n (albedo 1): E_sun(n) / pi in the irradiance modes, and in
+// radiance mode the disc, its radiance within its angular radius of its direction (0 outside).
+glm::dvec3 sunShadeReference(const SphericalLight& sun, ShadingMode mode, const glm::dvec3& n);
+
+// Linear exposure that maps the probe's mean radiance (its L0 term, Rec. 709 luminance; plus the
+// sun's power spread over the sphere, when it has one) to a mid grey; 1 for a probe without light.
+float autoExposure(const ShCoefficients& probe, const std::optional<SphericalLight>& sun = std::nullopt);
 
 } // namespace shprobe

@@ -62,7 +62,10 @@ ShCoefficients bakeRadiance(const Context& context, const Projector& projector, 
 RenderInput readProbeInput(const std::string& path) {
     RenderInput input;
     input.name = path;
-    input.probe = readProbeFile(path);
+    Probe probe = readProbe(path);
+    input.probe = std::move(probe.coefficients);
+    if (probe.sun)
+        input.sun = SphericalLight{probe.sun->direction, probe.sun->angularRadius, probe.sun->radiance};
     return input;
 }
 

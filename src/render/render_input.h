@@ -5,6 +5,7 @@
 #include "gpu/projector.h"
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
+#include "sh/lights.h"
 
 #include <glm/mat3x3.hpp>
 #include <optional>
@@ -25,12 +26,14 @@ struct RenderInputOptions {
 struct RenderInput {
     std::string name;                   // the path, or "built-in sky"
     ShCoefficients probe;               // radiance or irradiance coefficients
+    std::optional<SphericalLight> sun;  // a probe file's "sun" (bake --extract-sun), not in `probe`
     std::optional<Cubemap> environment; // for environment inputs
     double bakeMilliseconds = 0.0;      // GPU bake wall time (0 for probe files)
 };
 
-// A path ending in .json is a probe file (read with readProbeFile: bad files get an error naming
-// the file and field); anything else an environment; an empty path the built-in sky.
+// A path ending in .json is a probe file (read with readProbe: bad files get an error naming the
+// file and field; its sun, if any, comes along); anything else an environment (baked whole, the sun
+// left in); an empty path the built-in sky.
 bool isProbeFile(const std::string& path);
 RenderInput readProbeInput(const std::string& path); // probe files only; needs no device
 RenderInput loadRenderInput(const Context& context, const std::string& path,

@@ -139,6 +139,7 @@ gpu::RenderUniforms makeUniforms(const SceneRenderer& renderer, const Scene& sce
     std::copy(renderer.probe.radiance.begin(), renderer.probe.radiance.end(), uniforms.radiance);
     std::copy(renderer.probe.irradiance.begin(), renderer.probe.irradiance.end(), uniforms.irradiance);
     std::copy(renderer.probe.l1.begin(), renderer.probe.l1.end(), uniforms.l1);
+    uniforms.sun = renderer.probe.foldedSun; // direction.w = 0: no sun, nothing added
     return uniforms;
 }
 

@@ -205,7 +205,9 @@ void rotateEnvironment(const Context& context, Session& session, float degrees) 
     if (!session.input.environment || !session.projector) {
         ShCoefficients rotated =
             rotate(makeShRotation(rotation, session.input.probe.order), session.input.probe);
-        setProbe(session.renderer, foldProbe(rotated, session.foldOrder, session.input.name));
+        std::optional<SphericalLight> sun = session.input.sun;
+        if (sun) sun->direction = rotation * sun->direction; // the light from d comes from R d
+        setProbe(session.renderer, foldProbe(rotated, session.foldOrder, session.input.name, sun));
         return;
     }
     Cubemap rotated = rotateCubemap(*session.input.environment, rotation);
@@ -277,15 +279,15 @@ void startSession(const Context& context, const ViewerOptions& options, GLFWwind
                   Session& session) {
     session.input = loadRenderInput(context, options.input, options.inputOptions);
     session.foldOrder = std::min(session.input.probe.order, kMaxRenderOrder);
-    ProbeShading probe =
-        foldProbe(session.input.probe, std::max(options.view.order, session.foldOrder), session.input.name);
+    ProbeShading probe = foldProbe(session.input.probe, std::max(options.view.order, session.foldOrder),
+                                   session.input.name, session.input.sun);
     session.renderer = createSceneRenderer(context);
     setProbe(session.renderer, probe);
     if (session.input.environment) {
         setEnvironment(context, session.renderer, *session.input.environment);
         session.projector = createProjector(context, {.order = kRenderBakeOrder});
     }
-    session.autoExposure = autoExposure(session.input.probe);
+    session.autoExposure = autoExposure(session.input.probe, session.input.sun);
     session.initial = usableView(session, options.view);
     session.view = session.initial;
     session.device = context.info.name;

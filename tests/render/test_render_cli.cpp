@@ -1,11 +1,15 @@
 // `shprobe render` and `shprobe view` end to end, as child processes on lavapipe with the
 // validation layer on (SHPROBE_VALIDATION=1 from ctest): the images written, the grid, every bad
 // probe file and bad option (exit code 2, one error line naming the file and the field, no output
-// left behind), and the viewer without a display. The viewer with a display: test_render_viewer.
+// left behind), the sun of `bake --extract-sun` added back by `render`, and the viewer without a
+// display. The viewer with a display: test_render_viewer.
 #include "run_program.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
 #include "test_inputs.h"
 
 #include <OpenImageIO/imageio.h>
+#include <glm/trigonometric.hpp>
 #include <gtest/gtest.h>
 
 namespace shprobe::testing {
@@ -82,6 +86,129 @@ TEST_F(RenderCli, EnvironmentIsBakedFirstAndTheGridHasSixCells) {
     ImageInfo info = imageInfo(folder / "grid.png");
     EXPECT_EQ(info.width, 3 * 48) << "three columns of cells 48 wide";
     EXPECT_EQ(info.height, 2 * 24) << "two rows of cells 24 high";
+}
+
+// ---- The sun: bake --extract-sun, then render -------------------------------------------------
+
+struct LinearImage {
+    int width = 0, height = 0;
+    std::vector<float> rgb; // 3 floats per pixel
+    glm::dvec3 at(size_t p) const { return {rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]}; }
+};
+
+LinearImage readExr(const std::string& path) {
+    LinearImage image;
+    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path);
+    if (!input) return image;
+    image.width = input->spec().width;
+    image.height = input->spec().height;
+    std::vector<float> all(size_t(image.width) * image.height * input->spec().nchannels);
+    input->read_image(0, 0, 0, -1, OIIO::TypeDesc::FLOAT, all.data());
+    for (size_t p = 0; p < size_t(image.width) * image.height; ++p)
+        for (int c = 0; c < 3; ++c)
+            image.rgb.push_back(all[p * input->spec().nchannels + c]);
+    return image;
+}
+
+// The largest error, as a fraction of the light's power, of the order-n irradiance of a delta light:
+// max over cos of |sum_{l<n} A_l (2l+1)/(4pi) P_l(cos) - max(0, cos)| (3/32 at order 3, at the
+// terminator).
+double deltaIrradianceWorstError(int order) {
+    double worst = 0.0;
+    for (int k = 0; k <= 20000; ++k) {
+        double x = -1.0 + 2.0 * k / 20000.0, previous = 1.0, legendre = x, sum = 0.0;
+        for (int l = 0; l < order; ++l) {
+            double p = l == 0 ? 1.0 : legendre;
+            sum += irradianceBandFactor(l) * (2 * l + 1) / (4.0 * M_PI) * p;
+            if (l >= 1) {
+                double next = ((2 * l + 1) * x * legendre - l * previous) / (l + 1);
+                previous = legendre;
+                legendre = next;
+            }
+        }
+        worst = std::max(worst, std::abs(sum - std::max(x, 0.0)));
+    }
+    return worst;
+}
+
+// The built-in sky baked whole (full.json) and with its sun taken out (rest.json, with "sun"),
+// rendered to EXR from the sun's side, and rest.json without its "sun" field (nosun.json):
+//  - rest - nosun is what the renderer adds: at the pixel facing the sun, albedo L sin^2 r, the exact
+//    irradiance of the cap over pi (the pixel's normal is within 0.3 degree of the sun: cos >
+//    0.99998, and the sky under it is the same in both);
+//  - full - rest is the SH truncation error of the sun alone, since both hold the same sky and the
+//    same sun power (P = L 2 pi (1 - cos r)): the full probe has the sun as an order-n expansion of an
+//    almost-delta light (1.1 degrees: its bands 0..4 are those of a delta within l(l+1) r^2 / 4 <
+//    2e-3), rest the exact cap. Facing the sun that is (s_n - 1) P / pi = +1/16 at order 3 and
+//    -1/32 at order 5 of the sun's peak (Sloan's 17/16 and 31/32), and nowhere more than the delta
+//    light's worst error, 3/32 at order 3 (at the terminator), which a view from 90 degrees to the
+//    side shows. What else differs (the fill of the sun's texels by the ring around them against the
+//    sky they covered, the cap against a delta, fp32) measures 5e-5 of the sun's peak; the test
+//    allows 2e-3 at the facing pixel and 1e-2 over the image.
+TEST_F(RenderCli, ExtractedSunIsAddedBackAnalytically) {
+    std::string full = folder / "full.json", rest = folder / "rest.json", nosun = folder / "nosun.json";
+    RunResult bake = run({"bake", "--order", "5", "-q", "-o", full});
+    ASSERT_EQ(bake.exitCode, 0) << describe(bake);
+    bake = run({"bake", "--order", "5", "-q", "--extract-sun", "-o", rest});
+    ASSERT_EQ(bake.exitCode, 0) << describe(bake);
+    Probe probe = readProbe(rest);
+    ASSERT_TRUE(probe.sun.has_value());
+    writeProbeFile(nosun, probe.coefficients, {});
+    const ProbeSun& sun = *probe.sun;
+    const double s = std::sin(sun.angularRadius), albedo = 0.8; // the sphere's albedo (scene.h)
+    const glm::dvec3 peak = albedo * sun.radiance * s * s;      // albedo E_sun / pi facing the sun
+    const double power = 2.0 * (1.0 - std::cos(sun.angularRadius)) / (s * s); // P / (pi L s^2)
+
+    const double sunYaw = glm::degrees(std::atan2(sun.direction.x, sun.direction.z));
+    const std::string pitch = std::to_string(glm::degrees(std::asin(sun.direction.y)));
+    for (int order : {3, 5}) {
+        const double expectedTruncation = (deltaLightPeak(order) - 1.0) * power;
+        const double bound = deltaIrradianceWorstError(order) * power;
+        for (double yawOffset : {0.0, 90.0}) {
+            auto render = [&](const std::string& input, const std::string& name) {
+                std::string output = folder / (name + std::to_string(order) + ".exr");
+                RunResult result = run({"render", input, "--order", std::to_string(order), "--size", "256",
+                                        "--background", "color", "--yaw", std::to_string(sunYaw + yawOffset),
+                                        "--pitch", yawOffset == 0.0 ? pitch : "0", "-o", output});
+                EXPECT_EQ(result.exitCode, 0) << describe(result);
+                return readExr(output);
+            };
+            LinearImage withSun = render(rest, "rest"), whole = render(full, "full");
+            ASSERT_EQ(withSun.rgb.size(), size_t(256 * 256 * 3));
+            ASSERT_EQ(whole.rgb.size(), withSun.rgb.size());
+            double worst = 0.0; // the largest |full - rest| anywhere
+            for (size_t p = 0; p < size_t(256 * 256); ++p)
+                for (int c = 0; c < 3; ++c)
+                    worst = std::max(worst, std::abs(whole.at(p)[c] - withSun.at(p)[c]) / peak[c]);
+            std::printf("  order %d, view %2.0f deg from the sun: worst |full - rest| %.4f of the sun's peak "
+                        "(bound %.4f + 0.01)\n",
+                        order, yawOffset, worst, bound);
+            EXPECT_LT(worst, bound + 0.01) << "order " << order;
+            if (yawOffset != 0.0) {
+                EXPECT_GT(worst, bound - 0.01) << "the terminator, where the truncation error peaks, shows";
+                continue;
+            }
+            // Facing the sun: the pixel the sun adds most to.
+            LinearImage withoutSun = render(nosun, "nosun");
+            ASSERT_EQ(withoutSun.rgb.size(), withSun.rgb.size());
+            size_t brightest = 0;
+            for (size_t p = 0; p < size_t(256 * 256); ++p)
+                if ((withSun.at(p) - withoutSun.at(p)).g >
+                    (withSun.at(brightest) - withoutSun.at(brightest)).g)
+                    brightest = p;
+            glm::dvec3 added = (withSun.at(brightest) - withoutSun.at(brightest)) / peak;
+            glm::dvec3 truncation = (whole.at(brightest) - withSun.at(brightest)) / peak;
+            std::printf(
+                "  order %d: facing the sun it adds (%.6f %.6f %.6f) of albedo L sin^2 r; full - rest "
+                "there (%.5f %.5f %.5f), expected %.5f\n",
+                order, added.r, added.g, added.b, truncation.r, truncation.g, truncation.b,
+                expectedTruncation);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_NEAR(added[c], 1.0, 1e-4) << "order " << order << " channel " << c;
+                EXPECT_NEAR(truncation[c], expectedTruncation, 2e-3) << "order " << order << " channel " << c;
+            }
+        }
+    }
 }
 
 TEST_F(RenderCli, BadProbeFilesNameTheFileAndTheField) {

@@ -1,7 +1,8 @@
 // The render shaders on the device (lavapipe in CI) against the double references, pixel by pixel
 // at the normals the shader used (read back from the float direction target): orders 3 and 5,
 // every mode, on the sphere and on full-sphere panoramas; Sloan's delta-light facts (seed 000);
-// the non-linear L1 model's positivity and energy (seed 004); the display bytes and EXR output.
+// the non-linear L1 model's positivity and energy (seed 004); a probe file's sun, added analytically
+// (E_probe(n) + E_sun(n) per pixel); the display bytes and EXR output.
 #include "render_test.h"
 
 #include "image/environment.h"
@@ -12,6 +13,7 @@
 #include "sh/basis.h"
 #include "sh/cubemap.h"
 #include "sh/error.h"
+#include "sh/lights.h"
 #include "sh/projection.h"
 
 #include <algorithm>
@@ -20,6 +22,7 @@
 #include <filesystem>
 #include <glm/geometric.hpp>
 #include <numbers>
+#include <optional>
 #include <unistd.h>
 
 namespace shprobe::testing {
@@ -54,6 +57,18 @@ ShCoefficients skyProbe() {
     return projectCubemap(makeDefaultSky(32), 5);
 }
 
+// The built-in sky with its sun taken out (as `bake --extract-sun` does), and the sun.
+struct SunnyProbe {
+    ShCoefficients radiance;
+    SphericalLight sun;
+};
+SunnyProbe skyWithoutSun() {
+    Cubemap sky = makeDefaultSky(64);
+    SunExtraction sun = extractSun(sky);
+    EXPECT_TRUE(sun.found);
+    return {projectCubemap(sky, 5), sunAsSphericalLight(sun)};
+}
+
 // A delta light of power pi along d: the exact E(n)/pi is max(n.d, 0), 1 at the light's pole.
 ShCoefficients directionalLight(const glm::dvec3& d) {
     return deltaLights({{d, glm::dvec3(kPi)}});
@@ -84,8 +99,10 @@ Scene panorama(int order, ShadingMode mode, Background background = Background::
 // ---- Comparison -------------------------------------------------------------------------------
 
 struct Comparison {
-    double worst = 0.0; // largest |gpu - reference| / scale over pixels and channels
-    int pixels = 0;     // pixels compared
+    double worst = 0.0;       // largest |gpu - reference| / scale over pixels and channels
+    int pixels = 0;           // pixels compared
+    int sunPixels = 0;        // of which the sun adds to (disc, or irradiance > 0)
+    int terminatorPixels = 0; // of which the horizon cuts the sun (|n.d| < sin r)
 };
 
 // The size errors are measured against, per channel at normal n: for the SH modes, the sum of
@@ -128,9 +145,33 @@ glm::dvec3 errorScale(const ProbeShading& folded, ShadingMode mode, int order, c
     return scale;
 }
 
-// Compares every pixel whose direction target says `kind` with albedo * reference(n).
+// What the sun adds to the error scale at normal n: in the irradiance modes, its term's magnitude
+// L s^2 |e| (E/pi = L s^2 e when all of the sun is up, terms of the size of the result elsewhere,
+// sun_light.h) plus L s^2 for the rounding of e = n.d itself (|n||d| = 1, and dE/de <= pi L s^2); in
+// radiance mode L where the disc is drawn.
+glm::dvec3 sunErrorScale(const SphericalLight& sun, ShadingMode mode, const glm::dvec3& n) {
+    if (mode == ShadingMode::Radiance) return sunShadeReference(sun, mode, n);
+    double s = std::sin(sun.angularRadius);
+    return sun.radiance * s * s * (1.0 + std::abs(glm::dot(n, sun.direction)));
+}
+
+// Whether n is so close to the edge of the sun's disc that fp32 may put it on either side:
+// |n - d|^2 within 1e-7 of 4 sin^2(r/2) (the fp32 squared chord is good to ~1e-9 for small suns).
+bool onDiscEdge(const SphericalLight& sun, const glm::dvec3& n) {
+    double half = std::sin(0.5 * sun.angularRadius);
+    glm::dvec3 chord = n - sun.direction;
+    return std::abs(glm::dot(chord, chord) - 4.0 * half * half) < 1e-7;
+}
+
+// Compares every pixel whose direction target says `kind` with albedo * reference(n), the
+// probe's reference plus, with a sun, sunShadeReference (the disc's edge pixels are skipped).
+struct Comparison;
 Comparison compare(const RenderedImage& image, const ShCoefficients& radiance, ShadingMode mode, int order,
-                   float kind, const glm::dvec3& albedo) {
+                   float kind, const glm::dvec3& albedo,
+                   const std::optional<SphericalLight>& sun = std::nullopt);
+
+Comparison compare(const RenderedImage& image, const ShCoefficients& radiance, ShadingMode mode, int order,
+                   float kind, const glm::dvec3& albedo, const std::optional<SphericalLight>& sun) {
     ProbeShading folded = foldProbe(radiance, 5, "probe");
     Comparison comparison;
     for (size_t p = 0; p < image.linear.texels.size(); ++p) {
@@ -138,8 +179,17 @@ Comparison compare(const RenderedImage& image, const ShCoefficients& radiance, S
         if (direction.w != kind) continue;
         glm::dvec3 n = glm::normalize(glm::dvec3(glm::vec3(direction)));
         glm::dvec3 reference = shadeReference(radiance, mode, order, n);
-        if (mode != ShadingMode::Radiance && kind == SHPROBE_DIRECTION_SHADING) reference *= albedo;
         glm::dvec3 scale = errorScale(folded, mode, order, n);
+        if (sun) {
+            if (mode == ShadingMode::Radiance && onDiscEdge(*sun, n)) continue;
+            glm::dvec3 added = sunShadeReference(*sun, mode, n);
+            reference += added;
+            scale += sunErrorScale(*sun, mode, n);
+            if (added != glm::dvec3(0.0)) ++comparison.sunPixels;
+            if (std::abs(glm::dot(n, sun->direction)) < std::sin(sun->angularRadius))
+                ++comparison.terminatorPixels;
+        }
+        if (mode != ShadingMode::Radiance && kind == SHPROBE_DIRECTION_SHADING) reference *= albedo;
         glm::dvec3 gpu(glm::vec3(image.linear.texels[p]));
         for (int c = 0; c < 3; ++c)
             if (scale[c] > 0.0)
@@ -166,31 +216,66 @@ double tolerance(ShadingMode mode) {
 
 class RenderAccuracy : public RenderTest {
   protected:
-    void expectMatches(const ShCoefficients& radiance, const char* probeName) {
-        setProbe(renderer().scene, foldProbe(radiance, 5, probeName));
+    void expectMatches(const ShCoefficients& radiance, const char* probeName,
+                       const std::optional<SphericalLight>& sun = std::nullopt) {
+        setProbe(renderer().scene, foldProbe(radiance, 5, probeName, sun));
         for (int order : {3, 5}) {
             for (ShadingMode mode :
                  {ShadingMode::Radiance, ShadingMode::Irradiance, ShadingMode::L1NonLinear}) {
                 Comparison sphere = compare(render(sphereView(order, mode), 64, 64), radiance, mode, order,
-                                            SHPROBE_DIRECTION_SHADING, glm::dvec3(kAlbedo));
+                                            SHPROBE_DIRECTION_SHADING, glm::dvec3(kAlbedo), sun);
                 Comparison everywhere = compare(render(panorama(order, mode), 64, 32), radiance, mode, order,
-                                                SHPROBE_DIRECTION_SHADING, glm::dvec3(1.0));
+                                                SHPROBE_DIRECTION_SHADING, glm::dvec3(1.0), sun);
                 std::printf("  %s order %d %-12s sphere %4d px worst %.2e, panorama %4d px worst %.2e (of "
                             "the scale)\n",
                             probeName, order, shadingModeName(mode), sphere.pixels, sphere.worst,
                             everywhere.pixels, everywhere.worst);
                 EXPECT_GT(sphere.pixels, 64 * 64 / 2) << "the sphere covers about 60% of the image";
-                EXPECT_EQ(everywhere.pixels, 64 * 32);
+                if (!sun || mode != ShadingMode::Radiance) {
+                    EXPECT_EQ(everywhere.pixels, 64 * 32);
+                }
                 EXPECT_LT(sphere.worst, tolerance(mode))
                     << probeName << " order " << order << " " << shadingModeName(mode);
                 EXPECT_LT(everywhere.worst, tolerance(mode))
                     << probeName << " order " << order << " " << shadingModeName(mode);
             }
-            Comparison background =
-                compare(render(panorama(order, ShadingMode::Irradiance, Background::Radiance), 64, 32),
-                        radiance, ShadingMode::Radiance, order, SHPROBE_DIRECTION_RADIANCE, glm::dvec3(1.0));
-            EXPECT_EQ(background.pixels, 64 * 32);
+            Comparison background = compare(
+                render(panorama(order, ShadingMode::Irradiance, Background::Radiance), 64, 32), radiance,
+                ShadingMode::Radiance, order, SHPROBE_DIRECTION_RADIANCE, glm::dvec3(1.0), sun);
+            if (!sun) {
+                EXPECT_EQ(background.pixels, 64 * 32);
+            }
             EXPECT_LT(background.worst, kShTolerance) << "radiance background, order " << order;
+        }
+    }
+
+    // The sun on its own terms: panoramas fine enough that many pixels fall where the horizon cuts
+    // the sun (|n.d| < sin r) and inside its disc, and the sphere seen from the sun's side.
+    void expectSunMatches(const ShCoefficients& radiance, const SphericalLight& sun, const char* probeName,
+                          uint32_t width) {
+        setProbe(renderer().scene, foldProbe(radiance, 5, probeName, sun));
+        glm::dvec3 d = glm::normalize(sun.direction);
+        float yaw = float(glm::degrees(std::atan2(d.x, d.z))), pitch = float(glm::degrees(std::asin(d.y)));
+        for (ShadingMode mode : {ShadingMode::Irradiance, ShadingMode::L1NonLinear, ShadingMode::Radiance}) {
+            Scene sphere = sphereScene(orbitCamera(yaw + 60.0f, std::clamp(pitch, -80.0f, 80.0f), 3.2f), 5,
+                                       mode, Background::Color);
+            sphere.objects[0].albedo = kAlbedo;
+            Comparison lit = compare(render(sphere, 128, 128), radiance, mode, 5, SHPROBE_DIRECTION_SHADING,
+                                     glm::dvec3(kAlbedo), sun);
+            Comparison everywhere = compare(render(panorama(5, mode), width, width / 2), radiance, mode, 5,
+                                            SHPROBE_DIRECTION_SHADING, glm::dvec3(1.0), sun);
+            std::printf("  %s + sun (r = %.3f deg) %-12s sphere %5d px (%4d lit by the sun, %3d at its "
+                        "terminator) worst %.2e; panorama %5d px (%4d, %4d) worst %.2e\n",
+                        probeName, glm::degrees(sun.angularRadius), shadingModeName(mode), lit.pixels,
+                        lit.sunPixels, lit.terminatorPixels, lit.worst, everywhere.pixels,
+                        everywhere.sunPixels, everywhere.terminatorPixels, everywhere.worst);
+            EXPECT_GT(everywhere.sunPixels, 0) << probeName << " " << shadingModeName(mode);
+            if (mode != ShadingMode::Radiance) {
+                EXPECT_GT(lit.terminatorPixels, 0) << probeName;
+                EXPECT_GT(everywhere.terminatorPixels, int(width)) << probeName;
+            }
+            EXPECT_LT(lit.worst, tolerance(mode)) << probeName << " " << shadingModeName(mode);
+            EXPECT_LT(everywhere.worst, tolerance(mode)) << probeName << " " << shadingModeName(mode);
         }
     }
 };
@@ -201,6 +286,42 @@ TEST_F(RenderAccuracy, ColoredLightsEveryOrderAndMode) {
 
 TEST_F(RenderAccuracy, BuiltInSkyEveryOrderAndMode) {
     expectMatches(skyProbe(), "sky");
+}
+
+// E_probe(n) + E_sun(n): the built-in sky without its sun plus the sun it had (r = 1.146 degrees),
+// and the coloured lights with suns from 0.5 to 90 degrees.
+TEST_F(RenderAccuracy, ProbeWithSunEveryOrderAndMode) {
+    SunnyProbe sky = skyWithoutSun();
+    expectMatches(sky.radiance, "sky - sun", sky.sun);
+    expectSunMatches(sky.radiance, sky.sun, "sky - sun", 1024);
+    const glm::dvec3 d = glm::normalize(glm::dvec3(0.5, 0.6, -0.62));
+    for (double radiusDegrees : {0.5, 3.0, 25.0, 90.0}) {
+        SphericalLight sun{d, radiusDegrees * kPi / 180.0, glm::dvec3(2000.0, 1800.0, 1500.0)};
+        sun.radiance /= 1e3 * std::pow(std::sin(sun.angularRadius), 2); // peak E/pi about 2, 1.8, 1.5
+        expectSunMatches(coloredLights(), sun, "lights", radiusDegrees < 1.0 ? 1024 : 256);
+    }
+}
+
+// Without a sun nothing is added (RenderSun.direction.w = 0), and with one the pixels it cannot
+// reach (the whole sun below their horizon) keep the sunless values bit for bit.
+TEST_F(RenderTest, SunAddsNothingWhereItIsBelowTheHorizon) {
+    SunnyProbe sky = skyWithoutSun();
+    const double s = std::sin(sky.sun.angularRadius);
+    for (ShadingMode mode : {ShadingMode::Irradiance, ShadingMode::L1NonLinear}) {
+        setProbe(renderer().scene, foldProbe(sky.radiance, 5, "sky - sun"));
+        RenderedImage plain = render(panorama(5, mode), 128, 64);
+        setProbe(renderer().scene, foldProbe(sky.radiance, 5, "sky - sun", sky.sun));
+        RenderedImage sunny = render(panorama(5, mode), 128, 64);
+        int dark = 0, differing = 0;
+        for (size_t p = 0; p < plain.linear.texels.size(); ++p) {
+            glm::dvec3 n = glm::normalize(glm::dvec3(glm::vec3(plain.directions.texels[p])));
+            if (glm::dot(n, sky.sun.direction) > -s - 1e-6) continue;
+            ++dark;
+            if (plain.linear.texels[p] != sunny.linear.texels[p]) ++differing;
+        }
+        EXPECT_GT(dark, 128 * 64 / 3);
+        EXPECT_EQ(differing, 0) << shadingModeName(mode);
+    }
 }
 
 // ---- Sloan's facts (seed 000) -----------------------------------------------------------------

@@ -1,12 +1,14 @@
 // CPU side of the render shaders (no device): the basis polynomials and their constants, the
 // folding of probes (checked by evaluating the folded terms the way sh_irradiance.glsl does, in
 // double), the non-linear L1 model's properties (seed 004), the seed-000 facts for a delta light
-// on the references, and the errors for probes the renderer cannot use.
+// on the references, the sun's exact irradiance (against quadrature, and the fp32 code the shaders
+// run, sun_light.h, against it), and the errors for probes the renderer cannot use.
 #include "render/probe_shading.h"
 #include "render/scene.h"
 #include "sh/basis.h"
 #include "sh/error.h"
 #include "sh/irradiance.h"
+#include "sun_light.h"
 
 #include <gtest/gtest.h>
 
@@ -225,6 +227,137 @@ TEST(RenderShading, ProbesWithTooFewBandsAreRefusedByName) {
         EXPECT_NE(std::string(e.what()).find("sky.json"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("order 3"), std::string::npos) << e.what();
     }
+}
+
+// ---- The sun: exact irradiance of a uniform cap ----------------------------------------------
+
+double degrees(double d) {
+    return d * kPi / 180.0;
+}
+
+// E / L of a cap of radius r at angle theta from the normal, by quadrature, independent of the
+// closed form: around the cap's centre, directions at polar angle beta <= r and azimuth phi have
+// n.w = a + b cos(phi), a = cos(theta) cos(beta), b = sin(theta) sin(beta) >= 0, and the azimuthal
+// integral of max(0, a + b cos(phi)) is exact: 2 pi a (a >= b), 0 (a <= -b), else
+// 2 (a acos(-a/b) + sqrt(b^2 - a^2)), whose first derivative in a is continuous. The midpoint rule in
+// beta (weight sin(beta)) then converges as h^2: 20000 steps give ~1e-10 relative.
+double capIrradianceByQuadrature(double cosTheta, double r) {
+    const int steps = 20000;
+    const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta)), h = r / steps;
+    double sum = 0.0;
+    for (int k = 0; k < steps; ++k) {
+        double beta = (k + 0.5) * h;
+        double a = cosTheta * std::cos(beta), b = sinTheta * std::sin(beta);
+        double azimuthal = a >= b    ? 2.0 * kPi * a
+                           : a <= -b ? 0.0
+                                     : 2.0 * (a * std::acos(-a / b) + std::sqrt(b * b - a * a));
+        sum += azimuthal * std::sin(beta);
+    }
+    return sum * h;
+}
+
+const double kSunRadiiDegrees[] = {0.25, 0.5, 1.146, 3.0, 10.0, 20.0, 26.0, 27.0, 45.0, 60.0, 89.0, 90.0};
+
+TEST(RenderShading, SunIrradianceIsTheExactIrradianceOfACap) {
+    double worst = 0.0;
+    for (double radiusDegrees : kSunRadiiDegrees) {
+        const double r = degrees(radiusDegrees), s = std::sin(r), peak = kPi * s * s;
+        std::vector<double> cosines = {-1.0, -0.5, 0.0, 0.3, 0.7, 1.0};
+        for (int k = -10; k <= 10; ++k)
+            cosines.push_back(std::clamp(s * k / 9.0, -1.0, 1.0));
+        for (double e : cosines) {
+            double closed = sphericalCapIrradiance(e, r), quadrature = capIrradianceByQuadrature(e, r);
+            worst = std::max(worst, std::abs(closed - quadrature) / peak);
+            EXPECT_NEAR(closed, quadrature, 1e-8 * peak) << "radius " << radiusDegrees << " deg, cos " << e;
+            if (e * e >= s * s) {
+                EXPECT_NEAR(closed, peak * std::max(e, 0.0), 1e-15 * peak) << "whole cap above or below";
+            }
+        }
+        // At the terminator (theta = 90 degrees) half the cap is up: r - sin r cos r exactly.
+        EXPECT_NEAR(sphericalCapIrradiance(0.0, r), r - s * std::cos(r), 1e-12 * peak);
+    }
+    // A hemisphere of sky: pi (1 + cos theta) / 2.
+    for (double e : {-0.9, -0.2, 0.0, 0.5, 0.99})
+        EXPECT_NEAR(sphericalCapIrradiance(e, 0.5 * kPi), 0.5 * kPi * (1.0 + e), 1e-14);
+    std::printf("  closed form vs quadrature: worst %.2e of the peak pi sin^2 r\n", worst);
+}
+
+// The fp32 code of sun_light.h (the shaders run the same source) against the double closed form, at
+// the same fp32 cosine, densely across the terminator. Errors relative to the peak s^2 (E/pi per
+// unit radiance): the fp32 rounding of sin r, cos r and sin^2 r (foldSun) moves the result by
+// ~1e-7 of it; every term is of the size of the result (no cancellation), so a few ulps more.
+TEST(RenderShading, SunFp32CodeMatchesTheClosedForm) {
+    for (double radiusDegrees : kSunRadiiDegrees) {
+        const double r = degrees(radiusDegrees), s = std::sin(r);
+        SphericalLight light{glm::dvec3(0.0, 0.0, 1.0), r, glm::dvec3(1.0)};
+        const glm::vec4 shape = foldSun(light).shape;
+        double worst = 0.0;
+        auto check = [&](double cosine) {
+            float e = float(std::clamp(cosine, -1.0, 1.0));
+            double fp32 = gpu::sunCapIrradianceOverPi(e, shape);
+            double reference = sphericalCapIrradiance(double(e), r) / kPi;
+            ASSERT_TRUE(std::isfinite(fp32)) << "cos " << e << " radius " << radiusDegrees;
+            double error = std::abs(fp32 - reference) / (s * s);
+            worst = std::max(worst, error);
+        };
+        for (int k = 0; k <= 20000; ++k)
+            check(-1.0 + 2.0 * k / 20000.0);
+        for (int k = 0; k <= 20000; ++k)
+            check(s * (-1.05 + 2.1 * k / 20000.0));
+        std::printf("  radius %6.3f deg: fp32 vs double worst %.2e of sin^2 r\n", radiusDegrees, worst);
+        EXPECT_LT(worst, 3e-7) << "radius " << radiusDegrees;
+    }
+}
+
+TEST(RenderShading, SunFoldsAndIsAddedByMode) {
+    SphericalLight sun{glm::dvec3(0.0, 3.0, 4.0), degrees(2.0), glm::dvec3(100.0, 50.0, 0.0)};
+    ShCoefficients probe = makeCoefficients(3, Quantity::Radiance);
+    ProbeShading plain = foldProbe(probe, 3, "plain.json");
+    EXPECT_FALSE(plain.sun.has_value());
+    EXPECT_EQ(plain.foldedSun.direction.w, 0.0f) << "no sun: the shaders add nothing";
+    EXPECT_EQ(gpu::sunShading(plain.foldedSun, SHPROBE_SHADING_IRRADIANCE, glm::vec3(0, 0, 1), glm::vec3(1)),
+              glm::vec3(0.0f));
+
+    ProbeShading sunny = foldProbe(probe, 3, "sunny.json", sun);
+    ASSERT_TRUE(sunny.sun.has_value());
+    EXPECT_NEAR(glm::length(sunny.sun->direction), 1.0, 1e-15);
+    EXPECT_EQ(sunny.foldedSun.direction, glm::vec4(0.0f, 0.6f, 0.8f, 1.0f));
+    const double s = std::sin(sun.angularRadius);
+    EXPECT_FLOAT_EQ(sunny.foldedSun.shape.z, float(s * s));
+    EXPECT_FLOAT_EQ(sunny.foldedSun.shape.w, float(2.0 - 2.0 * std::cos(sun.angularRadius)));
+
+    const glm::dvec3 d(0.0, 0.6, 0.8);
+    // Facing the sun: E / pi = L sin^2 r; the disc shows L inside and nothing outside.
+    glm::dvec3 facing = sunShadeReference(*sunny.sun, ShadingMode::Irradiance, d);
+    EXPECT_NEAR(facing.r, 100.0 * s * s, 1e-12);
+    EXPECT_EQ(sunShadeReference(*sunny.sun, ShadingMode::L1NonLinear, d), facing);
+    EXPECT_EQ(sunShadeReference(*sunny.sun, ShadingMode::Radiance, d), sun.radiance);
+    glm::dvec3 outside = glm::normalize(d + glm::dvec3(0.05, 0.0, 0.0)); // 2.9 degrees away
+    EXPECT_EQ(sunShadeReference(*sunny.sun, ShadingMode::Radiance, outside), glm::dvec3(0.0));
+    glm::vec3 albedo(0.5f);
+    EXPECT_EQ(gpu::sunShading(sunny.foldedSun, SHPROBE_SHADING_RADIANCE, glm::vec3(d), albedo),
+              glm::vec3(100.0f, 50.0f, 0.0f));
+    EXPECT_NEAR(gpu::sunShading(sunny.foldedSun, SHPROBE_SHADING_L1_NONLINEAR, glm::vec3(d), albedo).r,
+                0.5 * 100.0 * s * s, 1e-6 * 100.0 * s * s);
+
+    // The sun's power counts in the automatic exposure: its mean over the sphere, L Omega / (4 pi).
+    ShCoefficients dark = makeCoefficients(3, Quantity::Radiance);
+    double meanLuminance = glm::dot(sun.radiance, glm::dvec3(0.2126, 0.7152, 0.0722)) *
+                           capSolidAngle(sun.angularRadius) / (4.0 * kPi);
+    EXPECT_FLOAT_EQ(autoExposure(dark, sun), float(0.5 / meanLuminance));
+    EXPECT_EQ(autoExposure(dark), 1.0f);
+
+    for (double badRadius : {0.0, -0.1, degrees(90.5)}) {
+        SphericalLight bad = sun;
+        bad.angularRadius = badRadius;
+        EXPECT_THROW(foldProbe(probe, 3, "bad.json", bad), Error) << badRadius;
+    }
+    SphericalLight negative = sun;
+    negative.radiance.g = -1.0;
+    EXPECT_THROW(foldProbe(probe, 3, "bad.json", negative), Error);
+    SphericalLight nowhere = sun;
+    nowhere.direction = glm::dvec3(0.0);
+    EXPECT_THROW(foldProbe(probe, 3, "bad.json", nowhere), Error);
 }
 
 TEST(RenderShading, NamesParse) {
