@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <glm/geometric.hpp>
 #include <random>
@@ -103,7 +104,9 @@ TEST_F(GpuProjection, MatchesReferenceOnGeneratedCubemaps) {
 TEST_F(GpuProjection, MatchesReferenceAtLargeFaces) {
     Cubemap cubemap = noiseCubemap(2048, 5);
     GpuBake gpu = bake(cubemap, {.order = 3});
-    EXPECT_GT(gpu.dispatches, 1u) << "the 400 MiB input should need more than one binding";
+    if (context().info.limits.maxStorageBufferRange < cubemap.texels.size() * sizeof(glm::vec4)) {
+        EXPECT_GT(gpu.dispatches, 1u) << "the 400 MiB input is larger than one binding may be";
+    }
     double error = relativeError(gpu.radiance, projectCubemap(cubemap, 3));
     EXPECT_LT(error, kGpuTolerance);
     RecordProperty("error 2048 order 3", std::to_string(error));
@@ -208,6 +211,16 @@ TEST_F(GpuProjection, ManyPartialSlotsAreAllSummed) {
     GpuBake gpu = bake(cubemap, {.order = 3, .texelsPerInvocation = 1});
     EXPECT_GE(gpu.workgroups, 65536u);
     EXPECT_LT(relativeError(gpu.radiance, projectCubemap(cubemap, 3)), kGpuTolerance);
+}
+
+// ctest runs this file once per lavapipe vector width; each run must report the subgroup size it is
+// named for (LP_NATIVE_VECTOR_WIDTH / 32), or the four runs would test the same thing. (At 1024 on a
+// 256-bit CPU lavapipe reports 32 while running subgroups of 16; project.comp does not rely on the
+// reported size, see the comment there.)
+TEST_F(GpuProjection, RunsAtTheRequestedSubgroupSize) {
+    const char* width = std::getenv("LP_NATIVE_VECTOR_WIDTH");
+    if (!width) GTEST_SKIP() << "LP_NATIVE_VECTOR_WIDTH is not set (ctest sets it for each run)";
+    EXPECT_EQ(context().info.subgroupSize, uint32_t(std::atoi(width) / 32));
 }
 
 TEST_F(GpuProjection, RejectsBadOrdersAndFaces) {
