@@ -193,7 +193,10 @@ double readDeviceMilliseconds(const Context& context, VkQueryPool pool) {
     uint64_t ticks[2] = {};
     VK_CHECK(vkGetQueryPoolResults(context.device, pool, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
                                    VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
-    return double(ticks[1] - ticks[0]) * context.info.timestampPeriod * 1e-6;
+    // Only timestampValidBits bits count; masking the difference also handles a wrap-around.
+    uint32_t bits = context.info.timestampValidBits;
+    uint64_t mask = bits >= 64 ? ~uint64_t(0) : (uint64_t(1) << bits) - 1;
+    return double((ticks[1] - ticks[0]) & mask) * context.info.timestampPeriod * 1e-6;
 }
 
 // Descriptor sets and dispatches of the two convolutions, both reading the raw radiance slot.

@@ -134,7 +134,8 @@ DeviceInfo describeDevice(VkPhysicalDevice physicalDevice, uint32_t index) {
         vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, nullptr);
         std::vector<VkQueueFamilyProperties> families(count);
         vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, families.data());
-        info.timestamps = families[*family].timestampValidBits > 0 && p.limits.timestampPeriod > 0.0f;
+        info.timestampValidBits = families[*family].timestampValidBits;
+        info.timestamps = info.timestampValidBits > 0 && p.limits.timestampPeriod > 0.0f;
     }
 
     if (p.apiVersion < VK_API_VERSION_1_1)

@@ -42,6 +42,7 @@ struct DeviceInfo {
     uint32_t subgroupSize = 0;
     bool subgroupArithmetic = false; // basic + arithmetic subgroup ops in compute shaders
     bool timestamps = false;         // the compute queue can write timestamps
+    uint32_t timestampValidBits = 0; // bits of a timestamp that count (the rest are undefined)
     float timestampPeriod = 0.0f;    // nanoseconds per tick
     VkPhysicalDeviceLimits limits{};
     // Why the device cannot run shprobe (empty when it can).
