@@ -24,36 +24,18 @@
 // arithmetic and sqrt, to about an ulp (as texel_geometry.h does for texel weights).
 #ifndef SHPROBE_SUN_LIGHT_H
 #define SHPROBE_SUN_LIGHT_H
+#include "precise_math.h"
 #include "render_interface.h"
 
 SHPROBE_BEGIN
 
-// atan(t) for 0 <= t <= 1: two half-angle steps, atan(t) = 2 atan(t / (1 + sqrt(1 + t^2))), bring t
-// below tan(pi/16) = 0.199, where the odd Taylor series to t^17 is exact in fp32 (the first omitted
-// term is below 1e-13 relative).
-SHPROBE_FN float sunAtanUnit(float t) {
-    float x = t / (1.0f + sqrt(1.0f + t * t));
-    x = x / (1.0f + sqrt(1.0f + x * x));
-    float x2 = x * x;
-    float series = 1.0f / 17.0f;
-    series = 1.0f / 15.0f - x2 * series;
-    series = 1.0f / 13.0f - x2 * series;
-    series = 1.0f / 11.0f - x2 * series;
-    series = 1.0f / 9.0f - x2 * series;
-    series = 1.0f / 7.0f - x2 * series;
-    series = 1.0f / 5.0f - x2 * series;
-    series = 1.0f / 3.0f - x2 * series;
-    series = 1.0f - x2 * series;
-    return 4.0f * x * series;
-}
-
 // The angle of the vector (x, y) with y > 0 (or y >= 0 and x != 0), in [0, pi].
 SHPROBE_FN float sunAtan2Upper(float y, float x) {
     const float kPi = 3.14159265358979f;
-    if (x >= y) return sunAtanUnit(y / x);
-    if (-x >= y) return kPi - sunAtanUnit(y / -x);
+    if (x >= y) return preciseAtan(y / x);
+    if (-x >= y) return kPi - preciseAtan(y / -x);
     float t = x / y; // |t| < 1
-    return x >= 0.0f ? 0.5f * kPi - sunAtanUnit(t) : 0.5f * kPi + sunAtanUnit(-t);
+    return x >= 0.0f ? 0.5f * kPi - preciseAtan(t) : 0.5f * kPi + preciseAtan(-t);
 }
 
 // atan(t) - t for 0 <= t <= 0.5 by its series -t^3/3 + t^5/5 - ... to t^29 (t^2 <= 1/4: the first

@@ -10,7 +10,7 @@
 //              +----+
 #ifndef SHPROBE_TEXEL_GEOMETRY_H
 #define SHPROBE_TEXEL_GEOMETRY_H
-#include "shared.h"
+#include "precise_math.h"
 
 SHPROBE_BEGIN
 
@@ -36,26 +36,6 @@ SHPROBE_FN vec3 orientToFace(uint face, vec3 v) {
 // Unnormalized direction through face-local point (a, b) of a face.
 SHPROBE_FN vec3 faceDirection(uint face, float a, float b) {
     return orientToFace(face, vec3(a, b, 1.0f));
-}
-
-// atan(t) for 0 <= t <= 0.6 to about an ulp, from arithmetic and sqrt only. GLSL's atan is only
-// required to be within 4096 ulps (Vulkan spec, "Precision of SPIR-V Instructions"), and lavapipe's
-// is 2e-5 relative off, too coarse for texel weights. One half-angle step,
-// atan(t) = 2 atan(t / (1 + sqrt(1 + t^2))), brings t below tan(pi/12) = 0.268, where the odd
-// Taylor series to t^17 is exact in fp32 (the first omitted term is below 1e-10 relative).
-SHPROBE_FN float preciseAtan(float t) {
-    float x = t / (1.0f + sqrt(1.0f + t * t));
-    float x2 = x * x;
-    float series = 1.0f / 17.0f;
-    series = 1.0f / 15.0f - x2 * series;
-    series = 1.0f / 13.0f - x2 * series;
-    series = 1.0f / 11.0f - x2 * series;
-    series = 1.0f / 9.0f - x2 * series;
-    series = 1.0f / 7.0f - x2 * series;
-    series = 1.0f / 5.0f - x2 * series;
-    series = 1.0f / 3.0f - x2 * series;
-    series = 1.0f - x2 * series;
-    return 2.0f * x * series;
 }
 
 // Solid angle of the spherical triangle spanned by p0, p1, p2 (not necessarily unit), given

@@ -49,19 +49,6 @@ void destroyGpuMesh(const Context& context, GpuMesh& mesh) {
     mesh.indexCount = 0;
 }
 
-VkSampler createLinearSampler(const Context& context) {
-    VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-    info.magFilter = VK_FILTER_LINEAR;
-    info.minFilter = VK_FILTER_LINEAR;
-    info.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
-    info.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    VkSampler sampler = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateSampler(context.device, &info, nullptr, &sampler));
-    return sampler;
-}
-
 VkDescriptorPool createScenePool(const Context& context) {
     std::array<VkDescriptorPoolSize, 2> sizes{
         {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1}, {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}}};
@@ -172,7 +159,7 @@ SceneRenderer createSceneRenderer(const Context& context) {
         renderer.uniforms =
             createBuffer(context, sizeof(gpu::RenderUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                          MemoryUse::Upload, "render uniforms");
-        renderer.sampler = createLinearSampler(context);
+        renderer.sampler = createSampler(context, VK_FILTER_LINEAR);
         renderer.pool = createScenePool(context);
         renderer.set = createSceneSet(context, renderer);
         renderer.environment = createCubeTexture(context, blackCubemap());

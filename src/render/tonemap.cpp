@@ -1,5 +1,6 @@
 #include "render/tonemap.h"
 
+#include "render/gpu_image.h"
 #include "render/scene_pipelines.h"
 #include "render_interface.h"
 #include "shprobe/shprobe_render_spirv.h"
@@ -146,19 +147,6 @@ VkPipeline createTonemapPipeline(const Context& context, const Tonemapper& tonem
     return pipeline;
 }
 
-VkSampler createNearestSampler(const Context& context) {
-    VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-    info.magFilter = VK_FILTER_NEAREST;
-    info.minFilter = VK_FILTER_NEAREST;
-    info.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
-    info.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    VkSampler sampler = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateSampler(context.device, &info, nullptr, &sampler));
-    return sampler;
-}
-
 VkDescriptorPool createInputPool(const Context& context) {
     constexpr uint32_t kMaxInputs = 16; // one per live HDR target
     VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaxInputs};
@@ -182,7 +170,7 @@ Tonemapper createTonemapper(const Context& context, VkFormat format, VkImageLayo
         tonemapper.renderPass = createTonemapRenderPass(context, format, finalLayout);
         tonemapper.setLayout = createTonemapSetLayout(context);
         tonemapper.layout = createTonemapPipelineLayout(context, tonemapper.setLayout);
-        tonemapper.sampler = createNearestSampler(context);
+        tonemapper.sampler = createSampler(context, VK_FILTER_NEAREST);
         tonemapper.pool = createInputPool(context);
         vertex = createShaderModule(context, spirv::fullscreen_vert.data(), spirv::fullscreen_vert.size());
         fragment = createShaderModule(context, spirv::tonemap_frag.data(), spirv::tonemap_frag.size());
