@@ -189,8 +189,7 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
         ->capture_default_str();
     command->add_flag("--irradiance", options.irradiance, "Write irradiance E_lm = A_l L_lm instead of radiance");
     command->add_flag("--sanitize", options.sanitize, "Replace NaN and infinite texels with 0 instead of failing");
-    command->add_option("--device", options.device, "Vulkan device index or name part (see `shprobe info`)");
-    command->add_flag("--validation", options.validation, "Enable the Khronos validation layer; fail on messages");
+    addDeviceOptions(*command, options.device, options.validation);
     command->add_option("--workgroup-size", options.workgroupSize, "GPU projection workgroup width")
         ->check(CLI::Range(1, 1024))
         ->capture_default_str();

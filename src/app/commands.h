@@ -67,6 +67,12 @@ struct ViewOptions {
     bool validation = false;
 };
 
+// --device and --validation, as bake, render and view take them.
+inline void addDeviceOptions(CLI::App& command, std::string& device, bool& validation) {
+    command.add_option("--device", device, "Vulkan device index or name part (see `shprobe info`)");
+    command.add_flag("--validation", validation, "Enable the Khronos validation layer; fail on messages");
+}
+
 void addBakeCommand(CLI::App& app, BakeOptions& options);
 void runBake(const BakeOptions& options);
 
@@ -79,6 +85,9 @@ struct ImageSize {
     uint32_t height = 0;
 };
 ImageSize parseImageSize(const std::string& text, const char* option);
+
+// --face-size and --sanitize for an environment given to render or view (baked before showing it).
+void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize);
 
 void addRenderCommand(CLI::App& app, RenderOptions& options);
 void runRender(const RenderOptions& options);

@@ -166,13 +166,14 @@ void addRenderCommand(CLI::App& app, RenderOptions& options) {
     command->add_option("--pitch", options.pitch, "Camera pitch, degrees")
         ->check(CLI::Range(-85.0, 85.0))
         ->capture_default_str();
-    command->add_option("--face-size", options.faceSize, "Cube-map face size of an environment input")
+    addEnvironmentInputOptions(*command, options.faceSize, options.sanitize);
+    addDeviceOptions(*command, options.device, options.validation);
+}
+
+void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize) {
+    command.add_option("--face-size", faceSize, "Cube-map face size of an environment input")
         ->check(CLI::Range(1, kMaxGpuFaceSize));
-    command->add_flag("--sanitize", options.sanitize,
-                      "Replace NaN and infinite texels with 0 instead of failing");
-    command->add_option("--device", options.device, "Vulkan device index or name part (see `shprobe info`)");
-    command->add_flag("--validation", options.validation,
-                      "Enable the Khronos validation layer; fail on messages");
+    command.add_flag("--sanitize", sanitize, "Replace NaN and infinite texels with 0 instead of failing");
 }
 
 void runRender(const RenderOptions& options) {

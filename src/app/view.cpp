@@ -27,13 +27,8 @@ void addViewCommand(CLI::App& app, ViewOptions& options) {
         ->delimiter(',');
     command->add_option("--exposure", options.exposure, "Exposure in stops relative to the automatic one")
         ->capture_default_str();
-    command->add_option("--face-size", options.faceSize, "Cube-map face size of an environment input")
-        ->check(CLI::Range(1, kMaxGpuFaceSize));
-    command->add_flag("--sanitize", options.sanitize,
-                      "Replace NaN and infinite texels with 0 instead of failing");
-    command->add_option("--device", options.device, "Vulkan device index or name part (see `shprobe info`)");
-    command->add_flag("--validation", options.validation,
-                      "Enable the Khronos validation layer; fail on messages");
+    addEnvironmentInputOptions(*command, options.faceSize, options.sanitize);
+    addDeviceOptions(*command, options.device, options.validation);
 }
 
 void runView(const ViewOptions& options) {
