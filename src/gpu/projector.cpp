@@ -334,6 +334,17 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
     return bake;
 }
 
+std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& projector,
+                                  std::span<const Cubemap* const> cubemaps, std::span<const double> window) {
+    std::vector<GpuBake> bakes;
+    for (const Cubemap* cubemap : cubemaps) bakes.push_back(bakeCubemap(context, projector, *cubemap, window));
+    return bakes;
+}
+
+VkDeviceSize batchTexelBytes(const Context& context) {
+    return context.info.limits.maxStorageBufferRange;
+}
+
 GpuBake convolveOnGpu(const Context& context, const Projector& projector, const ShCoefficients& radiance,
                       std::span<const double> window) {
     const int order = projector.options.order;

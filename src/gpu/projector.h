@@ -7,6 +7,7 @@
 #include "vk/pipeline.h"
 
 #include <span>
+#include <vector>
 
 namespace shprobe {
 
@@ -44,6 +45,16 @@ constexpr int kMaxGpuFaceSize = 16384;
 // applies it: radiance L_lm w_l and irradiance A_l w_l L_lm. Empty: no window.
 GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap,
                     std::span<const double> window = {});
+
+// Bakes several cube maps (any face sizes) with one submission; results in input order. The window,
+// if any, applies to all of them. The texels of all cube maps must fit batchTexelBytes(context):
+// split larger batches into chunks.
+std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& projector,
+                                  std::span<const Cubemap* const> cubemaps, std::span<const double> window = {});
+
+// The most texel bytes (6 N^2 texels of 16 bytes per cube map, summed) one bakeCubemaps call accepts
+// on this device.
+VkDeviceSize batchTexelBytes(const Context& context);
 
 // The convolution alone, on radiance computed elsewhere (after lights were added to it, or with a
 // window found from it, as de-ringing does). Fills radiance and irradiance of the result.
