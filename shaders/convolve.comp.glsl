@@ -4,10 +4,12 @@
 // A window (de-ringing) multiplies into bandScale on the host, so it needs no other pass.
 //
 // Interface (shaders/INTERFACE.md):
-//   set 0, binding 0: readonly buffer, vec4 radiance[]: SH_COEFFICIENTS vec4 (rgb)
-//   set 0, binding 1: writeonly buffer, vec4 irradiance[]: SH_COEFFICIENTS vec4 (rgb, a = 0)
+//   set 0, binding 0: readonly buffer, vec4 radiance[]: SH_COEFFICIENTS vec4 (rgb) per probe,
+//                     probe p's at p * SH_COEFFICIENTS
+//   set 0, binding 1: writeonly buffer, vec4 irradiance[]: the same layout (rgb, a = 0), starting
+//                     at vec4 params.outputOffset
 //   push constants: ConvolveParams (gpu_interface.h), bandScale[l / 4][l % 4] for band l
-//   specialization: 0 = workgroup width, 1 = SH order (1..8); dispatch one workgroup.
+//   specialization: 0 = workgroup width, 1 = SH order (1..8); dispatch (1, probes, 1).
 #extension GL_GOOGLE_include_directive : require
 
 #include "gpu_interface.h"
@@ -21,8 +23,9 @@ layout(set = 0, binding = 1, std430) writeonly buffer Irradiance { vec4 irradian
 layout(push_constant, std430) uniform Push { ConvolveParams params; };
 
 void main() {
+    uint first = gl_WorkGroupID.y * SH_COEFFICIENTS;
     for (uint i = gl_LocalInvocationIndex; i < SH_COEFFICIENTS; i += gl_WorkGroupSize.x) {
         uint l = bandOfIndex(i);
-        irradiance[i] = vec4(radiance[i].rgb * params.bandScale[l / 4u][l % 4u], 0.0f);
+        irradiance[params.outputOffset + first + i] = vec4(radiance[first + i].rgb * params.bandScale[l / 4u][l % 4u], 0.0f);
     }
 }

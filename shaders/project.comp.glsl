@@ -8,16 +8,15 @@
 // for six texels, and each face's direction is a signed permutation of the same vector.
 //
 // Interface (shaders/INTERFACE.md):
-//   set 0, binding 0: readonly buffer, vec4 texels[]: RGBA32F, one band of rows of all six faces,
-//                     face after face (Vulkan layer order): texel (face, i, firstRow + r) at
-//                     face * rowCount * faceSize + r * faceSize + i. When the whole cube map fits
-//                     one binding (rowCount = faceSize) this is the plain face-major layout.
-//   set 0, binding 1: buffer, vec4 partials[]: slot s holds SH_COEFFICIENTS vec4 at s * SH_COEFFICIENTS
+//   set 0, binding 0: sampler2DArray cubemaps: probe p's face f is layer 6p + f (any sampled format;
+//                     read with texelFetch, so the sampler does not matter), N x N texels
+//   set 0, binding 1: buffer, vec4 partials[]: slot s holds SH_COEFFICIENTS vec4 at s * SH_COEFFICIENTS;
+//                     workgroup (g, p) writes slot p * gl_NumWorkGroups.x + g
 //   push constants: ProjectParams (gpu_interface.h)
 //   specialization: 0 = workgroup width, 1 = SH order (1..8)
-//   each invocation strides over the band's positions; dispatch any number of workgroups. lavapipe
-//   ends loops after 65535 iterations (nested loops count against the outermost), so keep the
-//   positions per invocation times 6 (1 + n^2 + n^2 / 2) below that at order n.
+//   dispatch (groups, probes, 1): each invocation strides over the N^2 positions of probe
+//   gl_WorkGroupID.y. lavapipe ends loops after 65535 iterations (nested loops count against the
+//   outermost), so keep the positions per invocation times 6 (1 + n^2 + n^2 / 2) below that at order n.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -31,7 +30,7 @@ layout(constant_id = SHPROBE_SPEC_ORDER) const uint SH_ORDER = 3;
 
 #include "sh_basis.glsl"
 
-layout(set = 0, binding = 0, std430) readonly buffer Texels { vec4 texels[]; };
+layout(set = 0, binding = 0) uniform sampler2DArray cubemaps;
 layout(set = 0, binding = 1, std430) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant, std430) uniform Push { ProjectParams params; };
 
@@ -67,32 +66,42 @@ vec3 workgroupSum(vec3 value, uint lanes) {
 }
 
 void main() {
-    vec3 sums[SH_COEFFICIENTS];
-    for (uint i = 0u; i < SH_COEFFICIENTS; ++i) sums[i] = vec3(0.0f);
+    // Arrays sized for order 8, of which the first SH_COEFFICIENTS are used: glslang refuses
+    // constant indices into arrays sized by a specialization constant, and with constant indices
+    // after unrolling the compiler keeps the sums in registers.
+    vec3 sums[SH_BASIS_CAPACITY];
+    [[unroll]] for (uint i = 0u; i < SH_COEFFICIENTS; ++i) sums[i] = vec3(0.0f);
 
     uint faceSize = params.faceSize;
-    uint bandTexels = params.rowCount * faceSize;
+    uint positions = faceSize * faceSize;
+    int firstLayer = int(gl_WorkGroupID.y) * 6;
+    // The position advances by stride each step; its row and column follow without a division.
     uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    for (uint position = gl_GlobalInvocationID.x; position < bandTexels; position += stride) {
-        uint row = position / faceSize;
-        uint column = position - row * faceSize;
-        uint j = params.firstRow + row;
-        float weight = texelSolidAngle(column, j, faceSize);
-        vec3 unit = normalize(vec3(texelCenterCoord(column, faceSize), texelCenterCoord(j, faceSize), 1.0f));
+    uint strideRows = stride / faceSize, strideColumns = stride - strideRows * faceSize;
+    uint j = gl_GlobalInvocationID.x / faceSize;
+    uint i = gl_GlobalInvocationID.x - j * faceSize;
+    for (uint position = gl_GlobalInvocationID.x; position < positions; position += stride) {
+        float weight = texelSolidAngle(i, j, faceSize);
+        vec3 unit = normalize(vec3(texelCenterCoord(i, faceSize), texelCenterCoord(j, faceSize), 1.0f));
         for (uint face = 0u; face < 6u; ++face) {
-            vec3 radiance = texels[face * bandTexels + position].rgb * weight;
+            vec3 radiance = texelFetch(cubemaps, ivec3(i, j, firstLayer + int(face)), 0).rgb * weight;
             float basis[SH_BASIS_CAPACITY];
             shEvalBasis(orientToFace(face, unit), basis);
-            // Unrolled once the order is known, so sums and basis live in registers.
-            for (uint i = 0u; i < SH_COEFFICIENTS; ++i) sums[i] += radiance * basis[i];
+            [[unroll]] for (uint k = 0u; k < SH_COEFFICIENTS; ++k) sums[k] += radiance * basis[k];
+        }
+        i += strideColumns;
+        j += strideRows;
+        if (i >= faceSize) {
+            i -= faceSize;
+            ++j;
         }
     }
 
     countSubgroups();
     uint lanes = subgroupAdd(1u); // invocations in this subgroup, as the hardware groups them
-    uint slot = (params.partialOffset + gl_WorkGroupID.x) * SH_COEFFICIENTS;
-    for (uint i = 0u; i < SH_COEFFICIENTS; ++i) {
-        vec3 total = workgroupSum(sums[i], lanes);
-        if (gl_LocalInvocationIndex == 0u) partials[slot + i] = vec4(total, 0.0f);
+    uint slot = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * SH_COEFFICIENTS;
+    for (uint k = 0u; k < SH_COEFFICIENTS; ++k) {
+        vec3 total = workgroupSum(sums[k], lanes);
+        if (gl_LocalInvocationIndex == 0u) partials[slot + k] = vec4(total, 0.0f);
     }
 }

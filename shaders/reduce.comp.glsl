@@ -1,6 +1,7 @@
 #version 450
-// Sums the partial slots written by project.comp into one set of SH coefficients. Workgroup i sums
-// coefficient i: invocation t adds slots t, t + width, t + 2 width, ..., then invocation 0 adds the
+// Sums the partial slots written by project.comp into one set of SH coefficients per probe.
+// Workgroup (i, p) sums coefficient i of probe p, whose slots are p * partialCount ..
+// (p + 1) * partialCount - 1: invocation t adds slots t, t + width, t + 2 width, ..., then invocation 0 adds the
 // invocations' sums in order. The order is fixed, so the same input gives bit-identical
 // coefficients on every run, and each invocation loops partialCount / width times, which keeps
 // lavapipe's 65535-iteration loop limit out of reach for millions of slots. Sums are compensated
@@ -9,9 +10,11 @@
 //
 // Interface (shaders/INTERFACE.md):
 //   set 0, binding 0: readonly buffer, vec4 partials[]: partialCount slots of SH_COEFFICIENTS vec4
-//   set 0, binding 1: writeonly buffer, vec4 coefficients[]: SH_COEFFICIENTS vec4 (rgb, a = 0)
+//                     per probe, probe after probe
+//   set 0, binding 1: writeonly buffer, vec4 coefficients[]: SH_COEFFICIENTS vec4 (rgb, a = 0) per
+//                     probe, probe p's at p * SH_COEFFICIENTS
 //   push constants: ReduceParams (gpu_interface.h)
-//   specialization: 0 = workgroup width, 1 = SH order (1..8); dispatch SH_COEFFICIENTS workgroups.
+//   specialization: 0 = workgroup width, 1 = SH order (1..8); dispatch (SH_COEFFICIENTS, probes, 1).
 #extension GL_GOOGLE_include_directive : require
 
 #include "gpu_interface.h"
@@ -36,14 +39,15 @@ void addCompensated(inout vec3 total, inout vec3 compensation, vec3 value) {
 
 void main() {
     uint coefficient = gl_WorkGroupID.x;
+    uint firstSlot = gl_WorkGroupID.y * params.partialCount;
     vec3 total = vec3(0.0f), compensation = vec3(0.0f);
     for (uint slot = gl_LocalInvocationIndex; slot < params.partialCount; slot += gl_WorkGroupSize.x)
-        addCompensated(total, compensation, partials[slot * SH_COEFFICIENTS + coefficient].rgb);
+        addCompensated(total, compensation, partials[(firstSlot + slot) * SH_COEFFICIENTS + coefficient].rgb);
     invocationSums[gl_LocalInvocationIndex] = total;
     barrier();
     if (gl_LocalInvocationIndex != 0u) return;
     total = vec3(0.0f);
     compensation = vec3(0.0f);
     for (uint t = 0u; t < gl_WorkGroupSize.x; ++t) addCompensated(total, compensation, invocationSums[t]);
-    coefficients[coefficient] = vec4(total, 0.0f);
+    coefficients[gl_WorkGroupID.y * SH_COEFFICIENTS + coefficient] = vec4(total, 0.0f);
 }

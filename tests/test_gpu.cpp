@@ -3,6 +3,7 @@
 // per subgroup size 4, 8, 16, 32).
 #include "gpu_test.h"
 
+#include "gpu/probe_baker.h"
 #include "gpu/projector.h"
 #include "gpu/rotator.h"
 #include "image/environment.h"
@@ -13,6 +14,7 @@
 #include "sh/rotation.h"
 #include "sh/windowing.h"
 #include "shprobe/shprobe_test_spirv.h"
+#include "vk/image.h"
 #include "vk/pipeline.h"
 #include "vk/resources.h"
 
@@ -21,6 +23,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <glm/geometric.hpp>
+#include <glm/gtc/packing.hpp>
 #include <random>
 
 namespace shprobe::testing {
@@ -99,14 +102,11 @@ TEST_F(GpuProjection, MatchesReferenceOnGeneratedCubemaps) {
     }
 }
 
-// 6 x 2048^2 RGBA32F is 400 MiB: more than lavapipe's 128 MiB storage-buffer range, so the input is
-// projected in several dispatches, and at 25 M texels accumulation errors are at their largest.
+// 6 x 2048^2 RGBA32F is 400 MiB, more than lavapipe's 128 MiB storage-buffer range (the image has
+// no such limit), and at 25 M texels accumulation errors are at their largest.
 TEST_F(GpuProjection, MatchesReferenceAtLargeFaces) {
     Cubemap cubemap = noiseCubemap(2048, 5);
     GpuBake gpu = bake(cubemap, {.order = 3});
-    if (context().info.limits.maxStorageBufferRange < cubemap.texels.size() * sizeof(glm::vec4)) {
-        EXPECT_GT(gpu.dispatches, 1u) << "the 400 MiB input is larger than one binding may be";
-    }
     double error = relativeError(gpu.radiance, projectCubemap(cubemap, 3));
     EXPECT_LT(error, kGpuTolerance);
     RecordProperty("error 2048 order 3", std::to_string(error));
@@ -202,14 +202,17 @@ TEST_F(GpuProjection, HugeWorkPerInvocationStaysCorrect) {
     }
 }
 
-// One texel position per invocation at 2048^2 makes 65536 workgroups, hence 65536 partial slots:
-// more than lavapipe lets one loop run, so a reduction that loops over all slots in one invocation
-// loses some of them without a word (it did: L_00 came out 3% low at 3072^2). reduce.comp strides
-// over the slots with a whole workgroup per coefficient.
+// One texel position per invocation at 2048^2 asks for 65536 workgroups: one more than a dispatch row
+// allows (maxComputeWorkGroupCount[0] = 65535 on lavapipe), so the baker doubles the work per
+// invocation, and 32768 partial slots remain. A reduction looping over that many slots in one
+// invocation loses some of them without a word under lavapipe's 65535-iteration loop cap (it did:
+// L_00 came out 3% low at 3072^2); reduce.comp strides over the slots with a whole workgroup per
+// coefficient.
 TEST_F(GpuProjection, ManyPartialSlotsAreAllSummed) {
     Cubemap cubemap = noiseCubemap(2048, 9);
     GpuBake gpu = bake(cubemap, {.order = 3, .texelsPerInvocation = 1});
-    EXPECT_GE(gpu.workgroups, 65536u);
+    EXPECT_GE(gpu.workgroups, 32768u);
+    EXPECT_LE(gpu.workgroups, context().info.limits.maxComputeWorkGroupCount[0]);
     EXPECT_LT(relativeError(gpu.radiance, projectCubemap(cubemap, 3)), kGpuTolerance);
 }
 
@@ -232,6 +235,148 @@ TEST_F(GpuProjection, RejectsBadOrdersAndFaces) {
     destroyProjector(context(), projector);
 }
 
+// A batch bakes each probe exactly as a bake of it alone would (same dispatch shapes, the same fixed
+// summation order), so the coefficients must be bit-identical, in input order, whatever the face
+// sizes; and all of it is one queue submission.
+TEST_F(GpuProjection, BatchEqualsSingleBakesInOneSubmission) {
+    const std::vector<Cubemap> cubemaps = {noiseCubemap(16, 11), noiseCubemap(33, 12), hotSunCubemap(16),
+                                           noiseCubemap(1, 13), noiseCubemap(33, 14)};
+    std::vector<const Cubemap*> batch;
+    for (const Cubemap& cubemap : cubemaps) batch.push_back(&cubemap);
+    Projector projector = createProjector(context(), {.order = 5});
+    const uint64_t submissionsBefore = submissionCount();
+    std::vector<GpuBake> batched = bakeCubemaps(context(), projector, batch);
+    EXPECT_EQ(submissionCount() - submissionsBefore, 1u) << "a batch of 5 probes, 3 face sizes";
+    ASSERT_EQ(batched.size(), cubemaps.size());
+    for (size_t k = 0; k < cubemaps.size(); ++k) {
+        GpuBake single = bakeCubemap(context(), projector, cubemaps[k]);
+        EXPECT_EQ(batched[k].radiance.rgb, single.radiance.rgb) << "probe " << k;
+        EXPECT_EQ(batched[k].irradiance.rgb, single.irradiance.rgb) << "probe " << k;
+        EXPECT_LT(relativeError(batched[k].radiance, projectCubemap(cubemaps[k], 5)), kGpuTolerance) << "probe " << k;
+    }
+    destroyProjector(context(), projector);
+}
+
+// RGBA16F input: the GPU reads halves, so the reference is the projection of the half-rounded
+// texels, and the fp32 tolerance applies unchanged. Values beyond the half range are refused.
+TEST_F(GpuProjection, HalfFloatInputMatchesTheReferenceOfItsValues) {
+    Cubemap cubemap = hotSunCubemap(32);
+    cubemap.at(2, 10, 6) = glm::vec4(6e4f, 5e4f, 4e4f, 1.0f); // the sun, within the half range
+    Cubemap rounded = cubemap;
+    for (glm::vec4& texel : rounded.texels) texel = glm::unpackHalf4x16(glm::packHalf4x16(texel));
+    Projector projector = createProjector(context(), {.order = 3, .texelFormat = GpuTexelFormat::Rgba16F});
+    GpuBake gpu = bakeCubemap(context(), projector, cubemap);
+    EXPECT_LT(relativeError(gpu.radiance, projectCubemap(rounded, 3)), kGpuTolerance);
+    cubemap.at(0, 0, 0) = glm::vec4(1e5f, 0.0f, 0.0f, 1.0f);
+    EXPECT_THROW(bakeCubemap(context(), projector, cubemap), Error);
+    destroyProjector(context(), projector);
+}
+
+// The renderer's path (probe_baker.h): a baker on a borrowed device, the caller's own image, command
+// buffer and output buffer (at a non-zero offset), two targets and a second bake of the first
+// target recorded in one command buffer, and no submission by the library.
+class GpuResidentBake : public GpuTest {
+  protected:
+    struct Probes {
+        GpuImage image;
+        Buffer staging;
+    };
+
+    // 6 * count layers filled from the cube maps, transitioned as probe_baker.h asks.
+    Probes upload(std::span<const Cubemap> cubemaps, VkCommandBuffer commands) {
+        const uint32_t n = uint32_t(cubemaps[0].faceSize);
+        const VkDeviceSize bytes = cubemaps[0].texels.size() * sizeof(glm::vec4);
+        Probes probes;
+        probes.staging = createBuffer(context(), bytes * cubemaps.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                      MemoryUse::Upload, "test upload");
+        for (size_t k = 0; k < cubemaps.size(); ++k)
+            std::memcpy(static_cast<char*>(probes.staging.mapped) + k * bytes, cubemaps[k].texels.data(), bytes);
+        probes.image = createImage(context(), {.extent = {n, n},
+                                               .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                               .what = "test probes",
+                                               .layers = uint32_t(6 * cubemaps.size())});
+        changeLayout(commands, probes.image,
+                     {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
+                      0, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT});
+        VkBufferImageCopy region{};
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, probes.image.layers};
+        region.imageExtent = {n, n, 1};
+        vkCmdCopyBufferToImage(commands, probes.staging.buffer, probes.image.image,
+                               VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+        changeLayout(commands, probes.image,
+                     {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+        return probes;
+    }
+};
+
+TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
+    const int order = 3;
+    Context device = borrowDevice({context().physicalDevice, context().device, context().queueFamily});
+    ProbeBaker baker = createProbeBaker(device, {.order = order});
+    const std::vector<Cubemap> first = {noiseCubemap(24, 21), noiseCubemap(24, 22), hotSunCubemap(24)};
+    const std::vector<Cubemap> second = {noiseCubemap(9, 23)};
+    const VkDeviceSize alignment = device.info.limits.minStorageBufferOffsetAlignment;
+    const VkDeviceSize firstOffset = alignment; // not at the start of the buffer
+    const VkDeviceSize secondOffset = firstOffset + (probeBakeOutputBytes(order, 3) + alignment - 1) / alignment * alignment;
+    Buffer output = createBuffer(device, secondOffset + probeBakeOutputBytes(order, 1),
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "caller's coefficients");
+    Probes firstProbes, secondProbes;
+    ProbeBakeSet firstSet, secondSet;
+    const uint64_t submissionsBefore = submissionCount();
+    submitAndWait(context(), [&](VkCommandBuffer commands) {
+        firstProbes = upload(first, commands);
+        secondProbes = upload(second, commands);
+        firstSet = createProbeBakeSet(device, baker, {firstProbes.image.view, 24, 3, output.buffer, firstOffset});
+        secondSet = createProbeBakeSet(device, baker, {secondProbes.image.view, 9, 1, output.buffer, secondOffset});
+        recordProbeBake(commands, baker, firstSet);
+        recordProbeBake(commands, baker, secondSet);
+        recordProbeBake(commands, baker, firstSet); // again: the scratch buffer is reused safely
+        computeWriteBarrier(commands);
+    });
+    EXPECT_EQ(submissionCount() - submissionsBefore, 1u) << "only the test's own submission";
+    invalidateBuffer(device, output);
+
+    auto expectProbe = [&](VkDeviceSize offset, uint32_t probes, uint32_t k, const Cubemap& cubemap) {
+        const auto* values = reinterpret_cast<const glm::vec4*>(static_cast<const char*>(output.mapped) + offset);
+        ShCoefficients reference = projectCubemap(cubemap, order);
+        ShCoefficients radiance = makeCoefficients(order, Quantity::Radiance);
+        ShCoefficients irradiance = makeCoefficients(order, Quantity::Irradiance);
+        const size_t n2 = size_t(coefficientCount(order));
+        for (size_t i = 0; i < n2; ++i) {
+            radiance.rgb[i] = glm::dvec3(glm::vec3(values[k * n2 + i]));
+            irradiance.rgb[i] = glm::dvec3(glm::vec3(values[(probes + k) * n2 + i]));
+        }
+        EXPECT_LT(relativeError(radiance, reference), kGpuTolerance) << "probe " << k;
+        EXPECT_LT(relativeError(irradiance, convolveIrradiance(reference)), kGpuTolerance) << "probe " << k;
+    };
+    for (uint32_t k = 0; k < 3; ++k) expectProbe(firstOffset, 3, k, first[k]);
+    expectProbe(secondOffset, 1, 0, second[0]);
+
+    destroyProbeBakeSet(device, secondSet);
+    destroyProbeBakeSet(device, firstSet);
+    for (Probes* probes : {&firstProbes, &secondProbes}) {
+        destroyImage(context(), probes->image);
+        destroyBuffer(context(), probes->staging);
+    }
+    destroyBuffer(device, output);
+    destroyProbeBaker(device, baker);
+}
+
+TEST_F(GpuResidentBake, RefusesTargetsItCannotBake) {
+    ProbeBaker baker = createProbeBaker(context(), {.order = 3});
+    Buffer output = createBuffer(context(), 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "out");
+    GpuImage image = createImage(context(), {.extent = {4, 4}, .usage = VK_IMAGE_USAGE_SAMPLED_BIT, .what = "probe",
+                                             .layers = 6});
+    EXPECT_THROW(createProbeBakeSet(context(), baker, {image.view, 4, 1, output.buffer, 1}), Error) << "misaligned";
+    EXPECT_THROW(createProbeBakeSet(context(), baker, {image.view, 0, 1, output.buffer, 0}), Error) << "face size 0";
+    EXPECT_THROW(createProbeBakeSet(context(), baker, {VK_NULL_HANDLE, 4, 1, output.buffer, 0}), Error) << "no view";
+    destroyImage(context(), image);
+    destroyBuffer(context(), output);
+    destroyProbeBaker(context(), baker);
+}
+
 // The texel solid angle as the GPU evaluates it (texel_geometry.h compiled to SPIR-V, with the
 // device's own atan and sqrt) against the double four-atan2 formula of CONVENTIONS.md: within
 // 1e-5 relative for every texel of faces 1..64 and of sizes up to 4096.
@@ -241,12 +386,12 @@ class GpuSolidAngles : public GpuTest {
         VkDeviceSize bytes = VkDeviceSize(faceSize) * faceSize * sizeof(float);
         Buffer output = createBuffer(context(), bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                      MemoryUse::Readback, "solid angles");
-        VkDescriptorPool pool = createDescriptorPool(context(), 1, 1);
-        BufferRange range{&output, 0, bytes};
-        VkDescriptorSet set = createDescriptorSet(context(), pool, program, std::span(&range, 1));
+        VkDescriptorPool pool = createDescriptorPool(context(), {.sets = 1, .storageBuffers = 1});
+        BindingTarget target{output.buffer, 0, bytes};
+        VkDescriptorSet set = createDescriptorSet(context(), pool, program, std::span(&target, 1));
         uint32_t groups = std::min<uint32_t>((uint32_t(faceSize) * faceSize + 63) / 64, 4096);
         submitAndWait(context(), [&](VkCommandBuffer commands) {
-            dispatch(commands, program, set, uint32_t(faceSize), groups);
+            dispatch(commands, program, set, uint32_t(faceSize), {groups});
             computeWriteBarrier(commands);
         });
         invalidateBuffer(context(), output);
@@ -264,8 +409,13 @@ class GpuSolidAngles : public GpuTest {
 };
 
 TEST_F(GpuSolidAngles, EveryTexelMatchesTheDoubleFormula) {
-    ComputeProgram program = createComputeProgram(
-        context(), {"solid_angles.comp", spirv::solid_angles_comp, 1, sizeof(uint32_t), 64, 1});
+    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    ComputeProgram program = createComputeProgram(context(), {.name = "solid_angles.comp",
+                                                              .spirv = spirv::solid_angles_comp,
+                                                              .bindings = kBindings,
+                                                              .pushConstantSize = sizeof(uint32_t),
+                                                              .localSize = 64,
+                                                              .order = 1});
     std::vector<int> sizes;
     for (int n = 1; n <= 64; ++n)
         sizes.push_back(n);

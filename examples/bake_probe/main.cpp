@@ -1,16 +1,17 @@
 // bake_probe: bakes an SH light probe with shprobe's installed SPIR-V modules and plain Vulkan.
 //
 // Everything here comes from share/shprobe/spirv/INTERFACE.md: the bindings, the push-constant
-// layouts (declared below and pinned by static_asserts), the specialization constants and the
-// dispatch rules of project.comp, reduce.comp and convolve.comp. No shprobe C++ is linked or
-// included; the only thing the package provides is the folder of the .spv files.
+// layouts (declared below and pinned by static_asserts), the specialization constants, the
+// dispatch rules of project.comp, reduce.comp and convolve.comp, and the output layout. No shprobe
+// C++ is linked or included; the only thing the package provides is the folder of the .spv files.
 //
 //   bake_probe [--environment white|sky] [--face-size N] [--order N] [--write-faces DIR]
 //              [--spirv-dir DIR] [--validation]
 //
 // The environment is generated: `white` is radiance 1 everywhere (the white furnace: L_00 =
-// sqrt(4 pi), every other coefficient 0), `sky` a smooth gradient with a soft sun. --write-faces
-// writes the same texels as DIR/px.pfm ... DIR/nz.pfm, which `shprobe bake 'DIR/{face}.pfm'` reads.
+// sqrt(4 pi), every other coefficient 0), `sky` a smooth gradient with a soft sun. It is uploaded
+// into a 2D-array image of six RGBA32F layers, which project.comp samples. --write-faces writes the
+// same texels as DIR/px.pfm ... DIR/nz.pfm, which `shprobe bake 'DIR/{face}.pfm'` reads.
 #include <vulkan/vulkan.h>
 
 #include <algorithm>
@@ -22,7 +23,6 @@
 #include <cstring>
 #include <fstream>
 #include <initializer_list>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -44,29 +44,28 @@ namespace {
 constexpr uint32_t kSpecWorkgroupWidth = 0; // specialization constant ids
 constexpr uint32_t kSpecOrder = 1;
 constexpr uint32_t kWidth = 64;             // workgroup width of all three modules here
+constexpr uint32_t kFaces = 6;              // layers per probe: probe p's face f is layer 6p + f
 constexpr uint32_t kTexelsPerPosition = 6;  // project.comp: one position = the same texel of six faces
+constexpr uint32_t kProbes = 1;             // probes per bake; the modules take many, this example one
+constexpr VkFormat kTexelFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 
-struct ProjectParams { // project.comp, 16 bytes
+struct ProjectParams { // project.comp, 4 bytes
     uint32_t faceSize;
-    uint32_t firstRow;
-    uint32_t rowCount;
-    uint32_t partialOffset;
 };
-static_assert(sizeof(ProjectParams) == 16 && offsetof(ProjectParams, faceSize) == 0 &&
-              offsetof(ProjectParams, firstRow) == 4 && offsetof(ProjectParams, rowCount) == 8 &&
-              offsetof(ProjectParams, partialOffset) == 12);
+static_assert(sizeof(ProjectParams) == 4);
 
 struct ReduceParams { // reduce.comp, 4 bytes
     uint32_t partialCount;
 };
 static_assert(sizeof(ReduceParams) == 4);
 
-struct ConvolveParams { // convolve.comp, 32 bytes: vec4 bandScale[2], band l at float l
+struct ConvolveParams { // convolve.comp, 36 bytes: vec4 bandScale[2] (band l at float l), uint outputOffset
     float bandScale[8];
+    uint32_t outputOffset; // in vec4: where probe 0's output starts in binding 1
 };
-static_assert(sizeof(ConvolveParams) == 32);
+static_assert(sizeof(ConvolveParams) == 36 && offsetof(ConvolveParams, outputOffset) == 32);
 
-struct Coefficient { // every coefficient buffer: vec4, rgb + unused w
+struct Coefficient { // every coefficient buffer, and the texels: vec4, rgb + unused w
     float r, g, b, unused;
 };
 static_assert(sizeof(Coefficient) == 16);
@@ -121,12 +120,12 @@ Coefficient radianceAt(const std::string& environment, Vec3 d) {
             1.2f + 0.9f * d.y - 0.2f * d.z * d.z + 2.0f * glow, 1.0f};
 }
 
-// RGBA32F, face after face, rows top to bottom: project.comp's layout with one band.
+// RGBA32F, face after face, rows top to bottom: what vkCmdCopyBufferToImage puts into layers 0..5.
 std::vector<Coefficient> makeCubemap(const Options& options) {
     uint32_t n = options.faceSize;
     std::vector<Coefficient> texels;
-    texels.reserve(size_t(6) * n * n);
-    for (int face = 0; face < 6; ++face)
+    texels.reserve(size_t(kFaces) * n * n);
+    for (int face = 0; face < int(kFaces); ++face)
         for (uint32_t j = 0; j < n; ++j)
             for (uint32_t i = 0; i < n; ++i) texels.push_back(radianceAt(options.environment, texelDirection(face, i, j, n)));
     return texels;
@@ -135,7 +134,7 @@ std::vector<Coefficient> makeCubemap(const Options& options) {
 // PFM (little-endian RGB float), whose rows go bottom to top.
 void writeFaces(const std::vector<Coefficient>& texels, uint32_t n, const std::string& folder) {
     const char* names[6] = {"px", "nx", "py", "ny", "pz", "nz"};
-    for (int face = 0; face < 6; ++face) {
+    for (int face = 0; face < int(kFaces); ++face) {
         std::string path = folder + "/" + names[face] + ".pfm";
         std::ofstream file(path, std::ios::binary);
         file << "PF\n" << n << " " << n << "\n-1.0\n";
@@ -149,7 +148,7 @@ void writeFaces(const std::vector<Coefficient>& texels, uint32_t n, const std::s
     }
 }
 
-// --- Vulkan: instance, device, buffers -----------------------------------------------------------
+// --- Vulkan: instance, device ---------------------------------------------------------------------
 
 struct Gpu {
     VkInstance instance = VK_NULL_HANDLE;
@@ -196,7 +195,8 @@ void createInstance(Gpu& gpu, bool validation) {
     VK_CHECK(create(gpu.instance, &messenger, nullptr, &gpu.messenger));
 }
 
-// project.comp needs Vulkan 1.1 and subgroup basic + arithmetic operations in compute shaders.
+// project.comp needs Vulkan 1.1, subgroup basic + arithmetic operations in compute shaders, and
+// the texel format sampled from optimal-tiling images.
 bool suitable(VkPhysicalDevice physical, uint32_t& queueFamily) {
     VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
     VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
@@ -206,12 +206,15 @@ bool suitable(VkPhysicalDevice physical, uint32_t& queueFamily) {
     if (properties.properties.apiVersion < VK_API_VERSION_1_1 || !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ||
         (subgroup.supportedOperations & needed) != needed)
         return false;
+    VkFormatProperties format;
+    vkGetPhysicalDeviceFormatProperties(physical, kTexelFormat, &format);
+    if (!(format.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT)) return false;
     uint32_t count = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(physical, &count, nullptr);
     std::vector<VkQueueFamilyProperties> families(count);
     vkGetPhysicalDeviceQueueFamilyProperties(physical, &count, families.data());
     for (uint32_t i = 0; i < count; ++i)
-        if (families[i].queueFlags & VK_QUEUE_COMPUTE_BIT) {
+        if (families[i].queueFlags & VK_QUEUE_COMPUTE_BIT) { // compute queues also take transfers
             queueFamily = i;
             return true;
         }
@@ -229,7 +232,7 @@ void createDevice(Gpu& gpu) {
             gpu.physical = physical;
             break;
         }
-    if (!gpu.physical) fail("no Vulkan 1.1 device with subgroup arithmetic in compute shaders");
+    if (!gpu.physical) fail("no Vulkan 1.1 device with subgroup arithmetic in compute shaders and sampled RGBA32F");
     VkPhysicalDeviceProperties properties;
     vkGetPhysicalDeviceProperties(gpu.physical, &properties);
     gpu.limits = properties.limits;
@@ -247,7 +250,28 @@ void createDevice(Gpu& gpu) {
     vkGetDeviceQueue(gpu.device, gpu.queueFamily, 0, &gpu.queue);
 }
 
-// Host-visible, coherent storage buffers: simple, and fine for a probe's few kilobytes.
+// --- memory: buffers and the cube-map image -------------------------------------------------------
+
+// The first allowed memory type with all flags of the first preference any type meets.
+uint32_t memoryType(const Gpu& gpu, uint32_t allowed, std::initializer_list<VkMemoryPropertyFlags> preferences) {
+    VkPhysicalDeviceMemoryProperties memory;
+    vkGetPhysicalDeviceMemoryProperties(gpu.physical, &memory);
+    for (VkMemoryPropertyFlags wanted : preferences)
+        for (uint32_t i = 0; i < memory.memoryTypeCount; ++i)
+            if ((allowed & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
+    fail("no suitable memory type");
+}
+
+VkDeviceMemory allocate(const Gpu& gpu, const VkMemoryRequirements& requirements, uint32_t type) {
+    VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    info.allocationSize = requirements.size;
+    info.memoryTypeIndex = type;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    VK_CHECK(vkAllocateMemory(gpu.device, &info, nullptr, &memory));
+    return memory;
+}
+
+// Host-visible, coherent buffers: simple, and fine for a probe's texels and few kilobytes of sums.
 struct Buffer {
     VkBuffer buffer = VK_NULL_HANDLE;
     VkDeviceMemory memory = VK_NULL_HANDLE;
@@ -255,28 +279,18 @@ struct Buffer {
     void* mapped = nullptr;
 };
 
-uint32_t hostVisibleMemoryType(const Gpu& gpu, uint32_t allowed) {
-    VkPhysicalDeviceMemoryProperties memory;
-    vkGetPhysicalDeviceMemoryProperties(gpu.physical, &memory);
-    VkMemoryPropertyFlags wanted = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    for (uint32_t i = 0; i < memory.memoryTypeCount; ++i)
-        if ((allowed & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
-    fail("no host-visible coherent memory for storage buffers");
-}
-
-Buffer createBuffer(const Gpu& gpu, VkDeviceSize size) {
+Buffer createBuffer(const Gpu& gpu, VkDeviceSize size, VkBufferUsageFlags usage) {
     Buffer buffer;
     buffer.size = size;
     VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
     info.size = size;
-    info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+    info.usage = usage;
     VK_CHECK(vkCreateBuffer(gpu.device, &info, nullptr, &buffer.buffer));
     VkMemoryRequirements requirements;
     vkGetBufferMemoryRequirements(gpu.device, buffer.buffer, &requirements);
-    VkMemoryAllocateInfo allocate{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    allocate.allocationSize = requirements.size;
-    allocate.memoryTypeIndex = hostVisibleMemoryType(gpu, requirements.memoryTypeBits);
-    VK_CHECK(vkAllocateMemory(gpu.device, &allocate, nullptr, &buffer.memory));
+    const VkMemoryPropertyFlags hostVisible =
+        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    buffer.memory = allocate(gpu, requirements, memoryType(gpu, requirements.memoryTypeBits, {hostVisible}));
     VK_CHECK(vkBindBufferMemory(gpu.device, buffer.buffer, buffer.memory, 0));
     VK_CHECK(vkMapMemory(gpu.device, buffer.memory, 0, VK_WHOLE_SIZE, 0, &buffer.mapped));
     std::memset(buffer.mapped, 0, size);
@@ -286,6 +300,62 @@ Buffer createBuffer(const Gpu& gpu, VkDeviceSize size) {
 void destroyBuffer(const Gpu& gpu, Buffer& buffer) {
     vkDestroyBuffer(gpu.device, buffer.buffer, nullptr);
     vkFreeMemory(gpu.device, buffer.memory, nullptr);
+}
+
+// The cube maps as project.comp reads them: N x N RGBA32F, `layers` layers, a 2D-array view.
+struct Image {
+    VkImage image = VK_NULL_HANDLE;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    VkImageView view = VK_NULL_HANDLE;
+    uint32_t size = 0, layers = 0;
+};
+
+Image createCubemapImage(const Gpu& gpu, uint32_t size, uint32_t layers) {
+    Image image{.size = size, .layers = layers};
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = kTexelFormat;
+    info.extent = {size, size, 1};
+    info.mipLevels = 1;
+    info.arrayLayers = layers;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    VK_CHECK(vkCreateImage(gpu.device, &info, nullptr, &image.image));
+    VkMemoryRequirements requirements;
+    vkGetImageMemoryRequirements(gpu.device, image.image, &requirements);
+    image.memory = allocate(gpu, requirements,
+                            memoryType(gpu, requirements.memoryTypeBits, {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0}));
+    VK_CHECK(vkBindImageMemory(gpu.device, image.image, image.memory, 0));
+
+    VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    viewInfo.image = image.image;
+    viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D_ARRAY;
+    viewInfo.format = kTexelFormat;
+    viewInfo.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, layers};
+    VK_CHECK(vkCreateImageView(gpu.device, &viewInfo, nullptr, &image.view));
+    return image;
+}
+
+void destroyImage(const Gpu& gpu, Image& image) {
+    vkDestroyImageView(gpu.device, image.view, nullptr);
+    vkDestroyImage(gpu.device, image.image, nullptr);
+    vkFreeMemory(gpu.device, image.memory, nullptr);
+}
+
+// project.comp reads with texelFetch, so filtering does not matter: nearest, clamped.
+VkSampler createNearestSampler(const Gpu& gpu) {
+    VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    info.magFilter = VK_FILTER_NEAREST;
+    info.minFilter = VK_FILTER_NEAREST;
+    info.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    info.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    info.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    VkSampler sampler = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateSampler(gpu.device, &info, nullptr, &sampler));
+    return sampler;
 }
 
 // --- programs: one per module, as INTERFACE.md lays them out -------------------------------------
@@ -298,6 +368,15 @@ struct Program {
     uint32_t pushConstantSize = 0;
 };
 
+// A module's file and set 0: bindings 0, 1, ... of these types. A combined image sampler gets
+// `sampler` as its immutable sampler.
+struct ProgramInfo {
+    const char* file;
+    std::vector<VkDescriptorType> bindings;
+    uint32_t pushConstantSize;
+    VkSampler sampler = VK_NULL_HANDLE;
+};
+
 std::vector<uint32_t> readSpirv(const std::string& path) {
     std::ifstream file(path, std::ios::binary | std::ios::ate);
     if (!file) fail("cannot read " + path);
@@ -308,27 +387,34 @@ std::vector<uint32_t> readSpirv(const std::string& path) {
     return words;
 }
 
-// Set 0 holds storage buffers at bindings 0..bufferCount-1; push constants from offset 0;
-// specialization constants 0 (workgroup width) and 1 (SH order); entry point "main".
-Program createProgram(const Gpu& gpu, const std::string& path, uint32_t bufferCount, uint32_t pushConstantSize,
-                      uint32_t order) {
+VkDescriptorSetLayout createSetLayout(const Gpu& gpu, const ProgramInfo& info) {
+    std::vector<VkDescriptorSetLayoutBinding> bindings;
+    for (VkDescriptorType type : info.bindings) {
+        bool sampled = type == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+        bindings.push_back({uint32_t(bindings.size()), type, 1, VK_SHADER_STAGE_COMPUTE_BIT,
+                            sampled ? &info.sampler : nullptr});
+    }
+    VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    setInfo.bindingCount = uint32_t(bindings.size());
+    setInfo.pBindings = bindings.data();
+    VkDescriptorSetLayout layout = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateDescriptorSetLayout(gpu.device, &setInfo, nullptr, &layout));
+    return layout;
+}
+
+// Push constants from offset 0; specialization constants 0 (workgroup width) and 1 (SH order);
+// entry point "main".
+Program createProgram(const Gpu& gpu, const Options& options, const ProgramInfo& info) {
     Program program;
-    program.pushConstantSize = pushConstantSize;
-    std::vector<uint32_t> code = readSpirv(path);
+    program.pushConstantSize = info.pushConstantSize;
+    std::vector<uint32_t> code = readSpirv(options.spirvDir + "/" + info.file);
     VkShaderModuleCreateInfo moduleInfo{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     moduleInfo.codeSize = code.size() * 4;
     moduleInfo.pCode = code.data();
     VK_CHECK(vkCreateShaderModule(gpu.device, &moduleInfo, nullptr, &program.module));
+    program.setLayout = createSetLayout(gpu, info);
 
-    std::vector<VkDescriptorSetLayoutBinding> bindings;
-    for (uint32_t b = 0; b < bufferCount; ++b)
-        bindings.push_back({b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
-    VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    setInfo.bindingCount = bufferCount;
-    setInfo.pBindings = bindings.data();
-    VK_CHECK(vkCreateDescriptorSetLayout(gpu.device, &setInfo, nullptr, &program.setLayout));
-
-    VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, pushConstantSize};
+    VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, info.pushConstantSize};
     VkPipelineLayoutCreateInfo layoutInfo{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     layoutInfo.setLayoutCount = 1;
     layoutInfo.pSetLayouts = &program.setLayout;
@@ -336,17 +422,17 @@ Program createProgram(const Gpu& gpu, const std::string& path, uint32_t bufferCo
     layoutInfo.pPushConstantRanges = &range;
     VK_CHECK(vkCreatePipelineLayout(gpu.device, &layoutInfo, nullptr, &program.layout));
 
-    const uint32_t values[2] = {kWidth, order};
+    const uint32_t values[2] = {kWidth, options.order};
     const VkSpecializationMapEntry entries[2] = {{kSpecWorkgroupWidth, 0, 4}, {kSpecOrder, 4, 4}};
     VkSpecializationInfo specialization{2, entries, sizeof(values), values};
-    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-    info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
-    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-    info.stage.module = program.module;
-    info.stage.pName = "main";
-    info.stage.pSpecializationInfo = &specialization;
-    info.layout = program.layout;
-    VK_CHECK(vkCreateComputePipelines(gpu.device, VK_NULL_HANDLE, 1, &info, nullptr, &program.pipeline));
+    VkComputePipelineCreateInfo pipelineInfo{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    pipelineInfo.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    pipelineInfo.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    pipelineInfo.stage.module = program.module;
+    pipelineInfo.stage.pName = "main";
+    pipelineInfo.stage.pSpecializationInfo = &specialization;
+    pipelineInfo.layout = program.layout;
+    VK_CHECK(vkCreateComputePipelines(gpu.device, VK_NULL_HANDLE, 1, &pipelineInfo, nullptr, &program.pipeline));
     return program;
 }
 
@@ -357,44 +443,111 @@ void destroyProgram(const Gpu& gpu, Program& program) {
     vkDestroyShaderModule(gpu.device, program.module, nullptr);
 }
 
+// What one binding of a set points at: a whole buffer, or an image view (its sampler is immutable).
+struct Resource {
+    const Buffer* buffer = nullptr;
+    const Image* image = nullptr;
+};
+
 VkDescriptorSet createSet(const Gpu& gpu, VkDescriptorPool pool, const Program& program,
-                          std::initializer_list<const Buffer*> buffers) {
+                          std::initializer_list<Resource> resources) {
     VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     allocate.descriptorPool = pool;
     allocate.descriptorSetCount = 1;
     allocate.pSetLayouts = &program.setLayout;
     VkDescriptorSet set = VK_NULL_HANDLE;
     VK_CHECK(vkAllocateDescriptorSets(gpu.device, &allocate, &set));
-    std::vector<VkDescriptorBufferInfo> infos;
-    for (const Buffer* buffer : buffers) infos.push_back({buffer->buffer, 0, VK_WHOLE_SIZE});
+    std::vector<VkDescriptorBufferInfo> buffers(resources.size());
+    std::vector<VkDescriptorImageInfo> images(resources.size());
     std::vector<VkWriteDescriptorSet> writes;
-    for (uint32_t b = 0; b < infos.size(); ++b) {
+    for (const Resource& resource : resources) {
+        uint32_t b = uint32_t(writes.size());
         VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
         write.dstSet = set;
         write.dstBinding = b;
         write.descriptorCount = 1;
-        write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-        write.pBufferInfo = &infos[b];
+        if (resource.image) {
+            images[b] = {VK_NULL_HANDLE, resource.image->view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+            write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+            write.pImageInfo = &images[b];
+        } else {
+            buffers[b] = {resource.buffer->buffer, 0, VK_WHOLE_SIZE};
+            write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+            write.pBufferInfo = &buffers[b];
+        }
         writes.push_back(write);
     }
     vkUpdateDescriptorSets(gpu.device, uint32_t(writes.size()), writes.data(), 0, nullptr);
     return set;
 }
 
+// --- commands --------------------------------------------------------------------------------------
+
 void dispatch(VkCommandBuffer commands, const Program& program, VkDescriptorSet set, const void* constants,
-              uint32_t groups) {
+              uint32_t groupsX, uint32_t groupsY) {
     vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
     vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set, 0, nullptr);
     vkCmdPushConstants(commands, program.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, program.pushConstantSize, constants);
-    vkCmdDispatch(commands, groups, 1, 1);
+    vkCmdDispatch(commands, groupsX, groupsY, 1);
 }
 
+// Compute writes, made visible to `destinationAccess` at `destinationStage`.
 void barrier(VkCommandBuffer commands, VkPipelineStageFlags destinationStage, VkAccessFlags destinationAccess) {
     VkMemoryBarrier memory{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     memory.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
     memory.dstAccessMask = destinationAccess;
     vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, destinationStage, 0, 1, &memory, 0, nullptr,
                          0, nullptr);
+}
+
+struct LayoutChange {
+    VkImageLayout from, to;
+    VkPipelineStageFlags sourceStage;
+    VkAccessFlags sourceAccess;
+    VkPipelineStageFlags destinationStage;
+    VkAccessFlags destinationAccess;
+};
+
+void changeLayout(VkCommandBuffer commands, const Image& image, const LayoutChange& change) {
+    VkImageMemoryBarrier barrier{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    barrier.srcAccessMask = change.sourceAccess;
+    barrier.dstAccessMask = change.destinationAccess;
+    barrier.oldLayout = change.from;
+    barrier.newLayout = change.to;
+    barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    barrier.image = image.image;
+    barrier.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, image.layers};
+    vkCmdPipelineBarrier(commands, change.sourceStage, change.destinationStage, 0, 0, nullptr, 0, nullptr, 1,
+                         &barrier);
+}
+
+// The staging buffer's layers into the image, left in SHADER_READ_ONLY_OPTIMAL for compute reads.
+void recordUpload(VkCommandBuffer commands, const Buffer& staging, const Image& image) {
+    changeLayout(commands, image,
+                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT});
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.layers};
+    region.imageExtent = {image.size, image.size, 1};
+    vkCmdCopyBufferToImage(commands, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+    changeLayout(commands, image,
+                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                  VK_ACCESS_SHADER_READ_BIT});
+}
+
+VkCommandBuffer beginCommands(const Gpu& gpu, VkCommandPool pool) {
+    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    allocate.commandPool = pool;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = 1;
+    VkCommandBuffer commands = VK_NULL_HANDLE;
+    VK_CHECK(vkAllocateCommandBuffers(gpu.device, &allocate, &commands));
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VK_CHECK(vkBeginCommandBuffer(commands, &begin));
+    return commands;
 }
 
 void submitAndWait(const Gpu& gpu, VkCommandBuffer commands) {
@@ -417,52 +570,92 @@ struct Bake {
 };
 
 struct Programs {
+    VkSampler sampler = VK_NULL_HANDLE; // project.comp's immutable sampler
     Program project, reduce, convolve;
 };
 
 Programs createPrograms(const Gpu& gpu, const Options& options) {
-    std::string dir = options.spirvDir + "/";
-    return {createProgram(gpu, dir + "project.comp.spv", 2, sizeof(ProjectParams), options.order),
-            createProgram(gpu, dir + "reduce.comp.spv", 2, sizeof(ReduceParams), options.order),
-            createProgram(gpu, dir + "convolve.comp.spv", 2, sizeof(ConvolveParams), options.order)};
+    const VkDescriptorType image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    const VkDescriptorType buffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    Programs programs;
+    programs.sampler = createNearestSampler(gpu);
+    programs.project =
+        createProgram(gpu, options, {"project.comp.spv", {image, buffer}, sizeof(ProjectParams), programs.sampler});
+    programs.reduce = createProgram(gpu, options, {"reduce.comp.spv", {buffer, buffer}, sizeof(ReduceParams)});
+    programs.convolve = createProgram(gpu, options, {"convolve.comp.spv", {buffer, buffer}, sizeof(ConvolveParams)});
+    return programs;
 }
 
-// project.comp's workgroup count (INTERFACE.md): about 43 positions (256 texels) per invocation,
-// capped for lavapipe's loop limit.
-uint32_t projectGroups(const Gpu& gpu, uint32_t faceSize, uint32_t order) {
-    const uint32_t positionsPerInvocation =
-        std::min((256u + kTexelsPerPosition - 1) / kTexelsPerPosition, maxPositionsPerInvocation(order));
-    const uint32_t perGroup = kWidth * positionsPerInvocation;
-    return std::clamp((faceSize * faceSize + perGroup - 1) / perGroup, 1u, gpu.limits.maxComputeWorkGroupCount[0]);
+void destroyPrograms(const Gpu& gpu, Programs& programs) {
+    for (Program* program : {&programs.convolve, &programs.reduce, &programs.project}) destroyProgram(gpu, *program);
+    vkDestroySampler(gpu.device, programs.sampler, nullptr);
+}
+
+// What one bake dispatches: N, the SH order and project.comp's workgroups per probe.
+struct BakePlan {
+    uint32_t faceSize = 0, order = 0, groups = 0;
+};
+
+// project.comp's workgroups per probe (INTERFACE.md, shprobe's plan): about 43 positions (256
+// texels) per invocation, at least as many as maxComputeWorkGroupCount[0] and one binding of
+// partial slots (maxStorageBufferRange) allow, at most lavapipe's loop cap.
+BakePlan planBake(const Gpu& gpu, const Options& options) {
+    const uint32_t order = options.order;
+    const uint64_t positions = uint64_t(options.faceSize) * options.faceSize;
+    const uint64_t slotBytes = uint64_t(order) * order * sizeof(Coefficient);
+    const uint64_t maxGroups = std::min<uint64_t>(gpu.limits.maxComputeWorkGroupCount[0],
+                                                  gpu.limits.maxStorageBufferRange / slotBytes / kProbes);
+    const uint64_t least = maxGroups ? ((positions + maxGroups - 1) / maxGroups + kWidth - 1) / kWidth : UINT64_MAX;
+    const uint64_t most = maxPositionsPerInvocation(order);
+    if (least > most)
+        fail("face size " + std::to_string(options.faceSize) + " at order " + std::to_string(order) +
+             " needs more workgroups than one dispatch allows on this device");
+    const uint64_t requested = (256u + kTexelsPerPosition - 1) / kTexelsPerPosition;
+    const uint64_t perInvocation = std::clamp<uint64_t>(requested, std::max<uint64_t>(least, 1), most);
+    return {options.faceSize, order, uint32_t((positions + kWidth * perInvocation - 1) / (kWidth * perInvocation))};
 }
 
 // Everything one bake allocates.
 struct BakeResources {
-    Buffer input, partials, raw, radiance, irradiance;
+    Buffer staging, partials, radiance, output;
+    Image cubemaps;
     VkDescriptorPool pool = VK_NULL_HANDLE;
+    VkDescriptorSet project = VK_NULL_HANDLE, reduce = VK_NULL_HANDLE, convolve = VK_NULL_HANDLE;
     VkCommandPool commandPool = VK_NULL_HANDLE;
 };
 
-BakeResources createBakeResources(const Gpu& gpu, const std::vector<Coefficient>& texels, uint32_t groups,
-                                  uint32_t order) {
-    const VkDeviceSize texelBytes = texels.size() * sizeof(Coefficient);
-    if (texelBytes > gpu.limits.maxStorageBufferRange)
-        fail("the cube map needs more than one band (maxStorageBufferRange); this example binds one");
-    const VkDeviceSize setBytes = order * order * sizeof(Coefficient);
-    BakeResources r;
-    r.input = createBuffer(gpu, texelBytes);
-    std::memcpy(r.input.mapped, texels.data(), texelBytes);
-    r.partials = createBuffer(gpu, groups * setBytes);
-    r.raw = createBuffer(gpu, setBytes);
-    r.radiance = createBuffer(gpu, setBytes);
-    r.irradiance = createBuffer(gpu, setBytes);
+VkDescriptorPool createDescriptorPool(const Gpu& gpu) {
+    const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 5},
+                                           {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}};
+    VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    info.maxSets = 3;
+    info.poolSizeCount = 2;
+    info.pPoolSizes = sizes;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateDescriptorPool(gpu.device, &info, nullptr, &pool));
+    return pool;
+}
 
-    VkDescriptorPoolSize poolSize{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8};
-    VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    poolInfo.maxSets = 4;
-    poolInfo.poolSizeCount = 1;
-    poolInfo.pPoolSizes = &poolSize;
-    VK_CHECK(vkCreateDescriptorPool(gpu.device, &poolInfo, nullptr, &r.pool));
+// The buffers of INTERFACE.md's table (partial slots, radiance, output), the image and its
+// staging copy, and the three descriptor sets.
+BakeResources createBakeResources(const Gpu& gpu, const Programs& programs, const std::vector<Coefficient>& texels,
+                                  const BakePlan& plan) {
+    if (plan.faceSize > gpu.limits.maxImageDimension2D)
+        fail("face size " + std::to_string(plan.faceSize) + " exceeds maxImageDimension2D " +
+             std::to_string(gpu.limits.maxImageDimension2D));
+    const VkDeviceSize texelBytes = texels.size() * sizeof(Coefficient);
+    const VkDeviceSize setBytes = plan.order * plan.order * sizeof(Coefficient);
+    BakeResources r;
+    r.staging = createBuffer(gpu, texelBytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
+    std::memcpy(r.staging.mapped, texels.data(), texelBytes);
+    r.cubemaps = createCubemapImage(gpu, plan.faceSize, kFaces * kProbes);
+    r.partials = createBuffer(gpu, kProbes * plan.groups * setBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+    r.radiance = createBuffer(gpu, kProbes * setBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+    r.output = createBuffer(gpu, 2 * kProbes * setBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+    r.pool = createDescriptorPool(gpu);
+    r.project = createSet(gpu, r.pool, programs.project, {{.image = &r.cubemaps}, {&r.partials}});
+    r.reduce = createSet(gpu, r.pool, programs.reduce, {{&r.partials}, {&r.radiance}});
+    r.convolve = createSet(gpu, r.pool, programs.convolve, {{&r.radiance}, {&r.output}});
     VkCommandPoolCreateInfo commandPoolInfo{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     commandPoolInfo.queueFamilyIndex = gpu.queueFamily;
     VK_CHECK(vkCreateCommandPool(gpu.device, &commandPoolInfo, nullptr, &r.commandPool));
@@ -472,58 +665,56 @@ BakeResources createBakeResources(const Gpu& gpu, const std::vector<Coefficient>
 void destroyBakeResources(const Gpu& gpu, BakeResources& r) {
     vkDestroyCommandPool(gpu.device, r.commandPool, nullptr);
     vkDestroyDescriptorPool(gpu.device, r.pool, nullptr);
-    for (Buffer* buffer : {&r.irradiance, &r.radiance, &r.raw, &r.partials, &r.input}) destroyBuffer(gpu, *buffer);
+    for (Buffer* buffer : {&r.output, &r.radiance, &r.partials}) destroyBuffer(gpu, *buffer);
+    destroyImage(gpu, r.cubemaps);
+    destroyBuffer(gpu, r.staging);
 }
 
-VkCommandBuffer beginCommands(const Gpu& gpu, VkCommandPool pool) {
-    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    allocate.commandPool = pool;
-    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    allocate.commandBufferCount = 1;
-    VkCommandBuffer commands = VK_NULL_HANDLE;
-    VK_CHECK(vkAllocateCommandBuffers(gpu.device, &allocate, &commands));
-    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    VK_CHECK(vkBeginCommandBuffer(commands, &begin));
-    return commands;
-}
-
-// Per-band scales of convolve.comp: 1 (radiance) or A_l (irradiance, E_lm = A_l L_lm).
-ConvolveParams bandScales(uint32_t order, bool irradiance) {
+// Per-band scales of convolve.comp: 1 (radiance) or A_l (irradiance, E_lm = A_l L_lm), written
+// from vec4 outputOffset on.
+ConvolveParams convolveParams(uint32_t order, bool irradiance, uint32_t outputOffset) {
     ConvolveParams params{};
     for (uint32_t l = 0; l < order; ++l) params.bandScale[l] = irradiance ? float(irradianceFactor(int(l))) : 1.0f;
+    params.outputOffset = outputOffset;
     return params;
 }
 
-// project (one band: the whole cube map) -> reduce -> convolve twice, in one submission.
-Bake bake(const Gpu& gpu, const Programs& programs, const std::vector<Coefficient>& texels, const Options& options) {
-    const uint32_t n = options.faceSize, order = options.order;
-    const uint32_t groups = projectGroups(gpu, n, order);
-    BakeResources r = createBakeResources(gpu, texels, groups, order);
-    VkDescriptorSet projectSet = createSet(gpu, r.pool, programs.project, {&r.input, &r.partials});
-    VkDescriptorSet reduceSet = createSet(gpu, r.pool, programs.reduce, {&r.partials, &r.raw});
-    VkDescriptorSet radianceSet = createSet(gpu, r.pool, programs.convolve, {&r.raw, &r.radiance});
-    VkDescriptorSet irradianceSet = createSet(gpu, r.pool, programs.convolve, {&r.raw, &r.irradiance});
-    const ProjectParams project{n, 0, n, 0};
-    const ReduceParams reduce{groups};
-    const ConvolveParams unit = bandScales(order, false), lambert = bandScales(order, true);
-
-    VkCommandBuffer commands = beginCommands(gpu, r.commandPool);
-    dispatch(commands, programs.project, projectSet, &project, groups);
+// upload -> project -> reduce -> convolve twice into one output: radiance at 0, irradiance after
+// all probes' radiance (INTERFACE.md's output layout).
+void recordBake(VkCommandBuffer commands, const Programs& programs, const BakeResources& r, const BakePlan& plan) {
+    const uint32_t coefficients = plan.order * plan.order;
+    const ProjectParams project{plan.faceSize};
+    const ReduceParams reduce{plan.groups};
+    const ConvolveParams radiance = convolveParams(plan.order, false, 0);
+    const ConvolveParams irradiance = convolveParams(plan.order, true, kProbes * coefficients);
+    recordUpload(commands, r.staging, r.cubemaps);
+    dispatch(commands, programs.project, r.project, &project, plan.groups, kProbes);
     barrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-    dispatch(commands, programs.reduce, reduceSet, &reduce, uint32_t(options.order * options.order)); // one per coefficient
+    dispatch(commands, programs.reduce, r.reduce, &reduce, coefficients, kProbes); // one workgroup per coefficient
     barrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-    dispatch(commands, programs.convolve, radianceSet, &unit, 1);
-    dispatch(commands, programs.convolve, irradianceSet, &lambert, 1);
+    dispatch(commands, programs.convolve, r.convolve, &radiance, 1, kProbes);
+    // Not needed (disjoint parts of one binding); shprobe records it too, for hazard tracking that
+    // sees the binding's whole range.
+    barrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
+    dispatch(commands, programs.convolve, r.convolve, &irradiance, 1, kProbes);
     barrier(commands, VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+}
+
+Bake bake(const Gpu& gpu, const Programs& programs, const std::vector<Coefficient>& texels, const Options& options) {
+    const BakePlan plan = planBake(gpu, options);
+    BakeResources r = createBakeResources(gpu, programs, texels, plan);
+    VkCommandBuffer commands = beginCommands(gpu, r.commandPool);
+    recordBake(commands, programs, r, plan);
     VK_CHECK(vkEndCommandBuffer(commands));
     submitAndWait(gpu, commands);
-    std::printf("input: %s, 6 x %u x %u texels, order %u, %u workgroups of %u\n", options.environment.c_str(), n, n,
-                order, groups, kWidth);
+    std::printf("input: %s, 6 x %u x %u texels, order %u, %u workgroups of %u\n", options.environment.c_str(),
+                plan.faceSize, plan.faceSize, plan.order, plan.groups, kWidth);
 
-    auto* radiance = static_cast<const Coefficient*>(r.radiance.mapped);
-    auto* irradiance = static_cast<const Coefficient*>(r.irradiance.mapped);
-    Bake result{{radiance, radiance + order * order}, {irradiance, irradiance + order * order}};
+    // Probe 0: radiance at vec4 0, irradiance at kProbes * n^2.
+    const uint32_t coefficients = plan.order * plan.order;
+    const auto* radiance = static_cast<const Coefficient*>(r.output.mapped);
+    const Coefficient* irradiance = radiance + kProbes * coefficients;
+    Bake result{{radiance, radiance + coefficients}, {irradiance, irradiance + coefficients}};
     destroyBakeResources(gpu, r);
     return result;
 }
@@ -577,7 +768,7 @@ int main(int argc, char** argv) {
     printCoefficients("L", result.radiance);
     printCoefficients("E", result.irradiance);
 
-    for (Program* program : {&programs.convolve, &programs.reduce, &programs.project}) destroyProgram(gpu, *program);
+    destroyPrograms(gpu, programs);
     vkDestroyDevice(gpu.device, nullptr);
     if (gpu.messenger) {
         auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(

@@ -22,24 +22,22 @@ SHPROBE_FN uint bandOfIndex(uint index) {
     return l;
 }
 
-// project.comp: one dispatch projects rows [firstRow, firstRow + rowCount) of all six faces of an
-// N x N cube map (N = faceSize); the bound input holds exactly that band (see project.comp.glsl).
-// Workgroup g writes its partial sums to partial slot partialOffset + g.
+// project.comp: projects the N x N cube maps (N = faceSize) of the bound image, one probe per
+// workgroup row; workgroup (g, p) writes its partial sums to slot p * gl_NumWorkGroups.x + g.
 struct ProjectParams {
     uint faceSize;
-    uint firstRow;
-    uint rowCount;
-    uint partialOffset;
 };
 
-// reduce.comp: sums partialCount partial slots into one coefficient set. One workgroup.
+// reduce.comp: sums each probe's partialCount partial slots into its coefficient set.
 struct ReduceParams {
     uint partialCount;
 };
 
-// convolve.comp: multiplies coefficient i of band l by bandScale[l] (A_l times an optional window).
+// convolve.comp: multiplies coefficient i of band l by bandScale[l] (A_l times an optional window)
+// and writes it outputOffset vec4 into the output binding.
 struct ConvolveParams {
     vec4 bandScale[SHPROBE_MAX_ORDER / 4];
+    uint outputOffset;
 };
 
 // rotate.comp: rotates probeCount probes. Probe p uses the band matrices that start at float
@@ -52,9 +50,9 @@ struct RotateParams {
 SHPROBE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(shprobe::gpu::ProjectParams) == 16);
+static_assert(sizeof(shprobe::gpu::ProjectParams) == 4);
 static_assert(sizeof(shprobe::gpu::ReduceParams) == 4);
-static_assert(sizeof(shprobe::gpu::ConvolveParams) == 32);
+static_assert(sizeof(shprobe::gpu::ConvolveParams) == 36);
 static_assert(sizeof(shprobe::gpu::RotateParams) == 8);
 #endif
 

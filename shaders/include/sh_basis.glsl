@@ -72,6 +72,9 @@ void shEvalBand(uint l, vec3 d, inout float y[SH_BASIS_CAPACITY]) {
 
 void shEvalBasis(vec3 d, out float y[SH_BASIS_CAPACITY]) {
     shEvalBands0To4(d, y);
+    // Without this early return llvmpipe keeps y in memory even when the loop below runs zero
+    // times, and the projection at order 3 runs four times slower.
+    if (SH_ORDER <= 5u) return;
     for (uint l = 5u; l < SH_ORDER; ++l) shEvalBand(l, d, y);
 }
 

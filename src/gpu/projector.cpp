@@ -3,170 +3,31 @@
 #include "gpu_interface.h"
 #include "sh/basis.h"
 #include "sh/error.h"
-#include "sh/irradiance.h"
-#include "shprobe/shprobe_spirv.h"
 #include "vk/check.h"
+#include "vk/image.h"
 #include "vk/resources.h"
 
 #include <algorithm>
-#include <span>
 #include <cmath>
-#include <vector>
+#include <cstring>
+#include <glm/gtc/packing.hpp>
 
 namespace shprobe {
 
 namespace {
 
-constexpr VkDeviceSize kTexelBytes = sizeof(glm::vec4);
 constexpr VkDeviceSize kCoefficientBytes = sizeof(glm::vec4); // rgb + padding, std430 vec4
+constexpr float kHalfMax = 65504.0f;
 
 VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
     return (value + alignment - 1) / alignment * alignment;
 }
 
-// One projection dispatch: a band of rows of all six faces, small enough for one storage-buffer
-// binding. In the uploaded buffer the bands follow each other, each holding its rows face by face.
-struct Band {
-    uint32_t firstRow;
-    uint32_t rowCount;
-    uint32_t groupCount;
-    uint32_t partialOffset;
-    VkDeviceSize offset; // bytes
-    VkDeviceSize size;   // bytes
-};
-
-// llvmpipe (lavapipe) ends any loop after 65535 iterations, counting the iterations of nested loops
-// against the outermost one, and past the limit the sums are silently wrong. One position (six
-// texels) runs fewer than 1 + 6 (1 + n^2 + n^2 / 2) loop iterations at order n (the position and
-// face loops, the accumulation, the recurrence of bands above 4). Half the limit leaves a margin;
-// other devices lose nothing by the cap.
-uint32_t maxPositionsPerInvocation(int order) {
-    uint32_t n = uint32_t(order);
-    return 32768u / (1u + 6u * (1u + n * n + n * n / 2u));
+VkFormat imageFormat(GpuTexelFormat format) {
+    return format == GpuTexelFormat::Rgba16F ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R32G32B32A32_SFLOAT;
 }
 
-// Positions (texel positions of all six faces) each invocation handles. The request is raised
-// when needed so that all partial slots fit one storage-buffer binding (half of it, leaving room for
-// the rounding of each band's group count), and capped for lavapipe's loop limit; a face size that
-// cannot meet both is refused.
-uint32_t positionsPerInvocation(const DeviceInfo& device, const ProjectorOptions& options, uint32_t faceSize) {
-    VkDeviceSize slotBytes = VkDeviceSize(coefficientCount(options.order)) * kCoefficientBytes;
-    VkDeviceSize maxSlots = device.limits.maxStorageBufferRange / slotBytes / 2;
-    VkDeviceSize positions = VkDeviceSize(faceSize) * faceSize;
-    VkDeviceSize perGroup = (positions + maxSlots - 1) / maxSlots;
-    uint32_t least = uint32_t((perGroup + options.workgroupSize - 1) / options.workgroupSize);
-    uint32_t most = maxPositionsPerInvocation(options.order);
-    if (least > most)
-        throw Error(ErrorKind::Input, "GPU bake: face size " + std::to_string(faceSize) + " at order " +
-                                          std::to_string(options.order) + " needs a workgroup wider than " +
-                                          std::to_string(options.workgroupSize) + " on " + device.name);
-    uint32_t requested = (options.texelsPerInvocation + kFaceCount - 1) / kFaceCount;
-    return std::clamp(requested, std::max(least, 1u), most);
-}
-
-// Rows per band: as many as one binding can hold and one dispatch's workgroup count can cover, a
-// multiple of 8 so that band offsets (96 N firstRow bytes) meet every storage-buffer offset
-// alignment Vulkan allows (at most 256).
-uint32_t rowsPerBand(const DeviceInfo& device, uint32_t faceSize, uint32_t positionsPerGroup) {
-    VkDeviceSize rowBytes = VkDeviceSize(kFaceCount) * faceSize * kTexelBytes;
-    VkDeviceSize byBinding = device.limits.maxStorageBufferRange / rowBytes;
-    VkDeviceSize byGroups = VkDeviceSize(device.limits.maxComputeWorkGroupCount[0]) * positionsPerGroup / faceSize;
-    VkDeviceSize rows = std::min(byBinding, byGroups);
-    if (rows >= faceSize) return faceSize;
-    return uint32_t(std::max<VkDeviceSize>(8, rows / 8 * 8));
-}
-
-std::vector<Band> planBands(const DeviceInfo& device, const ProjectorOptions& options, uint32_t faceSize) {
-    uint32_t positionsPerGroup = options.workgroupSize * positionsPerInvocation(device, options, faceSize);
-    uint32_t bandRows = rowsPerBand(device, faceSize, positionsPerGroup);
-    std::vector<Band> bands;
-    uint32_t partials = 0;
-    VkDeviceSize offset = 0;
-    for (uint32_t firstRow = 0; firstRow < faceSize; firstRow += bandRows) {
-        uint32_t rows = std::min(bandRows, faceSize - firstRow);
-        uint32_t positions = rows * faceSize;
-        uint32_t groups = (positions + positionsPerGroup - 1) / positionsPerGroup;
-        VkDeviceSize size = VkDeviceSize(kFaceCount) * positions * kTexelBytes;
-        bands.push_back({firstRow, rows, groups, partials, offset, size});
-        partials += groups;
-        offset += size;
-    }
-    return bands;
-}
-
-// Writes the cube map band after band, each band's rows face by face (project.comp's layout).
-void writeBands(const Cubemap& cubemap, const std::vector<Band>& bands, void* destination) {
-    auto* out = static_cast<glm::vec4*>(destination);
-    size_t n = size_t(cubemap.faceSize);
-    for (const Band& band : bands)
-        for (int face = 0; face < kFaceCount; ++face) {
-            const glm::vec4* rows = &cubemap.at(face, 0, int(band.firstRow));
-            out = std::copy(rows, rows + band.rowCount * n, out);
-        }
-}
-
-// Per-band scales for convolve.comp: the window alone (windowed radiance), or A_l times the window
-// (irradiance, E_lm = A_l L_lm). An empty window is no window.
-gpu::ConvolveParams bandScales(int order, std::span<const double> window, Quantity quantity) {
-    gpu::ConvolveParams params{};
-    for (int l = 0; l < order; ++l) {
-        double scale = window.empty() ? 1.0 : window[size_t(l)];
-        if (quantity == Quantity::Irradiance) scale *= irradianceBandFactor(l);
-        params.bandScale[l / 4][l % 4] = float(scale);
-    }
-    return params;
-}
-
-void checkWindow(int order, std::span<const double> window) {
-    if (!window.empty() && window.size() != size_t(order))
-        throw Error(ErrorKind::Input, "a window of " + std::to_string(window.size()) + " bands for order " +
-                                          std::to_string(order));
-}
-
-// Throws when a coefficient is not finite: finite inputs whose sums overflow fp32 (values near
-// 1e38), or a device that computed garbage; either way no such probe is handed on.
-ShCoefficients readCoefficients(const Buffer& results, VkDeviceSize offset, int order, Quantity quantity) {
-    ShCoefficients coefficients = makeCoefficients(order, quantity);
-    auto* values = reinterpret_cast<const glm::vec4*>(static_cast<const char*>(results.mapped) + offset);
-    for (size_t i = 0; i < coefficients.rgb.size(); ++i) {
-        glm::vec3 value(values[i]);
-        if (!std::isfinite(value.r) || !std::isfinite(value.g) || !std::isfinite(value.b))
-            throw Error(ErrorKind::Input, "GPU bake: coefficient " + std::to_string(i) +
-                                              " is not finite (input values too large for fp32 sums?)");
-        coefficients.rgb[i] = glm::dvec3(value);
-    }
-    return coefficients;
-}
-
-// The host-visible results buffer: three coefficient sets, each at a storage-buffer-aligned offset.
-struct ResultSlots {
-    VkDeviceSize bytes;  // one coefficient set
-    VkDeviceSize stride; // bytes rounded up to the offset alignment
-    static constexpr int kRawRadiance = 0, kRadiance = 1, kIrradiance = 2, kCount = 3;
-    VkDeviceSize offset(int slot) const { return VkDeviceSize(slot) * stride; }
-};
-
-ResultSlots resultSlots(const Context& context, int order) {
-    VkDeviceSize bytes = VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
-    return {bytes, alignUp(bytes, context.info.limits.minStorageBufferOffsetAlignment)};
-}
-
-// Everything one bake allocates, destroyed in one place.
-struct BakeResources {
-    Buffer texels;
-    Buffer partials;
-    Buffer results; // ResultSlots; host-visible
-    VkDescriptorPool pool = VK_NULL_HANDLE;
-    VkQueryPool timestamps = VK_NULL_HANDLE;
-};
-
-void destroyBakeResources(const Context& context, BakeResources& resources) {
-    if (resources.timestamps) vkDestroyQueryPool(context.device, resources.timestamps, nullptr);
-    if (resources.pool) vkDestroyDescriptorPool(context.device, resources.pool, nullptr);
-    destroyBuffer(context, resources.results);
-    destroyBuffer(context, resources.partials);
-    destroyBuffer(context, resources.texels);
-}
+VkDeviceSize texelBytes(GpuTexelFormat format) { return format == GpuTexelFormat::Rgba16F ? 8 : 16; }
 
 void checkCubemap(const Cubemap& cubemap) {
     if (cubemap.faceSize < 1 || cubemap.faceSize > kMaxGpuFaceSize)
@@ -177,10 +38,92 @@ void checkCubemap(const Cubemap& cubemap) {
                                           " texels, not 6 x " + std::to_string(cubemap.faceSize) + "^2");
 }
 
+// Copies the texels into the staging memory in the image's format (faces follow each other, as
+// layers do). RGBA16F refuses values a half cannot hold rather than clamping them silently.
+void packTexels(const Cubemap& cubemap, GpuTexelFormat format, void* destination) {
+    if (format == GpuTexelFormat::Rgba32F) {
+        std::memcpy(destination, cubemap.texels.data(), cubemap.texels.size() * sizeof(glm::vec4));
+        return;
+    }
+    auto* out = static_cast<uint64_t*>(destination);
+    for (const glm::vec4& texel : cubemap.texels) {
+        glm::vec3 rgb(texel);
+        if (glm::any(glm::greaterThan(glm::abs(rgb), glm::vec3(kHalfMax))))
+            throw Error(ErrorKind::Input, "GPU bake: a texel of " + std::to_string(std::max({rgb.r, rgb.g, rgb.b})) +
+                                              " does not fit RGBA16F (at most 65504); use RGBA32F");
+        *out++ = glm::packHalf4x16(glm::vec4(rgb, 0.0f));
+    }
+}
+
+// Cube maps of one face size, baked from one image (one layer per face) with one bake set.
+struct BakeGroup {
+    std::vector<size_t> members; // indices into the batch
+    uint32_t faceSize = 0;
+    VkDeviceSize outputOffset = 0;
+    Buffer staging;
+    GpuImage image;
+    ProbeBakeSet set;
+};
+
+// Groups by face size, in order of first appearance, at most maxImageArrayLayers / 6 probes each.
+std::vector<BakeGroup> groupByFaceSize(const Context& context, std::span<const Cubemap* const> cubemaps) {
+    const size_t maxProbes = std::max<size_t>(1, context.info.limits.maxImageArrayLayers / kFaceCount);
+    std::vector<BakeGroup> groups;
+    for (size_t i = 0; i < cubemaps.size(); ++i) {
+        uint32_t faceSize = uint32_t(cubemaps[i]->faceSize);
+        auto open = std::find_if(groups.begin(), groups.end(), [&](const BakeGroup& group) {
+            return group.faceSize == faceSize && group.members.size() < maxProbes;
+        });
+        if (open == groups.end()) open = groups.insert(groups.end(), BakeGroup{{}, faceSize});
+        open->members.push_back(i);
+    }
+    return groups;
+}
+
+void destroyGroups(const Context& context, std::vector<BakeGroup>& groups) {
+    for (BakeGroup& group : groups) {
+        destroyProbeBakeSet(context, group.set);
+        destroyImage(context, group.image);
+        destroyBuffer(context, group.staging);
+    }
+}
+
+// The group's image in one layer per face, filled from its staging buffer.
+void createGroupImage(const Context& context, const ProjectorOptions& options,
+                      std::span<const Cubemap* const> cubemaps, BakeGroup& group) {
+    const VkDeviceSize faceTexels = VkDeviceSize(group.faceSize) * group.faceSize;
+    const VkDeviceSize cubemapBytes = kFaceCount * faceTexels * texelBytes(options.texelFormat);
+    group.staging = createBuffer(context, cubemapBytes * group.members.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                 MemoryUse::Upload, "cube-map upload");
+    for (size_t k = 0; k < group.members.size(); ++k)
+        packTexels(*cubemaps[group.members[k]], options.texelFormat,
+                   static_cast<char*>(group.staging.mapped) + k * cubemapBytes);
+    group.image = createImage(context, {.format = imageFormat(options.texelFormat),
+                                        .extent = {group.faceSize, group.faceSize},
+                                        .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                        .what = "cube maps to bake",
+                                        .layers = uint32_t(kFaceCount * group.members.size())});
+}
+
+void recordUpload(VkCommandBuffer commands, const BakeGroup& group) {
+    changeLayout(commands, group.image,
+                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT});
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, group.image.layers};
+    region.imageExtent = {group.faceSize, group.faceSize, 1};
+    vkCmdCopyBufferToImage(commands, group.staging.buffer, group.image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                           &region);
+    // probe_baker.h: the image in SHADER_READ_ONLY_OPTIMAL, its writes visible to compute reads.
+    changeLayout(commands, group.image,
+                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                  VK_ACCESS_SHADER_READ_BIT});
+}
+
 VkQueryPool createTimestampPool(const Context& context) {
     if (!context.info.timestamps) return VK_NULL_HANDLE;
-    VkQueryPoolCreateInfo info{};
-    info.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO;
+    VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     info.queryType = VK_QUERY_TYPE_TIMESTAMP;
     info.queryCount = 2;
     VkQueryPool pool = VK_NULL_HANDLE;
@@ -199,150 +142,116 @@ double readDeviceMilliseconds(const Context& context, VkQueryPool pool) {
     return double((ticks[1] - ticks[0]) & mask) * context.info.timestampPeriod * 1e-6;
 }
 
-// Descriptor sets and dispatches of the two convolutions, both reading the raw radiance slot.
-struct Convolutions {
-    VkDescriptorSet radianceSet;
-    VkDescriptorSet irradianceSet;
-};
-
-Convolutions createConvolutions(const Context& context, const Projector& projector, VkDescriptorPool pool,
-                                const Buffer& results, const ResultSlots& slots) {
-    auto setFor = [&](int slot) {
-        BufferRange ranges[] = {{&results, slots.offset(ResultSlots::kRawRadiance), slots.bytes},
-                                {&results, slots.offset(slot), slots.bytes}};
-        return createDescriptorSet(context, pool, projector.convolve, ranges);
-    };
-    return {setFor(ResultSlots::kRadiance), setFor(ResultSlots::kIrradiance)};
+// Throws when a coefficient is not finite: finite inputs whose sums overflow fp32 (values near
+// 1e38), or a device that computed garbage; either way no such probe is handed on.
+ShCoefficients readCoefficients(const Buffer& output, VkDeviceSize offset, int order, Quantity quantity) {
+    ShCoefficients coefficients = makeCoefficients(order, quantity);
+    auto* values = reinterpret_cast<const glm::vec4*>(static_cast<const char*>(output.mapped) + offset);
+    for (size_t i = 0; i < coefficients.rgb.size(); ++i) {
+        glm::vec3 value(values[i]);
+        if (!std::isfinite(value.r) || !std::isfinite(value.g) || !std::isfinite(value.b))
+            throw Error(ErrorKind::Input, "GPU bake: coefficient " + std::to_string(i) +
+                                              " is not finite (input values too large for fp32 sums?)");
+        coefficients.rgb[i] = glm::dvec3(value);
+    }
+    return coefficients;
 }
 
-void recordConvolutions(VkCommandBuffer commands, const Projector& projector, const Convolutions& convolutions,
-                        std::span<const double> window) {
-    int order = projector.options.order;
-    dispatch(commands, projector.convolve, convolutions.radianceSet, bandScales(order, window, Quantity::Radiance), 1);
-    dispatch(commands, projector.convolve, convolutions.irradianceSet,
-             bandScales(order, window, Quantity::Irradiance), 1);
-    computeWriteBarrier(commands);
-}
-
-void readResults(const Context& context, const Buffer& results, const ResultSlots& slots, int order, GpuBake& bake) {
-    invalidateBuffer(context, results);
-    bake.radiance = readCoefficients(results, slots.offset(ResultSlots::kRadiance), order, Quantity::Radiance);
-    bake.irradiance = readCoefficients(results, slots.offset(ResultSlots::kIrradiance), order, Quantity::Irradiance);
+// Probe k of a bake whose output starts at `offset` (probe_baker.h's layout).
+GpuBake readProbe(const Buffer& output, VkDeviceSize offset, int order, size_t probes, size_t k) {
+    const VkDeviceSize setBytes = VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
+    GpuBake bake;
+    bake.radiance = readCoefficients(output, offset + k * setBytes, order, Quantity::Radiance);
+    bake.irradiance = readCoefficients(output, offset + (probes + k) * setBytes, order, Quantity::Irradiance);
+    return bake;
 }
 
 } // namespace
 
 Projector createProjector(const Context& context, const ProjectorOptions& options) {
-    if (options.order < 1 || options.order > kMaxOrder)
-        throw Error(ErrorKind::Input, "order " + std::to_string(options.order) + " is outside 1.." +
-                                          std::to_string(kMaxOrder));
-    if (options.texelsPerInvocation < 1)
-        throw Error(ErrorKind::Input, "texels per invocation must be at least 1");
-    // project.comp keeps one vec3 (16 bytes in shared memory) per invocation for its reduction.
-    if (VkDeviceSize(options.workgroupSize) * 16 + 16 > context.info.limits.maxComputeSharedMemorySize)
-        throw Error(ErrorKind::Input, "workgroup size " + std::to_string(options.workgroupSize) +
-                                          " needs more shared memory than " + context.info.name + " has");
     Projector projector;
     projector.options = options;
-    uint32_t order = uint32_t(options.order);
-    try {
-        projector.project = createComputeProgram(
-            context, {"project.comp", spirv::project_comp, 2, sizeof(gpu::ProjectParams), options.workgroupSize, order});
-        // The reduction and convolution handle one value per coefficient: a small workgroup is enough.
-        projector.reduce = createComputeProgram(
-            context, {"reduce.comp", spirv::reduce_comp, 2, sizeof(gpu::ReduceParams), 64, order});
-        projector.convolve = createComputeProgram(
-            context, {"convolve.comp", spirv::convolve_comp, 2, sizeof(gpu::ConvolveParams), 64, order});
-    } catch (...) {
-        destroyProjector(context, projector);
-        throw;
-    }
+    projector.baker = createProbeBaker(context, {.order = options.order,
+                                                 .workgroupSize = options.workgroupSize,
+                                                 .texelsPerInvocation = options.texelsPerInvocation,
+                                                 .pipelineCache = options.pipelineCache});
     return projector;
 }
 
-void destroyProjector(const Context& context, Projector& projector) {
-    destroyComputeProgram(context, projector.convolve);
-    destroyComputeProgram(context, projector.reduce);
-    destroyComputeProgram(context, projector.project);
-}
+void destroyProjector(const Context& context, Projector& projector) { destroyProbeBaker(context, projector.baker); }
 
-GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap,
-                    std::span<const double> window) {
-    checkCubemap(cubemap);
-    const int order = projector.options.order;
-    checkWindow(order, window);
-    const ResultSlots slots = resultSlots(context, order);
-    const VkDeviceSize coefficientBytes = slots.bytes;
-    const VkDeviceSize texelBytes = cubemap.texels.size() * kTexelBytes;
-    const std::vector<Band> bands = planBands(context.info, projector.options, uint32_t(cubemap.faceSize));
-    const uint32_t partialSlots = bands.back().partialOffset + bands.back().groupCount;
-
-    BakeResources resources;
-    GpuBake bake;
-    try {
-        const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-        resources.texels = createBuffer(context, texelBytes, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                        MemoryUse::Device, "input texels");
-        resources.partials =
-            createBuffer(context, partialSlots * coefficientBytes, storage, MemoryUse::Device, "partial sums");
-        resources.results = createBuffer(context, slots.offset(ResultSlots::kCount), storage, MemoryUse::Readback,
-                                         "coefficients");
-        resources.pool = createDescriptorPool(context, uint32_t(bands.size()) + 3, 2 * (uint32_t(bands.size()) + 3));
-        resources.timestamps = createTimestampPool(context);
-        writeBuffer(context, resources.texels, texelBytes,
-                    [&](void* destination) { writeBands(cubemap, bands, destination); });
-
-        std::vector<VkDescriptorSet> bandSets;
-        for (const Band& band : bands) {
-            BufferRange ranges[] = {{&resources.texels, band.offset, band.size},
-                                    {&resources.partials, 0, VK_WHOLE_SIZE}};
-            bandSets.push_back(createDescriptorSet(context, resources.pool, projector.project, ranges));
-        }
-        BufferRange reduceRanges[] = {{&resources.partials, 0, VK_WHOLE_SIZE},
-                                      {&resources.results, slots.offset(ResultSlots::kRawRadiance), coefficientBytes}};
-        VkDescriptorSet reduceSet = createDescriptorSet(context, resources.pool, projector.reduce, reduceRanges);
-        Convolutions convolutions = createConvolutions(context, projector, resources.pool, resources.results, slots);
-
-        submitAndWait(context, [&](VkCommandBuffer commands) {
-            if (resources.timestamps) {
-                vkCmdResetQueryPool(commands, resources.timestamps, 0, 2);
-                vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, resources.timestamps, 0);
-            }
-            for (size_t i = 0; i < bands.size(); ++i) {
-                const Band& band = bands[i];
-                gpu::ProjectParams params{uint32_t(cubemap.faceSize), band.firstRow, band.rowCount, band.partialOffset};
-                dispatch(commands, projector.project, bandSets[i], params, band.groupCount);
-            }
-            computeWriteBarrier(commands);
-            dispatch(commands, projector.reduce, reduceSet, gpu::ReduceParams{partialSlots},
-                     uint32_t(coefficientCount(order)));
-            computeWriteBarrier(commands);
-            recordConvolutions(commands, projector, convolutions, window);
-            if (resources.timestamps)
-                vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, resources.timestamps, 1);
-        });
-
-        readResults(context, resources.results, slots, order, bake);
-        bake.deviceMilliseconds = readDeviceMilliseconds(context, resources.timestamps);
-        bake.workgroups = partialSlots;
-        bake.dispatches = uint32_t(bands.size());
-    } catch (...) {
-        destroyBakeResources(context, resources);
-        throw;
-    }
-    destroyBakeResources(context, resources);
-    return bake;
+VkDeviceSize batchTexelBytes(const Context& context) {
+    VkDeviceSize largestHeap = 0;
+    for (uint32_t h = 0; h < context.memory.memoryHeapCount; ++h)
+        if (context.memory.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+            largestHeap = std::max(largestHeap, context.memory.memoryHeaps[h].size);
+    // A quarter of the heap leaves room for the staging copy and whatever else the device holds.
+    return std::min<VkDeviceSize>(VkDeviceSize(1) << 30, largestHeap / 4);
 }
 
 std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& projector,
                                   std::span<const Cubemap* const> cubemaps, std::span<const double> window) {
-    std::vector<GpuBake> bakes;
-    for (const Cubemap* cubemap : cubemaps) bakes.push_back(bakeCubemap(context, projector, *cubemap, window));
+    const int order = projector.options.order;
+    for (const Cubemap* cubemap : cubemaps) checkCubemap(*cubemap);
+    if (cubemaps.empty()) return {};
+
+    std::vector<BakeGroup> groups = groupByFaceSize(context, cubemaps);
+    Buffer output;
+    VkQueryPool timestamps = VK_NULL_HANDLE;
+    std::vector<GpuBake> bakes(cubemaps.size());
+    try {
+        VkDeviceSize outputBytes = 0;
+        for (BakeGroup& group : groups) {
+            group.outputOffset = outputBytes;
+            outputBytes = alignUp(outputBytes + probeBakeOutputBytes(order, uint32_t(group.members.size())),
+                                  context.info.limits.minStorageBufferOffsetAlignment);
+        }
+        output = createBuffer(context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback,
+                              "coefficients");
+        for (BakeGroup& group : groups) {
+            createGroupImage(context, projector.options, cubemaps, group);
+            group.set = createProbeBakeSet(context, projector.baker,
+                                           {group.image.view, group.faceSize, uint32_t(group.members.size()),
+                                            output.buffer, group.outputOffset});
+        }
+        timestamps = createTimestampPool(context);
+
+        submitAndWait(context, [&](VkCommandBuffer commands) {
+            for (const BakeGroup& group : groups) recordUpload(commands, group);
+            if (timestamps) {
+                vkCmdResetQueryPool(commands, timestamps, 0, 2);
+                vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);
+            }
+            for (const BakeGroup& group : groups) recordProbeBake(commands, projector.baker, group.set, window);
+            if (timestamps) vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
+            computeWriteBarrier(commands); // the coefficients, to the host
+        });
+
+        invalidateBuffer(context, output);
+        const double deviceMs = readDeviceMilliseconds(context, timestamps);
+        for (const BakeGroup& group : groups)
+            for (size_t k = 0; k < group.members.size(); ++k) {
+                GpuBake& bake = bakes[group.members[k]];
+                bake = readProbe(output, group.outputOffset, order, group.members.size(), k);
+                bake.deviceMilliseconds = deviceMs;
+                bake.workgroups = group.set.groupsPerProbe;
+            }
+    } catch (...) {
+        if (timestamps) vkDestroyQueryPool(context.device, timestamps, nullptr);
+        destroyGroups(context, groups);
+        destroyBuffer(context, output);
+        throw;
+    }
+    if (timestamps) vkDestroyQueryPool(context.device, timestamps, nullptr);
+    destroyGroups(context, groups);
+    destroyBuffer(context, output);
     return bakes;
 }
 
-VkDeviceSize batchTexelBytes(const Context& context) {
-    return context.info.limits.maxStorageBufferRange;
+GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap,
+                    std::span<const double> window) {
+    const Cubemap* one[] = {&cubemap};
+    return bakeCubemaps(context, projector, one, window).front();
 }
 
 GpuBake convolveOnGpu(const Context& context, const Projector& projector, const ShCoefficients& radiance,
@@ -350,28 +259,34 @@ GpuBake convolveOnGpu(const Context& context, const Projector& projector, const 
     const int order = projector.options.order;
     if (radiance.order != order || radiance.quantity != Quantity::Radiance)
         throw Error(ErrorKind::Input, "GPU convolution: expected order-" + std::to_string(order) + " radiance");
-    checkWindow(order, window);
-    const ResultSlots slots = resultSlots(context, order);
     std::vector<glm::vec4> raw;
     for (const glm::dvec3& c : radiance.rgb) raw.emplace_back(glm::vec3(c), 0.0f);
+    const VkDeviceSize setBytes = raw.size() * kCoefficientBytes;
+    const VkDeviceSize outputBytes = probeBakeOutputBytes(order, 1);
 
-    Buffer results;
+    Buffer input, output;
     VkDescriptorPool pool = VK_NULL_HANDLE;
     auto release = [&] {
         if (pool) vkDestroyDescriptorPool(context.device, pool, nullptr);
-        destroyBuffer(context, results);
+        destroyBuffer(context, output);
+        destroyBuffer(context, input);
     };
     GpuBake bake;
     try {
-        results = createBuffer(context, slots.offset(ResultSlots::kCount), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                               MemoryUse::Readback, "coefficients");
-        uploadBuffer(context, results, raw.data(), slots.bytes); // slot 0: the raw radiance
-        pool = createDescriptorPool(context, 2, 4);
-        Convolutions convolutions = createConvolutions(context, projector, pool, results, slots);
+        input = createBuffer(context, setBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                             MemoryUse::Device, "radiance to convolve");
+        output = createBuffer(context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback,
+                              "coefficients");
+        uploadBuffer(context, input, raw.data(), setBytes);
+        pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 2});
+        const BindingTarget targets[] = {{input.buffer, 0, setBytes}, {output.buffer, 0, outputBytes}};
+        VkDescriptorSet set = createDescriptorSet(context, pool, projector.baker.convolve, targets);
         submitAndWait(context, [&](VkCommandBuffer commands) {
-            recordConvolutions(commands, projector, convolutions, window);
+            recordConvolutions(commands, projector.baker, set, 1, window);
+            computeWriteBarrier(commands);
         });
-        readResults(context, results, slots, order, bake);
+        invalidateBuffer(context, output);
+        bake = readProbe(output, 0, order, 1, 0);
     } catch (...) {
         release();
         throw;

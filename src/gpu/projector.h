@@ -1,29 +1,34 @@
-// GPU bake: projection of a cube map onto SH (project.comp), reduction of the per-workgroup partial
-// sums (reduce.comp) and the irradiance convolution (convolve.comp), recorded in one command buffer.
+// GPU bake from host memory: uploads cube maps into a sampled image, records the bake of
+// gpu/probe_baker.h (project.comp, reduce.comp, convolve.comp) and reads the coefficients back,
+// all in one submission however many cube maps there are.
 #pragma once
+#include "gpu/probe_baker.h"
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 #include "vk/context.h"
-#include "vk/pipeline.h"
 
 #include <span>
 #include <vector>
 
 namespace shprobe {
 
+// How the texels are stored on the GPU: RGBA32F as loaded, or RGBA16F (half the bytes to read;
+// values beyond the half range, +-65504, are refused).
+enum class GpuTexelFormat { Rgba32F, Rgba16F };
+
 struct ProjectorOptions {
     int order = 3;                       // 1..kMaxOrder
     uint32_t workgroupSize = 64;         // invocations per workgroup
     uint32_t texelsPerInvocation = 256;  // sets the workgroup count: more texels, fewer reductions;
-                                         // capped by order for lavapipe's loop limit (projector.cpp)
+                                         // capped by order for lavapipe's loop limit (probe_baker.cpp)
+    GpuTexelFormat texelFormat = GpuTexelFormat::Rgba32F;
+    VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional
 };
 
 // Pipelines for one order, created once and reused for any number of bakes.
 struct Projector {
     ProjectorOptions options;
-    ComputeProgram project;
-    ComputeProgram reduce;
-    ComputeProgram convolve;
+    ProbeBaker baker;
 };
 
 Projector createProjector(const Context& context, const ProjectorOptions& options);
@@ -32,9 +37,9 @@ void destroyProjector(const Context& context, Projector& projector);
 struct GpuBake {
     ShCoefficients radiance;
     ShCoefficients irradiance;
-    double deviceMilliseconds = 0.0; // from timestamps around the dispatches; 0 where unsupported
-    uint32_t workgroups = 0;         // projection workgroups over all dispatches
-    uint32_t dispatches = 0;         // projection dispatches (the input is split to fit buffer limits)
+    double deviceMilliseconds = 0.0; // from timestamps around the bake dispatches (all probes of the
+                                     // submission, uploads excluded); 0 where unsupported
+    uint32_t workgroups = 0;         // projection workgroups of this probe
 };
 
 // Largest face the GPU path accepts: texel indices are 32-bit (6 N^2 < 2^32).

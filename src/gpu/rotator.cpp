@@ -53,8 +53,14 @@ Rotator createRotator(const Context& context, int order) {
         throw Error(ErrorKind::Input, "order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxOrder));
     Rotator rotator;
     rotator.order = order;
-    rotator.program = createComputeProgram(context, {"rotate.comp", spirv::rotate_comp, 3, sizeof(gpu::RotateParams),
-                                                     kWorkgroupSize, uint32_t(order)});
+    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                                     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    rotator.program = createComputeProgram(context, {.name = "rotate.comp",
+                                                     .spirv = spirv::rotate_comp,
+                                                     .bindings = kBindings,
+                                                     .pushConstantSize = sizeof(gpu::RotateParams),
+                                                     .localSize = kWorkgroupSize,
+                                                     .order = uint32_t(order)});
     return rotator;
 }
 
@@ -87,10 +93,10 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
                                      "rotated probes");
         uploadBuffer(context, matrixBuffer, matrices.data(), matrixBytes);
         uploadBuffer(context, probeBuffer, input.data(), probeBytes);
-        pool = createDescriptorPool(context, 1, 3);
-        BufferRange ranges[] = {{&matrixBuffer, 0, matrixBytes}, {&probeBuffer, 0, probeBytes},
-                                {&rotatedBuffer, 0, probeBytes}};
-        VkDescriptorSet set = createDescriptorSet(context, pool, rotator.program, ranges);
+        pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 3});
+        BindingTarget targets[] = {{matrixBuffer.buffer, 0, matrixBytes}, {probeBuffer.buffer, 0, probeBytes},
+                                   {rotatedBuffer.buffer, 0, probeBytes}};
+        VkDescriptorSet set = createDescriptorSet(context, pool, rotator.program, targets);
 
         uint32_t stride = rotations.size() == 1 ? 0u : uint32_t(matrixFloats(rotator.order));
         gpu::RotateParams params{uint32_t(probes.size()), stride};
@@ -100,7 +106,7 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
                                               " probes are more than one dispatch can rotate on " + context.info.name +
                                               "; rotate them in smaller batches");
         submitAndWait(context, [&](VkCommandBuffer commands) {
-            dispatch(commands, rotator.program, set, params, groups);
+            dispatch(commands, rotator.program, set, params, {groups});
             computeWriteBarrier(commands);
         });
         invalidateBuffer(context, rotatedBuffer);

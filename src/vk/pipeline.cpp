@@ -18,12 +18,15 @@ VkShaderModule createShaderModule(const Context& context, std::span<const uint32
     return module;
 }
 
-VkDescriptorSetLayout createStorageBufferSetLayout(const Context& context, uint32_t count) {
-    std::vector<VkDescriptorSetLayoutBinding> bindings(count);
-    for (uint32_t i = 0; i < count; ++i)
-        bindings[i] = {i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+VkDescriptorSetLayout createSetLayout(const Context& context, std::span<const VkDescriptorType> types,
+                                      const VkSampler* immutableSampler) {
+    std::vector<VkDescriptorSetLayoutBinding> bindings(types.size());
+    for (uint32_t i = 0; i < bindings.size(); ++i) {
+        bool image = types[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+        bindings[i] = {i, types[i], 1, VK_SHADER_STAGE_COMPUTE_BIT, image ? immutableSampler : nullptr};
+    }
     VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    info.bindingCount = count;
+    info.bindingCount = uint32_t(bindings.size());
     info.pBindings = bindings.data();
     VkDescriptorSetLayout layout = VK_NULL_HANDLE;
     VK_CHECK(vkCreateDescriptorSetLayout(context.device, &info, nullptr, &layout));
@@ -58,7 +61,7 @@ VkPipeline createPipeline(const Context& context, VkShaderModule module, VkPipel
     info.stage.pSpecializationInfo = &specialization;
     info.layout = layout;
     VkPipeline pipeline = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateComputePipelines(context.device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline));
+    VK_CHECK(vkCreateComputePipelines(context.device, desc.cache, 1, &info, nullptr, &pipeline));
     return pipeline;
 }
 
@@ -71,11 +74,11 @@ ComputeProgram createComputeProgram(const Context& context, const ComputeProgram
                                           " is not supported by " + context.info.name + " (at most " +
                                           std::to_string(context.info.limits.maxComputeWorkGroupInvocations) + ")");
     ComputeProgram program;
-    program.storageBufferCount = desc.storageBufferCount;
+    program.bindings.assign(desc.bindings.begin(), desc.bindings.end());
     program.pushConstantSize = desc.pushConstantSize;
     try {
         program.module = createShaderModule(context, desc.spirv);
-        program.setLayout = createStorageBufferSetLayout(context, desc.storageBufferCount);
+        program.setLayout = createSetLayout(context, desc.bindings, &desc.immutableSampler);
         program.layout = createPipelineLayout(context, program.setLayout, desc.pushConstantSize);
         program.pipeline = createPipeline(context, program.module, program.layout, desc);
     } catch (...) {
@@ -93,19 +96,25 @@ void destroyComputeProgram(const Context& context, ComputeProgram& program) {
     program = ComputeProgram{};
 }
 
-VkDescriptorPool createDescriptorPool(const Context& context, uint32_t maxSets, uint32_t maxStorageBuffers) {
-    VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, maxStorageBuffers};
+VkDescriptorPool createDescriptorPool(const Context& context, const DescriptorPoolSize& size) {
+    std::vector<VkDescriptorPoolSize> sizes;
+    if (size.storageBuffers) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, size.storageBuffers});
+    if (size.imageSamplers) sizes.push_back({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, size.imageSamplers});
     VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    info.maxSets = maxSets;
-    info.poolSizeCount = 1;
-    info.pPoolSizes = &size;
+    info.maxSets = size.sets;
+    info.poolSizeCount = uint32_t(sizes.size());
+    info.pPoolSizes = sizes.data();
     VkDescriptorPool pool = VK_NULL_HANDLE;
     VK_CHECK(vkCreateDescriptorPool(context.device, &info, nullptr, &pool));
     return pool;
 }
 
 VkDescriptorSet createDescriptorSet(const Context& context, VkDescriptorPool pool, const ComputeProgram& program,
-                                    std::span<const BufferRange> ranges) {
+                                    std::span<const BindingTarget> targets) {
+    if (targets.size() != program.bindings.size())
+        throw Error(ErrorKind::Device, "descriptor set with " + std::to_string(targets.size()) +
+                                           " targets for a program with " + std::to_string(program.bindings.size()) +
+                                           " bindings");
     VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     allocate.descriptorPool = pool;
     allocate.descriptorSetCount = 1;
@@ -113,23 +122,28 @@ VkDescriptorSet createDescriptorSet(const Context& context, VkDescriptorPool poo
     VkDescriptorSet set = VK_NULL_HANDLE;
     VK_CHECK(vkAllocateDescriptorSets(context.device, &allocate, &set));
 
-    std::vector<VkDescriptorBufferInfo> buffers;
-    for (const BufferRange& range : ranges) buffers.push_back({range.buffer->buffer, range.offset, range.size});
-    std::vector<VkWriteDescriptorSet> writes(buffers.size());
+    std::vector<VkDescriptorBufferInfo> buffers(targets.size());
+    std::vector<VkDescriptorImageInfo> images(targets.size());
+    std::vector<VkWriteDescriptorSet> writes(targets.size());
     for (uint32_t i = 0; i < writes.size(); ++i) {
+        buffers[i] = {targets[i].buffer, targets[i].offset, targets[i].size};
+        images[i] = {VK_NULL_HANDLE, targets[i].imageView, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
         writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
         writes[i].dstSet = set;
         writes[i].dstBinding = i;
         writes[i].descriptorCount = 1;
-        writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-        writes[i].pBufferInfo = &buffers[i];
+        writes[i].descriptorType = program.bindings[i];
+        if (program.bindings[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER)
+            writes[i].pImageInfo = &images[i];
+        else
+            writes[i].pBufferInfo = &buffers[i];
     }
     vkUpdateDescriptorSets(context.device, uint32_t(writes.size()), writes.data(), 0, nullptr);
     return set;
 }
 
 void dispatchRaw(VkCommandBuffer commands, const ComputeProgram& program, VkDescriptorSet set,
-                 const void* constants, uint32_t constantsSize, uint32_t groupCount) {
+                 const void* constants, uint32_t constantsSize, GroupCount groups) {
     if (constantsSize != program.pushConstantSize)
         throw Error(ErrorKind::Device, "push constants of " + std::to_string(constantsSize) +
                                            " bytes for a program that takes " +
@@ -138,7 +152,7 @@ void dispatchRaw(VkCommandBuffer commands, const ComputeProgram& program, VkDesc
     vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set, 0, nullptr);
     if (constantsSize)
         vkCmdPushConstants(commands, program.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, constantsSize, constants);
-    vkCmdDispatch(commands, groupCount, 1, 1);
+    vkCmdDispatch(commands, groups.x, groups.y, 1);
 }
 
 } // namespace shprobe

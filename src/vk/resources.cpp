@@ -3,11 +3,14 @@
 #include "vk/check.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 
 namespace shprobe {
 
 namespace {
+
+std::atomic<uint64_t> gSubmissions{0};
 
 struct MemoryPreference {
     VkMemoryPropertyFlags required;
@@ -150,6 +153,8 @@ void invalidateBuffer(const Context& context, const Buffer& buffer) {
     VK_CHECK(vkInvalidateMappedMemoryRanges(context.device, 1, &range));
 }
 
+uint64_t submissionCount() { return gSubmissions; }
+
 void submitAndWait(const Context& context, const std::function<void(VkCommandBuffer)>& record) {
     VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     allocate.commandPool = context.commandPool;
@@ -171,6 +176,7 @@ void submitAndWait(const Context& context, const std::function<void(VkCommandBuf
         submit.commandBufferCount = 1;
         submit.pCommandBuffers = &commands;
         VK_CHECK(vkQueueSubmit(context.queue, 1, &submit, fence));
+        ++gSubmissions;
         VK_CHECK(vkWaitForFences(context.device, 1, &fence, VK_TRUE, UINT64_MAX));
     } catch (...) {
         if (fence) vkDestroyFence(context.device, fence, nullptr);

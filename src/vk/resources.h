@@ -34,6 +34,8 @@ void invalidateBuffer(const Context& context, const Buffer& buffer);
 
 // Records commands with `record`, submits them on the context's queue and waits for them.
 void submitAndWait(const Context& context, const std::function<void(VkCommandBuffer)>& record);
+// Queue submissions made by submitAndWait in this process so far (tests count them).
+uint64_t submissionCount();
 
 // A barrier making compute-shader (and transfer) writes visible to later compute reads, transfers
 // and host reads.

@@ -1,0 +1,113 @@
+// GPU-resident probe baking for renderers: the cube maps are already on the GPU, the commands go
+// into the caller's command buffer, the coefficients into the caller's buffer. No submission, no
+// wait and no host access happen here; the caller decides when the work runs and what follows it.
+//
+//   Context device = borrowDevice({physicalDevice, device, queueFamily});   // once
+//   ProbeBaker baker = createProbeBaker(device, {.order = 3});
+//   ProbeBakeSet set = createProbeBakeSet(device, baker, {cubemapsView, 256, probeCount, buffer, 0});
+//   recordProbeBake(commandBuffer, baker, set);                              // per bake
+//   ... submit; once it completed: destroyProbeBakeSet, or record it again (same view, new texels).
+//
+// What the caller provides:
+// - The cube maps: a VkImageView of type VK_IMAGE_VIEW_TYPE_2D_ARRAY over 6 * probeCount layers of
+//   an image created with VK_IMAGE_USAGE_SAMPLED_BIT, in any format the device can sample (RGBA16F,
+//   RGBA32F, ...; alpha is ignored): probe p's face f is layer 6p + f of the view, faces in Vulkan's
+//   order +X, -X, +Y, -Y, +Z, -Z with the orientation of shaders/INTERFACE.md (the orientation
+//   vkCmdCopyBufferToImage and cube-map rendering give). One mip level is read: the view's base.
+// - Before recordProbeBake: the image in VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, and a barrier that
+//   makes its writes available to VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_READ_BIT.
+// - The output: a buffer with VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, probeBakeOutputBytes(order,
+//   probeCount) bytes from an offset that is a multiple of minStorageBufferOffsetAlignment. Layout
+//   (std430, vec4 per coefficient, rgb in xyz, w = 0), with n^2 coefficients per probe, flat index
+//   i = l(l+1) + m:
+//     radiance   L_i of probe p at offset + (p * n^2 + i) * 16
+//     irradiance E_i of probe p at offset + ((probeCount + p) * n^2 + i) * 16
+// - After recordProbeBake: a barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT /
+//   VK_ACCESS_SHADER_WRITE_BIT to whatever reads the output (uniform reads, transfer, host).
+// - The bakes of one ProbeBakeSet share its scratch buffer: recordProbeBake orders itself after the
+//   earlier compute work of the queue it runs on, so they may follow each other in one command
+//   buffer or on one queue, but must not run concurrently on different queues. Different sets
+//   are independent.
+#pragma once
+#include "vk/context.h"
+#include "vk/pipeline.h"
+#include "vk/resources.h"
+
+#include <cstdint>
+#include <span>
+
+namespace shprobe {
+
+// The renderer's own device, borrowed: shprobe creates its baker's objects on it and nothing else.
+struct ExternalDevice {
+    VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    uint32_t queueFamily = 0; // a family with VK_QUEUE_COMPUTE_BIT, where the bakes will run
+};
+
+// A Context over borrowed handles (no instance, queue or command pool of its own); enough to
+// create and destroy bakers. Throws Error(Device) naming what the device lacks for baking.
+// Never pass it to destroyContext.
+Context borrowDevice(const ExternalDevice& device);
+
+struct ProbeBakerOptions {
+    int order = 3;                          // 1..kMaxOrder
+    uint32_t workgroupSize = 64;            // invocations per projection workgroup
+    uint32_t texelsPerInvocation = 256;     // work per invocation (capped by order for lavapipe)
+    VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional
+};
+
+// Created once and reused for any number of bakes: the pipelines of project, reduce and convolve,
+// their set layouts and the sampler.
+struct ProbeBaker {
+    ProbeBakerOptions options;
+    VkSampler sampler = VK_NULL_HANDLE;
+    ComputeProgram project;
+    ComputeProgram reduce;
+    ComputeProgram convolve;
+};
+
+ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& options);
+void destroyProbeBaker(const Context& context, ProbeBaker& baker);
+
+// One bake's input and output.
+struct ProbeBakeTarget {
+    VkImageView cubemaps = VK_NULL_HANDLE; // 2D array of 6 * probeCount layers (see above)
+    uint32_t faceSize = 0;                 // N: the layers are N x N
+    uint32_t probeCount = 1;
+    VkBuffer output = VK_NULL_HANDLE;
+    VkDeviceSize outputOffset = 0;         // a multiple of minStorageBufferOffsetAlignment
+};
+
+VkDeviceSize probeBakeOutputBytes(int order, uint32_t probeCount);
+
+// What the bakes of one target need, created once and reusable for any number of bakes of it:
+// the scratch buffer (partial sums, raw radiance) and the descriptor sets (a pool of their own).
+struct ProbeBakeSet {
+    ProbeBakeTarget target;
+    uint32_t groupsPerProbe = 0; // projection workgroups per probe
+    Buffer scratch;
+    VkDeviceSize radianceOffset = 0; // bytes: where the raw radiance starts in the scratch buffer
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VkDescriptorSet project = VK_NULL_HANDLE;
+    VkDescriptorSet reduce = VK_NULL_HANDLE;
+    VkDescriptorSet convolve = VK_NULL_HANDLE;
+};
+
+// Throws Error(Input) when the target exceeds what the device can bake in one dispatch.
+ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker, const ProbeBakeTarget& target);
+// After the last command buffer that used it completed.
+void destroyProbeBakeSet(const Context& context, ProbeBakeSet& set);
+
+// Records project, reduce and both convolutions of every probe of the set: 4 dispatches whatever
+// the probe count. `window` holds one factor per band (de-ringing, sh/windowing.h) applied to
+// both outputs; empty: none.
+void recordProbeBake(VkCommandBuffer commands, const ProbeBaker& baker, const ProbeBakeSet& set,
+                     std::span<const double> window = {});
+
+// The convolutions alone, for radiance computed elsewhere: a set of baker.convolve reading the raw
+// radiance of `probes` probes (binding 0) and writing the output layout above (binding 1).
+void recordConvolutions(VkCommandBuffer commands, const ProbeBaker& baker, VkDescriptorSet convolveSet,
+                        uint32_t probes, std::span<const double> window);
+
+} // namespace shprobe
