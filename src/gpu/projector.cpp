@@ -60,8 +60,7 @@ struct BakeGroup {
     std::vector<size_t> members; // indices into the batch
     uint32_t faceSize = 0;
     VkDeviceSize outputOffset = 0;
-    Buffer staging;
-    GpuImage image;
+    CubemapUpload upload;
     ProbeBakeSet set;
 };
 
@@ -83,42 +82,8 @@ std::vector<BakeGroup> groupByFaceSize(const Context& context, std::span<const C
 void destroyGroups(const Context& context, std::vector<BakeGroup>& groups) {
     for (BakeGroup& group : groups) {
         destroyProbeBakeSet(context, group.set);
-        destroyImage(context, group.image);
-        destroyBuffer(context, group.staging);
+        destroyCubemapUpload(context, group.upload);
     }
-}
-
-// The group's image in one layer per face, filled from its staging buffer.
-void createGroupImage(const Context& context, const ProjectorOptions& options,
-                      std::span<const Cubemap* const> cubemaps, BakeGroup& group) {
-    const VkDeviceSize faceTexels = VkDeviceSize(group.faceSize) * group.faceSize;
-    const VkDeviceSize cubemapBytes = kFaceCount * faceTexels * texelBytes(options.texelFormat);
-    group.staging = createBuffer(context, cubemapBytes * group.members.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                 MemoryUse::Upload, "cube-map upload");
-    for (size_t k = 0; k < group.members.size(); ++k)
-        packTexels(*cubemaps[group.members[k]], options.texelFormat,
-                   static_cast<char*>(group.staging.mapped) + k * cubemapBytes);
-    group.image = createImage(context, {.format = imageFormat(options.texelFormat),
-                                        .extent = {group.faceSize, group.faceSize},
-                                        .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                        .what = "cube maps to bake",
-                                        .layers = uint32_t(kFaceCount * group.members.size())});
-}
-
-void recordUpload(VkCommandBuffer commands, const BakeGroup& group) {
-    changeLayout(commands, group.image,
-                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT});
-    VkBufferImageCopy region{};
-    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, group.image.layers};
-    region.imageExtent = {group.faceSize, group.faceSize, 1};
-    vkCmdCopyBufferToImage(commands, group.staging.buffer, group.image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
-                           &region);
-    // probe_baker.h: the image in SHADER_READ_ONLY_OPTIMAL, its writes visible to compute reads.
-    changeLayout(commands, group.image,
-                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                  VK_ACCESS_SHADER_READ_BIT});
 }
 
 VkQueryPool createTimestampPool(const Context& context) {
@@ -168,6 +133,54 @@ GpuBake readProbe(const Buffer& output, VkDeviceSize offset, int order, size_t p
 
 } // namespace
 
+CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
+                                  GpuTexelFormat format) {
+    CubemapUpload upload;
+    upload.faceSize = uint32_t(cubemaps.front()->faceSize);
+    upload.probeCount = uint32_t(cubemaps.size());
+    const VkDeviceSize cubemapBytes = kFaceCount * VkDeviceSize(upload.faceSize) * upload.faceSize * texelBytes(format);
+    try {
+        upload.staging = createBuffer(context, cubemapBytes * cubemaps.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                      MemoryUse::Upload, "cube-map upload");
+        for (size_t k = 0; k < cubemaps.size(); ++k) {
+            checkCubemap(*cubemaps[k]);
+            if (uint32_t(cubemaps[k]->faceSize) != upload.faceSize)
+                throw Error(ErrorKind::Input, "GPU bake: cube maps of one upload must share their face size");
+            packTexels(*cubemaps[k], format, static_cast<char*>(upload.staging.mapped) + k * cubemapBytes);
+        }
+        upload.image = createImage(context, {.format = imageFormat(format),
+                                             .extent = {upload.faceSize, upload.faceSize},
+                                             .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                             .what = "cube maps to bake",
+                                             .layers = kFaceCount * upload.probeCount});
+    } catch (...) {
+        destroyCubemapUpload(context, upload);
+        throw;
+    }
+    return upload;
+}
+
+void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload) {
+    changeLayout(commands, upload.image,
+                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT});
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, upload.image.layers};
+    region.imageExtent = {upload.faceSize, upload.faceSize, 1};
+    vkCmdCopyBufferToImage(commands, upload.staging.buffer, upload.image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                           1, &region);
+    changeLayout(commands, upload.image,
+                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                  VK_ACCESS_SHADER_READ_BIT});
+}
+
+void destroyCubemapUpload(const Context& context, CubemapUpload& upload) {
+    destroyImage(context, upload.image);
+    destroyBuffer(context, upload.staging);
+    upload = CubemapUpload{};
+}
+
 Projector createProjector(const Context& context, const ProjectorOptions& options) {
     Projector projector;
     projector.options = options;
@@ -209,15 +222,17 @@ std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& proje
         output = createBuffer(context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback,
                               "coefficients");
         for (BakeGroup& group : groups) {
-            createGroupImage(context, projector.options, cubemaps, group);
+            std::vector<const Cubemap*> members;
+            for (size_t index : group.members) members.push_back(cubemaps[index]);
+            group.upload = createCubemapUpload(context, members, projector.options.texelFormat);
             group.set = createProbeBakeSet(context, projector.baker,
-                                           {group.image.view, group.faceSize, uint32_t(group.members.size()),
+                                           {group.upload.image.view, group.faceSize, uint32_t(group.members.size()),
                                             output.buffer, group.outputOffset});
         }
         timestamps = createTimestampPool(context);
 
         submitAndWait(context, [&](VkCommandBuffer commands) {
-            for (const BakeGroup& group : groups) recordUpload(commands, group);
+            for (const BakeGroup& group : groups) recordCubemapUpload(commands, group.upload);
             if (timestamps) {
                 vkCmdResetQueryPool(commands, timestamps, 0, 2);
                 vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);

@@ -6,6 +6,8 @@
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 #include "vk/context.h"
+#include "vk/image.h"
+#include "vk/resources.h"
 
 #include <span>
 #include <vector>
@@ -24,6 +26,23 @@ struct ProjectorOptions {
     GpuTexelFormat texelFormat = GpuTexelFormat::Rgba32F;
     VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional
 };
+
+// Cube maps of one face size in a sampled 2D-array image, 6 layers each (probe_baker.h's layout),
+// with the staging buffer they are copied from.
+struct CubemapUpload {
+    uint32_t faceSize = 0;
+    uint32_t probeCount = 0;
+    Buffer staging;
+    GpuImage image;
+};
+
+// Creates the image and fills the staging buffer (all cube maps must have the same face size).
+CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
+                                  GpuTexelFormat format);
+// Records the copy and leaves the image as probe_baker.h asks: SHADER_READ_ONLY_OPTIMAL, visible to
+// compute-shader reads.
+void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload);
+void destroyCubemapUpload(const Context& context, CubemapUpload& upload);
 
 // Pipelines for one order, created once and reused for any number of bakes.
 struct Projector {
