@@ -23,6 +23,7 @@
 #extension GL_EXT_control_flow_attributes : require
 
 #include "gpu_interface.h"
+#include "position_walk.glsl"
 #include "texel_geometry.h"
 
 layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
@@ -75,26 +76,18 @@ void main() {
     uint faceSize = params.faceSize;
     uint positions = faceSize * faceSize;
     int firstLayer = int(gl_WorkGroupID.y) * 6;
-    // The position advances by stride each step; its row and column follow without a division.
     uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    uint strideRows = stride / faceSize, strideColumns = stride - strideRows * faceSize;
-    uint j = gl_GlobalInvocationID.x / faceSize;
-    uint i = gl_GlobalInvocationID.x - j * faceSize;
+    PositionWalk walk = startWalk(gl_GlobalInvocationID.x, stride, faceSize);
     for (uint position = gl_GlobalInvocationID.x; position < positions; position += stride) {
-        float weight = texelSolidAngle(i, j, faceSize);
-        vec3 unit = normalize(vec3(texelCenterCoord(i, faceSize), texelCenterCoord(j, faceSize), 1.0f));
+        float weight = texelSolidAngle(walk.i, walk.j, faceSize);
+        vec3 unit = normalize(vec3(texelCenterCoord(walk.i, faceSize), texelCenterCoord(walk.j, faceSize), 1.0f));
         for (uint face = 0u; face < 6u; ++face) {
-            vec3 radiance = texelFetch(cubemaps, ivec3(i, j, firstLayer + int(face)), 0).rgb * weight;
+            vec3 radiance = texelFetch(cubemaps, ivec3(walk.i, walk.j, firstLayer + int(face)), 0).rgb * weight;
             float basis[SH_BASIS_CAPACITY];
             shEvalBasis(orientToFace(face, unit), basis);
             [[unroll]] for (uint k = 0u; k < SH_COEFFICIENTS; ++k) sums[k] += radiance * basis[k];
         }
-        i += strideColumns;
-        j += strideRows;
-        if (i >= faceSize) {
-            i -= faceSize;
-            ++j;
-        }
+        stepWalk(walk, faceSize);
     }
 
     countSubgroups();

@@ -3,18 +3,21 @@
 // environment passed explicitly). Checks the bake summary and coefficient table, the files it
 // writes (read back with readProbeFile), GPU = CPU through the program, determinism, the exit codes
 // and one-line error messages of the README, that failures leave no file behind and never touch an
-// existing one, `shprobe info`, and layout detection. Test images are written by each test into
-// its own temporary folder; no binary file is checked in.
+// existing one, `shprobe info`, layout detection, batches (equal to single bakes, chunked or not;
+// bad inputs, output folders, ambiguous names, the progress bar on a terminal) and the header
+// formats. Test images are written by each test into its own temporary folder; no binary file is
+// checked in.
 //
 // ctest runs this with VK_ICD_FILENAMES = lavapipe and SHPROBE_VALIDATION=1, which the children
 // inherit: any validation message fails their bake. Each GPU bake costs a process start with the
-// validation layer (~0.3-1 s), so images are tiny and there are about ten GPU runs in all.
+// validation layer (~0.3-1 s), so images are tiny and the runs a few dozen.
 #include "image/environment.h"
 #include "image/image_write.h"
 #include "io/probe_export.h"
 #include "io/probe_file.h"
 #include "sh/basis.h"
 #include "sh/error.h"
+#include "sh/folding.h"
 #include "sh/irradiance.h"
 #include "sh/lights.h"
 #include "sh/rotation.h"
@@ -77,8 +80,10 @@ void writeText(const fs::path& path, const std::string& text) {
 
 // Runs SHPROBE_EXECUTABLE with `args`; stdout and stderr go to files under `logFolder`, stdin is
 // /dev/null. The child's environment is ours with `changes` applied, passed explicitly.
+// With stderrFd >= 0 the child's stderr is that descriptor (a terminal) instead of a file, and
+// the result's err is left empty for the caller to fill.
 RunResult runShprobe(const std::vector<std::string>& args, const fs::path& logFolder,
-                     const EnvironmentChanges& changes = {}) {
+                     const EnvironmentChanges& changes = {}, int stderrFd = -1) {
     static int runCount = 0;
     fs::create_directories(logFolder);
     std::string tag = std::to_string(++runCount);
@@ -109,7 +114,10 @@ RunResult runShprobe(const std::vector<std::string>& args, const fs::path& logFo
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
     posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (stderrFd >= 0)
+        posix_spawn_file_actions_adddup2(&actions, stderrFd, 2);
+    else
+        posix_spawn_file_actions_addopen(&actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
 
     RunResult result;
     auto start = std::chrono::steady_clock::now();
@@ -129,7 +137,27 @@ RunResult runShprobe(const std::vector<std::string>& args, const fs::path& logFo
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     result.out = readFile(outPath);
-    result.err = readFile(errPath);
+    if (stderrFd < 0) result.err = readFile(errPath);
+    return result;
+}
+
+// Runs shprobe with its stderr on a pseudo-terminal (so isatty(2) holds in the child) and returns
+// what it wrote there in err. The output is small (a few hundred bytes), well within the
+// terminal's buffer, so it is read after the child exits.
+RunResult runWithTerminalStderr(const std::vector<std::string>& args, const fs::path& logFolder) {
+    int master = posix_openpt(O_RDWR | O_NOCTTY);
+    if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0) {
+        ADD_FAILURE() << "cannot open a pseudo-terminal: " << std::strerror(errno);
+        return {};
+    }
+    int terminal = open(ptsname(master), O_RDWR | O_NOCTTY);
+    RunResult result = runShprobe(args, logFolder, {}, terminal);
+    close(terminal);
+    fcntl(master, F_SETFL, O_NONBLOCK);
+    char buffer[4096];
+    for (ssize_t n; (n = read(master, buffer, sizeof(buffer))) > 0;)
+        result.err.append(buffer, size_t(n));
+    close(master);
     return result;
 }
 
@@ -746,6 +774,272 @@ TEST_F(CliFailures, EquirectLayoutOnA4To3ImageIsRefused) {
     expectFailure({{"bake", file("cross.exr"), "--layout", "equirect", "-q", "-o", "OUT"},
                    2,
                    {file("cross.exr"), "32x24", "2:1"}});
+}
+
+// ---- 7. Batches --------------------------------------------------------------------------------
+
+// Inputs for batches: three different smooth environments, a.exr and b.exr (32x16 equirects, face
+// size 8: 6144 texel bytes each) and c.hdr (64x32, face size 16: 24576 bytes).
+class CliBatch : public Cli {
+  protected:
+    std::string a() const { return file("a.exr"); }
+    std::string b() const { return file("b.exr"); }
+    std::string c() const { return file("c.hdr"); }
+    void writeInputs() const {
+        Image smooth = smoothEquirect(32, 16);
+        writeImage(a(), smooth);
+        writeImage(b(),
+                   filledImage(32, 16, [&](int i, int j) { return 0.5f * glm::vec3(smooth.at(31 - i, j)); }));
+        writeImage(c(), filledImage(64, 32, [](int i, int j) {
+                       glm::dvec3 d = equirectDirection(i, j, 64, 32);
+                       return glm::vec3(float(1.5 + d.y), float(1.0 + 0.5 * d.x * d.z), float(2.0 - d.z));
+                   }));
+    }
+    static std::vector<std::string> with(std::vector<std::string> args,
+                                         const std::vector<std::string>& more) {
+        args.insert(args.end(), more.begin(), more.end());
+        return args;
+    }
+};
+
+// The summary line of a batch, e.g. "shprobe bake: 3 probes baked, 0 failed; 2304 texels in 1 GPU
+// submission; 0.41 s, 7.3 probes/s".
+bool hasBatchSummary(const std::string& out, const std::string& counts) {
+    static const std::regex tail(R"(; [0-9.]+ s, [0-9.]+ probes/s$)");
+    for (const std::string& line : linesOf(out))
+        if (startsWith(line, "shprobe bake: " + counts) && std::regex_search(line, tail)) return true;
+    return false;
+}
+
+// The same three inputs and options (order 4, irradiance) baked one by one with -o, as one batch (a
+// single GPU submission) and as a batch forced into chunks (--batch-bytes 13000: a and b in one
+// submission, c in another; c given through --list, between a comment and a blank line) give the
+// same files, byte for byte and number for number. No progress bar on stderr, which is not a
+// terminal here (runOk: stderr empty); the summary counts probes, texels and submissions.
+TEST_F(CliBatch, BatchEqualsSingleBakesProbeForProbe) {
+    writeInputs();
+    const std::vector<std::string> shared = {"--order", "4", "--irradiance", "-q"};
+    for (const char* name : {"a", "b", "c"}) {
+        std::string input = name == std::string("c") ? c() : file(std::string(name) + ".exr");
+        runOk(with({"bake", input, "-o", file(std::string("single_") + name + ".json")}, shared));
+    }
+    RunResult whole = runOk(with({"bake", a(), b(), c(), "--out-dir", file("whole")}, shared));
+    EXPECT_TRUE(hasBatchSummary(whole.out, "3 probes baked, 0 failed; 2304 texels in 1 GPU submission"))
+        << whole.out;
+    EXPECT_CONTAINS(whole.out, "shprobe bake: 3 inputs -> " + file("whole"));
+
+    writeText(file("list.txt"), "# the third input\n\n  " + c() + "  \n");
+    RunResult chunked = runOk(with({"bake", a(), b(), "--list", file("list.txt"), "--out-dir",
+                                    file("chunked"), "--batch-bytes", "13000"},
+                                   shared));
+    EXPECT_TRUE(hasBatchSummary(chunked.out, "3 probes baked, 0 failed; 2304 texels in 2 GPU submissions"))
+        << chunked.out;
+
+    for (const char* name : {"a", "b", "c"}) {
+        SCOPED_TRACE(name);
+        std::string single = readFile(file(std::string("single_") + name + ".json"));
+        ASSERT_FALSE(single.empty());
+        for (const char* batch : {"whole", "chunked"}) {
+            fs::path path = folder() / batch / (std::string(name) + ".json");
+            EXPECT_EQ(readFile(path), single) << batch;
+            ShCoefficients batched = readProbeFile(path.string()),
+                           alone = readProbeFile(file(std::string("single_") + name + ".json"));
+            ASSERT_EQ(batched.rgb.size(), 16u);
+            EXPECT_EQ(batched.quantity, Quantity::Irradiance);
+            for (size_t i = 0; i < alone.rgb.size(); ++i)
+                for (int k = 0; k < 3; ++k)
+                    EXPECT_EQ(batched.rgb[i][k], alone.rgb[i][k]) << batch << " coefficient " << i;
+        }
+    }
+    // The inputs differ, so equal files are not a copy of one probe.
+    EXPECT_NE(readProbeFile(file("single_a.json")).rgb[3].r, readProbeFile(file("single_b.json")).rgb[3].r);
+    EXPECT_EQ(entriesOf(folder() / "whole"), (std::vector<std::string>{"a.json", "b.json", "c.json"}));
+}
+
+// --backend cpu bakes a batch probe by probe with the double reference: the same files as -o.
+TEST_F(CliBatch, CpuBatchEqualsCpuBakes) {
+    writeInputs();
+    runOk({"bake", a(), "--backend", "cpu", "--order", "5", "-q", "-o", file("single_a.json")});
+    RunResult batch =
+        runOk({"bake", a(), c(), "--backend", "cpu", "--order", "5", "-q", "--out-dir", file("cpu")});
+    EXPECT_TRUE(hasBatchSummary(batch.out, "2 probes baked, 0 failed; 1920 texels; ")) << batch.out;
+    EXPECT_EQ(readFile(folder() / "cpu" / "a.json"), readFile(file("single_a.json")));
+    EXPECT_EQ(readProbeFile((folder() / "cpu" / "c.json").string()).rgb.size(), 25u);
+}
+
+// A batch holding a text file named .exr (positional) and a missing file (from --list) bakes and
+// writes the other two, reports each bad input on exactly one "shprobe: error:" line naming it,
+// ends with one more error line giving the count, exits 2 (bad input) and writes nothing for the
+// bad ones (no temporary file either).
+TEST_F(CliBatch, BadInputsAreReportedAndTheOthersWritten) {
+    writeInputs();
+    writeText(file("bad.exr"), "these are not the pixels you are looking for\n");
+    writeText(file("list.txt"), file("nowhere.exr") + "\n" + b() + "\n");
+    RunResult result =
+        run({"bake", a(), file("bad.exr"), "--list", file("list.txt"), "--out-dir", file("out")});
+    EXPECT_EQ(result.exitCode, 2) << describe(result);
+    std::vector<std::string> lines = linesOf(result.err);
+    ASSERT_EQ(lines.size(), 3u) << result.err;
+    for (const std::string& line : lines)
+        EXPECT_TRUE(startsWith(line, "shprobe: error: ")) << line;
+    for (const std::string& bad : {file("bad.exr"), file("nowhere.exr")})
+        EXPECT_EQ(std::count_if(lines.begin(), lines.end(),
+                                [&](const std::string& line) { return line.find(bad) != std::string::npos; }),
+                  1)
+            << bad << " in:\n"
+            << result.err;
+    EXPECT_CONTAINS(lines[0], "not an image");
+    EXPECT_CONTAINS(lines[1], "no such file");
+    EXPECT_CONTAINS(lines[2], "2 of 4 inputs failed");
+    EXPECT_TRUE(hasBatchSummary(result.out, "2 probes baked, 2 failed;")) << result.out;
+    EXPECT_CONTAINS(result.out, "a.exr (equirect 32x16) -> " + (folder() / "out" / "a.json").string());
+    EXPECT_EQ(entriesOf(folder() / "out"), (std::vector<std::string>{"a.json", "b.json"}));
+    EXPECT_EQ(readProbeFile((folder() / "out" / "b.json").string()).rgb.size(), 9u);
+}
+
+// The output folder is checked before any GPU work: a folder whose parent is missing is exit 3
+// naming it, even with a missing input and without any Vulkan driver (which would be exit 2 or 4
+// had the inputs been loaded or a device opened), at once, and nothing is created. So is a file
+// where the folder should be, and (unless running as root, which ignores permission bits) a
+// read-only folder, left as it was. A missing folder whose parent exists is created.
+TEST_F(CliBatch, OutputFolderIsCheckedBeforeTheBake) {
+    writeInputs();
+    EnvironmentChanges noDriver{{"VK_ICD_FILENAMES", file("no_such_icd.json")},
+                                {"VK_DRIVER_FILES", std::nullopt}};
+    auto expectOutputError = [&](const std::string& outDir, const std::string& mention) {
+        RunResult result = run({"bake", a(), file("nowhere.exr"), "--out-dir", outDir}, noDriver);
+        EXPECT_EQ(result.exitCode, 3) << describe(result);
+        EXPECT_EQ(linesOf(result.err).size(), 1u) << result.err;
+        EXPECT_TRUE(startsWith(result.err, "shprobe: error: ")) << result.err;
+        EXPECT_CONTAINS(result.err, mention);
+        EXPECT_EQ(result.out, "");
+        EXPECT_LT(result.seconds, 5.0) << "the output folder must be checked before the bake";
+    };
+    expectOutputError(file("missing/probes"), file("missing") + " does not exist");
+    EXPECT_FALSE(fs::exists(file("missing")));
+    writeText(file("plain"), "a file, not a folder\n");
+    expectOutputError(file("plain"), "not a folder");
+    EXPECT_EQ(readFile(file("plain")), "a file, not a folder\n");
+
+    fs::path readonly = folder() / "readonly";
+    fs::create_directories(readonly);
+    fs::permissions(readonly, fs::perms::owner_read | fs::perms::owner_exec);
+    if (access(readonly.c_str(), W_OK) != 0) {
+        expectOutputError(readonly.string(), "not writable");
+        EXPECT_EQ(entriesOf(readonly), std::vector<std::string>{});
+    } else {
+        std::printf("[ info     ] running as root: the read-only folder case is not checked\n");
+    }
+
+    RunResult created = runOk({"bake", a(), "--backend", "cpu", "-q", "--out-dir", file("new")});
+    EXPECT_EQ(entriesOf(folder() / "new"), std::vector<std::string>{"a.json"});
+}
+
+// Two inputs that would write one file are refused up front (exit 2, one line naming both and the
+// file), before the output folder is created; several inputs or --list without --out-dir are
+// refused, and -o with --out-dir is a usage error.
+TEST_F(CliBatch, AmbiguousOutputsAreRefused) {
+    writeInputs();
+    fs::create_directories(folder() / "other");
+    writeImage(file("other/a.hdr"), smoothEquirect(32, 16));
+    RunResult twice = run({"bake", a(), b(), file("other/a.hdr"), "--out-dir", file("out")});
+    EXPECT_EQ(twice.exitCode, 2) << describe(twice);
+    EXPECT_EQ(linesOf(twice.err).size(), 1u) << twice.err;
+    EXPECT_CONTAINS(twice.err, a());
+    EXPECT_CONTAINS(twice.err, file("other/a.hdr"));
+    EXPECT_CONTAINS(twice.err, (folder() / "out" / "a.json").string());
+    EXPECT_FALSE(fs::exists(file("out")));
+
+    RunResult several = run({"bake", a(), b(), "-o", file("x.json")});
+    EXPECT_EQ(several.exitCode, 2) << describe(several);
+    EXPECT_CONTAINS(several.err, "--out-dir");
+    writeText(file("list.txt"), a() + "\n");
+    RunResult list = run({"bake", "--list", file("list.txt"), "-o", file("x.json")});
+    EXPECT_EQ(list.exitCode, 2) << describe(list);
+    EXPECT_CONTAINS(list.err, "--list needs --out-dir");
+    RunResult both = run({"bake", a(), "-o", file("x.json"), "--out-dir", file("out")});
+    EXPECT_EQ(both.exitCode, 2) << describe(both);
+    EXPECT_CONTAINS(both.err, "--out-dir");
+    EXPECT_FALSE(fs::exists(file("x.json")));
+    EXPECT_FALSE(fs::exists(file("out")));
+}
+
+// With stderr on a terminal a batch draws a progress bar there ("\r[###...] 2/2 probes"); stdout
+// (a file) holds the same lines as without one.
+TEST_F(CliBatch, ProgressBarOnlyOnATerminal) {
+    writeInputs();
+    RunResult plain = runOk({"bake", a(), b(), "--out-dir", file("plain")});
+    EXPECT_EQ(plain.err.find('\r'), std::string::npos);
+    RunResult terminal =
+        runWithTerminalStderr({"bake", a(), b(), "--out-dir", file("terminal")}, folder() / "logs");
+    EXPECT_EQ(terminal.exitCode, 0) << describe(terminal);
+    EXPECT_CONTAINS(terminal.err, "\r[");
+    EXPECT_CONTAINS(terminal.err, "] 2/2 probes");
+    EXPECT_EQ(terminal.err.find("error"), std::string::npos) << terminal.err;
+    EXPECT_TRUE(hasBatchSummary(terminal.out, "2 probes baked, 0 failed;")) << terminal.out;
+    EXPECT_EQ(linesOf(terminal.out).size(), linesOf(plain.out).size()) << terminal.out;
+}
+
+// ---- 8. Header formats ------------------------------------------------------------------------
+
+// The four numbers of each array entry of a header: "vec4(r, g, b, w)" (GLSL) or "{r, g, b, w}"
+// (C, 'f' suffixes), comments skipped.
+std::vector<std::array<float, 4>> headerEntries(const std::string& header) {
+    std::string code;
+    for (const std::string& line : linesOf(header))
+        code += line.substr(0, line.find("//")) + "\n";
+    static const std::regex entry(R"((?:vec4\(|\{)\s*([^(){}]*?)\s*[)}])");
+    std::vector<std::array<float, 4>> entries;
+    for (auto match = std::sregex_iterator(code.begin(), code.end(), entry); match != std::sregex_iterator();
+         ++match) {
+        std::string numbers = (*match)[1];
+        std::array<float, 4> values{};
+        const char* text = numbers.c_str();
+        for (float& value : values) {
+            char* end = nullptr;
+            value = std::strtof(text, &end);
+            text = end + std::strspn(end, "fF, ");
+        }
+        entries.push_back(values);
+    }
+    return entries;
+}
+
+// --format glsl and --format cpp (single with -o, and a batch: one header per input, named after
+// it) hold the coefficients folded for sh_irradiance.glsl: the fold of the exact float probe of
+// --format binary, rounded to float, number for number (every GPU bake of an input gives the same
+// bits). Orders above 5 and --extract-sun (the sun would be lost) are refused with these formats.
+TEST_F(CliBatch, HeaderFormatsHoldTheFoldedProbe) {
+    writeInputs();
+    runOk({"bake", a(), "--order", "5", "-q", "--format", "binary", "-o", file("a.bin")});
+    runOk({"bake", a(), "--order", "5", "-q", "--format", "cpp", "-o", file("a.h")});
+    runOk({"bake", a(), c(), "--order", "5", "-q", "--format", "glsl", "--out-dir", file("glsl")});
+    std::vector<ShCoefficients> binary = readBinaryProbes(file("a.bin"));
+    ASSERT_EQ(binary.size(), 1u);
+    FoldedCoefficients expected = *foldCoefficients(binary[0], 5, FoldedQuantity::Radiance);
+    for (const fs::path& header : {folder() / "a.h", folder() / "glsl" / "a.glsl"}) {
+        SCOPED_TRACE(header.string());
+        std::string text = readFile(header);
+        EXPECT_CONTAINS(text, "shRadiance(");
+        EXPECT_CONTAINS(text, "order      5:");
+        std::vector<std::array<float, 4>> entries = headerEntries(text);
+        ASSERT_EQ(entries.size(), size_t(kFoldedCount)) << text;
+        for (int i = 0; i < kFoldedCount; ++i)
+            for (int k = 0; k < 4; ++k)
+                EXPECT_EQ(entries[i][k], k < 3 ? float(expected[i][k]) : 0.0f) << "entry " << i;
+    }
+    EXPECT_CONTAINS(readFile(folder() / "a.h"), "static const float a_sh[25][4]");
+    EXPECT_CONTAINS(readFile(folder() / "glsl" / "c.glsl"), "const vec4 c_sh[SH_FOLDED_COUNT]");
+    EXPECT_EQ(entriesOf(folder() / "glsl"), (std::vector<std::string>{"a.glsl", "c.glsl"}));
+
+    RunResult order6 = run({"bake", a(), "--order", "6", "--format", "glsl", "-o", file("x.glsl")});
+    EXPECT_EQ(order6.exitCode, 2) << describe(order6);
+    EXPECT_CONTAINS(order6.err, "--format glsl");
+    RunResult sun = run({"bake", "--extract-sun", "--format", "cpp", "-o", file("x.h")});
+    EXPECT_EQ(sun.exitCode, 2) << describe(sun);
+    EXPECT_CONTAINS(sun.err, "--extract-sun");
+    EXPECT_FALSE(fs::exists(file("x.glsl")));
+    EXPECT_FALSE(fs::exists(file("x.h")));
 }
 
 } // namespace

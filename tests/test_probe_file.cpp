@@ -1,13 +1,19 @@
 // Coefficient files (README "Conventions", coefficient files): what is written reads back the
 // same, and every malformed or wrong-schema file is refused with a message naming the file and the
 // offending field.
+#include "io/atomic_file.h"
 #include "io/probe_file.h"
 #include "sh/error.h"
 
+#include <algorithm>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <gtest/gtest.h>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace shprobe {
 namespace {
@@ -103,6 +109,8 @@ TEST(ProbeFile, RejectsMalformedJson) {
     expectRejected("[1, 2, 3]", "JSON object");
     std::string valid = probeToJson(sampleProbe(3, Quantity::Radiance), {});
     expectRejected(valid.substr(0, valid.size() / 2), "not valid JSON");
+    expectRejected(valid + std::string(1, '\0') + "junk", "a NUL byte at offset " + std::to_string(valid.size()));
+    expectRejected(std::string("{\"format\": \"shprobe.sh\",, }"), "parse error at line 1, column 25");
 }
 
 TEST(ProbeFile, RejectsMissingRequiredFields) {
@@ -211,6 +219,137 @@ TEST(ProbeFile, RejectsMalformedSun) {
     std::string huge = with("angular_radius_degrees", 12345.5);
     expectRejected(huge.replace(huge.find("12345.5"), 7, "1e999"), "not valid JSON");
     EXPECT_TRUE(parseProbe(with("angular_radius_degrees", 90), "ok.json").sun.has_value()) << "90 is allowed";
+}
+
+// The reader's checks before parsing: each names the file and says what it is instead.
+TEST(ProbeFile, ReadRefusesWhatIsNotAProbeFile) {
+    namespace fs = std::filesystem;
+    fs::path folder = fs::temp_directory_path() / ("shprobe_test_probe_read_" + std::to_string(getpid()));
+    fs::create_directories(folder / "folder.json");
+    std::ofstream(folder / "empty.json").close();
+    std::ofstream(folder / "large.json") << std::string((16 << 20) + 1, ' ');
+    std::string valid = probeToJson(sampleProbe(3, Quantity::Radiance), {});
+    std::ofstream(folder / "cut.json") << valid.substr(0, valid.find("\"coefficients\""));
+    const std::pair<const char*, const char*> cases[] = {
+        {"folder.json", "is a folder"},
+        {"empty.json", "the file is empty"},
+        {"large.json", "the file has 16777217 bytes, far more than a probe file"},
+        {"cut.json", "not valid JSON (parse error at line"},
+        {"absent.json", "no such file"},
+    };
+    for (const auto& [name, problem] : cases) {
+        std::string path = (folder / name).string();
+        try {
+            readProbeFile(path);
+            ADD_FAILURE() << name << " was accepted";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.kind(), ErrorKind::Input);
+            EXPECT_NE(std::string(e.what()).find(path + ": " + problem), std::string::npos) << e.what();
+        }
+    }
+    EXPECT_THROW(readProbeFile("/dev/null"), Error); // not a regular file
+    fs::remove_all(folder);
+}
+
+// Coefficients that overflowed are not written (no file holds infinity): the error names the
+// output, and neither it nor a temporary file appears.
+TEST(ProbeFile, NonFiniteCoefficientsAreNotWritten) {
+    namespace fs = std::filesystem;
+    fs::path folder = fs::temp_directory_path() / ("shprobe_test_probe_inf_" + std::to_string(getpid()));
+    fs::create_directories(folder);
+    ShCoefficients probe = sampleProbe(2, Quantity::Radiance);
+    probe.rgb[0].g = std::numeric_limits<double>::infinity();
+    std::string path = (folder / "probe.json").string();
+    try {
+        writeProbeFile(path, probe, {});
+        ADD_FAILURE() << "written";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cannot write " + path + ": coefficient 0 is not finite"),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_TRUE(fs::is_empty(folder));
+    fs::remove_all(folder);
+}
+
+// ---- Atomic files -----------------------------------------------------------------------------
+
+std::vector<std::string> entriesOf(const std::filesystem::path& folder) {
+    std::vector<std::string> names;
+    for (const auto& entry : std::filesystem::directory_iterator(folder))
+        names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+std::string contentsOf(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The temporary file exists (hidden, in the destination's folder, with its extension) until the
+// commit renames it over the destination; an AtomicFile abandoned (an error on the way) removes it
+// and leaves an existing destination untouched.
+TEST(AtomicFile, TemporaryFileIsRenamedOrRemoved) {
+    namespace fs = std::filesystem;
+    fs::path folder = fs::temp_directory_path() / ("shprobe_test_atomic_" + std::to_string(getpid()));
+    fs::create_directories(folder);
+    std::ofstream(folder / "out.exr") << "old";
+    {
+        AtomicFile file((folder / "out.exr").string());
+        EXPECT_EQ(fs::path(file.temporaryPath()).parent_path(), folder);
+        EXPECT_EQ(fs::path(file.temporaryPath()).extension(), ".exr");
+        EXPECT_EQ(fs::path(file.temporaryPath()).filename().string().rfind(".out.", 0), 0u);
+        EXPECT_TRUE(fs::exists(file.temporaryPath())) << "created empty, with a name no other file has";
+        std::ofstream(file.temporaryPath()) << "half";
+    }
+    EXPECT_EQ(entriesOf(folder), std::vector<std::string>{"out.exr"});
+    EXPECT_EQ(contentsOf(folder / "out.exr"), "old");
+    writeFileAtomic((folder / "out.exr").string(), "new");
+    EXPECT_EQ(entriesOf(folder), std::vector<std::string>{"out.exr"});
+    EXPECT_EQ(contentsOf(folder / "out.exr"), "new");
+    fs::remove_all(folder);
+}
+
+// Ctrl-C (and SIGTERM) while a temporary file exists: removeTemporaryFilesOnInterrupt removes it
+// and the process ends by the signal; the destination keeps its earlier content. A child process
+// plays the program: it installs the handling, opens an AtomicFile, writes half of it, says so
+// through a pipe and waits to be interrupted.
+TEST(AtomicFile, InterruptRemovesTemporaryFiles) {
+    namespace fs = std::filesystem;
+    for (int signal : {SIGINT, SIGTERM}) {
+        fs::path folder = fs::temp_directory_path() / ("shprobe_test_interrupt_" + std::to_string(getpid()));
+        fs::remove_all(folder);
+        fs::create_directories(folder);
+        std::ofstream(folder / "probe.json") << "earlier";
+        int ready[2];
+        ASSERT_EQ(pipe(ready), 0);
+        pid_t child = fork();
+        ASSERT_GE(child, 0);
+        if (child == 0) {
+            struct sigaction standard {};
+            standard.sa_handler = SIG_DFL;
+            sigaction(signal, &standard, nullptr);
+            removeTemporaryFilesOnInterrupt();
+            AtomicFile file((folder / "probe.json").string());
+            std::ofstream(file.temporaryPath()) << "half a probe";
+            AtomicFile second((folder / "other.bin").string());
+            (void)!write(ready[1], "r", 1);
+            for (;;) pause();
+        }
+        close(ready[1]);
+        char byte = 0;
+        ASSERT_EQ(read(ready[0], &byte, 1), 1) << "the child failed before its files existed";
+        close(ready[0]);
+        EXPECT_EQ(entriesOf(folder).size(), 3u) << "the temporary files exist before the signal";
+        kill(child, signal);
+        int status = 0;
+        ASSERT_EQ(waitpid(child, &status, 0), child);
+        EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "status " << status;
+        EXPECT_EQ(entriesOf(folder), std::vector<std::string>{"probe.json"});
+        EXPECT_EQ(contentsOf(folder / "probe.json"), "earlier");
+        fs::remove_all(folder);
+    }
 }
 
 TEST(ProbeFile, MissingFileIsAnInputError) {

@@ -2,6 +2,7 @@
 // plain options struct; library errors (shprobe::Error) reach main, which prints them.
 #pragma once
 #include "app/toolkit.h"
+#include "image/environment.h"
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
@@ -11,14 +12,18 @@
 namespace shprobe {
 
 struct BakeOptions {
-    std::string input;            // file, folder or {face} pattern; empty: the built-in sky
+    std::vector<std::string> inputs; // files, folders or {face} patterns; none: the built-in sky
     std::string output = "probe.json";
+    std::string outDir;           // batch: one output per input in this folder, named after it
+    std::string listFile;         // batch: more inputs, one path per line
+    uint64_t batchBytes = 0;      // batch: most texel bytes per GPU submission (0: the device's limit)
     int order = 3;
     std::string layout = "auto";
     int faceSize = 0;             // 0: from the input (256 for the built-in sky)
     std::string backend = "gpu";  // gpu | cpu
     bool irradiance = false;      // write E_lm instead of L_lm
     bool sanitize = false;        // replace NaN/Inf texels with 0 instead of refusing
+    int64_t maxPixels = kDefaultMaxImagePixels; // larger image files are refused from their header
     std::string device;
     bool validation = false;
     uint32_t workgroupSize = 64;
@@ -27,7 +32,7 @@ struct BakeOptions {
     LightOptions lights;          // analytic lights added to the environment's radiance
     std::string window = "none";  // none | hanning:W | lanczos:W | dering | dering-lanczos
     bool extractSun = false;      // take the sun out and write it beside the probe
-    std::string format = "json";  // json | binary | irradiance-equirect | irradiance-cross
+    std::string format = "json";  // json | binary | glsl | cpp | irradiance-equirect | irradiance-cross
     int mapSize = 0;              // irradiance maps: equirect width or face size (0: 512 / 128)
 };
 
@@ -71,6 +76,17 @@ struct ViewOptions {
 inline void addDeviceOptions(CLI::App& command, std::string& device, bool& validation) {
     command.add_option("--device", device, "Vulkan device index or name part (see `shprobe info`)");
     command.add_flag("--validation", validation, "Enable the Khronos validation layer; fail on messages");
+}
+
+// --max-pixels: image files with more pixels are refused from their header, before any pixel is
+// read (LoadOptions::maxPixels).
+inline void addImageLimitOption(CLI::App& command, int64_t& maxPixels) {
+    command
+        .add_option("--max-pixels", maxPixels,
+                    "Largest image file to read, in pixels (16384x8192 by default); larger ones are "
+                    "refused from their header")
+        ->check(CLI::Range(int64_t(1), kMaxImageSide * kMaxImageSide))
+        ->capture_default_str();
 }
 
 void addBakeCommand(CLI::App& app, BakeOptions& options);

@@ -1,10 +1,12 @@
 // shprobe: bakes HDR environments into spherical-harmonics light probes on the GPU.
 #include "app/bench.h"
 #include "app/commands.h"
+#include "io/atomic_file.h"
 #include "sh/error.h"
 
 #include <cstdio>
 #include <exception>
+#include <string>
 
 namespace {
 
@@ -18,9 +20,18 @@ int exitCode(shprobe::ErrorKind kind) {
     return 1;
 }
 
+// An error is one line; a library's message may hold several.
+std::string oneLine(std::string text) {
+    while (!text.empty() && text.back() == '\n') text.pop_back();
+    for (char& c : text)
+        if (c == '\n') c = ' ';
+    return text;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    shprobe::removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
     CLI::App app{"shprobe: bake HDR environments into spherical-harmonics light probes with Vulkan"};
     app.require_subcommand(1);
     shprobe::BakeOptions bake;
@@ -42,7 +53,7 @@ int main(int argc, char** argv) {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         if (e.get_exit_code() == 0) return app.exit(e); // --help
-        std::fprintf(stderr, "shprobe: error: %s (see --help)\n", e.what());
+        std::fprintf(stderr, "shprobe: error: %s (see --help)\n", oneLine(e.what()).c_str());
         return 2;
     }
 
@@ -55,13 +66,13 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("light")) shprobe::runLight(light);
         if (app.got_subcommand("bench")) shprobe::runBench(bench);
     } catch (const shprobe::Error& e) {
-        std::fprintf(stderr, "shprobe: error: %s\n", e.what());
+        std::fprintf(stderr, "shprobe: error: %s\n", oneLine(e.what()).c_str());
         return exitCode(e.kind());
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "shprobe: error: out of memory\n");
         return 1;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "shprobe: internal error: %s\n", e.what());
+        std::fprintf(stderr, "shprobe: internal error: %s\n", oneLine(e.what()).c_str());
         return 1;
     }
     return 0;

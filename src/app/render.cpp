@@ -7,6 +7,7 @@
 #include "render/offscreen.h"
 #include "render/render_input.h"
 #include "sh/error.h"
+#include "vk/check.h"
 #include "vk/context.h"
 
 #include <chrono>
@@ -88,8 +89,11 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
     contextOptions.graphics = true;
     Context context = createContext(contextOptions);
     try {
-        if (!isProbeFile(options.input))
+        if (!isProbeFile(options.input)) {
+            DeviceStep step("baking " + (options.input.empty() ? std::string("the built-in sky") : options.input));
             result.input = loadRenderInput(context, options.input, {options.faceSize, options.sanitize});
+        }
+        DeviceStep step("rendering " + options.output);
         renderInput(context, options, size, result);
     } catch (...) {
         destroyContext(context);

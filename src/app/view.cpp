@@ -2,7 +2,9 @@
 // saves frame N and exits, for tests and scripts.
 #include "app/commands.h"
 #include "gpu/projector.h"
+#include "render/render_input.h"
 #include "render/viewer.h"
+#include "vk/check.h"
 
 namespace shprobe {
 
@@ -33,6 +35,8 @@ void addViewCommand(CLI::App& app, ViewOptions& options) {
 
 void runView(const ViewOptions& options) {
     ImageSize size = parseImageSize(options.size, "--size");
+    // A bad probe file is refused before a window opens (and where there is no display).
+    if (isProbeFile(options.input)) readProbeInput(options.input);
     ViewerOptions viewer;
     viewer.input = options.input;
     viewer.inputOptions = {options.faceSize, options.sanitize};
@@ -46,6 +50,7 @@ void runView(const ViewOptions& options) {
     viewer.keys = options.keys;
     viewer.device = options.device;
     viewer.validation = options.validation;
+    DeviceStep step("showing " + (options.input.empty() ? std::string("the built-in sky") : options.input));
     runViewer(viewer);
 }
 

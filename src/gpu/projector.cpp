@@ -86,27 +86,6 @@ void destroyGroups(const Context& context, std::vector<BakeGroup>& groups) {
     }
 }
 
-VkQueryPool createTimestampPool(const Context& context) {
-    if (!context.info.timestamps) return VK_NULL_HANDLE;
-    VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
-    info.queryType = VK_QUERY_TYPE_TIMESTAMP;
-    info.queryCount = 2;
-    VkQueryPool pool = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateQueryPool(context.device, &info, nullptr, &pool));
-    return pool;
-}
-
-double readDeviceMilliseconds(const Context& context, VkQueryPool pool) {
-    if (!pool) return 0.0;
-    uint64_t ticks[2] = {};
-    VK_CHECK(vkGetQueryPoolResults(context.device, pool, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
-                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
-    // Only timestampValidBits bits count; masking the difference also handles a wrap-around.
-    uint32_t bits = context.info.timestampValidBits;
-    uint64_t mask = bits >= 64 ? ~uint64_t(0) : (uint64_t(1) << bits) - 1;
-    return double((ticks[1] - ticks[0]) & mask) * context.info.timestampPeriod * 1e-6;
-}
-
 // Throws when a coefficient is not finite: finite inputs whose sums overflow fp32 (values near
 // 1e38), or a device that computed garbage; either way no such probe is handed on.
 ShCoefficients readCoefficients(const Buffer& output, VkDeviceSize offset, int order, Quantity quantity) {
@@ -122,12 +101,22 @@ ShCoefficients readCoefficients(const Buffer& output, VkDeviceSize offset, int o
     return coefficients;
 }
 
-// Probe k of a bake whose output starts at `offset` (probe_baker.h's layout).
+// Probe k of a bake whose output starts at `offset` (probe_baker.h's layout); `failure` says why
+// its coefficients cannot be used, if they cannot.
 GpuBake readProbe(const Buffer& output, VkDeviceSize offset, int order, size_t probes, size_t k) {
     const VkDeviceSize setBytes = VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
     GpuBake bake;
-    bake.radiance = readCoefficients(output, offset + k * setBytes, order, Quantity::Radiance);
-    bake.irradiance = readCoefficients(output, offset + (probes + k) * setBytes, order, Quantity::Irradiance);
+    try {
+        bake.radiance = readCoefficients(output, offset + k * setBytes, order, Quantity::Radiance);
+        bake.irradiance = readCoefficients(output, offset + (probes + k) * setBytes, order, Quantity::Irradiance);
+    } catch (const Error& error) {
+        bake.failure = error.what();
+    }
+    return bake;
+}
+
+GpuBake usableOrThrow(GpuBake bake) {
+    if (!bake.failure.empty()) throw Error(ErrorKind::Input, bake.failure);
     return bake;
 }
 
@@ -243,7 +232,7 @@ std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& proje
         });
 
         invalidateBuffer(context, output);
-        const double deviceMs = readDeviceMilliseconds(context, timestamps);
+        const double deviceMs = timestampMilliseconds(context, timestamps);
         for (const BakeGroup& group : groups)
             for (size_t k = 0; k < group.members.size(); ++k) {
                 GpuBake& bake = bakes[group.members[k]];
@@ -266,7 +255,7 @@ std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& proje
 GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cubemap& cubemap,
                     std::span<const double> window) {
     const Cubemap* one[] = {&cubemap};
-    return bakeCubemaps(context, projector, one, window).front();
+    return usableOrThrow(bakeCubemaps(context, projector, one, window).front());
 }
 
 GpuBake convolveOnGpu(const Context& context, const Projector& projector, const ShCoefficients& radiance,
@@ -301,7 +290,7 @@ GpuBake convolveOnGpu(const Context& context, const Projector& projector, const 
             computeWriteBarrier(commands);
         });
         invalidateBuffer(context, output);
-        bake = readProbe(output, 0, order, 1, 0);
+        bake = usableOrThrow(readProbe(output, 0, order, 1, 0));
     } catch (...) {
         release();
         throw;

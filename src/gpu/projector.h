@@ -10,6 +10,7 @@
 #include "vk/resources.h"
 
 #include <span>
+#include <string>
 #include <vector>
 
 namespace shprobe {
@@ -59,6 +60,7 @@ struct GpuBake {
     double deviceMilliseconds = 0.0; // from timestamps around the bake dispatches (all probes of the
                                      // submission, uploads excluded); 0 where unsupported
     uint32_t workgroups = 0;         // projection workgroups of this probe
+    std::string failure;             // why the coefficients cannot be used (not finite); empty if fine
 };
 
 // Largest face the GPU path accepts: texel indices are 32-bit (6 N^2 < 2^32).
@@ -71,7 +73,8 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
                     std::span<const double> window = {});
 
 // Bakes several cube maps (any face sizes) with one submission; results in input order. The window,
-// if any, applies to all of them. The texels of all cube maps must fit batchTexelBytes(context):
+// if any, applies to all of them. A probe whose coefficients are not finite (fp32 sums overflowed)
+// comes back with `failure` set; the others are unaffected. (bakeCubemap throws instead.) The texels of all cube maps must fit batchTexelBytes(context):
 // split larger batches into chunks.
 std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& projector,
                                   std::span<const Cubemap* const> cubemaps, std::span<const double> window = {});

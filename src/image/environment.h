@@ -4,6 +4,7 @@
 #include "sh/cubemap.h"
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 namespace shprobe {
@@ -18,16 +19,27 @@ const char* layoutName(Layout layout);
 // Throws Error(Input) naming the size when it matches none.
 Layout detectLayout(int width, int height);
 
-// What to do with texels that are NaN or infinite.
+// What to do with texels that are NaN or infinite. Other values are baked as they are: negative
+// ones too (the projection is linear, and resampled HDRs hold small negative lobes around bright
+// spots), and huge finite ones (1e30 bakes; sums that overflow are refused when the coefficients
+// are written, since no file holds infinities).
 enum class NonFinitePolicy {
     Refuse,  // throw Error(Input) with their count
     Replace, // replace them with 0 and report the count
 };
 
+// The largest image read by default: 16384 x 8192 pixels, an equirect of the largest size in common
+// use, and 2 GiB once held as RGBA32F. A header claiming more is refused before any pixel is read
+// (files can claim any size); the limit can be raised (the programs' --max-pixels).
+constexpr int64_t kDefaultMaxImagePixels = int64_t(16384) * 8192;
+// Sides are limited too, whatever the pixel limit: no layout uses a longer one.
+constexpr int64_t kMaxImageSide = 65536;
+
 struct LoadOptions {
     Layout layout = Layout::Auto;
     int faceSize = 0; // 0: chosen from the input (equirect width / 4, cross or face size)
     NonFinitePolicy nonFinite = NonFinitePolicy::Refuse;
+    int64_t maxPixels = kDefaultMaxImagePixels; // per image file (each face of six face files)
 };
 
 struct Environment {
@@ -39,9 +51,14 @@ struct Environment {
 
 // Reads an image file (any format OpenImageIO reads). 8-bit and 16-bit integer images are taken
 // as sRGB and decoded to linear, unless the file's colour space says linear; float images (EXR,
-// HDR) as linear. 1 channel is grey, 2 grey and alpha; alpha is ignored. Throws Error(Input)
-// naming the file on any failure, and before reading pixels if the image is unreasonably large.
-Image readImage(const std::string& path);
+// HDR) as linear. 1 channel is grey (copied to R, G and B), 2 grey and alpha, 3 RGB, 4 or more RGB
+// and alpha (and more); alpha and any further channel are ignored, never multiplied in. Texel
+// values are kept as stored: NaN and infinities are left to applyNonFinitePolicy, negative and huge
+// finite values are kept. Throws Error(Input) naming the file on any failure, and from the header,
+// before any pixel is read, when the image has more than maxPixels pixels or a side longer than
+// kMaxImageSide. What the image libraries print themselves (libpng's "libpng error: ..." line)
+// does not reach stderr: their text is in the error.
+Image readImage(const std::string& path, int64_t maxPixels = kDefaultMaxImagePixels);
 
 // Resolves the six face files of a folder (px, nx, py, ny, pz, nz with any image extension) or of
 // a pattern containing "{face}". Returns the paths in Face order; throws Error(Input) if one is

@@ -10,9 +10,13 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <string_view>
+#include <sys/mman.h>
+#include <unistd.h>
 
 namespace shprobe {
 namespace fs = std::filesystem;
@@ -27,10 +31,82 @@ std::string oneLine(std::string text) {
     return text;
 }
 
-// A header can claim any size; refuse before allocating. 2^28 pixels (a 4 GiB RGBA32F image,
-// e.g. 32768 x 8192) is far more than any environment worth reducing to a few SH coefficients.
-constexpr int64_t kMaxImageSide = 65536;
-constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
+// libpng prints its errors and warnings to stderr itself ("libpng error: ..."), and OpenImageIO
+// then reports the same text as its error, which our one error line carries. While images are
+// opened and read, the process's stderr (fd 2) goes to an in-memory file; when the last read in
+// progress ends, every line printed meanwhile is passed on to the real stderr except libpng's.
+// Reads on several threads share one capture. Sanitizer builds leave stderr alone: a report must
+// reach it even if the read crashes.
+#if defined(__SANITIZE_ADDRESS__)
+#define SHPROBE_ADDRESS_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SHPROBE_ADDRESS_SANITIZER 1
+#endif
+#endif
+
+class LibraryChatter {
+public:
+    LibraryChatter() {
+#if !defined(SHPROBE_ADDRESS_SANITIZER)
+        Capture& capture = shared();
+        std::lock_guard lock(capture.mutex);
+        if (capture.readers++ == 0) capture.start();
+#endif
+    }
+    ~LibraryChatter() {
+#if !defined(SHPROBE_ADDRESS_SANITIZER)
+        Capture& capture = shared();
+        std::lock_guard lock(capture.mutex);
+        if (--capture.readers == 0) capture.stop();
+#endif
+    }
+    LibraryChatter(const LibraryChatter&) = delete;
+    LibraryChatter& operator=(const LibraryChatter&) = delete;
+
+private:
+    struct Capture {
+        std::mutex mutex;
+        int readers = 0;
+        int file = -1;  // the in-memory file fd 2 points to
+        int saved = -1; // the real stderr
+        void start() {
+            std::fflush(stderr);
+            file = memfd_create("shprobe-image-messages", MFD_CLOEXEC);
+            saved = file >= 0 ? dup(STDERR_FILENO) : -1;
+            if (saved < 0 || dup2(file, STDERR_FILENO) < 0) release();
+        }
+        void stop() {
+            if (saved < 0) return;
+            std::fflush(stderr);
+            dup2(saved, STDERR_FILENO);
+            passOn();
+            release();
+        }
+        void passOn() const {
+            std::string text;
+            char buffer[4096];
+            ssize_t got = 0;
+            for (off_t at = 0; (got = pread(file, buffer, sizeof(buffer), at)) > 0; at += got)
+                text.append(buffer, size_t(got));
+            for (size_t start = 0; start < text.size();) {
+                size_t end = std::min(text.find('\n', start), text.size() - 1) + 1;
+                std::string_view line(text.data() + start, end - start);
+                if (!line.starts_with("libpng ")) std::fwrite(line.data(), 1, line.size(), stderr);
+                start = end;
+            }
+        }
+        void release() {
+            if (saved >= 0) close(saved);
+            if (file >= 0) close(file);
+            saved = file = -1;
+        }
+    };
+    static Capture& shared() {
+        static Capture* capture = new Capture; // never destroyed: reads may run while statics are
+        return *capture;
+    }
+};
 
 // File names of the faces in Face order (+X, -X, +Y, -Y, +Z, -Z), and the pattern placeholder.
 constexpr std::array<std::string_view, kFaceCount> kFaceNames{"px", "nx", "py", "ny", "pz", "nz"};
@@ -45,6 +121,8 @@ void checkReadableFile(const std::string& path) {
     fs::file_status status = fs::status(path, error);
     if (!fs::exists(status)) throw Error(ErrorKind::Input, path + ": no such file");
     if (fs::is_directory(status)) throw Error(ErrorKind::Input, path + ": is a folder, not an image file");
+    // Pipes and devices could block or never end; image readers seek anyway.
+    if (!fs::is_regular_file(status)) throw Error(ErrorKind::Input, path + ": not a regular file");
     if (fs::file_size(path, error) == 0) throw Error(ErrorKind::Input, path + ": the file is empty");
 }
 
@@ -60,15 +138,26 @@ std::unique_ptr<OIIO::ImageInput> openImage(const std::string& path) {
     return input;
 }
 
-void checkSpec(const std::string& path, const OIIO::ImageSpec& spec) {
+// "134217728 pixels (16384 x 8192)" for the default, the plain count for any other limit.
+std::string pixelLimitText(int64_t maxPixels) {
+    std::string text = std::to_string(maxPixels) + " pixels";
+    return maxPixels == kDefaultMaxImagePixels ? text + " (16384x8192)" : text;
+}
+
+// From the header alone: nothing of the size it claims has been allocated yet.
+void checkSpec(const std::string& path, const OIIO::ImageSpec& spec, int64_t maxPixels) {
     if (spec.width < 1 || spec.height < 1)
         throw Error(ErrorKind::Input,
                     path + ": the image has no pixels (" + sizeText(spec.width, spec.height) + ")");
-    if (spec.width > kMaxImageSide || spec.height > kMaxImageSide ||
-        int64_t(spec.width) * spec.height > kMaxImagePixels)
+    const int64_t pixels = int64_t(spec.width) * spec.height;
+    if (spec.width > kMaxImageSide || spec.height > kMaxImageSide)
         throw Error(ErrorKind::Input, path + ": the image is " + sizeText(spec.width, spec.height) +
-                                          ", larger than the limit of " + std::to_string(kMaxImageSide) +
-                                          " per side and " + std::to_string(kMaxImagePixels) + " pixels");
+                                          ", longer than the limit of " + std::to_string(kMaxImageSide) +
+                                          " pixels per side");
+    if (pixels > maxPixels)
+        throw Error(ErrorKind::Input, path + ": the image is " + sizeText(spec.width, spec.height) + " (" +
+                                          std::to_string(pixels) + " pixels), more than the limit of " +
+                                          pixelLimitText(maxPixels) + "; raise it with --max-pixels");
     // Volume and deep images hold more than width x height values per channel.
     if (spec.depth > 1 || spec.deep)
         throw Error(ErrorKind::Input, path + ": volume and deep images are not supported");
@@ -179,7 +268,7 @@ Environment loadFaces(const std::string& source, const LoadOptions& options) {
     std::array<Image, kFaceCount> faces;
     size_t replaced = 0;
     for (int face = 0; face < kFaceCount; ++face) {
-        faces[size_t(face)] = readImage(paths[size_t(face)]);
+        faces[size_t(face)] = readImage(paths[size_t(face)], options.maxPixels);
         replaced += applyNonFinitePolicy(faces[size_t(face)].texels, options.nonFinite, paths[size_t(face)]);
     }
     checkFaceSizes(paths, faces);
@@ -205,7 +294,7 @@ Cubemap imageToCubemap(const Image& image, Layout layout, int faceSize) {
 }
 
 Environment loadSingleImage(const std::string& path, const LoadOptions& options) {
-    Image image = readImage(path);
+    Image image = readImage(path, options.maxPixels);
     Environment environment;
     environment.replacedTexels = applyNonFinitePolicy(image.texels, options.nonFinite, path);
     try {
@@ -221,13 +310,19 @@ Environment loadSingleImage(const std::string& path, const LoadOptions& options)
 
 } // namespace
 
-Image readImage(const std::string& path) {
+Image readImage(const std::string& path, int64_t maxPixels) {
     checkReadableFile(path);
-    std::unique_ptr<OIIO::ImageInput> input = openImage(path);
-    const OIIO::ImageSpec& spec = input->spec();
-    checkSpec(path, spec);
-    Image image = readPixels(path, *input, spec);
-    if (isSrgbEncoded(spec)) decodeSrgb(image);
+    Image image;
+    bool srgb = false;
+    {
+        LibraryChatter quiet;
+        std::unique_ptr<OIIO::ImageInput> input = openImage(path);
+        const OIIO::ImageSpec& spec = input->spec();
+        checkSpec(path, spec, maxPixels);
+        image = readPixels(path, *input, spec);
+        srgb = isSrgbEncoded(spec);
+    }
+    if (srgb) decodeSrgb(image);
     return image;
 }
 
@@ -251,6 +346,8 @@ Environment loadEnvironment(const std::string& path, const LoadOptions& options)
     if (options.faceSize < 0)
         throw Error(ErrorKind::Input, "face size must be positive (or 0 for automatic), not " +
                                           std::to_string(options.faceSize));
+    if (options.maxPixels < 1)
+        throw Error(ErrorKind::Input, "--max-pixels must be at least 1, not " + std::to_string(options.maxPixels));
     bool faces = options.layout == Layout::Faces || (options.layout == Layout::Auto && isFacesSource(path));
     return faces ? loadFaces(path, options) : loadSingleImage(path, options);
 }

@@ -1,5 +1,6 @@
 // Other ways to hand a probe to a renderer than the JSON file (probe_file.h): a packed binary file,
-// and the irradiance itself drawn into an equirect map or a horizontal-cross cube map (EXR).
+// a GLSL or C/C++ header of coefficients folded for the render shader, and the irradiance itself
+// drawn into an equirect map or a horizontal-cross cube map (EXR).
 #pragma once
 #include "sh/coefficients.h"
 
@@ -28,6 +29,32 @@ void writeBinaryProbes(const std::string& path, std::span<const ShCoefficients> 
 // Parses and validates; throws Error(Input) naming `name` and what is wrong.
 std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std::string& name);
 std::vector<ShCoefficients> readBinaryProbes(const std::string& path);
+
+// Headers with the coefficients folded for shaders/include/sh_irradiance.glsl (sh/folding.h), as
+// Filament cmgen's --sh-shader writes them: the basis constants and, for irradiance, the
+// convolution A_l / pi are multiplied in, so the shader spends one multiply-add per coefficient.
+// A radiance probe folds with s_l = 1 for shRadiance (L(d)), an irradiance probe with A_l / pi for
+// shIrradianceOverPi (E(n) / pi). The header states order, quantity, source and the call that
+// evaluates it, and holds one array of SH_FOLDED_COUNT (25) rgb entries with w = 0, entries past
+// the order 0, named after the file: for "sunset.h", `sunset_sh` and the order SUNSET_SH_ORDER
+// (C/C++: `static const float sunset_sh[25][4]`, 16 bytes per entry as the shader's vec4 array in
+// std140 or std430; GLSL: `const vec4 sunset_sh[SH_FOLDED_COUNT]` and `const uint
+// sunset_sh_order`, to include after sh_irradiance.glsl). Values are the float nearest the double
+// fold, printed in the shortest form that reads back to the same float.
+enum class HeaderLanguage { Glsl, C };
+
+// The identifier a header derives from a file stem: letters, digits and '_' kept, any other byte
+// (and runs of them) one '_', no leading, trailing or double '_'; "probe_" in front of a leading
+// digit or GLSL's reserved "gl_", and "probe" for an empty result.
+std::string headerIdentifier(std::string_view stem);
+
+// Order 1..5 (the shader's); throws Error(Input) otherwise. `identifier` names the array
+// (identifier + "_sh"); `source` is copied into a comment (control characters and '\' replaced).
+std::string probeToHeader(const ShCoefficients& probe, HeaderLanguage language, const std::string& identifier,
+                          const std::string& source);
+// The identifier is headerIdentifier(stem of path). Written atomically.
+void writeProbeHeader(const std::string& path, const ShCoefficients& probe, HeaderLanguage language,
+                      const std::string& source);
 
 // The irradiance of a probe (its convolution when it holds radiance) drawn as the radiance a white
 // Lambertian surface facing each direction reflects, E(n) / pi: a W x W/2 equirect map (directions

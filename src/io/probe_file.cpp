@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -15,6 +16,10 @@ namespace shprobe {
 namespace {
 
 using nlohmann::json;
+
+// A coefficient file of order 8 is a few kilobytes; anything far larger is not one, and is not
+// read into memory whole.
+constexpr std::uintmax_t kMaxProbeFileBytes = 16u << 20;
 
 const char* kFormat = "shprobe.sh";
 const int kVersion = 1;
@@ -103,6 +108,29 @@ ProbeSun parseSun(const json& sun, const std::string& name) {
     return result;
 }
 
+// nlohmann's "[json.exception.parse_error.101] parse error at line 3, column 1: syntax error
+// while parsing array - unexpected end of input; ..." without the bracketed prefix.
+std::string parseProblem(const json::exception& error) {
+    std::string text = error.what();
+    size_t end = text.find("] ");
+    return end == std::string::npos ? text : text.substr(end + 2);
+}
+
+// The checks reading a file would otherwise answer with a less clear message.
+void checkProbeFile(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code error;
+    fs::file_status status = fs::status(path, error);
+    if (!fs::exists(status)) fail(path, "no such file");
+    if (fs::is_directory(status)) fail(path, "is a folder, not a probe file");
+    if (!fs::is_regular_file(status)) fail(path, "not a regular file");
+    std::uintmax_t size = fs::file_size(path, error);
+    if (size == 0) fail(path, "the file is empty");
+    if (size > kMaxProbeFileBytes)
+        fail(path, "the file has " + std::to_string(size) + " bytes, far more than a probe file (" +
+                       std::to_string(kMaxProbeFileBytes) + " at most)");
+}
+
 std::string formatNumber(double value) {
     std::ostringstream out;
     out.precision(9); // float coefficients round-trip with 9 significant digits
@@ -153,12 +181,27 @@ std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata&
 }
 
 void writeProbeFile(const std::string& path, const ShCoefficients& coefficients, const ProbeMetadata& metadata) {
-    writeFileAtomic(path, probeToJson(coefficients, metadata));
+    std::string text;
+    try {
+        text = probeToJson(coefficients, metadata);
+    } catch (const Error& error) {
+        throw Error(error.kind(), "cannot write " + path + ": " + error.what() +
+                                      " (is the input's radiance too large?)");
+    }
+    writeFileAtomic(path, text);
 }
 
 Probe parseProbe(std::string_view text, const std::string& name) {
-    json root = json::parse(text, nullptr, false);
-    if (root.is_discarded()) fail(name, "not valid JSON");
+    // The JSON reader would take a NUL byte for the end of the text and ignore what follows (the
+    // zeros a crash can leave at the end of a file, say).
+    if (size_t nul = text.find('\0'); nul != std::string_view::npos)
+        fail(name, "not valid JSON (a NUL byte at offset " + std::to_string(nul) + ")");
+    json root;
+    try {
+        root = json::parse(text);
+    } catch (const json::exception& error) { // parse errors, and numbers beyond double's range
+        fail(name, "not valid JSON (" + parseProblem(error) + ")");
+    }
     if (!root.is_object()) fail(name, "the top level must be a JSON object");
     if (requireString(root, "format", name) != kFormat)
         fail(name, std::string("field \"format\" must be \"") + kFormat + "\"");
@@ -182,10 +225,12 @@ Probe parseProbe(std::string_view text, const std::string& name) {
 }
 
 Probe readProbe(const std::string& path) {
+    checkProbeFile(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(path, "cannot open the file");
     std::stringstream text;
     text << in.rdbuf();
+    if (in.bad()) fail(path, "cannot read the file");
     return parseProbe(text.str(), path);
 }
 

@@ -1,6 +1,5 @@
-// Folding SH probes for the render shaders (sh_irradiance.glsl) and the double references of the
-// shading modes. Basis polynomials: CONVENTIONS.md through l = 2, Sloan ("Stupid SH Tricks",
-// seed 000, appendix A2) and Brown (seed 003) with Sloan's Condon-Shortley signs for l = 3, 4.
+// Folding SH probes for the render shaders (sh_irradiance.glsl; the fold itself is sh/folding.h)
+// and the double references of the shading modes.
 #include "render/probe_shading.h"
 
 #include "sh/basis.h"
@@ -18,101 +17,18 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// k_i of y_i = k_i p_i, i = l(l+1) + m, l <= 4. K_l^m of CONVENTIONS.md times the integer factors
-// of the associated Legendre polynomials, with the (-1)^m phase on odd m.
-const std::array<double, SHPROBE_FOLDED_COUNT>& polynomialScales() {
-    static const std::array<double, SHPROBE_FOLDED_COUNT> scales = [] {
-        const double s = std::sqrt(1.0 / kPi);
-        return std::array<double, SHPROBE_FOLDED_COUNT>{
-            0.5 * s,                           // 1
-            -std::sqrt(3.0 / (4.0 * kPi)),     // y
-            std::sqrt(3.0 / (4.0 * kPi)),      // z
-            -std::sqrt(3.0 / (4.0 * kPi)),     // x
-            0.5 * std::sqrt(15.0) * s,         // xy
-            -0.5 * std::sqrt(15.0) * s,        // yz
-            0.25 * std::sqrt(5.0) * s,         // 3z^2 - 1
-            -0.5 * std::sqrt(15.0) * s,        // xz
-            0.25 * std::sqrt(15.0) * s,        // x^2 - y^2
-            -0.25 * std::sqrt(35.0 / 2.0) * s, // y (3x^2 - y^2)
-            0.5 * std::sqrt(105.0) * s,        // xyz
-            -0.25 * std::sqrt(21.0 / 2.0) * s, // y (5z^2 - 1)
-            0.25 * std::sqrt(7.0) * s,         // z (5z^2 - 3)
-            -0.25 * std::sqrt(21.0 / 2.0) * s, // x (5z^2 - 1)
-            0.25 * std::sqrt(105.0) * s,       // z (x^2 - y^2)
-            -0.25 * std::sqrt(35.0 / 2.0) * s, // x (x^2 - 3y^2)
-            0.75 * std::sqrt(35.0) * s,        // xy (x^2 - y^2)
-            -0.75 * std::sqrt(35.0 / 2.0) * s, // yz (3x^2 - y^2)
-            0.75 * std::sqrt(5.0) * s,         // xy (7z^2 - 1)
-            -0.75 * std::sqrt(5.0 / 2.0) * s,  // yz (7z^2 - 3)
-            3.0 / 16.0 * s,                    // 35z^4 - 30z^2 + 3
-            -0.75 * std::sqrt(5.0 / 2.0) * s,  // xz (7z^2 - 3)
-            0.375 * std::sqrt(5.0) * s,        // (x^2 - y^2)(7z^2 - 1)
-            -0.75 * std::sqrt(35.0 / 2.0) * s, // xz (x^2 - 3y^2)
-            3.0 / 16.0 * std::sqrt(35.0) * s,  // x^2 (x^2 - 3y^2) - y^2 (3x^2 - y^2)
-        };
-    }();
-    return scales;
-}
+static_assert(kFoldedCount == SHPROBE_FOLDED_COUNT, "the uniforms hold the folded coefficients");
 
-constexpr int kY20 = 6; // flat index of y_20, split as in Sloan's shader
-
-void requireIndex(int index) {
-    if (index < 0 || index >= SHPROBE_FOLDED_COUNT)
-        throw Error(ErrorKind::Input, "no basis polynomial " + std::to_string(index) + " (bands 0..4 only)");
-}
-
-// Radiance coefficients of a probe, band by band; false where they cannot be recovered
-// (irradiance probes lose the bands with A_l = 0).
-bool radianceOfProbe(const ShCoefficients& probe, int order, ShCoefficients& radiance) {
-    radiance = truncateOrder(probe, order);
-    radiance.quantity = Quantity::Radiance;
-    if (probe.quantity == Quantity::Radiance) return true;
-    for (int i = 0; i < coefficientCount(order); ++i) {
-        double a = irradianceBandFactor(shBand(i));
-        if (a == 0.0) return false;
-        radiance.rgb[size_t(i)] /= a;
-    }
-    return true;
-}
-
-// c_i = s_l k_i f_i, with Sloan's split of y_20 (see sh_irradiance.glsl).
-std::array<glm::vec4, SHPROBE_FOLDED_COUNT> fold(const std::vector<glm::dvec3>& f, int order,
-                                                 double (*bandScale)(int)) {
-    std::array<glm::dvec3, SHPROBE_FOLDED_COUNT> c{};
-    for (int i = 0; i < coefficientCount(order); ++i)
-        c[size_t(i)] = bandScale(shBand(i)) * polynomialScales()[size_t(i)] * f[size_t(i)];
-    if (order >= 3) {
-        c[0] -= c[kY20]; // the constant of k (3z^2 - 1)
-        c[kY20] *= 3.0;  // the z^2 term
-    }
+std::array<glm::vec4, SHPROBE_FOLDED_COUNT> toUniform(const FoldedCoefficients& c) {
     std::array<glm::vec4, SHPROBE_FOLDED_COUNT> folded{};
     for (size_t i = 0; i < c.size(); ++i)
         folded[i] = glm::vec4(glm::vec3(c[i]), 0.0f);
     return folded;
 }
 
-double unitScale(int) {
-    return 1.0;
-}
-double irradianceOverPiScale(int l) {
-    return irradianceBandFactor(l) / kPi;
-}
-
-std::vector<glm::dvec3> irradianceOfProbe(const ShCoefficients& probe, int order) {
-    ShCoefficients truncated = truncateOrder(probe, order);
-    if (probe.quantity == Quantity::Irradiance) {
-        // Already E_lm = A_l L_lm: fold with s_l = 1 / pi by undoing A_l where it is not 0.
-        for (int i = 0; i < coefficientCount(order); ++i) {
-            double a = irradianceBandFactor(shBand(i));
-            truncated.rgb[size_t(i)] = a == 0.0 ? glm::dvec3(0.0) : truncated.rgb[size_t(i)] / a;
-        }
-    }
-    return truncated.rgb; // radiance-like values, folded with A_l / pi
-}
-
 // E_00 y_00 / pi = L_00 y_00 whatever the quantity: the mean of E / pi over the sphere.
 glm::dvec3 meanRadiance(const ShCoefficients& probe) {
-    double y00 = polynomialScales()[0];
+    double y00 = basisPolynomialScale(0);
     return probe.quantity == Quantity::Radiance ? probe.rgb[0] * y00 : probe.rgb[0] * y00 / kPi;
 }
 
@@ -134,51 +50,6 @@ ShadingMode parseShadingMode(const std::string& name) {
     for (ShadingMode mode : {ShadingMode::Radiance, ShadingMode::Irradiance, ShadingMode::L1NonLinear})
         if (name == shadingModeName(mode)) return mode;
     throw Error(ErrorKind::Input, "unknown mode '" + name + "' (radiance, irradiance or l1-nonlinear)");
-}
-
-double basisPolynomialScale(int index) {
-    requireIndex(index);
-    return polynomialScales()[size_t(index)];
-}
-
-double basisPolynomial(int index, const glm::dvec3& d) {
-    requireIndex(index);
-    const double x = d.x, y = d.y, z = d.z, x2 = x * x, y2 = y * y, z2 = z * z;
-    const double p[SHPROBE_FOLDED_COUNT] = {1.0,
-                                            y,
-                                            z,
-                                            x,
-                                            x * y,
-                                            y * z,
-                                            3.0 * z2 - 1.0,
-                                            x * z,
-                                            x2 - y2,
-                                            y * (3.0 * x2 - y2),
-                                            x * y * z,
-                                            y * (5.0 * z2 - 1.0),
-                                            z * (5.0 * z2 - 3.0),
-                                            x * (5.0 * z2 - 1.0),
-                                            z * (x2 - y2),
-                                            x * (x2 - 3.0 * y2),
-                                            x * y * (x2 - y2),
-                                            y * z * (3.0 * x2 - y2),
-                                            x * y * (7.0 * z2 - 1.0),
-                                            y * z * (7.0 * z2 - 3.0),
-                                            (35.0 * z2 - 30.0) * z2 + 3.0,
-                                            x * z * (7.0 * z2 - 3.0),
-                                            (x2 - y2) * (7.0 * z2 - 1.0),
-                                            x * z * (x2 - 3.0 * y2),
-                                            x2 * (x2 - 3.0 * y2) - y2 * (3.0 * x2 - y2)};
-    return p[index];
-}
-
-ShCoefficients truncateOrder(const ShCoefficients& probe, int order) {
-    if (order < 1 || order > probe.order || probe.rgb.size() < size_t(coefficientCount(order)))
-        throw Error(ErrorKind::Input, "cannot take order " + std::to_string(order) + " of a probe of order " +
-                                          std::to_string(probe.order));
-    ShCoefficients truncated = makeCoefficients(order, probe.quantity);
-    std::copy_n(probe.rgb.begin(), coefficientCount(order), truncated.rgb.begin());
-    return truncated;
 }
 
 gpu::RenderSun foldSun(const SphericalLight& sun) {
@@ -203,16 +74,14 @@ ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string
                                           " (bake it with --order " + std::to_string(order) + ")");
     ProbeShading shading;
     shading.order = order;
-    ShCoefficients radiance;
-    shading.hasRadiance = radianceOfProbe(probe, order, radiance);
-    if (shading.hasRadiance) shading.radiance = fold(radiance.rgb, order, unitScale);
-    shading.irradiance = fold(irradianceOfProbe(probe, order), order, irradianceOverPiScale);
+    std::optional<FoldedCoefficients> radiance = foldCoefficients(probe, order, FoldedQuantity::Radiance);
+    shading.hasRadiance = radiance.has_value();
+    if (radiance) shading.radiance = toUniform(*radiance);
+    shading.irradiance = toUniform(*foldCoefficients(probe, order, FoldedQuantity::IrradianceOverPi));
 
     // The L1 model needs L_00 and L_1m, which any probe of order >= 2 gives (A_0, A_1 != 0).
     if (probe.order >= 2) {
-        ShCoefficients l1Radiance;
-        radianceOfProbe(probe, 2, l1Radiance);
-        RenormalizedL1 l1 = renormalizedL1(l1Radiance);
+        RenormalizedL1 l1 = renormalizedL1(*radianceOf(probe, 2));
         shading.l1[0] = glm::vec4(glm::vec3(l1.r0), 0.0f);
         for (int axis = 0; axis < 3; ++axis)
             shading.l1[size_t(axis) + 1] = glm::vec4(glm::vec3(l1.r1[axis]), 0.0f);
@@ -244,7 +113,7 @@ RenormalizedL1 renormalizedL1(const ShCoefficients& radiance) {
     const double k = std::sqrt(3.0 / (4.0 * kPi));
     const double toR1 = 1.0 / (4.0 * kPi * k);
     RenormalizedL1 l1;
-    l1.r0 = radiance.rgb[0] * polynomialScales()[0];
+    l1.r0 = radiance.rgb[0] * basisPolynomialScale(0);
     l1.r1[0] = -radiance.rgb[3] * toR1;
     l1.r1[1] = -radiance.rgb[1] * toR1;
     l1.r1[2] = radiance.rgb[2] * toR1;

@@ -7,6 +7,7 @@
 #pragma once
 #include "render_interface.h"
 #include "sh/coefficients.h"
+#include "sh/folding.h"
 #include "sh/lights.h"
 
 #include <array>
@@ -29,13 +30,9 @@ ShadingMode parseShadingMode(const std::string& name);
 constexpr int kMinRenderOrder = 3;
 constexpr int kMaxRenderOrder = SHPROBE_RENDER_MAX_ORDER;
 
-// y_i = basisPolynomialScale(i) * basisPolynomial(i, d) for i < 25 (CONVENTIONS.md; Sloan's signs:
-// the odd-m constants are negative). The polynomials are the ones sh_irradiance.glsl evaluates,
-// except that the shader evaluates z^2 for y_20 = k (3 z^2 - 1) (Sloan's split, see there).
-double basisPolynomialScale(int index);
-double basisPolynomial(int index, const glm::dvec3& d);
+// basisPolynomialScale, basisPolynomial, truncateOrder and the fold itself: sh/folding.h.
 
-// Folded coefficients for the shaders (rgb; layout of gpu::RenderUniforms).
+// Folded coefficients for the shaders (rgb; layout of gpu::RenderUniforms), from foldCoefficients.
 struct ProbeShading {
     int order = 0;            // bands 0..order-1 are set; the others are 0
     bool hasRadiance = false; // false for irradiance probes whose bands with A_l = 0 are needed
@@ -56,9 +53,6 @@ ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string
 // The sun's uniforms: unit direction, radiance, and sin r, cos r, sin^2 r, 4 sin^2(r/2) from the
 // double radius (sin^2(r/2) rather than 1 - cos r, which cancels for small r).
 gpu::RenderSun foldSun(const SphericalLight& sun);
-
-// The first `order` bands of a probe (order <= probe.order).
-ShCoefficients truncateOrder(const ShCoefficients& probe, int order);
 
 // Renormalized L0 and L1 of radiance (seed 004): R0 = (1/4pi) int L, R1 = (1/4pi) int L w, per channel.
 struct RenormalizedL1 {

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <optional>
+#include <tuple>
 
 namespace shprobe {
 
@@ -17,10 +18,23 @@ namespace {
 const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 const char* kNoDeviceHint = "install a Vulkan driver; without a GPU, Mesa's lavapipe works "
                             "(Debian: apt-get install mesa-vulkan-drivers)";
+// What a user can do when the devices there cannot run the shaders: nothing is baked on them.
+const char* kCpuBackendHint = "; nothing was run on the device (`shprobe bake --backend cpu` bakes without one)";
 
 bool envFlag(const char* name) {
     const char* value = std::getenv(name);
     return value && *value && std::strcmp(value, "0") != 0;
+}
+
+// Synchronization validation (hazards between commands: missing barriers) comes with the layer's
+// VK_EXT_validation_features, which Debian 12's layer (1.3.239) has; without it, the plain checks.
+bool layerHasExtension(const char* layer, const char* extension) {
+    uint32_t count = 0;
+    if (vkEnumerateInstanceExtensionProperties(layer, &count, nullptr) != VK_SUCCESS) return false;
+    std::vector<VkExtensionProperties> extensions(count);
+    vkEnumerateInstanceExtensionProperties(layer, &count, extensions.data());
+    return std::any_of(extensions.begin(), extensions.end(),
+                       [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, extension) == 0; });
 }
 
 bool hasInstanceLayer(const char* name) {
@@ -69,11 +83,19 @@ VkInstance createInstance(bool validation, ValidationLog* log,
     for (const std::string& extension : extraExtensions) extensions.push_back(extension.c_str());
     std::vector<const char*> layers;
     VkDebugUtilsMessengerCreateInfoEXT debugInfo = messengerInfo(log);
+    const VkValidationFeatureEnableEXT synchronization = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
+    VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
+    features.enabledValidationFeatureCount = 1;
+    features.pEnabledValidationFeatures = &synchronization;
     VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
     if (validation) {
         layers.push_back(kValidationLayer);
         extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
         info.pNext = &debugInfo; // also reports problems in vkCreateInstance / vkDestroyInstance
+        if (layerHasExtension(kValidationLayer, VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME)) {
+            extensions.push_back(VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME);
+            debugInfo.pNext = &features;
+        }
     }
     info.pApplicationInfo = &app;
     info.enabledLayerCount = uint32_t(layers.size());
@@ -138,12 +160,8 @@ DeviceInfo describeDevice(VkPhysicalDevice physicalDevice, uint32_t index) {
         info.timestamps = info.timestampValidBits > 0 && p.limits.timestampPeriod > 0.0f;
     }
 
-    if (p.apiVersion < VK_API_VERSION_1_1)
-        info.unsupportedReason = "Vulkan " + versionString(p.apiVersion) + " (1.1 required)";
-    else if (!family)
-        info.unsupportedReason = "no compute queue";
-    else if (!info.subgroupArithmetic)
-        info.unsupportedReason = "no subgroup arithmetic operations in compute shaders";
+    info.unsupportedReason = missingRequirement(
+        {p.apiVersion, family.has_value(), subgroup.supportedStages, subgroup.supportedOperations});
     return info;
 }
 
@@ -180,24 +198,6 @@ const DeviceInfo& findRequestedDevice(const std::vector<DeviceInfo>& devices, co
         if (matches) return device;
     }
     throw Error(ErrorKind::Device, "no Vulkan device matches '" + request + "' (see `shprobe info`)");
-}
-
-const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::string& request) {
-    if (devices.empty()) throw Error(ErrorKind::Device, std::string("no Vulkan device found: ") + kNoDeviceHint);
-    if (!request.empty()) {
-        const DeviceInfo& device = findRequestedDevice(devices, request);
-        if (!device.unsupportedReason.empty())
-            throw Error(ErrorKind::Device, "device " + device.name + " cannot be used: " + device.unsupportedReason);
-        return device;
-    }
-    const DeviceInfo* best = nullptr;
-    for (const DeviceInfo& device : devices)
-        if (device.unsupportedReason.empty() && (!best || typeRank(device.type) > typeRank(best->type)))
-            best = &device;
-    if (!best)
-        throw Error(ErrorKind::Device, "no usable Vulkan device: " + devices.front().name + ": " +
-                                           devices.front().unsupportedReason);
-    return *best;
 }
 
 std::vector<VkPhysicalDevice> enumeratePhysicalDevices(VkInstance instance) {
@@ -301,6 +301,42 @@ std::string versionString(uint32_t version) {
            "." + std::to_string(VK_API_VERSION_PATCH(version));
 }
 
+std::string missingRequirement(const DeviceCapabilities& device) {
+    if (device.apiVersion < VK_API_VERSION_1_1)
+        return "Vulkan " + versionString(device.apiVersion) + " (shprobe needs 1.1)";
+    if (!device.computeQueue) return "no compute queue";
+    if (!(device.subgroupStages & VK_SHADER_STAGE_COMPUTE_BIT))
+        return "no subgroup operations in compute shaders (subgroup supportedStages lacks "
+               "VK_SHADER_STAGE_COMPUTE_BIT)";
+    const std::tuple<VkSubgroupFeatureFlagBits, const char*, const char*> operations[] = {
+        {VK_SUBGROUP_FEATURE_BASIC_BIT, "VK_SUBGROUP_FEATURE_BASIC_BIT", "subgroupElect"},
+        {VK_SUBGROUP_FEATURE_ARITHMETIC_BIT, "VK_SUBGROUP_FEATURE_ARITHMETIC_BIT", "subgroupAdd"}};
+    for (const auto& [bit, name, use] : operations)
+        if (!(device.subgroupOperations & bit))
+            return std::string("no ") + name + " subgroup operations (" + use + ") in compute shaders";
+    return {};
+}
+
+const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::string& request) {
+    if (devices.empty()) throw Error(ErrorKind::Device, std::string("no Vulkan device found: ") + kNoDeviceHint);
+    if (!request.empty()) {
+        const DeviceInfo& device = findRequestedDevice(devices, request);
+        if (!device.unsupportedReason.empty())
+            throw Error(ErrorKind::Device, "device " + device.name + " cannot be used: " + device.unsupportedReason +
+                                               kCpuBackendHint);
+        return device;
+    }
+    const DeviceInfo* best = nullptr;
+    for (const DeviceInfo& device : devices)
+        if (device.unsupportedReason.empty() && (!best || typeRank(device.type) > typeRank(best->type)))
+            best = &device;
+    if (best) return *best;
+    std::string reasons;
+    for (const DeviceInfo& device : devices)
+        reasons += (reasons.empty() ? "" : "; ") + device.name + ": " + device.unsupportedReason;
+    throw Error(ErrorKind::Device, "no usable Vulkan device (" + reasons + ")" + kCpuBackendHint);
+}
+
 std::vector<DeviceInfo> listDevices(const ContextOptions& options) {
     ValidationLog log;
     bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
@@ -317,6 +353,7 @@ std::vector<DeviceInfo> listDevices(const ContextOptions& options) {
 }
 
 Context createContext(const ContextOptions& options) {
+    DeviceStep step("creating the Vulkan device");
     Context context;
     bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
     context.validationLog = std::make_unique<ValidationLog>();

@@ -49,6 +49,20 @@ struct DeviceInfo {
     std::string unsupportedReason;
 };
 
+// What decides whether a device can run shprobe's compute shaders: Vulkan 1.1, a compute queue, and
+// the subgroup operations of the projection's reduction (subgroupElect, subgroupAdd). Rendering
+// adds its own requirements (ContextOptions). No optional VkPhysicalDeviceFeatures are enabled.
+struct DeviceCapabilities {
+    uint32_t apiVersion = 0;
+    bool computeQueue = false;
+    VkShaderStageFlags subgroupStages = 0;         // VkPhysicalDeviceSubgroupProperties::supportedStages
+    VkSubgroupFeatureFlags subgroupOperations = 0; // ...::supportedOperations
+};
+
+// Why a device with these capabilities cannot run shprobe, naming what it lacks as Vulkan names it
+// (e.g. VK_SUBGROUP_FEATURE_ARITHMETIC_BIT); empty when it can. `shprobe info` prints it.
+std::string missingRequirement(const DeviceCapabilities& device);
+
 // Counts validation messages; owned by the context and shared with the messenger callback.
 struct ValidationLog {
     std::atomic<uint32_t> messages{0};
@@ -76,6 +90,12 @@ void destroyContext(Context& context);
 
 // Every physical device with its properties, for `shprobe info` and device selection.
 std::vector<DeviceInfo> listDevices(const ContextOptions& options);
+
+// The device to use: the one `request` names (an index or a part of the name; see ContextOptions)
+// or else the best usable one. Throws Error(Device) when there is none, or when the one requested
+// or every one cannot be used, naming each device and what it lacks: the run is refused, and the
+// message points to `bake --backend cpu`.
+const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::string& request);
 
 const char* deviceTypeName(VkPhysicalDeviceType type);
 std::string versionString(uint32_t version);

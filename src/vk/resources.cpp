@@ -187,6 +187,27 @@ void submitAndWait(const Context& context, const std::function<void(VkCommandBuf
     vkFreeCommandBuffers(context.device, context.commandPool, 1, &commands);
 }
 
+VkQueryPool createTimestampPool(const Context& context) {
+    if (!context.info.timestamps) return VK_NULL_HANDLE;
+    VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    info.queryCount = 2;
+    VkQueryPool pool = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateQueryPool(context.device, &info, nullptr, &pool));
+    return pool;
+}
+
+double timestampMilliseconds(const Context& context, VkQueryPool pool) {
+    if (!pool) return 0.0;
+    uint64_t ticks[2] = {};
+    VK_CHECK(vkGetQueryPoolResults(context.device, pool, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    // Only timestampValidBits bits count; masking the difference also handles a wrap-around.
+    uint32_t bits = context.info.timestampValidBits;
+    uint64_t mask = bits >= 64 ? ~uint64_t(0) : (uint64_t(1) << bits) - 1;
+    return double((ticks[1] - ticks[0]) & mask) * context.info.timestampPeriod * 1e-6;
+}
+
 void computeWriteBarrier(VkCommandBuffer commands) {
     VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;

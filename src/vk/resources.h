@@ -37,6 +37,11 @@ void submitAndWait(const Context& context, const std::function<void(VkCommandBuf
 // Queue submissions made by submitAndWait in this process so far (tests count them).
 uint64_t submissionCount();
 
+// A pool of two timestamp queries, or VK_NULL_HANDLE when the queue cannot write timestamps.
+VkQueryPool createTimestampPool(const Context& context);
+// Milliseconds between the pool's two timestamps (waits for them); 0 for VK_NULL_HANDLE.
+double timestampMilliseconds(const Context& context, VkQueryPool pool);
+
 // A barrier making compute-shader (and transfer) writes visible to later compute reads, transfers
 // and host reads.
 void computeWriteBarrier(VkCommandBuffer commands);

@@ -13,6 +13,7 @@
 #include <spawn.h>
 #include <sstream>
 #include <string>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
@@ -25,6 +26,7 @@ struct RunResult {
     int exitCode = -1; // the exit status, or 128 + signal
     std::string out;
     std::string err;
+    long peakKiB = 0; // the child's peak resident memory (ru_maxrss)
 };
 
 // A value sets the variable, nullopt removes it.
@@ -81,11 +83,13 @@ inline RunResult runProgram(const std::vector<std::string>& args, const std::fil
         return result;
     }
     int status = 0;
-    while (waitpid(pid, &status, 0) < 0)
+    struct rusage usage {};
+    while (wait4(pid, &status, 0, &usage) < 0)
         if (errno != EINTR) {
-            ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
+            ADD_FAILURE() << "wait4 failed: " << std::strerror(errno);
             return result;
         }
+    result.peakKiB = usage.ru_maxrss;
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     result.out = readText(outPath);
     result.err = readText(errPath);

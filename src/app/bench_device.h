@@ -1,0 +1,25 @@
+// The GPU side of `shprobe bench` that needs more than a bake: the device's own read bound on the
+// projection's access pattern, and the cost of creating the pipelines with and without a
+// pipeline cache.
+#pragma once
+#include "gpu/projector.h"
+#include "sh/cubemap.h"
+#include "vk/context.h"
+
+namespace shprobe {
+
+// Device milliseconds (timestamps) of read_texels.comp over the cube map: every texel fetched as
+// project.comp fetches it, and only summed. The best of `repeat` runs; 0 without timestamps.
+double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, GpuTexelFormat format, int repeat);
+
+struct PipelineCreation {
+    double firstMilliseconds = 0.0;  // createProjector with an empty pipeline cache
+    double cachedMilliseconds = 0.0; // again, with a cache loaded from the first one's saved data
+    size_t cacheBytes = 0;           // the saved data (a driver without a real cache saves a header)
+};
+
+// Creates and destroys the projector's pipelines twice, the second time from a cache that went
+// through a file (as the next run of the program would see it).
+PipelineCreation measurePipelineCreation(const Context& context, int order);
+
+} // namespace shprobe

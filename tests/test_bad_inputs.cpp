@@ -1,0 +1,823 @@
+// What the program does with hostile inputs, one test per row of the README's "Reliability" table:
+// truncated and oversized images, odd faces and channel counts, extreme texel values, options out
+// of range, bad probe files, outputs that cannot be written, and Ctrl-C. Each failure must exit
+// with the table's code and print exactly one line, "shprobe: error: ...", naming the input and the
+// problem (no library chatter), leave no file behind (not even a temporary one) and leave an
+// existing output byte for byte as it was. Also the device side: the requirements a device must
+// meet, Vulkan errors as messages, and an allocation no device can make.
+//
+// ctest runs this with VK_ICD_FILENAMES = lavapipe and SHPROBE_VALIDATION=1, which the children
+// inherit: a validation message fails their run. Test files are written by each test into its own
+// temporary folder; no binary file is checked in.
+#include "image/environment.h"
+#include "image/image_write.h"
+#include "io/probe_file.h"
+#include "sh/basis.h"
+#include "sh/error.h"
+#include "vk/check.h"
+#include "vk/context.h"
+#include "vk/resources.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <grp.h>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace shprobe {
+namespace {
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+#define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "in: " << (text)
+
+// ---- Running the program ----------------------------------------------------------------------
+
+struct RunResult {
+    int exitCode = -1; // the exit status, or 128 + the signal that ended the child
+    std::string out;
+    std::string err;
+    double seconds = 0.0;
+};
+
+// Changes to the inherited environment: a value sets the variable, nullopt removes it.
+using EnvironmentChanges = std::map<std::string, std::optional<std::string>>;
+
+struct RunOptions {
+    EnvironmentChanges environment;
+    // Run as user nobody when this process is root, for whom permission bits do not count.
+    bool asOtherUser = false;
+};
+
+constexpr uid_t kNobody = 65534;
+
+std::string readFile(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+}
+
+std::vector<char*> pointersTo(std::vector<std::string>& strings) {
+    std::vector<char*> pointers;
+    for (std::string& text : strings)
+        pointers.push_back(text.data());
+    pointers.push_back(nullptr);
+    return pointers;
+}
+
+std::vector<std::string> changedEnvironment(const EnvironmentChanges& changes) {
+    std::vector<std::string> variables;
+    for (char** entry = environ; *entry; ++entry) {
+        std::string variable(*entry);
+        if (!changes.count(variable.substr(0, variable.find('=')))) variables.push_back(variable);
+    }
+    for (const auto& [name, value] : changes)
+        if (value) variables.push_back(name + "=" + *value);
+    return variables;
+}
+
+// A running shprobe: stdin /dev/null, stdout and stderr into files, the interrupt signals with
+// their default action (as a terminal's Ctrl-C finds them, whatever this process inherited: a
+// shell starts background jobs with SIGINT ignored). fork and exec, with only async-signal-safe
+// calls in between, so that the child can become another user.
+class Child {
+  public:
+    Child(const std::vector<std::string>& args, const fs::path& logFolder, const RunOptions& options) {
+        static int runs = 0;
+        fs::create_directories(logFolder);
+        outPath_ = logFolder / ("run" + std::to_string(++runs) + ".stdout");
+        errPath_ = logFolder / ("run" + std::to_string(runs) + ".stderr");
+        std::vector<std::string> argStrings{SHPROBE_EXECUTABLE};
+        argStrings.insert(argStrings.end(), args.begin(), args.end());
+        std::vector<std::string> envStrings = changedEnvironment(options.environment);
+        std::vector<char*> argv = pointersTo(argStrings), envp = pointersTo(envStrings);
+        const bool drop = options.asOtherUser && geteuid() == 0;
+        start_ = Clock::now();
+        pid_ = fork();
+        if (pid_ == 0) becomeShprobe(argv.data(), envp.data(), drop);
+        if (pid_ < 0) ADD_FAILURE() << "fork failed: " << std::strerror(errno);
+    }
+    ~Child() {
+        if (pid_ > 0 && !waited_) {
+            kill(pid_, SIGKILL);
+            wait();
+        }
+    }
+    Child(const Child&) = delete;
+    Child& operator=(const Child&) = delete;
+
+    void signal(int number) const { kill(pid_, number); }
+    bool running() const { return pid_ > 0 && !waited_ && waitpid(pid_, nullptr, WNOHANG) == 0; }
+
+    RunResult wait() {
+        RunResult result;
+        int status = 0;
+        while (waitpid(pid_, &status, 0) < 0)
+            if (errno != EINTR) {
+                ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
+                return result;
+            }
+        waited_ = true;
+        result.seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+        result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+        result.out = readFile(outPath_);
+        result.err = readFile(errPath_);
+        return result;
+    }
+
+  private:
+    [[noreturn]] void becomeShprobe(char** argv, char** envp, bool drop) const {
+        int in = open("/dev/null", O_RDONLY);
+        int out = open(outPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        int err = open(errPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (in < 0 || out < 0 || err < 0 || dup2(in, 0) < 0 || dup2(out, 1) < 0 || dup2(err, 2) < 0)
+            _exit(126);
+        struct sigaction standard {};
+        standard.sa_handler = SIG_DFL;
+        for (int number : {SIGINT, SIGTERM, SIGHUP})
+            sigaction(number, &standard, nullptr);
+        sigset_t none;
+        sigemptyset(&none);
+        sigprocmask(SIG_SETMASK, &none, nullptr);
+        if (drop && (setgroups(0, nullptr) != 0 || setgid(kNobody) != 0 || setuid(kNobody) != 0)) _exit(126);
+        execve(argv[0], argv, envp);
+        _exit(127);
+    }
+
+    pid_t pid_ = -1;
+    bool waited_ = false;
+    fs::path outPath_, errPath_;
+    Clock::time_point start_;
+};
+
+std::string describe(const RunResult& run) {
+    return "exit " + std::to_string(run.exitCode) + "\n--- stdout:\n" + run.out + "--- stderr:\n" + run.err;
+}
+
+std::vector<std::string> linesOf(const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);)
+        lines.push_back(line);
+    return lines;
+}
+
+// Every entry of a folder, hidden ones (temporary files) included.
+std::vector<std::string> entriesOf(const fs::path& folder) {
+    std::vector<std::string> names;
+    std::error_code ignored;
+    for (const fs::directory_entry& entry : fs::directory_iterator(folder, ignored))
+        names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+// ---- Test files -------------------------------------------------------------------------------
+
+Image filledImage(int width, int height, const std::function<glm::vec3(int, int)>& value) {
+    Image image = makeImage(width, height);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            image.at(x, y) = glm::vec4(value(x, y), 1.0f);
+    return image;
+}
+
+Image constantImage(int width, int height, glm::vec3 value) {
+    return filledImage(width, height, [&](int, int) { return value; });
+}
+
+// Raw channels through OpenImageIO, for channel counts and formats writeImage (RGB) does not make.
+template <typename T>
+void writeChannels(const fs::path& path, int width, int height, int channels, OIIO::TypeDesc type,
+                   const std::vector<T>& data) {
+    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(path.string());
+    ASSERT_TRUE(output) << OIIO::geterror();
+    OIIO::ImageSpec spec(width, height, channels, type);
+    spec.attribute("oiio:UnassociatedAlpha", 1);
+    ASSERT_TRUE(output->open(path.string(), spec)) << output->geterror();
+    ASSERT_TRUE(output->write_image(type, data.data())) << output->geterror();
+    ASSERT_TRUE(output->close()) << output->geterror();
+}
+
+// An 8-bit PNG of noise: deflate cannot shrink it, so a cut always falls inside the pixel data.
+void writeNoisePng(const fs::path& path, int width, int height) {
+    std::vector<uint8_t> rgb(size_t(width) * height * 3);
+    uint32_t state = 12345;
+    for (uint8_t& byte : rgb)
+        byte = uint8_t((state = state * 1664525u + 1013904223u) >> 24);
+    writeChannels(path, width, height, 3, OIIO::TypeDesc::UINT8, rgb);
+}
+
+void cutFile(const fs::path& from, const fs::path& to, uintmax_t bytes) {
+    fs::copy_file(from, to, fs::copy_options::overwrite_existing);
+    fs::resize_file(to, bytes);
+}
+
+// A Radiance HDR header claiming width x height, and no pixels.
+void writeHdrHeader(const fs::path& path, int width, int height) {
+    writeText(path, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y " + std::to_string(height) + " +X " +
+                        std::to_string(width) + "\n");
+}
+
+uint32_t crc32(const std::string& bytes) { // PNG's CRC (ISO 3309), bit by bit
+    uint32_t crc = 0xffffffffu;
+    for (unsigned char byte : bytes) {
+        crc ^= byte;
+        for (int bit = 0; bit < 8; ++bit)
+            crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+std::string bigEndian(uint32_t value) {
+    return {char(value >> 24), char(value >> 16), char(value >> 8), char(value)};
+}
+
+std::string pngChunk(const std::string& type, const std::string& data) {
+    return bigEndian(uint32_t(data.size())) + type + data + bigEndian(crc32(type + data));
+}
+
+// A valid PNG signature and IHDR (8-bit RGB) claiming width x height, then the start of an empty
+// zlib stream as the only IDAT and IEND: far too few pixels.
+void writePngHeader(const fs::path& path, uint32_t width, uint32_t height) {
+    std::string header = bigEndian(width) + bigEndian(height) + std::string("\x08\x02\x00\x00\x00", 5);
+    writeText(path, std::string("\x89PNG\r\n\x1a\n", 8) + pngChunk("IHDR", header) +
+                        pngChunk("IDAT", std::string("\x78\x9c", 2)) + pngChunk("IEND", ""));
+}
+
+// A probe file of `order` whose coefficients are all distinct.
+ShCoefficients testProbe(int order) {
+    ShCoefficients probe = makeCoefficients(order, Quantity::Radiance);
+    for (size_t i = 0; i < probe.rgb.size(); ++i)
+        probe.rgb[i] = glm::dvec3(1.0 + double(i), 0.5, -0.25 * double(i));
+    return probe;
+}
+
+constexpr double kY00 = 0.28209479177387814; // 1 / (2 sqrt(pi))
+
+// ---- Fixture ----------------------------------------------------------------------------------
+
+struct Failure {
+    std::vector<std::string> args;     // "OUT" is replaced by the output path
+    int exitCode;                      // README: 2 input or usage, 3 output, 4 device
+    std::vector<std::string> mentions; // parts the one error line must contain
+    std::string output = "out.json";   // the output's file name (the extension picks the format)
+};
+
+class BadInputs : public ::testing::Test {
+  protected:
+    BadInputs() {
+        const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        folder_ = fs::temp_directory_path() /
+                  ("shprobe_test_bad_inputs_" + std::to_string(getpid()) + "_" + test->name());
+        fs::remove_all(folder_);
+        fs::create_directories(folder_);
+    }
+    ~BadInputs() override {
+        std::error_code ignored;
+        fs::permissions(folder_ / "readonly", fs::perms::owner_all, ignored); // left by a failed test
+        fs::remove_all(folder_, ignored);
+    }
+    std::string file(const std::string& name) const { return (folder_ / name).string(); }
+    const fs::path& folder() const { return folder_; }
+
+    RunResult run(const std::vector<std::string>& args, const RunOptions& options = {}) const {
+        return Child(args, folder_ / "logs", options).wait();
+    }
+    RunResult runOk(const std::vector<std::string>& args) const {
+        RunResult result = run(args);
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_EQ(result.err, "") << describe(result);
+        return result;
+    }
+
+    // Runs the failure into an empty folder (no file may appear, not even a temporary one) and onto
+    // an existing output file (left byte for byte as it was); both must fail the same way.
+    void expectFailure(const Failure& failure) const {
+        SCOPED_TRACE(::testing::Message() << "shprobe " << joined(failure.args));
+        fs::path fresh = folder_ / "fresh_out", existing = folder_ / "existing_out";
+        fs::remove_all(fresh);
+        fs::remove_all(existing);
+        fs::create_directories(fresh);
+        fs::create_directories(existing);
+        const std::string before = "an earlier good output\n";
+        writeText(existing / failure.output, before);
+        for (const fs::path& output : {fresh / failure.output, existing / failure.output})
+            expectMessage(failure, run(withOutput(failure.args, output.string())));
+        EXPECT_EQ(entriesOf(fresh), std::vector<std::string>{}) << "a failed run left files behind";
+        EXPECT_EQ(entriesOf(existing), std::vector<std::string>{failure.output});
+        EXPECT_EQ(readFile(existing / failure.output), before) << "a failed run changed the existing output";
+    }
+
+    // The exit code, and stderr exactly one line "shprobe: error: ..." holding every mention.
+    static void expectMessage(const Failure& failure, const RunResult& result) {
+        EXPECT_EQ(result.exitCode, failure.exitCode) << describe(result);
+        std::vector<std::string> lines = linesOf(result.err);
+        EXPECT_EQ(lines.size(), 1u) << "exactly one line expected:\n" << result.err;
+        EXPECT_EQ(result.err.rfind("shprobe: error: ", 0), 0u) << result.err;
+        EXPECT_TRUE(!result.err.empty() && result.err.back() == '\n') << result.err;
+        for (const std::string& part : failure.mentions)
+            EXPECT_CONTAINS(result.err, part);
+    }
+
+    static std::vector<std::string> withOutput(std::vector<std::string> args, const std::string& output) {
+        for (std::string& arg : args)
+            if (arg == "OUT") arg = output;
+        return args;
+    }
+    static std::string joined(const std::vector<std::string>& args) {
+        std::string text;
+        for (const std::string& arg : args)
+            text += (text.empty() ? "" : " ") + arg;
+        return text;
+    }
+
+  private:
+    fs::path folder_;
+};
+
+// ---- Truncated and oversized images -----------------------------------------------------------
+
+// An EXR cut short loses pixels (the reader says so) or, cut to a few hundred bytes, its header
+// (not an image). `bake` and `render` (which bakes an environment first) both refuse it.
+TEST_F(BadInputs, TruncatedExr) {
+    writeImage(file("full.exr"), filledImage(64, 32, [](int x, int y) { return glm::vec3(x, y, 1.0f); }));
+    cutFile(file("full.exr"), file("short.exr"), fs::file_size(file("full.exr")) - 40);
+    cutFile(file("full.exr"), file("head.exr"), 200);
+    expectFailure({{"bake", file("short.exr"), "-o", "OUT"}, 2, {file("short.exr"), "truncated"}});
+    expectFailure({{"bake", file("head.exr"), "-o", "OUT"}, 2, {file("head.exr"), "not an image"}});
+    expectFailure(
+        {{"render", file("short.exr"), "-o", "OUT"}, 2, {file("short.exr"), "truncated"}, "out.png"});
+}
+
+// libpng prints "libpng error: ..." itself before OpenImageIO reports the same: the program's
+// stderr holds only its own line, which carries the library's text.
+TEST_F(BadInputs, TruncatedPng) {
+    writeNoisePng(file("full.png"), 64, 32);
+    cutFile(file("full.png"), file("cut.png"), fs::file_size(file("full.png")) * 6 / 10);
+    expectFailure({{"bake", file("cut.png"), "-o", "OUT"}, 2, {file("cut.png"), "truncated", "end of file"}});
+}
+
+// A header claiming 65536 x 32768 (2^31 pixels, 32 GiB as RGBA32F) is refused from the header
+// with the limit and the option that raises it: the run is quick and allocates nothing of that size.
+TEST_F(BadInputs, OversizeHeaderIsRefusedBeforeAnyAllocation) {
+    writeHdrHeader(file("huge.hdr"), 65536, 32768);
+    writePngHeader(file("huge.png"), 65536, 32768);
+    writeHdrHeader(file("long.hdr"), 100000, 1);
+    for (const char* name : {"huge.hdr", "huge.png"}) {
+        expectFailure(
+            {{"bake", file(name), "-o", "OUT"},
+             2,
+             {file(name), "65536x32768", "limit of 134217728 pixels (16384x8192)", "--max-pixels"}});
+        RunResult quick = run({"bake", file(name), "-o", file("quick.json")});
+        EXPECT_LT(quick.seconds, 5.0) << "refused from the header, before reading";
+    }
+    expectFailure({{"bake", file("long.hdr"), "-o", "OUT"}, 2, {file("long.hdr"), "100000x1", "65536"}});
+    expectFailure(
+        {{"render", file("huge.hdr"), "-o", "OUT"}, 2, {file("huge.hdr"), "--max-pixels"}, "out.png"});
+}
+
+// --max-pixels sets the limit: a 64 x 32 image (2048 pixels) passes at 2048 and is refused at 2047.
+TEST_F(BadInputs, MaxPixelsSetsTheLimit) {
+    writeImage(file("small.exr"), constantImage(64, 32, glm::vec3(1.0f)));
+    runOk(
+        {"bake", file("small.exr"), "--backend", "cpu", "--max-pixels", "2048", "-q", "-o", file("ok.json")});
+    expectFailure({{"bake", file("small.exr"), "--backend", "cpu", "--max-pixels", "2047", "-o", "OUT"},
+                   2,
+                   {file("small.exr"), "64x32 (2048 pixels)", "limit of 2047 pixels"}});
+    expectFailure({{"bake", file("small.exr"), "--max-pixels", "0", "-o", "OUT"}, 2, {"--max-pixels"}});
+}
+
+// ---- Faces and channels -----------------------------------------------------------------------
+
+void writeFaces(const fs::path& folder, int width, int height, const std::function<float(int)>& value) {
+    fs::create_directories(folder);
+    const char* names[kFaceCount] = {"px", "nx", "py", "ny", "pz", "nz"};
+    for (int face = 0; face < kFaceCount; ++face)
+        writeImage((folder / (std::string(names[face]) + ".exr")).string(),
+                   constantImage(width, height, glm::vec3(value(face))));
+}
+
+TEST_F(BadInputs, NonSquareFaces) {
+    writeFaces(folder() / "faces", 16, 12, [](int) { return 1.0f; });
+    expectFailure({{"bake", file("faces"), "-o", "OUT"}, 2, {"px.exr", "16x12", "square"}});
+}
+
+// Six 1 x 1 faces are a valid cube map: each texel is a whole face, 4 pi / 6 sr, so
+// L00 = Y00 (4 pi / 6) (sum of the six values) exactly. GPU and CPU give it to fp32 precision.
+TEST_F(BadInputs, OneTexelFacesAreBaked) {
+    writeFaces(folder() / "faces", 1, 1, [](int face) { return float(face + 1); });
+    runOk({"bake", file("faces"), "-q", "-o", file("gpu.json")});
+    runOk({"bake", file("faces"), "-q", "--backend", "cpu", "-o", file("cpu.json")});
+    const double expected = kY00 * (4.0 * std::numbers::pi / 6.0) * 21.0;
+    EXPECT_NEAR(readProbeFile(file("gpu.json")).rgb[0].r, expected, 1e-6 * expected);
+    EXPECT_NEAR(readProbeFile(file("cpu.json")).rgb[0].r, expected, 5e-9 * expected); // 9 digits in the file
+}
+
+// 1 channel is grey for R, G and B; 2 channels grey and alpha; 4 channels RGB and alpha. Alpha is
+// ignored (here 0: it neither blackens nor weights anything). A constant c gives L00 = c Y00 4 pi.
+TEST_F(BadInputs, OneTwoAndFourChannelsHaveTheirStatedMeaning) {
+    const int w = 16, h = 8;
+    writeChannels(file("grey.exr"), w, h, 1, OIIO::TypeDesc::FLOAT, std::vector<float>(w * h, 0.5f));
+    std::vector<float> greyAlpha, rgba;
+    for (int t = 0; t < w * h; ++t) {
+        greyAlpha.insert(greyAlpha.end(), {0.5f, 0.0f});
+        rgba.insert(rgba.end(), {0.25f, 0.5f, 0.75f, 0.0f});
+    }
+    writeChannels(file("grey_alpha.exr"), w, h, 2, OIIO::TypeDesc::FLOAT, greyAlpha);
+    writeChannels(file("rgba.exr"), w, h, 4, OIIO::TypeDesc::FLOAT, rgba);
+    const double full = kY00 * 4.0 * std::numbers::pi;
+    const std::map<std::string, glm::dvec3> expected = {
+        {"grey.exr", glm::dvec3(0.5)}, {"grey_alpha.exr", glm::dvec3(0.5)}, {"rgba.exr", {0.25, 0.5, 0.75}}};
+    for (const auto& [name, value] : expected) {
+        runOk({"bake", file(name), "--backend", "cpu", "-q", "-o", file(name + ".json")});
+        ShCoefficients probe = readProbeFile(file(name + ".json"));
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(probe.rgb[0][c], value[c] * full, 1e-6 * full) << name << " " << c;
+    }
+}
+
+// ---- Texel values -----------------------------------------------------------------------------
+
+// NaN and +Inf texels are refused with their count, unless --sanitize replaces them with 0.
+TEST_F(BadInputs, NanAndInfinityNeedSanitize) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    writeImage(file("nan.exr"),
+               filledImage(16, 8, [&](int x, int y) { return glm::vec3(x == 3 && y == 2 ? nan : 1.0f); }));
+    writeImage(file("inf.exr"),
+               filledImage(16, 8, [&](int x, int) { return glm::vec3(x < 2 ? inf : 1.0f); }));
+    expectFailure({{"bake", file("nan.exr"), "-o", "OUT"},
+                   2,
+                   {file("nan.exr"), "1 texels are NaN or infinite", "--sanitize"}});
+    expectFailure({{"bake", file("inf.exr"), "-o", "OUT"}, 2, {file("inf.exr"), "16 texels", "--sanitize"}});
+    RunResult sanitized = runOk({"bake", file("inf.exr"), "--sanitize", "-q", "-o", file("sanitized.json")});
+    EXPECT_CONTAINS(sanitized.out, "replaced 16");
+    EXPECT_TRUE(std::isfinite(readProbeFile(file("sanitized.json")).rgb[0].r));
+}
+
+// Negative texels are baked as they are (the projection is linear): a constant (-1, -2, -3) gives
+// L00 = Y00 4 pi (-1, -2, -3), on the GPU as on the CPU.
+TEST_F(BadInputs, NegativeTexelsAreBakedAsGiven) {
+    writeImage(file("negative.exr"), constantImage(32, 16, glm::vec3(-1.0f, -2.0f, -3.0f)));
+    runOk({"bake", file("negative.exr"), "-q", "-o", file("negative.json")});
+    const double full = kY00 * 4.0 * std::numbers::pi;
+    ShCoefficients probe = readProbeFile(file("negative.json"));
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(probe.rgb[0][c], -(c + 1) * full, 2e-6 * (c + 1) * full) << c;
+}
+
+// 1e30 is a finite float and bakes (L00 = 1e30 Y00 4 pi, within fp32 of it).
+TEST_F(BadInputs, HugeFiniteTexelsAreBaked) {
+    writeImage(file("huge.exr"), constantImage(32, 16, glm::vec3(1e30f)));
+    runOk({"bake", file("huge.exr"), "-q", "-o", file("huge.json")});
+    const double expected = 1e30 * kY00 * 4.0 * std::numbers::pi;
+    EXPECT_NEAR(readProbeFile(file("huge.json")).rgb[0].r, expected, 2e-6 * expected);
+}
+
+// 3e38 is finite too, but the GPU's fp32 sums overflow: refused (exit 2) with one line naming the
+// input, and nothing is written.
+TEST_F(BadInputs, TexelsOverflowingFp32SumsAreRefused) {
+    writeImage(file("overflow.exr"), constantImage(32, 16, glm::vec3(3e38f)));
+    expectFailure({{"bake", file("overflow.exr"), "-o", "OUT"}, 2, {file("overflow.exr"), "not finite"}});
+}
+
+// ---- Options out of range ---------------------------------------------------------------------
+
+TEST_F(BadInputs, OrderAndFaceSizeOutOfRange) {
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    expectFailure({{"bake", "--order", "0", "-o", "OUT"}, 2, {"--order", "0"}});
+    expectFailure({{"bake", "--order", "9", "-o", "OUT"}, 2, {"--order", "9"}});
+    expectFailure({{"bake", "--face-size", "0", "-o", "OUT"}, 2, {"--face-size", "0"}});
+    expectFailure({{"light", "--order", "9", "--ambient", "1,1,1", "-o", "OUT"}, 2, {"--order", "9"}});
+    expectFailure(
+        {{"render", file("probe.json"), "--face-size", "0", "-o", "OUT"}, 2, {"--face-size"}, "out.png"});
+    expectFailure(
+        {{"render", file("probe.json"), "--order", "4", "-o", "OUT"}, 2, {"--order", "4"}, "out.png"});
+}
+
+// ---- Probe files ------------------------------------------------------------------------------
+
+// Every command that reads probe files refuses each bad one, naming the file and what is wrong:
+// malformed and truncated JSON (with where the parser stopped), an empty file, a folder, a missing
+// file, and files of the wrong schema. `view` reads them before opening a window.
+TEST_F(BadInputs, BadProbeFilesAreRefusedByEveryCommand) {
+    const std::string valid = probeToJson(testProbe(3), {});
+    auto edited = [&](const std::string& from, const std::string& to) {
+        std::string text = valid;
+        size_t at = text.find(from);
+        EXPECT_NE(at, std::string::npos) << from << " not in\n" << valid;
+        return at == std::string::npos ? text : text.replace(at, from.size(), to);
+    };
+    enum class Kind { File, Folder, Missing };
+    struct BadProbe {
+        std::string name;
+        std::string text;
+        std::vector<std::string> problem;
+        Kind kind = Kind::File;
+    };
+    const std::vector<BadProbe> probes = {
+        {"malformed.json", "{\"format\": \"shprobe.sh\",, }", {"not valid JSON", "line 1, column 25"}},
+        {"truncated.json", valid.substr(0, valid.size() / 2), {"not valid JSON", "parse error at line"}},
+        {"empty.json", "", {"the file is empty"}},
+        {"garbage.json", std::string("\x89PNG\r\n\x1a\n\0\0", 10), {"not valid JSON"}},
+        {"array.json", "[1, 2, 3]", {"JSON object"}},
+        {"no_format.json", edited("\"format\": \"shprobe.sh\",", ""), {"missing field \"format\""}},
+        {"version.json", edited("\"version\": 1", "\"version\": 2"), {"field \"version\" must be 1"}},
+        {"order.json", edited("\"order\": 3", "\"order\": 9"), {"field \"order\""}},
+        {"rows.json", edited("\"order\": 3", "\"order\": 4"), {"16 rows for order 4, not 9"}},
+        {"row.json", edited("[1, 0.5, -0]", "[\"one\", 0.5, 0]"), {"coefficients[0]"}},
+        {"overflow.json", edited("[1, 0.5, -0]", "[1e999, 0.5, 0]"), {"not valid JSON", "overflow"}},
+        {"folder.json", "", {"is a folder"}, Kind::Folder},
+        {"missing.json", "", {"no such file"}, Kind::Missing},
+    };
+    for (const BadProbe& probe : probes) {
+        const std::string path = file(probe.name);
+        if (probe.kind == Kind::Folder) fs::create_directories(path);
+        if (probe.kind == Kind::File) writeText(path, probe.text);
+        std::vector<std::string> mentions = probe.problem;
+        mentions.push_back(path);
+        SCOPED_TRACE(probe.name);
+        expectFailure({{"rotate", path, "--euler", "0,90,0", "-o", "OUT"}, 2, mentions});
+        // The three commands share the reader; each program start costs about 0.3 s (the libraries
+        // OpenImageIO loads), so render and view get one file of each kind.
+        if (probe.name != "malformed.json" && probe.name != "truncated.json" &&
+            probe.name != "version.json" && probe.name != "folder.json")
+            continue;
+        expectFailure({{"render", path, "-o", "OUT"}, 2, mentions, "out.png"});
+        expectFailure({{"view", path, "--frames", "1", "--screenshot", "OUT"}, 2, mentions, "shot.png"});
+    }
+}
+
+// ---- Outputs that cannot be written -----------------------------------------------------------
+
+// Every command that writes, with an output of each kind it writes.
+std::vector<Failure> everyWriter(const std::string& probe) {
+    return {
+        {{"bake", "--face-size", "4", "-o", "OUT"}, 3, {}, "probe.json"},
+        {{"bake", "--face-size", "4", "--format", "binary", "-o", "OUT"}, 3, {}, "probe.bin"},
+        {{"bake", "--face-size", "4", "--format", "irradiance-equirect", "-o", "OUT"}, 3, {}, "map.exr"},
+        {{"rotate", probe, "--euler", "0,90,0", "-o", "OUT"}, 3, {}, "rotated.json"},
+        {{"light", "--ambient", "1,1,1", "-o", "OUT"}, 3, {}, "light.json"},
+        {{"render", probe, "--size", "8", "-o", "OUT"}, 3, {}, "render.png"},
+        {{"render", probe, "--size", "8", "-o", "OUT"}, 3, {}, "render.exr"},
+        {{"view", probe, "--frames", "1", "--screenshot", "OUT"}, 3, {}, "shot.png"},
+        {{"bench", "--sizes", "4", "--json", "OUT"}, 3, {}, "bench.json"},
+    };
+}
+
+// Exit 3 before any work, the message names the missing folder; the folder is not created.
+TEST_F(BadInputs, OutputIntoAMissingFolder) {
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    const fs::path missing = folder() / "no_such_folder";
+    for (Failure failure : everyWriter(file("probe.json"))) {
+        failure.mentions = {missing.string(), "does not exist"};
+        SCOPED_TRACE(failure.args[0] + " -> " + failure.output);
+        RunResult result = run(withOutput(failure.args, (missing / failure.output).string()));
+        expectMessage(failure, result);
+        EXPECT_LT(result.seconds, 5.0) << "the output must be checked before any work";
+        EXPECT_FALSE(fs::exists(missing));
+    }
+}
+
+// Exit 3, naming the folder; an existing file in it is untouched and nothing is added. Permission
+// bits do not stop root: as root, the program runs as user nobody.
+TEST_F(BadInputs, OutputIntoAReadOnlyFolder) {
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    const fs::path readonly = folder() / "readonly";
+    fs::create_directories(readonly);
+    const std::string before = "an earlier good output\n";
+    std::vector<std::string> names;
+    for (const Failure& failure : everyWriter(file("probe.json"))) {
+        writeText(readonly / failure.output, before);
+        names.push_back(failure.output);
+    }
+    std::sort(names.begin(), names.end());
+    names.erase(std::unique(names.begin(), names.end()), names.end());
+    fs::permissions(readonly, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                  fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+    for (Failure failure : everyWriter(file("probe.json"))) {
+        failure.mentions = {readonly.string(), "not writable"};
+        SCOPED_TRACE(failure.args[0] + " -> " + failure.output);
+        for (const std::string& name : {failure.output, "new_" + failure.output}) {
+            RunResult result =
+                run(withOutput(failure.args, (readonly / name).string()), {.asOtherUser = true});
+            expectMessage(failure, result);
+        }
+    }
+    EXPECT_EQ(entriesOf(readonly), names);
+    for (const std::string& name : names)
+        EXPECT_EQ(readFile(readonly / name), before) << name;
+}
+
+// ---- Ctrl-C -----------------------------------------------------------------------------------
+
+// A signal ends the run within a second whatever it is doing, by the signal itself (a shell shows
+// 130 for SIGINT, 143 for SIGTERM), with no partial or temporary file and the earlier output intact.
+void expectInterrupted(const RunResult& result, int signal, double signalledAt) {
+    EXPECT_EQ(result.exitCode, 128 + signal) << describe(result);
+    EXPECT_LT(result.seconds - signalledAt, 1.0) << "the run must end promptly";
+}
+
+double secondsSince(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// A long bake (6 x 2048^2 texels of the built-in sky, about 4 s on these machines, most of it
+// making the sky), interrupted by SIGINT after 0.5 s and by SIGTERM after 1.2 s. The signals are
+// handled by a thread of their own, so the phase the bake is in does not matter.
+TEST_F(BadInputs, InterruptedBakeLeavesNoFile) {
+    for (auto [signal, after] : {std::pair{SIGINT, 500}, std::pair{SIGTERM, 1200}}) {
+        SCOPED_TRACE(strsignal(signal));
+        const fs::path out = folder() / "out";
+        fs::remove_all(out);
+        fs::create_directories(out);
+        writeText(out / "probe.json", "an earlier good output\n");
+        Clock::time_point start = Clock::now();
+        Child bake({"bake", "--face-size", "2048", "-q", "-o", (out / "probe.json").string()},
+                   folder() / "logs", {});
+        std::this_thread::sleep_for(std::chrono::milliseconds(after));
+        ASSERT_TRUE(bake.running()) << "the bake ended before it could be interrupted";
+        double signalledAt = secondsSince(start);
+        bake.signal(signal);
+        expectInterrupted(bake.wait(), signal, signalledAt);
+        EXPECT_EQ(entriesOf(out), std::vector<std::string>{"probe.json"});
+        EXPECT_EQ(readFile(out / "probe.json"), "an earlier good output\n");
+    }
+}
+
+// While the output is being written: a 4096 x 2048 irradiance map takes seconds to compress, and
+// the signal comes as soon as its temporary file exists. The temporary file goes with the process.
+TEST_F(BadInputs, InterruptWhileWritingRemovesTheTemporaryFile) {
+    const fs::path out = folder() / "out";
+    fs::create_directories(out);
+    writeText(out / "map.exr", "an earlier good output\n");
+    Clock::time_point start = Clock::now();
+    Child bake({"bake", "--backend", "cpu", "--face-size", "16", "--format", "irradiance-equirect",
+                "--map-size", "4096", "-q", "-o", (out / "map.exr").string()},
+               folder() / "logs", {});
+    while (entriesOf(out).size() < 2 && bake.running() && secondsSince(start) < 60.0)
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    std::vector<std::string> during = entriesOf(out);
+    ASSERT_EQ(during.size(), 2u) << "no temporary file appeared while the map was written";
+    EXPECT_EQ(during[0].rfind(".map.", 0), 0u) << during[0];
+    double signalledAt = secondsSince(start);
+    bake.signal(SIGINT);
+    expectInterrupted(bake.wait(), SIGINT, signalledAt);
+    EXPECT_EQ(entriesOf(out), std::vector<std::string>{"map.exr"});
+    EXPECT_EQ(readFile(out / "map.exr"), "an earlier good output\n");
+}
+
+// ---- The device: requirements, Vulkan errors, memory ------------------------------------------
+
+DeviceCapabilities capableDevice() {
+    return {VK_API_VERSION_1_3, true, VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+            VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_VOTE_BIT |
+                VK_SUBGROUP_FEATURE_ARITHMETIC_BIT};
+}
+
+// Each requirement missing alone is named the way Vulkan names it.
+TEST(DeviceRequirements, EachMissingFeatureIsNamed) {
+    EXPECT_EQ(missingRequirement(capableDevice()), "");
+    DeviceCapabilities old = capableDevice();
+    old.apiVersion = VK_API_VERSION_1_0;
+    EXPECT_CONTAINS(missingRequirement(old), "Vulkan 1.0.0 (shprobe needs 1.1)");
+    DeviceCapabilities noCompute = capableDevice();
+    noCompute.computeQueue = false;
+    EXPECT_CONTAINS(missingRequirement(noCompute), "no compute queue");
+    DeviceCapabilities fragmentOnly = capableDevice();
+    fragmentOnly.subgroupStages = VK_SHADER_STAGE_FRAGMENT_BIT;
+    EXPECT_CONTAINS(missingRequirement(fragmentOnly), "VK_SHADER_STAGE_COMPUTE_BIT");
+    DeviceCapabilities noArithmetic = capableDevice();
+    noArithmetic.subgroupOperations = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_VOTE_BIT;
+    EXPECT_CONTAINS(missingRequirement(noArithmetic), "VK_SUBGROUP_FEATURE_ARITHMETIC_BIT");
+    EXPECT_CONTAINS(missingRequirement(noArithmetic), "subgroupAdd");
+    DeviceCapabilities noBasic = capableDevice();
+    noBasic.subgroupOperations = VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+    EXPECT_CONTAINS(missingRequirement(noBasic), "VK_SUBGROUP_FEATURE_BASIC_BIT");
+}
+
+DeviceInfo deviceNamed(const std::string& name, uint32_t index, std::string unsupportedReason) {
+    DeviceInfo device;
+    device.name = name;
+    device.index = index;
+    device.type = VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU;
+    device.unsupportedReason = std::move(unsupportedReason);
+    return device;
+}
+
+// The message of the Error(Device) that f must throw.
+std::string deviceErrorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& error) {
+        EXPECT_EQ(error.kind(), ErrorKind::Device) << error.what();
+        return error.what();
+    }
+    ADD_FAILURE() << "no Error was thrown";
+    return {};
+}
+
+// A device without a required feature is passed over for one that has it; when none has it (or
+// the one asked for lacks it) the run is refused, naming each device, what it lacks, and the CPU
+// backend.
+TEST(DeviceRequirements, DevicesLackingAFeatureAreRefusedByName) {
+    DeviceCapabilities noArithmetic = capableDevice();
+    noArithmetic.subgroupOperations = VK_SUBGROUP_FEATURE_BASIC_BIT;
+    const std::string lacks = missingRequirement(noArithmetic);
+    std::vector<DeviceInfo> devices = {deviceNamed("Old GPU", 0, lacks), deviceNamed("llvmpipe", 1, "")};
+    EXPECT_EQ(pickDevice(devices, "").name, "llvmpipe");
+
+    std::string requested = deviceErrorOf([&] { pickDevice(devices, "old"); });
+    EXPECT_CONTAINS(requested, "Old GPU cannot be used: " + lacks);
+    EXPECT_CONTAINS(requested, "--backend cpu");
+
+    devices[1].unsupportedReason = "no compute queue";
+    std::string none = deviceErrorOf([&] { pickDevice(devices, ""); });
+    EXPECT_CONTAINS(none, "no usable Vulkan device");
+    EXPECT_CONTAINS(none, "Old GPU: " + lacks);
+    EXPECT_CONTAINS(none, "llvmpipe: no compute queue");
+    EXPECT_CONTAINS(none, "--backend cpu");
+}
+
+// A lost device and a lack of memory are reported with the call, the result's name, what the
+// program was doing (the nested DeviceSteps, outer to inner) and what to try; once the steps end,
+// they are no longer named.
+TEST(VulkanErrors, DeviceLostNamesTheResultTheCallAndTheStep) {
+    auto lost = [] { VK_CHECK(VK_ERROR_DEVICE_LOST); };
+    std::string message;
+    {
+        DeviceStep bake("baking sky.exr");
+        DeviceStep project("projecting the environment");
+        message = deviceErrorOf(lost);
+    }
+    EXPECT_CONTAINS(message, "VK_ERROR_DEVICE_LOST (-4)");
+    EXPECT_CONTAINS(message, "VK_ERROR_DEVICE_LOST failed"); // the call's text
+    EXPECT_CONTAINS(message, "while baking sky.exr: projecting the environment");
+    EXPECT_CONTAINS(message, "tests/test_bad_inputs.cpp:");
+    EXPECT_CONTAINS(message, "device was lost");
+    EXPECT_EQ(deviceErrorOf(lost).find("while"), std::string::npos);
+
+    std::string submit = vkErrorMessage(VK_ERROR_DEVICE_LOST, "vkQueueSubmit(queue, 1, &submit, fence)",
+                                        "/build/shprobe/src/gpu/projector.cpp", 120);
+    EXPECT_CONTAINS(submit, "vkQueueSubmit(queue, 1, &submit, fence) failed with VK_ERROR_DEVICE_LOST (-4) "
+                            "(src/gpu/projector.cpp:120): the Vulkan device was lost");
+}
+
+TEST(VulkanErrors, OutOfMemoryIsSaidInWords) {
+    EXPECT_CONTAINS(deviceErrorOf([] { VK_CHECK(VK_ERROR_OUT_OF_DEVICE_MEMORY); }),
+                    "VK_ERROR_OUT_OF_DEVICE_MEMORY (-2)");
+    EXPECT_CONTAINS(deviceErrorOf([] { VK_CHECK(VK_ERROR_OUT_OF_DEVICE_MEMORY); }), "out of device memory");
+    EXPECT_CONTAINS(deviceErrorOf([] { VK_CHECK(VK_ERROR_OUT_OF_HOST_MEMORY); }), "out of host memory");
+    EXPECT_STREQ(vkResultName(VK_ERROR_OUT_OF_DATE_KHR), "VK_ERROR_OUT_OF_DATE_KHR");
+    EXPECT_STREQ(vkResultName(VkResult(-123456)), "VkResult");
+}
+
+// A buffer of 1 TiB, more than any heap of the device and beyond maxBufferSize: an Error naming
+// the result and what was being done, not a crash, and no validation message.
+TEST(DeviceMemory, AllocationLargerThanTheDeviceIsAnError) {
+    ContextOptions options;
+    options.validation = true;
+    Context context = createContext(options);
+    VkDeviceSize largestHeap = 0;
+    for (uint32_t h = 0; h < context.memory.memoryHeapCount; ++h)
+        largestHeap = std::max(largestHeap, context.memory.memoryHeaps[h].size);
+    const VkDeviceSize size = VkDeviceSize(1) << 40;
+    ASSERT_GT(size, largestHeap);
+    std::string message = deviceErrorOf([&] {
+        DeviceStep step("allocating 1 TiB of test texels");
+        Buffer buffer =
+            createBuffer(context, size, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "test texels");
+        destroyBuffer(context, buffer);
+    });
+    EXPECT_CONTAINS(message, "OUT_OF_DEVICE_MEMORY");
+    EXPECT_CONTAINS(message, "allocating 1 TiB of test texels");
+    EXPECT_EQ(context.validationMessages(), 0u);
+    destroyContext(context);
+}
+
+} // namespace
+} // namespace shprobe
