@@ -264,7 +264,7 @@ TEST_F(GpuProjection, HalfFloatInputMatchesTheReferenceOfItsValues) {
     cubemap.at(2, 10, 6) = glm::vec4(6e4f, 5e4f, 4e4f, 1.0f); // the sun, within the half range
     Cubemap rounded = cubemap;
     for (glm::vec4& texel : rounded.texels) texel = glm::unpackHalf4x16(glm::packHalf4x16(texel));
-    Projector projector = createProjector(context(), {.order = 3, .texelFormat = GpuTexelFormat::Rgba16F});
+    Projector projector = createProjector(context(), {.order = 3, .texelFormat = TexelFormat::Rgba16F});
     GpuBake gpu = bakeCubemap(context(), projector, cubemap);
     EXPECT_LT(relativeError(gpu.radiance, projectCubemap(rounded, 3)), kGpuTolerance);
     cubemap.at(0, 0, 0) = glm::vec4(1e5f, 0.0f, 0.0f, 1.0f);

@@ -10,6 +10,7 @@
 #include "io/probe_file.h"
 #include "sh/basis.h"
 #include "sh/error.h"
+#include "sh/fast_projection.h"
 #include "sh/folding.h"
 #include "sh/irradiance.h"
 #include "sh/lights.h"
@@ -147,12 +148,19 @@ std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& con
     return results;
 }
 
+// "cpu": the fast float path on all cores; "reference": the double-precision reference.
+const char* cpuBackendName(const BakeOptions& options) {
+    return options.backend == "reference" ? "cpu reference (double)" : "cpu (float, all cores)";
+}
+
 BakeResult bakeOnCpu(const BakeOptions& options, const Cubemap& cubemap) {
-    Finished finished = finish(options, projectCubemap(cubemap, options.order));
+    ShCoefficients radiance = options.backend == "reference" ? projectCubemap(cubemap, options.order)
+                                                             : projectCubemapFast(cubemap, options.order);
+    Finished finished = finish(options, radiance);
     BakeResult result;
     result.radiance = finished.window.empty() ? finished.radiance : applyWindow(finished.radiance, finished.window);
     result.irradiance = convolveIrradiance(result.radiance);
-    result.device = "cpu reference (double)";
+    result.device = cpuBackendName(options);
     return result;
 }
 
@@ -553,7 +561,7 @@ void runBatchBake(const BakeOptions& options) {
             });
         });
     } else {
-        printBatchStart(options, items.size(), "cpu reference (double)");
+        printBatchStart(options, items.size(), cpuBackendName(options));
         bakeInChunks(batch, items, 0, [&](std::span<const Cubemap* const> cubemaps) {
             return std::vector<BakeResult>{bakeOnCpu(options, *cubemaps[0])}; // chunks of one
         });
@@ -598,8 +606,10 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
         ->capture_default_str();
     command->add_option("--face-size", options.faceSize, "Cube-map face size (default: from the input)")
         ->check(CLI::Range(1, kMaxGpuFaceSize));
-    command->add_option("--backend", options.backend, "gpu (Vulkan compute) or cpu (double reference)")
-        ->check(CLI::IsMember({"gpu", "cpu"}))
+    command
+        ->add_option("--backend", options.backend,
+                     "gpu (Vulkan compute), cpu (float, all cores) or reference (the double-precision reference)")
+        ->check(CLI::IsMember({"gpu", "cpu", "reference"}))
         ->capture_default_str();
     command->add_flag("--irradiance", options.irradiance, "Write irradiance E_lm = A_l L_lm instead of radiance");
     command->add_flag("--sanitize", options.sanitize, "Replace NaN and infinite texels with 0 instead of failing");

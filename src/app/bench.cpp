@@ -1,21 +1,32 @@
 // `shprobe bench`: how fast each projection path runs, measured in one run on the same generated
 // inputs against the machine's own bound: a plain multithreaded pass that reads the same texel
-// bytes once. Every figure is the best of --repeat runs; ratios, not absolute times, are what
-// compare across machines.
+// bytes once. The inputs are held as RGBA32F and as RGBA16F (the same values, which halves
+// represent exactly), and each path is compared with the bound of the bytes it reads. Every figure
+// is the best of --repeat runs; ratios, not absolute times, are what compare across machines.
 #include "app/bench.h"
+#include "app/bench_device.h"
 #include "gpu/projector.h"
 #include "io/atomic_file.h"
 #include "sh/basis.h"
+#include "sh/fast_projection.h"
 #include "sh/projection.h"
 #include "vk/context.h"
 
+#include <glm/gtc/packing.hpp>
+
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <span>
 #include <thread>
 
 namespace shprobe {
@@ -26,20 +37,42 @@ using Clock = std::chrono::steady_clock;
 
 struct Measurement {
     int faceSize;
-    int order;      // 0 for the memory-read bound
+    const char* format; // of the texels the path reads
+    int order;          // 0 for the memory-read bound
     std::string path;
     double milliseconds;
     double texelsPerSecond;
+    double bytesPerSecond; // the texel bytes the path reads, per second
     double fractionOfBound;
     double errorToReference; // max |c - reference| / |L_00|; negative when not measured
 };
 
-Cubemap noiseCubemap(int faceSize) {
-    Cubemap cubemap = makeCubemap(faceSize);
+// The same noise as RGBA32F and as RGBA16F: values in [0, 1) rounded to half precision, so that both
+// formats hold them exactly and one reference serves both.
+struct BenchInput {
+    Cubemap rgba32f;
+    std::vector<uint64_t> rgba16f; // one texel (four halves) per word
+};
+
+BenchInput noiseInput(int faceSize) {
+    BenchInput input{makeCubemap(faceSize), {}};
+    input.rgba16f.resize(input.rgba32f.texels.size());
     std::mt19937 random{uint32_t(faceSize)};
     std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-    for (glm::vec4& texel : cubemap.texels) texel = {uniform(random), uniform(random), uniform(random), 1.0f};
-    return cubemap;
+    for (size_t t = 0; t < input.rgba16f.size(); ++t) {
+        input.rgba16f[t] = glm::packHalf4x16({uniform(random), uniform(random), uniform(random), 1.0f});
+        input.rgba32f.texels[t] = glm::unpackHalf4x16(input.rgba16f[t]);
+    }
+    return input;
+}
+
+std::span<const std::byte> bytesOf(const BenchInput& input, TexelFormat format) {
+    return format == TexelFormat::Rgba32F ? std::as_bytes(std::span(input.rgba32f.texels))
+                                          : std::as_bytes(std::span(input.rgba16f));
+}
+
+const char* formatName(TexelFormat format) {
+    return format == TexelFormat::Rgba32F ? "RGBA32F" : "RGBA16F";
 }
 
 // Best wall time of `repeat` runs of f, in milliseconds.
@@ -53,27 +86,53 @@ double bestMilliseconds(int repeat, const std::function<void()>& f) {
     return best;
 }
 
-// Reads every texel on all cores (four independent sums per thread so the loads, not the additions,
-// set the pace), repeating the pass until at least 256 MiB were read so that starting the threads
-// does not count; returns the time of one pass. Nothing that reads the data can beat this here.
-double memoryReadMilliseconds(const Cubemap& cubemap, int repeat) {
-    const size_t count = cubemap.texels.size();
-    const size_t passes = std::max<size_t>(1, (size_t(256) << 20) / (count * sizeof(glm::vec4)));
+// Sum of the 64-bit words of bytes, in eight independent sums (one cache line per step, which the
+// compiler turns into vector additions) so that the loads, not the additions, set the pace.
+uint64_t sumWords(std::span<const std::byte> bytes) {
+    std::array<uint64_t, 8> sums{};
+    const size_t words = bytes.size() / sizeof(uint64_t);
+    const auto add = [&](size_t word, size_t sum) {
+        uint64_t loaded;
+        std::memcpy(&loaded, bytes.data() + word * sizeof(uint64_t), sizeof(loaded));
+        sums[sum] += loaded;
+    };
+    size_t word = 0;
+    for (; word + sums.size() <= words; word += sums.size()) {
+        for (size_t s = 0; s < sums.size(); ++s)
+            add(word + s, s);
+    }
+    for (; word < words; ++word)
+        add(word, 0);
+    uint64_t total = 0;
+    for (uint64_t sum : sums)
+        total += sum;
+    return total;
+}
+
+// Reads the texel bytes (whole 64-bit words) once on all cores, repeating the pass until at least
+// 256 MiB were read so that starting the threads does not count; returns the time of one pass.
+// Nothing that reads the data can beat this here. The threads take 1 MiB parts in turn, as the fast
+// CPU path takes its blocks, so that a core lent to another process slows both alike.
+double memoryReadMilliseconds(std::span<const std::byte> bytes, int repeat) {
+    constexpr size_t kPartBytes = size_t(1) << 20;
+    const size_t partsPerPass = (bytes.size() + kPartBytes - 1) / kPartBytes;
+    const size_t passes = std::max<size_t>(1, (size_t(256) << 20) / bytes.size());
     const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
-    std::vector<float> sums(threads);
+    std::vector<uint64_t> sums(threads);
     double ms = bestMilliseconds(repeat, [&] {
+        std::atomic<size_t> nextPart{0};
         std::vector<std::thread> workers;
         for (unsigned t = 0; t < threads; ++t)
             workers.emplace_back([&, t] {
-                const glm::vec4* texels = cubemap.texels.data();
-                glm::vec4 sum(0.0f);
-                for (size_t pass = 0; pass < passes; ++pass)
-                    for (size_t i = count * t / threads; i < count * (t + 1) / threads; ++i) sum += texels[i];
-                sums[t] = sum.x + sum.y + sum.z + sum.w;
+                for (size_t part = nextPart++; part < passes * partsPerPass; part = nextPart++) {
+                    const size_t offset = part % partsPerPass * kPartBytes;
+                    const size_t size = std::min(kPartBytes, bytes.size() - offset);
+                    sums[t] += sumWords(bytes.subspan(offset, size));
+                }
             });
         for (std::thread& worker : workers) worker.join();
     });
-    volatile float keep = sums[0]; // the sums must be computed
+    volatile uint64_t keep = sums[0]; // the sums must be computed
     (void)keep;
     return ms / double(passes);
 }
@@ -91,42 +150,74 @@ public:
     Bench(const BenchOptions& options, Context& context) : options_(options), context_(context) {}
 
     void runFaceSize(int faceSize) {
-        Cubemap cubemap = noiseCubemap(faceSize);
-        texels_ = double(cubemap.texels.size());
-        boundMs_ = memoryReadMilliseconds(cubemap, options_.repeat);
-        add(faceSize, 0, "memory read (bound)", boundMs_, -1.0);
-        for (int order : options_.orders) runOrder(cubemap, order);
+        const BenchInput input = noiseInput(faceSize);
+        texels_ = double(input.rgba32f.texels.size());
+        for (TexelFormat format : kFormats) {
+            boundMs_[size_t(format)] = memoryReadMilliseconds(bytesOf(input, format), options_.repeat);
+            add(faceSize, format, 0, "memory read (bound)", boundMs_[size_t(format)], -1.0);
+        }
+        // The device's own bound: read_texels.comp fetches the texels as project.comp does.
+        for (TexelFormat format : kFormats) {
+            const double ms = deviceReadMilliseconds(context_, input.rgba32f, format, options_.repeat);
+            if (ms > 0.0) add(faceSize, format, 0, "gpu texel reads only (device)", ms, -1.0);
+        }
+        for (int order : options_.orders) runOrder(input, order);
     }
 
     const std::vector<Measurement>& measurements() const { return measurements_; }
 
 private:
-    void runOrder(const Cubemap& cubemap, int order) {
+    static constexpr std::array<TexelFormat, 2> kFormats{TexelFormat::Rgba32F, TexelFormat::Rgba16F};
+
+    void runOrder(const BenchInput& input, int order) {
+        const Cubemap& cubemap = input.rgba32f;
         ShCoefficients reference;
         bool haveReference = cubemap.faceSize <= options_.referenceMaxFaceSize;
         if (haveReference) {
             double ms = bestMilliseconds(1, [&] { reference = projectCubemap(cubemap, order); });
-            add(cubemap.faceSize, order, "cpu reference (double)", ms, 0.0);
+            add(cubemap.faceSize, TexelFormat::Rgba32F, order, "cpu reference (double)", ms, 0.0);
         }
-        Projector projector = createProjector(context_, {.order = order});
-        GpuBake bake;
+        for (TexelFormat format : kFormats) runGpu(cubemap, format, order, haveReference ? &reference : nullptr);
+        for (TexelFormat format : kFormats)
+            runCpuFast(input, format, order, haveReference ? &reference : nullptr);
+    }
+
+    void runGpu(const Cubemap& cubemap, TexelFormat format, int order, const ShCoefficients* reference) {
+        Projector projector = createProjector(context_, {.order = order, .texelFormat = format});
+        GpuBake bake = bakeCubemap(context_, projector, cubemap); // untimed: llvmpipe compiles at first use
         double deviceMs = INFINITY;
         double wallMs = bestMilliseconds(options_.repeat, [&] {
             bake = bakeCubemap(context_, projector, cubemap);
             deviceMs = std::min(deviceMs, bake.deviceMilliseconds);
         });
         destroyProjector(context_, projector);
-        double error = haveReference ? errorToReference(bake.radiance, reference) : -1.0;
-        if (bake.deviceMilliseconds > 0.0) add(cubemap.faceSize, order, "gpu projection (device)", deviceMs, error);
-        add(cubemap.faceSize, order, "gpu bake (wall: upload, dispatch, readback)", wallMs, error);
+        const double error = reference ? errorToReference(bake.radiance, *reference) : -1.0;
+        if (bake.deviceMilliseconds > 0.0)
+            add(cubemap.faceSize, format, order, "gpu projection (device)", deviceMs, error);
+        add(cubemap.faceSize, format, order, "gpu bake (wall: upload, dispatch, readback)", wallMs, error);
     }
 
-    void add(int faceSize, int order, const std::string& path, double ms, double error) {
-        double rate = texels_ / (ms * 1e-3);
-        measurements_.push_back({faceSize, order, path, ms, rate, boundMs_ / ms, error});
+    // The fast CPU path on all cores, reading the texels in `format`.
+    void runCpuFast(const BenchInput& input, TexelFormat format, int order, const ShCoefficients* reference) {
+        const void* texels = bytesOf(input, format).data();
+        const int faceSize = input.rgba32f.faceSize;
+        const FastProjectionOptions fast{.threads = std::max(1u, std::thread::hardware_concurrency())};
+        ShCoefficients result;
+        const auto project = [&] { result = projectFacesFast(texels, format, faceSize, order, fast); };
+        const double ms = bestMilliseconds(options_.repeat, project);
+        const std::string path = "cpu fast (float, " + std::to_string(fast.threads) + " threads)";
+        add(faceSize, format, order, path, ms, reference ? errorToReference(result, *reference) : -1.0);
+    }
+
+    void add(int faceSize, TexelFormat format, int order, const std::string& path, double ms, double error) {
+        const double rate = texels_ / (ms * 1e-3);
+        const double bytes = rate * double(texelBytes(format));
+        const double boundMs = boundMs_[size_t(format)];
+        measurements_.push_back({faceSize, formatName(format), order, path, ms, rate, bytes, boundMs / ms, error});
         const Measurement& m = measurements_.back();
-        std::printf("%6d  %5s  %-44s %10.2f %10.1f %8.1f%%", m.faceSize, order ? std::to_string(order).c_str() : "-",
-                    m.path.c_str(), m.milliseconds, m.texelsPerSecond * 1e-6, m.fractionOfBound * 100.0);
+        std::printf("%6d  %-7s  %5s  %-44s %10.2f %10.1f %7.2f %8.1f%%", m.faceSize, m.format,
+                    order ? std::to_string(order).c_str() : "-", m.path.c_str(), m.milliseconds,
+                    m.texelsPerSecond * 1e-6, m.bytesPerSecond * 1e-9, m.fractionOfBound * 100.0);
         if (m.errorToReference >= 0.0) std::printf("  %.1e", m.errorToReference);
         std::printf("\n");
         std::fflush(stdout);
@@ -135,31 +226,58 @@ private:
     const BenchOptions& options_;
     Context& context_;
     double texels_ = 0.0;
-    double boundMs_ = 0.0;
+    std::array<double, kFormats.size()> boundMs_{}; // indexed by TexelFormat
     std::vector<Measurement> measurements_;
 };
 
-nlohmann::ordered_json reportJson(const Context& context, const std::vector<Measurement>& measurements) {
+using PipelineCreations = std::vector<std::pair<int, PipelineCreation>>;
+
+// The pipelines of each order created with an empty cache, then from the first one's data read back
+// from a file: what a second run of the program saves, if the driver caches anything.
+PipelineCreations measurePipelines(const Context& context, const std::vector<int>& orders) {
+    std::printf("\npipeline creation (project, reduce, convolve)\n%5s %12s %14s %12s\n", "order", "first ms",
+                "from cache ms", "cache bytes");
+    PipelineCreations creations;
+    for (int order : orders) {
+        PipelineCreation creation = measurePipelineCreation(context, order);
+        std::printf("%5d %12.2f %14.2f %12zu\n", order, creation.firstMilliseconds, creation.cachedMilliseconds,
+                    creation.cacheBytes);
+        creations.emplace_back(order, creation);
+    }
+    return creations;
+}
+
+nlohmann::ordered_json reportJson(const Context& context, const std::vector<Measurement>& measurements,
+                                  const PipelineCreations& pipelineCreations) {
     nlohmann::ordered_json report;
     report["device"] = context.info.name;
     report["driver"] = context.info.driver;
     report["device_type"] = deviceTypeName(context.info.type);
     report["subgroup_size"] = context.info.subgroupSize;
     report["threads"] = std::thread::hardware_concurrency();
-    report["input"] = "RGBA32F noise, 6 faces";
+    report["input"] = "noise in [0, 1), half-representable, 6 faces; RGBA32F and RGBA16F";
     nlohmann::ordered_json rows = nlohmann::ordered_json::array();
     for (const Measurement& m : measurements) {
         nlohmann::ordered_json row;
         row["face_size"] = m.faceSize;
+        row["format"] = m.format;
         row["order"] = m.order;
         row["path"] = m.path;
         row["milliseconds"] = m.milliseconds;
         row["texels_per_second"] = m.texelsPerSecond;
+        row["bytes_per_second"] = m.bytesPerSecond;
         row["fraction_of_memory_read_bound"] = m.fractionOfBound;
         if (m.errorToReference >= 0.0) row["max_error_relative_to_L00"] = m.errorToReference;
         rows.push_back(row);
     }
     report["measurements"] = rows;
+    nlohmann::ordered_json pipelines = nlohmann::ordered_json::array();
+    for (const auto& [order, creation] : pipelineCreations)
+        pipelines.push_back({{"order", order},
+                             {"first_milliseconds", creation.firstMilliseconds},
+                             {"cached_milliseconds", creation.cachedMilliseconds},
+                             {"cache_bytes", creation.cacheBytes}});
+    report["pipeline_creation"] = pipelines;
     return report;
 }
 
@@ -188,18 +306,20 @@ void runBench(const BenchOptions& options) {
     std::printf("device: %s (%s), %s, subgroup size %u; CPU threads: %u\n", context.info.name.c_str(),
                 deviceTypeName(context.info.type), context.info.driver.c_str(), context.info.subgroupSize,
                 std::thread::hardware_concurrency());
-    std::printf("%6s  %5s  %-44s %10s %10s %9s  %s\n", "face", "order", "path", "ms", "Mtexel/s", "of bound",
-                "error/|L00|");
+    std::printf("%6s  %-7s  %5s  %-44s %10s %10s %7s %9s  %s\n", "face", "format", "order", "path", "ms",
+                "Mtexel/s", "GB/s", "of bound", "error/|L00|");
     std::vector<Measurement> measurements;
+    PipelineCreations pipelineCreations;
     try {
         Bench bench(options, context);
         for (int faceSize : options.faceSizes) bench.runFaceSize(faceSize);
         measurements = bench.measurements();
+        pipelineCreations = measurePipelines(context, options.orders);
     } catch (...) {
         destroyContext(context);
         throw;
     }
-    if (!options.json.empty()) writeFileAtomic(options.json, reportJson(context, measurements).dump(2) + "\n");
+    if (!options.json.empty()) writeFileAtomic(options.json, reportJson(context, measurements, pipelineCreations).dump(2) + "\n");
     destroyContext(context);
 }
 

@@ -10,7 +10,7 @@ struct BenchOptions {
     std::vector<int> faceSizes{64, 256, 1024, 2048};
     std::vector<int> orders{3, 5, 8};
     int repeat = 3;
-    int referenceMaxFaceSize = 1024; // the double reference takes seconds beyond this
+    int referenceMaxFaceSize = 2048; // the double reference takes seconds beyond this
     std::string json;
     std::string device;
 };

@@ -9,8 +9,9 @@
 namespace shprobe {
 
 // Device milliseconds (timestamps) of read_texels.comp over the cube map: every texel fetched as
-// project.comp fetches it, and only summed. The best of `repeat` runs; 0 without timestamps.
-double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, GpuTexelFormat format, int repeat);
+// project.comp fetches it, and only summed. The best of `repeat` runs after an untimed one; 0
+// without timestamps.
+double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format, int repeat);
 
 struct PipelineCreation {
     double firstMilliseconds = 0.0;  // createProjector with an empty pipeline cache

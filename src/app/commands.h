@@ -20,7 +20,7 @@ struct BakeOptions {
     int order = 3;
     std::string layout = "auto";
     int faceSize = 0;             // 0: from the input (256 for the built-in sky)
-    std::string backend = "gpu";  // gpu | cpu
+    std::string backend = "gpu";  // gpu | cpu (fast float) | reference (double)
     bool irradiance = false;      // write E_lm instead of L_lm
     bool sanitize = false;        // replace NaN/Inf texels with 0 instead of refusing
     int64_t maxPixels = kDefaultMaxImagePixels; // larger image files are refused from their header
@@ -53,6 +53,7 @@ struct RenderOptions {
     float pitch = 10.0f;
     int faceSize = 0;                  // environment cube-map face size (0: from the input)
     bool sanitize = false;
+    int64_t maxPixels = kDefaultMaxImagePixels;
     std::string device;
     bool validation = false;
 };
@@ -68,6 +69,7 @@ struct ViewOptions {
     float exposure = 0.0f;
     int faceSize = 0;
     bool sanitize = false;
+    int64_t maxPixels = kDefaultMaxImagePixels;
     std::string device;
     bool validation = false;
 };
@@ -103,7 +105,7 @@ struct ImageSize {
 ImageSize parseImageSize(const std::string& text, const char* option);
 
 // --face-size and --sanitize for an environment given to render or view (baked before showing it).
-void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize);
+void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels);
 
 void addRenderCommand(CLI::App& app, RenderOptions& options);
 void runRender(const RenderOptions& options);

@@ -91,7 +91,7 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
     try {
         if (!isProbeFile(options.input)) {
             DeviceStep step("baking " + (options.input.empty() ? std::string("the built-in sky") : options.input));
-            result.input = loadRenderInput(context, options.input, {options.faceSize, options.sanitize});
+            result.input = loadRenderInput(context, options.input, {options.faceSize, options.sanitize, options.maxPixels});
         }
         DeviceStep step("rendering " + options.output);
         renderInput(context, options, size, result);
@@ -170,14 +170,15 @@ void addRenderCommand(CLI::App& app, RenderOptions& options) {
     command->add_option("--pitch", options.pitch, "Camera pitch, degrees")
         ->check(CLI::Range(-85.0, 85.0))
         ->capture_default_str();
-    addEnvironmentInputOptions(*command, options.faceSize, options.sanitize);
+    addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(*command, options.device, options.validation);
 }
 
-void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize) {
+void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels) {
     command.add_option("--face-size", faceSize, "Cube-map face size of an environment input")
         ->check(CLI::Range(1, kMaxGpuFaceSize));
     command.add_flag("--sanitize", sanitize, "Replace NaN and infinite texels with 0 instead of failing");
+    addImageLimitOption(command, maxPixels);
 }
 
 void runRender(const RenderOptions& options) {

@@ -29,7 +29,7 @@ void addViewCommand(CLI::App& app, ViewOptions& options) {
         ->delimiter(',');
     command->add_option("--exposure", options.exposure, "Exposure in stops relative to the automatic one")
         ->capture_default_str();
-    addEnvironmentInputOptions(*command, options.faceSize, options.sanitize);
+    addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(*command, options.device, options.validation);
 }
 
@@ -39,7 +39,7 @@ void runView(const ViewOptions& options) {
     if (isProbeFile(options.input)) readProbeInput(options.input);
     ViewerOptions viewer;
     viewer.input = options.input;
-    viewer.inputOptions = {options.faceSize, options.sanitize};
+    viewer.inputOptions = {options.faceSize, options.sanitize, options.maxPixels};
     viewer.width = size.width;
     viewer.height = size.height;
     viewer.view.order = options.order;

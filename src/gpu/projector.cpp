@@ -23,11 +23,9 @@ VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
     return (value + alignment - 1) / alignment * alignment;
 }
 
-VkFormat imageFormat(GpuTexelFormat format) {
-    return format == GpuTexelFormat::Rgba16F ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R32G32B32A32_SFLOAT;
+VkFormat imageFormat(TexelFormat format) {
+    return format == TexelFormat::Rgba16F ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R32G32B32A32_SFLOAT;
 }
-
-VkDeviceSize texelBytes(GpuTexelFormat format) { return format == GpuTexelFormat::Rgba16F ? 8 : 16; }
 
 void checkCubemap(const Cubemap& cubemap) {
     if (cubemap.faceSize < 1 || cubemap.faceSize > kMaxGpuFaceSize)
@@ -40,8 +38,8 @@ void checkCubemap(const Cubemap& cubemap) {
 
 // Copies the texels into the staging memory in the image's format (faces follow each other, as
 // layers do). RGBA16F refuses values a half cannot hold rather than clamping them silently.
-void packTexels(const Cubemap& cubemap, GpuTexelFormat format, void* destination) {
-    if (format == GpuTexelFormat::Rgba32F) {
+void packTexels(const Cubemap& cubemap, TexelFormat format, void* destination) {
+    if (format == TexelFormat::Rgba32F) {
         std::memcpy(destination, cubemap.texels.data(), cubemap.texels.size() * sizeof(glm::vec4));
         return;
     }
@@ -123,7 +121,7 @@ GpuBake usableOrThrow(GpuBake bake) {
 } // namespace
 
 CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
-                                  GpuTexelFormat format) {
+                                  TexelFormat format) {
     CubemapUpload upload;
     upload.faceSize = uint32_t(cubemaps.front()->faceSize);
     upload.probeCount = uint32_t(cubemaps.size());

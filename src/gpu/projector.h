@@ -15,16 +15,14 @@
 
 namespace shprobe {
 
-// How the texels are stored on the GPU: RGBA32F as loaded, or RGBA16F (half the bytes to read;
-// values beyond the half range, +-65504, are refused).
-enum class GpuTexelFormat { Rgba32F, Rgba16F };
-
 struct ProjectorOptions {
     int order = 3;                       // 1..kMaxOrder
     uint32_t workgroupSize = 64;         // invocations per workgroup
     uint32_t texelsPerInvocation = 256;  // sets the workgroup count: more texels, fewer reductions;
                                          // capped by order for lavapipe's loop limit (probe_baker.cpp)
-    GpuTexelFormat texelFormat = GpuTexelFormat::Rgba32F;
+    // How the texels are stored on the GPU: RGBA32F as loaded, or RGBA16F (half the bytes to read;
+    // values beyond the half range, +-65504, are refused).
+    TexelFormat texelFormat = TexelFormat::Rgba32F;
     VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional
 };
 
@@ -39,7 +37,7 @@ struct CubemapUpload {
 
 // Creates the image and fills the staging buffer (all cube maps must have the same face size).
 CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
-                                  GpuTexelFormat format);
+                                  TexelFormat format);
 // Records the copy and leaves the image as probe_baker.h asks: SHADER_READ_ONLY_OPTIMAL, visible to
 // compute-shader reads.
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload);

@@ -24,6 +24,7 @@ Environment loadEnvironmentInput(const std::string& path, const RenderInputOptio
     LoadOptions load;
     load.faceSize = options.faceSize;
     load.nonFinite = options.sanitize ? NonFinitePolicy::Replace : NonFinitePolicy::Refuse;
+    load.maxPixels = options.maxPixels;
     return loadEnvironment(path, load);
 }
 

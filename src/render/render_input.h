@@ -3,6 +3,7 @@
 // background.
 #pragma once
 #include "gpu/projector.h"
+#include "image/environment.h"
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 #include "sh/lights.h"
@@ -21,6 +22,7 @@ constexpr int kRenderSkyFaceSize = 128;
 struct RenderInputOptions {
     int faceSize = 0;      // 0: from the input (equirect width / 4, ...)
     bool sanitize = false; // replace NaN/Inf texels with 0 instead of refusing them
+    int64_t maxPixels = kDefaultMaxImagePixels; // larger image files are refused from their header
 };
 
 struct RenderInput {

@@ -12,6 +12,11 @@ namespace shprobe {
 enum class Face { PositiveX, NegativeX, PositiveY, NegativeY, PositiveZ, NegativeZ };
 constexpr int kFaceCount = 6;
 
+// How texels are stored outside a Cubemap (which holds RGBA32F): 4 channels (RGBA, alpha ignored)
+// of IEEE single or half floats.
+enum class TexelFormat { Rgba32F, Rgba16F };
+constexpr size_t texelBytes(TexelFormat format) { return format == TexelFormat::Rgba16F ? 8 : 16; }
+
 // Six N x N faces, face after face in Face order, rows top to bottom, RGBA32F (alpha unused).
 // This is also the layout the GPU projection reads.
 struct Cubemap {

@@ -2,6 +2,7 @@
 
 #include "sh/error.h"
 #include "vk/check.h"
+#include "vk/resources.h"
 
 #include <string>
 
@@ -36,6 +37,7 @@ void allocateAndBind(const Context& context, GpuImage& image, const char* what) 
     allocate.memoryTypeIndex = imageMemoryType(context, requirements.memoryTypeBits);
     if (allocate.memoryTypeIndex == UINT32_MAX)
         throw Error(ErrorKind::Device, std::string("no memory type for ") + what);
+    checkAllocationSize(context, requirements.size, allocate.memoryTypeIndex, what);
     VkResult result = vkAllocateMemory(context.device, &allocate, nullptr, &image.memory);
     if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
         throw Error(ErrorKind::Device, std::string("out of memory for ") + what + " on " + context.info.name);

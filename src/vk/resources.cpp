@@ -64,6 +64,7 @@ std::string sizeText(VkDeviceSize size) { return std::to_string((size + (1 << 20
 
 VkDeviceMemory allocateMemory(const Context& context, VkMemoryRequirements requirements, uint32_t type,
                               const char* what) {
+    checkAllocationSize(context, requirements.size, type, what);
     VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     info.allocationSize = requirements.size;
     info.memoryTypeIndex = type;
@@ -78,6 +79,18 @@ VkDeviceMemory allocateMemory(const Context& context, VkMemoryRequirements requi
 }
 
 } // namespace
+
+void checkAllocationSize(const Context& context, VkDeviceSize size, uint32_t memoryType, const char* what) {
+    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &maintenance3};
+    vkGetPhysicalDeviceProperties2(context.physicalDevice, &properties);
+    const VkDeviceSize heap = context.memory.memoryHeaps[context.memory.memoryTypes[memoryType].heapIndex].size;
+    const VkDeviceSize limit = std::min(heap, maintenance3.maxMemoryAllocationSize);
+    if (size > limit)
+        throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(size) + " for " + what +
+                                           ": more than one allocation may hold on " + context.info.name + " (" +
+                                           sizeText(limit) + "); try a smaller --face-size or fewer probes at a time");
+}
 
 Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
                     const char* what) {

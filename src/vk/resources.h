@@ -19,6 +19,10 @@ struct Buffer {
     bool coherent = false;
 };
 
+// Throws Error(Device) naming `what` when size exceeds what one allocation of the memory type may
+// hold (its heap, maxMemoryAllocationSize): drivers may accept such a request and fail later.
+void checkAllocationSize(const Context& context, VkDeviceSize size, uint32_t memoryType, const char* what);
+
 // `what` names the buffer in error messages ("input texels").
 Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
                     const char* what);

@@ -1,0 +1,731 @@
+// Fast float projection of cube maps onto SH (fast_projection.h). The sums are the reference's
+// (projection.cpp), L_lm = sum L(w) y_lm(w) Omega, rearranged so that little more than the
+// multiply-adds remains per texel:
+//
+// 1. One grid for six faces. Face f's unit direction at face-local (a, b) is P_f v, with
+//    v = (a, b, 1) / sqrt(a^2 + b^2 + 1) and P_f the signed permutation of orientToFace
+//    (texel_geometry.h); the solid angle Omega depends on (a, b) alone. Each face is projected in its
+//    own frame, T_f = sum L_f(a, b) Omega(a, b) y(v), from one table of Omega y(v) that serves all
+//    six faces. Every P_f is a reflection (det -1): P_f = -Q_f with Q_f a rotation, and
+//    y_lm(-w) = (-1)^l y_lm(w), so the world coefficients are sum_f D(Q_f) (-1)^l T_f, D being the
+//    band rotation matrices of rotation.h (a face's frame turned into the world's).
+// 2. Mirror symmetry within a face. y_lm(x, y, z) is even or odd in x and in y: for m >= 0 it is
+//    cos(m phi) times a function of z and |sin theta|, odd in x for odd m and even in y; for m < 0 it
+//    is sin(|m| phi) times such a function, odd in x for even |m| and odd in y. The texels at
+//    (a, b), (-a, b), (a, -b), (-a, -b) share Omega and |y_lm(v)|, so their radiances are first
+//    combined into four sums, one per parity (a 2 x 2 Hadamard transform), and each coefficient takes
+//    the sum of its parity: order^2 multiply-adds per four texels. On odd faces the middle column
+//    and row are their own mirror images: their weight is halved and they are counted twice.
+// 3. Lanes. Eight float lanes hold two texels' RGBA, and one multiply-add by Omega y_k, spread
+//    over each texel's four channels, serves both.
+// 4. Memory. The texels are asked for (prefetched) in memory order one face ahead, because the
+//    mirror images are read from both ends of two rows at once (see NextRows).
+// 5. Precision. Sums run in float along one row of positions (at most N/4 terms per lane), then
+//    in double across rows and faces.
+// 6. Threads. The rows are split into blocks fixed by the face size alone; each block's double sums
+//    are kept apart and the blocks are added in index order, so the result does not depend on the
+//    number of threads nor on which thread ran which block.
+#include "fast_projection.h"
+
+#include "basis.h"
+#include "error.h"
+#include "rotation.h"
+#include "texel_geometry.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <new>
+#include <numbers>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+// The kernels are compiled for x86-64-v4 (AVX-512), x86-64-v3 (AVX2, FMA, F16C) and the baseline,
+// and the best one the processor runs is chosen at load time (GCC's target_clones, ELF x86-64
+// only); elsewhere they are compiled for the target alone. flatten inlines the lane functions into
+// each clone, so that they too are compiled for its instruction set. ThreadSanitizer instruments
+// the clones' resolver, which runs before it is set up, so its builds go without clones.
+#if defined(__x86_64__) && defined(__ELF__) && defined(__GNUC__) && !defined(__clang__) &&                   \
+    !defined(__SANITIZE_THREAD__)
+#define SHPROBE_X86_CLONES 1
+#define SHPROBE_KERNEL [[gnu::target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"), gnu::flatten]]
+#else
+#define SHPROBE_X86_CLONES 0
+#define SHPROBE_KERNEL [[gnu::flatten]]
+#endif
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#if SHPROBE_X86_CLONES
+#include <immintrin.h>
+#endif
+
+// The lane functions below return 32-byte vectors by value (and take them by reference, as GCC notes
+// even a suppressed ABI warning for such arguments). They are internal and inlined into the kernels,
+// so the x86-64 ABI difference for such values with and without AVX never meets code compiled
+// elsewhere.
+#if defined(__GNUC__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
+namespace shprobe {
+
+namespace {
+
+// ------------------------------------------------------------------------------------------------
+// Lanes: GCC and Clang vector extensions, lowered to the widest SIMD of the clone being compiled
+// (two SSE registers on the x86-64 baseline).
+
+using Lanes = float __attribute__((vector_size(32))); // two texels' RGBA, or eight positions
+using LaneBits = uint32_t __attribute__((vector_size(32)));
+using HalfLanes = uint16_t __attribute__((vector_size(16))); // two texels' RGBA in half floats
+constexpr int kLaneCount = 8;
+constexpr int kChannels = 4; // RGBA; alpha is carried along and dropped at the end
+constexpr int kParities = 4; // even/odd in x times even/odd in y
+
+// Heap arrays of Lanes, 32-byte aligned. The AVX clones load and store Lanes as 32-byte aligned, but
+// the baseline x86-64 build (without AVX) aligns a 32-byte vector type to 16 bytes only, and standard
+// containers ignore alignment attributes on their element type: allocations are aligned by hand.
+constexpr std::align_val_t kLaneAlignment{32};
+
+struct AlignedDelete {
+    void operator()(Lanes* lanes) const { ::operator delete(lanes, kLaneAlignment); }
+};
+using LaneArray = std::unique_ptr<Lanes[], AlignedDelete>;
+
+LaneArray makeLaneArray(size_t count) {
+    void* memory = ::operator new(count * sizeof(Lanes), kLaneAlignment);
+    std::memset(memory, 0, count * sizeof(Lanes));
+    return LaneArray(static_cast<Lanes*>(memory));
+}
+
+// Lane-wise square root. The vector extensions have none, and std::sqrt in a loop is not vectorized
+// because it may set errno; SSE2, part of x86-64, has one (correctly rounded, like std::sqrt).
+Lanes laneSqrt(const Lanes& x) {
+#if defined(__SSE2__)
+    const __m128 low = _mm_sqrt_ps(__builtin_shufflevector(x, x, 0, 1, 2, 3));
+    const __m128 high = _mm_sqrt_ps(__builtin_shufflevector(x, x, 4, 5, 6, 7));
+    return __builtin_shufflevector(low, high, 0, 1, 2, 3, 4, 5, 6, 7);
+#else
+    Lanes root;
+    for (int lane = 0; lane < kLaneCount; ++lane)
+        root[lane] = std::sqrt(x[lane]);
+    return root;
+#endif
+}
+
+// [v_q x4, v_4+q x4]: from the values of four coefficients at two positions (the first four lanes
+// for one position, the last four for the other), coefficient q over the four channels of each
+// position's texel. One shuffle within 128-bit halves.
+template <int Q> Lanes spreadCoefficient(const Lanes& v) {
+    return __builtin_shufflevector(v, v, Q, Q, Q, Q, 4 + Q, 4 + Q, 4 + Q, 4 + Q);
+}
+
+Lanes splat(float value) {
+    return Lanes{value, value, value, value, value, value, value, value};
+}
+
+// Exchanges the two texels held in the lanes.
+Lanes swapTexels(const Lanes& v) {
+    return __builtin_shufflevector(v, v, 4, 5, 6, 7, 0, 1, 2, 3);
+}
+
+// IEEE half to float, exact for every value (F. Giesen, "Half to float done quick", 2012): a half's
+// exponent and mantissa, moved to the mantissa position of a float, make a float 2^112 times too
+// small, for normal and subnormal halves alike (the float is then normal or subnormal in the same
+// way), so one multiplication by 2^112 rescales them exactly. The all-ones exponent (infinity, NaN)
+// is mapped apart. Needs subnormal floats (no flush-to-zero), the default in C++.
+Lanes halfToFloat(HalfLanes half) {
+    const LaneBits bits = __builtin_convertvector(half, LaneBits);
+    const LaneBits magnitude = (bits & 0x7fffu) << 13;
+    const LaneBits sign = (bits & 0x8000u) << 16;
+    const LaneBits infinityOrNan = std::bit_cast<LaneBits>((bits & 0x7c00u) == 0x7c00u);
+    const LaneBits finite = std::bit_cast<LaneBits>(std::bit_cast<Lanes>(magnitude) * 0x1p112f);
+    const LaneBits special = magnitude | 0x7f800000u;
+    return std::bit_cast<Lanes>(((finite & ~infinityOrNan) | (special & infinityOrNan)) | sign);
+}
+
+// Loads one or two adjacent texels into lanes; with one, the second texel's lanes are 0.
+struct Rgba32FTexels {
+    static constexpr size_t kTexelBytes = kChannels * sizeof(float);
+    static Lanes loadTwo(const std::byte* texel) {
+        Lanes v;
+        std::memcpy(&v, texel, sizeof v);
+        return v;
+    }
+    static Lanes loadOne(const std::byte* texel) {
+        Lanes v{};
+        std::memcpy(&v, texel, kTexelBytes);
+        return v;
+    }
+};
+
+struct Rgba16FTexels {
+    static constexpr size_t kTexelBytes = kChannels * sizeof(uint16_t);
+    static Lanes loadTwo(const std::byte* texel) {
+        HalfLanes h;
+        std::memcpy(&h, texel, sizeof h);
+        return halfToFloat(h);
+    }
+    static Lanes loadOne(const std::byte* texel) {
+        HalfLanes h{};
+        std::memcpy(&h, texel, kTexelBytes);
+        return halfToFloat(h);
+    }
+};
+
+#if SHPROBE_X86_CLONES
+// Eight halves to floats by F16C's one instruction (exact, like halfToFloat). Compiled for F16C
+// alone: the clones that have it (x86-64-v3 and v4) inline it, the baseline clone calls it, which
+// it may only do where the processor has F16C. The floats go through memory (untyped, as Lanes are
+// aligned differently there), as the passing of 32-byte vectors differs between code with and
+// without AVX.
+[[gnu::target("f16c")]] void convertHalvesF16c(const std::byte* halves, void* floats) {
+    __m128i bits;
+    std::memcpy(&bits, halves, sizeof bits);
+    const __m256 converted = _mm256_cvtph_ps(bits);
+    std::memcpy(floats, &converted, sizeof converted);
+}
+
+// RGBA16F texels where the processor has F16C.
+struct Rgba16FTexelsF16c {
+    static constexpr size_t kTexelBytes = Rgba16FTexels::kTexelBytes;
+    static Lanes loadTwo(const std::byte* texel) {
+        Lanes floats;
+        convertHalvesF16c(texel, &floats);
+        return floats;
+    }
+    static Lanes loadOne(const std::byte* texel) {
+        std::byte halves[2 * kTexelBytes] = {};
+        std::memcpy(halves, texel, kTexelBytes);
+        return loadTwo(halves);
+    }
+};
+
+bool processorHasF16c() {
+    return __builtin_cpu_supports("f16c");
+}
+#endif
+
+// ------------------------------------------------------------------------------------------------
+// The plan: everything fixed by the input, its face size and the order, read by all threads.
+//
+// A position (i, j) stands for the four texels (i, j), (N-1-i, j), (i, N-1-j), (N-1-i, N-1-j) of a
+// face, for i, j < (N+1)/2 (face-local a, b <= 0). Two positions share lanes as a "pair".
+
+// Table lanes per pair: four coefficients at the pair's two positions per lanes.
+constexpr int tableLanesPerPair(int coefficients) {
+    return (coefficients + 3) / 4;
+}
+
+// Blocks of rows, the unit of work of a thread: enough to keep many cores busy, few enough that a
+// block holds several rows (see projectBlock), and they bound the memory of the block sums.
+constexpr int kMaxBlocks = 64;
+
+struct Plan {
+    const std::byte* texels;
+    size_t texelBytes;
+    int faceSize;
+    int order;
+    int coefficients; // order^2
+    int positions;    // positions per row, also rows of positions: (N + 1) / 2
+    int pairs;        // pairs per row: ceil(positions / 2)
+    int tablePairs;   // pairs rounded up to a multiple of 4 (the table is built 8 positions at a time)
+    int blockRows;    // rows of positions per block (the last block may hold fewer)
+    int blocks;
+    std::array<float, coefficientCount(kMaxOrder)> normalization; // of the recurrence's Y_lm
+
+    const std::byte* rowTexels(int face, int row) const {
+        return texels + (size_t(face) * size_t(faceSize) + size_t(row)) * size_t(faceSize) * texelBytes;
+    }
+
+    // Weight factor of column (or row) i of the positions: 1/2 where it is its own mirror image
+    // (the middle of an odd face), 0 beyond the positions (lanes past the end of a row).
+    float mirrorFactor(int i) const {
+        if (i >= positions) return 0.0f;
+        return i == faceSize - 1 - i ? 0.5f : 1.0f;
+    }
+};
+
+// y_lm = recurrence Y_lm times sqrt(2) K_l^|m| for m != 0, K_l^0 for m = 0 (as basis.cpp).
+std::array<float, coefficientCount(kMaxOrder)> recurrenceNormalization(int order) {
+    std::array<float, coefficientCount(kMaxOrder)> normalization{};
+    for (int l = 0; l < order; ++l) {
+        for (int m = -l; m <= l; ++m) {
+            const double k = shNormalization(l, m);
+            normalization[size_t(shIndex(l, m))] = float(m == 0 ? k : std::numbers::sqrt2 * k);
+        }
+    }
+    return normalization;
+}
+
+// Pairs per stage. Where the coefficients take several groups (accumulateStage), the stage's parity
+// sums (4 lanes each, 8 KiB) stay in the L1 cache for the groups after the first.
+constexpr int kStagePairs = 64;
+
+Plan makePlan(const void* texels, TexelFormat format, int faceSize, int order) {
+    Plan plan{};
+    plan.texels = static_cast<const std::byte*>(texels);
+    plan.texelBytes =
+        format == TexelFormat::Rgba32F ? Rgba32FTexels::kTexelBytes : Rgba16FTexels::kTexelBytes;
+    plan.faceSize = faceSize;
+    plan.order = order;
+    plan.coefficients = coefficientCount(order);
+    plan.positions = (faceSize + 1) / 2;
+    plan.pairs = (plan.positions + 1) / 2;
+    plan.tablePairs = (plan.pairs + 3) / 4 * 4;
+    plan.blockRows = (plan.positions + kMaxBlocks - 1) / kMaxBlocks;
+    plan.blocks = (plan.positions + plan.blockRows - 1) / plan.blockRows;
+    plan.normalization = recurrenceNormalization(order);
+    return plan;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Geometry of eight positions of a row: solid angles and basis, on lanes.
+
+// From this face size on, the solid angles come from their expansion about the texel center; below
+// it the expansion is not accurate enough, and the faces are small enough for the exact formula.
+constexpr int kMinExpandedFaceSize = 128;
+
+// The solid angle of a texel is the integral of (1 + s^2 + t^2)^(-3/2) over it (the plane z = 1 seen
+// from the origin). Expanded about the center (a, b), r^2 = 1 + a^2 + b^2, h = 1/N half the texel's
+// width: Omega = 4 h^2 (f + h^2/6 (f_aa + f_bb) + O(h^4)) with f = r^-3, which simplifies to
+// 4 h^2 r^-3 (1 + h^2 r^-2 (1.5 - 2.5 r^-2)). Against the exact formula in double, the relative error
+// is 4.3e-9 at most for N = 128 and falls as N^-4: far below float rounding. It needs only 1/r,
+// which the direction needs too, instead of four corner lengths and two arctangents.
+Lanes expandedSolidAngles(const Lanes& inverseLength, int faceSize) {
+    const float h = 1.0f / float(faceSize);
+    const Lanes u = inverseLength * inverseLength;
+    return (4.0f * h * h) * (u * inverseLength) * (1.0f + (h * h) * u * (1.5f - 2.5f * u));
+}
+
+// Solid angles of the texels of columns i0 .. i0+7 in a row. Below kMinExpandedFaceSize, the
+// shaders' formula (texelSolidAngle of texel_geometry.h) texel by texel: a few thousand calls at most.
+Lanes texelSolidAngles(const Plan& plan, int firstColumn, int row, const Lanes& inverseLength) {
+    if (plan.faceSize >= kMinExpandedFaceSize) return expandedSolidAngles(inverseLength, plan.faceSize);
+    Lanes solidAngles;
+    for (int lane = 0; lane < kLaneCount; ++lane) {
+        solidAngles[lane] =
+            gpu::texelSolidAngle(gpu::uint(firstColumn + lane), gpu::uint(row), gpu::uint(plan.faceSize));
+    }
+    return solidAngles;
+}
+
+// y_k, k < Order^2, at eight unit directions (x, y, z): the Lisle-Huang recurrence of basis.cpp
+// (seed 002, section 2.1) on float lanes, then the normalization.
+template <int Order>
+void evalBasisLanes(const Lanes& x, const Lanes& y, const Lanes& z, const float* normalization, Lanes* out) {
+    const auto at = [out](int l, int m) -> Lanes& { return out[shIndex(l, m)]; };
+    out[0] = splat(1.0f);
+    if constexpr (Order > 1) {
+        at(1, -1) = -y;
+        at(1, 0) = z;
+        at(1, 1) = -x;
+    }
+    for (int l = 2; l < Order; ++l) {
+        // Y_l,l = (2l-1)(-x Y_l-1,l-1 + y Y_l-1,-(l-1)); Y_l,-l = (2l-1)(-y Y_l-1,l-1 - x Y_l-1,-(l-1)).
+        const float twoLMinusOne = float(2 * l - 1);
+        const Lanes cosine = at(l - 1, l - 1);
+        const Lanes sine = at(l - 1, -(l - 1));
+        at(l, l) = twoLMinusOne * (y * sine - x * cosine);
+        at(l, -l) = -twoLMinusOne * (y * cosine + x * sine);
+        // Y_l,+-m = ((2l-1) z Y_l-1,+-m - (l+m-1) Y_l-2,+-m) / (l-m), without the second term for m > l-2.
+        for (int m = 0; m < l; ++m) {
+            Lanes positive = twoLMinusOne * z * at(l - 1, m);
+            Lanes negative = twoLMinusOne * z * at(l - 1, -m);
+            if (m <= l - 2) {
+                positive -= float(l + m - 1) * at(l - 2, m);
+                negative -= float(l + m - 1) * at(l - 2, -m);
+            }
+            at(l, m) = positive * (1.0f / float(l - m));
+            at(l, -m) = negative * (1.0f / float(l - m));
+        }
+    }
+    out[0] = splat(normalization[0]); // Y_00 = 1
+    for (int k = 1; k < Order * Order; ++k)
+        out[k] *= normalization[k];
+}
+
+// Face-local coordinates 2(i + 0.5)/N - 1 of columns i0 .. i0+7, as texelCenterCoord computes them.
+Lanes centerCoords(int firstColumn, int faceSize) {
+    const Lanes column = Lanes{0, 1, 2, 3, 4, 5, 6, 7} + float(firstColumn);
+    return 2.0f * (column + 0.5f) / float(faceSize) - 1.0f;
+}
+
+// Mirror factors of columns i0 .. i0+7: all 1 but near the end of a row.
+Lanes columnFactors(const Plan& plan, int firstColumn) {
+    const int lastColumn = firstColumn + kLaneCount - 1;
+    if (lastColumn < plan.positions && lastColumn < plan.faceSize - 1 - lastColumn) return splat(1.0f);
+    Lanes factors;
+    for (int lane = 0; lane < kLaneCount; ++lane)
+        factors[lane] = plan.mirrorFactor(firstColumn + lane);
+    return factors;
+}
+
+// Four coefficients at eight positions (one lanes per coefficient) into the table's layout: for each
+// pair q of positions 2q, 2q+1, the four coefficients at 2q, then at 2q+1. A 4 x 8 transpose by
+// shuffles (interleave coefficient pairs, then quadruples, then exchange 128-bit halves).
+void writeTableEntries(const Lanes& w0, const Lanes& w1, const Lanes& w2, const Lanes& w3, Lanes* out,
+                       int stride) {
+    const Lanes w01Low = __builtin_shufflevector(w0, w1, 0, 8, 1, 9, 4, 12, 5, 13);
+    const Lanes w01High = __builtin_shufflevector(w0, w1, 2, 10, 3, 11, 6, 14, 7, 15);
+    const Lanes w23Low = __builtin_shufflevector(w2, w3, 0, 8, 1, 9, 4, 12, 5, 13);
+    const Lanes w23High = __builtin_shufflevector(w2, w3, 2, 10, 3, 11, 6, 14, 7, 15);
+    const Lanes positions04 = __builtin_shufflevector(w01Low, w23Low, 0, 1, 8, 9, 4, 5, 12, 13);
+    const Lanes positions15 = __builtin_shufflevector(w01Low, w23Low, 2, 3, 10, 11, 6, 7, 14, 15);
+    const Lanes positions26 = __builtin_shufflevector(w01High, w23High, 0, 1, 8, 9, 4, 5, 12, 13);
+    const Lanes positions37 = __builtin_shufflevector(w01High, w23High, 2, 3, 10, 11, 6, 7, 14, 15);
+    out[0] = __builtin_shufflevector(positions04, positions15, 0, 1, 2, 3, 8, 9, 10, 11);
+    out[stride] = __builtin_shufflevector(positions26, positions37, 0, 1, 2, 3, 8, 9, 10, 11);
+    out[2 * stride] = __builtin_shufflevector(positions04, positions15, 4, 5, 6, 7, 12, 13, 14, 15);
+    out[3 * stride] = __builtin_shufflevector(positions26, positions37, 4, 5, 6, 7, 12, 13, 14, 15);
+}
+
+// The table of a row: Omega y_k(v) of the row's pairs, including the mirror factors of the
+// positions; lanes p * tableLanesPerPair + k/4 hold coefficient k of pair p's first position in lane
+// k%4 and of its second position in lane 4 + k%4, for spreadCoefficient. (Holding each value four
+// times instead, ready to multiply, makes a table four times as large, out of the L1 cache.)
+template <int Order> void fillBasisTable(const Plan& plan, int row, Lanes* table) {
+    constexpr int count = Order * Order;
+    const float b = gpu::texelCenterCoord(gpu::uint(row), gpu::uint(plan.faceSize));
+    const float rowFactor = plan.mirrorFactor(row);
+    for (int group = 0; group < plan.pairs; group += kLaneCount / 2) {
+        const int firstColumn = 2 * group;
+        const Lanes a = centerCoords(firstColumn, plan.faceSize);
+        const Lanes inverseLength = 1.0f / laneSqrt(a * a + (b * b + 1.0f));
+        const Lanes weight = texelSolidAngles(plan, firstColumn, row, inverseLength) *
+                             columnFactors(plan, firstColumn) * rowFactor;
+        Lanes basis[tableLanesPerPair(count) * 4] = {};
+        evalBasisLanes<Order>(a * inverseLength, b * inverseLength, inverseLength, plan.normalization.data(),
+                              basis);
+        Lanes* out = table + size_t(group) * tableLanesPerPair(count);
+        for (int k = 0; k < count; k += 4) {
+            writeTableEntries(basis[k] * weight, basis[k + 1] * weight, basis[k + 2] * weight,
+                              basis[k + 3] * weight, out + k / 4, tableLanesPerPair(count));
+        }
+    }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Texels: parity sums and their multiply-adds.
+
+// Parity class of y_k (see the top of the file): bit 0 set if odd in x, bit 1 if odd in y.
+constexpr int parityClass(int index) {
+    int l = 0;
+    while ((l + 1) * (l + 1) <= index)
+        ++l;
+    const int m = index - l * (l + 1);
+    const bool oddInX = m >= 0 ? m % 2 != 0 : m % 2 == 0;
+    const bool oddInY = m < 0;
+    return int(oddInX) | int(oddInY) << 1;
+}
+
+// The four parity sums of a texel at (a, b) and its mirror images at (-a, b), (a, -b), (-a, -b).
+void writeParitySums(const Lanes& texel, const Lanes& mirroredA, const Lanes& mirroredB,
+                     const Lanes& mirroredBoth, Lanes* sums) {
+    const Lanes evenInX = texel + mirroredA;
+    const Lanes oddInX = texel - mirroredA;
+    const Lanes evenInXMirroredB = mirroredB + mirroredBoth;
+    const Lanes oddInXMirroredB = mirroredB - mirroredBoth;
+    sums[0] = evenInX + evenInXMirroredB;
+    sums[1] = oddInX + oddInXMirroredB;
+    sums[2] = evenInX - evenInXMirroredB;
+    sums[3] = oddInX - oddInXMirroredB;
+}
+
+// The texels of one face at a row of positions: row j ("near") and its mirror row N-1-j ("far").
+struct RowPair {
+    const std::byte* near;
+    const std::byte* far;
+    int faceSize;
+    int completePairs; // pairs holding two positions; with an odd number of positions the last holds one
+};
+
+RowPair rowPair(const Plan& plan, int face, int row) {
+    return {plan.rowTexels(face, row), plan.rowTexels(face, plan.faceSize - 1 - row), plan.faceSize,
+            plan.positions / 2};
+}
+
+// The rows read after the current ones (the next face's, or the first face's at the next row of
+// positions), asked for from memory while the current ones are multiplied. They are asked for in
+// memory order, the near row forwards and the far row backwards: from visit to visit a face's near
+// rows ascend and its far rows descend, so each face is read as two continuous streams. Left to the
+// hardware prefetchers, reads in the order of the mirror pairs (four streams meeting in the middle
+// of each row) made the projection of 6 x 1024^2 texels take 1.4 times as long.
+struct NextRows {
+    const std::byte* near = nullptr; // none: nothing to ask for
+    const std::byte* far = nullptr;
+    size_t rowBytes = 0;
+    int pairs = 1; // the asking is spread over the current rows' pairs
+};
+
+NextRows nextRows(const Plan& plan, int face, int row, int lastRow) {
+    const int nextFace = (face + 1) % kFaceCount;
+    const int nextRow = nextFace == 0 ? row + 1 : row;
+    if (nextRow >= lastRow) return {};
+    const RowPair rows = rowPair(plan, nextFace, nextRow);
+    return {rows.near, rows.far, size_t(plan.faceSize) * plan.texelBytes, plan.pairs};
+}
+
+// Asks for the share of the next rows that goes with pair p: at most 64 bytes (one cache line) of
+// each, as a pair covers four texels of a row.
+void prefetchShare(const NextRows& next, int pair) {
+    const size_t offset = size_t(pair) * next.rowBytes / size_t(next.pairs);
+    __builtin_prefetch(next.near + offset, 0, 2);
+    __builtin_prefetch(next.far + (next.rowBytes - 1 - offset), 0, 2);
+}
+
+// The parity sums of a pair of positions (i, i+1). Their mirror columns N-1-i, N-2-i are adjacent
+// too, loaded together and swapped into the pair's order.
+template <class Texels> void loadParitySums(const RowPair& rows, int pair, Lanes* sums) {
+    const size_t column = size_t(2 * pair) * Texels::kTexelBytes;
+    if (pair < rows.completePairs) {
+        const size_t mirror = size_t(rows.faceSize - 2 - 2 * pair) * Texels::kTexelBytes;
+        writeParitySums(Texels::loadTwo(rows.near + column), swapTexels(Texels::loadTwo(rows.near + mirror)),
+                        Texels::loadTwo(rows.far + column), swapTexels(Texels::loadTwo(rows.far + mirror)),
+                        sums);
+    } else {
+        const size_t mirror = size_t(rows.faceSize - 1 - 2 * pair) * Texels::kTexelBytes;
+        writeParitySums(Texels::loadOne(rows.near + column), Texels::loadOne(rows.near + mirror),
+                        Texels::loadOne(rows.far + column), Texels::loadOne(rows.far + mirror), sums);
+    }
+}
+
+// sums[k] += parity sum of y_k's class * table entry k, over `pairCount` pairs, for the coefficients
+// First .. First+Count-1; paritySumsOf(p, local) points to pair p's four parity sums (in `local` or
+// elsewhere). Unrolled at compile time, so that each coefficient's parity class is a constant and
+// the accumulators stay in registers.
+template <int Order, int First, int Count, class ParitySums>
+void accumulateCoefficients(const ParitySums& paritySumsOf, const Lanes* table, int pairCount, Lanes* sums) {
+    [&]<int... q>(std::integer_sequence<int, q...>) {
+        Lanes accumulators[Count] = {sums[First + q]...};
+        for (int p = 0; p < pairCount; ++p) {
+            Lanes local[kParities];
+            const Lanes* parity = paritySumsOf(p, local);
+            const Lanes* weights = table + size_t(p) * tableLanesPerPair(Order * Order);
+            ((accumulators[q] +=
+              parity[parityClass(First + q)] * spreadCoefficient<(First + q) % 4>(weights[(First + q) / 4])),
+             ...);
+        }
+        ((sums[First + q] = accumulators[q]), ...);
+    }
+    (std::make_integer_sequence<int, Count>{});
+}
+
+// Coefficients per group: as many as fit the 16 vector registers of AVX2 next to the four parity
+// sums and a table entry and its spread value (at most 10), in groups of nearly equal size.
+constexpr int groupSize(int coefficients) {
+    const int groups = (coefficients + 9) / 10;
+    return (coefficients + groups - 1) / groups;
+}
+
+// All coefficients of a stage of pairs of one face, group after group. The first group reads the
+// texels, so that its arithmetic overlaps the loads from memory, and keeps their parity sums for
+// the other groups.
+template <int Order, class Texels>
+void accumulateStage(const RowPair& rows, const NextRows& next, int firstPair, int pairCount,
+                     const Lanes* table, Lanes* kept, Lanes* sums) {
+    constexpr int count = Order * Order;
+    constexpr int group = groupSize(count);
+    constexpr int groups = (count + group - 1) / group;
+    const auto fromTexels = [&](int p, Lanes* local) {
+        if (next.near != nullptr) prefetchShare(next, firstPair + p);
+        Lanes* parity = groups > 1 ? kept + kParities * p : local;
+        loadParitySums<Texels>(rows, firstPair + p, parity);
+        return parity;
+    };
+    const auto fromKept = [&](int p, Lanes*) { return kept + kParities * p; };
+    accumulateCoefficients<Order, 0, group>(fromTexels, table, pairCount, sums);
+    [&]<int... g>(std::integer_sequence<int, g...>) {
+        (accumulateCoefficients<Order, (g + 1) * group, std::min(group, count - (g + 1) * group)>(
+             fromKept, table, pairCount, sums),
+         ...);
+    }
+    (std::make_integer_sequence<int, groups - 1>{});
+}
+
+// ------------------------------------------------------------------------------------------------
+// Rows, blocks and threads.
+
+// Per-thread working memory, allocated before the threads start.
+struct Scratch {
+    LaneArray table;      // tablePairs x tableLanesPerPair(order^2)
+    LaneArray paritySums; // kStagePairs x 4
+    LaneArray rowSums;    // 6 faces x order^2, float sums of the current row
+};
+
+Scratch makeScratch(const Plan& plan) {
+    return Scratch{makeLaneArray(size_t(plan.tablePairs) * size_t(tableLanesPerPair(plan.coefficients))),
+                   makeLaneArray(kStagePairs * kParities),
+                   makeLaneArray(size_t(kFaceCount) * size_t(plan.coefficients))};
+}
+
+// Double sums, per face, coefficient and RGB channel, of one block of rows.
+size_t blockSumsSize(const Plan& plan) {
+    return size_t(kFaceCount) * size_t(plan.coefficients) * 3;
+}
+
+// Adds a row's float sums (two texels' RGBA per entry) to the block's double sums.
+void addRowSums(const Plan& plan, const Lanes* rowSums, double* blockSums) {
+    for (size_t i = 0; i < size_t(kFaceCount) * size_t(plan.coefficients); ++i) {
+        for (int c = 0; c < 3; ++c)
+            blockSums[3 * i + size_t(c)] += double(rowSums[i][c]) + double(rowSums[i][kChannels + c]);
+    }
+}
+
+// One row of positions: its table, then the six faces along it.
+template <int Order, class Texels>
+void projectRow(const Plan& plan, int row, int lastRow, Scratch& scratch, double* blockSums) {
+    constexpr int count = Order * Order;
+    std::fill_n(scratch.rowSums.get(), kFaceCount * count, Lanes{});
+    fillBasisTable<Order>(plan, row, scratch.table.get());
+    for (int face = 0; face < kFaceCount; ++face) {
+        const RowPair rows = rowPair(plan, face, row);
+        const NextRows next = nextRows(plan, face, row, lastRow);
+        for (int stage = 0; stage < plan.pairs; stage += kStagePairs) {
+            accumulateStage<Order, Texels>(rows, next, stage, std::min(kStagePairs, plan.pairs - stage),
+                                           scratch.table.get() + size_t(stage) * tableLanesPerPair(count),
+                                           scratch.paritySums.get(), scratch.rowSums.get() + face * count);
+        }
+    }
+    addRowSums(plan, scratch.rowSums.get(), blockSums);
+}
+
+// The rows of a block, in order (the texels of each row are asked for while the one before is
+// multiplied).
+template <int Order, class Texels>
+SHPROBE_KERNEL void projectBlock(const Plan& plan, int block, Scratch& scratch, double* blockSums) {
+    const int lastRow = std::min(plan.positions, (block + 1) * plan.blockRows);
+    for (int row = block * plan.blockRows; row < lastRow; ++row)
+        projectRow<Order, Texels>(plan, row, lastRow, scratch, blockSums);
+}
+
+using BlockKernel = void (*)(const Plan&, int, Scratch&, double*);
+
+template <class Texels, int... orderMinusOne>
+BlockKernel blockKernelOf(int order, std::integer_sequence<int, orderMinusOne...>) {
+    const BlockKernel kernels[] = {&projectBlock<orderMinusOne + 1, Texels>...};
+    return kernels[order - 1];
+}
+
+BlockKernel blockKernel(TexelFormat format, int order) {
+    const auto orders = std::make_integer_sequence<int, kMaxOrder>{};
+    if (format == TexelFormat::Rgba32F) return blockKernelOf<Rgba32FTexels>(order, orders);
+#if SHPROBE_X86_CLONES
+    if (processorHasF16c()) return blockKernelOf<Rgba16FTexelsF16c>(order, orders);
+#endif
+    return blockKernelOf<Rgba16FTexels>(order, orders);
+}
+
+// Runs every block on `threads` threads, the caller's among them; each takes the next block not yet
+// taken, and block b writes only its own sums.
+std::vector<double> projectBlocks(const Plan& plan, BlockKernel kernel, unsigned threads) {
+    std::vector<double> blockSums(size_t(plan.blocks) * blockSumsSize(plan), 0.0);
+    std::vector<Scratch> scratches;
+    for (unsigned t = 0; t < threads; ++t)
+        scratches.push_back(makeScratch(plan));
+    std::atomic<int> nextBlock{0};
+    const auto work = [&](Scratch& scratch) {
+        for (int block = nextBlock++; block < plan.blocks; block = nextBlock++)
+            kernel(plan, block, scratch, blockSums.data() + size_t(block) * blockSumsSize(plan));
+    };
+    std::vector<std::jthread> workers;
+    for (unsigned t = 1; t < threads; ++t)
+        workers.emplace_back(work, std::ref(scratches[t]));
+    work(scratches[0]);
+    workers.clear(); // joins
+    return blockSums;
+}
+
+// ------------------------------------------------------------------------------------------------
+// From the faces' frames to the world.
+
+// P_f, the signed permutation taking face f's frame (a, b, 1) to the world (orientToFace).
+glm::dmat3 faceOrientation(int face) {
+    const auto column = [face](glm::vec3 axis) {
+        return glm::dvec3(gpu::orientToFace(gpu::uint(face), axis));
+    };
+    return glm::dmat3(column({1.0f, 0.0f, 0.0f}), column({0.0f, 1.0f, 0.0f}), column({0.0f, 0.0f, 1.0f}));
+}
+
+// World coefficients of one face's frame sums T: D(Q_f) (-1)^l T with Q_f = -P_f (top of the file).
+ShCoefficients faceToWorld(int face, ShCoefficients frameSums) {
+    for (int l = 1; l < frameSums.order; l += 2) {
+        for (int m = -l; m <= l; ++m)
+            frameSums.rgb[size_t(shIndex(l, m))] *= -1.0;
+    }
+    return rotate(makeShRotation(-faceOrientation(face), frameSums.order), frameSums);
+}
+
+// The blocks' sums added in block order, per face, then turned into the world and added.
+ShCoefficients combineBlocks(const Plan& plan, const std::vector<double>& blockSums) {
+    ShCoefficients world = makeCoefficients(plan.order, Quantity::Radiance);
+    for (int face = 0; face < kFaceCount; ++face) {
+        ShCoefficients frameSums = makeCoefficients(plan.order, Quantity::Radiance);
+        for (int block = 0; block < plan.blocks; ++block) {
+            const double* sums = blockSums.data() + size_t(block) * blockSumsSize(plan) +
+                                 size_t(face) * size_t(plan.coefficients) * 3;
+            for (int k = 0; k < plan.coefficients; ++k)
+                frameSums.rgb[size_t(k)] += glm::dvec3(sums[3 * k], sums[3 * k + 1], sums[3 * k + 2]);
+        }
+        const ShCoefficients faceWorld = faceToWorld(face, frameSums);
+        for (int k = 0; k < plan.coefficients; ++k)
+            world.rgb[size_t(k)] += faceWorld.rgb[size_t(k)];
+    }
+    return world;
+}
+
+void requireProjectable(const void* texels, int faceSize, int order) {
+    if (faceSize < 1)
+        throw Error(ErrorKind::Input, "cube-map face size must be positive, got " + std::to_string(faceSize));
+    if (order < 1 || order > kMaxOrder) {
+        throw Error(ErrorKind::Input,
+                    "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
+    }
+    if (texels == nullptr) throw Error(ErrorKind::Input, "no texels to project");
+}
+
+// Texels worth a thread: about 0.1 ms of work, more than starting a thread costs.
+constexpr size_t kTexelsPerThread = size_t(1) << 17;
+
+// The threads asked for, or all cores but no more than the work is worth; never more than blocks.
+unsigned threadCount(const FastProjectionOptions& options, const Plan& plan) {
+    const size_t texels = size_t(kFaceCount) * size_t(plan.faceSize) * size_t(plan.faceSize);
+    const size_t worth = std::max<size_t>(1, texels / kTexelsPerThread);
+    const size_t wanted =
+        options.threads != 0 ? options.threads : std::min<size_t>(std::thread::hardware_concurrency(), worth);
+    return unsigned(std::clamp<size_t>(wanted, 1, size_t(plan.blocks)));
+}
+
+} // namespace
+
+ShCoefficients projectFacesFast(const void* texels, TexelFormat format, int faceSize, int order,
+                                const FastProjectionOptions& options) {
+    requireProjectable(texels, faceSize, order);
+    const Plan plan = makePlan(texels, format, faceSize, order);
+    return combineBlocks(plan, projectBlocks(plan, blockKernel(format, order), threadCount(options, plan)));
+}
+
+ShCoefficients projectCubemapFast(const Cubemap& cubemap, int order, const FastProjectionOptions& options) {
+    static_assert(sizeof(glm::vec4) == Rgba32FTexels::kTexelBytes,
+                  "Cubemap texels are tightly packed RGBA32F");
+    const size_t expected =
+        size_t(kFaceCount) * size_t(std::max(cubemap.faceSize, 0)) * size_t(std::max(cubemap.faceSize, 0));
+    if (cubemap.texels.size() != expected) {
+        throw Error(ErrorKind::Input, "cube map holds " + std::to_string(cubemap.texels.size()) +
+                                          " texels, expected " + std::to_string(expected));
+    }
+    return projectFacesFast(cubemap.texels.data(), TexelFormat::Rgba32F, cubemap.faceSize, order, options);
+}
+
+} // namespace shprobe

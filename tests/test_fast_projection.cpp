@@ -1,0 +1,255 @@
+// The fast float projection against the double reference, its half-float input, its independence
+// of the thread count, and its refusals.
+#include "sh/basis.h"
+#include "sh/error.h"
+#include "sh/fast_projection.h"
+#include "sh/projection.h"
+
+#include <glm/common.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace shprobe {
+namespace {
+
+constexpr double kFloatEpsilon = 0x1p-24; // unit roundoff of float
+
+// Rounding of one table entry Omega y_k in float, in units of kFloatEpsilon relative to max |y_k|:
+// the recurrence through l = 7 loses up to about 50 (measured near the face centers, where the
+// three-term recurrence of P_l(z) at z near 1 cancels), the normalization, the solid angle and the
+// product a few more.
+constexpr double kTableRounding = 64.0;
+
+// Bound of the fast path's error relative to |L_00|, for positive radiance whose largest value is at
+// most kMaxToMean times its mean. Its error per texel is at most (s + t) u |L Omega y_k|, u the float
+// unit roundoff: s <= N/4 + 3 for the float sums (the parity sums, the multiply-add, and the
+// recursive sum of N/4 terms per lane along a row of positions), t = kTableRounding. Summed over the
+// sphere, |L y_k| Omega adds up to at most max L sqrt(4 pi) (Cauchy-Schwarz with the unit norm of
+// y_k), and |L_00| = mean L sqrt(4 pi), so the error relative to |L_00| is at most
+// kMaxToMean (N/4 + 3 + t) u. Measured errors are 10 to 100 times smaller (the roundings do not all
+// add up); the bound still catches any error of the method (a wrong sign, texel or rotation) by
+// orders of magnitude.
+constexpr double kMaxToMean = 2.0; // noise uniform in [0, 1]
+double floatRoundingBound(int faceSize) {
+    return kMaxToMean * (faceSize / 4.0 + 3.0 + kTableRounding) * kFloatEpsilon;
+}
+// The accuracy target at 6 x 2048^2. The bound above allows 7e-5 there, but the rounding errors of
+// different rows are independent and mostly cancel (measured: 4e-8 to 6e-8); this checks they do.
+constexpr double kLargeFaceError = 1e-6;
+
+// Noise in [0, 1) in RGB; alpha, which the projection ignores, is NaN so that any leak shows.
+Cubemap noiseCubemap(int faceSize, unsigned seed) {
+    Cubemap cube = makeCubemap(faceSize);
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (glm::vec4& texel : cube.texels)
+        texel = glm::vec4(uniform(random), uniform(random), uniform(random), nan);
+    return cube;
+}
+
+// max over coefficients and channels of |result - expected|, divided by the largest |L_00| channel.
+double errorRelativeToL00(const ShCoefficients& result, const ShCoefficients& expected) {
+    double worst = 0.0;
+    for (size_t i = 0; i < expected.rgb.size(); ++i) {
+        const glm::dvec3 deviation = glm::abs(result.rgb[i] - expected.rgb[i]);
+        worst = std::max({worst, deviation.x, deviation.y, deviation.z});
+    }
+    const glm::dvec3 dc = glm::abs(expected.rgb[0]);
+    return worst / std::max({dc.x, dc.y, dc.z});
+}
+
+void expectIdentical(const ShCoefficients& a, const ShCoefficients& b, const char* what) {
+    ASSERT_EQ(a.rgb.size(), b.rgb.size()) << what;
+    for (size_t i = 0; i < a.rgb.size(); ++i) {
+        for (int c = 0; c < 3; ++c)
+            EXPECT_EQ(a.rgb[i][c], b.rgb[i][c]) << what << ", coefficient " << i << ", channel " << c;
+    }
+}
+
+// Checks: noise projects as the reference does, for every (order, face size) pair: odd and even
+// sizes, one texel per face, rows with and without an unpaired middle position.
+TEST(FastProjection, MatchesReference) {
+    for (int faceSize : {1, 7, 64, 257}) {
+        const Cubemap cube = noiseCubemap(faceSize, unsigned(faceSize));
+        for (int order : {1, 3, 5, 8}) {
+            const double error =
+                errorRelativeToL00(projectCubemapFast(cube, order), projectCubemap(cube, order));
+            std::printf("N = %3d, order %d: error / |L_00| = %.2e\n", faceSize, order, error);
+            EXPECT_LT(error, floatRoundingBound(faceSize)) << "N = " << faceSize << ", order " << order;
+        }
+    }
+}
+
+// Expected projection of a cube map lit at one texel only: c Omega y_k(d).
+ShCoefficients singleTexelProjection(int face, int i, int j, int faceSize, const glm::vec4& c) {
+    ShCoefficients expected = makeCoefficients(kMaxOrder, Quantity::Radiance);
+    std::array<double, coefficientCount(kMaxOrder)> basis{};
+    evalBasis(kMaxOrder, texelDirection(face, i, j, faceSize), basis);
+    for (size_t k = 0; k < basis.size(); ++k)
+        expected.rgb[k] = glm::dvec3(c) * (basis[k] * texelSolidAngle(i, j, faceSize));
+    return expected;
+}
+
+// A single texel is projected with the rounding of one table entry only, kTableRounding ulps of
+// max |y_k|, which is sqrt(2l + 1) = sqrt(15) times |y_00| through l = 7 (addition theorem:
+// sum_m y_lm^2 = (2l + 1) / (4 pi)). Measured: 4.7e-6, against 1.5e-5.
+constexpr double kSingleTexelError = kTableRounding * kFloatEpsilon * 3.873;
+
+// Checks: each texel alone, on every face of small odd and even faces (middle rows and columns, rows
+// of one and three positions), projects to c Omega y_k(d): every texel has its own direction and
+// solid angle, whatever its place among its mirror images.
+TEST(FastProjection, EveryTexelAlone) {
+    const glm::vec4 c(1.0f, 2.0f, 0.5f, 0.0f);
+    double worst = 0.0;
+    for (int faceSize : {1, 2, 5, 6}) {
+        Cubemap cube = makeCubemap(faceSize);
+        for (int face = 0; face < kFaceCount; ++face) {
+            for (int j = 0; j < faceSize; ++j) {
+                for (int i = 0; i < faceSize; ++i) {
+                    cube.at(face, i, j) = c;
+                    const double error = errorRelativeToL00(projectCubemapFast(cube, kMaxOrder),
+                                                            singleTexelProjection(face, i, j, faceSize, c));
+                    cube.at(face, i, j) = glm::vec4(0.0f);
+                    worst = std::max(worst, error);
+                    EXPECT_LT(error, kSingleTexelError)
+                        << "N = " << faceSize << ", face " << face << ", texel (" << i << ", " << j << ")";
+                }
+            }
+        }
+    }
+    std::printf("single texels: worst error / |L_00| = %.2e\n", worst);
+}
+
+// Checks: one hot texel on a large odd face, against the reference projection of the whole cube map.
+TEST(FastProjection, HotTexelOnLargeFace) {
+    constexpr int faceSize = 257, face = int(Face::NegativeZ), i = 200, j = 17;
+    Cubemap cube = makeCubemap(faceSize);
+    cube.at(face, i, j) = glm::vec4(1000.0f, 1.0f, 3.0f, 0.0f);
+    const double error =
+        errorRelativeToL00(projectCubemapFast(cube, kMaxOrder), projectCubemap(cube, kMaxOrder));
+    std::printf("hot texel on N = 257: error / |L_00| = %.2e\n", error);
+    EXPECT_LT(error, kSingleTexelError);
+}
+
+// The float value of an IEEE half, from the format's definition: (-1)^s 2^(e-15) (1 + m/1024) for a
+// biased exponent e in 1..30, (-1)^s 2^-14 (m/1024) for e = 0.
+float halfValue(uint16_t bits) {
+    const int exponent = (bits >> 10) & 0x1f;
+    const int mantissa = bits & 0x3ff;
+    const double magnitude =
+        exponent == 0 ? std::ldexp(mantissa, -24) : std::ldexp(1024 + mantissa, exponent - 25);
+    return float(bits & 0x8000 ? -magnitude : magnitude);
+}
+
+bool finiteHalf(uint16_t bits) {
+    return ((bits >> 10) & 0x1f) != 0x1f;
+}
+
+// The same texels as half bits and as their float values.
+struct HalfCubemap {
+    std::vector<uint16_t> halves; // RGBA per texel
+    Cubemap floats;
+};
+
+HalfCubemap halfCubemap(int faceSize, const std::vector<uint16_t>& rgbValues) {
+    HalfCubemap cube{std::vector<uint16_t>(size_t(kFaceCount) * faceSize * faceSize * 4, 0),
+                     makeCubemap(faceSize)};
+    for (size_t v = 0; v < rgbValues.size(); ++v) {
+        cube.halves[v / 3 * 4 + v % 3] = rgbValues[v];
+        cube.floats.texels[v / 3][int(v % 3)] = halfValue(rgbValues[v]);
+    }
+    return cube;
+}
+
+// Checks: RGBA16F input gives exactly the result of the RGBA32F input of the same values, on random
+// finite halves of every magnitude and sign (normal and subnormal), at two orders.
+TEST(FastProjection, HalfInputEqualsFloatInput) {
+    constexpr int faceSize = 64;
+    std::mt19937 random(16);
+    std::uniform_int_distribution<int> bits(0, 0xffff);
+    std::vector<uint16_t> values;
+    while (values.size() < size_t(kFaceCount) * faceSize * faceSize * 3) {
+        const uint16_t value = uint16_t(bits(random));
+        if (finiteHalf(value)) values.push_back(value);
+    }
+    const HalfCubemap cube = halfCubemap(faceSize, values);
+    for (int order : {3, 8}) {
+        expectIdentical(projectFacesFast(cube.halves.data(), TexelFormat::Rgba16F, faceSize, order),
+                        projectCubemapFast(cube.floats, order), "random halves");
+    }
+}
+
+// Checks: every finite half converts exactly. Projections of one-texel faces, 18 values each (three
+// channels of six faces), are compared as above; the values of one projection are consecutive
+// half bit patterns of one sign, within a factor 2 of each other or zero, so that no float product
+// of one of them can be lost in the double sum of the others.
+TEST(FastProjection, EveryFiniteHalfConvertsExactly) {
+    constexpr size_t kValuesPerProjection = kFaceCount * 3;
+    for (uint16_t sign : {uint16_t(0), uint16_t(0x8000)}) {
+        for (uint32_t first = 0; first < 0x7c00; first += kValuesPerProjection) {
+            std::vector<uint16_t> values;
+            for (uint32_t m = first; m < std::min<uint32_t>(first + kValuesPerProjection, 0x7c00); ++m)
+                values.push_back(uint16_t(sign | m));
+            const HalfCubemap cube = halfCubemap(1, values);
+            expectIdentical(projectFacesFast(cube.halves.data(), TexelFormat::Rgba16F, 1, 1),
+                            projectCubemapFast(cube.floats, 1), "consecutive halves");
+            if (HasFailure()) {
+                ADD_FAILURE() << "first half bits 0x" << std::hex << (sign | first);
+                return;
+            }
+        }
+    }
+}
+
+// Checks: the result is bit-identical for 1, 2 and 3 threads and for all cores.
+TEST(FastProjection, IdenticalForEveryThreadCount) {
+    const Cubemap cube = noiseCubemap(257, 3);
+    const ShCoefficients single = projectCubemapFast(cube, 5, {.threads = 1});
+    for (unsigned threads : {2u, 3u, 0u})
+        expectIdentical(projectCubemapFast(cube, 5, {.threads = threads}), single, "threads");
+}
+
+// Checks: the accuracy target, 6 x 2048^2 at order 3 within 1e-6 of |L_00| of the reference.
+TEST(FastProjection, LargeCubemapWithinTarget) {
+    const Cubemap cube = noiseCubemap(2048, 2048);
+    const double error = errorRelativeToL00(projectCubemapFast(cube, 3), projectCubemap(cube, 3));
+    std::printf("N = 2048, order 3: error / |L_00| = %.2e\n", error);
+    EXPECT_LT(error, kLargeFaceError);
+}
+
+// Checks: a face size below 1, an order outside 1..8, no texels and a cube map whose texel count
+// disagrees with its size are input errors.
+TEST(FastProjection, InvalidInputThrows) {
+    const Cubemap cube = makeCubemap(2);
+    const auto kind = [](auto&& project) {
+        try {
+            project();
+        } catch (const Error& e) {
+            return int(e.kind());
+        }
+        return -1;
+    };
+    const int input = int(ErrorKind::Input);
+    EXPECT_EQ(kind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 0, 3); }), input);
+    EXPECT_EQ(kind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba16F, -2, 3); }), input);
+    EXPECT_EQ(kind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 2, 0); }), input);
+    EXPECT_EQ(kind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 2, kMaxOrder + 1); }),
+              input);
+    EXPECT_EQ(kind([&] { projectFacesFast(nullptr, TexelFormat::Rgba32F, 2, 3); }), input);
+    EXPECT_EQ(kind([&] { projectCubemapFast(Cubemap{}, 3); }), input);
+    Cubemap truncated = cube;
+    truncated.texels.pop_back();
+    EXPECT_EQ(kind([&] { projectCubemapFast(truncated, 3); }), input);
+}
+
+} // namespace
+} // namespace shprobe
