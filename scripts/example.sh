@@ -7,7 +7,7 @@
 #   2. a sky with a sun, order 5, 6 x 128^2: the example writes its texels as six PFM faces and
 #      `shprobe bake` projects the same file; radiance and irradiance must agree within 1e-6 of each
 #      channel's first coefficient (L_00 or E_00; same modules, same dispatch plan: in practice identical);
-#   3. the same radiance against `shprobe bake --backend cpu`, the double-precision reference, within
+#   3. the same radiance against `shprobe bake --backend reference`, the double-precision reference, within
 #      1e-5 of L_00 (fp32 texel weights and sums; measured about 1e-7).
 # SHPROBE_BUILD_DIR picks the build to install (default ./build, built here if needed).
 set -euo pipefail
@@ -48,7 +48,7 @@ mkdir -p "$work/faces"
 "$example" --environment sky --face-size 128 --order 5 --write-faces "$work/faces" --validation | tee "$work/sky.txt"
 "$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 -o "$work/radiance.json" -q
 "$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 --irradiance -o "$work/irradiance.json" -q
-"$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 --backend cpu -o "$work/cpu.json" -q
+"$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 --backend reference -o "$work/cpu.json" -q
 compare() { # tag, probe file, tolerance relative to the first coefficient
   paste -d ' ' <(rows "$1" "$work/sky.txt") <(json_rows "$2") | awk -v tag="$1" -v file="${2##*/}" -v tolerance="$3" '
     NR == 1 { for (c = 2; c <= 4; ++c) scale[c] = ($c < 0 ? -$c : $c) }
