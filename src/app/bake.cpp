@@ -16,11 +16,13 @@
 #include "sh/lights.h"
 #include "sh/projection.h"
 #include "sh/windowing.h"
+#include "vk/check.h"
 #include "vk/context.h"
 #include "vk/pipeline_cache.h"
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -98,11 +100,13 @@ template <typename Work> void withGpu(const BakeOptions& options, Work&& work) {
     try {
         const std::string cachePath = pipelineCachePath(context);
         cache = loadPipelineCache(context, cachePath);
+        std::optional<DeviceStep> creating(std::in_place, "creating the bake pipelines");
         Projector projector = createProjector(context, {.order = options.order,
                                                         .workgroupSize = options.workgroupSize,
                                                         .texelsPerInvocation = options.texelsPerInvocation,
                                                         .pipelineCache = cache});
         savePipelineCache(context, cache, cachePath);
+        creating.reset();
         try {
             work(std::as_const(context), std::as_const(projector));
         } catch (...) {
@@ -267,6 +271,7 @@ void runSingleBake(const BakeOptions& options) {
     BakeResult result;
     if (options.backend == "gpu") {
         withGpu(options, [&](const Context& context, const Projector& projector) {
+            DeviceStep step("baking " + environment.description);
             const Cubemap* cubemap = &environment.cubemap;
             result = bakeOnGpu(options, context, projector, std::span(&cubemap, 1))[0];
         });
@@ -557,6 +562,7 @@ void runBatchBake(const BakeOptions& options) {
             VkDeviceSize chunkBytes = batchTexelBytes(context);
             if (options.batchBytes > 0) chunkBytes = std::min<VkDeviceSize>(chunkBytes, options.batchBytes);
             bakeInChunks(batch, items, chunkBytes, [&](std::span<const Cubemap* const> cubemaps) {
+                DeviceStep step("baking a chunk of " + std::to_string(cubemaps.size()) + " probes");
                 return bakeOnGpu(options, context, projector, cubemaps);
             });
         });
