@@ -7,6 +7,7 @@
 #include "sh/irradiance.h"
 #include "shprobe/shprobe_spirv.h"
 #include "vk/check.h"
+#include "vk/image.h"
 
 #include <algorithm>
 #include <string>
@@ -87,19 +88,6 @@ void checkWindow(int order, std::span<const double> window) {
                                           std::to_string(order));
 }
 
-VkSampler createNearestSampler(const Context& context) {
-    VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-    info.magFilter = VK_FILTER_NEAREST;
-    info.minFilter = VK_FILTER_NEAREST;
-    info.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
-    info.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    VkSampler sampler = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateSampler(context.device, &info, nullptr, &sampler));
-    return sampler;
-}
-
 void checkTarget(const Context& context, const ProbeBakeTarget& target) {
     if (!target.cubemaps || !target.output)
         throw Error(ErrorKind::Input, "GPU bake: the target needs a cube-map view and an output buffer");
@@ -170,7 +158,7 @@ ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& opt
     ProbeBaker baker;
     baker.options = options;
     try {
-        baker.sampler = createNearestSampler(context);
+        baker.sampler = createSampler(context, VK_FILTER_NEAREST);
         baker.project = createComputeProgram(context, {.name = "project.comp",
                                                        .spirv = spirv::project_comp,
                                                        .bindings = kProjectBindings,

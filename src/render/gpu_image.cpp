@@ -99,17 +99,4 @@ void copyImageToBuffer(VkCommandBuffer commands, const GpuImage& image, const Bu
                          0, nullptr, 0, nullptr);
 }
 
-VkSampler createSampler(const Context& context, VkFilter filter) {
-    VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-    info.magFilter = filter;
-    info.minFilter = filter;
-    info.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
-    info.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    VkSampler sampler = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateSampler(context.device, &info, nullptr, &sampler));
-    return sampler;
-}
-
 } // namespace shprobe

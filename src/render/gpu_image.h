@@ -17,9 +17,6 @@ GpuImage createCubeTexture(const Context& context, const Cubemap& cubemap);
 // D32_SFLOAT where supported as a depth attachment, else D16_UNORM (always supported).
 VkFormat pickDepthFormat(const Context& context);
 
-// A sampler with the given filter for magnification and minification, clamped to the edges.
-VkSampler createSampler(const Context& context, VkFilter filter);
-
 // Records a copy of a 2D colour image (in TRANSFER_SRC_OPTIMAL) into a buffer, rows tightly packed,
 // and makes it visible to the host.
 void copyImageToBuffer(VkCommandBuffer commands, const GpuImage& image, const Buffer& buffer);

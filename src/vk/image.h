@@ -41,4 +41,7 @@ void changeLayout(VkCommandBuffer commands, const GpuImage& image, const LayoutC
 void changeLayout(VkCommandBuffer commands, VkImage image, VkImageAspectFlags aspect, uint32_t layers,
                   const LayoutChange& change);
 
+// A sampler with the given filter for magnification and minification, clamped to the edges.
+VkSampler createSampler(const Context& context, VkFilter filter);
+
 } // namespace shprobe
