@@ -78,4 +78,13 @@ void shEvalBasis(vec3 d, out float y[SH_BASIS_CAPACITY]) {
     for (uint l = 5u; l < SH_ORDER; ++l) shEvalBand(l, d, y);
 }
 
+// Every coefficient index up to SH_BASIS_CAPACITY as X(index), for code that needs one variable
+// per coefficient: llvmpipe keeps an array that is ever indexed in a loop in memory, with a masked
+// per-lane store for every write, so accumulators are spelled out as sum0, sum1, ... instead.
+#define SH_EACH_COEFFICIENT(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7) X(8) X(9) X(10) X(11) X(12) \
+    X(13) X(14) X(15) X(16) X(17) X(18) X(19) X(20) X(21) X(22) X(23) X(24) X(25) X(26) X(27) \
+    X(28) X(29) X(30) X(31) X(32) X(33) X(34) X(35) X(36) X(37) X(38) X(39) X(40) X(41) X(42) \
+    X(43) X(44) X(45) X(46) X(47) X(48) X(49) X(50) X(51) X(52) X(53) X(54) X(55) X(56) X(57) \
+    X(58) X(59) X(60) X(61) X(62) X(63)
+
 #endif

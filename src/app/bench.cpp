@@ -156,7 +156,7 @@ public:
             boundMs_[size_t(format)] = memoryReadMilliseconds(bytesOf(input, format), options_.repeat);
             add(faceSize, format, 0, "memory read (bound)", boundMs_[size_t(format)], -1.0);
         }
-        // The device's own bound: read_texels.comp fetches the texels as project.comp does.
+        // The device's own bound: read_texels reads the texels as the projection does.
         for (TexelFormat format : kFormats) {
             const double ms = deviceReadMilliseconds(context_, input.rgba32f, format, options_.repeat);
             if (ms > 0.0) add(faceSize, format, 0, "gpu texel reads only (device)", ms, -1.0);

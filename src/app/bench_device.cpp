@@ -48,9 +48,12 @@ void destroyReadResources(const Context& context, ReadResources& r) {
 
 double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format, int repeat) {
     if (!context.info.timestamps) return 0.0;
-    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+    // read_texels reads as the storage-image projection does, the one the program uses.
+    if (uploadBinding(context, format) == CubemapBinding::SampledImage) return 0.0;
+    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
                                                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
-    const ProbeBakerOptions plan{.order = 3}; // the workgroup plan of an order-3 projection
+    const ProbeBakerOptions plan{.order = 3, .cubemaps = uploadBinding(context, format)}; // an order-3 projection's plan
+    const bool half = format == TexelFormat::Rgba16F;
     ReadResources r;
     double best = INFINITY;
     try {
@@ -63,13 +66,13 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
         const uint32_t groups = r.set.groupsPerProbe;
         r.sums = createBuffer(context, VkDeviceSize(groups) * plan.workgroupSize * 16,
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "read sums");
-        r.read = createComputeProgram(context, {.name = "read_texels.comp",
-                                                .spirv = spirv::read_texels_comp,
+        r.read = createComputeProgram(context, {.name = half ? "read_texels_rgba16f.comp" : "read_texels_rgba32f.comp",
+                                                .spirv = half ? spirv::read_texels_rgba16f_comp
+                                                              : spirv::read_texels_rgba32f_comp,
                                                 .bindings = kBindings,
-                                                .immutableSampler = r.baker.sampler,
                                                 .pushConstantSize = sizeof(gpu::ProjectParams),
                                                 .localSize = plan.workgroupSize});
-        r.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 1, .imageSamplers = 1});
+        r.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 1, .storageImages = 1});
         const BindingTarget targets[] = {{.imageView = r.upload.image.view}, {r.sums.buffer, 0, VK_WHOLE_SIZE}};
         VkDescriptorSet set = createDescriptorSet(context, r.pool, r.read, targets);
         r.timestamps = createTimestampPool(context);

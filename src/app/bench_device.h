@@ -8,9 +8,9 @@
 
 namespace shprobe {
 
-// Device milliseconds (timestamps) of read_texels.comp over the cube map: every texel fetched as
-// project.comp fetches it, and only summed. The best of `repeat` runs after an untimed one; 0
-// without timestamps.
+// Device milliseconds (timestamps) of read_texels_<format>.comp over the cube map: every texel read
+// as the storage-image projection reads it, and only summed. The best of `repeat` runs after an
+// untimed one; 0 without timestamps or without storage images of the format.
 double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format, int repeat);
 
 struct PipelineCreation {

@@ -105,7 +105,25 @@ void checkTarget(const Context& context, const ProbeBakeTarget& target) {
                                           std::to_string(context.info.limits.minStorageBufferOffsetAlignment) + ")");
 }
 
+struct ProjectModule {
+    const char* name;
+    std::span<const uint32_t> spirv;
+};
+
+ProjectModule projectModule(CubemapBinding binding) {
+    switch (binding) {
+    case CubemapBinding::StorageRgba32F: return {"project_rgba32f.comp", spirv::project_rgba32f_comp};
+    case CubemapBinding::StorageRgba16F: return {"project_rgba16f.comp", spirv::project_rgba16f_comp};
+    case CubemapBinding::SampledImage: break;
+    }
+    return {"project.comp", spirv::project_comp};
+}
+
 } // namespace
+
+VkImageLayout cubemapLayout(CubemapBinding binding) {
+    return binding == CubemapBinding::SampledImage ? VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL : VK_IMAGE_LAYOUT_GENERAL;
+}
 
 Context borrowDevice(const ExternalDevice& device) {
     Context context;
@@ -150,7 +168,10 @@ ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& opt
     if (VkDeviceSize(options.workgroupSize) * 16 + 16 > context.info.limits.maxComputeSharedMemorySize)
         throw Error(ErrorKind::Input, "workgroup size " + std::to_string(options.workgroupSize) +
                                           " needs more shared memory than " + context.info.name + " has");
-    static constexpr VkDescriptorType kProjectBindings[] = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+    const bool sampled = options.cubemaps == CubemapBinding::SampledImage;
+    static constexpr VkDescriptorType kSampledBindings[] = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                                                            VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    static constexpr VkDescriptorType kStorageBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
                                                             VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
     static constexpr VkDescriptorType kBufferBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                                                            VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
@@ -158,10 +179,12 @@ ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& opt
     ProbeBaker baker;
     baker.options = options;
     try {
-        baker.sampler = createSampler(context, VK_FILTER_NEAREST);
-        baker.project = createComputeProgram(context, {.name = "project.comp",
-                                                       .spirv = spirv::project_comp,
-                                                       .bindings = kProjectBindings,
+        if (sampled) baker.sampler = createSampler(context, VK_FILTER_NEAREST);
+        const ProjectModule module = projectModule(options.cubemaps);
+        baker.project = createComputeProgram(context, {.name = module.name,
+                                                       .spirv = module.spirv,
+                                                       .bindings = sampled ? std::span(kSampledBindings)
+                                                                           : std::span(kStorageBindings),
                                                        .immutableSampler = baker.sampler,
                                                        .pushConstantSize = sizeof(gpu::ProjectParams),
                                                        .localSize = options.workgroupSize,
@@ -214,7 +237,9 @@ ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker,
     try {
         set.scratch = createBuffer(context, set.radianceOffset + radianceBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                    MemoryUse::Device, "bake scratch (partial sums)");
-        set.pool = createDescriptorPool(context, {.sets = 3, .storageBuffers = 5, .imageSamplers = 1});
+        const bool sampled = baker.options.cubemaps == CubemapBinding::SampledImage;
+        set.pool = createDescriptorPool(
+            context, {.sets = 3, .storageBuffers = 5, .imageSamplers = sampled ? 1u : 0u, .storageImages = sampled ? 0u : 1u});
         const BindingTarget project[] = {{.imageView = target.cubemaps}, {set.scratch.buffer, 0, partialBytes}};
         const BindingTarget reduce[] = {{set.scratch.buffer, 0, partialBytes},
                                         {set.scratch.buffer, set.radianceOffset, radianceBytes}};

@@ -9,13 +9,15 @@
 //   ... submit; once it completed: destroyProbeBakeSet, or record it again (same view, new texels).
 //
 // What the caller provides:
-// - The cube maps: a VkImageView of type VK_IMAGE_VIEW_TYPE_2D_ARRAY over 6 * probeCount layers of
-//   an image created with VK_IMAGE_USAGE_SAMPLED_BIT, in any format the device can sample (RGBA16F,
-//   RGBA32F, ...; alpha is ignored): probe p's face f is layer 6p + f of the view, faces in Vulkan's
-//   order +X, -X, +Y, -Y, +Z, -Z with the orientation of shaders/INTERFACE.md (the orientation
-//   vkCmdCopyBufferToImage and cube-map rendering give). One mip level is read: the view's base.
-// - Before recordProbeBake: the image in VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, and a barrier that
-//   makes its writes available to VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT / VK_ACCESS_SHADER_READ_BIT.
+// - The cube maps: a VkImageView of type VK_IMAGE_VIEW_TYPE_2D_ARRAY over 6 * probeCount layers:
+//   probe p's face f is layer 6p + f of the view, faces in Vulkan's order +X, -X, +Y, -Y, +Z, -Z with
+//   the orientation of shaders/INTERFACE.md (the orientation vkCmdCopyBufferToImage and cube-map
+//   rendering give). One mip level is read: the view's base. Alpha is ignored. As the baker's
+//   CubemapBinding says: an image with VK_IMAGE_USAGE_SAMPLED_BIT in any format the device can
+//   sample, or one with VK_IMAGE_USAGE_STORAGE_BIT in exactly RGBA32F or RGBA16F.
+// - Before recordProbeBake: the image in cubemapLayout(binding) (SHADER_READ_ONLY_OPTIMAL or
+//   GENERAL), and a barrier that makes its writes available to VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT /
+//   VK_ACCESS_SHADER_READ_BIT.
 // - The output: a buffer with VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, probeBakeOutputBytes(order,
 //   probeCount) bytes from an offset that is a multiple of minStorageBufferOffsetAlignment. Layout
 //   (std430, vec4 per coefficient, rgb in xyz, w = 0), with n^2 coefficients per probe, flat index
@@ -50,18 +52,27 @@ struct ExternalDevice {
 // Never pass it to destroyContext.
 Context borrowDevice(const ExternalDevice& device);
 
+// How the projection reads the cube maps: project.comp samples an image of any format;
+// project_rgba32f.comp and project_rgba16f.comp read a storage image of that format. The values and
+// the results are the same; the storage read is three times faster on lavapipe (`shprobe bench`).
+enum class CubemapBinding { SampledImage, StorageRgba32F, StorageRgba16F };
+
+// The layout the cube maps must be in when the bake runs.
+VkImageLayout cubemapLayout(CubemapBinding binding);
+
 struct ProbeBakerOptions {
     int order = 3;                          // 1..kMaxOrder
+    CubemapBinding cubemaps = CubemapBinding::SampledImage;
     uint32_t workgroupSize = 64;            // invocations per projection workgroup
     uint32_t texelsPerInvocation = 256;     // work per invocation (capped by order for lavapipe)
     VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional
 };
 
 // Created once and reused for any number of bakes: the pipelines of project, reduce and convolve,
-// their set layouts and the sampler.
+// their set layouts and, for a sampled image, the sampler.
 struct ProbeBaker {
     ProbeBakerOptions options;
-    VkSampler sampler = VK_NULL_HANDLE;
+    VkSampler sampler = VK_NULL_HANDLE; // SampledImage only
     ComputeProgram project;
     ComputeProgram reduce;
     ComputeProgram convolve;

@@ -120,9 +120,19 @@ GpuBake usableOrThrow(GpuBake bake) {
 
 } // namespace
 
+CubemapBinding uploadBinding(const Context& context, TexelFormat format) {
+    VkFormatProperties properties{};
+    vkGetPhysicalDeviceFormatProperties(context.physicalDevice, imageFormat(format), &properties);
+    if (!(properties.optimalTilingFeatures & VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT)) return CubemapBinding::SampledImage;
+    return format == TexelFormat::Rgba16F ? CubemapBinding::StorageRgba16F : CubemapBinding::StorageRgba32F;
+}
+
 CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
                                   TexelFormat format) {
     CubemapUpload upload;
+    upload.binding = uploadBinding(context, format);
+    const VkImageUsageFlags readUsage =
+        upload.binding == CubemapBinding::SampledImage ? VK_IMAGE_USAGE_SAMPLED_BIT : VK_IMAGE_USAGE_STORAGE_BIT;
     upload.faceSize = uint32_t(cubemaps.front()->faceSize);
     upload.probeCount = uint32_t(cubemaps.size());
     const VkDeviceSize cubemapBytes = kFaceCount * VkDeviceSize(upload.faceSize) * upload.faceSize * texelBytes(format);
@@ -137,7 +147,7 @@ CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubema
         }
         upload.image = createImage(context, {.format = imageFormat(format),
                                              .extent = {upload.faceSize, upload.faceSize},
-                                             .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                             .usage = readUsage | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                                              .what = "cube maps to bake",
                                              .layers = kFaceCount * upload.probeCount});
     } catch (...) {
@@ -157,7 +167,7 @@ void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload) 
     vkCmdCopyBufferToImage(commands, upload.staging.buffer, upload.image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                            1, &region);
     changeLayout(commands, upload.image,
-                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, cubemapLayout(upload.binding),
                   VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                   VK_ACCESS_SHADER_READ_BIT});
 }
@@ -172,6 +182,7 @@ Projector createProjector(const Context& context, const ProjectorOptions& option
     Projector projector;
     projector.options = options;
     projector.baker = createProbeBaker(context, {.order = options.order,
+                                                 .cubemaps = uploadBinding(context, options.texelFormat),
                                                  .workgroupSize = options.workgroupSize,
                                                  .texelsPerInvocation = options.texelsPerInvocation,
                                                  .pipelineCache = options.pipelineCache});

@@ -1,4 +1,4 @@
-// GPU bake from host memory: uploads cube maps into a sampled image, records the bake of
+// GPU bake from host memory: uploads cube maps into an image, records the bake of
 // gpu/probe_baker.h (project.comp, reduce.comp, convolve.comp) and reads the coefficients back,
 // all in one submission however many cube maps there are.
 #pragma once
@@ -26,11 +26,16 @@ struct ProjectorOptions {
     VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional
 };
 
-// Cube maps of one face size in a sampled 2D-array image, 6 layers each (probe_baker.h's layout),
-// with the staging buffer they are copied from.
+// The fastest way the projection can read cube maps uploaded in this format: as a storage image
+// where the device supports storage images of the format, else as a sampled image.
+CubemapBinding uploadBinding(const Context& context, TexelFormat format);
+
+// Cube maps of one face size in a 2D-array image, 6 layers each (probe_baker.h's layout), bound as
+// uploadBinding says, with the staging buffer they are copied from.
 struct CubemapUpload {
     uint32_t faceSize = 0;
     uint32_t probeCount = 0;
+    CubemapBinding binding = CubemapBinding::SampledImage;
     Buffer staging;
     GpuImage image;
 };
@@ -38,8 +43,8 @@ struct CubemapUpload {
 // Creates the image and fills the staging buffer (all cube maps must have the same face size).
 CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
                                   TexelFormat format);
-// Records the copy and leaves the image as probe_baker.h asks: SHADER_READ_ONLY_OPTIMAL, visible to
-// compute-shader reads.
+// Records the copy and leaves the image as probe_baker.h asks: in cubemapLayout(upload.binding),
+// visible to compute-shader reads.
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload);
 void destroyCubemapUpload(const Context& context, CubemapUpload& upload);
 

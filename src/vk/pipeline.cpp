@@ -100,6 +100,7 @@ VkDescriptorPool createDescriptorPool(const Context& context, const DescriptorPo
     std::vector<VkDescriptorPoolSize> sizes;
     if (size.storageBuffers) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, size.storageBuffers});
     if (size.imageSamplers) sizes.push_back({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, size.imageSamplers});
+    if (size.storageImages) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, size.storageImages});
     VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     info.maxSets = size.sets;
     info.poolSizeCount = uint32_t(sizes.size());
@@ -127,13 +128,15 @@ VkDescriptorSet createDescriptorSet(const Context& context, VkDescriptorPool poo
     std::vector<VkWriteDescriptorSet> writes(targets.size());
     for (uint32_t i = 0; i < writes.size(); ++i) {
         buffers[i] = {targets[i].buffer, targets[i].offset, targets[i].size};
-        images[i] = {VK_NULL_HANDLE, targets[i].imageView, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+        const bool storageImage = program.bindings[i] == VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+        images[i] = {VK_NULL_HANDLE, targets[i].imageView,
+                     storageImage ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
         writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
         writes[i].dstSet = set;
         writes[i].dstBinding = i;
         writes[i].descriptorCount = 1;
         writes[i].descriptorType = program.bindings[i];
-        if (program.bindings[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER)
+        if (storageImage || program.bindings[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER)
             writes[i].pImageInfo = &images[i];
         else
             writes[i].pBufferInfo = &buffers[i];

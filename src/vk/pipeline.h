@@ -1,5 +1,5 @@
-// Compute programs: a shader module, its descriptor-set layout (set 0: storage buffers and
-// combined image samplers), push-constant range and pipeline, specialized by workgroup width and
+// Compute programs: a shader module, its descriptor-set layout (set 0: storage buffers, combined
+// image samplers and storage images), push-constant range and pipeline, specialized by workgroup width and
 // SH order.
 #pragma once
 #include "vk/context.h"
@@ -13,8 +13,8 @@ namespace shprobe {
 struct ComputeProgramDesc {
     const char* name = "";                       // for error messages
     std::span<const uint32_t> spirv;             // the module's words
-    std::span<const VkDescriptorType> bindings;  // binding i of set 0: STORAGE_BUFFER or COMBINED_IMAGE_SAMPLER
-    VkSampler immutableSampler = VK_NULL_HANDLE; // the sampler of every image binding
+    std::span<const VkDescriptorType> bindings;  // binding i of set 0: STORAGE_BUFFER, COMBINED_IMAGE_SAMPLER or STORAGE_IMAGE
+    VkSampler immutableSampler = VK_NULL_HANDLE; // the sampler of every combined image sampler
     uint32_t pushConstantSize = 0;               // bytes
     uint32_t localSize = 64;                     // specialization constant 0
     uint32_t order = 3;                          // specialization constant 1
@@ -33,7 +33,8 @@ struct ComputeProgram {
 ComputeProgram createComputeProgram(const Context& context, const ComputeProgramDesc& desc);
 void destroyComputeProgram(const Context& context, ComputeProgram& program);
 
-// What one binding points at: a range of a buffer, or an image view (in SHADER_READ_ONLY_OPTIMAL).
+// What one binding points at: a range of a buffer, or an image view (in SHADER_READ_ONLY_OPTIMAL when
+// sampled, GENERAL when a storage image).
 struct BindingTarget {
     VkBuffer buffer = VK_NULL_HANDLE;
     VkDeviceSize offset = 0;
@@ -50,6 +51,7 @@ struct DescriptorPoolSize {
     uint32_t sets = 0;
     uint32_t storageBuffers = 0;
     uint32_t imageSamplers = 0;
+    uint32_t storageImages = 0;
 };
 VkDescriptorPool createDescriptorPool(const Context& context, const DescriptorPoolSize& size);
 

@@ -178,7 +178,12 @@ Statements reflectResources(const json& r) {
     for (const json& t : r.value("textures", json::array()))
         out.insert("sampler " + std::to_string(t.at("set").get<int>()) + " " + std::to_string(t.at("binding").get<int>()) +
                    " " + t.at("type").get<std::string>() + " " + t.at("name").get<std::string>());
-    for (const char* kind : {"separate_images", "separate_samplers", "images", "acceleration_structures",
+    for (const json& t : r.value("images", json::array()))
+        out.insert("storage_image " + std::to_string(t.at("set").get<int>()) + " " + std::to_string(t.at("binding").get<int>()) +
+                   " " + (t.value("readonly", false) ? "readonly" : t.value("writeonly", false) ? "writeonly" : "readwrite") +
+                   " " + t.at("type").get<std::string>() + " " + t.value("format", std::string("unknown")) + " " +
+                   t.at("name").get<std::string>());
+    for (const char* kind : {"separate_images", "separate_samplers", "acceleration_structures",
                              "subpass_inputs"})
         for (const json& other : r.value(kind, json::array()))
             out.insert(std::string("unsupported ") + kind + " " + other.value("name", std::string()));

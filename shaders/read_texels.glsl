@@ -1,0 +1,33 @@
+// The device's own read bound for `shprobe bench` (read_texels_rgba32f.comp, read_texels_rgba16f.comp):
+// reads every texel exactly as the projection modules' storage variants do (same image, layers,
+// positions, streams and order) and only sums them, so its speed is the most any projection
+// reading the texels this way can reach on the device. Not part of the baking interface.
+//
+//   set 0, binding 0: storage image2DArray cubemaps (cubemap_input.glsl)
+//   set 0, binding 1: buffer, vec4 sums[]: one per invocation (keeps the reads from being optimized away)
+//   push constants: ProjectParams; dispatch (groups, probes, 1) as the projection
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_EXT_control_flow_attributes : require
+
+#include "gpu_interface.h"
+#include "position_walk.glsl"
+#include "cubemap_input.glsl"
+
+layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
+
+layout(set = 0, binding = 1, std430) writeonly buffer Sums { vec4 sums[]; };
+layout(push_constant, std430) uniform Push { ProjectParams params; };
+
+void main() {
+    uint faceSize = params.faceSize;
+    int firstLayer = int(gl_WorkGroupID.y) * 6;
+    START_STREAM(faceSize)
+    PositionWalk walk = startWalk(first, lanes, faceSize);
+    vec3 sum = vec3(0.0f);
+    for (uint position = first; position < end; position += lanes) {
+        [[unroll]] for (int face = 0; face < 6; ++face) sum += readRadiance(walk.i, walk.j, firstLayer + face);
+        stepWalk(walk, faceSize);
+    }
+    sums[(gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x + gl_LocalInvocationIndex] =
+        vec4(sum, 0.0f);
+}
