@@ -364,6 +364,44 @@ TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
     destroyProbeBaker(device, baker);
 }
 
+// The CLI's own bakes (GpuProjection above) read a storage image; this runs project.comp, the
+// sampled-image module, through the same workgroup shapes: its streams of positions must cover
+// every texel once whatever the width.
+TEST_F(GpuResidentBake, SampledModuleMatchesTheReferenceForAnyWorkgroupShape) {
+    const int order = 4;
+    Context device = borrowDevice({context().physicalDevice, context().device, context().queueFamily});
+    const std::vector<Cubemap> cubemaps = {noiseCubemap(24, 31)};
+    const ShCoefficients reference = projectCubemap(cubemaps[0], order);
+    Buffer output = createBuffer(device, probeBakeOutputBytes(order, 1), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                 MemoryUse::Readback, "caller's coefficients");
+    for (uint32_t width : {1u, 3u, 8u, 100u}) {
+        for (uint32_t perInvocation : {1u, 256u}) {
+            ProbeBaker baker = createProbeBaker(
+                device, {.order = order, .workgroupSize = width, .texelsPerInvocation = perInvocation});
+            ASSERT_EQ(baker.options.cubemaps, CubemapBinding::SampledImage);
+            Probes probes;
+            ProbeBakeSet set;
+            submitAndWait(context(), [&](VkCommandBuffer commands) {
+                probes = upload(cubemaps, commands);
+                set = createProbeBakeSet(device, baker, {probes.image.view, 24, 1, output.buffer, 0});
+                recordProbeBake(commands, baker, set);
+                computeWriteBarrier(commands);
+            });
+            invalidateBuffer(device, output);
+            const auto* values = static_cast<const glm::vec4*>(output.mapped);
+            ShCoefficients radiance = makeCoefficients(order, Quantity::Radiance);
+            for (size_t i = 0; i < radiance.rgb.size(); ++i) radiance.rgb[i] = glm::dvec3(glm::vec3(values[i]));
+            EXPECT_LT(relativeError(radiance, reference), kGpuTolerance)
+                << "workgroup " << width << ", texels per invocation " << perInvocation;
+            destroyProbeBakeSet(device, set);
+            destroyImage(context(), probes.image);
+            destroyBuffer(context(), probes.staging);
+            destroyProbeBaker(device, baker);
+        }
+    }
+    destroyBuffer(device, output);
+}
+
 TEST_F(GpuResidentBake, RefusesTargetsItCannotBake) {
     ProbeBaker baker = createProbeBaker(context(), {.order = 3});
     Buffer output = createBuffer(context(), 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "out");

@@ -31,9 +31,10 @@ void stepWalk(inout PositionWalk walk, uint faceSize) {
 // invocations (a stream) take neighbouring positions side by side and walk forward together
 // through one contiguous range, [first, end) in steps of `lanes`. That is what GPU memory coalescing
 // wants, and what CPU prefetchers want under llvmpipe, which runs one subgroup's whole loop before
-// the next subgroup's (three times faster than a grid-wide stride). The width divides the
-// workgroup, so the streams cover every position once whatever the hardware's subgroups really
-// are. The includer enables GL_KHR_shader_subgroup_basic.
+// the next subgroup's (three times faster than a grid-wide stride). The width is a power of two
+// that divides the workgroup and is the same in every invocation of the dispatch (gl_SubgroupSize
+// is, in these SPIR-V 1.3 modules without varying subgroup sizes), so the streams cover every
+// position once whatever the hardware's subgroups really are. The includer enables GL_KHR_shader_subgroup_basic.
 // It is a macro declaring `first`, `end` and `lanes` where it is used: computed in a function,
 // returned in a struct or through out parameters, they come out wrong on llvmpipe 22.3 (test_gpu
 // caught it at order 8 with many positions per invocation).

@@ -37,9 +37,10 @@ shared vec3 subgroupSums[gl_WorkGroupSize.x];
 shared uint subgroupCount;
 
 // The reduction relies only on subgroupAdd, subgroupElect, gl_SubgroupID and
-// gl_SubgroupInvocationID. gl_SubgroupSize and gl_NumSubgroups are not used: lavapipe (Mesa 22.3)
+// gl_SubgroupInvocationID, not on gl_SubgroupSize or gl_NumSubgroups: lavapipe (Mesa 22.3)
 // reports a subgroup size of 32 under LP_NATIVE_VECTOR_WIDTH=1024 on 256-bit CPUs while running
 // subgroups of 16, and rounds gl_NumSubgroups down when the width is not a multiple of it.
+// (START_STREAM takes gl_SubgroupSize only as a stream width, correct for any power of two.)
 void countSubgroups() {
     if (gl_LocalInvocationIndex == 0u) subgroupCount = 0u;
     barrier();

@@ -26,7 +26,7 @@ double millisecondsSince(Clock::time_point start) {
 // Everything one read measurement creates, destroyed in one place.
 struct ReadResources {
     CubemapUpload upload;
-    ProbeBaker baker; // its sampler, and the workgroup plan of the projection being compared with
+    ProbeBaker baker; // the workgroup plan of the projection being compared with
     ProbeBakeSet set;
     ComputeProgram read;
     Buffer sums;

@@ -54,7 +54,7 @@ Context borrowDevice(const ExternalDevice& device);
 
 // How the projection reads the cube maps: project.comp samples an image of any format;
 // project_rgba32f.comp and project_rgba16f.comp read a storage image of that format. The values and
-// the results are the same; the storage read is three times faster on lavapipe (`shprobe bench`).
+// the results are the same; on lavapipe the storage read is three times faster (`shprobe bench`).
 enum class CubemapBinding { SampledImage, StorageRgba32F, StorageRgba16F };
 
 // The layout the cube maps must be in when the bake runs.

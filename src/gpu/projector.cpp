@@ -121,6 +121,7 @@ GpuBake usableOrThrow(GpuBake bake) {
 } // namespace
 
 CubemapBinding uploadBinding(const Context& context, TexelFormat format) {
+    // Vulkan requires storage-image support with optimal tiling for both formats; checked anyway.
     VkFormatProperties properties{};
     vkGetPhysicalDeviceFormatProperties(context.physicalDevice, imageFormat(format), &properties);
     if (!(properties.optimalTilingFeatures & VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT)) return CubemapBinding::SampledImage;
@@ -223,6 +224,9 @@ std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& proje
             std::vector<const Cubemap*> members;
             for (size_t index : group.members) members.push_back(cubemaps[index]);
             group.upload = createCubemapUpload(context, members, projector.options.texelFormat);
+            if (group.upload.binding != projector.baker.options.cubemaps)
+                throw Error(ErrorKind::Device, "GPU bake: cube maps uploaded for another binding than the "
+                                               "projector's pipelines read");
             group.set = createProbeBakeSet(context, projector.baker,
                                            {group.upload.image.view, group.faceSize, uint32_t(group.members.size()),
                                             output.buffer, group.outputOffset});
