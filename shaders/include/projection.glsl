@@ -5,7 +5,11 @@
 //
 // Each invocation takes texel positions (i, j) and handles that position on all six faces: the
 // solid angle and the normalized (a, b, 1) depend on the position only, so they are computed once
-// for six texels, and each face's direction is a signed permutation of the same vector.
+// for six texels. Opposite faces' directions at one position differ only in the signs of two
+// coordinates, and a sign change of x, y or z multiplies y_lm by +-1 according to its parity in
+// that coordinate (basisParity). So the basis is evaluated once per face pair, and each
+// coefficient takes the sum or the difference of the pair's radiance: per six texels, three basis
+// evaluations and 3 n^2 multiply-adds instead of six and 6 n^2.
 //
 // The includer defines SHPROBE_STORAGE_FORMAT or not (cubemap_input.glsl) and nothing else.
 //   set 0, binding 0: the cube maps (cubemap_input.glsl)
@@ -64,8 +68,21 @@ vec3 workgroupSum(vec3 value, uint lanes) {
     return total;
 }
 
+// Face pair p is faces 2p (+axis) and 2p + 1 (-axis); at the same position the opposite face's
+// direction negates two coordinates (face table in texel_geometry.h):
+//   +X ( c, -b, -a), -X (-c, -b,  a): x and z
+//   +Y ( a,  c,  b), -Y ( a, -c, -b): y and z
+//   +Z ( a, -b,  c), -Z (-a, -b, -c): x and z
+const uvec3 NEGATED_BY_OPPOSITE_FACE[3] = uvec3[3](uvec3(1, 0, 1), uvec3(0, 1, 1), uvec3(1, 0, 1));
+
+// L(near) + L(far) y_lm(far direction) / y_lm(near direction). The sign is a constant once l, m and
+// the pair are, so this is one addition or subtraction, shared by coefficients of equal parity.
+vec3 pairSum(vec3 near, vec3 far, int l, int m, uint pair) {
+    return near + reflectionSign(basisParity(l, m), NEGATED_BY_OPPOSITE_FACE[pair]) * far;
+}
+
 void main() {
-#define DECLARE_SUM(k) vec3 sum##k = vec3(0.0f);
+#define DECLARE_SUM(k, l, m) vec3 sum##k = vec3(0.0f);
     SH_EACH_COEFFICIENT(DECLARE_SUM)
 
     uint faceSize = params.faceSize;
@@ -78,23 +95,25 @@ void main() {
         READ_FACE(0) READ_FACE(1) READ_FACE(2) READ_FACE(3) READ_FACE(4) READ_FACE(5)
         float weight = texelSolidAngle(walk.i, walk.j, faceSize);
         vec3 unit = normalize(vec3(texelCenterCoord(walk.i, faceSize), texelCenterCoord(walk.j, faceSize), 1.0f));
-#define ACCUMULATE(k) if (k < SH_COEFFICIENTS) sum##k += radiance * basis[k];
-#define ACCUMULATE_FACE(f)                                   \
-        {                                                    \
-            vec3 radiance = radiance##f * weight;            \
-            float basis[SH_BASIS_CAPACITY];                  \
-            shEvalBasis(orientToFace(f, unit), basis);       \
-            SH_EACH_COEFFICIENT(ACCUMULATE)                  \
+#define ACCUMULATE(k, l, m) if (k < SH_COEFFICIENTS) sum##k += basis[k] * pairSum(near, far, l, m, pair);
+#define ACCUMULATE_PAIR(PAIR, NEAR, FAR)                        \
+        {                                                       \
+            const uint pair = PAIR;                             \
+            vec3 near = NEAR * weight, far = FAR * weight;      \
+            float basis[SH_BASIS_CAPACITY];                     \
+            shEvalBasis(orientToFace(2u * pair, unit), basis);  \
+            SH_EACH_COEFFICIENT(ACCUMULATE)                     \
         }
-        ACCUMULATE_FACE(0) ACCUMULATE_FACE(1) ACCUMULATE_FACE(2)
-        ACCUMULATE_FACE(3) ACCUMULATE_FACE(4) ACCUMULATE_FACE(5)
+        ACCUMULATE_PAIR(0u, radiance0, radiance1)
+        ACCUMULATE_PAIR(1u, radiance2, radiance3)
+        ACCUMULATE_PAIR(2u, radiance4, radiance5)
         stepWalk(walk, faceSize);
     }
 
     countSubgroups();
     uint subgroupLanes = subgroupAdd(1u); // invocations in this subgroup, as the hardware groups them
     uint slot = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * SH_COEFFICIENTS;
-#define REDUCE(k)                                                                  \
+#define REDUCE(k, l, m)                                                                \
     if (k < SH_COEFFICIENTS) {                                                     \
         vec3 total = workgroupSum(sum##k, subgroupLanes);                          \
         if (gl_LocalInvocationIndex == 0u) partials[slot + k] = vec4(total, 0.0f); \

@@ -78,13 +78,36 @@ void shEvalBasis(vec3 d, out float y[SH_BASIS_CAPACITY]) {
     for (uint l = 5u; l < SH_ORDER; ++l) shEvalBand(l, d, y);
 }
 
-// Every coefficient index up to SH_BASIS_CAPACITY as X(index), for code that needs one variable
+// Every coefficient up to SH_BASIS_CAPACITY as X(index, l, m), for code that needs one variable
 // per coefficient: llvmpipe keeps an array that is ever indexed in a loop in memory, with a masked
 // per-lane store for every write, so accumulators are spelled out as sum0, sum1, ... instead.
-#define SH_EACH_COEFFICIENT(X) X(0) X(1) X(2) X(3) X(4) X(5) X(6) X(7) X(8) X(9) X(10) X(11) X(12) \
-    X(13) X(14) X(15) X(16) X(17) X(18) X(19) X(20) X(21) X(22) X(23) X(24) X(25) X(26) X(27) \
-    X(28) X(29) X(30) X(31) X(32) X(33) X(34) X(35) X(36) X(37) X(38) X(39) X(40) X(41) X(42) \
-    X(43) X(44) X(45) X(46) X(47) X(48) X(49) X(50) X(51) X(52) X(53) X(54) X(55) X(56) X(57) \
-    X(58) X(59) X(60) X(61) X(62) X(63)
+#define SH_EACH_COEFFICIENT(X) X(0, 0, 0) X(1, 1, -1) X(2, 1, 0) X(3, 1, 1) X(4, 2, -2) \
+    X(5, 2, -1) X(6, 2, 0) X(7, 2, 1) X(8, 2, 2) X(9, 3, -3) X(10, 3, -2) X(11, 3, -1) X(12, 3, 0) \
+    X(13, 3, 1) X(14, 3, 2) X(15, 3, 3) X(16, 4, -4) X(17, 4, -3) X(18, 4, -2) X(19, 4, -1) \
+    X(20, 4, 0) X(21, 4, 1) X(22, 4, 2) X(23, 4, 3) X(24, 4, 4) X(25, 5, -5) X(26, 5, -4) \
+    X(27, 5, -3) X(28, 5, -2) X(29, 5, -1) X(30, 5, 0) X(31, 5, 1) X(32, 5, 2) X(33, 5, 3) \
+    X(34, 5, 4) X(35, 5, 5) X(36, 6, -6) X(37, 6, -5) X(38, 6, -4) X(39, 6, -3) X(40, 6, -2) \
+    X(41, 6, -1) X(42, 6, 0) X(43, 6, 1) X(44, 6, 2) X(45, 6, 3) X(46, 6, 4) X(47, 6, 5) \
+    X(48, 6, 6) X(49, 7, -7) X(50, 7, -6) X(51, 7, -5) X(52, 7, -4) X(53, 7, -3) X(54, 7, -2) \
+    X(55, 7, -1) X(56, 7, 0) X(57, 7, 1) X(58, 7, 2) X(59, 7, 3) X(60, 7, 4) X(61, 7, 5) \
+    X(62, 7, 6) X(63, 7, 7)
+
+// Parity of y_lm in x, y and z: y_lm is Re or Im of (x + iy)^|m| (terms x^(|m| - 2k) y^(2k) for
+// cos(m phi), m > 0; x^(|m| - 1 - 2k) y^(2k + 1) for sin(|m| phi), m < 0) times a polynomial in z of
+// parity l - |m|. So for D = diag(+-1, +-1, +-1), y_lm(D d) = y_lm(d) (-1)^(sum of the parities of
+// the negated axes).
+uvec3 basisParity(int l, int m) {
+    uint am = uint(abs(m));
+    uint zParity = uint(l) - am;
+    if (m > 0) return uvec3(am, 0u, zParity) & 1u;
+    if (m < 0) return uvec3(am - 1u, 1u, zParity) & 1u;
+    return uvec3(0u, 0u, zParity) & 1u;
+}
+
+// The factor +-1 by which y_lm changes when the axes set in `negated` change sign.
+float reflectionSign(uvec3 parity, uvec3 negated) {
+    uvec3 odd = parity & negated;
+    return ((odd.x + odd.y + odd.z) & 1u) == 0u ? 1.0f : -1.0f;
+}
 
 #endif
