@@ -12,6 +12,7 @@
 #include "image/environment.h"
 #include "image/image_write.h"
 #include "io/probe_file.h"
+#include "render/run_program.h"
 #include "sh/basis.h"
 #include "sh/error.h"
 #include "vk/check.h"
@@ -35,18 +36,20 @@
 #include <limits>
 #include <map>
 #include <numbers>
-#include <optional>
 #include <sstream>
 #include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
 
-extern char** environ;
 
 namespace shprobe {
 namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+using testing::changedEnvironment;
+using testing::EnvironmentChanges;
+using testing::pointersTo;
+using testing::readText;
 
 #define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "in: " << (text)
 
@@ -59,9 +62,6 @@ struct RunResult {
     double seconds = 0.0;
 };
 
-// Changes to the inherited environment: a value sets the variable, nullopt removes it.
-using EnvironmentChanges = std::map<std::string, std::optional<std::string>>;
-
 struct RunOptions {
     EnvironmentChanges environment;
     // Run as user nobody when this process is root, for whom permission bits do not count.
@@ -70,34 +70,8 @@ struct RunOptions {
 
 constexpr uid_t kNobody = 65534;
 
-std::string readFile(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
 void writeText(const fs::path& path, const std::string& text) {
     std::ofstream(path, std::ios::binary) << text;
-}
-
-std::vector<char*> pointersTo(std::vector<std::string>& strings) {
-    std::vector<char*> pointers;
-    for (std::string& text : strings)
-        pointers.push_back(text.data());
-    pointers.push_back(nullptr);
-    return pointers;
-}
-
-std::vector<std::string> changedEnvironment(const EnvironmentChanges& changes) {
-    std::vector<std::string> variables;
-    for (char** entry = environ; *entry; ++entry) {
-        std::string variable(*entry);
-        if (!changes.count(variable.substr(0, variable.find('=')))) variables.push_back(variable);
-    }
-    for (const auto& [name, value] : changes)
-        if (value) variables.push_back(name + "=" + *value);
-    return variables;
 }
 
 // A running shprobe: stdin /dev/null, stdout and stderr into files, the interrupt signals with
@@ -144,8 +118,8 @@ class Child {
         waited_ = true;
         result.seconds = std::chrono::duration<double>(Clock::now() - start_).count();
         result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-        result.out = readFile(outPath_);
-        result.err = readFile(errPath_);
+        result.out = readText(outPath_);
+        result.err = readText(errPath_);
         return result;
     }
 
@@ -330,7 +304,7 @@ class BadInputs : public ::testing::Test {
             expectMessage(failure, run(withOutput(failure.args, output.string())));
         EXPECT_EQ(entriesOf(fresh), std::vector<std::string>{}) << "a failed run left files behind";
         EXPECT_EQ(entriesOf(existing), std::vector<std::string>{failure.output});
-        EXPECT_EQ(readFile(existing / failure.output), before) << "a failed run changed the existing output";
+        EXPECT_EQ(readText(existing / failure.output), before) << "a failed run changed the existing output";
     }
 
     // The exit code, and stderr exactly one line "shprobe: error: ..." holding every mention.
@@ -633,7 +607,7 @@ TEST_F(BadInputs, OutputIntoAReadOnlyFolder) {
     }
     EXPECT_EQ(entriesOf(readonly), names);
     for (const std::string& name : names)
-        EXPECT_EQ(readFile(readonly / name), before) << name;
+        EXPECT_EQ(readText(readonly / name), before) << name;
 }
 
 // ---- Ctrl-C -----------------------------------------------------------------------------------
@@ -668,7 +642,7 @@ TEST_F(BadInputs, InterruptedBakeLeavesNoFile) {
         bake.signal(signal);
         expectInterrupted(bake.wait(), signal, signalledAt);
         EXPECT_EQ(entriesOf(out), std::vector<std::string>{"probe.json"});
-        EXPECT_EQ(readFile(out / "probe.json"), "an earlier good output\n");
+        EXPECT_EQ(readText(out / "probe.json"), "an earlier good output\n");
     }
 }
 
@@ -691,7 +665,7 @@ TEST_F(BadInputs, InterruptWhileWritingRemovesTheTemporaryFile) {
     bake.signal(SIGINT);
     expectInterrupted(bake.wait(), SIGINT, signalledAt);
     EXPECT_EQ(entriesOf(out), std::vector<std::string>{"map.exr"});
-    EXPECT_EQ(readFile(out / "map.exr"), "an earlier good output\n");
+    EXPECT_EQ(readText(out / "map.exr"), "an earlier good output\n");
 }
 
 // ---- The device: requirements, Vulkan errors, memory ------------------------------------------

@@ -15,6 +15,7 @@
 #include "image/image_write.h"
 #include "io/probe_export.h"
 #include "io/probe_file.h"
+#include "render/run_program.h"
 #include "sh/basis.h"
 #include "sh/error.h"
 #include "sh/folding.h"
@@ -37,9 +38,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
-#include <map>
 #include <numbers>
-#include <optional>
 #include <regex>
 #include <spawn.h>
 #include <sstream>
@@ -47,11 +46,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char** environ;
 
 namespace shprobe {
 namespace {
 namespace fs = std::filesystem;
+using testing::EnvironmentChanges;
+using testing::readText;
 
 #define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "in: " << (text)
 
@@ -63,16 +63,6 @@ struct RunResult {
     std::string err;
     double seconds = 0.0;
 };
-
-// Changes to the inherited environment: a value sets the variable, nullopt removes it.
-using EnvironmentChanges = std::map<std::string, std::optional<std::string>>;
-
-std::string readFile(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
 
 void writeText(const fs::path& path, const std::string& text) {
     std::ofstream(path, std::ios::binary) << text;
@@ -92,23 +82,8 @@ RunResult runShprobe(const std::vector<std::string>& args, const fs::path& logFo
 
     std::vector<std::string> argStrings{SHPROBE_EXECUTABLE};
     argStrings.insert(argStrings.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& arg : argStrings)
-        argv.push_back(arg.data());
-    argv.push_back(nullptr);
-
-    std::vector<std::string> envStrings;
-    for (char** entry = environ; *entry; ++entry) {
-        std::string variable(*entry);
-        std::string name = variable.substr(0, variable.find('='));
-        if (!changes.count(name)) envStrings.push_back(variable);
-    }
-    for (const auto& [name, value] : changes)
-        if (value) envStrings.push_back(name + "=" + *value);
-    std::vector<char*> envp;
-    for (std::string& variable : envStrings)
-        envp.push_back(variable.data());
-    envp.push_back(nullptr);
+    std::vector<std::string> envStrings = testing::changedEnvironment(changes);
+    std::vector<char*> argv = testing::pointersTo(argStrings), envp = testing::pointersTo(envStrings);
 
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
@@ -136,8 +111,8 @@ RunResult runShprobe(const std::vector<std::string>& args, const fs::path& logFo
         }
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    result.out = readFile(outPath);
-    if (stderrFd < 0) result.err = readFile(errPath);
+    result.out = readText(outPath);
+    if (stderrFd < 0) result.err = readText(errPath);
     return result;
 }
 
@@ -383,8 +358,8 @@ TEST_F(Cli, GpuBakeIsDeterministic) {
     writeImage(file("smooth.exr"), smoothEquirect(64, 32));
     runOk({"bake", file("smooth.exr"), "--order", "8", "-q", "-o", file("first.json")});
     runOk({"bake", file("smooth.exr"), "--order", "8", "-q", "-o", file("second.json")});
-    std::string first = coefficientRowsText(readFile(file("first.json")));
-    std::string second = coefficientRowsText(readFile(file("second.json")));
+    std::string first = coefficientRowsText(readText(file("first.json")));
+    std::string second = coefficientRowsText(readText(file("second.json")));
     ASSERT_FALSE(first.empty());
     EXPECT_EQ(first, second);
     EXPECT_EQ(readProbeFile(file("first.json")).rgb.size(), 64u);
@@ -422,7 +397,7 @@ class CliFailures : public Cli {
         }
         EXPECT_EQ(entriesOf(fresh), std::vector<std::string>{}) << "a failed bake left files behind";
         EXPECT_EQ(entriesOf(existing), std::vector<std::string>{"probe.json"});
-        EXPECT_EQ(readFile(existing / "probe.json"), before) << "a failed bake changed the existing file";
+        EXPECT_EQ(readText(existing / "probe.json"), before) << "a failed bake changed the existing file";
     }
 
     static void expectMessage(const Failure& failure, const RunResult& result) {
@@ -558,7 +533,7 @@ TEST_F(CliFailures, OutputIntoReadOnlyFolder) {
     RunResult existing = run({"bake", "-o", (readonly / "probe.json").string()});
     expectMessage(failure, existing);
     EXPECT_EQ(entriesOf(readonly), std::vector<std::string>{"probe.json"});
-    EXPECT_EQ(readFile(readonly / "probe.json"), before);
+    EXPECT_EQ(readText(readonly / "probe.json"), before);
 }
 
 // No Vulkan driver (VK_ICD_FILENAMES names a missing file, passed to the child explicitly): exit 4
@@ -842,11 +817,11 @@ TEST_F(CliBatch, BatchEqualsSingleBakesProbeForProbe) {
 
     for (const char* name : {"a", "b", "c"}) {
         SCOPED_TRACE(name);
-        std::string single = readFile(file(std::string("single_") + name + ".json"));
+        std::string single = readText(file(std::string("single_") + name + ".json"));
         ASSERT_FALSE(single.empty());
         for (const char* batch : {"whole", "chunked"}) {
             fs::path path = folder() / batch / (std::string(name) + ".json");
-            EXPECT_EQ(readFile(path), single) << batch;
+            EXPECT_EQ(readText(path), single) << batch;
             ShCoefficients batched = readProbeFile(path.string()),
                            alone = readProbeFile(file(std::string("single_") + name + ".json"));
             ASSERT_EQ(batched.rgb.size(), 16u);
@@ -868,7 +843,7 @@ TEST_F(CliBatch, CpuBatchEqualsCpuBakes) {
     RunResult batch =
         runOk({"bake", a(), c(), "--backend", "cpu", "--order", "5", "-q", "--out-dir", file("cpu")});
     EXPECT_TRUE(hasBatchSummary(batch.out, "2 probes baked, 0 failed; 1920 texels; ")) << batch.out;
-    EXPECT_EQ(readFile(folder() / "cpu" / "a.json"), readFile(file("single_a.json")));
+    EXPECT_EQ(readText(folder() / "cpu" / "a.json"), readText(file("single_a.json")));
     EXPECT_EQ(readProbeFile((folder() / "cpu" / "c.json").string()).rgb.size(), 25u);
 }
 
@@ -924,7 +899,7 @@ TEST_F(CliBatch, OutputFolderIsCheckedBeforeTheBake) {
     EXPECT_FALSE(fs::exists(file("missing")));
     writeText(file("plain"), "a file, not a folder\n");
     expectOutputError(file("plain"), "not a folder");
-    EXPECT_EQ(readFile(file("plain")), "a file, not a folder\n");
+    EXPECT_EQ(readText(file("plain")), "a file, not a folder\n");
 
     fs::path readonly = folder() / "readonly";
     fs::create_directories(readonly);
@@ -1024,7 +999,7 @@ TEST_F(CliBatch, HeaderFormatsHoldTheFoldedProbe) {
     FoldedCoefficients expected = *foldCoefficients(binary[0], 5, FoldedQuantity::Radiance);
     for (const fs::path& header : {folder() / "a.h", folder() / "glsl" / "a.glsl"}) {
         SCOPED_TRACE(header.string());
-        std::string text = readFile(header);
+        std::string text = readText(header);
         EXPECT_CONTAINS(text, "shRadiance(");
         EXPECT_CONTAINS(text, "order      5:");
         std::vector<std::array<float, 4>> entries = headerEntries(text);
@@ -1033,8 +1008,8 @@ TEST_F(CliBatch, HeaderFormatsHoldTheFoldedProbe) {
             for (int k = 0; k < 4; ++k)
                 EXPECT_EQ(entries[i][k], k < 3 ? float(expected[i][k]) : 0.0f) << "entry " << i;
     }
-    EXPECT_CONTAINS(readFile(folder() / "a.h"), "static const float a_sh[25][4]");
-    EXPECT_CONTAINS(readFile(folder() / "glsl" / "c.glsl"), "const vec4 c_sh[SH_FOLDED_COUNT]");
+    EXPECT_CONTAINS(readText(folder() / "a.h"), "static const float a_sh[25][4]");
+    EXPECT_CONTAINS(readText(folder() / "glsl" / "c.glsl"), "const vec4 c_sh[SH_FOLDED_COUNT]");
     EXPECT_EQ(entriesOf(folder() / "glsl"), (std::vector<std::string>{"a.glsl", "c.glsl"}));
 
     RunResult order6 = run({"bake", a(), "--order", "6", "--format", "glsl", "-o", file("x.glsl")});
