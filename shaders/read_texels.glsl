@@ -11,6 +11,7 @@
 
 #include "gpu_interface.h"
 #include "position_walk.glsl"
+#include "texel_geometry.h"
 #include "cubemap_input.glsl"
 
 layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
@@ -20,13 +21,21 @@ layout(push_constant, std430) uniform Push { ProjectParams params; };
 
 void main() {
     uint faceSize = params.faceSize;
+    uint quadrant = quadrantSize(faceSize);
     int firstLayer = int(gl_WorkGroupID.y) * 6;
-    START_STREAM(faceSize)
-    PositionWalk walk = startWalk(first, lanes, faceSize);
+    START_STREAM(quadrant)
     vec3 sum = vec3(0.0f);
-    for (uint position = first; position < end; position += lanes) {
-        [[unroll]] for (int face = 0; face < 6; ++face) sum += readRadiance(walk.i, walk.j, firstLayer + face);
-        stepWalk(walk, faceSize);
+    [[unroll]] for (int pair = 0; pair < 3; ++pair) {
+        PositionWalk walk = startWalk(first, lanes, quadrant);
+        for (uint position = first; position < end; position += lanes) {
+            uint mirrorI = faceSize - 1u - walk.i, mirrorJ = faceSize - 1u - walk.j;
+            [[unroll]] for (int face = 2 * pair; face < 2 * pair + 2; ++face) {
+                int layer = firstLayer + face;
+                sum += readRadiance(walk.i, walk.j, layer) + readRadiance(mirrorI, walk.j, layer) +
+                       readRadiance(walk.i, mirrorJ, layer) + readRadiance(mirrorI, mirrorJ, layer);
+            }
+            stepWalk(walk, quadrant);
+        }
     }
     sums[(gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x + gl_LocalInvocationIndex] =
         vec4(sum, 0.0f);

@@ -195,22 +195,25 @@ TEST_F(GpuProjection, WindowIsAppliedByTheConvolutionShader) {
 // wrong: asking for far more texels per invocation than that allows must still give the right sums
 // (the projector caps the work per invocation by order).
 TEST_F(GpuProjection, HugeWorkPerInvocationStaysCorrect) {
-    Cubemap cubemap = noiseCubemap(96, 8); // 55296 texels: one 8-wide workgroup would loop 6912 times
+    // 192^2 positions (each a texel and its mirror images): one 8-wide workgroup would loop 4608 times
+    // per face pair, with 18 basis-recurrence iterations in each at order 8.
+    Cubemap cubemap = noiseCubemap(384, 8);
     for (int order : {1, 3, 8}) {
         GpuBake gpu = bake(cubemap, {.order = order, .workgroupSize = 8, .texelsPerInvocation = 1u << 20});
         EXPECT_LT(relativeError(gpu.radiance, projectCubemap(cubemap, order)), kGpuTolerance) << "order " << order;
     }
 }
 
-// One texel position per invocation at 2048^2 asks for 65536 workgroups: one more than a dispatch row
-// allows (maxComputeWorkGroupCount[0] = 65535 on lavapipe), so the baker doubles the work per
-// invocation, and 32768 partial slots remain. A reduction looping over that many slots in one
+// One position (a texel and its mirror images, 1024^2 positions) per invocation at 2048^2 in 16-wide
+// workgroups asks for 65536 workgroups: one more than a dispatch row allows
+// (maxComputeWorkGroupCount[0] = 65535 on lavapipe), so the baker doubles the work per invocation,
+// and 32768 partial slots remain. A reduction looping over that many slots in one
 // invocation loses some of them without a word under lavapipe's 65535-iteration loop cap (it did:
 // L_00 came out 3% low at 3072^2); reduce.comp strides over the slots with a whole workgroup per
 // coefficient.
 TEST_F(GpuProjection, ManyPartialSlotsAreAllSummed) {
     Cubemap cubemap = noiseCubemap(2048, 9);
-    GpuBake gpu = bake(cubemap, {.order = 3, .texelsPerInvocation = 1});
+    GpuBake gpu = bake(cubemap, {.order = 3, .workgroupSize = 16, .texelsPerInvocation = 1});
     EXPECT_GE(gpu.workgroups, 32768u);
     EXPECT_LE(gpu.workgroups, context().info.limits.maxComputeWorkGroupCount[0]);
     EXPECT_LT(relativeError(gpu.radiance, projectCubemap(cubemap, 3)), kGpuTolerance);

@@ -33,6 +33,10 @@ SHPROBE_FN vec3 orientToFace(uint face, vec3 v) {
     }
 }
 
+// The GPU projection visits the positions (i, j) with i, j < ceil(N / 2), each with its mirror
+// images (N - 1 - i, j), (i, N - 1 - j) and (N - 1 - i, N - 1 - j): four texels per face.
+SHPROBE_FN uint quadrantSize(uint faceSize) { return (faceSize + 1u) / 2u; }
+
 // Unnormalized direction through face-local point (a, b) of a face.
 SHPROBE_FN vec3 faceDirection(uint face, float a, float b) {
     return orientToFace(face, vec3(a, b, 1.0f));

@@ -1,6 +1,7 @@
 #include "gpu/probe_baker.h"
 
 #include "gpu_interface.h"
+#include "texel_geometry.h"
 #include "sh/basis.h"
 #include "sh/cubemap.h"
 #include "sh/error.h"
@@ -25,10 +26,14 @@ VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
 
 VkDeviceSize coefficientSetBytes(int order) { return VkDeviceSize(coefficientCount(order)) * kCoefficientBytes; }
 
+// A projection position is a texel and its three mirror images on each of the six faces
+// (quadrantSize, texel_geometry.h).
+constexpr uint32_t kTexelsPerPosition = 4 * kFaceCount;
+
 // llvmpipe (lavapipe) ends any loop after 65535 iterations, counting the iterations of nested loops
-// against the outermost one, and past the limit the sums are silently wrong. One position (six
-// texels) runs fewer than 1 + 6 (1 + n^2 + n^2 / 2) loop iterations at order n, whatever the
-// compiler unrolls. Half the limit leaves a margin; other devices lose nothing by the cap.
+// against the outermost one, and past the limit the sums are silently wrong. One position (three
+// basis evaluations) runs fewer than 1 + 6 (1 + n^2 + n^2 / 2) loop iterations at order n, whatever
+// the compiler unrolls. Half the limit leaves a margin; other devices lose nothing by the cap.
 uint32_t maxPositionsPerInvocation(int order) {
     uint32_t n = uint32_t(order);
     return 32768u / (1u + 6u * (1u + n * n + n * n / 2u));
@@ -41,7 +46,7 @@ uint32_t maxPositionsPerInvocation(int order) {
 uint32_t groupsPerProbe(const Context& context, const ProbeBakerOptions& options, uint32_t faceSize,
                         uint32_t probes) {
     const VkPhysicalDeviceLimits& limits = context.info.limits;
-    const VkDeviceSize positions = VkDeviceSize(faceSize) * faceSize;
+    const VkDeviceSize positions = VkDeviceSize(gpu::quadrantSize(faceSize)) * gpu::quadrantSize(faceSize);
     const VkDeviceSize maxSlots = limits.maxStorageBufferRange / coefficientSetBytes(options.order);
     const VkDeviceSize maxGroups = std::min<VkDeviceSize>(limits.maxComputeWorkGroupCount[0], maxSlots / probes);
     const VkDeviceSize perGroup = (positions + maxGroups - 1) / std::max<VkDeviceSize>(maxGroups, 1);
@@ -52,7 +57,7 @@ uint32_t groupsPerProbe(const Context& context, const ProbeBakerOptions& options
                                           std::to_string(faceSize) + " at order " + std::to_string(options.order) +
                                           " are more than one bake can hold on " + context.info.name +
                                           "; bake fewer probes at a time");
-    const uint32_t requested = (options.texelsPerInvocation + kFaceCount - 1) / kFaceCount;
+    const uint32_t requested = (options.texelsPerInvocation + kTexelsPerPosition - 1) / kTexelsPerPosition;
     const VkDeviceSize perInvocation = std::clamp<VkDeviceSize>(requested, std::max<VkDeviceSize>(least, 1), most);
     const VkDeviceSize perWorkgroup = perInvocation * options.workgroupSize;
     return uint32_t((positions + perWorkgroup - 1) / perWorkgroup);
