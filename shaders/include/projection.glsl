@@ -38,8 +38,11 @@ layout(constant_id = SHPROBE_SPEC_ORDER) const uint SH_ORDER = 3;
 layout(set = 0, binding = 1, std430) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant, std430) uniform Push { ProjectParams params; };
 
-// One entry per subgroup; a subgroup of one invocation is the worst case.
-shared vec3 subgroupSums[gl_WorkGroupSize.x];
+// Coefficients reduced per pair of barriers, and their subgroup totals: one entry per subgroup
+// and coefficient (a subgroup of one invocation is the worst case), 512 entries or one
+// coefficient's worth, whichever is more.
+const uint REDUCTION_CHUNK = (512u + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
+shared vec3 subgroupSums[REDUCTION_CHUNK * gl_WorkGroupSize.x];
 shared uint subgroupCount;
 
 // The reduction relies only on subgroupAdd, subgroupElect, gl_SubgroupID and
@@ -54,20 +57,22 @@ void countSubgroups() {
     barrier();
 }
 
-// Sums value over the workgroup; the result is valid in invocation 0. Works for any number of
-// subgroups, including more subgroups than a subgroup has invocations (lavapipe: 32 of 8), and for
-// widths that are not a multiple of the subgroup size.
-vec3 workgroupSum(vec3 value, uint lanes) {
-    vec3 subgroupTotal = subgroupAdd(value);
-    if (subgroupElect()) subgroupSums[gl_SubgroupID] = subgroupTotal;
+// Sums the subgroup totals of coefficients first .. first + REDUCTION_CHUNK - 1 (fewer at the end),
+// stored at subgroupSums[c * width + subgroup], over the workgroup and writes them to the partial
+// slot. Works for any number of subgroups, including more subgroups than a subgroup has
+// invocations (lavapipe: 32 of 8), and for widths that are not a multiple of the subgroup size.
+void reduceChunk(uint first, uint slot, uint lanes) {
     barrier();
-    vec3 total = vec3(0.0f);
     if (gl_SubgroupID == 0u) {
-        for (uint s = gl_SubgroupInvocationID; s < subgroupCount; s += lanes) total += subgroupSums[s];
-        total = subgroupAdd(total);
+        for (uint c = 0u; c < REDUCTION_CHUNK && first + c < SH_COEFFICIENTS; ++c) {
+            vec3 total = vec3(0.0f);
+            for (uint s = gl_SubgroupInvocationID; s < subgroupCount; s += lanes)
+                total += subgroupSums[c * gl_WorkGroupSize.x + s];
+            total = subgroupAdd(total);
+            if (gl_LocalInvocationIndex == 0u) partials[slot + first + c] = vec4(total, 0.0f);
+        }
     }
-    barrier(); // subgroupSums is reused by the next call
-    return total;
+    barrier(); // subgroupSums is reused by the next chunk
 }
 
 // The eight texels of face pair p (faces 2p and 2p + 1) at a position and its mirror images see
@@ -145,13 +150,21 @@ void main() {
     }
     PROJECT_PAIR(0) PROJECT_PAIR(1) PROJECT_PAIR(2)
 
+    // Every sum is reduced over its subgroup before the first barrier. llvmpipe runs a shader with
+    // barriers as a coroutine, and a value live across a barrier is written to the coroutine's
+    // frame wherever it is assigned: every iteration, for the sums. The subgroup totals are assigned
+    // once, and a few chunks of them take few barriers (each barrier switches every subgroup).
+#define SUBGROUP_TOTAL(k, l, m) vec3 subgroupTotal##k = k < SH_COEFFICIENTS ? subgroupAdd(sum##k) : vec3(0.0f);
+    SH_EACH_COEFFICIENT(SUBGROUP_TOTAL)
     countSubgroups();
     uint subgroupLanes = subgroupAdd(1u); // invocations in this subgroup, as the hardware groups them
     uint slot = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * SH_COEFFICIENTS;
-#define REDUCE(k, l, m)                                                                \
-    if (k < SH_COEFFICIENTS) {                                                     \
-        vec3 total = workgroupSum(sum##k, subgroupLanes);                          \
-        if (gl_LocalInvocationIndex == 0u) partials[slot + k] = vec4(total, 0.0f); \
+#define REDUCE(k, l, m)                                                                                 \
+    if (k < SH_COEFFICIENTS) {                                                                          \
+        const uint chunkIndex = uint(k) % REDUCTION_CHUNK;                                              \
+        if (subgroupElect()) subgroupSums[chunkIndex * gl_WorkGroupSize.x + gl_SubgroupID] = subgroupTotal##k; \
+        if (chunkIndex + 1u == REDUCTION_CHUNK || k + 1 == SH_COEFFICIENTS)                            \
+            reduceChunk(uint(k) - chunkIndex, slot, subgroupLanes);                                     \
     }
     SH_EACH_COEFFICIENT(REDUCE)
 }
