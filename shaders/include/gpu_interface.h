@@ -8,6 +8,10 @@
 #define SHPROBE_MAX_ORDER 8
 #define SHPROBE_MAX_COEFFICIENTS (SHPROBE_MAX_ORDER * SHPROBE_MAX_ORDER)
 
+// project.comp's shared memory for its reduction: the subgroup totals of ceil(512 / width)
+// coefficients at a time, one vec3 per invocation of the workgroup (a subgroup of one is the worst case).
+#define SHPROBE_REDUCTION_ENTRIES 512u
+
 // Specialization constant ids, the same in every module that uses them.
 #define SHPROBE_SPEC_LOCAL_SIZE 0 // workgroup width (x); 1D workgroups
 #define SHPROBE_SPEC_ORDER 1      // SH order 1..SHPROBE_MAX_ORDER

@@ -39,9 +39,9 @@ layout(set = 0, binding = 1, std430) writeonly buffer Partials { vec4 partials[]
 layout(push_constant, std430) uniform Push { ProjectParams params; };
 
 // Coefficients reduced per pair of barriers, and their subgroup totals: one entry per subgroup
-// and coefficient (a subgroup of one invocation is the worst case), 512 entries or one
-// coefficient's worth, whichever is more.
-const uint REDUCTION_CHUNK = (512u + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
+// and coefficient (a subgroup of one invocation is the worst case), SHPROBE_REDUCTION_ENTRIES
+// or one coefficient's worth, whichever is more.
+const uint REDUCTION_CHUNK = (SHPROBE_REDUCTION_ENTRIES + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
 shared vec3 subgroupSums[REDUCTION_CHUNK * gl_WorkGroupSize.x];
 shared uint subgroupCount;
 

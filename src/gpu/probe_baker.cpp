@@ -169,8 +169,11 @@ ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& opt
                                           std::to_string(kMaxOrder));
     if (options.texelsPerInvocation < 1)
         throw Error(ErrorKind::Input, "texels per invocation must be at least 1");
-    // project.comp keeps one vec3 (16 bytes in shared memory) per invocation for its reduction.
-    if (VkDeviceSize(options.workgroupSize) * 16 + 16 > context.info.limits.maxComputeSharedMemorySize)
+    // project.comp's reduction keeps vec3 subgroup totals (16 bytes in shared memory each) for
+    // whole workgroups, as many coefficients at a time as SHPROBE_REDUCTION_ENTRIES allows.
+    const VkDeviceSize width = options.workgroupSize;
+    const VkDeviceSize reductionEntries = (SHPROBE_REDUCTION_ENTRIES + width - 1) / width * width;
+    if (reductionEntries * 16 + 16 > context.info.limits.maxComputeSharedMemorySize)
         throw Error(ErrorKind::Input, "workgroup size " + std::to_string(options.workgroupSize) +
                                           " needs more shared memory than " + context.info.name + " has");
     const bool sampled = options.cubemaps == CubemapBinding::SampledImage;
