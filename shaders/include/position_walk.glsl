@@ -9,25 +9,23 @@ struct PositionWalk {
     uint strideRows, strideColumns; // the stride as whole rows plus columns
 };
 
-PositionWalk startWalk(uint first, uint stride, uint faceSize) {
-    uint j = first / faceSize;
-    uint rows = stride / faceSize;
-    return PositionWalk(first - j * faceSize, j, rows, stride - rows * faceSize);
+PositionWalk startWalk(uint first, uint stride, uint gridSize) {
+    uint j = first / gridSize;
+    uint rows = stride / gridSize;
+    return PositionWalk(first - j * gridSize, j, rows, stride - rows * gridSize);
 }
 
-void stepWalk(inout PositionWalk walk, uint faceSize) {
+void stepWalk(inout PositionWalk walk, uint gridSize) {
     walk.i += walk.strideColumns;
     walk.j += walk.strideRows;
-    if (walk.i >= faceSize) {
-        walk.i -= faceSize;
+    if (walk.i >= gridSize) {
+        walk.i -= gridSize;
         ++walk.j;
     }
 }
 
-
-
-
-// The positions one invocation of a 1D dispatch takes out of a face's N^2: `lanes` neighbouring
+// The positions one invocation of a 1D dispatch takes out of an N x N grid (the projection's is a
+// quarter of the face, quadrantSize in texel_geometry.h): `lanes` neighbouring
 // invocations (a stream) take neighbouring positions side by side and walk forward together
 // through one contiguous range, [first, end) in steps of `lanes`. That is what GPU memory coalescing
 // wants, and what CPU prefetchers want under llvmpipe, which runs one subgroup's whole loop before
@@ -38,9 +36,9 @@ void stepWalk(inout PositionWalk walk, uint faceSize) {
 // It is a macro declaring `first`, `end` and `lanes` where it is used: computed in a function,
 // returned in a struct or through out parameters, they come out wrong on llvmpipe 22.3 (test_gpu
 // caught it at order 8 with many positions per invocation).
-#define START_STREAM(faceSize)                                                                   \
+#define START_STREAM(gridSize)                                                                   \
     uint lanes = min(gl_SubgroupSize, gl_WorkGroupSize.x & (~gl_WorkGroupSize.x + 1u));          \
-    uint streamPositions = (faceSize) * (faceSize);                                              \
+    uint streamPositions = (gridSize) * (gridSize);                                              \
     uint streamInvocations = gl_NumWorkGroups.x * gl_WorkGroupSize.x;                            \
     uint perInvocation = (streamPositions + streamInvocations - 1u) / streamInvocations;         \
     uint stream = gl_GlobalInvocationID.x / lanes;                                               \

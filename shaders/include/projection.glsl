@@ -19,9 +19,9 @@
 //   push constants: ProjectParams (gpu_interface.h)
 //   specialization: 0 = workgroup width, 1 = SH order (1..8)
 //   dispatch (groups, probes, 1): the invocations share the ceil(N / 2)^2 positions of probe
-//   gl_WorkGroupID.y in streams (main). lavapipe ends loops after 65535 iterations (nested loops
-//   count against the outermost): keep the positions per invocation times 6 (1 + n^2 + n^2 / 2)
-//   below that at order n.
+//   gl_WorkGroupID.y in streams (main), in one loop per face pair. lavapipe ends loops after 65535
+//   iterations (nested loops count against the outermost): keep the positions per invocation
+//   times 6 (1 + n^2 + n^2 / 2), a bound with room to spare, below that at order n.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -40,7 +40,7 @@ layout(push_constant, std430) uniform Push { ProjectParams params; };
 
 // Coefficients reduced per pair of barriers, and their subgroup totals: one entry per subgroup
 // and coefficient (a subgroup of one invocation is the worst case), SHPROBE_REDUCTION_ENTRIES
-// or one coefficient's worth, whichever is more.
+// rounded up to a multiple of the width.
 const uint REDUCTION_CHUNK = (SHPROBE_REDUCTION_ENTRIES + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
 shared vec3 subgroupSums[REDUCTION_CHUNK * gl_WorkGroupSize.x];
 shared uint subgroupCount;
@@ -93,7 +93,7 @@ uint oddAxes(int l, int m) {
 // In: radiance[s] is the texel whose direction is d with the axes in s negated. Out: radiance[p]
 // is the sum over s of (-1)^|p & s| radiance[s], a Walsh-Hadamard transform: the sum that y_lm(d)
 // multiplies when y_lm is odd in the axes p, since y_lm(d reflected in s) = (-1)^|p & s| y_lm(d).
-// Twelve additions and subtractions of vec3 give all eight.
+// Twelve butterflies (24 vec3 additions and subtractions) give all eight.
 void signedSums(inout vec3 radiance[8]) {
 #define BUTTERFLY(s, t) { vec3 plus = radiance[s] + radiance[t]; radiance[t] = radiance[s] - radiance[t]; radiance[s] = plus; }
     BUTTERFLY(0, 1) BUTTERFLY(2, 3) BUTTERFLY(4, 5) BUTTERFLY(6, 7)

@@ -104,10 +104,4 @@ uvec3 basisParity(int l, int m) {
     return uvec3(0u, 0u, zParity) & 1u;
 }
 
-// The factor +-1 by which y_lm changes when the axes set in `negated` change sign.
-float reflectionSign(uvec3 parity, uvec3 negated) {
-    uvec3 odd = parity & negated;
-    return ((odd.x + odd.y + odd.z) & 1u) == 0u ? 1.0f : -1.0f;
-}
-
 #endif

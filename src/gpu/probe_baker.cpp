@@ -31,9 +31,10 @@ VkDeviceSize coefficientSetBytes(int order) { return VkDeviceSize(coefficientCou
 constexpr uint32_t kTexelsPerPosition = 4 * kFaceCount;
 
 // llvmpipe (lavapipe) ends any loop after 65535 iterations, counting the iterations of nested loops
-// against the outermost one, and past the limit the sums are silently wrong. One position (three
-// basis evaluations) runs fewer than 1 + 6 (1 + n^2 + n^2 / 2) loop iterations at order n, whatever
-// the compiler unrolls. Half the limit leaves a margin; other devices lose nothing by the cap.
+// against the outermost one, and past the limit the sums are silently wrong. Each face pair's loop
+// runs fewer than 1 + 6 (1 + n^2 + n^2 / 2) iterations per position at order n (one basis
+// evaluation: a few times fewer), whatever the compiler unrolls. Half the limit leaves a margin;
+// other devices lose nothing by the cap.
 uint32_t maxPositionsPerInvocation(int order) {
     uint32_t n = uint32_t(order);
     return 32768u / (1u + 6u * (1u + n * n + n * n / 2u));
