@@ -1,4 +1,5 @@
 #include "app/bench_device.h"
+#include "app/stopwatch.h"
 
 #include "gpu/probe_baker.h"
 #include "gpu_interface.h"
@@ -16,12 +17,6 @@
 namespace shprobe {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double millisecondsSince(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // Everything one read measurement creates, destroyed in one place.
 struct ReadResources {

@@ -2,6 +2,7 @@
 // to EXR (linear) or PNG (tonemapped sRGB); `--grid` puts the environment and its order-3 and
 // order-5 reconstructions and lit spheres side by side.
 #include "app/commands.h"
+#include "app/stopwatch.h"
 #include "render/grid.h"
 #include "render/image_output.h"
 #include "render/offscreen.h"
@@ -22,12 +23,6 @@ namespace {
 constexpr uint32_t kDefaultSize = 512;
 constexpr uint32_t kDefaultGridCell = 384;
 constexpr uint32_t kMaxSize = 16384;
-
-using Clock = std::chrono::steady_clock;
-
-double millisecondsSince(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // The background the user asked for, or the best one the input allows.
 Background chooseBackground(const RenderOptions& options, const RenderInput& input,

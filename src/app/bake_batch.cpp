@@ -1,0 +1,306 @@
+// `shprobe bake` with --out-dir: every input to its own file, baked in chunks of as many cube maps
+// as one GPU submission takes; bad inputs are reported and skipped.
+#include "app/bake_steps.h"
+#include "app/stopwatch.h"
+#include "io/atomic_file.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <unistd.h>
+
+namespace shprobe {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct BatchItem {
+    std::string input;
+    std::string output;
+};
+
+// Paths as given on the command line, one a line; blank lines and '#' comments are skipped.
+std::vector<std::string> readInputList(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw Error(ErrorKind::Input, "--list " + path + ": cannot read the file");
+    std::vector<std::string> inputs;
+    for (std::string line; std::getline(in, line);) {
+        size_t first = line.find_first_not_of(" \t\r");
+        if (first == std::string::npos || line[first] == '#') continue;
+        size_t last = line.find_last_not_of(" \t\r");
+        inputs.push_back(line.substr(first, last - first + 1));
+    }
+    return inputs;
+}
+
+// The name an input's output takes: the file's stem; a faces folder's own name; a {face} pattern's
+// name without {face} and the separators around it (sky_{face}.exr -> sky), or its folder's name.
+std::string outputStem(const std::string& input) {
+    fs::path path = fs::absolute(input).lexically_normal();
+    if (!path.has_filename()) path = path.parent_path();
+    std::error_code error;
+    std::string stem = fs::is_directory(path, error) ? path.filename().string() : path.stem().string();
+    if (size_t at = stem.find("{face}"); at != std::string::npos) {
+        stem.erase(at, 6);
+        size_t first = stem.find_first_not_of("_-. "), last = stem.find_last_not_of("_-. ");
+        stem = first == std::string::npos ? path.parent_path().filename().string()
+                                          : stem.substr(first, last - first + 1);
+    }
+    return stem.empty() ? "probe" : stem;
+}
+
+const char* formatExtension(const std::string& format) {
+    if (format == "json") return ".json";
+    if (format == "binary") return ".bin";
+    if (format == "glsl") return ".glsl";
+    if (format == "cpp") return ".h";
+    return ".exr"; // irradiance-equirect, irradiance-cross
+}
+
+// Inputs and their outputs; two inputs with one output name are refused, naming both.
+std::vector<BatchItem> planBatch(const BakeOptions& options) {
+    std::vector<std::string> inputs = options.inputs;
+    if (!options.listFile.empty()) {
+        std::vector<std::string> listed = readInputList(options.listFile);
+        inputs.insert(inputs.end(), listed.begin(), listed.end());
+    }
+    if (inputs.empty())
+        throw Error(ErrorKind::Input,
+                    "--out-dir: no inputs (give image files, or --list FILE with at least one)");
+    std::vector<BatchItem> items;
+    std::map<std::string, std::string> inputOf; // output -> input
+    for (const std::string& input : inputs) {
+        std::string output =
+            (fs::path(options.outDir) / (outputStem(input) + formatExtension(options.format))).string();
+        auto [at, fresh] = inputOf.emplace(output, input);
+        if (!fresh)
+            throw Error(ErrorKind::Input, "inputs " + at->second + " and " + input +
+                                              " would both be written to " + output +
+                                              "; rename one or bake them separately");
+        items.push_back({input, output});
+    }
+    return items;
+}
+
+// The output folder is created when its parent exists; it and every output path are checked here,
+// before any GPU work, so that a bake is never wasted on an output that cannot be written.
+void prepareOutputFolder(const std::string& folder, const std::vector<BatchItem>& items) {
+    fs::path path = fs::path(folder).lexically_normal();
+    if (!path.has_filename()) path = path.parent_path();
+    std::error_code error;
+    if (!fs::exists(path, error)) {
+        fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
+        if (!fs::is_directory(parent, error))
+            throw Error(ErrorKind::Output,
+                        "cannot write to " + folder + ": folder " + parent.string() + " does not exist");
+        if (!fs::create_directory(path, error) && !fs::is_directory(path))
+            throw Error(ErrorKind::Output, "cannot create " + folder + ": " + error.message());
+    }
+    if (!fs::is_directory(path, error))
+        throw Error(ErrorKind::Output, "cannot write to " + folder + ": it is not a folder");
+    for (const BatchItem& item : items)
+        checkOutputPath(item.output);
+}
+
+// A progress bar on stderr, drawn only when stderr is a terminal: "[#####-----] 12/40 probes".
+struct ProgressBar {
+    size_t total = 0;
+    size_t done = 0;
+    bool enabled = isatty(STDERR_FILENO) == 1;
+    bool drawn = false;
+
+    void draw() {
+        if (!enabled) return;
+        constexpr size_t kWidth = 30;
+        size_t filled = total > 0 ? done * kWidth / total : kWidth;
+        std::string bar = std::string(filled, '#') + std::string(kWidth - filled, '-');
+        std::fprintf(stderr, "\r[%s] %zu/%zu probes", bar.c_str(), done, total);
+        std::fflush(stderr);
+        drawn = true;
+    }
+    void clear() {
+        if (!drawn) return;
+        std::fputs("\r\033[K", stderr);
+        std::fflush(stderr);
+        drawn = false;
+    }
+    ~ProgressBar() { clear(); }
+};
+
+struct Batch {
+    const BakeOptions& options;
+    ProgressBar progress;
+    size_t baked = 0;
+    size_t failed = 0;
+    bool inputFailed = false; // an input error among the failures (exit code 2, else 3)
+    uint64_t texels = 0;
+    size_t submissions = 0;
+};
+
+// A line on stdout or stderr between redraws of the progress bar.
+void printLine(Batch& batch, FILE* stream, const std::string& line) {
+    batch.progress.clear();
+    std::fprintf(stream, "%s\n", line.c_str());
+    std::fflush(stream);
+    batch.progress.draw();
+}
+
+void reportFailure(Batch& batch, const BatchItem& item, const Error& error) {
+    std::string message = error.what();
+    if (message.find(item.input) == std::string::npos) message = item.input + ": " + message;
+    ++batch.failed;
+    batch.inputFailed = batch.inputFailed || error.kind() == ErrorKind::Input;
+    ++batch.progress.done;
+    printLine(batch, stderr, "shprobe: error: " + message);
+}
+
+struct Loaded {
+    const BatchItem* item = nullptr;
+    Environment environment;
+    std::optional<ProbeSun> sun;
+};
+
+// A bad input is reported and skipped; any other failure ends the batch.
+std::optional<Loaded> loadItem(Batch& batch, const BatchItem& item) {
+    try {
+        Loaded loaded{&item, loadInput(batch.options, item.input), std::nullopt};
+        loaded.sun = takeOutSun(batch.options, loaded.environment);
+        return loaded;
+    } catch (const Error& error) {
+        if (error.kind() != ErrorKind::Input) throw;
+        reportFailure(batch, item, error);
+        return std::nullopt;
+    }
+}
+
+void writeItem(Batch& batch, const Loaded& loaded, const BakeResult& result) {
+    const BakeOptions& options = batch.options;
+    if (!result.failure.empty()) {
+        reportFailure(batch, *loaded.item, Error(ErrorKind::Input, result.failure));
+        return;
+    }
+    const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
+    try {
+        writeOutput(options, loaded.item->output, written,
+                    metadataFor(options, loaded.environment, result, loaded.sun));
+    } catch (const Error& error) {
+        if (error.kind() != ErrorKind::Output) throw;
+        reportFailure(batch, *loaded.item, error);
+        return;
+    }
+    ++batch.baked;
+    ++batch.progress.done;
+    batch.texels += loaded.environment.cubemap.texels.size();
+    if (options.quiet) {
+        batch.progress.draw();
+        return;
+    }
+    int n = loaded.environment.cubemap.faceSize;
+    std::string line = "  " + loaded.environment.description + " -> " + loaded.item->output + ", 6 x " +
+                       std::to_string(n) + " x " + std::to_string(n) + " texels";
+    if (loaded.environment.replacedTexels > 0)
+        line += ", " + std::to_string(loaded.environment.replacedTexels) + " NaN/Inf texels replaced with 0";
+    if (options.extractSun) line += loaded.sun ? ", sun taken out" : ", no sun found";
+    printLine(batch, stdout, line);
+}
+
+// Loads the inputs in order and bakes them in chunks of at most chunkBytes texel bytes (a larger
+// cube map alone), one bakeChunk call each, writing each chunk's outputs before loading further:
+// at most one chunk and the cube map that opens the next are in memory.
+template <typename BakeChunk>
+void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items, VkDeviceSize chunkBytes,
+                  BakeChunk&& bakeChunk) {
+    std::vector<Loaded> chunk;
+    VkDeviceSize bytes = 0;
+    auto flush = [&] {
+        if (chunk.empty()) return;
+        std::vector<const Cubemap*> cubemaps;
+        for (const Loaded& loaded : chunk)
+            cubemaps.push_back(&loaded.environment.cubemap);
+        std::vector<BakeResult> results = bakeChunk(std::span<const Cubemap* const>(cubemaps));
+        ++batch.submissions;
+        for (size_t i = 0; i < chunk.size(); ++i)
+            writeItem(batch, chunk[i], results[i]);
+        chunk.clear();
+        bytes = 0;
+    };
+    batch.progress.draw();
+    for (const BatchItem& item : items) {
+        std::optional<Loaded> loaded = loadItem(batch, item);
+        if (!loaded) continue;
+        VkDeviceSize itemBytes = cubemapBytes(loaded->environment.cubemap);
+        if (!chunk.empty() && bytes + itemBytes > chunkBytes) flush();
+        bytes += itemBytes;
+        chunk.push_back(std::move(*loaded));
+    }
+    flush();
+}
+
+std::string texelCount(uint64_t texels) {
+    char text[32];
+    if (texels >= 1000000)
+        std::snprintf(text, sizeof(text), "%.1fM", double(texels) / 1e6);
+    else
+        std::snprintf(text, sizeof(text), "%llu", static_cast<unsigned long long>(texels));
+    return text;
+}
+
+void printBatchStart(const BakeOptions& options, size_t count, const std::string& device) {
+    std::printf("shprobe bake: %zu inputs -> %s (%s: %s, order %d, %s)\n", count, options.outDir.c_str(),
+                options.backend.c_str(), device.c_str(), options.order, options.format.c_str());
+    std::fflush(stdout);
+}
+
+// The summary line; then, if an input failed, the error that gives the exit code.
+void finishBatch(Batch& batch, size_t count, double seconds) {
+    batch.progress.clear();
+    batch.progress.enabled = false;
+    std::string submissions = batch.options.backend == "gpu"
+                                  ? " in " + std::to_string(batch.submissions) +
+                                        (batch.submissions == 1 ? " GPU submission" : " GPU submissions")
+                                  : std::string();
+    std::printf("shprobe bake: %zu %s baked, %zu failed; %s texels%s; %.2f s, %.1f probes/s\n", batch.baked,
+                batch.baked == 1 ? "probe" : "probes", batch.failed, texelCount(batch.texels).c_str(),
+                submissions.c_str(), seconds, seconds > 0.0 ? double(batch.baked) / seconds : 0.0);
+    std::fflush(stdout);
+    if (batch.failed == 0) return;
+    std::string written = batch.baked == 0   ? "nothing was written"
+                          : batch.baked == 1 ? "the other probe was written to " + batch.options.outDir
+                                             : "the other " + std::to_string(batch.baked) +
+                                                   " probes were written to " + batch.options.outDir;
+    throw Error(batch.inputFailed ? ErrorKind::Input : ErrorKind::Output,
+                std::to_string(batch.failed) + " of " + std::to_string(count) + " inputs failed (above); " +
+                    written);
+}
+
+} // namespace
+
+void runBatchBake(const BakeOptions& options) {
+    std::vector<BatchItem> items = planBatch(options);
+    prepareOutputFolder(options.outDir, items);
+
+    Clock::time_point start = Clock::now();
+    Batch batch{options, ProgressBar{items.size()}};
+    if (options.backend == "gpu") {
+        withGpu(options, [&](const Context& context, const Projector& projector) {
+            printBatchStart(options, items.size(), context.info.name);
+            VkDeviceSize chunkBytes = batchTexelBytes(context);
+            if (options.batchBytes > 0) chunkBytes = std::min<VkDeviceSize>(chunkBytes, options.batchBytes);
+            bakeInChunks(batch, items, chunkBytes, [&](std::span<const Cubemap* const> cubemaps) {
+                DeviceStep step("baking a chunk of " + std::to_string(cubemaps.size()) + " probes");
+                return bakeOnGpu(options, context, projector, cubemaps);
+            });
+        });
+    } else {
+        printBatchStart(options, items.size(), cpuBackendName(options));
+        bakeInChunks(batch, items, 0, [&](std::span<const Cubemap* const> cubemaps) {
+            return std::vector<BakeResult>{bakeOnCpu(options, *cubemaps[0])}; // chunks of one
+        });
+    }
+    finishBatch(batch, items.size(), millisecondsSince(start) / 1000.0);
+}
+
+} // namespace shprobe

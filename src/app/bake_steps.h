@@ -1,0 +1,97 @@
+// The steps of `shprobe bake` that a single bake (bake.cpp) and a batch (bake_batch.cpp) share:
+// loading an input, baking cube maps on the GPU or the CPU, finishing and writing a probe.
+#pragma once
+#include "app/commands.h"
+#include "gpu/projector.h"
+#include "image/environment.h"
+#include "io/probe_file.h"
+#include "sh/error.h"
+#include "vk/check.h"
+#include "vk/context.h"
+#include "vk/pipeline_cache.h"
+
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace shprobe {
+
+struct BakeResult {
+    ShCoefficients radiance;
+    ShCoefficients irradiance;
+    std::string device; // "cpu reference" or the GPU's name
+    double deviceMilliseconds = 0.0;
+    std::string failure; // why this probe cannot be written (its sums overflowed); empty if fine
+};
+
+// An empty input is the built-in sky.
+Environment loadInput(const BakeOptions& options, const std::string& input);
+
+VkDeviceSize cubemapBytes(const Cubemap& cubemap);
+
+// Runs work(context, projector) with a device and the pipelines of the options' order, created once
+// for any number of bakes and released here; any validation message fails the run. The pipelines
+// come through the on-disk pipeline cache (vk/pipeline_cache.h), saved right after they exist.
+template <typename Work> void withGpu(const BakeOptions& options, Work&& work) {
+    ContextOptions contextOptions;
+    contextOptions.device = options.device;
+    contextOptions.validation = options.validation;
+    Context context = createContext(contextOptions);
+    VkPipelineCache cache = VK_NULL_HANDLE;
+    try {
+        const std::string cachePath = pipelineCachePath(context);
+        cache = loadPipelineCache(context, cachePath);
+        std::optional<DeviceStep> creating(std::in_place, "creating the bake pipelines");
+        Projector projector = createProjector(context, {.order = options.order,
+                                                        .workgroupSize = options.workgroupSize,
+                                                        .texelsPerInvocation = options.texelsPerInvocation,
+                                                        .pipelineCache = cache});
+        savePipelineCache(context, cache, cachePath);
+        creating.reset();
+        try {
+            work(std::as_const(context), std::as_const(projector));
+        } catch (...) {
+            destroyProjector(context, projector);
+            throw;
+        }
+        destroyProjector(context, projector);
+    } catch (...) {
+        if (cache) vkDestroyPipelineCache(context.device, cache, nullptr);
+        destroyContext(context);
+        throw;
+    }
+    vkDestroyPipelineCache(context.device, cache, nullptr);
+    uint32_t validationMessages = context.validationMessages();
+    destroyContext(context);
+    if (validationMessages > 0)
+        throw Error(ErrorKind::Device, std::to_string(validationMessages) + " Vulkan validation messages (above)");
+}
+
+// The cube maps of a chunk in one submission (bakeCubemaps), or alone through bakeCubemap when one
+// is larger than a chunk may be; then, per probe, the lights and the window (convolve.comp).
+std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& context,
+                                  const Projector& projector, std::span<const Cubemap* const> cubemaps);
+
+// "cpu": the fast float path on all cores; "reference": the double-precision reference.
+const char* cpuBackendName(const BakeOptions& options);
+BakeResult bakeOnCpu(const BakeOptions& options, const Cubemap& cubemap);
+
+// Takes the sun out of the environment when asked; the probe is then of the rest.
+std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& environment);
+
+// Option combinations the writers would refuse, checked before any work.
+void checkFormatOptions(const BakeOptions& options);
+
+// Writes the probe in the chosen format (probe_file.h, probe_export.h); every writer is atomic.
+void writeOutput(const BakeOptions& options, const std::string& path, const ShCoefficients& probe,
+                 const ProbeMetadata& metadata);
+
+ProbeMetadata metadataFor(const BakeOptions& options, const Environment& environment,
+                          const BakeResult& result, const std::optional<ProbeSun>& sun);
+
+// Every input to its own file in options.outDir (bake_batch.cpp).
+void runBatchBake(const BakeOptions& options);
+
+} // namespace shprobe
