@@ -34,9 +34,9 @@ namespace {
 // about 33 terms in sequence per coefficient by default (11 positions on three face pairs, each term
 // a signed sum of eight texels; a few hundred where the work per invocation is raised: error <= one
 // ulp per term worst case, far less typically), the workgroup reduction is a tree and the
-// cross-workgroup sum is compensated. Higher bands are
-// scaled by max|y_lm| / y_00 <= 5 at order 8. 2e-6 |L_00| leaves a few times the errors measured
-// (about 3e-7) and is 50 times tighter than a wrong weight or basis entry would give.
+// cross-workgroup sum is compensated. Higher bands are scaled by max|y_lm| / y_00 <= 5 at order 8.
+// 2e-6 |L_00| leaves a few times the errors measured (about 3e-7) and is 50 times tighter than a
+// wrong weight or basis entry would give.
 constexpr double kGpuTolerance = 2e-6;
 
 Cubemap noiseCubemap(int faceSize, uint32_t seed) {
@@ -53,6 +53,13 @@ Cubemap hotSunCubemap(int faceSize) {
     Cubemap cubemap = makeDefaultSky(faceSize);
     cubemap.at(2, faceSize / 3, faceSize / 5) = glm::vec4(1e5f, 9e4f, 8e4f, 1.0f);
     return cubemap;
+}
+
+// One coefficient set as the bakes write it: n^2 vec4, rgb used.
+ShCoefficients readCoefficientSet(const glm::vec4* values, int order, Quantity quantity) {
+    ShCoefficients set = makeCoefficients(order, quantity);
+    for (size_t i = 0; i < set.rgb.size(); ++i) set.rgb[i] = glm::dvec3(glm::vec3(values[i]));
+    return set;
 }
 
 Cubemap singleTexelCubemap(int faceSize, int face, int i, int j) {
@@ -352,13 +359,9 @@ TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
     auto expectProbe = [&](VkDeviceSize offset, uint32_t probes, uint32_t k, const Cubemap& cubemap) {
         const auto* values = reinterpret_cast<const glm::vec4*>(static_cast<const char*>(output.mapped) + offset);
         ShCoefficients reference = projectCubemap(cubemap, order);
-        ShCoefficients radiance = makeCoefficients(order, Quantity::Radiance);
-        ShCoefficients irradiance = makeCoefficients(order, Quantity::Irradiance);
         const size_t n2 = size_t(coefficientCount(order));
-        for (size_t i = 0; i < n2; ++i) {
-            radiance.rgb[i] = glm::dvec3(glm::vec3(values[k * n2 + i]));
-            irradiance.rgb[i] = glm::dvec3(glm::vec3(values[(probes + k) * n2 + i]));
-        }
+        ShCoefficients radiance = readCoefficientSet(values + k * n2, order, Quantity::Radiance);
+        ShCoefficients irradiance = readCoefficientSet(values + (probes + k) * n2, order, Quantity::Irradiance);
         EXPECT_LT(relativeError(radiance, reference), kGpuTolerance) << "probe " << k;
         EXPECT_LT(relativeError(irradiance, convolveIrradiance(reference)), kGpuTolerance) << "probe " << k;
     };
@@ -399,9 +402,8 @@ TEST_F(GpuResidentBake, SampledModuleMatchesTheReferenceForAnyWorkgroupShape) {
                 computeWriteBarrier(commands);
             });
             invalidateBuffer(device, output);
-            const auto* values = static_cast<const glm::vec4*>(output.mapped);
-            ShCoefficients radiance = makeCoefficients(order, Quantity::Radiance);
-            for (size_t i = 0; i < radiance.rgb.size(); ++i) radiance.rgb[i] = glm::dvec3(glm::vec3(values[i]));
+            ShCoefficients radiance =
+                readCoefficientSet(static_cast<const glm::vec4*>(output.mapped), order, Quantity::Radiance);
             EXPECT_LT(relativeError(radiance, reference), kGpuTolerance)
                 << "workgroup " << width << ", texels per invocation " << perInvocation;
             destroyProbeBakeSet(device, set);

@@ -5,6 +5,7 @@
 // is the best of --repeat runs; ratios, not absolute times, are what compare across machines.
 #include "app/bench.h"
 #include "app/bench_device.h"
+#include "app/stopwatch.h"
 #include "gpu/projector.h"
 #include "io/atomic_file.h"
 #include "sh/basis.h"
@@ -17,7 +18,6 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -32,8 +32,6 @@
 namespace shprobe {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 struct Measurement {
     int faceSize;
@@ -81,7 +79,7 @@ double bestMilliseconds(int repeat, const std::function<void()>& f) {
     for (int r = 0; r < repeat; ++r) {
         Clock::time_point start = Clock::now();
         f();
-        best = std::min(best, std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+        best = std::min(best, millisecondsSince(start));
     }
     return best;
 }

@@ -8,7 +8,6 @@
 #include "vk/pipeline.h"
 #include "vk/pipeline_cache.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>

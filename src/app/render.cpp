@@ -11,7 +11,6 @@
 #include "vk/check.h"
 #include "vk/context.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <regex>

@@ -47,7 +47,8 @@ uint32_t maxPositionsPerInvocation(int order) {
 uint32_t groupsPerProbe(const Context& context, const ProbeBakerOptions& options, uint32_t faceSize,
                         uint32_t probes) {
     const VkPhysicalDeviceLimits& limits = context.info.limits;
-    const VkDeviceSize positions = VkDeviceSize(gpu::quadrantSize(faceSize)) * gpu::quadrantSize(faceSize);
+    const VkDeviceSize quadrant = gpu::quadrantSize(faceSize);
+    const VkDeviceSize positions = quadrant * quadrant;
     const VkDeviceSize maxSlots = limits.maxStorageBufferRange / coefficientSetBytes(options.order);
     const VkDeviceSize maxGroups = std::min<VkDeviceSize>(limits.maxComputeWorkGroupCount[0], maxSlots / probes);
     const VkDeviceSize perGroup = (positions + maxGroups - 1) / std::max<VkDeviceSize>(maxGroups, 1);
