@@ -11,6 +11,7 @@ packages=(
   libopenimageio-dev openimageio-tools
   libgtest-dev libcli11-dev nlohmann-json3-dev
   xvfb xauth
+  blender-data  # real HDR environments for the tests (eight equirect EXRs)
 )
 
 missing=()

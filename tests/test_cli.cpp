@@ -1022,5 +1022,69 @@ TEST_F(CliBatch, HeaderFormatsHoldTheFoldedProbe) {
     EXPECT_FALSE(fs::exists(file("x.h")));
 }
 
+// ---- 9. A broken driver list ------------------------------------------------------------------
+
+// An ICD manifest naming a driver library that does not exist.
+void writeManifestOfMissingLibrary(const fs::path& path, const fs::path& library) {
+    writeText(path, R"({"file_format_version": "1.0.0", "ICD": {"library_path": ")" + library.string() +
+                        R"(", "api_version": "1.3.0"}})");
+}
+
+// The loader fails on a broken driver list in different ways: a manifest that is not JSON gives
+// VK_ERROR_OUT_OF_HOST_MEMORY, a missing manifest or library VK_ERROR_INCOMPATIBLE_DRIVER. Each is
+// exit 4 and one line that blames the list, naming the variable and its value, and never advice
+// about sizes; the CPU backend needs no driver and still bakes. The loader stays quiet on stderr
+// (VK_LOADER_DEBUG unset), with the validation layer on too: its messages are not validation's.
+TEST_F(CliFailures, BrokenDriverListIsNamed) {
+    writeText(file("garbage.json"), "{\"not\": \"an icd\"");
+    writeManifestOfMissingLibrary(file("missing_library.json"), file("no_such_driver.so"));
+    const std::vector<std::vector<std::string>> gpuCommands = {
+        {"bake", "--backend", "gpu", "--face-size", "8", "-o", file("gpu.json")}, {"info"}};
+    auto expectDriverListError = [&](const std::vector<std::string>& args, const EnvironmentChanges& changes,
+                                     const std::string& variable) {
+        SCOPED_TRACE(::testing::Message() << variable << " shprobe " << joined(args));
+        RunResult result = run(args, changes);
+        EXPECT_EQ(result.exitCode, 4) << describe(result);
+        EXPECT_EQ(linesOf(result.err).size(), 1u) << result.err;
+        EXPECT_TRUE(startsWith(result.err, "shprobe: error: ")) << result.err;
+        EXPECT_CONTAINS(result.err, "Vulkan driver list could not be loaded");
+        EXPECT_CONTAINS(result.err, variable);
+        EXPECT_CONTAINS(result.err, "--backend cpu");
+        EXPECT_EQ(result.err.find("--face-size"), std::string::npos) << result.err;
+        EXPECT_EQ(result.err.find("out of host memory; try"), std::string::npos) << result.err;
+    };
+
+    for (const std::string& list :
+         {file("garbage.json"), file("no_such_icd.json"), file("missing_library.json")}) {
+        EnvironmentChanges brokenList{{"VK_ICD_FILENAMES", list},
+                                      {"VK_DRIVER_FILES", std::nullopt},
+                                      {"VK_LOADER_DEBUG", std::nullopt},
+                                      {"SHPROBE_VALIDATION", std::nullopt}};
+        for (const std::vector<std::string>& args : gpuCommands)
+            expectDriverListError(args, brokenList, "VK_ICD_FILENAMES=" + list);
+        RunResult cpu =
+            run({"bake", "--backend", "cpu", "--face-size", "8", "-q", "-o", file("cpu.json")}, brokenList);
+        EXPECT_EQ(cpu.exitCode, 0) << describe(cpu);
+    }
+    EXPECT_FALSE(fs::exists(file("gpu.json")));
+
+    EnvironmentChanges driverFiles{{"VK_DRIVER_FILES", file("garbage.json")},
+                                   {"VK_LOADER_DEBUG", std::nullopt},
+                                   {"SHPROBE_VALIDATION", "1"}};
+    expectDriverListError(gpuCommands[0], driverFiles, "VK_DRIVER_FILES=" + file("garbage.json"));
+
+    // A list the loader copes with (lavapipe and a missing manifest) bakes under validation.
+    const char* lavapipe = std::getenv("VK_ICD_FILENAMES");
+    ASSERT_TRUE(lavapipe) << "ctest sets VK_ICD_FILENAMES to lavapipe";
+    EnvironmentChanges partlyBroken{
+        {"VK_ICD_FILENAMES", std::string(lavapipe) + ":" + file("no_such_icd.json")},
+        {"VK_DRIVER_FILES", std::nullopt},
+        {"VK_LOADER_DEBUG", std::nullopt},
+        {"SHPROBE_VALIDATION", "1"}};
+    RunResult partly = run({"bake", "--face-size", "8", "-q", "-o", file("partly.json")}, partlyBroken);
+    EXPECT_EQ(partly.exitCode, 0) << describe(partly);
+    EXPECT_EQ(partly.err, "") << describe(partly);
+}
+
 } // namespace
 } // namespace shprobe

@@ -1,21 +1,32 @@
-// Image loading: layouts (equirect, crosses, six faces), sRGB and channel handling, non-finite
-// texels, error messages, cube-map resizing, the default sky and the EXR writer. Test images are
-// written to a temporary folder by each test; no binary file is checked in.
+// Image loading: layouts (equirect, crosses, six faces), sRGB and channels by name, non-finite
+// texels, error messages (file system, bounded headers), cube-map resizing, the default sky and
+// the EXR writer. Test images are written to a temporary folder by each test; no binary file is
+// checked in.
+#include "image/channels.h"
 #include "image/environment.h"
 #include "image/image_write.h"
+#include "io/input_file.h"
 #include "sh/error.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <glm/geometric.hpp>
+#include <grp.h>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <random>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace shprobe {
@@ -390,7 +401,8 @@ TEST_F(EnvironmentFiles, RadianceHdrImagesAreLinear) {
     for (int x = 0; x < 2; ++x) {
         float largest = std::max({rgb[3 * x], rgb[3 * x + 1], rgb[3 * x + 2]});
         for (int c = 0; c < 3; ++c)
-            EXPECT_NEAR(image.at(x, 0)[c], rgb[3 * x + c], largest / 256.0f) << "pixel " << x << " channel " << c;
+            EXPECT_NEAR(image.at(x, 0)[c], rgb[3 * x + c], largest / 256.0f)
+                << "pixel " << x << " channel " << c;
     }
 }
 
@@ -430,6 +442,189 @@ TEST_F(EnvironmentFiles, FourChannelsAreRgbAndIgnoredAlpha) {
     writeChannels(file("rgba.exr"), 1, 1, 4, OIIO::TypeDesc::FLOAT,
                   std::vector<float>{1.5f, 2.5f, 3.5f, 0.0f});
     EXPECT_EQ(glm::vec3(readImage(file("rgba.exr")).at(0, 0)), glm::vec3(1.5f, 2.5f, 3.5f));
+}
+
+// ---- Channels by name -------------------------------------------------------------------------
+
+// Float channels under the given names, pixel after pixel; OpenImageIO's EXR writer keeps the
+// names (and stores them sorted, the order it reads them back in). Chromaticities, if given, are
+// written as the EXR attribute (red, green, blue, white xy).
+void writeNamedChannels(const std::string& path, int width, int height, const std::vector<std::string>& names,
+                        const std::vector<float>& data,
+                        const std::array<float, 8>* chromaticities = nullptr) {
+    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(output) << OIIO::geterror();
+    OIIO::ImageSpec spec(width, height, int(names.size()), OIIO::TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.alpha_channel = -1;
+    if (chromaticities)
+        spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), chromaticities->data());
+    ASSERT_TRUE(output->open(path, spec)) << output->geterror();
+    ASSERT_TRUE(output->write_image(OIIO::TypeDesc::FLOAT, data.data())) << output->geterror();
+    ASSERT_TRUE(output->close()) << output->geterror();
+}
+
+TEST(ChannelPlans, ChosenByName) {
+    struct Case {
+        std::vector<std::string> names;
+        ChannelMeaning meaning;
+        std::array<int, 3> channels;
+    };
+    const std::vector<Case> cases = {
+        {{"R", "G", "B"}, ChannelMeaning::Rgb, {0, 1, 2}},
+        {{"A", "B", "G", "R"}, ChannelMeaning::Rgb, {3, 2, 1}},
+        {{"R", "G", "B", "Y"}, ChannelMeaning::Rgb, {0, 1, 2}},
+        {{"Y"}, ChannelMeaning::Grey, {0, 0, 0}},
+        {{"A", "Y"}, ChannelMeaning::Grey, {1, 1, 1}},
+        {{"Y", "BY", "RY"}, ChannelMeaning::LuminanceChroma, {0, 2, 1}},
+        // The unprefixed layer first, then layers in the order of their first channel.
+        {{"diffuse.R", "diffuse.G", "diffuse.B", "R", "G", "B"}, ChannelMeaning::Rgb, {3, 4, 5}},
+        {{"A", "a.R", "a.G", "b.R", "b.G", "b.B"}, ChannelMeaning::Rgb, {3, 4, 5}},
+        {{"Z", "light.sun.B", "light.sun.G", "light.sun.R"}, ChannelMeaning::Rgb, {3, 2, 1}},
+        {{"depth.Z", "mask.Y"}, ChannelMeaning::Grey, {1, 1, 1}},
+        // OpenImageIO's names for any two-channel image whose format names none: grey and alpha.
+        {{"R", "G"}, ChannelMeaning::Grey, {0, 0, 0}},
+    };
+    for (const Case& c : cases) {
+        ChannelPlan plan = planChannels(c.names, "test");
+        std::string names = ::testing::PrintToString(c.names);
+        EXPECT_EQ(plan.meaning, c.meaning) << names;
+        for (int i = 0; i < plan.count(); ++i)
+            EXPECT_EQ(plan.channels[size_t(i)], c.channels[size_t(i)]) << names;
+    }
+}
+
+TEST(ChannelPlans, NamesWithoutColourAreRefused) {
+    EXPECT_EQ(inputErrorOf([] {
+                  planChannels({"Z", "A"}, "sky.exr");
+              }),
+              "sky.exr: no R,G,B, Y or Y,RY,BY channels (found: Z, A)");
+    EXPECT_EQ(inputErrorOf([] { planChannels({}, "sky.exr"); }),
+              "sky.exr: no R,G,B, Y or Y,RY,BY channels (found: none)");
+    // Case matters, as in OpenEXR; a layer needs all three; R and G beside another are not OpenImageIO's
+    // default names.
+    EXPECT_CONTAINS(inputErrorOf([] { planChannels({"r", "g", "b"}, "x"); }), "(found: r, g, b)");
+    EXPECT_CONTAINS(inputErrorOf([] {
+                        planChannels({"diffuse.R", "diffuse.G"}, "x");
+                    }),
+                    "(found: diffuse.R, diffuse.G)");
+    EXPECT_CONTAINS(inputErrorOf([] { planChannels({"R", "G", "Z"}, "x"); }), "(found: R, G, Z)");
+    EXPECT_EQ(inputErrorOf([] {
+                  planChannels({"Y", "RY"}, "sky.exr");
+              }),
+              "sky.exr: chroma channel RY without its pair (RY and BY come together; found: Y, RY)");
+    // A long list is cut, and control bytes do not break the one line.
+    std::vector<std::string> many(40, "Z");
+    many[0] = "bad\nname";
+    std::string message = inputErrorOf([&] { planChannels(many, "x"); });
+    EXPECT_CONTAINS(message, "bad?name, Z");
+    EXPECT_CONTAINS(message, "and 24 more)");
+}
+
+// OpenEXR's luminance weights are the Y row of the primaries' RGB-to-XYZ matrix. BT.709 with D65
+// gives the published (0.2126, 0.7152, 0.0722), rounded there to 4 digits; ACES AP1 gives the
+// 10-digit Y row of the AP1-to-XYZ matrix of SMPTE ST 2065-1 / Academy S-2014-004, to float.
+TEST(LuminanceChroma, WeightsFollowTheChromaticities) {
+    glm::vec3 bt709 = luminanceWeights(Chromaticities{}, "test");
+    EXPECT_NEAR(bt709.r, 0.2126f, 5e-5f);
+    EXPECT_NEAR(bt709.g, 0.7152f, 5e-5f);
+    EXPECT_NEAR(bt709.b, 0.0722f, 5e-5f);
+    const Chromaticities ap1{{0.713, 0.293}, {0.165, 0.830}, {0.128, 0.044}, {0.32168, 0.33767}};
+    glm::vec3 aces = luminanceWeights(ap1, "test");
+    EXPECT_NEAR(aces.r, 0.2722287168f, 1e-6f);
+    EXPECT_NEAR(aces.g, 0.6740817658f, 1e-6f);
+    EXPECT_NEAR(aces.b, 0.0536895174f, 1e-6f);
+    const Chromaticities degenerate{{0.3, 0.3}, {0.3, 0.3}, {0.3, 0.3}, {0.3127, 0.3290}};
+    EXPECT_CONTAINS(inputErrorOf([&] { luminanceWeights(degenerate, "sky.exr"); }),
+                    "sky.exr: the chromaticities");
+}
+
+// RGB to OpenEXR's luminance/chroma as RgbaOutputFile stores it: Y = w . rgb, RY = (R - Y) / Y,
+// BY = (B - Y) / Y.
+glm::vec3 toLuminanceChroma(const glm::vec3& rgb, const glm::vec3& w) {
+    float y = glm::dot(rgb, w);
+    return {y, (rgb.r - y) / y, (rgb.b - y) / y};
+}
+
+// Positive, of several sizes and saturations (Y must not be 0).
+glm::vec3 colourfulTexel(int x, int y) {
+    return {0.05f + 0.7f * float(x), 0.02f + 1.3f * float(y), 3.0f / float(1 + x + y)};
+}
+
+// Forward and back, each step rounds to float once, values up to the largest component; G is
+// (Y - R w.r - B w.b) / w.g, about ten roundings divided by w.g (0.72 for BT.709, 0.67 for AP1):
+// within 1e-6 of the largest component (measured: 2.2e-7 over 64 x 64 such texels).
+constexpr float kLuminanceChromaRounding = 1e-6f;
+
+void expectRgbBack(const Image& image, int width, int height) {
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            glm::vec3 expected = colourfulTexel(x, y);
+            float largest = std::max({expected.r, expected.g, expected.b});
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(image.at(x, y)[c], expected[c], kLuminanceChromaRounding * largest)
+                    << "texel " << x << " " << y << " channel " << c;
+        }
+}
+
+TEST_F(EnvironmentFiles, LuminanceChromaIsConvertedToRgb) {
+    const int w = 8, h = 4;
+    const glm::vec3 weights = luminanceWeights(Chromaticities{}, "test"); // no chromaticities: BT.709
+    std::vector<float> yca;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            glm::vec3 stored = toLuminanceChroma(colourfulTexel(x, y), weights);
+            yca.insert(yca.end(), {stored[0], stored[1], stored[2]});
+        }
+    writeNamedChannels(file("yca.exr"), w, h, {"Y", "RY", "BY"}, yca);
+    expectRgbBack(readImage(file("yca.exr")), w, h);
+}
+
+// The file's chromaticities give the weights. The extra channels sort between BY and RY, so the
+// planned channels lie apart and are read one by one.
+TEST_F(EnvironmentFiles, LuminanceChromaUsesTheFilesChromaticities) {
+    const int w = 8, h = 4;
+    const std::array<float, 8> ap1xy{0.713f, 0.293f, 0.165f, 0.830f, 0.128f, 0.044f, 0.32168f, 0.33767f};
+    const Chromaticities ap1{
+        {ap1xy[0], ap1xy[1]}, {ap1xy[2], ap1xy[3]}, {ap1xy[4], ap1xy[5]}, {ap1xy[6], ap1xy[7]}};
+    const glm::vec3 weights = luminanceWeights(ap1, "test");
+    std::vector<float> data;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            glm::vec3 stored = toLuminanceChroma(colourfulTexel(x, y), weights);
+            data.insert(data.end(), {stored[0], stored[1], stored[2], 7.0f, 8.0f, 9.0f, 10.0f});
+        }
+    writeNamedChannels(file("aces.exr"), w, h, {"Y", "RY", "BY", "C", "D", "E", "F"}, data, &ap1xy);
+    expectRgbBack(readImage(file("aces.exr")), w, h);
+}
+
+TEST(LuminanceChroma, ZeroChromaIsExactlyGrey) {
+    const glm::vec3 weights = luminanceWeights(Chromaticities{}, "test");
+    for (float y : {0.3f, 1.0f, 7e4f})
+        EXPECT_EQ(luminanceChromaToRgb(y, 0.0f, 0.0f, weights), glm::vec3(y)) << y;
+}
+
+TEST_F(EnvironmentFiles, LayerPrefixedRgbIsRead) {
+    writeNamedChannels(file("layer.exr"), 1, 1, {"diffuse.R", "diffuse.G", "diffuse.B", "A", "Z"},
+                       {1.0f, 2.0f, 3.0f, 4.0f, 5.0f});
+    EXPECT_EQ(glm::vec3(readImage(file("layer.exr")).at(0, 0)), glm::vec3(1.0f, 2.0f, 3.0f));
+    writeNamedChannels(file("both.exr"), 1, 1, {"diffuse.R", "diffuse.G", "diffuse.B", "R", "G", "B"},
+                       {7.0f, 8.0f, 9.0f, 1.0f, 2.0f, 3.0f});
+    EXPECT_EQ(glm::vec3(readImage(file("both.exr")).at(0, 0)), glm::vec3(1.0f, 2.0f, 3.0f));
+}
+
+TEST_F(EnvironmentFiles, LuminanceWithAlphaIsGrey) {
+    writeNamedChannels(file("ya.exr"), 1, 1, {"Y", "A"}, {0.75f, 0.0f});
+    EXPECT_EQ(glm::vec3(readImage(file("ya.exr")).at(0, 0)), glm::vec3(0.75f));
+}
+
+TEST_F(EnvironmentFiles, ChannelsWithoutColourAreRefusedNamingThem) {
+    writeNamedChannels(file("depth.exr"), 1, 1, {"Z"}, {1.0f});
+    EXPECT_EQ(inputErrorOf([&] { readImage(file("depth.exr")); }),
+              file("depth.exr") + ": no R,G,B, Y or Y,RY,BY channels (found: Z)");
+    writeNamedChannels(file("motion.exr"), 1, 1, {"R", "G", "Z"}, {1.0f, 2.0f, 3.0f});
+    EXPECT_EQ(inputErrorOf([&] { readImage(file("motion.exr")); }),
+              file("motion.exr") + ": no R,G,B, Y or Y,RY,BY channels (found: R, G, Z)");
 }
 
 // ---- Non-finite texels ------------------------------------------------------------------------
@@ -543,13 +738,16 @@ TEST_F(EnvironmentFiles, PixelLimitIsAnOption) {
     writeImage(file("small.exr"), smoothEquirect(64, 32));
     EXPECT_EQ(loadEnvironment(file("small.exr"), {.maxPixels = 2048}).cubemap.faceSize, 16);
     std::string message = inputErrorOf([&] { loadEnvironment(file("small.exr"), {.maxPixels = 2047}); });
-    EXPECT_CONTAINS(message, "small.exr: the image is 64x32 (2048 pixels), more than the limit of 2047 pixels");
+    EXPECT_CONTAINS(message,
+                    "small.exr: the image is 64x32 (2048 pixels), more than the limit of 2047 pixels");
 
     for (const char* name : {"px", "nx", "py", "ny", "pz", "nz"})
         writeImage(folder() + "/" + name + ".exr", filledImage(8, 8, [](int, int) { return glm::vec3(1); }));
     EXPECT_EQ(loadEnvironment(folder(), {.maxPixels = 64}).cubemap.faceSize, 8);
-    EXPECT_CONTAINS(inputErrorOf([&] { loadEnvironment(folder(), {.maxPixels = 63}); }), "limit of 63 pixels");
-    EXPECT_CONTAINS(inputErrorOf([&] { loadEnvironment(file("small.exr"), {.maxPixels = 0}); }), "--max-pixels");
+    EXPECT_CONTAINS(inputErrorOf([&] { loadEnvironment(folder(), {.maxPixels = 63}); }),
+                    "limit of 63 pixels");
+    EXPECT_CONTAINS(inputErrorOf([&] { loadEnvironment(file("small.exr"), {.maxPixels = 0}); }),
+                    "--max-pixels");
 }
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -567,10 +765,14 @@ TEST_F(EnvironmentFiles, PixelLimitIsAnOption) {
 // truncated file (PNGInput::PngReadCallback): LeakSanitizer is told to overlook what is allocated
 // during such a read. Nothing in other builds.
 class LibraryLeaksIgnored {
-public:
+  public:
 #if defined(SHPROBE_TEST_ASAN)
-    LibraryLeaksIgnored() { __lsan_disable(); }
-    ~LibraryLeaksIgnored() { __lsan_enable(); }
+    LibraryLeaksIgnored() {
+        __lsan_disable();
+    }
+    ~LibraryLeaksIgnored() {
+        __lsan_enable();
+    }
 #endif
 };
 
@@ -580,7 +782,8 @@ public:
 TEST_F(EnvironmentFiles, TruncatedPngSaysSoInTheErrorOnly) {
     std::vector<uint8_t> noise(64 * 32 * 3);
     uint32_t state = 7;
-    for (uint8_t& byte : noise) byte = uint8_t((state = state * 1664525u + 1013904223u) >> 24);
+    for (uint8_t& byte : noise)
+        byte = uint8_t((state = state * 1664525u + 1013904223u) >> 24);
     writeChannels(file("full.png"), 64, 32, 3, OIIO::TypeDesc::UINT8, noise);
     fs::copy_file(file("full.png"), file("cut.png"));
     fs::resize_file(file("cut.png"), fs::file_size(file("full.png")) / 2);
@@ -602,9 +805,8 @@ TEST_F(EnvironmentFiles, TruncatedPngSaysSoInTheErrorOnly) {
 // Values are kept as stored: negative and huge finite texels are not changed on reading (the
 // non-finite policy deals with NaN and infinities only).
 TEST_F(EnvironmentFiles, NegativeAndHugeTexelsAreKept) {
-    Image image = filledImage(2, 1, [](int x, int) {
-        return x == 0 ? glm::vec3(-1.5f, -0.0f, -3e5f) : glm::vec3(1e30f);
-    });
+    Image image = filledImage(
+        2, 1, [](int x, int) { return x == 0 ? glm::vec3(-1.5f, -0.0f, -3e5f) : glm::vec3(1e30f); });
     writeImage(file("extreme.exr"), image);
     Image back = readImage(file("extreme.exr"));
     EXPECT_EQ(glm::vec3(back.at(0, 0)), glm::vec3(-1.5f, -0.0f, -3e5f));
@@ -618,6 +820,260 @@ TEST_F(EnvironmentFiles, NegativeAndHugeTexelsAreKept) {
 TEST_F(EnvironmentFiles, OnlyRegularFilesAreRead) {
     EXPECT_CONTAINS(inputErrorOf([&] { readImage("/dev/null"); }), "/dev/null: not a regular file");
     EXPECT_CONTAINS(inputErrorOf([&] { readImage(folder()); }), "is a folder");
+}
+
+// A loop of links, as the input, as a face file (of a pattern and of a folder) and as the faces
+// folder: each is one line "PATH: REASON" in the system's words.
+TEST_F(EnvironmentFiles, LoopsOfLinksAreSaidAsSuch) {
+    const std::string loop = systemReason(ELOOP); // "too many levels of symbolic links"
+    fs::create_symlink(file("loop.exr"), file("loop.exr"));
+    EXPECT_EQ(inputErrorOf([&] { loadEnvironment(file("loop.exr"), {}); }), file("loop.exr") + ": " + loop);
+    EXPECT_EQ(inputErrorOf([&] { readImage(file("loop.exr")); }), file("loop.exr") + ": " + loop);
+
+    for (int face = 1; face < kFaceCount; ++face)
+        writeImage(file("sky_" + std::string(kFaceNames[face]) + ".exr"), faceImage(face, 4));
+    fs::create_symlink(file("sky_px.exr"), file("sky_px.exr"));
+    EXPECT_EQ(inputErrorOf([&] { loadEnvironment(file("sky_{face}.exr"), {}); }),
+              file("sky_px.exr") + ": " + loop);
+
+    fs::create_directory(file("faces"));
+    for (int face = 1; face < kFaceCount; ++face)
+        writeImage(file("faces/" + std::string(kFaceNames[face]) + ".exr"), faceImage(face, 4));
+    fs::create_symlink(file("faces/px.exr"), file("faces/px.exr"));
+    EXPECT_EQ(inputErrorOf([&] { loadEnvironment(file("faces"), {}); }), file("faces/px.exr") + ": " + loop);
+
+    fs::create_symlink(file("folder_loop"), file("folder_loop"));
+    EXPECT_EQ(inputErrorOf([&] { loadEnvironment(file("folder_loop"), {.layout = Layout::Faces}); }),
+              file("folder_loop") + ": " + loop);
+}
+
+TEST_F(EnvironmentFiles, NamesLongerThanTheSystemAllowsAreSaidAsSuch) {
+    const std::string tooLong = file(std::string(300, 'n') + ".exr");
+    EXPECT_EQ(inputErrorOf([&] { loadEnvironment(tooLong, {}); }),
+              tooLong + ": " + systemReason(ENAMETOOLONG));
+    const std::string pattern = file(std::string(300, 'n') + "_{face}.exr");
+    EXPECT_CONTAINS(inputErrorOf([&] { loadEnvironment(pattern, {}); }), systemReason(ENAMETOOLONG));
+}
+
+// Runs `body` in a child process as user and group nobody (65534) and returns the message of the
+// Error(Input) it threw ("" if none); nullopt when the child could not switch users. The child
+// only asks the file system (every case fails before an image library runs), so forking a process
+// that may hold library threads is safe.
+std::optional<std::string> inputErrorAsNobody(const std::function<void()>& body) {
+    int pipeFds[2];
+    if (pipe(pipeFds) != 0) return std::nullopt;
+    pid_t child = fork();
+    if (child == 0) {
+        close(pipeFds[0]);
+        std::string message = "\x01";
+        if (setgroups(0, nullptr) == 0 && setgid(65534) == 0 && setuid(65534) == 0) {
+            message.clear();
+            try {
+                body();
+            } catch (const Error& error) {
+                message = error.what();
+            }
+        }
+        ssize_t written = write(pipeFds[1], message.data(), message.size());
+        _exit(written == ssize_t(message.size()) ? 0 : 1);
+    }
+    close(pipeFds[1]);
+    std::string message;
+    char buffer[512];
+    for (ssize_t got; (got = read(pipeFds[0], buffer, sizeof buffer)) > 0;)
+        message.append(buffer, size_t(got));
+    close(pipeFds[0]);
+    int status = 0;
+    waitpid(child, &status, 0);
+    if (message == "\x01") return std::nullopt;
+    return message;
+}
+
+// What an unprivileged user may not read is said as "permission denied": a file of mode 000, a
+// file in a folder they may not search, and a faces folder they may list but not search.
+TEST_F(EnvironmentFiles, UnreadableFilesSayPermissionDenied) {
+    if (geteuid() != 0) GTEST_SKIP() << "needs root, to read as user nobody in a child process";
+    const std::string denied = systemReason(EACCES); // "permission denied"
+    writeImage(file("locked.exr"), smoothEquirect(16, 8));
+    fs::permissions(file("locked.exr"), fs::perms::none);
+    fs::create_directory(file("private"));
+    writeImage(file("private/sky.exr"), smoothEquirect(16, 8));
+    fs::permissions(file("private"), fs::perms::owner_all);
+    fs::create_directory(file("faces"));
+    for (int face = 0; face < kFaceCount; ++face)
+        writeImage(file("faces/" + std::string(kFaceNames[face]) + ".exr"), faceImage(face, 4));
+    fs::permissions(file("faces"), fs::perms::owner_all | fs::perms::group_read | fs::perms::others_read);
+
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {file("locked.exr"), file("locked.exr")},
+        {file("private/sky.exr"), file("private/sky.exr")},
+        {file("faces"), file("faces/px.exr")},
+    };
+    for (const auto& [input, named] : cases) {
+        std::optional<std::string> message = inputErrorAsNobody([&] { loadEnvironment(input, {}); });
+        if (!message) GTEST_SKIP() << "this system does not let root switch to user nobody";
+        EXPECT_EQ(*message, named + ": " + denied) << input;
+    }
+    // Root reads them all (the files are sound).
+    EXPECT_EQ(readImage(file("locked.exr")).width, 16);
+}
+
+// ---- Headers read within bounds ---------------------------------------------------------------
+// Hand-made OpenEXR headers ("OpenEXR File Layout", openexr.com): magic, version 2 and flags, then
+// attributes `name\0 type\0 int32 size, value` until an empty name.
+
+std::string littleEndian32(uint32_t value) {
+    return {char(value & 0xff), char(value >> 8 & 0xff), char(value >> 16 & 0xff), char(value >> 24)};
+}
+
+std::string exrAttribute(const std::string& name, const std::string& type, const std::string& value) {
+    return name + '\0' + type + '\0' + littleEndian32(uint32_t(value.size())) + value;
+}
+
+// Channels of 32-bit float, sampled as given.
+struct ExrChannel {
+    std::string name;
+    int xSampling = 1;
+    int ySampling = 1;
+};
+std::string exrChannelList(const std::vector<ExrChannel>& channels) {
+    std::string list;
+    for (const ExrChannel& c : channels)
+        list += c.name + '\0' + littleEndian32(2) + std::string(4, '\0') +
+                littleEndian32(uint32_t(c.xSampling)) + littleEndian32(uint32_t(c.ySampling));
+    return list + '\0';
+}
+
+// The attributes every scan-line image has, for a width x height image of the given channels.
+std::string exrRequiredAttributes(int width, int height, const std::vector<ExrChannel>& channels) {
+    std::string window = littleEndian32(0) + littleEndian32(0) + littleEndian32(uint32_t(width - 1)) +
+                         littleEndian32(uint32_t(height - 1));
+    std::string one = littleEndian32(0x3f800000); // 1.0f
+    return exrAttribute("channels", "chlist", exrChannelList(channels)) +
+           exrAttribute("compression", "compression", std::string(1, '\0')) +
+           exrAttribute("dataWindow", "box2i", window) + exrAttribute("displayWindow", "box2i", window) +
+           exrAttribute("lineOrder", "lineOrder", std::string(1, '\0')) +
+           exrAttribute("pixelAspectRatio", "float", one) +
+           exrAttribute("screenWindowCenter", "v2f", std::string(8, '\0')) +
+           exrAttribute("screenWindowWidth", "float", one);
+}
+
+std::string exrStart(uint32_t flags = 0) {
+    return std::string("\x76\x2f\x31\x01", 4) + littleEndian32(2 | flags);
+}
+
+const std::vector<ExrChannel> kRgb = {{"B"}, {"G"}, {"R"}};
+
+// The peak resident memory of this process so far, in bytes.
+size_t peakMemory() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return size_t(usage.ru_maxrss) * 1024;
+}
+
+// A 600-byte EXR whose "comments" claims 2^31 - 1 bytes made OpenEXR allocate them (2.2 GB) and
+// read for seconds before it failed. Refused from the header, in far less than a second and
+// without the allocation (the process's peak memory does not grow by anything like it).
+TEST_F(EnvironmentFiles, ExrAttributeClaimingMoreThanTheFileIsRefusedAtOnce) {
+    std::string bytes = exrStart() + exrRequiredAttributes(8, 4, kRgb) + "comments" + '\0' + "string" + '\0' +
+                        littleEndian32(0x7fffffff) + std::string(200, 'x');
+    bytes.resize(600, '\0');
+    writeText(file("tiny.exr"), bytes);
+    const size_t memoryBefore = peakMemory();
+    const auto start = std::chrono::steady_clock::now();
+    std::string message = inputErrorOf([&] { loadEnvironment(file("tiny.exr"), {.maxPixels = 2048}); });
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_LT(seconds, 1.0);
+    EXPECT_LT(peakMemory() - memoryBefore, size_t(64) << 20);
+    const size_t left = 600 - (bytes.find(std::string(200, 'x')));
+    EXPECT_EQ(message, file("tiny.exr") +
+                           ": the OpenEXR header attribute \"comments\" (string) claims "
+                           "2147483647 bytes, more than the " +
+                           std::to_string(left) + " left in the file");
+}
+
+TEST_F(EnvironmentFiles, ExrHeadersBeyondTheLimitsAreRefused) {
+    const std::string header = exrStart() + exrRequiredAttributes(8, 4, kRgb);
+    auto refusal = [&](const std::string& name, const std::string& bytes) {
+        writeText(file(name), bytes + std::string(64, '\0'));
+        return inputErrorOf([&] { readImage(file(name)); });
+    };
+    EXPECT_CONTAINS(
+        refusal("negative.exr", header + "note" + '\0' + "string" + '\0' + littleEndian32(0xfffffff0u)),
+        "attribute \"note\" (string) claims a negative size (-16 bytes)");
+    // OpenEXR reads a box2i as 16 bytes whatever the size says: any other size would make it read
+    // the rest of the header from elsewhere than the scan.
+    EXPECT_CONTAINS(refusal("box.exr", header + exrAttribute("crop", "box2i", std::string(20, '\0'))),
+                    "attribute \"crop\" (box2i) claims 20 bytes; a box2i value has 16");
+    EXPECT_CONTAINS(refusal("name.exr", header + exrAttribute(std::string(300, 'n'), "string", "x")),
+                    "holds an attribute name longer than 255 bytes");
+    std::string many = header;
+    for (int i = 0; i < kMaxExrAttributesPerHeader; ++i)
+        many += exrAttribute("a" + std::to_string(i), "int", "1234");
+    EXPECT_CONTAINS(refusal("many.exr", many), "the OpenEXR header has more than 1000 attributes");
+
+    std::string parts = exrStart(0x1000);
+    for (int i = 0; i <= kMaxExrParts; ++i)
+        parts += exrAttribute("name", "string", "p" + std::to_string(i)) + '\0';
+    EXPECT_CONTAINS(refusal("parts.exr", parts + '\0'), "the OpenEXR header has more than 1000 parts");
+}
+
+// OpenEXR's luminance/chroma files keep RY and BY at half resolution; OpenImageIO reads no
+// subsampled channel. Said naming the channel.
+TEST_F(EnvironmentFiles, SubsampledChannelsAreRefusedNamingThem) {
+    std::string bytes = exrStart() + exrRequiredAttributes(4, 4, {{"BY", 2, 2}, {"RY", 2, 2}, {"Y"}}) + '\0';
+    writeText(file("yca.exr"), bytes + std::string(256, '\0'));
+    EXPECT_EQ(inputErrorOf([&] { readImage(file("yca.exr")); }),
+              file("yca.exr") +
+                  ": channel BY is subsampled (2 x 2), which OpenImageIO cannot read; store the "
+                  "image at full resolution");
+}
+
+// Files OpenImageIO writes, one part or two, pass the scan, which stops at the header's end.
+TEST_F(EnvironmentFiles, ExrHeadersOfSoundFilesPass) {
+    writeImage(file("sky.exr"), smoothEquirect(16, 8));
+    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(file("parts.exr"));
+    ASSERT_TRUE(output);
+    // The parts of one file share a display window: both are 16 x 8.
+    std::array<OIIO::ImageSpec, 2> specs{OIIO::ImageSpec(16, 8, 3, OIIO::TypeDesc::FLOAT),
+                                         OIIO::ImageSpec(16, 8, 1, OIIO::TypeDesc::FLOAT)};
+    specs[0].attribute("oiio:subimagename", "colour");
+    specs[1].attribute("oiio:subimagename", "depth");
+    specs[1].channelnames = {"Z"};
+    std::vector<float> rgb(16 * 8 * 3, 0.5f), depth(16 * 8, 9.0f);
+    ASSERT_TRUE(output->open(file("parts.exr"), 2, specs.data())) << output->geterror();
+    ASSERT_TRUE(output->write_image(OIIO::TypeDesc::FLOAT, rgb.data())) << output->geterror();
+    ASSERT_TRUE(output->open(file("parts.exr"), specs[1], OIIO::ImageOutput::AppendSubimage))
+        << output->geterror();
+    ASSERT_TRUE(output->write_image(OIIO::TypeDesc::FLOAT, depth.data())) << output->geterror();
+    ASSERT_TRUE(output->close());
+    for (const char* name : {"sky.exr", "parts.exr"}) {
+        int fd = open(file(name).c_str(), O_RDONLY | O_CLOEXEC);
+        ASSERT_GE(fd, 0);
+        uint64_t headerBytes = checkImageHeader(fd, file(name));
+        close(fd);
+        EXPECT_GT(headerBytes, 8u) << name;
+        EXPECT_LT(headerBytes, fs::file_size(file(name))) << name;
+    }
+    EXPECT_EQ(readImage(file("parts.exr")).at(3, 2), glm::vec4(0.5f, 0.5f, 0.5f, 1.0f));
+}
+
+// libpng allocates a chunk's length before reading it: a text chunk claiming 2^31 - 1 bytes in a
+// 52-byte PNG cost 2.2 GB. Refused from the chunk's length.
+TEST_F(EnvironmentFiles, PngChunkClaimingMoreThanTheFileIsRefused) {
+    std::string ihdr = std::string("\0\0\0\x0d"
+                                   "IHDR",
+                                   8) +
+                       std::string("\0\0\0\x04\0\0\0\x02\x08\x02\0\0\0", 13) +
+                       std::string(4, '\0'); // CRC unchecked before the refusal
+    std::string text = std::string("\x7f\xff\xff\xff"
+                                   "tEXt",
+                                   8) +
+                       "Comment" + '\0' + "abc";
+    writeText(file("text.png"), std::string("\x89PNG\r\n\x1a\n", 8) + ihdr + text);
+    EXPECT_EQ(inputErrorOf([&] { readImage(file("text.png")); }),
+              file("text.png") +
+                  ": the PNG chunk \"tEXt\" claims 2147483647 bytes, more than the 7 left in the file");
 }
 
 // ---- Resizing ---------------------------------------------------------------------------------

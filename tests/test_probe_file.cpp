@@ -1,7 +1,7 @@
 // Coefficient files (README "Conventions", coefficient files): what is written reads back the
 // same, and every malformed or wrong-schema file is refused with a message naming the file and the
 // offending field.
-#include "io/atomic_file.h"
+#include "io/output_file.h"
 #include "io/probe_file.h"
 #include "sh/error.h"
 
@@ -39,7 +39,8 @@ TEST(ProbeFile, RoundTripsEveryOrderAndQuantity) {
             ASSERT_EQ(read.rgb.size(), probe.rgb.size());
             for (size_t i = 0; i < probe.rgb.size(); ++i)
                 for (int c = 0; c < 3; ++c)
-                    EXPECT_NEAR(read.rgb[i][c], probe.rgb[i][c], kWriteRelativePrecision * std::abs(probe.rgb[i][c]))
+                    EXPECT_NEAR(read.rgb[i][c], probe.rgb[i][c],
+                                kWriteRelativePrecision * std::abs(probe.rgb[i][c]))
                         << "order " << order << " coefficient " << i;
         }
 }
@@ -109,7 +110,8 @@ TEST(ProbeFile, RejectsMalformedJson) {
     expectRejected("[1, 2, 3]", "JSON object");
     std::string valid = probeToJson(sampleProbe(3, Quantity::Radiance), {});
     expectRejected(valid.substr(0, valid.size() / 2), "not valid JSON");
-    expectRejected(valid + std::string(1, '\0') + "junk", "a NUL byte at offset " + std::to_string(valid.size()));
+    expectRejected(valid + std::string(1, '\0') + "junk",
+                   "a NUL byte at offset " + std::to_string(valid.size()));
     expectRejected(std::string("{\"format\": \"shprobe.sh\",, }"), "parse error at line 1, column 25");
 }
 
@@ -131,7 +133,8 @@ TEST(ProbeFile, RejectsWrongValues) {
 
 TEST(ProbeFile, RejectsBadCoefficientRows) {
     nlohmann::json rows = nlohmann::json::array();
-    for (int i = 0; i < 9; ++i) rows.push_back({1.0, 2.0, 3.0});
+    for (int i = 0; i < 9; ++i)
+        rows.push_back({1.0, 2.0, 3.0});
     EXPECT_EQ(parseProbeJson(validWith("coefficients", rows), "ok.json").rgb[8].b, 3.0);
 
     nlohmann::json shortRow = rows;
@@ -221,19 +224,23 @@ TEST(ProbeFile, RejectsMalformedSun) {
     EXPECT_TRUE(parseProbe(with("angular_radius_degrees", 90), "ok.json").sun.has_value()) << "90 is allowed";
 }
 
-// The reader's checks before parsing: each names the file and says what it is instead.
+// The reader's checks before parsing: each names the file and says what it is instead. A file
+// larger than 1 MiB is refused from its size, and deep nesting as soon as the parser reaches
+// level 17: neither is read into a tree (a megabyte of '[' took gigabytes when it was).
 TEST(ProbeFile, ReadRefusesWhatIsNotAProbeFile) {
     namespace fs = std::filesystem;
     fs::path folder = fs::temp_directory_path() / ("shprobe_test_probe_read_" + std::to_string(getpid()));
     fs::create_directories(folder / "folder.json");
     std::ofstream(folder / "empty.json").close();
-    std::ofstream(folder / "large.json") << std::string((16 << 20) + 1, ' ');
+    std::ofstream(folder / "large.json") << std::string((1 << 20) + 1, ' ');
+    std::ofstream(folder / "deep.json") << std::string(1 << 20, '[');
     std::string valid = probeToJson(sampleProbe(3, Quantity::Radiance), {});
     std::ofstream(folder / "cut.json") << valid.substr(0, valid.find("\"coefficients\""));
     const std::pair<const char*, const char*> cases[] = {
         {"folder.json", "is a folder"},
         {"empty.json", "the file is empty"},
-        {"large.json", "the file has 16777217 bytes, far more than a probe file"},
+        {"large.json", "the file has 1048577 bytes, more than a probe file can have (1048576 at most)"},
+        {"deep.json", "JSON nested deeper than 16 levels"},
         {"cut.json", "not valid JSON (parse error at line"},
         {"absent.json", "no such file"},
     };
@@ -288,15 +295,15 @@ std::string contentsOf(const std::filesystem::path& path) {
 }
 
 // The temporary file exists (hidden, in the destination's folder, with its extension) until the
-// commit renames it over the destination; an AtomicFile abandoned (an error on the way) removes it
+// commit renames it over the destination; an OutputFile abandoned (an error on the way) removes it
 // and leaves an existing destination untouched.
-TEST(AtomicFile, TemporaryFileIsRenamedOrRemoved) {
+TEST(OutputFile, TemporaryFileIsRenamedOrRemoved) {
     namespace fs = std::filesystem;
     fs::path folder = fs::temp_directory_path() / ("shprobe_test_atomic_" + std::to_string(getpid()));
     fs::create_directories(folder);
     std::ofstream(folder / "out.exr") << "old";
     {
-        AtomicFile file((folder / "out.exr").string());
+        OutputFile file((folder / "out.exr").string());
         EXPECT_EQ(fs::path(file.temporaryPath()).parent_path(), folder);
         EXPECT_EQ(fs::path(file.temporaryPath()).extension(), ".exr");
         EXPECT_EQ(fs::path(file.temporaryPath()).filename().string().rfind(".out.", 0), 0u);
@@ -305,7 +312,7 @@ TEST(AtomicFile, TemporaryFileIsRenamedOrRemoved) {
     }
     EXPECT_EQ(entriesOf(folder), std::vector<std::string>{"out.exr"});
     EXPECT_EQ(contentsOf(folder / "out.exr"), "old");
-    writeFileAtomic((folder / "out.exr").string(), "new");
+    writeOutputFile((folder / "out.exr").string(), "new");
     EXPECT_EQ(entriesOf(folder), std::vector<std::string>{"out.exr"});
     EXPECT_EQ(contentsOf(folder / "out.exr"), "new");
     fs::remove_all(folder);
@@ -313,9 +320,9 @@ TEST(AtomicFile, TemporaryFileIsRenamedOrRemoved) {
 
 // Ctrl-C (and SIGTERM) while a temporary file exists: removeTemporaryFilesOnInterrupt removes it
 // and the process ends by the signal; the destination keeps its earlier content. A child process
-// plays the program: it installs the handling, opens an AtomicFile, writes half of it, says so
+// plays the program: it installs the handling, opens an OutputFile, writes half of it, says so
 // through a pipe and waits to be interrupted.
-TEST(AtomicFile, InterruptRemovesTemporaryFiles) {
+TEST(OutputFile, InterruptRemovesTemporaryFiles) {
     namespace fs = std::filesystem;
     for (int signal : {SIGINT, SIGTERM}) {
         fs::path folder = fs::temp_directory_path() / ("shprobe_test_interrupt_" + std::to_string(getpid()));
@@ -331,11 +338,12 @@ TEST(AtomicFile, InterruptRemovesTemporaryFiles) {
             standard.sa_handler = SIG_DFL;
             sigaction(signal, &standard, nullptr);
             removeTemporaryFilesOnInterrupt();
-            AtomicFile file((folder / "probe.json").string());
+            OutputFile file((folder / "probe.json").string());
             std::ofstream(file.temporaryPath()) << "half a probe";
-            AtomicFile second((folder / "other.bin").string());
+            OutputFile second((folder / "other.bin").string());
             (void)!write(ready[1], "r", 1);
-            for (;;) pause();
+            for (;;)
+                pause();
         }
         close(ready[1]);
         char byte = 0;

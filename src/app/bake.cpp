@@ -4,7 +4,7 @@
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
 #include "app/toolkit.h"
-#include "io/atomic_file.h"
+#include "io/output_file.h"
 #include "sh/basis.h"
 #include "sh/irradiance.h"
 
@@ -15,44 +15,54 @@ namespace shprobe {
 
 namespace {
 
-void printSun(const std::optional<ProbeSun>& sun) {
+void printSun(FILE* report, const std::optional<ProbeSun>& sun) {
     if (!sun) {
-        std::printf("  sun      none found (nothing compact and far brighter than the sky)\n");
+        std::fprintf(
+            report,
+            "  sun      no sun found (no compact light dominates the environment; see --extract-sun)\n");
         return;
     }
-    std::printf("  sun      direction (%.4f, %.4f, %.4f), radius %.3f deg, radiance (%.4g, %.4g, %.4g): "
-                "written as \"sun\", not in the coefficients\n",
-                sun->direction.x, sun->direction.y, sun->direction.z, sun->angularRadius * 180.0 / M_PI,
-                sun->radiance.r, sun->radiance.g, sun->radiance.b);
+    std::fprintf(report,
+                 "  sun      direction (%.4f, %.4f, %.4f), radius %.3f deg, radiance (%.4g, %.4g, %.4g): "
+                 "written as \"sun\", not in the coefficients\n",
+                 sun->direction.x, sun->direction.y, sun->direction.z, sun->angularRadius * 180.0 / M_PI,
+                 sun->radiance.r, sun->radiance.g, sun->radiance.b);
 }
 
-void printCoefficients(const ShCoefficients& coefficients) {
-    std::printf("%s coefficients (r g b):\n", quantityName(coefficients.quantity));
+void printCoefficients(FILE* report, const ShCoefficients& coefficients) {
+    std::fprintf(report, "%s coefficients (r g b):\n", quantityName(coefficients.quantity));
     for (int i = 0; i < int(coefficients.rgb.size()); ++i) {
         int l = shBand(i);
         const glm::dvec3& c = coefficients.rgb[i];
-        std::printf("  l=%d m=%+d  %14.6f %14.6f %14.6f\n", l, i - l * (l + 1), c.r, c.g, c.b);
+        std::fprintf(report, "  l=%d m=%+d  %14.6f %14.6f %14.6f\n", l, i - l * (l + 1), c.r, c.g, c.b);
     }
 }
 
-void printSummary(const BakeOptions& options, const Environment& environment, const BakeResult& result,
-                  double loadMs, double bakeMs) {
+void printSummary(FILE* report, const BakeOptions& options, const Environment& environment,
+                  const BakeResult& result, double loadMs, double bakeMs) {
     int n = environment.cubemap.faceSize;
-    std::printf("shprobe bake: %s -> %s\n", environment.description.c_str(), options.output.c_str());
-    std::printf("  backend  %s: %s\n", options.backend.c_str(), result.device.c_str());
-    std::printf("  input    6 x %d x %d texels, order %d (%d coefficients)\n", n, n, options.order,
-                coefficientCount(options.order));
+    std::fprintf(report, "shprobe bake: %s -> %s\n", environment.description.c_str(), options.output.c_str());
+    std::fprintf(report, "  backend  %s: %s\n", options.backend.c_str(), result.device.c_str());
+    std::fprintf(report, "  input    6 x %d x %d texels, order %d (%d coefficients)\n", n, n, options.order,
+                 coefficientCount(options.order));
     if (environment.replacedTexels > 0)
-        std::printf("  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
-    if (hasLights(options.lights)) std::printf("  lights   added to the environment's radiance\n");
-    if (options.window != "none") std::printf("  window   %s\n", options.window.c_str());
-    std::printf("  time     load %.1f ms, bake %.1f ms", loadMs, bakeMs);
-    if (result.deviceMilliseconds > 0.0) std::printf(" (GPU %.1f ms)", result.deviceMilliseconds);
-    std::printf("\n");
+        std::fprintf(report, "  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
+    if (hasLights(options.lights)) std::fprintf(report, "  lights   added to the environment's radiance\n");
+    if (options.window != "none") std::fprintf(report, "  window   %s\n", options.window.c_str());
+    std::fprintf(report, "  time     load %.1f ms, bake %.1f ms", loadMs, bakeMs);
+    if (result.deviceMilliseconds > 0.0) std::fprintf(report, " (GPU %.1f ms)", result.deviceMilliseconds);
+    std::fprintf(report, "\n");
+}
+
+// Before any work: a failed write must not waste a bake, nor may the output be an input.
+void checkSingleOutput(const BakeOptions& options) {
+    checkOutputPath(options.output, formatContent(options.format));
+    if (!options.inputs.empty())
+        checkOutputsAreNotInputs({&options.output, 1}, filesReadBy(options.inputs[0]));
 }
 
 void runSingleBake(const BakeOptions& options) {
-    checkOutputPath(options.output); // before any work: a failed write must not waste a bake
+    checkSingleOutput(options);
 
     Clock::time_point start = Clock::now();
     Environment environment = loadInput(options, options.inputs.empty() ? std::string() : options.inputs[0]);
@@ -71,14 +81,17 @@ void runSingleBake(const BakeOptions& options) {
         result = bakeOnCpu(options, environment.cubemap);
     }
     double bakeMs = millisecondsSince(start);
-    if (!result.failure.empty()) throw Error(ErrorKind::Input, environment.description + ": " + result.failure);
+    if (!result.failure.empty())
+        throw Error(ErrorKind::Input, environment.description + ": " + result.failure);
 
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
     writeOutput(options, options.output, written, metadataFor(options, environment, result, sun));
 
-    printSummary(options, environment, result, loadMs, bakeMs);
-    if (options.extractSun) printSun(sun);
-    if (!options.quiet) printCoefficients(written);
+    // With the probe on standard output, the report goes to stderr.
+    FILE* report = reportStream(options.output);
+    printSummary(report, options, environment, result, loadMs, bakeMs);
+    if (options.extractSun) printSun(report, sun);
+    if (!options.quiet) printCoefficients(report, written);
 }
 
 } // namespace
@@ -90,8 +103,11 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
         "Environment: an equirect (2:1) or cross (4:3, 3:4) image, a folder holding px nx py ny "
         "pz nz images, or a pattern with {face}; default: the built-in sky. Several inputs "
         "are a batch and need --out-dir");
-    CLI::Option* output = command->add_option("-o,--output", options.output, "Output file of a single input")
-                              ->capture_default_str();
+    CLI::Option* output = command->add_option(
+        "-o,--output", options.output,
+        "Output file of a single input (default: probe and the format's extension, probe.json); "
+        "- writes to standard output. A link is followed and its target replaced; a device or "
+        "FIFO is written through");
     command
         ->add_option("--out-dir", options.outDir,
                      "Batch: write each input's probe into this folder, named after the input (its stem and "
@@ -109,7 +125,7 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
                      "Batch: most texel bytes (6 x N^2 x 16 per cube map) one GPU submission bakes; default "
                      "and upper bound: the device's limit")
         ->type_name("N")
-        ->check(CLI::PositiveNumber);
+        ->check(numberFrom(1.0, HUGE_VAL));
     command->add_option("--order", options.order, "SH order = number of bands (3: 9 coefficients)")
         ->check(CLI::Range(1, kMaxOrder))
         ->capture_default_str();
@@ -119,42 +135,54 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
     command->add_option("--face-size", options.faceSize, "Cube-map face size (default: from the input)")
         ->check(CLI::Range(1, kMaxGpuFaceSize));
     command
-        ->add_option("--backend", options.backend,
-                     "gpu (Vulkan compute), cpu (float, all cores) or reference (the double-precision reference)")
+        ->add_option(
+            "--backend", options.backend,
+            "gpu (Vulkan compute), cpu (float, all cores) or reference (the double-precision reference)")
         ->check(CLI::IsMember({"gpu", "cpu", "reference"}))
         ->capture_default_str();
-    command->add_flag("--irradiance", options.irradiance, "Write irradiance E_lm = A_l L_lm instead of radiance");
-    command->add_flag("--sanitize", options.sanitize, "Replace NaN and infinite texels with 0 instead of failing");
+    command->add_flag("--irradiance", options.irradiance,
+                      "Write irradiance E_lm = A_l L_lm instead of radiance");
+    command->add_flag("--sanitize", options.sanitize,
+                      "Replace NaN and infinite texels with 0 instead of failing");
     addImageLimitOption(*command, options.maxPixels);
     addDeviceOptions(*command, options.device, options.validation);
     command->add_option("--workgroup-size", options.workgroupSize, "GPU projection workgroup width")
         ->check(CLI::Range(1, 1024))
         ->capture_default_str();
-    command->add_option("--texels-per-invocation", options.texelsPerInvocation,
-                        "GPU projection texels per invocation (sets the workgroup count)")
+    command
+        ->add_option("--texels-per-invocation", options.texelsPerInvocation,
+                     "GPU projection texels per invocation (sets the workgroup count)")
         ->check(CLI::Range(1, 1 << 20))
         ->capture_default_str();
     command->add_flag("-q,--quiet", options.quiet,
                       "Print the summary only, not the coefficients (batch: not the line per probe)");
     command
-        ->add_option("--format", options.format,
-                     "json (CONVENTIONS' coefficient file), binary (packed float32, see README), glsl or cpp "
-                     "(a GLSL or C/C++ header of coefficients folded for sh_irradiance.glsl: radiance for "
-                     "shRadiance, with --irradiance for shIrradianceOverPi; orders 1-5), or the irradiance "
-                     "drawn as an EXR map: irradiance-equirect, irradiance-cross")
-        ->check(CLI::IsMember({"json", "binary", "glsl", "cpp", "irradiance-equirect", "irradiance-cross"}))
-        ->capture_default_str();
-    command->add_option("--map-size", options.mapSize,
-                        "Irradiance maps: equirect width (even; default 512) or cross face size (default 128)")
+        ->add_option(
+            "--format", options.format,
+            "json (CONVENTIONS' coefficient file), binary (packed float32, see README), glsl or cpp "
+            "(a GLSL or C/C++ header of coefficients folded for sh_irradiance.glsl: radiance for "
+            "shRadiance, with --irradiance for shIrradianceOverPi; orders 1-5), or the irradiance "
+            "drawn as an EXR map: irradiance-equirect, irradiance-cross. Default: from -o's extension "
+            "(.json, .bin, .glsl, .h, .exr), else json")
+        ->check(CLI::IsMember({"json", "binary", "glsl", "cpp", "irradiance-equirect", "irradiance-cross"}));
+    command
+        ->add_option("--map-size", options.mapSize,
+                     "Irradiance maps: equirect width (even; default 512) or cross face size (default 128)")
         ->check(CLI::Range(1, 16384));
-    command->add_flag("--extract-sun", options.extractSun,
-                      "Take the sun (the brightest compact region) out of the environment and write it beside the "
-                      "probe of the rest, as \"sun\" (direction, radiance, angular radius)");
+    command->add_flag(
+        "--extract-sun", options.extractSun,
+        "Take the sun out of the environment and write it beside the probe of the rest, as \"sun\" "
+        "(direction, radiance, angular radius). Only a compact light that clearly dominates is a sun: "
+        "the texels brighter than 20 times the median and 1/1000 of the brightest, connected to the "
+        "brightest, must lie within 5 degrees of their centre, hold at least 80% of the light of all "
+        "such texels and 1% of the whole map's, and peak at least 1000 times the median; otherwise "
+        "\"no sun found\" and the environment stays whole");
     addLightOptions(*command, options.lights);
     addWindowOption(*command, options.window);
 }
 
-void runBake(const BakeOptions& options) {
+void runBake(const BakeOptions& given) {
+    const BakeOptions options = withFormatAndOutput(given);
     checkFormatOptions(options);
     if (!options.outDir.empty()) return runBatchBake(options);
     if (options.inputs.size() > 1 || !options.listFile.empty())

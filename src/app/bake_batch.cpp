@@ -2,13 +2,16 @@
 // as one GPU submission takes; bad inputs are reported and skipped.
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
-#include "io/atomic_file.h"
+#include "io/input_file.h"
+#include "io/output_file.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
+#include <sstream>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace shprobe {
@@ -22,10 +25,18 @@ struct BatchItem {
     std::string output;
 };
 
+// A list of a million paths is a few tens of megabytes; a larger file (or /dev/zero) is no list.
+constexpr uint64_t kMaxListBytes = uint64_t(64) << 20;
+
 // Paths as given on the command line, one a line; blank lines and '#' comments are skipped.
 std::vector<std::string> readInputList(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw Error(ErrorKind::Input, "--list " + path + ": cannot read the file");
+    std::string text;
+    try {
+        text = readInputFile(path, kMaxListBytes, "a list of inputs");
+    } catch (const Error& error) {
+        throw Error(ErrorKind::Input, std::string("--list ") + error.what());
+    }
+    std::istringstream in(text);
     std::vector<std::string> inputs;
     for (std::string line; std::getline(in, line);) {
         size_t first = line.find_first_not_of(" \t\r");
@@ -39,9 +50,10 @@ std::vector<std::string> readInputList(const std::string& path) {
 // The name an input's output takes: the file's stem; a faces folder's own name; a {face} pattern's
 // name without {face} and the separators around it (sky_{face}.exr -> sky), or its folder's name.
 std::string outputStem(const std::string& input) {
-    fs::path path = fs::absolute(input).lexically_normal();
+    std::error_code error; // a relative input once the working folder is gone: named as given
+    fs::path path = fs::absolute(input, error);
+    path = (error ? fs::path(input) : path).lexically_normal();
     if (!path.has_filename()) path = path.parent_path();
-    std::error_code error;
     std::string stem = fs::is_directory(path, error) ? path.filename().string() : path.stem().string();
     if (size_t at = stem.find("{face}"); at != std::string::npos) {
         stem.erase(at, 6);
@@ -50,14 +62,6 @@ std::string outputStem(const std::string& input) {
                                           : stem.substr(first, last - first + 1);
     }
     return stem.empty() ? "probe" : stem;
-}
-
-const char* formatExtension(const std::string& format) {
-    if (format == "json") return ".json";
-    if (format == "binary") return ".bin";
-    if (format == "glsl") return ".glsl";
-    if (format == "cpp") return ".h";
-    return ".exr"; // irradiance-equirect, irradiance-cross
 }
 
 // Inputs and their outputs; two inputs with one output name are refused, naming both.
@@ -86,23 +90,30 @@ std::vector<BatchItem> planBatch(const BakeOptions& options) {
 }
 
 // The output folder is created when its parent exists; it and every output path are checked here,
-// before any GPU work, so that a bake is never wasted on an output that cannot be written.
-void prepareOutputFolder(const std::string& folder, const std::vector<BatchItem>& items) {
-    fs::path path = fs::path(folder).lexically_normal();
-    if (!path.has_filename()) path = path.parent_path();
-    std::error_code error;
-    if (!fs::exists(path, error)) {
-        fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
-        if (!fs::is_directory(parent, error))
-            throw Error(ErrorKind::Output,
-                        "cannot write to " + folder + ": folder " + parent.string() + " does not exist");
-        if (!fs::create_directory(path, error) && !fs::is_directory(path))
-            throw Error(ErrorKind::Output, "cannot create " + folder + ": " + error.message());
+// before any GPU work, so that a bake is never wasted on an output that cannot be written, and
+// no output may be one of the inputs.
+void prepareOutputFolder(const BakeOptions& options, const std::vector<BatchItem>& items) {
+    const std::string& folder = options.outDir;
+    if (mkdir(folder.c_str(), 0777) != 0 && errno != EEXIST) {
+        if (errno != ENOENT)
+            throw Error(ErrorKind::Output, "cannot create " + folder + ": " + systemReason(errno));
+        std::string parent = fs::path(folder).lexically_normal().parent_path().string();
+        throw Error(ErrorKind::Output, "cannot write to " + folder + ": folder " +
+                                           (parent.empty() ? "." : parent) + " does not exist");
     }
-    if (!fs::is_directory(path, error))
+    struct stat status {};
+    if (stat(folder.c_str(), &status) != 0)
+        throw Error(ErrorKind::Output, "cannot write to " + folder + ": " + systemReason(errno));
+    if (!S_ISDIR(status.st_mode))
         throw Error(ErrorKind::Output, "cannot write to " + folder + ": it is not a folder");
-    for (const BatchItem& item : items)
-        checkOutputPath(item.output);
+    std::vector<std::string> outputs, inputs;
+    for (const BatchItem& item : items) {
+        checkOutputPath(item.output, formatContent(options.format));
+        outputs.push_back(item.output);
+        for (std::string& file : filesReadBy(item.input))
+            inputs.push_back(std::move(file));
+    }
+    checkOutputsAreNotInputs(outputs, inputs);
 }
 
 // A progress bar on stderr, drawn only when stderr is a terminal: "[#####-----] 12/40 probes".
@@ -280,7 +291,7 @@ void finishBatch(Batch& batch, size_t count, double seconds) {
 
 void runBatchBake(const BakeOptions& options) {
     std::vector<BatchItem> items = planBatch(options);
-    prepareOutputFolder(options.outDir, items);
+    prepareOutputFolder(options, items);
 
     Clock::time_point start = Clock::now();
     Batch batch{options, ProgressBar{items.size()}};

@@ -9,6 +9,9 @@
 #include "sh/projection.h"
 #include "sh/windowing.h"
 
+#include <cctype>
+#include <filesystem>
+
 namespace shprobe {
 
 namespace {
@@ -22,7 +25,9 @@ struct Finished {
     std::vector<double> window; // empty: none
 };
 
-bool needsFinishing(const BakeOptions& options) { return hasLights(options.lights) || options.window != "none"; }
+bool needsFinishing(const BakeOptions& options) {
+    return hasLights(options.lights) || options.window != "none";
+}
 
 Finished finish(const BakeOptions& options, ShCoefficients radiance) {
     addLights(radiance, options.lights);
@@ -32,6 +37,24 @@ Finished finish(const BakeOptions& options, ShCoefficients radiance) {
 
 bool isHeaderFormat(const std::string& format) {
     return format == "glsl" || format == "cpp";
+}
+
+// The format an output name's extension names; empty when it names none (".txt", "/dev/null").
+std::string formatOfExtension(const std::string& path) {
+    std::string extension = std::filesystem::path(path).extension().string();
+    for (char& c : extension)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (extension == ".json") return "json";
+    if (extension == ".bin") return "binary";
+    if (extension == ".glsl") return "glsl";
+    if (extension == ".h" || extension == ".hpp") return "cpp";
+    if (extension == ".exr") return "irradiance-equirect";
+    return "";
+}
+
+bool extensionAgrees(const std::string& named, const std::string& format) {
+    return named.empty() || named == format ||
+           (named == "irradiance-equirect" && format == "irradiance-cross");
 }
 
 } // namespace
@@ -88,7 +111,8 @@ BakeResult bakeOnCpu(const BakeOptions& options, const Cubemap& cubemap) {
                                                              : projectCubemapFast(cubemap, options.order);
     Finished finished = finish(options, radiance);
     BakeResult result;
-    result.radiance = finished.window.empty() ? finished.radiance : applyWindow(finished.radiance, finished.window);
+    result.radiance =
+        finished.window.empty() ? finished.radiance : applyWindow(finished.radiance, finished.window);
     result.irradiance = convolveIrradiance(result.radiance);
     result.device = cpuBackendName(options);
     return result;
@@ -100,6 +124,41 @@ std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& envi
     if (!sun.found) return std::nullopt;
     SphericalLight light = sunAsSphericalLight(sun);
     return ProbeSun{light.direction, light.radiance, light.angularRadius};
+}
+
+const char* formatExtension(const std::string& format) {
+    if (format == "json") return ".json";
+    if (format == "binary") return ".bin";
+    if (format == "glsl") return ".glsl";
+    if (format == "cpp") return ".h";
+    return ".exr"; // irradiance-equirect, irradiance-cross
+}
+
+BakeOptions withFormatAndOutput(BakeOptions options) {
+    const std::string named = options.output.empty() ? "" : formatOfExtension(options.output);
+    if (options.format.empty()) options.format = named.empty() ? "json" : named;
+    if (!extensionAgrees(named, options.format))
+        throw Error(ErrorKind::Input, "-o " + options.output + " names a " + named +
+                                          " file but --format is " + options.format + "; use the extension " +
+                                          formatExtension(options.format) + " or leave out --format");
+    if (options.output.empty()) options.output = std::string("probe") + formatExtension(options.format);
+    return options;
+}
+
+OutputContent formatContent(const std::string& format) {
+    return format == "json" || isHeaderFormat(format) ? OutputContent::Text : OutputContent::Binary;
+}
+
+std::vector<std::string> filesReadBy(const std::string& input) {
+    if (input.empty()) return {};
+    try {
+        if (isFacesSource(input)) {
+            std::array<std::string, kFaceCount> faces = resolveFaceFiles(input);
+            return {faces.begin(), faces.end()};
+        }
+    } catch (const Error&) { // the load reports it
+    }
+    return {input};
 }
 
 void checkFormatOptions(const BakeOptions& options) {

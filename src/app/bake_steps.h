@@ -4,6 +4,7 @@
 #include "app/commands.h"
 #include "gpu/projector.h"
 #include "image/environment.h"
+#include "io/output_file.h"
 #include "io/probe_file.h"
 #include "sh/error.h"
 #include "vk/check.h"
@@ -43,7 +44,7 @@ template <typename Work> void withGpu(const BakeOptions& options, Work&& work) {
     try {
         const std::string cachePath = pipelineCachePath(context);
         cache = loadPipelineCache(context, cachePath);
-        std::optional<DeviceStep> creating(std::in_place, "creating the bake pipelines");
+        std::optional<DeviceStep> creating(std::in_place, "creating the bake pipelines", DeviceWork::Setup);
         Projector projector = createProjector(context, {.order = options.order,
                                                         .workgroupSize = options.workgroupSize,
                                                         .texelsPerInvocation = options.texelsPerInvocation,
@@ -66,7 +67,8 @@ template <typename Work> void withGpu(const BakeOptions& options, Work&& work) {
     uint32_t validationMessages = context.validationMessages();
     destroyContext(context);
     if (validationMessages > 0)
-        throw Error(ErrorKind::Device, std::to_string(validationMessages) + " Vulkan validation messages (above)");
+        throw Error(ErrorKind::Device,
+                    std::to_string(validationMessages) + " Vulkan validation messages (above)");
 }
 
 // The cube maps of a chunk in one submission (bakeCubemaps), or alone through bakeCubemap when one
@@ -80,6 +82,18 @@ BakeResult bakeOnCpu(const BakeOptions& options, const Cubemap& cubemap);
 
 // Takes the sun out of the environment when asked; the probe is then of the rest.
 std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& environment);
+
+// The extension a format's files get: ".json", ".bin", ".glsl", ".h", ".exr".
+const char* formatExtension(const std::string& format);
+
+// The options with --format and -o settled: without --format, -o's extension chooses it (json
+// when the extension names none); without -o, the output is "probe" and the format's extension.
+// An -o extension that names another format than --format is refused (Error(Input)).
+BakeOptions withFormatAndOutput(BakeOptions options);
+
+// Whether the format's files are text (json, glsl, cpp) or binary (standard output takes both;
+// a terminal only text).
+OutputContent formatContent(const std::string& format);
 
 // Option combinations the writers would refuse, checked before any work.
 void checkFormatOptions(const BakeOptions& options);

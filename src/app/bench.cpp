@@ -7,7 +7,7 @@
 #include "app/bench_device.h"
 #include "app/stopwatch.h"
 #include "gpu/projector.h"
-#include "io/atomic_file.h"
+#include "io/output_file.h"
 #include "sh/basis.h"
 #include "sh/fast_projection.h"
 #include "sh/projection.h"
@@ -128,7 +128,8 @@ double memoryReadMilliseconds(std::span<const std::byte> bytes, int repeat) {
                     sums[t] += sumWords(bytes.subspan(offset, size));
                 }
             });
-        for (std::thread& worker : workers) worker.join();
+        for (std::thread& worker : workers)
+            worker.join();
     });
     volatile uint64_t keep = sums[0]; // the sums must be computed
     (void)keep;
@@ -138,13 +139,14 @@ double memoryReadMilliseconds(std::span<const std::byte> bytes, int repeat) {
 double errorToReference(const ShCoefficients& coefficients, const ShCoefficients& reference) {
     double worst = 0.0;
     for (size_t i = 0; i < reference.rgb.size(); ++i)
-        for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(coefficients.rgb[i][c] - reference.rgb[i][c]));
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(worst, std::abs(coefficients.rgb[i][c] - reference.rgb[i][c]));
     const glm::dvec3& dc = reference.rgb[0];
     return worst / std::max({std::abs(dc.r), std::abs(dc.g), std::abs(dc.b)});
 }
 
 class Bench {
-public:
+  public:
     Bench(const BenchOptions& options, Context& context) : options_(options), context_(context) {}
 
     void runFaceSize(int faceSize) {
@@ -159,12 +161,13 @@ public:
             const double ms = deviceReadMilliseconds(context_, input.rgba32f, format, options_.repeat);
             if (ms > 0.0) add(faceSize, format, 0, "gpu texel reads only (device)", ms, -1.0);
         }
-        for (int order : options_.orders) runOrder(input, order);
+        for (int order : options_.orders)
+            runOrder(input, order);
     }
 
     const std::vector<Measurement>& measurements() const { return measurements_; }
 
-private:
+  private:
     static constexpr std::array<TexelFormat, 2> kFormats{TexelFormat::Rgba32F, TexelFormat::Rgba16F};
 
     void runOrder(const BenchInput& input, int order) {
@@ -175,7 +178,8 @@ private:
             double ms = bestMilliseconds(1, [&] { reference = projectCubemap(cubemap, order); });
             add(cubemap.faceSize, TexelFormat::Rgba32F, order, "cpu reference (double)", ms, 0.0);
         }
-        for (TexelFormat format : kFormats) runGpu(cubemap, format, order, haveReference ? &reference : nullptr);
+        for (TexelFormat format : kFormats)
+            runGpu(cubemap, format, order, haveReference ? &reference : nullptr);
         for (TexelFormat format : kFormats)
             runCpuFast(input, format, order, haveReference ? &reference : nullptr);
     }
@@ -211,7 +215,8 @@ private:
         const double rate = texels_ / (ms * 1e-3);
         const double bytes = rate * double(texelBytes(format));
         const double boundMs = boundMs_[size_t(format)];
-        measurements_.push_back({faceSize, formatName(format), order, path, ms, rate, bytes, boundMs / ms, error});
+        measurements_.push_back(
+            {faceSize, formatName(format), order, path, ms, rate, bytes, boundMs / ms, error});
         const Measurement& m = measurements_.back();
         std::printf("%6d  %-7s  %5s  %-44s %10.2f %10.1f %7.2f %8.1f%%", m.faceSize, m.format,
                     order ? std::to_string(order).c_str() : "-", m.path.c_str(), m.milliseconds,
@@ -238,8 +243,8 @@ PipelineCreations measurePipelines(const Context& context, const std::vector<int
     PipelineCreations creations;
     for (int order : orders) {
         PipelineCreation creation = measurePipelineCreation(context, order);
-        std::printf("%5d %12.2f %14.2f %12zu\n", order, creation.firstMilliseconds, creation.cachedMilliseconds,
-                    creation.cacheBytes);
+        std::printf("%5d %12.2f %14.2f %12zu\n", order, creation.firstMilliseconds,
+                    creation.cachedMilliseconds, creation.cacheBytes);
         creations.emplace_back(order, creation);
     }
     return creations;
@@ -285,12 +290,15 @@ void addBenchCommand(CLI::App& app, BenchOptions& options) {
     CLI::App* command = app.add_subcommand(
         "bench", "Measure every projection path against the machine's memory-read bound, in one run");
     command->add_option("--sizes", options.faceSizes, "Face sizes")->capture_default_str();
-    command->add_option("--orders", options.orders, "SH orders")->check(CLI::Range(1, kMaxOrder))->capture_default_str();
+    command->add_option("--orders", options.orders, "SH orders")
+        ->check(CLI::Range(1, kMaxOrder))
+        ->capture_default_str();
     command->add_option("--repeat", options.repeat, "Runs per measurement (the best counts)")
         ->check(CLI::Range(1, 100))
         ->capture_default_str();
-    command->add_option("--reference-max-size", options.referenceMaxFaceSize,
-                        "Largest face size for the (slow) double reference")
+    command
+        ->add_option("--reference-max-size", options.referenceMaxFaceSize,
+                     "Largest face size for the (slow) double reference")
         ->capture_default_str();
     command->add_option("--json", options.json, "Also write the measurements to this JSON file");
     command->add_option("--device", options.device, "Vulkan device index or name part");
@@ -310,14 +318,16 @@ void runBench(const BenchOptions& options) {
     PipelineCreations pipelineCreations;
     try {
         Bench bench(options, context);
-        for (int faceSize : options.faceSizes) bench.runFaceSize(faceSize);
+        for (int faceSize : options.faceSizes)
+            bench.runFaceSize(faceSize);
         measurements = bench.measurements();
         pipelineCreations = measurePipelines(context, options.orders);
     } catch (...) {
         destroyContext(context);
         throw;
     }
-    if (!options.json.empty()) writeFileAtomic(options.json, reportJson(context, measurements, pipelineCreations).dump(2) + "\n");
+    if (!options.json.empty())
+        writeOutputFile(options.json, reportJson(context, measurements, pipelineCreations).dump(2) + "\n");
     destroyContext(context);
 }
 

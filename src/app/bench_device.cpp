@@ -40,13 +40,15 @@ void destroyReadResources(const Context& context, ReadResources& r) {
 
 } // namespace
 
-double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format, int repeat) {
+double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format,
+                              int repeat) {
     if (!context.info.timestamps) return 0.0;
     // read_texels reads as the storage-image projection does, the one the program uses.
     if (uploadBinding(context, format) == CubemapBinding::SampledImage) return 0.0;
     static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
                                                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
-    const ProbeBakerOptions plan{.order = 3, .cubemaps = uploadBinding(context, format)}; // an order-3 projection's plan
+    const ProbeBakerOptions plan{.order = 3,
+                                 .cubemaps = uploadBinding(context, format)}; // an order-3 projection's plan
     const bool half = format == TexelFormat::Rgba16F;
     ReadResources r;
     double best = INFINITY;
@@ -54,20 +56,23 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
         const Cubemap* one[] = {&cubemap};
         r.upload = createCubemapUpload(context, one, format);
         r.baker = createProbeBaker(context, plan);
-        r.sums = createBuffer(context, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "placeholder");
-        r.set = createProbeBakeSet(context, r.baker, {r.upload.image.view, r.upload.faceSize, 1, r.sums.buffer, 0});
+        r.sums =
+            createBuffer(context, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "placeholder");
+        r.set = createProbeBakeSet(context, r.baker,
+                                   {r.upload.image.view, r.upload.faceSize, 1, r.sums.buffer, 0});
         destroyBuffer(context, r.sums);
         const uint32_t groups = r.set.groupsPerProbe;
         r.sums = createBuffer(context, VkDeviceSize(groups) * plan.workgroupSize * 16,
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "read sums");
-        r.read = createComputeProgram(context, {.name = half ? "read_texels_rgba16f.comp" : "read_texels_rgba32f.comp",
-                                                .spirv = half ? spirv::read_texels_rgba16f_comp
-                                                              : spirv::read_texels_rgba32f_comp,
-                                                .bindings = kBindings,
-                                                .pushConstantSize = sizeof(gpu::ProjectParams),
-                                                .localSize = plan.workgroupSize});
+        r.read = createComputeProgram(
+            context, {.name = half ? "read_texels_rgba16f.comp" : "read_texels_rgba32f.comp",
+                      .spirv = half ? spirv::read_texels_rgba16f_comp : spirv::read_texels_rgba32f_comp,
+                      .bindings = kBindings,
+                      .pushConstantSize = sizeof(gpu::ProjectParams),
+                      .localSize = plan.workgroupSize});
         r.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 1, .storageImages = 1});
-        const BindingTarget targets[] = {{.imageView = r.upload.image.view}, {r.sums.buffer, 0, VK_WHOLE_SIZE}};
+        const BindingTarget targets[] = {{.imageView = r.upload.image.view},
+                                         {r.sums.buffer, 0, VK_WHOLE_SIZE}};
         VkDescriptorSet set = createDescriptorSet(context, r.pool, r.read, targets);
         r.timestamps = createTimestampPool(context);
         // Run 0 is not timed: it uploads, and llvmpipe compiles a shader at its first dispatch.
@@ -90,7 +95,9 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
 }
 
 PipelineCreation measurePipelineCreation(const Context& context, int order) {
-    const std::string path = (std::filesystem::temp_directory_path() /
+    std::error_code noTemporaryFolder; // TMPDIR naming no folder
+    std::filesystem::path folder = std::filesystem::temp_directory_path(noTemporaryFolder);
+    const std::string path = ((noTemporaryFolder ? "/tmp" : folder) /
                               ("shprobe-bench-pipelines-" + std::to_string(getpid()) + ".bin"))
                                  .string();
     PipelineCreation result;

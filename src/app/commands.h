@@ -5,7 +5,10 @@
 #include "image/environment.h"
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -13,27 +16,28 @@ namespace shprobe {
 
 struct BakeOptions {
     std::vector<std::string> inputs; // files, folders or {face} patterns; none: the built-in sky
-    std::string output = "probe.json";
-    std::string outDir;           // batch: one output per input in this folder, named after it
-    std::string listFile;         // batch: more inputs, one path per line
-    uint64_t batchBytes = 0;      // batch: most texel bytes per GPU submission (0: the device's limit)
+    std::string output;              // empty: "probe" and the format's extension
+    std::string outDir;              // batch: one output per input in this folder, named after it
+    std::string listFile;            // batch: more inputs, one path per line
+    uint64_t batchBytes = 0;         // batch: most texel bytes per GPU submission (0: the device's limit)
     int order = 3;
     std::string layout = "auto";
-    int faceSize = 0;             // 0: from the input (256 for the built-in sky)
-    std::string backend = "gpu";  // gpu | cpu (fast float) | reference (double)
-    bool irradiance = false;      // write E_lm instead of L_lm
-    bool sanitize = false;        // replace NaN/Inf texels with 0 instead of refusing
+    int faceSize = 0;                           // 0: from the input (256 for the built-in sky)
+    std::string backend = "gpu";                // gpu | cpu (fast float) | reference (double)
+    bool irradiance = false;                    // write E_lm instead of L_lm
+    bool sanitize = false;                      // replace NaN/Inf texels with 0 instead of refusing
     int64_t maxPixels = kDefaultMaxImagePixels; // larger image files are refused from their header
     std::string device;
     bool validation = false;
     uint32_t workgroupSize = 64;
     uint32_t texelsPerInvocation = 256;
-    bool quiet = false;           // no coefficient table
-    LightOptions lights;          // analytic lights added to the environment's radiance
-    std::string window = "none";  // none | hanning:W | lanczos:W | dering | dering-lanczos
-    bool extractSun = false;      // take the sun out and write it beside the probe
-    std::string format = "json";  // json | binary | glsl | cpp | irradiance-equirect | irradiance-cross
-    int mapSize = 0;              // irradiance maps: equirect width or face size (0: 512 / 128)
+    bool quiet = false;          // no coefficient table
+    LightOptions lights;         // analytic lights added to the environment's radiance
+    std::string window = "none"; // none | hanning:W | lanczos:W | dering | dering-lanczos
+    bool extractSun = false;     // take the sun out and write it beside the probe
+    std::string format;          // json | binary | glsl | cpp | irradiance-equirect | irradiance-cross;
+                                 // empty: from the output's extension, else json
+    int mapSize = 0;             // irradiance maps: equirect width or face size (0: 512 / 128)
 };
 
 struct InfoOptions {
@@ -51,7 +55,7 @@ struct RenderOptions {
     float exposure = 0.0f;             // stops relative to the automatic exposure
     float yaw = 0.0f;                  // camera orbit, degrees
     float pitch = 10.0f;
-    int faceSize = 0;                  // environment cube-map face size (0: from the input)
+    int faceSize = 0; // environment cube-map face size (0: from the input)
     bool sanitize = false;
     int64_t maxPixels = kDefaultMaxImagePixels;
     std::string device;
@@ -59,13 +63,13 @@ struct RenderOptions {
 };
 
 struct ViewOptions {
-    std::string input;                 // like RenderOptions::input
-    std::string size = "960x600";      // window size, N or WxH
+    std::string input;            // like RenderOptions::input
+    std::string size = "960x600"; // window size, N or WxH
     int order = 3;
     std::string mode = "irradiance";
-    std::string screenshot;            // save frame --frames to this PNG and exit
-    int frames = 0;                    // > 0: exit after this many frames
-    std::vector<std::string> keys;     // key presses to replay, one per frame (tests, scripts)
+    std::string screenshot;        // save frame --frames to this PNG and exit
+    int frames = 0;                // > 0: exit after this many frames
+    std::vector<std::string> keys; // key presses to replay, one per frame (tests, scripts)
     float exposure = 0.0f;
     int faceSize = 0;
     bool sanitize = false;
@@ -74,10 +78,41 @@ struct ViewOptions {
     bool validation = false;
 };
 
+// Every number option is checked at parse time: finite (CLI11 reads "nan" and "inf" as numbers)
+// and within [min, max] (infinite bounds: none). The error says what is allowed: "--yaw: nan is not a number
+// from -360 to 360".
+inline CLI::Validator numberFrom(double min, double max) {
+    auto text = [](double value) {
+        std::ostringstream out;
+        out << value;
+        return out.str();
+    };
+    std::string allowed = std::isinf(min) && std::isinf(max) ? "a finite number"
+                          : std::isinf(max)                  ? "a number of at least " + text(min)
+                                            : "a number from " + text(min) + " to " + text(max);
+    return CLI::Validator(
+        [=](const std::string& input) {
+            char* end = nullptr;
+            double value = std::strtod(input.c_str(), &end);
+            bool number = !input.empty() && *end == '\0' && std::isfinite(value);
+            if (number && value >= min && value <= max) return std::string();
+            return input + " is not " + allowed;
+        },
+        allowed.substr(2));
+}
+
 // --device and --validation, as bake, render and view take them.
 inline void addDeviceOptions(CLI::App& command, std::string& device, bool& validation) {
     command.add_option("--device", device, "Vulkan device index or name part (see `shprobe info`)");
     command.add_flag("--validation", validation, "Enable the Khronos validation layer; fail on messages");
+}
+
+// --exposure of render and view: stops relative to the automatic exposure (2^64 either way
+// is already far past black and white).
+inline void addExposureOption(CLI::App& command, float& exposure) {
+    command.add_option("--exposure", exposure, "Exposure in stops relative to the automatic one")
+        ->check(numberFrom(-64.0, 64.0))
+        ->capture_default_str();
 }
 
 // --max-pixels: image files with more pixels are refused from their header, before any pixel is
@@ -90,6 +125,10 @@ inline void addImageLimitOption(CLI::App& command, int64_t& maxPixels) {
         ->check(CLI::Range(int64_t(1), kMaxImageSide * kMaxImageSide))
         ->capture_default_str();
 }
+
+// The files an input names: the six face files of a faces source, when they resolve, else the
+// input itself (none for the built-in sky); an output must be none of them.
+std::vector<std::string> filesReadBy(const std::string& input);
 
 void addBakeCommand(CLI::App& app, BakeOptions& options);
 void runBake(const BakeOptions& options);

@@ -24,7 +24,8 @@ void printDevice(const DeviceInfo& device) {
                 limits.maxComputeWorkGroupInvocations, limits.maxComputeSharedMemorySize / 1024,
                 limits.maxStorageBufferRange >> 20);
     std::printf("  timestamps: %s\n", device.timestamps ? "yes" : "no (bake reports wall time only)");
-    std::printf("  usable: %s\n", device.unsupportedReason.empty() ? "yes" : device.unsupportedReason.c_str());
+    std::printf("  usable: %s\n",
+                device.unsupportedReason.empty() ? "yes" : device.unsupportedReason.c_str());
 }
 
 } // namespace
@@ -32,13 +33,15 @@ void printDevice(const DeviceInfo& device) {
 void runInfo(const InfoOptions& options) {
     ContextOptions contextOptions;
     contextOptions.validation = options.validation;
-    for (const DeviceInfo& device : listDevices(contextOptions)) printDevice(device);
+    for (const DeviceInfo& device : listDevices(contextOptions))
+        printDevice(device);
 
     Context context = createContext(contextOptions);
     std::printf("bake uses device %u: %s (choose another with --device INDEX|NAME or SHPROBE_DEVICE)\n",
                 context.info.index, context.info.name.c_str());
     std::printf("shaders need: Vulkan 1.1, subgroup basic + arithmetic in compute, storage buffers; "
-                "GPU faces up to %d^2\n", kMaxGpuFaceSize);
+                "GPU faces up to %d^2\n",
+                kMaxGpuFaceSize);
     destroyContext(context);
 }
 

@@ -1,7 +1,7 @@
 // shprobe: bakes HDR environments into spherical-harmonics light probes on the GPU.
 #include "app/bench.h"
 #include "app/commands.h"
-#include "io/atomic_file.h"
+#include "io/output_file.h"
 #include "sh/error.h"
 
 #include <cstdio>
@@ -13,16 +13,20 @@ namespace {
 // Exit codes: 0 success, 2 bad input or usage, 3 output not written, 4 Vulkan device problem.
 int exitCode(shprobe::ErrorKind kind) {
     switch (kind) {
-    case shprobe::ErrorKind::Input: return 2;
-    case shprobe::ErrorKind::Output: return 3;
-    case shprobe::ErrorKind::Device: return 4;
+    case shprobe::ErrorKind::Input:
+        return 2;
+    case shprobe::ErrorKind::Output:
+        return 3;
+    case shprobe::ErrorKind::Device:
+        return 4;
     }
     return 1;
 }
 
 // An error is one line; a library's message may hold several.
 std::string oneLine(std::string text) {
-    while (!text.empty() && text.back() == '\n') text.pop_back();
+    while (!text.empty() && text.back() == '\n')
+        text.pop_back();
     for (char& c : text)
         if (c == '\n') c = ' ';
     return text;

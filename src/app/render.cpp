@@ -3,6 +3,7 @@
 // order-5 reconstructions and lit spheres side by side.
 #include "app/commands.h"
 #include "app/stopwatch.h"
+#include "io/output_file.h"
 #include "render/grid.h"
 #include "render/image_output.h"
 #include "render/offscreen.h"
@@ -84,8 +85,10 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
     Context context = createContext(contextOptions);
     try {
         if (!isProbeFile(options.input)) {
-            DeviceStep step("baking " + (options.input.empty() ? std::string("the built-in sky") : options.input));
-            result.input = loadRenderInput(context, options.input, {options.faceSize, options.sanitize, options.maxPixels});
+            DeviceStep step("baking " +
+                            (options.input.empty() ? std::string("the built-in sky") : options.input));
+            result.input = loadRenderInput(context, options.input,
+                                           {options.faceSize, options.sanitize, options.maxPixels});
         }
         DeviceStep step("rendering " + options.output);
         renderInput(context, options, size, result);
@@ -157,12 +160,12 @@ void addRenderCommand(CLI::App& app, RenderOptions& options) {
     command->add_option("--background", options.background, "Background behind the sphere")
         ->check(CLI::IsMember({"auto", "environment", "radiance", "sh", "shading", "color"}))
         ->capture_default_str();
-    command->add_option("--exposure", options.exposure, "Exposure in stops relative to the automatic one")
-        ->capture_default_str();
+    addExposureOption(*command, options.exposure);
     command->add_option("--yaw", options.yaw, "Camera yaw around +Y, degrees (0 looks along -Z)")
+        ->check(numberFrom(-360.0, 360.0))
         ->capture_default_str();
     command->add_option("--pitch", options.pitch, "Camera pitch, degrees")
-        ->check(CLI::Range(-85.0, 85.0))
+        ->check(numberFrom(-85.0, 85.0))
         ->capture_default_str();
     addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(*command, options.device, options.validation);
@@ -180,6 +183,7 @@ void runRender(const RenderOptions& options) {
         options.size.empty() ? std::to_string(options.grid ? kDefaultGridCell : kDefaultSize) : options.size,
         "--size");
     checkRenderOutputPath(options.output); // before any work
+    checkOutputsAreNotInputs({&options.output, 1}, filesReadBy(options.input));
     RenderResult result = renderOnDevice(options, size);
     writeRenderedImage(options.output, result.image);
     printSummary(options, result);

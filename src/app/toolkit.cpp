@@ -1,7 +1,9 @@
 // `shprobe rotate` and `shprobe light`, and the light and window options shared with `bake`.
 #include "app/toolkit.h"
 
-#include "io/atomic_file.h"
+#include "app/commands.h"
+
+#include "io/output_file.h"
 #include "io/probe_file.h"
 #include "sh/basis.h"
 #include "sh/error.h"
@@ -33,7 +35,8 @@ std::vector<double> parseNumbers(const std::string& text, size_t count, const st
         }
     }
     if (values.size() != count)
-        throw Error(ErrorKind::Input, option + ": '" + text + "' needs " + std::to_string(count) + " numbers");
+        throw Error(ErrorKind::Input,
+                    option + ": '" + text + "' needs " + std::to_string(count) + " numbers");
     return values;
 }
 
@@ -59,7 +62,8 @@ double parseRadiusRadians(const std::string& text, const std::string& option) {
 glm::dmat3 chosenRotation(const RotateOptions& options) {
     int given = !options.euler.empty() + !options.quaternion.empty() + !options.matrix.empty();
     if (given != 1) throw Error(ErrorKind::Input, "rotate: give exactly one of --euler, --quat, --matrix");
-    if (!options.euler.empty()) return rotationFromEulerZYZ(options.euler[0], options.euler[1], options.euler[2]);
+    if (!options.euler.empty())
+        return rotationFromEulerZYZ(options.euler[0], options.euler[1], options.euler[2]);
     if (!options.quaternion.empty()) {
         const std::vector<double>& q = options.quaternion;
         return rotationFromQuaternion(q[0], q[1], q[2], q[3]);
@@ -69,7 +73,8 @@ glm::dmat3 chosenRotation(const RotateOptions& options) {
 
 std::string joined(const std::vector<double>& values) {
     std::ostringstream text;
-    for (size_t i = 0; i < values.size(); ++i) text << (i ? "," : "") << values[i];
+    for (size_t i = 0; i < values.size(); ++i)
+        text << (i ? "," : "") << values[i];
     return text.str();
 }
 
@@ -84,8 +89,9 @@ std::pair<WindowKind, double> parseFixedWindow(const std::string& window) {
     size_t colon = window.find(':');
     std::string kind = window.substr(0, colon);
     if (colon == std::string::npos || (kind != "hanning" && kind != "lanczos"))
-        throw Error(ErrorKind::Input, "--window: '" + window +
-                                          "' is not none, hanning:WIDTH, lanczos:WIDTH, dering or dering-lanczos");
+        throw Error(ErrorKind::Input,
+                    "--window: '" + window +
+                        "' is not none, hanning:WIDTH, lanczos:WIDTH, dering or dering-lanczos");
     double width = parseNumbers(window.substr(colon + 1), 1, "--window")[0];
     if (width <= 0.0) throw Error(ErrorKind::Input, "--window: the width must be positive");
     return {kind == "hanning" ? WindowKind::Hanning : WindowKind::Lanczos, width};
@@ -95,13 +101,16 @@ std::pair<WindowKind, double> parseFixedWindow(const std::string& window) {
 
 void addLightOptions(CLI::App& command, LightOptions& options) {
     command.add_option("--ambient", options.ambient, "Uniform radiance R,G,B added to the probe");
-    command.add_option("--directional", options.directional,
-                       "Directional light X,Y,Z R,G,B (intensity I lights a facing white surface to I); repeatable")
-        ->expected(2)
+    command
+        .add_option(
+            "--directional", options.directional,
+            "Directional light X,Y,Z R,G,B (intensity I lights a facing white surface to I); repeatable")
+        ->type_size(2)
         ->allow_extra_args(false);
-    command.add_option("--sphere", options.sphere,
-                       "Spherical light X,Y,Z RADIUS_DEGREES R,G,B (uniform radiance over the disc); repeatable")
-        ->expected(3)
+    command
+        .add_option("--sphere", options.sphere,
+                    "Spherical light X,Y,Z RADIUS_DEGREES R,G,B (uniform radiance over the disc); repeatable")
+        ->type_size(3)
         ->allow_extra_args(false);
 }
 
@@ -110,7 +119,8 @@ bool hasLights(const LightOptions& options) {
 }
 
 void addLights(ShCoefficients& radiance, const LightOptions& options) {
-    for (const std::string& rgb : options.ambient) addAmbient(radiance, parseVector(rgb, "--ambient"));
+    for (const std::string& rgb : options.ambient)
+        addAmbient(radiance, parseVector(rgb, "--ambient"));
     for (size_t i = 0; i + 1 < options.directional.size(); i += 2)
         addDirectionalLight(radiance, {parseDirection(options.directional[i], "--directional"),
                                        parseVector(options.directional[i + 1], "--directional")});
@@ -121,13 +131,16 @@ void addLights(ShCoefficients& radiance, const LightOptions& options) {
 }
 
 void addWindowOption(CLI::App& command, std::string& window) {
-    command.add_option("--window", window,
-                       "Windowing against ringing: none, hanning:WIDTH, lanczos:WIDTH, or dering / dering-lanczos "
-                       "(the weakest Hanning / Lanczos window that keeps irradiance non-negative)")
+    command
+        .add_option(
+            "--window", window,
+            "Windowing against ringing: none, hanning:WIDTH, lanczos:WIDTH, or dering / dering-lanczos "
+            "(the weakest Hanning / Lanczos window that keeps irradiance non-negative)")
         ->capture_default_str();
 }
 
-std::optional<std::vector<double>> windowFactorsFor(const std::string& window, const ShCoefficients& radiance) {
+std::optional<std::vector<double>> windowFactorsFor(const std::string& window,
+                                                    const ShCoefficients& radiance) {
     if (window == "none") return std::nullopt;
     if (window == "dering" || window == "dering-lanczos") {
         DeringOptions options;
@@ -142,30 +155,44 @@ void addRotateCommand(CLI::App& app, RotateOptions& options) {
     CLI::App* command = app.add_subcommand("rotate", "Rotate a probe: a light from d then comes from R d");
     command->add_option("probe", options.input, "Coefficient file (JSON)")->required();
     command->add_option("-o,--output", options.output, "Rotated coefficient file")->required();
-    command->add_option("--euler", options.euler, "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)")
+    command
+        ->add_option("--euler", options.euler, "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)")
         ->expected(3)
-        ->delimiter(',');
-    command->add_option("--quat", options.quaternion, "W,X,Y,Z unit quaternion")->expected(4)->delimiter(',');
+        ->delimiter(',')
+        ->check(numberFrom(-360.0, 360.0));
+    command->add_option("--quat", options.quaternion, "W,X,Y,Z unit quaternion")
+        ->expected(4)
+        ->delimiter(',')
+        ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // rotationFromQuaternion says when it is not unit
     command->add_option("--matrix", options.matrix, "R00,R01,...,R22 rotation matrix, row-major")
         ->expected(9)
-        ->delimiter(',');
+        ->delimiter(',')
+        ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // rotationFromRowMajor says when it is no rotation
 }
 
 void runRotate(const RotateOptions& options) {
     checkOutputPath(options.output);
-    ShCoefficients probe = readProbeFile(options.input);
-    ShCoefficients rotated = rotate(makeShRotation(chosenRotation(options), probe.order), probe);
+    checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
+    Probe probe = readProbe(options.input);
+    const glm::dmat3 rotation = chosenRotation(options);
     ProbeMetadata metadata;
     metadata.source = options.input + " rotated by " + rotationDescription(options);
-    writeProbeFile(options.output, rotated, metadata);
-    std::printf("shprobe rotate: %s -> %s (%s)\n", options.input.c_str(), options.output.c_str(),
-                rotationDescription(options).c_str());
+    // The sun taken out of the coefficients turns with them: a light from d then comes from R d.
+    metadata.sun = probe.sun;
+    if (metadata.sun) metadata.sun->direction = glm::normalize(rotation * metadata.sun->direction);
+    const ShCoefficients& coefficients = probe.coefficients;
+    writeProbeFile(options.output, rotate(makeShRotation(rotation, coefficients.order), coefficients),
+                   metadata);
+    std::fprintf(reportStream(options.output), "shprobe rotate: %s -> %s (%s)\n", options.input.c_str(),
+                 options.output.c_str(), rotationDescription(options).c_str());
 }
 
 void addLightCommand(CLI::App& app, LightCommandOptions& options) {
     CLI::App* command = app.add_subcommand("light", "Write the probe of analytic lights");
     command->add_option("-o,--output", options.output, "Coefficient file (JSON)")->required();
-    command->add_option("--order", options.order, "SH order")->check(CLI::Range(1, kMaxOrder))->capture_default_str();
+    command->add_option("--order", options.order, "SH order")
+        ->check(CLI::Range(1, kMaxOrder))
+        ->capture_default_str();
     command->add_flag("--irradiance", options.irradiance, "Write irradiance instead of radiance");
     addLightOptions(*command, options.lights);
 }
@@ -179,8 +206,10 @@ void runLight(const LightCommandOptions& options) {
     ProbeMetadata metadata;
     metadata.source = "analytic lights";
     writeProbeFile(options.output, options.irradiance ? convolveIrradiance(radiance) : radiance, metadata);
-    std::printf("shprobe light: %zu ambient, %zu directional, %zu spherical -> %s\n", options.lights.ambient.size(),
-                options.lights.directional.size() / 2, options.lights.sphere.size() / 3, options.output.c_str());
+    std::fprintf(reportStream(options.output),
+                 "shprobe light: %zu ambient, %zu directional, %zu spherical -> %s\n",
+                 options.lights.ambient.size(), options.lights.directional.size() / 2,
+                 options.lights.sphere.size() / 3, options.output.c_str());
 }
 
 } // namespace shprobe

@@ -25,7 +25,8 @@ void addLights(ShCoefficients& radiance, const LightOptions& options);
 void addWindowOption(CLI::App& command, std::string& window);
 // Per-band factors for l < order: fixed windows from their width, de-ringing from the radiance
 // (the weakest window that keeps irradiance non-negative). std::nullopt for "none".
-std::optional<std::vector<double>> windowFactorsFor(const std::string& window, const ShCoefficients& radiance);
+std::optional<std::vector<double>> windowFactorsFor(const std::string& window,
+                                                    const ShCoefficients& radiance);
 
 struct RotateOptions {
     std::string input;

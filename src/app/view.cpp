@@ -2,6 +2,7 @@
 // saves frame N and exits, for tests and scripts.
 #include "app/commands.h"
 #include "gpu/projector.h"
+#include "io/output_file.h"
 #include "render/render_input.h"
 #include "render/viewer.h"
 #include "vk/check.h"
@@ -27,14 +28,15 @@ void addViewCommand(CLI::App& app, ViewOptions& options) {
         ->add_option("--keys", options.keys,
                      "Key presses to replay, one before each frame: 3 5 m b left right + - r q")
         ->delimiter(',');
-    command->add_option("--exposure", options.exposure, "Exposure in stops relative to the automatic one")
-        ->capture_default_str();
+    addExposureOption(*command, options.exposure);
     addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(*command, options.device, options.validation);
 }
 
 void runView(const ViewOptions& options) {
     ImageSize size = parseImageSize(options.size, "--size");
+    if (!options.screenshot.empty())
+        checkOutputsAreNotInputs({&options.screenshot, 1}, filesReadBy(options.input));
     // A bad probe file is refused before a window opens (and where there is no display).
     if (isProbeFile(options.input)) readProbeInput(options.input);
     ViewerOptions viewer;

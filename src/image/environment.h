@@ -51,18 +51,25 @@ struct Environment {
 
 // Reads an image file (any format OpenImageIO reads). 8-bit and 16-bit integer images are taken
 // as sRGB and decoded to linear, unless the file's colour space says linear; float images (EXR,
-// HDR) as linear. 1 channel is grey (copied to R, G and B), 2 grey and alpha, 3 RGB, 4 or more RGB
-// and alpha (and more); alpha and any further channel are ignored, never multiplied in. Texel
-// values are kept as stored: NaN and infinities are left to applyNonFinitePolicy, negative and huge
-// finite values are kept. Throws Error(Input) naming the file on any failure, and from the header,
-// before any pixel is read, when the image has more than maxPixels pixels or a side longer than
+// HDR) as linear. Channels are chosen by name (planChannels, image/channels.h): R, G, B (of the
+// unprefixed layer, else of the first layer holding all three), OpenEXR's luminance/chroma Y, RY,
+// BY converted to RGB, or Y alone as grey (copied to R, G and B); only those channels are read,
+// and alpha and any further channel are ignored, never multiplied in. Texel values are kept as
+// stored: NaN and infinities are left to applyNonFinitePolicy, negative and huge finite values
+// are kept. Throws Error(Input) naming the file on any failure: "PATH: REASON" in the system's
+// words when the file cannot be opened (io/input_file.h: "permission denied", "too many levels of
+// symbolic links", ...); from the header, before OpenImageIO opens the file, when an EXR or PNG
+// header claims more bytes than the file holds (checkImageHeader); and from the header, before any
+// pixel is read, when the image has more than maxPixels pixels or a side longer than
 // kMaxImageSide. What the image libraries print themselves (libpng's "libpng error: ..." line)
 // does not reach stderr: their text is in the error.
 Image readImage(const std::string& path, int64_t maxPixels = kDefaultMaxImagePixels);
 
 // Resolves the six face files of a folder (px, nx, py, ny, pz, nz with any image extension) or of
 // a pattern containing "{face}". Returns the paths in Face order; throws Error(Input) if one is
-// missing. isFacesSource tells whether a path names such a source (a folder or a pattern).
+// missing, and "PATH: REASON" when the folder, a face file or the path itself cannot be looked up
+// (a loop of links, a name too long, a folder that may not be searched). isFacesSource tells
+// whether a path names such a source (a folder or a pattern); it throws as resolveFaceFiles does.
 std::array<std::string, kFaceCount> resolveFaceFiles(const std::string& path);
 bool isFacesSource(const std::string& path);
 
@@ -80,10 +87,10 @@ Cubemap resizeCubemap(const Cubemap& cubemap, int faceSize);
 // The built-in default environment: a sky gradient, darker ground and a small, very bright sun
 // disc, as radiance in linear units.
 struct SkyParameters {
-    glm::dvec3 sunDirection{0.32, 0.72, -0.61}; // normalized on use
-    double sunAngularRadius = 0.02;             // radians (about 1.1 degrees)
+    glm::dvec3 sunDirection{0.32, 0.72, -0.61};        // normalized on use
+    double sunAngularRadius = 0.02;                    // radians (about 1.1 degrees)
     glm::dvec3 sunRadiance{60000.0, 54000.0, 45000.0}; // bright enough that order-3 and order-5
-                                                        // irradiance ring negative (de-ringing)
+                                                       // irradiance ring negative (de-ringing)
     glm::dvec3 zenith{0.25, 0.45, 1.0};
     glm::dvec3 horizon{0.9, 0.95, 1.0};
     glm::dvec3 ground{0.3, 0.25, 0.2};

@@ -2,18 +2,23 @@
 // (equirect or cross) and six face files. Every failure is an Error(Input) naming the file.
 #include "image/environment.h"
 
+#include "image/channels.h"
+#include "io/input_file.h"
 #include "sh/error.h"
 
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <fcntl.h>
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string_view>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -25,7 +30,8 @@ namespace {
 
 // Library messages may span lines; an error is one line, so their lines are joined with "; ".
 std::string oneLine(std::string text) {
-    while (!text.empty() && text.back() == '\n') text.pop_back();
+    while (!text.empty() && text.back() == '\n')
+        text.pop_back();
     for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
         text.replace(at, 1, "; ");
     return text;
@@ -46,7 +52,7 @@ std::string oneLine(std::string text) {
 #endif
 
 class LibraryChatter {
-public:
+  public:
     LibraryChatter() {
 #if !defined(SHPROBE_ADDRESS_SANITIZER)
         Capture& capture = shared();
@@ -64,7 +70,7 @@ public:
     LibraryChatter(const LibraryChatter&) = delete;
     LibraryChatter& operator=(const LibraryChatter&) = delete;
 
-private:
+  private:
     struct Capture {
         std::mutex mutex;
         int readers = 0;
@@ -116,14 +122,19 @@ std::string sizeText(int width, int height) {
     return std::to_string(width) + "x" + std::to_string(height);
 }
 
-void checkReadableFile(const std::string& path) {
-    std::error_code error;
-    fs::file_status status = fs::status(path, error);
-    if (!fs::exists(status)) throw Error(ErrorKind::Input, path + ": no such file");
-    if (fs::is_directory(status)) throw Error(ErrorKind::Input, path + ": is a folder, not an image file");
-    // Pipes and devices could block or never end; image readers seek anyway.
-    if (!fs::is_regular_file(status)) throw Error(ErrorKind::Input, path + ": not a regular file");
-    if (fs::file_size(path, error) == 0) throw Error(ErrorKind::Input, path + ": the file is empty");
+// OpenImageIO's readers allocate what a header claims before they find the file shorter (an EXR
+// attribute claiming 2 GiB, a PNG text chunk as long): the header is read within the file's size
+// first (image/channels.h).
+void checkHeaderBounds(const std::string& path) {
+    int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) throwInputError(path, errno);
+    try {
+        checkImageHeader(fd, path);
+    } catch (...) {
+        close(fd);
+        throw;
+    }
+    close(fd);
 }
 
 std::unique_ptr<OIIO::ImageInput> openImage(const std::string& path) {
@@ -161,10 +172,7 @@ void checkSpec(const std::string& path, const OIIO::ImageSpec& spec, int64_t max
     // Volume and deep images hold more than width x height values per channel.
     if (spec.depth > 1 || spec.deep)
         throw Error(ErrorKind::Input, path + ": volume and deep images are not supported");
-    if (spec.nchannels < 1)
-        throw Error(ErrorKind::Input,
-                    path + ": the image has " + std::to_string(spec.nchannels) +
-                        " channels; expected 1 (grey), 2 (grey, alpha), 3 (RGB) or more (RGB, alpha...)");
+    if (spec.nchannels < 1) throw Error(ErrorKind::Input, path + ": the image has no channels");
 }
 
 // Integer images are sRGB-encoded unless the file says otherwise; float images are linear.
@@ -175,20 +183,64 @@ bool isSrgbEncoded(const OIIO::ImageSpec& spec) {
     return !linear;
 }
 
-// Reads the first channel (1 or 2 channels: grey, alpha ignored) or the first three (RGB, the
-// rest ignored) straight into the RGBA texels, converted to float (integers normalized to [0, 1]).
-// The unused alpha is set to 1, as in every cube map the library makes.
-Image readPixels(const std::string& path, OIIO::ImageInput& input, const OIIO::ImageSpec& spec) {
-    int channels = spec.nchannels >= 3 ? 3 : 1;
-    Image image = makeImage(spec.width, spec.height);
+// Reads channels [begin, end) into consecutive components of every texel from `first` on,
+// converted to float (integers normalized to [0, 1]).
+void readChannelRange(const std::string& path, OIIO::ImageInput& input, int begin, int end, float* first,
+                      int width) {
     constexpr OIIO::stride_t texelStride = sizeof(glm::vec4);
-    if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, image.texels.data(), texelStride,
-                          texelStride * spec.width))
-        throw Error(ErrorKind::Input, path + ": cannot read the pixels; the file may be truncated or corrupt (" +
+    if (!input.read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, first, texelStride, texelStride * width))
+        throw Error(ErrorKind::Input, path +
+                                          ": cannot read the pixels; the file may be truncated or corrupt (" +
                                           oneLine(input.geterror()) + ")");
-    for (glm::vec4& texel : image.texels)
-        texel =
-            channels == 1 ? glm::vec4(texel.r, texel.r, texel.r, 1.0f) : glm::vec4(glm::vec3(texel), 1.0f);
+}
+
+// Reads the planned channels only, straight into the RGBA texels: in one read when they lie
+// within four channels of each other (the usual R, G, B, or Y, BY, RY), else one read each.
+// Returns the texel component each planned channel landed in.
+std::array<int, 3> readPlannedChannels(const std::string& path, OIIO::ImageInput& input,
+                                       const ChannelPlan& plan, Image& image) {
+    const auto planned = std::span(plan.channels).first(size_t(plan.count()));
+    const auto [low, high] = std::minmax_element(planned.begin(), planned.end());
+    const int begin = *low, end = *high + 1;
+    if (end - begin <= 4) {
+        readChannelRange(path, input, begin, end, &image.texels[0].x, image.width);
+        return {plan.channels[0] - begin, plan.channels[1] - begin, plan.channels[2] - begin};
+    }
+    for (size_t i = 0; i < planned.size(); ++i)
+        readChannelRange(path, input, planned[i], planned[i] + 1, &image.texels[0][int(i)], image.width);
+    return {0, 1, 2};
+}
+
+// The file's chromaticities attribute (float[8]: red, green, blue, white xy), or BT.709's.
+Chromaticities chromaticitiesOf(const OIIO::ImageSpec& spec) {
+    Chromaticities chromaticities;
+    float xy[8];
+    if (!spec.getattribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), xy))
+        return chromaticities;
+    chromaticities.red = {xy[0], xy[1]};
+    chromaticities.green = {xy[2], xy[3]};
+    chromaticities.blue = {xy[4], xy[5]};
+    chromaticities.white = {xy[6], xy[7]};
+    return chromaticities;
+}
+
+// Reads the channels the plan names and makes them RGB. The unused alpha is set to 1, as in every
+// cube map the library makes.
+Image readPixels(const std::string& path, OIIO::ImageInput& input, const OIIO::ImageSpec& spec,
+                 const ChannelPlan& plan) {
+    Image image = makeImage(spec.width, spec.height);
+    const std::array<int, 3> at = readPlannedChannels(path, input, plan, image);
+    const glm::vec3 weights = plan.meaning == ChannelMeaning::LuminanceChroma
+                                  ? luminanceWeights(chromaticitiesOf(spec), path)
+                                  : glm::vec3(0.0f);
+    for (glm::vec4& texel : image.texels) {
+        glm::vec3 stored(texel[at[0]], texel[at[1]], texel[at[2]]);
+        glm::vec3 rgb = plan.meaning == ChannelMeaning::Grey ? glm::vec3(stored[0])
+                        : plan.meaning == ChannelMeaning::Rgb
+                            ? stored
+                            : luminanceChromaToRgb(stored[0], stored[1], stored[2], weights);
+        texel = glm::vec4(rgb, 1.0f);
+    }
     return image;
 }
 
@@ -209,21 +261,34 @@ std::string replaceAll(std::string text, std::string_view from, std::string_view
     return text;
 }
 
+// A face file that exists; anything else wrong with it (a folder, a device, no permission) is said
+// when it is read. A loop of links or a name too long is said here: "PATH: REASON".
 std::string faceFileFromPattern(const std::string& pattern, std::string_view name) {
     std::string path = replaceAll(pattern, kFacePlaceholder, name);
-    if (!fs::is_regular_file(path))
+    if (inputPathKind(path) == PathKind::Missing)
         throw Error(ErrorKind::Input, pattern + ": face file " + path + " does not exist");
     return path;
 }
 
-// The one file of the folder named <name>.<any extension>.
-std::string faceFileInFolder(const std::string& folder, std::string_view name) {
+// The folder's entries, sorted; "FOLDER: REASON" when it cannot be listed.
+std::vector<fs::path> folderEntries(const std::string& folder) {
     std::error_code error;
+    std::vector<fs::path> entries;
+    fs::directory_iterator entry(folder, error);
+    for (; !error && entry != fs::directory_iterator(); entry.increment(error))
+        entries.push_back(entry->path());
+    if (error) throwInputError(folder, error.value());
+    std::sort(entries.begin(), entries.end());
+    return entries;
+}
+
+// The one regular file of the folder named <name>.<any extension>. Only entries of that name are
+// looked at, so a loop of links among the other files does not matter; in one of them it is said.
+std::string faceFileInFolder(const std::string& folder, std::string_view name) {
     std::vector<std::string> matches;
-    for (const fs::directory_entry& entry : fs::directory_iterator(folder, error))
-        if (entry.is_regular_file() && entry.path().stem() == name) matches.push_back(entry.path().string());
-    if (error) throw Error(ErrorKind::Input, folder + ": cannot list the folder (" + error.message() + ")");
-    std::sort(matches.begin(), matches.end());
+    for (const fs::path& entry : folderEntries(folder))
+        if (entry.stem() == name && inputPathKind(entry.string()) == PathKind::Regular)
+            matches.push_back(entry.string());
     std::string expected = std::string(name) + ".<extension>";
     if (matches.empty())
         throw Error(ErrorKind::Input,
@@ -311,7 +376,8 @@ Environment loadSingleImage(const std::string& path, const LoadOptions& options)
 } // namespace
 
 Image readImage(const std::string& path, int64_t maxPixels) {
-    checkReadableFile(path);
+    checkInputFile(path, "an image file");
+    checkHeaderBounds(path);
     Image image;
     bool srgb = false;
     {
@@ -319,7 +385,7 @@ Image readImage(const std::string& path, int64_t maxPixels) {
         std::unique_ptr<OIIO::ImageInput> input = openImage(path);
         const OIIO::ImageSpec& spec = input->spec();
         checkSpec(path, spec, maxPixels);
-        image = readPixels(path, *input, spec);
+        image = readPixels(path, *input, spec, planChannels(spec.channelnames, path));
         srgb = isSrgbEncoded(spec);
     }
     if (srgb) decodeSrgb(image);
@@ -327,12 +393,12 @@ Image readImage(const std::string& path, int64_t maxPixels) {
 }
 
 bool isFacesSource(const std::string& path) {
-    return path.find(kFacePlaceholder) != std::string::npos || fs::is_directory(path);
+    return path.find(kFacePlaceholder) != std::string::npos || inputPathKind(path) == PathKind::Folder;
 }
 
 std::array<std::string, kFaceCount> resolveFaceFiles(const std::string& path) {
     bool pattern = path.find(kFacePlaceholder) != std::string::npos;
-    if (!pattern && !fs::is_directory(path))
+    if (!pattern && inputPathKind(path) != PathKind::Folder)
         throw Error(ErrorKind::Input, path + ": six face files need a folder or a pattern containing {face}");
     std::array<std::string, kFaceCount> paths;
     for (int face = 0; face < kFaceCount; ++face) {
@@ -347,7 +413,8 @@ Environment loadEnvironment(const std::string& path, const LoadOptions& options)
         throw Error(ErrorKind::Input, "face size must be positive (or 0 for automatic), not " +
                                           std::to_string(options.faceSize));
     if (options.maxPixels < 1)
-        throw Error(ErrorKind::Input, "--max-pixels must be at least 1, not " + std::to_string(options.maxPixels));
+        throw Error(ErrorKind::Input,
+                    "--max-pixels must be at least 1, not " + std::to_string(options.maxPixels));
     bool faces = options.layout == Layout::Faces || (options.layout == Layout::Auto && isFacesSource(path));
     return faces ? loadFaces(path, options) : loadSingleImage(path, options);
 }

@@ -1,7 +1,7 @@
-// Writing linear RGB images through OpenImageIO, atomically via AtomicFile.
+// Writing images through OpenImageIO into memory, then to the destination through OutputFile.
 #include "image/image_write.h"
 
-#include "io/atomic_file.h"
+#include "io/output_file.h"
 #include "sh/error.h"
 
 #include <OpenImageIO/imageio.h>
@@ -24,39 +24,57 @@ Image srgbEncoded(const Image& image) {
     return encoded;
 }
 
-bool writePixels(OIIO::ImageOutput& output, const Image& image) {
+[[noreturn]] void failWrite(const std::string& destination, const std::string& why) {
+    throw Error(ErrorKind::Output, "cannot write " + destination + ": " + why);
+}
+
+// Encodes with OpenImageIO into a MemoryFile, then writes its bytes to the destination. The
+// OutputFile exists first, so that a run interrupted while encoding removes its temporary file.
+// writePixels(output, format) writes the pixels; `format` is the file's pixel type.
+template <typename WritePixels>
+void encodeImage(const std::string& destination, const std::string& format, const OIIO::ImageSpec& spec,
+                 WritePixels writePixels) {
+    OutputFile file(destination, OutputContent::Binary);
+    MemoryFile memory;
+    std::unique_ptr<OIIO::ImageOutput> output =
+        OIIO::ImageOutput::create(format.empty() ? destination : format);
+    if (!output) failWrite(destination, "no image format for this extension (" + OIIO::geterror() + ")");
+    if (!output->open(memory.path(), spec)) failWrite(destination, output->geterror());
+    if (!writePixels(*output, output->spec().format)) failWrite(destination, output->geterror());
+    if (!output->close()) failWrite(destination, output->geterror());
+    file.write(memory.contents());
+    file.commit();
+}
+
+bool writeTexels(OIIO::ImageOutput& output, const Image& image) {
     constexpr OIIO::stride_t texelStride = sizeof(glm::vec4);
     return output.write_image(OIIO::TypeDesc::FLOAT, image.texels.data(), texelStride,
                               texelStride * image.width);
 }
 
-[[noreturn]] void failWrite(const std::string& destination, const std::string& why) {
-    throw Error(ErrorKind::Output, "cannot write " + destination + ": " + why);
-}
-
-// Writes to file (the temporary one); errors name the destination, the file the user asked for.
-void writeTo(const std::string& file, const std::string& destination, const Image& image) {
-    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(destination); // by its extension
-    if (!output) failWrite(destination, "no image format for this extension (" + OIIO::geterror() + ")");
-    OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
-    if (!output->open(file, spec)) failWrite(destination, output->geterror());
-    // The format may store integers (PNG, JPEG...): those hold sRGB, which readImage decodes.
-    // OIIO converts our floats to the file's type.
-    bool linear = output->spec().format.is_floating_point();
-    bool written = linear ? writePixels(*output, image) : writePixels(*output, srgbEncoded(image));
-    if (!written) failWrite(destination, output->geterror());
-    if (!output->close()) failWrite(destination, output->geterror());
-}
-
 } // namespace
 
-void writeImage(const std::string& path, const Image& image) {
+void writeImage(const std::string& path, const Image& image, const std::string& format) {
     if (image.width < 1 || image.height < 1 || image.texels.size() != size_t(image.width) * image.height)
-        throw Error(ErrorKind::Output,
-                    "cannot write " + path + ": the image has no pixels or a wrong texel count");
-    AtomicFile file(path);
-    writeTo(file.temporaryPath(), path, image);
-    file.commit();
+        failWrite(path, "the image has no pixels or a wrong texel count");
+    OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
+    encodeImage(path, format, spec, [&](OIIO::ImageOutput& output, OIIO::TypeDesc stored) {
+        // The format may store integers (PNG, JPEG...): those hold sRGB, which readImage decodes.
+        // OIIO converts our floats to the file's type.
+        return stored.is_floating_point() ? writeTexels(output, image)
+                                          : writeTexels(output, srgbEncoded(image));
+    });
+}
+
+void writeSrgbImage(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba) {
+    if (width < 1 || height < 1 || rgba.size() != size_t(width) * size_t(height) * 4)
+        failWrite(path, "the image has no pixels or a wrong byte count");
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    encodeImage(path, "", spec, [&](OIIO::ImageOutput& output, OIIO::TypeDesc) {
+        // Alpha is dropped: 4-byte pixel stride over 3 channels.
+        return output.write_image(OIIO::TypeDesc::UINT8, rgba.data(), 4, OIIO::stride_t(width) * 4);
+    });
 }
 
 } // namespace shprobe

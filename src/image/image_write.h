@@ -1,13 +1,22 @@
-// Writing images through OpenImageIO, atomically (temporary file in the same folder, then rename).
+// Writing images through OpenImageIO. The encoded file goes to the destination through
+// OutputFile (io/output_file.h): whole or not at all, every write checked.
 #pragma once
 #include "sh/cubemap.h"
+
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace shprobe {
 
-// Writes a linear float image; the format follows the extension (EXR keeps floats; integer
-// formats such as PNG get the sRGB encoding that readImage decodes).
-// Throws Error(Output) naming the file on failure, leaving no partial file.
-void writeImage(const std::string& path, const Image& image);
+// Writes a linear float image; the format is OpenImageIO's format name `format` ("openexr"), or,
+// when empty, follows the extension (EXR keeps floats; integer formats such as PNG get the sRGB
+// encoding that readImage decodes). Throws Error(Output) naming the file on failure, leaving no
+// partial file.
+void writeImage(const std::string& path, const Image& image, const std::string& format = "");
+
+// Writes RGBA8 bytes (rows top down, already sRGB-encoded) as an 8-bit RGB file of the
+// extension's format (PNG, JPEG); alpha is dropped.
+void writeSrgbImage(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba);
 
 } // namespace shprobe

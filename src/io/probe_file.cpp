@@ -1,13 +1,12 @@
 #include "io/probe_file.h"
 
-#include "io/atomic_file.h"
+#include "io/input_file.h"
+#include "io/output_file.h"
 #include "sh/basis.h"
 #include "sh/error.h"
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -18,8 +17,13 @@ namespace {
 using nlohmann::json;
 
 // A coefficient file of order 8 is a few kilobytes; anything far larger is not one, and is not
-// read into memory whole.
-constexpr std::uintmax_t kMaxProbeFileBytes = 16u << 20;
+// read into memory at all.
+constexpr uint64_t kMaxProbeFileBytes = 1u << 20;
+// A coefficient file nests three levels (the object, "coefficients", a row). The parser stops
+// at this depth, before it builds the levels below: "[[[[..." is refused at once.
+constexpr int kMaxJsonDepth = 16;
+
+struct TooDeep {};
 
 const char* kFormat = "shprobe.sh";
 const int kVersion = 1;
@@ -116,21 +120,6 @@ std::string parseProblem(const json::exception& error) {
     return end == std::string::npos ? text : text.substr(end + 2);
 }
 
-// The checks reading a file would otherwise answer with a less clear message.
-void checkProbeFile(const std::string& path) {
-    namespace fs = std::filesystem;
-    std::error_code error;
-    fs::file_status status = fs::status(path, error);
-    if (!fs::exists(status)) fail(path, "no such file");
-    if (fs::is_directory(status)) fail(path, "is a folder, not a probe file");
-    if (!fs::is_regular_file(status)) fail(path, "not a regular file");
-    std::uintmax_t size = fs::file_size(path, error);
-    if (size == 0) fail(path, "the file is empty");
-    if (size > kMaxProbeFileBytes)
-        fail(path, "the file has " + std::to_string(size) + " bytes, far more than a probe file (" +
-                       std::to_string(kMaxProbeFileBytes) + " at most)");
-}
-
 std::string formatNumber(double value) {
     std::ostringstream out;
     out.precision(9); // float coefficients round-trip with 9 significant digits
@@ -140,7 +129,9 @@ std::string formatNumber(double value) {
 
 } // namespace
 
-const char* quantityName(Quantity quantity) { return quantity == Quantity::Radiance ? "radiance" : "irradiance"; }
+const char* quantityName(Quantity quantity) {
+    return quantity == Quantity::Radiance ? "radiance" : "irradiance";
+}
 
 std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata& metadata) {
     // JSON has no NaN or infinity: refuse rather than write a file no reader accepts.
@@ -169,7 +160,8 @@ std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata&
 
     // One coefficient row per line, so the file reads like the table it is.
     std::string text = "{\n";
-    for (const auto& [key, value] : header.items()) text += "  " + json(key).dump() + ": " + value.dump() + ",\n";
+    for (const auto& [key, value] : header.items())
+        text += "  " + json(key).dump() + ": " + value.dump() + ",\n";
     text += "  \"coefficients\": [\n";
     for (size_t i = 0; i < coefficients.rgb.size(); ++i) {
         const glm::dvec3& c = coefficients.rgb[i];
@@ -180,15 +172,16 @@ std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata&
     return text;
 }
 
-void writeProbeFile(const std::string& path, const ShCoefficients& coefficients, const ProbeMetadata& metadata) {
+void writeProbeFile(const std::string& path, const ShCoefficients& coefficients,
+                    const ProbeMetadata& metadata) {
     std::string text;
     try {
         text = probeToJson(coefficients, metadata);
     } catch (const Error& error) {
-        throw Error(error.kind(), "cannot write " + path + ": " + error.what() +
-                                      " (is the input's radiance too large?)");
+        throw Error(error.kind(),
+                    "cannot write " + path + ": " + error.what() + " (is the input's radiance too large?)");
     }
-    writeFileAtomic(path, text);
+    writeOutputFile(path, text);
 }
 
 Probe parseProbe(std::string_view text, const std::string& name) {
@@ -198,9 +191,14 @@ Probe parseProbe(std::string_view text, const std::string& name) {
         fail(name, "not valid JSON (a NUL byte at offset " + std::to_string(nul) + ")");
     json root;
     try {
-        root = json::parse(text);
+        root = json::parse(text, [](int depth, json::parse_event_t, json&) {
+            if (depth > kMaxJsonDepth) throw TooDeep{};
+            return true;
+        });
     } catch (const json::exception& error) { // parse errors, and numbers beyond double's range
         fail(name, "not valid JSON (" + parseProblem(error) + ")");
+    } catch (const TooDeep&) {
+        fail(name, "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels; not a probe file");
     }
     if (!root.is_object()) fail(name, "the top level must be a JSON object");
     if (requireString(root, "format", name) != kFormat)
@@ -218,26 +216,24 @@ Probe parseProbe(std::string_view text, const std::string& name) {
         fail(name, "field \"coefficients\" must hold " + std::to_string(coefficients.rgb.size()) +
                        " rows for order " + std::to_string(coefficients.order) + ", not " +
                        (rows.is_array() ? std::to_string(rows.size()) : std::string("a non-array")));
-    for (size_t i = 0; i < rows.size(); ++i) coefficients.rgb[i] = parseRow(rows[i], i, name);
+    for (size_t i = 0; i < rows.size(); ++i)
+        coefficients.rgb[i] = parseRow(rows[i], i, name);
     Probe probe{std::move(coefficients), std::nullopt};
     if (auto sun = root.find("sun"); sun != root.end()) probe.sun = parseSun(*sun, name);
     return probe;
 }
 
 Probe readProbe(const std::string& path) {
-    checkProbeFile(path);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail(path, "cannot open the file");
-    std::stringstream text;
-    text << in.rdbuf();
-    if (in.bad()) fail(path, "cannot read the file");
-    return parseProbe(text.str(), path);
+    return parseProbe(readInputFile(path, kMaxProbeFileBytes, "a probe file"),
+                      path == "-" ? "standard input" : path);
 }
 
 ShCoefficients parseProbeJson(std::string_view text, const std::string& name) {
     return parseProbe(text, name).coefficients;
 }
 
-ShCoefficients readProbeFile(const std::string& path) { return readProbe(path).coefficients; }
+ShCoefficients readProbeFile(const std::string& path) {
+    return readProbe(path).coefficients;
+}
 
 } // namespace shprobe

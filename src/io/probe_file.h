@@ -24,13 +24,14 @@ struct ProbeMetadata {
     std::string backend; // "gpu" or "cpu"
     std::string device;
     std::string weighting = "exact-solid-angle";
-    std::string window;             // e.g. "hanning:4"; empty: none
+    std::string window; // e.g. "hanning:4"; empty: none
     std::optional<ProbeSun> sun;
 };
 
 std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata& metadata);
 // Writes atomically; throws Error(Output) naming the file.
-void writeProbeFile(const std::string& path, const ShCoefficients& coefficients, const ProbeMetadata& metadata);
+void writeProbeFile(const std::string& path, const ShCoefficients& coefficients,
+                    const ProbeMetadata& metadata);
 
 // A coefficient file as a renderer needs it: the coefficients and, when the file has one, the sun
 // taken out of them (field "sun"; see ProbeSun), to be added back analytically.
@@ -43,6 +44,7 @@ struct Probe {
 // "sun" is checked when present: "direction" 3 finite numbers, not all 0 (normalized on read),
 // "radiance" 3 finite numbers >= 0, "angular_radius_degrees" in (0, 90].
 Probe parseProbe(std::string_view text, const std::string& name);
+// Reads path ("-": standard input) of at most 1 MiB (a probe file of order 8 has a few KB).
 Probe readProbe(const std::string& path);
 // The coefficients only (the sun, if any, is validated and dropped).
 ShCoefficients parseProbeJson(std::string_view text, const std::string& name);

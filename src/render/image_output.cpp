@@ -1,10 +1,9 @@
 #include "render/image_output.h"
 
 #include "image/image_write.h"
-#include "io/atomic_file.h"
+#include "io/output_file.h"
 #include "sh/error.h"
 
-#include <OpenImageIO/imageio.h>
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
@@ -24,10 +23,6 @@ OutputKind outputKind(const std::string& path) {
     return OutputKind::Unknown;
 }
 
-[[noreturn]] void failWrite(const std::string& path, const std::string& why) {
-    throw Error(ErrorKind::Output, "cannot write " + path + ": " + why);
-}
-
 } // namespace
 
 void checkRenderOutputPath(const std::string& path) {
@@ -35,23 +30,7 @@ void checkRenderOutputPath(const std::string& path) {
         throw Error(ErrorKind::Input, path +
                                           ": unknown image type; use .exr or .hdr (linear) or .png or .jpg "
                                           "(tonemapped sRGB)");
-    checkOutputPath(path);
-}
-
-void writeDisplayImage(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba) {
-    if (width < 1 || height < 1 || rgba.size() != size_t(width) * size_t(height) * 4)
-        failWrite(path, "the image has no pixels or a wrong byte count");
-    AtomicFile file(path);
-    std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create(path);
-    if (!output) failWrite(path, "no image format for this extension (" + OIIO::geterror() + ")");
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", "sRGB");
-    if (!output->open(file.temporaryPath(), spec)) failWrite(path, output->geterror());
-    // Alpha is dropped: 4-byte pixel stride over 3 channels.
-    if (!output->write_image(OIIO::TypeDesc::UINT8, rgba.data(), 4, OIIO::stride_t(width) * 4))
-        failWrite(path, output->geterror());
-    if (!output->close()) failWrite(path, output->geterror());
-    file.commit();
+    checkOutputPath(path, OutputContent::Binary);
 }
 
 void writeRenderedImage(const std::string& path, const RenderedImage& image) {
@@ -60,7 +39,7 @@ void writeRenderedImage(const std::string& path, const RenderedImage& image) {
         writeImage(path, image.linear);
         return;
     case OutputKind::Display:
-        writeDisplayImage(path, image.linear.width, image.linear.height, image.display);
+        writeSrgbImage(path, image.linear.width, image.linear.height, image.display);
         return;
     case OutputKind::Unknown:
         break;

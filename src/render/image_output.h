@@ -14,7 +14,4 @@ void checkRenderOutputPath(const std::string& path);
 // Writes `image` to `path` by its extension; throws Error(Output) naming the file on failure.
 void writeRenderedImage(const std::string& path, const RenderedImage& image);
 
-// Writes RGBA8 bytes (rows top down) as an 8-bit RGB file; the bytes are already sRGB-encoded.
-void writeDisplayImage(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba);
-
 } // namespace shprobe

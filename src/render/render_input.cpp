@@ -45,6 +45,7 @@ glm::vec4 sampleCubemap(const Cubemap& cubemap, const glm::dvec3& d) {
 } // namespace
 
 bool isProbeFile(const std::string& path) {
+    if (path == "-") return true; // a probe on standard input
     std::string extension = std::filesystem::path(path).extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });

@@ -20,8 +20,8 @@ constexpr int kRenderBakeOrder = 5;
 constexpr int kRenderSkyFaceSize = 128;
 
 struct RenderInputOptions {
-    int faceSize = 0;      // 0: from the input (equirect width / 4, ...)
-    bool sanitize = false; // replace NaN/Inf texels with 0 instead of refusing them
+    int faceSize = 0;                           // 0: from the input (equirect width / 4, ...)
+    bool sanitize = false;                      // replace NaN/Inf texels with 0 instead of refusing them
     int64_t maxPixels = kDefaultMaxImagePixels; // larger image files are refused from their header
 };
 
@@ -36,6 +36,7 @@ struct RenderInput {
 // A path ending in .json is a probe file (read with readProbe: bad files get an error naming the
 // file and field; its sun, if any, comes along); anything else an environment (baked whole, the sun
 // left in); an empty path the built-in sky.
+// ".json", or "-": a probe on standard input.
 bool isProbeFile(const std::string& path);
 RenderInput readProbeInput(const std::string& path); // probe files only; needs no device
 RenderInput loadRenderInput(const Context& context, const std::string& path,

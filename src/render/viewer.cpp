@@ -2,6 +2,7 @@
 // renderer's scene pass plus the tonemap pass into the swapchain (viewer_frames.cpp).
 #include "render/viewer.h"
 
+#include "image/image_write.h"
 #include "render/image_output.h"
 #include "render/scene_renderer.h"
 #include "render/viewer_frames.h"
@@ -334,7 +335,7 @@ int runFrames(const Context& context, const ViewerOptions& options, GLFWwindow* 
 void saveScreenshot(const Context& context, const ViewerOptions& options, const Session& session, int shown) {
     if (options.screenshot.empty() || shown < options.frames) return;
     VkExtent2D extent = session.frames.swapchain.extent;
-    writeDisplayImage(options.screenshot, int(extent.width), int(extent.height),
+    writeSrgbImage(options.screenshot, int(extent.width), int(extent.height),
                       readCapture(context, session.frames));
     std::printf("shprobe view: frame %d (%ux%u) saved to %s\n", shown, extent.width, extent.height,
                 options.screenshot.c_str());

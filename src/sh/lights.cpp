@@ -5,6 +5,7 @@
 #include "error.h"
 #include "irradiance.h"
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <string>
 
 namespace shprobe {
@@ -206,6 +208,11 @@ glm::dvec3 directionOf(size_t index, int n) {
     return texelDirection(t.face, t.i, t.j, n);
 }
 
+double solidAngleOf(size_t index, int n) {
+    const TexelCoord t = texelCoord(index, n);
+    return texelSolidAngle(t.i, t.j, n);
+}
+
 // The texel next to t one step along (di, dj); off the face's edge, the texel of the neighbouring
 // face that holds the continued direction.
 size_t neighbourTexel(const TexelCoord& t, int di, int dj, int n) {
@@ -219,23 +226,32 @@ size_t neighbourTexel(const TexelCoord& t, int di, int dj, int n) {
     return texelIndex({p.face, toTexel(p.a), toTexel(p.b)}, n);
 }
 
-double luminanceThreshold(const Cubemap& cubemap, const SunExtractionOptions& options) {
+// What the threshold and the criteria need from the whole map.
+struct MapLuminance {
+    double median = 0.0;
+    size_t brightest = 0; // the seed of the region
+    double peak = 0.0;    // the brightest texel's luminance
+    double power = 0.0;   // sum of max(luminance, 0) Omega over the map
+};
+
+MapLuminance measureMap(const Cubemap& cubemap) {
+    const int n = cubemap.faceSize;
+    MapLuminance map;
     std::vector<double> values(cubemap.texels.size());
-    for (size_t k = 0; k < values.size(); ++k)
+    for (size_t k = 0; k < values.size(); ++k) {
         values[k] = luminance(texelRgb(cubemap, k));
+        map.power += std::max(values[k], 0.0) * solidAngleOf(k, n);
+        if (k == 0 || values[k] > map.peak) map.brightest = k, map.peak = values[k];
+    }
     const auto middle = values.begin() + std::ptrdiff_t(values.size() / 2);
     std::nth_element(values.begin(), middle, values.end());
-    return std::max(options.relativeThreshold * *middle, options.absoluteThreshold);
+    map.median = *middle;
+    return map;
 }
 
-size_t brightestTexel(const Cubemap& cubemap) {
-    size_t best = 0;
-    double bestLuminance = luminance(texelRgb(cubemap, 0));
-    for (size_t k = 1; k < cubemap.texels.size(); ++k) {
-        const double value = luminance(texelRgb(cubemap, k));
-        if (value > bestLuminance) best = k, bestLuminance = value;
-    }
-    return best;
+double luminanceThreshold(const MapLuminance& map, const SunExtractionOptions& options) {
+    return std::max(
+        {options.relativeThreshold * map.median, options.absoluteThreshold, options.peakFraction * map.peak});
 }
 
 struct SunRegion {
@@ -287,59 +303,120 @@ SunRegion growRegion(const Cubemap& cubemap, size_t seed, double threshold, doub
     return region;
 }
 
-glm::dvec3 ringMean(const Cubemap& cubemap, const std::vector<size_t>& ring) {
+// The sky level under the sun: the ring's mean, clamped to >= 0 per channel so that the residual
+// min(L, fill) is never negative where L is not (resampled HDRs hold small negative lobes).
+glm::dvec3 fillLevel(const Cubemap& cubemap, const SunRegion& region, SunFill fill) {
+    if (fill == SunFill::Zero || region.ring.empty()) return glm::dvec3(0.0);
     glm::dvec3 sum(0.0);
-    for (size_t k : ring)
+    for (size_t k : region.ring)
         sum += texelRgb(cubemap, k);
-    return ring.empty() ? sum : sum / double(ring.size());
+    return glm::max(sum / double(region.ring.size()), glm::dvec3(0.0));
 }
 
-// Luminance above the fill of the sun's fully covered part: the solid-angle-weighted mean over the
+// What a region texel keeps, per channel min(L, fill): the fill never exceeds the texel, so
+// removing the sun cannot raise a channel (a sunset's sun is dimmer in blue than the sky around it)
+// nor push one below 0. In float, as stored, so that the removed part below is exact.
+glm::vec3 residualRadiance(const glm::vec4& texel, const glm::dvec3& fill) {
+    return glm::min(glm::vec3(texel), glm::vec3(fill));
+}
+
+// L - min(L, fill) = max(L - fill, 0) per channel: the sun's share of the texel, never negative.
+glm::dvec3 removedRadiance(const glm::vec4& texel, const glm::dvec3& fill) {
+    return glm::dvec3(glm::vec3(texel)) - glm::dvec3(residualRadiance(texel, fill));
+}
+
+// Removed luminance of the sun's fully covered part: the solid-angle-weighted mean over the
 // region's interior, or the brightest texel's when the region is too small to have an interior.
 double coreLuminance(const Cubemap& cubemap, const SunRegion& region, const glm::dvec3& fill) {
     const int n = cubemap.faceSize;
     double weighted = 0.0, solidAngle = 0.0;
     for (size_t k : region.interior) {
-        const TexelCoord t = texelCoord(k, n);
-        const double omega = texelSolidAngle(t.i, t.j, n);
-        weighted += luminance(texelRgb(cubemap, k) - fill) * omega;
+        const double omega = solidAngleOf(k, n);
+        weighted += luminance(removedRadiance(cubemap.texels[k], fill)) * omega;
         solidAngle += omega;
     }
     if (solidAngle > 0.0) return weighted / solidAngle;
     double brightest = 0.0;
     for (size_t k : region.texels)
-        brightest = std::max(brightest, luminance(texelRgb(cubemap, k) - fill));
+        brightest = std::max(brightest, luminance(removedRadiance(cubemap.texels[k], fill)));
     return brightest;
 }
 
-// Measures the region against the fill level, then overwrites its texels with the fill.
-SunExtraction removeRegion(Cubemap& cubemap, const SunRegion& region, const glm::dvec3& fill) {
+double largestAngleFrom(const glm::dvec3& direction, const std::vector<size_t>& texels, int n) {
+    double minCosine = 1.0;
+    for (size_t k : texels)
+        minCosine = std::min(minCosine, glm::dot(direction, directionOf(k, n)));
+    return std::acos(std::clamp(minCosine, -1.0, 1.0));
+}
+
+// Describes the sun the region would give, without touching the map.
+SunExtraction measureSun(const Cubemap& cubemap, const SunRegion& region, const glm::dvec3& fill,
+                         const MapLuminance& map) {
     const int n = cubemap.faceSize;
     SunExtraction sun;
-    sun.found = true;
     sun.texelCount = int(region.texels.size());
     sun.fillRadiance = fill;
-    const double core = coreLuminance(cubemap, region, fill);
     glm::dvec3 weightedDirection(0.0);
-    double luminancePower = 0.0;
     for (size_t k : region.texels) {
-        const TexelCoord t = texelCoord(k, n);
-        const double omega = texelSolidAngle(t.i, t.j, n);
-        const glm::dvec3 removed = texelRgb(cubemap, k) - fill;
+        const double omega = solidAngleOf(k, n);
+        const glm::dvec3 removed = removedRadiance(cubemap.texels[k], fill);
         sun.power += removed * omega;
         sun.regionSolidAngle += omega;
-        luminancePower += std::max(luminance(removed), 0.0) * omega;
-        weightedDirection += std::max(luminance(removed), 0.0) * omega * directionOf(k, n);
-        cubemap.texels[k] = glm::vec4(glm::vec3(fill), cubemap.texels[k].a);
+        weightedDirection += luminance(removed) * omega * directionOf(k, n);
     }
     // Partly covered edge texels count for the fraction of the core luminance they hold.
+    const double luminancePower = luminance(sun.power), core = coreLuminance(cubemap, region, fill);
     sun.solidAngle =
         core > 0.0 ? std::min(luminancePower / core, sun.regionSolidAngle) : sun.regionSolidAngle;
-    // The seed (brightest texel) stands in when nothing was removed (a fill as bright as the sun).
+    // The seed (brightest texel) stands in when nothing would be removed (a fill as bright as the sun).
     sun.direction = glm::length(weightedDirection) > 0.0 ? glm::normalize(weightedDirection)
                                                          : directionOf(region.texels[0], n);
     sun.angularRadius = capAngularRadius(sun.solidAngle);
+    sun.extent = largestAngleFrom(sun.direction, region.texels, n);
+    sun.powerFraction = map.power > 0.0 ? luminancePower / map.power : 0.0;
     return sun;
+}
+
+// The region's share of the luminance power of all texels above the threshold.
+double regionDominance(const Cubemap& cubemap, const SunRegion& region, double threshold) {
+    const int n = cubemap.faceSize;
+    double inRegion = 0.0, aboveThreshold = 0.0;
+    for (size_t k : region.texels)
+        inRegion += luminance(texelRgb(cubemap, k)) * solidAngleOf(k, n);
+    for (size_t k = 0; k < cubemap.texels.size(); ++k) {
+        const double value = luminance(texelRgb(cubemap, k));
+        if (value > threshold) aboveThreshold += value * solidAngleOf(k, n);
+    }
+    return aboveThreshold > 0.0 ? inRegion / aboveThreshold : 0.0;
+}
+
+bool isSun(const SunExtraction& sun, const SunExtractionOptions& options) {
+    const bool compact = sun.extent <= options.maxSunAngularRadius;
+    const bool dominant = sun.dominance >= options.minDominance;
+    const bool substantial = luminance(sun.power) > 0.0 && sun.powerFraction >= options.minPowerFraction;
+    const bool bright = sun.peakRatio >= options.minPeakRatio;
+    // What probe files accept (a disc of radius in (0, 90] degrees), whatever the options.
+    const bool valid = sun.solidAngle > 0.0 && sun.angularRadius > 0.0 && sun.angularRadius <= 0.5 * kPi;
+    return compact && dominant && substantial && bright && valid;
+}
+
+void removeRegion(Cubemap& cubemap, const SunRegion& region, const glm::dvec3& fill) {
+    for (size_t k : region.texels)
+        cubemap.texels[k] = glm::vec4(residualRadiance(cubemap.texels[k], fill), cubemap.texels[k].a);
+}
+
+void requireSunOptions(const SunExtractionOptions& options) {
+    const bool thresholds = options.relativeThreshold >= 0.0 && options.absoluteThreshold >= 0.0 &&
+                            options.peakFraction >= 0.0 && options.peakFraction <= 1.0;
+    const bool angles = options.maxAngularRadius > 0.0 && options.maxSunAngularRadius > 0.0 &&
+                        options.maxSunAngularRadius <= 0.5 * kPi;
+    const bool criteria = options.minDominance >= 0.0 && options.minDominance <= 1.0 &&
+                          options.minPowerFraction >= 0.0 && options.minPeakRatio >= 0.0;
+    if (!(thresholds && angles && criteria)) {
+        throw Error(ErrorKind::Input, "sun extraction needs non-negative thresholds and criteria, a peak "
+                                      "fraction and a dominance in [0, 1], a positive maximum radius and a "
+                                      "maximum sun radius in (0, pi/2]");
+    }
 }
 
 } // namespace
@@ -350,18 +427,20 @@ SunExtraction extractSun(Cubemap& cubemap, const SunExtractionOptions& options) 
         throw Error(ErrorKind::Input, "cube map holds " + std::to_string(cubemap.texels.size()) +
                                           " texels for face size " + std::to_string(n));
     }
-    if (!(options.maxAngularRadius > 0.0) || !(options.relativeThreshold >= 0.0) ||
-        !(options.absoluteThreshold >= 0.0)) {
-        throw Error(ErrorKind::Input,
-                    "sun extraction needs non-negative thresholds and a positive maximum radius");
-    }
-    const double threshold = luminanceThreshold(cubemap, options);
-    const size_t seed = brightestTexel(cubemap);
-    if (!(luminance(texelRgb(cubemap, seed)) > threshold)) return SunExtraction{};
-    const SunRegion region = growRegion(cubemap, seed, threshold, options.maxAngularRadius);
-    const glm::dvec3 fill =
-        options.fill == SunFill::SurroundingSky ? ringMean(cubemap, region.ring) : glm::dvec3(0.0);
-    return removeRegion(cubemap, region, fill);
+    requireSunOptions(options);
+    const MapLuminance map = measureMap(cubemap);
+    const double peakRatio =
+        map.median > 0.0 ? map.peak / map.median : std::numeric_limits<double>::infinity();
+    const double threshold = luminanceThreshold(map, options);
+    if (!(map.peak > threshold)) return SunExtraction{.peakRatio = peakRatio};
+    const SunRegion region = growRegion(cubemap, map.brightest, threshold, options.maxAngularRadius);
+    const glm::dvec3 fill = fillLevel(cubemap, region, options.fill);
+    SunExtraction sun = measureSun(cubemap, region, fill, map);
+    sun.peakRatio = peakRatio;
+    sun.dominance = regionDominance(cubemap, region, threshold);
+    sun.found = isSun(sun, options);
+    if (sun.found) removeRegion(cubemap, region, fill);
+    return sun;
 }
 
 SphericalLight sunAsSphericalLight(const SunExtraction& sun) {

@@ -101,34 +101,82 @@ enum class SunFill {
     Zero,           // region texels get 0; the whole texel radiance counts as sun
 };
 
+// The defaults were chosen by measuring the eight HDRs of Blender's studio lights (city,
+// courtyard, forest, interior, night, studio, sunrise, sunset: 1024 x 512 equirects, loaded at face
+// size 256). Their visible suns (city, sunrise, sunset) and their other lights (ceiling spots,
+// lamps, bright sky through an arcade or leaves) differ most in dominance: a sun's region held
+// 99.9% or more of the power above the threshold, another light at most 55%, as lights like it
+// share the rest. The figures below are from those maps.
 struct SunExtractionOptions {
-    // A texel can belong to the sun when its luminance (Rec. 709) exceeds both
-    // relativeThreshold * (median texel luminance of the map) and absoluteThreshold.
+    // A texel can belong to the sun when its luminance (Rec. 709) exceeds relativeThreshold *
+    // (median texel luminance of the map), absoluteThreshold and peakFraction * (the brightest
+    // texel's luminance).
     double relativeThreshold = 20.0;
     double absoluteThreshold = 0.0;
+    // The sun's disc is where the luminance is within three decades of the peak; the glow around it
+    // (the aureole) is left to the probe, where it is smooth enough to project well. 20 x median
+    // alone takes the glow into the sun on city and sunrise (radii of 7.8 and 12.6 degrees), 1/1000
+    // of the peak leaves 0.8 and 0.9. A partly covered edge texel dimmer than this stays in the sky,
+    // so the fill (the ring's mean) is biased by at most this fraction of the sun's radiance.
+    double peakFraction = 1e-3;
     // The region is the set of such texels connected (across faces) to the brightest texel and
     // within this angle of it (radians), which bounds it when the threshold is too low.
     double maxAngularRadius = 0.35; // about 20 degrees
     SunFill fill = SunFill::SurroundingSky;
+
+    // --- When the region is a sun: all four must hold, otherwise the map is left untouched ---
+    // Compact: every region texel centre lies within this angle (radians) of the sun's direction.
+    // Measured: the suns 0.8 to 1.5 degrees (a 0.27-degree sun blurred by the maps' 0.35-degree
+    // pixels), studio's brightest lamp 8.1, courtyard's sky 18.6. 5 degrees also keeps suns drawn as
+    // large as 3. At most pi/2, so that a sun's angular radius is in (0, 90] degrees as probe files
+    // require.
+    double maxSunAngularRadius = 5.0 * std::numbers::pi / 180.0;
+    // Dominant: the region holds at least this fraction of the luminance power (L Omega) of all the
+    // texels above the threshold: nothing else in the map comes near it. Measured: the suns 0.999 to
+    // 1; interior's brightest ceiling spot 0.55 (a second one as bright holds most of the rest),
+    // night's brightest horizon light 0.32, studio's brightest lamp 0.27, forest 0.11, courtyard 0.07.
+    double minDominance = 0.8;
+    // Substantial: the removed luminance power is at least this fraction of the whole map's; a light
+    // too weak to matter is not worth taking out. Measured: sunset's sun, low and dimmed, 0.023;
+    // city's 0.24, sunrise's 0.58.
+    double minPowerFraction = 0.01;
+    // Far brighter than the sky: the brightest texel is at least this many times the median
+    // luminance. The real sun is some 1e5 times the sky; the maps' suns give 3.9e3 (sunset) to 2.4e5
+    // (sunrise). An 8-bit image (texels at most its white) passes only if its median is below
+    // 1/1000 of white; courtyard, with no sun in view, gives 658.
+    double minPeakRatio = 1000.0;
 };
 
 struct SunExtraction {
-    bool found = false;            // false: the brightest texel is below the threshold; map untouched
+    // false: the brightest region failed the criteria (or no texel is above the threshold) and the
+    // map is untouched; the fields below then describe the region that failed.
+    bool found = false;
     glm::dvec3 direction{0.0};     // unit; centroid of the region weighted by removed luminance x solid angle
-    glm::dvec3 power{0.0};         // sum over the region of (L - fill) Omega: the removed power per channel
+    glm::dvec3 power{0.0};         // sum over the region of (L - residual) Omega: the removed power, >= 0
     double regionSolidAngle = 0.0; // of the region's texels
     // The sun's own solid angle: (luminance power) / (core luminance), the core being the
-    // solid-angle-weighted mean of the region's interior texels (all four neighbours in the region),
-    // or the brightest texel when there is no interior. Partly covered edge texels thus count for
-    // their coverage; for a hard-edged uniform disc this equals regionSolidAngle.
+    // solid-angle-weighted mean of the removed luminance over the region's interior texels (all
+    // four neighbours in the region), or the brightest texel's when there is no interior. Partly
+    // covered edge texels thus count for their coverage; for a hard-edged uniform disc this equals
+    // regionSolidAngle.
     double solidAngle = 0.0;
     double angularRadius = 0.0;   // radians: capAngularRadius(solidAngle)
     int texelCount = 0;           // texels in the region
-    glm::dvec3 fillRadiance{0.0}; // what the region's texels were replaced with
+    glm::dvec3 fillRadiance{0.0}; // the sky level the region's texels were brought down to (>= 0)
+
+    // What the criteria of SunExtractionOptions measured (all but peakRatio stay 0 when no texel is
+    // above the threshold).
+    double peakRatio = 0.0; // brightest texel luminance / median luminance (infinite if the median is <= 0)
+    double dominance = 0.0; // region's share of the luminance power of all texels above the threshold
+    double powerFraction = 0.0; // removed luminance power / luminance power of the whole map
+    double extent = 0.0;        // radians: the largest angle from direction to a region texel centre
 };
 
-// Finds the brightest compact region (see SunExtractionOptions), removes it from the cube map
-// (replacing its texels by options.fill) and describes it. The cube map with the sun removed plus
+// Finds the brightest compact region (see SunExtractionOptions) and, if it passes the criteria,
+// removes it from the cube map and describes it. Removing brings every region texel down to the
+// fill per channel, and never raises one: the texel keeps min(L, fill) (fill >= 0), the sun gets
+// the rest, L - min(L, fill) >= 0. Neither part is negative where L is not, a negative texel is left
+// as it is, and residual + sun = L exactly. The cube map with the sun removed plus
 // sunAsSphericalLight(result) approximates the original probe.
 SunExtraction extractSun(Cubemap& cubemap, const SunExtractionOptions& options = {});
 

@@ -1,5 +1,6 @@
 #include "vk/check.h"
 
+#include <cstdlib>
 #include <string_view>
 #include <vector>
 
@@ -7,12 +8,23 @@ namespace shprobe {
 
 namespace {
 
-thread_local std::vector<std::string> deviceSteps;
+struct Step {
+    std::string what;
+    DeviceWork work;
+};
+
+thread_local std::vector<Step> deviceSteps;
 
 std::string currentSteps() {
     std::string steps;
-    for (const std::string& step : deviceSteps) steps += (steps.empty() ? "" : ": ") + step;
+    for (const Step& step : deviceSteps)
+        steps += (steps.empty() ? "" : ": ") + step.what;
     return steps;
+}
+
+// Outside any step the work is unknown, so nothing that depends on it is suggested.
+DeviceWork currentWork() {
+    return deviceSteps.empty() ? DeviceWork::Setup : deviceSteps.back().work;
 }
 
 // The path from the source tree's src/ on ("src/vk/resources.cpp"), not the build machine's.
@@ -21,25 +33,70 @@ std::string sourcePath(std::string_view file) {
     return std::string(at == std::string_view::npos ? file : file.substr(at + 1));
 }
 
-// What the result means for the user, and what to try.
-const char* explanation(VkResult result) {
+const char* kLavapipeHint =
+    "without a GPU, Mesa's lavapipe works (Debian: apt-get install mesa-vulkan-drivers), "
+    "or bake with `--backend cpu`";
+
+// Work whose size follows the options: a smaller one may fit, or finish before a watchdog.
+std::string sizedWorkExplanation(VkResult result) {
     switch (result) {
     case VK_ERROR_DEVICE_LOST:
-        return ": the Vulkan device was lost (a driver crash or GPU reset; a watchdog may stop long dispatches: "
-               "try a smaller --face-size or --texels-per-invocation, or --backend cpu)";
+        return ": the Vulkan device was lost (a driver crash or GPU reset; a watchdog may stop long "
+               "dispatches: try a smaller --face-size or --texels-per-invocation, or --backend cpu)";
     case VK_ERROR_OUT_OF_DEVICE_MEMORY:
         return ": out of device memory; try a smaller --face-size (or --backend cpu)";
     case VK_ERROR_OUT_OF_HOST_MEMORY:
         return ": out of host memory; try a smaller --face-size";
-    default: return "";
+    default:
+        return "";
     }
+}
+
+// Work of a fixed size: no option makes it smaller, only the CPU backend avoids it.
+std::string setupExplanation(VkResult result) {
+    switch (result) {
+    case VK_ERROR_DEVICE_LOST:
+        return ": the Vulkan device was lost (a driver crash or GPU reset; `--backend cpu` bakes without it)";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY:
+        return ": out of device memory (`--backend cpu` bakes without the device)";
+    case VK_ERROR_OUT_OF_HOST_MEMORY:
+        return ": out of host memory";
+    default:
+        return "";
+    }
+}
+
+// The loader's results while it reads the driver list say what is wrong with the list: a manifest
+// it cannot parse comes back as VK_ERROR_OUT_OF_HOST_MEMORY, a list with no loadable driver (missing
+// manifest, missing library, a library that is no driver) as VK_ERROR_INCOMPATIBLE_DRIVER.
+std::string driverLoadingExplanation(VkResult result) {
+    std::string cause;
+    if (result == VK_ERROR_OUT_OF_HOST_MEMORY)
+        cause = " (a driver manifest that is not valid JSON reads as out of host memory)";
+    if (result == VK_ERROR_INCOMPATIBLE_DRIVER) cause = " (no driver it names could be loaded)";
+    return ": the Vulkan driver list could not be loaded" + cause + "; " + driverListAdvice();
+}
+
+// What the result means for the user, and what to try.
+std::string explanation(VkResult result, DeviceWork work) {
+    switch (work) {
+    case DeviceWork::Sized:
+        return sizedWorkExplanation(result);
+    case DeviceWork::Setup:
+        return setupExplanation(result);
+    case DeviceWork::DriverLoading:
+        return driverLoadingExplanation(result);
+    }
+    return "";
 }
 
 } // namespace
 
 const char* vkResultName(VkResult result) {
     switch (result) {
-#define SHPROBE_RESULT_NAME(name) case name: return #name;
+#define SHPROBE_RESULT_NAME(name)                                                                            \
+    case name:                                                                                               \
+        return #name;
         SHPROBE_RESULT_NAME(VK_SUCCESS)
         SHPROBE_RESULT_NAME(VK_NOT_READY)
         SHPROBE_RESULT_NAME(VK_TIMEOUT)
@@ -70,24 +127,48 @@ const char* vkResultName(VkResult result) {
         SHPROBE_RESULT_NAME(VK_ERROR_OUT_OF_DATE_KHR)
         SHPROBE_RESULT_NAME(VK_ERROR_VALIDATION_FAILED_EXT)
 #undef SHPROBE_RESULT_NAME
-    default: return "VkResult";
+    default:
+        return "VkResult";
     }
 }
 
-DeviceStep::DeviceStep(std::string what) { deviceSteps.push_back(std::move(what)); }
+DeviceStep::DeviceStep(std::string what, DeviceWork work) {
+    deviceSteps.push_back({std::move(what), work});
+}
 
-DeviceStep::~DeviceStep() { deviceSteps.pop_back(); }
+DeviceStep::~DeviceStep() {
+    deviceSteps.pop_back();
+}
 
 std::string vkErrorMessage(VkResult result, const char* call, const char* file, int line) {
     std::string message =
         std::string(call) + " failed with " + vkResultName(result) + " (" + std::to_string(int(result)) + ")";
     std::string steps = currentSteps();
     if (!steps.empty()) message += " while " + steps;
-    return message + " (" + sourcePath(file) + ":" + std::to_string(line) + ")" + explanation(result);
+    return message + " (" + sourcePath(file) + ":" + std::to_string(line) + ")" +
+           explanation(result, currentWork());
 }
 
 void throwVkError(VkResult result, const char* call, const char* file, int line) {
     throw Error(ErrorKind::Device, vkErrorMessage(result, call, file, line));
+}
+
+std::string driverListVariable() {
+    const char* driverFiles = std::getenv("VK_DRIVER_FILES");
+    const char* icdFilenames = std::getenv("VK_ICD_FILENAMES");
+    bool hasDriverFiles = driverFiles && *driverFiles, hasIcdFilenames = icdFilenames && *icdFilenames;
+    // The loader reads VK_ICD_FILENAMES, the older name, only when VK_DRIVER_FILES is not set.
+    if (hasDriverFiles)
+        return std::string("VK_DRIVER_FILES=") + driverFiles +
+               (hasIcdFilenames ? " (it overrides VK_ICD_FILENAMES)" : "");
+    return hasIcdFilenames ? std::string("VK_ICD_FILENAMES=") + icdFilenames : std::string();
+}
+
+std::string driverListAdvice() {
+    const std::string variable = driverListVariable();
+    const std::string check =
+        variable.empty() ? "install a Vulkan driver or check the installed ones" : "check " + variable;
+    return check + " (VK_LOADER_DEBUG=error says why a driver is refused); " + kLavapipeHint;
 }
 
 } // namespace shprobe

@@ -1,6 +1,6 @@
 // VK_CHECK stays on in every build: a failed call throws Error(Device) naming the call, the
 // result, what the program was doing (DeviceStep) and where it happened; a lost device and a lack
-// of memory are said in words, with what to try.
+// of memory are said in words, with what to try where that depends on what was being done.
 #pragma once
 #include "sh/error.h"
 #include <string>
@@ -10,12 +10,22 @@ namespace shprobe {
 
 const char* vkResultName(VkResult result);
 
+// What kind of work a step is; the advice a failed call gets depends on it, since the same result
+// means different things: VK_ERROR_OUT_OF_HOST_MEMORY from vkCreateInstance is how the loader
+// reports a driver manifest that is not JSON, where "try a smaller --face-size" would mislead.
+enum class DeviceWork {
+    Sized,         // allocations, uploads and dispatches whose size follows the options (--face-size)
+    Setup,         // creating the logical device and its pools: their size is fixed
+    DriverLoading, // creating the instance and listing devices: the loader reads the driver list
+};
+
 // Names what the program uses the device for while it lives ("projecting the environment"); the
 // error of any Vulkan call that fails meanwhile says so. Steps nest (the error names them outer to
-// inner, "baking sky.exr: projecting the environment"); each thread has its own.
+// inner, "baking sky.exr: projecting the environment") and the innermost one's work decides the
+// advice; each thread has its own. Outside any step a failure is said in words, without advice.
 class DeviceStep {
-public:
-    explicit DeviceStep(std::string what);
+  public:
+    explicit DeviceStep(std::string what, DeviceWork work = DeviceWork::Sized);
     ~DeviceStep();
     DeviceStep(const DeviceStep&) = delete;
     DeviceStep& operator=(const DeviceStep&) = delete;
@@ -27,10 +37,18 @@ public:
 std::string vkErrorMessage(VkResult result, const char* call, const char* file, int line);
 [[noreturn]] void throwVkError(VkResult result, const char* call, const char* file, int line);
 
+// The variable that replaces the loader's search of the icd.d folders (VK_DRIVER_FILES, or else
+// VK_ICD_FILENAMES) with its value, "VK_ICD_FILENAMES=/tmp/x.json"; empty when neither is set.
+std::string driverListVariable();
+// What to check when the driver list gives no usable driver: that variable and its value, or the
+// installed manifests; then lavapipe and `--backend cpu`.
+std::string driverListAdvice();
+
 } // namespace shprobe
 
 #define VK_CHECK(call)                                                                                       \
     do {                                                                                                     \
         VkResult vkCheckResult_ = (call);                                                                    \
-        if (vkCheckResult_ != VK_SUCCESS) ::shprobe::throwVkError(vkCheckResult_, #call, __FILE__, __LINE__); \
+        if (vkCheckResult_ != VK_SUCCESS)                                                                    \
+            ::shprobe::throwVkError(vkCheckResult_, #call, __FILE__, __LINE__);                              \
     } while (0)

@@ -3,8 +3,8 @@
 #include "vk/check.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cctype>
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -16,10 +16,9 @@ namespace shprobe {
 namespace {
 
 const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
-const char* kNoDeviceHint = "install a Vulkan driver; without a GPU, Mesa's lavapipe works "
-                            "(Debian: apt-get install mesa-vulkan-drivers)";
 // What a user can do when the devices there cannot run the shaders: nothing is baked on them.
-const char* kCpuBackendHint = "; nothing was run on the device (`shprobe bake --backend cpu` bakes without one)";
+const char* kCpuBackendHint =
+    "; nothing was run on the device (`shprobe bake --backend cpu` bakes without one)";
 
 bool envFlag(const char* name) {
     const char* value = std::getenv(name);
@@ -33,8 +32,9 @@ bool layerHasExtension(const char* layer, const char* extension) {
     if (vkEnumerateInstanceExtensionProperties(layer, &count, nullptr) != VK_SUCCESS) return false;
     std::vector<VkExtensionProperties> extensions(count);
     vkEnumerateInstanceExtensionProperties(layer, &count, extensions.data());
-    return std::any_of(extensions.begin(), extensions.end(),
-                       [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, extension) == 0; });
+    return std::any_of(extensions.begin(), extensions.end(), [&](const VkExtensionProperties& e) {
+        return std::strcmp(e.extensionName, extension) == 0;
+    });
 }
 
 bool hasInstanceLayer(const char* name) {
@@ -42,13 +42,23 @@ bool hasInstanceLayer(const char* name) {
     vkEnumerateInstanceLayerProperties(&count, nullptr);
     std::vector<VkLayerProperties> layers(count);
     vkEnumerateInstanceLayerProperties(&count, layers.data());
-    return std::any_of(layers.begin(), layers.end(),
-                       [&](const VkLayerProperties& layer) { return std::strcmp(layer.layerName, name) == 0; });
+    return std::any_of(layers.begin(), layers.end(), [&](const VkLayerProperties& layer) {
+        return std::strcmp(layer.layerName, name) == 0;
+    });
+}
+
+// The loader reports through the messenger too, e.g. why it skipped a driver manifest. Those are
+// not validation messages: they are neither counted (a bake must not fail for a driver list the
+// loader copes with) nor printed (a failure stays one line); VK_LOADER_DEBUG=error prints them.
+bool isLoaderMessage(const VkDebugUtilsMessengerCallbackDataEXT* data) {
+    return data->pMessageIdName && std::strcmp(data->pMessageIdName, "Loader Message") == 0;
 }
 
 VKAPI_ATTR VkBool32 VKAPI_CALL onValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT,
                                                    VkDebugUtilsMessageTypeFlagsEXT,
-                                                   const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+                                                   const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                   void* user) {
+    if (isLoaderMessage(data)) return VK_FALSE;
     static_cast<ValidationLog*>(user)->messages++;
     std::fprintf(stderr, "vulkan validation: %s\n", data->pMessage);
     return VK_FALSE;
@@ -66,24 +76,41 @@ VkDebugUtilsMessengerCreateInfoEXT messengerInfo(ValidationLog* log) {
     return info;
 }
 
+// The loader reads the driver list (VK_DRIVER_FILES, VK_ICD_FILENAMES or the icd.d folders) here,
+// so a failure is said as the list's, whatever result the loader gives.
+VkInstance createLoaderInstance(const VkInstanceCreateInfo& info) {
+    DeviceStep step("loading the Vulkan driver list", DeviceWork::DriverLoading);
+    VkInstance instance = VK_NULL_HANDLE;
+    VkResult result = vkCreateInstance(&info, nullptr, &instance);
+    // No driver installed and none named: the usual case on a machine without a GPU, in plain words.
+    if (result == VK_ERROR_INCOMPATIBLE_DRIVER && driverListVariable().empty())
+        throw Error(ErrorKind::Device, "no Vulkan driver found: " + driverListAdvice());
+    if (result != VK_SUCCESS) throwVkError(result, "vkCreateInstance", __FILE__, __LINE__);
+    return instance;
+}
+
 VkInstance createInstance(bool validation, ValidationLog* log,
                           const std::vector<std::string>& extraExtensions = {}) {
     uint32_t loaderVersion = 0;
     if (vkEnumerateInstanceVersion(&loaderVersion) != VK_SUCCESS || loaderVersion < VK_API_VERSION_1_1)
-        throw Error(ErrorKind::Device, std::string("no Vulkan 1.1 loader: ") + kNoDeviceHint);
+        throw Error(ErrorKind::Device, "no Vulkan 1.1 loader: install libvulkan1 1.1 or newer, or bake with "
+                                       "`--backend cpu`");
     if (validation && !hasInstanceLayer(kValidationLayer))
-        throw Error(ErrorKind::Device, "validation requested but the Khronos validation layer is not installed "
-                                       "(Debian: apt-get install vulkan-validationlayers)");
+        throw Error(ErrorKind::Device,
+                    "validation requested but the Khronos validation layer is not installed "
+                    "(Debian: apt-get install vulkan-validationlayers)");
 
     VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
     app.pApplicationName = "shprobe";
     app.apiVersion = VK_API_VERSION_1_3; // the highest version used; 1.1 devices work with it too
 
     std::vector<const char*> extensions;
-    for (const std::string& extension : extraExtensions) extensions.push_back(extension.c_str());
+    for (const std::string& extension : extraExtensions)
+        extensions.push_back(extension.c_str());
     std::vector<const char*> layers;
     VkDebugUtilsMessengerCreateInfoEXT debugInfo = messengerInfo(log);
-    const VkValidationFeatureEnableEXT synchronization = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
+    const VkValidationFeatureEnableEXT synchronization =
+        VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
     VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
     features.enabledValidationFeatureCount = 1;
     features.pEnabledValidationFeatures = &synchronization;
@@ -102,13 +129,7 @@ VkInstance createInstance(bool validation, ValidationLog* log,
     info.ppEnabledLayerNames = layers.data();
     info.enabledExtensionCount = uint32_t(extensions.size());
     info.ppEnabledExtensionNames = extensions.data();
-
-    VkInstance instance = VK_NULL_HANDLE;
-    VkResult result = vkCreateInstance(&info, nullptr, &instance);
-    if (result == VK_ERROR_INCOMPATIBLE_DRIVER)
-        throw Error(ErrorKind::Device, std::string("no Vulkan driver found: ") + kNoDeviceHint);
-    VK_CHECK(result);
-    return instance;
+    return createLoaderInstance(info);
 }
 
 std::optional<uint32_t> findComputeQueueFamily(VkPhysicalDevice physicalDevice) {
@@ -167,21 +188,28 @@ DeviceInfo describeDevice(VkPhysicalDevice physicalDevice, uint32_t index) {
 
 int typeRank(VkPhysicalDeviceType type) {
     switch (type) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1; // lavapipe: slower, but a real device
-    default: return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+        return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+        return 3;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+        return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+        return 1; // lavapipe: slower, but a real device
+    default:
+        return 0;
     }
 }
 
 std::string lowercase(std::string text) {
-    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(text.begin(), text.end(), text.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     return text;
 }
 
 bool isIndex(const std::string& text) {
-    return !text.empty() && std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); });
+    return !text.empty() &&
+           std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); });
 }
 
 // Whether an index as typed ("0", "01") names device `index`; numbers too large for one never do.
@@ -193,14 +221,17 @@ bool requestsIndex(const std::string& request, uint32_t index) {
 
 const DeviceInfo& findRequestedDevice(const std::vector<DeviceInfo>& devices, const std::string& request) {
     for (const DeviceInfo& device : devices) {
-        bool matches = isIndex(request) ? requestsIndex(request, device.index)
-                                        : lowercase(device.name).find(lowercase(request)) != std::string::npos;
+        bool matches = isIndex(request)
+                           ? requestsIndex(request, device.index)
+                           : lowercase(device.name).find(lowercase(request)) != std::string::npos;
         if (matches) return device;
     }
     throw Error(ErrorKind::Device, "no Vulkan device matches '" + request + "' (see `shprobe info`)");
 }
 
 std::vector<VkPhysicalDevice> enumeratePhysicalDevices(VkInstance instance) {
+    // The loader starts the listed drivers here; their failures are the driver list's too.
+    DeviceStep step("listing the Vulkan devices", DeviceWork::DriverLoading);
     uint32_t count = 0;
     VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
     std::vector<VkPhysicalDevice> physicalDevices(count);
@@ -210,7 +241,8 @@ std::vector<VkPhysicalDevice> enumeratePhysicalDevices(VkInstance instance) {
 
 std::vector<DeviceInfo> describeDevices(const std::vector<VkPhysicalDevice>& physicalDevices) {
     std::vector<DeviceInfo> devices;
-    for (uint32_t i = 0; i < physicalDevices.size(); ++i) devices.push_back(describeDevice(physicalDevices[i], i));
+    for (uint32_t i = 0; i < physicalDevices.size(); ++i)
+        devices.push_back(describeDevice(physicalDevices[i], i));
     return devices;
 }
 
@@ -222,7 +254,8 @@ std::string requestedDevice(const ContextOptions& options) {
 VkDevice createLogicalDevice(VkPhysicalDevice physicalDevice, uint32_t queueFamily,
                              const std::vector<std::string>& extensions) {
     std::vector<const char*> names;
-    for (const std::string& extension : extensions) names.push_back(extension.c_str());
+    for (const std::string& extension : extensions)
+        names.push_back(extension.c_str());
     float priority = 1.0f;
     VkDeviceQueueCreateInfo queue{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
     queue.queueFamilyIndex = queueFamily;
@@ -277,8 +310,8 @@ std::string renderingShortfall(VkPhysicalDevice physicalDevice, const ContextOpt
 }
 
 void applyRenderingRequirements(std::vector<DeviceInfo>& devices,
-                                const std::vector<VkPhysicalDevice>& physicalDevices, const ContextOptions& options,
-                                VkSurfaceKHR surface) {
+                                const std::vector<VkPhysicalDevice>& physicalDevices,
+                                const ContextOptions& options, VkSurfaceKHR surface) {
     for (DeviceInfo& device : devices)
         if (device.unsupportedReason.empty())
             device.unsupportedReason = renderingShortfall(physicalDevices[device.index], options, surface);
@@ -288,17 +321,23 @@ void applyRenderingRequirements(std::vector<DeviceInfo>& devices,
 
 const char* deviceTypeName(VkPhysicalDeviceType type) {
     switch (type) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "CPU";
-    default: return "other";
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+        return "discrete GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+        return "integrated GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+        return "virtual GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+        return "CPU";
+    default:
+        return "other";
     }
 }
 
 std::string versionString(uint32_t version) {
-    return std::to_string(VK_API_VERSION_MAJOR(version)) + "." + std::to_string(VK_API_VERSION_MINOR(version)) +
-           "." + std::to_string(VK_API_VERSION_PATCH(version));
+    return std::to_string(VK_API_VERSION_MAJOR(version)) + "." +
+           std::to_string(VK_API_VERSION_MINOR(version)) + "." +
+           std::to_string(VK_API_VERSION_PATCH(version));
 }
 
 std::string missingRequirement(const DeviceCapabilities& device) {
@@ -318,12 +357,12 @@ std::string missingRequirement(const DeviceCapabilities& device) {
 }
 
 const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::string& request) {
-    if (devices.empty()) throw Error(ErrorKind::Device, std::string("no Vulkan device found: ") + kNoDeviceHint);
+    if (devices.empty()) throw Error(ErrorKind::Device, "no Vulkan device found: " + driverListAdvice());
     if (!request.empty()) {
         const DeviceInfo& device = findRequestedDevice(devices, request);
         if (!device.unsupportedReason.empty())
-            throw Error(ErrorKind::Device, "device " + device.name + " cannot be used: " + device.unsupportedReason +
-                                               kCpuBackendHint);
+            throw Error(ErrorKind::Device, "device " + device.name + " cannot be used: " +
+                                               device.unsupportedReason + kCpuBackendHint);
         return device;
     }
     const DeviceInfo* best = nullptr;
@@ -353,7 +392,7 @@ std::vector<DeviceInfo> listDevices(const ContextOptions& options) {
 }
 
 Context createContext(const ContextOptions& options) {
-    DeviceStep step("creating the Vulkan device");
+    DeviceStep step("creating the Vulkan device", DeviceWork::Setup);
     Context context;
     bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
     context.validationLog = std::make_unique<ValidationLog>();

@@ -84,7 +84,8 @@ struct Context {
     uint32_t validationMessages() const { return validationLog ? validationLog->messages.load() : 0; }
 };
 
-// Throws Error(Device) with a hint when there is no Vulkan loader, no device, or none usable.
+// Throws Error(Device) with a hint when there is no Vulkan loader, the driver list cannot be loaded
+// (naming VK_DRIVER_FILES / VK_ICD_FILENAMES when set), or there is no device, or none usable.
 Context createContext(const ContextOptions& options);
 void destroyContext(Context& context);
 

@@ -1,27 +1,28 @@
 #include "vk/pipeline_cache.h"
 
-#include "io/atomic_file.h"
+#include "io/input_file.h"
+#include "io/output_file.h"
 #include "sh/error.h"
 #include "vk/check.h"
 
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
-#include <vector>
+#include <sys/stat.h>
 
 namespace shprobe {
 
 namespace {
 
 // The header every pipeline cache's data starts with (VkPipelineCacheHeaderVersionOne).
-bool headerMatches(const std::vector<char>& data, const VkPhysicalDeviceProperties& properties) {
+bool headerMatches(const std::string& data, const VkPhysicalDeviceProperties& properties) {
     VkPipelineCacheHeaderVersionOne header;
     if (data.size() < sizeof(header)) return false;
     std::memcpy(&header, data.data(), sizeof(header));
-    return header.headerVersion == VK_PIPELINE_CACHE_HEADER_VERSION_ONE && header.vendorID == properties.vendorID &&
-           header.deviceID == properties.deviceID &&
+    return header.headerVersion == VK_PIPELINE_CACHE_HEADER_VERSION_ONE &&
+           header.vendorID == properties.vendorID && header.deviceID == properties.deviceID &&
            std::memcmp(header.pipelineCacheUUID, properties.pipelineCacheUUID, VK_UUID_SIZE) == 0;
 }
 
@@ -30,6 +31,38 @@ std::string cacheFolder() {
     if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/shprobe";
     if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/shprobe";
     return {};
+}
+
+// A cache is only an optimization: what is wrong with it is said once, and the run goes on.
+void warnOnce(const std::string& problem) {
+    static bool warned = false;
+    if (warned) return;
+    warned = true;
+    std::fprintf(stderr, "shprobe: warning: pipeline cache not used: %s\n", problem.c_str());
+}
+
+// Real caches are a few megabytes at most (lavapipe's: a 32-byte header).
+constexpr uint64_t kMaxCacheBytes = uint64_t(64) << 20;
+
+// The cache file's data: nothing when there is no file yet (the first run), and nothing, with a
+// warning, when the path holds anything but a regular file of at most kMaxCacheBytes (a FIFO
+// would block, /dev/zero never end).
+std::string readCache(const std::string& path) {
+    try {
+        if (path.empty() || inputPathKind(path) == PathKind::Missing) return {};
+        return readInputFile(path, kMaxCacheBytes, "a pipeline cache");
+    } catch (const Error& error) {
+        warnOnce(error.what());
+        return {};
+    }
+}
+
+// Only a regular file, or none yet, is (re)written: a link, a device or a FIFO put in its place
+// is left alone.
+bool isReplaceableFile(const std::string& path) {
+    struct stat status {};
+    if (lstat(path.c_str(), &status) != 0) return errno == ENOENT;
+    return S_ISREG(status.st_mode);
 }
 
 } // namespace
@@ -49,11 +82,7 @@ std::string pipelineCachePath(const Context& context) {
 }
 
 VkPipelineCache loadPipelineCache(const Context& context, const std::string& path) {
-    std::vector<char> data;
-    if (!path.empty()) {
-        std::ifstream file(path, std::ios::binary);
-        if (file) data.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
-    }
+    std::string data = readCache(path);
     VkPhysicalDeviceProperties properties;
     vkGetPhysicalDeviceProperties(context.physicalDevice, &properties);
     if (!headerMatches(data, properties)) data.clear();
@@ -67,7 +96,7 @@ VkPipelineCache loadPipelineCache(const Context& context, const std::string& pat
 }
 
 bool savePipelineCache(const Context& context, VkPipelineCache cache, const std::string& path) {
-    if (path.empty() || !cache) return false;
+    if (path.empty() || !cache || !isReplaceableFile(path)) return false;
     size_t size = 0;
     if (vkGetPipelineCacheData(context.device, cache, &size, nullptr) != VK_SUCCESS) return false;
     std::string data(size, '\0');
@@ -76,8 +105,9 @@ bool savePipelineCache(const Context& context, VkPipelineCache cache, const std:
     std::error_code ignored;
     std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ignored);
     try {
-        writeFileAtomic(path, data);
-    } catch (const Error&) {
+        writeOutputFile(path, data, OutputContent::Binary);
+    } catch (const Error& error) {
+        warnOnce(error.what());
         return false;
     }
     return true;

@@ -1,0 +1,486 @@
+// The program's second round of reliability, one test per class of the README's "Reliability"
+// table that test_bad_inputs does not hold: a full file system, outputs that are links, devices,
+// FIFOs and standard output, file-system errors as one line, the pipeline cache, number options,
+// output names, outputs that are inputs, and memory bounded by what a file holds. Each failure
+// follows test_bad_inputs' rules (ProgramTest::expectFailure): its exit code, exactly one line
+// "shprobe: error: ...", no file left behind, an existing output unchanged.
+//
+// ctest runs this with VK_ICD_FILENAMES = lavapipe and SHPROBE_VALIDATION=1, which the children
+// inherit. Some cases need root (mounting a small tmpfs to fill it) or another user (permission
+// bits): they are skipped with a message where this process cannot have them.
+#include "child_program.h"
+#include "image/image_write.h"
+#include "io/probe_file.h"
+#include "sh/basis.h"
+#include "sh/rotation.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <sys/mount.h>
+#include <sys/stat.h>
+#include <thread>
+
+namespace shprobe {
+namespace {
+
+using Reliability = ProgramTest;
+
+constexpr double kY00 = 0.28209479177387814; // 1 / (2 sqrt(pi))
+
+ShCoefficients testProbe(int order) {
+    ShCoefficients probe = makeCoefficients(order, Quantity::Radiance);
+    for (size_t i = 0; i < probe.rgb.size(); ++i)
+        probe.rgb[i] = glm::dvec3(1.0 + double(i), 0.5, -0.25 * double(i));
+    return probe;
+}
+
+bool isCharacterDevice(const char* path) {
+    struct stat status {};
+    return stat(path, &status) == 0 && S_ISCHR(status.st_mode);
+}
+
+// Every command that writes, with an output of each kind it writes. The bakes are of the built-in
+// sky at face size 4 (a few milliseconds); bench is left out: its report takes the same path.
+std::vector<Failure> everyWriter(const std::string& probe) {
+    return {
+        {{"bake", "--face-size", "4", "-q", "-o", "OUT"}, 3, {}, "probe.json"},
+        {{"bake", "--face-size", "4", "-q", "-o", "OUT"}, 3, {}, "probe.bin"},
+        {{"bake", "--face-size", "4", "-q", "-o", "OUT"}, 3, {}, "probe.glsl"},
+        {{"bake", "--face-size", "4", "-q", "-o", "OUT"}, 3, {}, "probe.h"},
+        {{"bake", "--face-size", "4", "-q", "--map-size", "8", "-o", "OUT"}, 3, {}, "map.exr"},
+        {{"bake", "--face-size", "4", "-q", "--format", "irradiance-cross", "--map-size", "4", "-o", "OUT"},
+         3,
+         {},
+         "cross.exr"},
+        {{"rotate", probe, "--euler", "0,90,0", "-o", "OUT"}, 3, {}, "rotated.json"},
+        {{"light", "--ambient", "1,1,1", "-o", "OUT"}, 3, {}, "light.json"},
+        {{"render", probe, "--size", "8", "-o", "OUT"}, 3, {}, "render.png"},
+        {{"render", probe, "--size", "8", "-o", "OUT"}, 3, {}, "render.jpg"},
+        {{"render", probe, "--size", "8", "-o", "OUT"}, 3, {}, "render.exr"},
+        {{"render", probe, "--size", "8", "-o", "OUT"}, 3, {}, "render.hdr"},
+    };
+}
+
+// A tmpfs of 256 KiB mounted over `folder` for the test's lifetime, then filled to the last
+// byte: every further write fails with ENOSPC, as on a full disk.
+class FullFileSystem {
+  public:
+    explicit FullFileSystem(const fs::path& folder) : folder_(folder) {
+        fs::create_directories(folder_);
+        mounted_ = mount("tmpfs", folder_.c_str(), "tmpfs", 0, "size=256k,nr_inodes=1000") == 0;
+        error_ = mounted_ ? "" : std::strerror(errno);
+    }
+    ~FullFileSystem() {
+        if (mounted_) umount2(folder_.c_str(), MNT_DETACH);
+    }
+    bool mounted() const { return mounted_; }
+    const std::string& error() const { return error_; }
+    // Writes the filler until the file system refuses another byte.
+    void fill() const {
+        int file = open((folder_ / "filler").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        ASSERT_GE(file, 0);
+        std::string block(4096, 'x');
+        for (size_t size : {block.size(), size_t(1)})
+            while (write(file, block.data(), size) == ssize_t(size)) {
+            }
+        close(file);
+    }
+
+  private:
+    fs::path folder_;
+    bool mounted_ = false;
+    std::string error_;
+};
+
+// Every writer on a full file system: exit 3 saying so, no file added (the temporary one is gone
+// too) and an existing output unchanged. OpenImageIO's PNG writer returned success after short
+// writes and left a truncated file: the program now writes every byte itself.
+TEST_F(Reliability, FullFileSystemLosesNothing) {
+    if (geteuid() != 0) GTEST_SKIP() << "mounting a small tmpfs needs root";
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    FullFileSystem full(folder() / "full");
+    if (!full.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here: " << full.error();
+    const std::string before = "an earlier good output\n";
+    std::vector<std::string> names{"filler"};
+    for (const Failure& writer : everyWriter(file("probe.json"))) {
+        writeText(folder() / "full" / writer.output, before);
+        names.push_back(writer.output);
+    }
+    std::sort(names.begin(), names.end());
+    full.fill();
+    for (Failure writer : everyWriter(file("probe.json"))) {
+        SCOPED_TRACE(writer.args[0] + " -> " + writer.output);
+        writer.mentions = {"no space left on device"};
+        for (const std::string& name : {writer.output, "new_" + writer.output})
+            expectMessage(writer, run(withOutput(writer.args, (folder() / "full" / name).string())));
+    }
+    EXPECT_EQ(entriesOf(folder() / "full"), names);
+    for (const std::string& name : names) {
+        if (name == "filler") continue;
+        EXPECT_EQ(readText(folder() / "full" / name), before) << name;
+    }
+}
+
+// A link is followed and its target replaced (created when missing), in the target's folder; the
+// link stays a link.
+TEST_F(Reliability, LinksAreFollowedAndKept) {
+    fs::create_directories(folder() / "elsewhere");
+    fs::create_symlink(folder() / "elsewhere" / "target.json", folder() / "link.json");
+    fs::create_symlink("elsewhere/target.png", folder() / "link.png"); // relative to the link's folder
+    for (int run = 0; run < 2; ++run) {                                // creates the target, then replaces it
+        runOk({"light", "--ambient", std::to_string(run + 1) + ",1,1", "-o", file("link.json")});
+        runOk({"render", file("link.json"), "--size", "8", "-o", file("link.png")});
+    }
+    EXPECT_TRUE(fs::is_symlink(folder() / "link.json"));
+    EXPECT_TRUE(fs::is_symlink(folder() / "link.png"));
+    ShCoefficients written = readProbeFile(file("elsewhere/target.json"));
+    EXPECT_GT(written.rgb[0].r, written.rgb[0].g) << "the second run replaced the target";
+    EXPECT_EQ(entriesOf(folder() / "elsewhere"), (std::vector<std::string>{"target.json", "target.png"}));
+}
+
+// Devices, FIFOs and standard output are written through as streams, never replaced by a file:
+// /dev/full fails as a full disk does, /dev/null takes anything, /dev/stdout and "-" reach the
+// program's stdout (the report then goes to stderr), a FIFO reaches its reader.
+TEST_F(Reliability, DevicesFifosAndStandardOutputAreStreams) {
+    expectMessage({{}, 3, {"cannot write /dev/full", "no space left on device"}},
+                  run({"light", "--ambient", "1,1,1", "-o", "/dev/full"}));
+    EXPECT_TRUE(isCharacterDevice("/dev/full"));
+    runOk({"bake", "--face-size", "4", "-q", "--format", "binary", "-o", "/dev/null"});
+    EXPECT_TRUE(isCharacterDevice("/dev/null"));
+    for (const char* standardOutput : {"-", "/dev/stdout"}) {
+        SCOPED_TRACE(standardOutput);
+        RunResult result = run({"light", "--ambient", "1,2,3", "-o", standardOutput});
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        const double l00 = 3.0 * kY00 * 4.0 * std::numbers::pi; // uniform radiance 3
+        EXPECT_NEAR(parseProbe(result.out, "stdout").coefficients.rgb[0].b, l00, 1e-6 * l00)
+            << "the probe alone is on stdout";
+        EXPECT_CONTAINS(result.err, "shprobe light:");
+    }
+    EXPECT_TRUE(fs::is_symlink("/dev/stdout"));
+
+    ASSERT_EQ(mkfifo(file("probe.fifo").c_str(), 0644), 0);
+    std::string received;
+    std::thread reader([&] { received = readText(folder() / "probe.fifo"); });
+    runOk({"light", "--ambient", "1,1,1", "-o", file("probe.fifo")});
+    reader.join();
+    EXPECT_NO_THROW(parseProbe(received, "fifo"));
+    EXPECT_EQ(fs::status(folder() / "probe.fifo").type(), fs::file_type::fifo);
+}
+
+// Probe readers take "-" for standard input; a device or a FIFO in place of a probe file is
+// refused at once, never read (a FIFO would wait for a writer, /dev/zero never end).
+TEST_F(Reliability, ProbeReadersTakeStandardInputAndNoSpecialFiles) {
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    RunResult rotated = run({"rotate", "-", "--euler", "0,0,0", "-o", file("rotated.json")},
+                            {.standardInput = file("probe.json")});
+    EXPECT_EQ(rotated.exitCode, 0) << describe(rotated);
+    EXPECT_NEAR(readProbeFile(file("rotated.json")).rgb[4].r, testProbe(3).rgb[4].r, 1e-7);
+    RunResult rendered =
+        run({"render", "-", "--size", "8", "-o", file("r.png")}, {.standardInput = file("probe.json")});
+    EXPECT_EQ(rendered.exitCode, 0) << describe(rendered);
+    ASSERT_EQ(mkfifo(file("probe_fifo.json").c_str(), 0644), 0);
+    for (const std::string& special : {std::string("/dev/zero"), file("probe_fifo.json")}) {
+        expectFailure(
+            {{"rotate", special, "--euler", "0,90,0", "-o", "OUT"}, 2, {special, "not a regular file"}});
+        expectFailure({{"render", special + ".json", "-o", "OUT"}, 2, {}, "out.png"});
+    }
+    expectFailure({{"rotate", "-", "--euler", "0,90,0", "-o", "OUT"}, 2, {"standard input", "empty"}});
+}
+
+// File-system failures name the path and the system's reason, with the exit code of their side
+// (2 inputs, 3 outputs), never "internal error".
+TEST_F(Reliability, FileSystemErrorsAreOneLine) {
+    fs::create_symlink(folder() / "loop_b", folder() / "loop_a");
+    fs::create_symlink(folder() / "loop_a", folder() / "loop_b");
+    const std::string loop = file("loop_a"), longName = file(std::string(300, 'n') + ".exr");
+    const std::string loopReason = "too many levels of symbolic links", longReason = "file name too long";
+    expectFailure({{"bake", loop, "-o", "OUT"}, 2, {loop, loopReason}});
+    expectFailure({{"rotate", loop, "--euler", "0,90,0", "-o", "OUT"}, 2, {loop, loopReason}});
+    expectFailure({{"bake", longName, "-o", "OUT"}, 2, {longReason}});
+    for (const std::string& output : {loop + "/probe.json", loop, file(std::string(300, 'o') + ".json")}) {
+        RunResult result = run({"light", "--ambient", "1,1,1", "-o", output});
+        expectMessage({{}, 3, {"cannot write " + output, output.size() > 300 ? longReason : loopReason}},
+                      result);
+    }
+    RunResult outDir = run({"bake", "--out-dir", loop, file("a.exr"), file("b.exr")});
+    expectMessage({{}, 3, {loop, loopReason}}, outDir);
+
+    // A relative input once the working folder is gone: its name and "no such file"; a relative
+    // output: the folder "was removed". Neither reaches std::filesystem's current_path.
+    fs::create_directories(folder() / "gone");
+    RunResult goneInput = run({"bake", "sky.exr", "-o", file("gone.json")},
+                              {.workingFolder = file("gone"), .removeWorkingFolder = true});
+    expectMessage({{}, 2, {"sky.exr: no such file"}}, goneInput);
+    fs::create_directories(folder() / "gone");
+    RunResult goneOutput = run({"light", "--ambient", "1,1,1", "-o", "light.json"},
+                               {.workingFolder = file("gone"), .removeWorkingFolder = true});
+    expectMessage({{}, 3, {"cannot write light.json", "was removed"}}, goneOutput);
+}
+
+// A mode-000 input, or an input in a folder that may not be searched, is "permission denied" for
+// a user other than root (root ignores the bits: the program runs as user nobody).
+TEST_F(Reliability, UnreadableInputsSayPermissionDenied) {
+    if (geteuid() != 0) GTEST_SKIP() << "needs root to run the program as user nobody";
+    writeImage(file("sky.exr"), makeImage(8, 4));
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    fs::create_directories(folder() / "closed");
+    writeProbeFile(file("closed/probe.json"), testProbe(3), {});
+    fs::permissions(folder(), fs::perms::all); // nobody may write its outputs here
+    fs::permissions(folder() / "sky.exr", fs::perms::none);
+    fs::permissions(folder() / "probe.json", fs::perms::none);
+    fs::permissions(folder() / "closed", fs::perms::none);
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"bake", file("sky.exr"), "-o", file("a.json")}, file("sky.exr")},
+        {{"rotate", file("probe.json"), "--euler", "0,90,0", "-o", file("b.json")}, file("probe.json")},
+        {{"rotate", file("closed/probe.json"), "--euler", "0,90,0", "-o", file("c.json")},
+         file("closed/probe.json")},
+    };
+    for (const auto& [args, input] : cases)
+        expectMessage({{}, 2, {input, "permission denied"}}, run(args, {.asOtherUser = true}));
+    fs::permissions(folder() / "closed", fs::perms::owner_all);
+}
+
+// The pipeline cache is only an optimization: a FIFO, a link to /dev/zero or a folder in place of
+// the cache file, or a cache folder that is a loop of links or too long a name, costs one warning
+// line and nothing else (the probe is written, exit 0, within seconds). Runs sharing one cache
+// folder at once all succeed without a word.
+TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
+    const std::string cache = file("cache");
+    fs::create_directories(cache);
+    RunResult first = run({"bake", "--face-size", "4", "-q", "-o", file("first.json")},
+                          {.environment = {{"SHPROBE_CACHE_DIR", cache}}});
+    ASSERT_EQ(first.exitCode, 0) << describe(first);
+    std::vector<std::string> created = entriesOf(cache);
+    ASSERT_EQ(created.size(), 1u) << "the first run writes its cache";
+    const fs::path cacheFile = fs::path(cache) / created[0];
+
+    fs::create_symlink(folder() / "loop_b", folder() / "loop_a");
+    fs::create_symlink(folder() / "loop_a", folder() / "loop_b");
+    const std::vector<std::pair<std::string, std::function<void()>>> breakages = {
+        {"a FIFO", [&] { ASSERT_EQ(mkfifo(cacheFile.c_str(), 0644), 0); }},
+        {"a link to /dev/zero", [&] { fs::create_symlink("/dev/zero", cacheFile); }},
+        {"a folder", [&] { fs::create_directories(cacheFile); }},
+    };
+    auto expectWarning = [&](const std::string& what, const std::string& folderName) {
+        SCOPED_TRACE(what);
+        RunResult result = run({"bake", "--face-size", "4", "-q", "-o", file("probe.json")},
+                               {.environment = {{"SHPROBE_CACHE_DIR", folderName}}});
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_LT(result.seconds, 20.0) << "the cache must not make the run wait";
+        EXPECT_EQ(linesOf(result.err).size(), 1u) << result.err;
+        EXPECT_CONTAINS(result.err, "shprobe: warning: pipeline cache not used");
+        EXPECT_NO_THROW(readProbeFile(file("probe.json")));
+    };
+    for (const auto& [what, breakCache] : breakages) {
+        fs::remove(cacheFile);
+        breakCache();
+        expectWarning(what, cache);
+    }
+    expectWarning("a loop of links", file("loop_a"));
+    expectWarning("too long a name", file(std::string(300, 'c')));
+
+    const std::string shared = file("shared");
+    std::vector<std::unique_ptr<Child>> runs;
+    for (int i = 0; i < 4; ++i)
+        runs.push_back(std::make_unique<Child>(
+            std::vector<std::string>{"bake", "--face-size", "8", "-q", "-o",
+                                     file("run" + std::to_string(i) + ".json")},
+            folder() / "logs", RunOptions{.environment = {{"SHPROBE_CACHE_DIR", shared}}}));
+    for (std::unique_ptr<Child>& child : runs) {
+        RunResult result = child->wait();
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_EQ(result.err, "") << describe(result);
+    }
+}
+
+// Every number option is refused at parse time unless finite and in its range, with a short line
+// that says what is allowed.
+TEST_F(Reliability, NumberOptionsMustBeFiniteAndInRange) {
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    const std::string probe = file("probe.json");
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"render", probe, "--exposure", "nan", "-o", "OUT"},
+         "--exposure: nan is not a number from -64 to 64"},
+        {{"render", probe, "--exposure", "-inf", "-o", "OUT"}, "--exposure: -inf is not"},
+        {{"render", probe, "--yaw", "inf", "-o", "OUT"}, "--yaw: inf is not a number from -360 to 360"},
+        {{"render", probe, "--pitch", "nan", "-o", "OUT"}, "--pitch: nan is not a number from -85 to 85"},
+        {{"view", probe, "--exposure", "nan", "--frames", "1", "--screenshot", "OUT"}, "--exposure: nan"},
+        {{"rotate", probe, "--euler", "0,nan,0", "-o", "OUT"}, "--euler: nan is not"},
+        {{"rotate", probe, "--quat", "inf,0,0,0", "-o", "OUT"}, "--quat: inf is not a finite number"},
+        {{"rotate", probe, "--matrix", "1,0,0,0,1,0,0,0,nan", "-o", "OUT"}, "--matrix: nan is not"},
+        {{"bake", "--batch-bytes", "0", "--out-dir", "OUT", probe},
+         "--batch-bytes: 0 is not a number of at least 1"},
+    };
+    for (const auto& [args, message] : cases) {
+        const std::string output = args[0] == "view" || args[0] == "render" ? "out.png" : "out.json";
+        expectFailure({args, 2, {message}, output});
+        RunResult result = run(withOutput(args, file(output)));
+        EXPECT_LT(result.err.size(), 120u) << "error lines stay short: " << result.err;
+    }
+}
+
+// --directional and --sphere repeat as the help says: two lights give the sum of their probes.
+TEST_F(Reliability, RepeatedLightOptionsAddUp) {
+    const std::vector<std::string> a = {"--directional", "0,1,0", "1,2,3"},
+                                   b = {"--directional", "1,0,0", "2,2,2"};
+    const std::vector<std::string> c = {"--sphere", "0,0,1", "10", "1,1,1"},
+                                   d = {"--sphere", "0,-1,0", "5", "3,2,1"};
+    auto probeOf = [&](std::vector<std::vector<std::string>> lights, const std::string& name) {
+        std::vector<std::string> args = {"light", "-o", file(name)};
+        for (const std::vector<std::string>& light : lights)
+            args.insert(args.end(), light.begin(), light.end());
+        RunResult result = run(args);
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        return readProbeFile(file(name));
+    };
+    ShCoefficients all = probeOf({a, b, c, d}, "all.json");
+    ShCoefficients parts[] = {probeOf({a}, "a.json"), probeOf({b}, "b.json"), probeOf({c}, "c.json"),
+                              probeOf({d}, "d.json")};
+    for (size_t i = 0; i < all.rgb.size(); ++i)
+        for (int channel = 0; channel < 3; ++channel) {
+            double sum = 0.0;
+            for (const ShCoefficients& part : parts)
+                sum += part.rgb[i][channel];
+            EXPECT_NEAR(all.rgb[i][channel], sum, 1e-6 * (1.0 + std::abs(sum))) << i; // 9 digits in the files
+        }
+}
+
+// --list reads a small regular file only: a folder or a device is named for what it is, at once.
+TEST_F(Reliability, ListMustBeARegularFile) {
+    fs::create_directories(folder() / "listdir");
+    expectFailure({{"bake", "--list", file("listdir"), "--out-dir", "OUT"},
+                   2,
+                   {"is a folder, not a list of inputs"},
+                   "probes"});
+    expectFailure({{"bake", "--list", "/dev/zero", "--out-dir", "OUT"},
+                   2,
+                   {"/dev/zero: not a regular file"},
+                   "probes"});
+    EXPECT_LT(run({"bake", "--list", "/dev/zero", "--out-dir", file("probes")}).seconds, 5.0);
+}
+
+// `rotate` turns the sun taken out of a probe with its coefficients: a light from d comes from R d.
+TEST_F(Reliability, RotateTurnsTheSun) {
+    ProbeMetadata metadata;
+    metadata.sun = ProbeSun{glm::normalize(glm::dvec3(1.0, 2.0, 3.0)), glm::dvec3(100.0, 90.0, 80.0), 0.01};
+    writeProbeFile(file("sun.json"), testProbe(3), metadata);
+    runOk({"rotate", file("sun.json"), "--euler", "90,30,0", "-o", file("turned.json")});
+    Probe turned = readProbe(file("turned.json"));
+    ASSERT_TRUE(turned.sun.has_value()) << "the sun was dropped";
+    glm::dvec3 expected = rotationFromEulerZYZ(90.0, 30.0, 0.0) * metadata.sun->direction;
+    EXPECT_LT(glm::length(turned.sun->direction - expected), 1e-8);
+    EXPECT_NEAR(turned.sun->radiance.r, 100.0, 1e-6);
+    EXPECT_NEAR(turned.sun->angularRadius, 0.01, 1e-9);
+}
+
+// Without -o the output's name follows the format; without --format the extension chooses it;
+// an extension that names another format than --format is refused before any work.
+TEST_F(Reliability, OutputNamesFollowTheFormat) {
+    const std::vector<std::pair<std::string, std::string>> defaults = {{"json", "probe.json"},
+                                                                       {"binary", "probe.bin"},
+                                                                       {"glsl", "probe.glsl"},
+                                                                       {"cpp", "probe.h"},
+                                                                       {"irradiance-equirect", "probe.exr"}};
+    for (const auto& [format, name] : defaults) {
+        fs::create_directories(folder() / format);
+        RunResult result = run({"bake", "--face-size", "4", "-q", "--map-size", "8", "--format", format},
+                               {.workingFolder = file(format)});
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_EQ(entriesOf(folder() / format), std::vector<std::string>{name}) << format;
+    }
+    runOk({"bake", "--face-size", "4", "-q", "-o", file("chosen.bin")});
+    EXPECT_EQ(readText(folder() / "chosen.bin").substr(0, 4), "SHPB");
+    runOk({"bake", "--face-size", "4", "-q", "-o", file("chosen.h")});
+    EXPECT_CONTAINS(readText(folder() / "chosen.h"), "chosen_sh[25][4]");
+    runOk({"bake", "--face-size", "4", "-q", "--map-size", "8", "-o", file("chosen.exr")});
+    EXPECT_TRUE(OIIO::ImageInput::open(file("chosen.exr"))) << "an irradiance map";
+    runOk({"bake", "--face-size", "4", "-q", "-o", file("chosen.txt")});
+    EXPECT_NO_THROW(readProbeFile(file("chosen.txt"))) << "an extension naming no format: json";
+    expectFailure({{"bake", "--format", "binary", "-o", "OUT"},
+                   2,
+                   {"names a json file but --format is binary", ".bin"}});
+}
+
+// An output that is an input, by name or through a link, is refused before any work, and the
+// input stays as it was.
+TEST_F(Reliability, OutputThatIsAnInputIsRefused) {
+    Image sky = makeImage(8, 4);
+    writeImage(file("sky.exr"), sky);
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    fs::create_symlink(folder() / "sky.exr", folder() / "alias.exr");
+    const std::string skyBytes = readText(folder() / "sky.exr"),
+                      probeBytes = readText(folder() / "probe.json");
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"bake", file("sky.exr"), "-o", file("sky.exr")}, file("sky.exr")},
+        {{"bake", file("sky.exr"), "--format", "irradiance-cross", "-o", file("alias.exr")},
+         file("alias.exr")},
+        {{"render", file("sky.exr"), "-o", file("sky.exr")}, file("sky.exr")},
+        {{"rotate", file("probe.json"), "--euler", "0,90,0", "-o", file("probe.json")}, file("probe.json")},
+        {{"bake", file("sky.exr"), "--format", "irradiance-equirect", "--out-dir", folder().string()},
+         file("sky.exr")},
+    };
+    for (const auto& [args, output] : cases) {
+        RunResult result = run(args);
+        expectMessage({{}, 3, {"cannot write " + output, "it is the input"}}, result);
+        EXPECT_LT(result.seconds, 5.0) << "refused before any work";
+    }
+    EXPECT_EQ(readText(folder() / "sky.exr"), skyBytes);
+    EXPECT_EQ(readText(folder() / "probe.json"), probeBytes);
+}
+
+// An output name of 250 bytes and more, up to the longest a folder takes, is written: the
+// temporary file's name is never longer than that.
+TEST_F(Reliability, LongestOutputNamesAreWritten) {
+    for (const std::string& name : {std::string(245, 'p') + ".json", std::string(250, 'q') + ".json"})
+        runOk({"light", "--ambient", "1,1,1", "-o", file(name)});
+    runOk({"render", file(std::string(245, 'p') + ".json"), "--size", "8", "-o",
+           file(std::string(251, 'r') + ".png")});
+    runOk({"bake", "--face-size", "4", "-q", "-o", file(std::string(251, 'b') + ".bin")});
+    EXPECT_EQ(entriesOf(folder()).size(), 5u) << "four outputs and the logs, no temporary file";
+}
+
+// What a file claims is not allocated before it is checked: an EXR of a few hundred bytes whose
+// header claims a 2 GiB attribute, and probe files of brackets, are refused in well under a
+// second with memory near what a run that reads nothing takes.
+TEST_F(Reliability, MemoryIsBoundedByWhatTheFileHolds) {
+    Image small = makeImage(64, 32);
+    {
+        std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create("exr");
+        OIIO::ImageSpec spec(64, 32, 3, OIIO::TypeDesc::FLOAT);
+        spec.attribute("ImageDescription", "claims");
+        ASSERT_TRUE(output->open(file("claims.exr"), spec));
+        ASSERT_TRUE(output->write_image(OIIO::TypeDesc::FLOAT, small.texels.data(), sizeof(glm::vec4)));
+        output->close();
+    }
+    // The "comments" attribute (OIIO's ImageDescription): name, type "string", a 4-byte size.
+    std::string bytes = readText(folder() / "claims.exr");
+    size_t at = bytes.find(std::string("comments\0string\0", 16));
+    ASSERT_NE(at, std::string::npos);
+    const uint32_t claimed = 0x7fffffff;
+    std::memcpy(&bytes[at + 16], &claimed, 4); // little-endian, as the file is
+    writeText(folder() / "claims.exr", bytes);
+    writeText(folder() / "brackets.json", std::string(15700000, '['));
+    writeText(folder() / "deep.json", std::string(1 << 20, '['));
+
+    RunResult baseline = run({"bake", file("missing.exr"), "-o", file("base.json")});
+    ASSERT_EQ(baseline.exitCode, 2) << describe(baseline);
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"bake", file("claims.exr"), "--max-pixels", "2048", "-o", "OUT"}, "comments"},
+        {{"rotate", file("brackets.json"), "--euler", "0,90,0", "-o", "OUT"}, "bytes"},
+        {{"rotate", file("deep.json"), "--euler", "0,90,0", "-o", "OUT"}, "nested deeper than"},
+    };
+    for (const auto& [args, mention] : cases) {
+        expectFailure({args, 2, {mention}});
+        RunResult result = run(withOutput(args, file("out.json")));
+        EXPECT_LT(result.seconds, 1.0) << "refused at once";
+        EXPECT_LT(result.peakKiB, baseline.peakKiB + 64 * 1024) << "baseline " << baseline.peakKiB << " KiB";
+        RecordProperty(args[1].substr(args[1].rfind('/') + 1) + "_peak_kib", std::to_string(result.peakKiB));
+    }
+}
+
+} // namespace
+} // namespace shprobe
