@@ -158,3 +158,6 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/shprobeConfigVersion.cmak
     COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/shprobeConfig.cmake ${PROJECT_BINARY_DIR}/shprobeConfigVersion.cmake
     DESTINATION ${SHPROBE_INSTALL_CMAKEDIR})
+
+# --- license -------------------------------------------------------------------------------------
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/shprobe)

@@ -109,6 +109,9 @@ ProbeSun parseSun(const json& sun, const std::string& name) {
     if (!(degrees > 0.0 && degrees <= 90.0))
         fail(name, "field \"sun.angular_radius_degrees\" must be a number in (0, 90]");
     result.angularRadius = degrees * M_PI / 180.0;
+    // A radius so small that it is 0 in radians (1e-322 degrees) would be written as 0 and refused.
+    if (!(result.angularRadius > 0.0))
+        fail(name, "field \"sun.angular_radius_degrees\" must be a number in (0, 90]");
     return result;
 }
 
