@@ -10,11 +10,11 @@
 #                                              shprobe_render_spirv (static; exported as shprobe::sh,
 #                                              shprobe::shprobe, shprobe::spirv, shprobe::render,
 #                                              shprobe::render_spirv)
-#   include/shprobe/{sh,io,image,vk,gpu,render}/*.h   C++ headers; include dir include/shprobe, so
-#                                              `#include "sh/basis.h"` works as in the source tree
-#   include/shprobe/shprobe/shprobe_spirv.h    the embedded-module declarations (generated)
-#   include/shprobe/glsl/                      shaders/include: the C++/GLSL shared headers and the
-#                                              GLSL includes; also an include dir of the C++ targets
+#   include/shprobe/{sh,io,image,vk,gpu,render}/*.h   C++ headers, included as <shprobe/sh/basis.h>
+#                                              (include dir: include), as in the build tree
+#   include/shprobe/shprobe_spirv.h            the embedded-module declarations (generated)
+#   include/shprobe/glsl/                      shaders/include: the C++/GLSL shared headers
+#                                              (<shprobe/glsl/gpu_interface.h>) and the GLSL includes
 #   share/shprobe/spirv/*.spv, INTERFACE.md    every module built into the libraries, and its contract
 #   lib/cmake/shprobe/                         shprobeConfig.cmake, version file, exported targets
 #
@@ -59,9 +59,7 @@ function(shprobe_relocate_includes target)
         endif()
     endforeach()
     set_target_properties(${target} PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "${relocated}")
-    target_include_directories(${target} INTERFACE
-        $<INSTALL_INTERFACE:${SHPROBE_INSTALL_INCLUDEDIR}>
-        $<INSTALL_INTERFACE:${SHPROBE_INSTALL_GLSLDIR}>)
+    target_include_directories(${target} INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
 endfunction()
 
 set(shprobe_export_targets "")
@@ -77,7 +75,7 @@ install(TARGETS ${shprobe_export_targets}
     EXPORT shprobeTargets
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-    INCLUDES DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR})
+    INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS shprobe_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
 # --- headers -------------------------------------------------------------------------------------
@@ -93,7 +91,7 @@ endforeach()
 install(FILES
         ${PROJECT_BINARY_DIR}/generated/shprobe/shprobe_spirv.h
         ${PROJECT_BINARY_DIR}/generated/shprobe/shprobe_render_spirv.h
-    DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR}/shprobe)
+    DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/shaders/include/ DESTINATION ${SHPROBE_INSTALL_GLSLDIR})
 
 # --- SPIR-V modules ------------------------------------------------------------------------------

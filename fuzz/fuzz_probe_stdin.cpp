@@ -2,8 +2,8 @@
 // a valid probe or throw shprobe::Error, and a probe it accepts, sun included, must read back the
 // same once written by probeToJson.
 #include "fuzz_support.h"
-#include "io/probe_file.h"
-#include "sh/basis.h"
+#include "shprobe/io/probe_file.h"
+#include "shprobe/sh/basis.h"
 
 #include <cmath>
 #include <sys/mman.h>

@@ -1,6 +1,6 @@
 // The SH basis: golden values, recurrence against closed forms, orthonormality, normalization.
-#include "sh/basis.h"
-#include "sh/error.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
 #include "test_support.h"
 
 #include <glm/geometric.hpp>

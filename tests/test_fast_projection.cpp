@@ -1,9 +1,9 @@
 // The fast float projection against the double reference, its half-float input, its independence
 // of the thread count, and its refusals.
-#include "sh/basis.h"
-#include "sh/error.h"
-#include "sh/fast_projection.h"
-#include "sh/projection.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/fast_projection.h"
+#include "shprobe/sh/projection.h"
 
 #include <glm/common.hpp>
 #include <gtest/gtest.h>

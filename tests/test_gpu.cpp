@@ -3,20 +3,20 @@
 // per subgroup size 4, 8, 16, 32).
 #include "gpu_test.h"
 
-#include "gpu/probe_baker.h"
-#include "gpu/projector.h"
-#include "gpu/rotator.h"
-#include "image/environment.h"
-#include "sh/basis.h"
-#include "sh/error.h"
-#include "sh/irradiance.h"
-#include "sh/projection.h"
-#include "sh/rotation.h"
-#include "sh/windowing.h"
+#include "shprobe/gpu/probe_baker.h"
+#include "shprobe/gpu/projector.h"
+#include "shprobe/gpu/rotator.h"
+#include "shprobe/image/environment.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/irradiance.h"
+#include "shprobe/sh/projection.h"
+#include "shprobe/sh/rotation.h"
+#include "shprobe/sh/windowing.h"
 #include "shprobe/shprobe_test_spirv.h"
-#include "vk/image.h"
-#include "vk/pipeline.h"
-#include "vk/resources.h"
+#include "shprobe/vk/image.h"
+#include "shprobe/vk/pipeline.h"
+#include "shprobe/vk/resources.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,14 +3,14 @@
 // (sh/folding.h), evaluate to the probe's radiance or E(n) / pi, and compile (glslangValidator, and
 // the system's C and C++ compilers); the irradiance maps hold E(n) / pi at their pixels'
 // directions, and a cross map loaded and projected back gives the probe's irradiance again.
-#include "io/probe_export.h"
+#include "shprobe/io/probe_export.h"
 
-#include "image/environment.h"
-#include "sh/basis.h"
-#include "sh/error.h"
-#include "sh/folding.h"
-#include "sh/irradiance.h"
-#include "sh/projection.h"
+#include "shprobe/image/environment.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/folding.h"
+#include "shprobe/sh/irradiance.h"
+#include "shprobe/sh/projection.h"
 #include "test_support.h"
 
 #include <cerrno>

@@ -1,9 +1,9 @@
 // Coefficient files (README "Conventions", coefficient files): what is written reads back the
 // same, and every malformed or wrong-schema file is refused with a message naming the file and the
 // offending field.
-#include "io/output_file.h"
-#include "io/probe_file.h"
-#include "sh/error.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/io/probe_file.h"
+#include "shprobe/sh/error.h"
 
 #include <algorithm>
 #include <csignal>

@@ -1,7 +1,7 @@
 // The double-precision reference projection of cube maps and equirect maps.
-#include "sh/basis.h"
-#include "sh/error.h"
-#include "sh/projection.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/projection.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

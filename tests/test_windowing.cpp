@@ -1,12 +1,12 @@
 // Windows, de-ringing, and the seeds' facts about truncated irradiance: Sloan's order-3 and
 // order-5 lobes, Lisle-Huang's H_2n recurrence for A_l, and the L1 antipodal identity of seed 004.
-#include "sh/basis.h"
-#include "sh/cubemap.h"
-#include "sh/error.h"
-#include "sh/irradiance.h"
-#include "sh/lights.h"
-#include "sh/projection.h"
-#include "sh/windowing.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/cubemap.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/irradiance.h"
+#include "shprobe/sh/lights.h"
+#include "shprobe/sh/projection.h"
+#include "shprobe/sh/windowing.h"
 #include "test_support.h"
 
 #include <glm/geometric.hpp>

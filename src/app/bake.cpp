@@ -4,9 +4,9 @@
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
 #include "app/toolkit.h"
-#include "io/output_file.h"
-#include "sh/basis.h"
-#include "sh/irradiance.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/irradiance.h"
 
 #include <cmath>
 #include <cstdio>

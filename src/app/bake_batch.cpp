@@ -2,8 +2,8 @@
 // as one GPU submission takes; bad inputs are reported and skipped.
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
-#include "io/input_file.h"
-#include "io/output_file.h"
+#include "shprobe/io/input_file.h"
+#include "shprobe/io/output_file.h"
 
 #include <algorithm>
 #include <cerrno>

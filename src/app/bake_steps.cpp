@@ -1,13 +1,13 @@
 #include "app/bake_steps.h"
 
 #include "app/toolkit.h"
-#include "io/probe_export.h"
-#include "sh/fast_projection.h"
-#include "sh/folding.h"
-#include "sh/irradiance.h"
-#include "sh/lights.h"
-#include "sh/projection.h"
-#include "sh/windowing.h"
+#include "shprobe/io/probe_export.h"
+#include "shprobe/sh/fast_projection.h"
+#include "shprobe/sh/folding.h"
+#include "shprobe/sh/irradiance.h"
+#include "shprobe/sh/lights.h"
+#include "shprobe/sh/projection.h"
+#include "shprobe/sh/windowing.h"
 
 #include <cctype>
 #include <filesystem>

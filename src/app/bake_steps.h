@@ -2,14 +2,14 @@
 // loading an input, baking cube maps on the GPU or the CPU, finishing and writing a probe.
 #pragma once
 #include "app/commands.h"
-#include "gpu/projector.h"
-#include "image/environment.h"
-#include "io/output_file.h"
-#include "io/probe_file.h"
-#include "sh/error.h"
-#include "vk/check.h"
-#include "vk/context.h"
-#include "vk/pipeline_cache.h"
+#include "shprobe/gpu/projector.h"
+#include "shprobe/image/environment.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/io/probe_file.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
+#include "shprobe/vk/context.h"
+#include "shprobe/vk/pipeline_cache.h"
 
 #include <optional>
 #include <span>

@@ -6,12 +6,12 @@
 #include "app/bench.h"
 #include "app/bench_device.h"
 #include "app/stopwatch.h"
-#include "gpu/projector.h"
-#include "io/output_file.h"
-#include "sh/basis.h"
-#include "sh/fast_projection.h"
-#include "sh/projection.h"
-#include "vk/context.h"
+#include "shprobe/gpu/projector.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/fast_projection.h"
+#include "shprobe/sh/projection.h"
+#include "shprobe/vk/context.h"
 
 #include <glm/gtc/packing.hpp>
 

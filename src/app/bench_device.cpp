@@ -1,12 +1,12 @@
 #include "app/bench_device.h"
 #include "app/stopwatch.h"
 
-#include "gpu/probe_baker.h"
-#include "gpu_interface.h"
+#include "shprobe/gpu/probe_baker.h"
+#include "shprobe/glsl/gpu_interface.h"
 #include "shprobe/shprobe_bench_spirv.h"
-#include "vk/check.h"
-#include "vk/pipeline.h"
-#include "vk/pipeline_cache.h"
+#include "shprobe/vk/check.h"
+#include "shprobe/vk/pipeline.h"
+#include "shprobe/vk/pipeline_cache.h"
 
 #include <cmath>
 #include <cstdio>

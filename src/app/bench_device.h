@@ -2,9 +2,9 @@
 // projection's access pattern, and the cost of creating the pipelines with and without a
 // pipeline cache.
 #pragma once
-#include "gpu/projector.h"
-#include "sh/cubemap.h"
-#include "vk/context.h"
+#include "shprobe/gpu/projector.h"
+#include "shprobe/sh/cubemap.h"
+#include "shprobe/vk/context.h"
 
 namespace shprobe {
 

@@ -2,7 +2,7 @@
 // plain options struct; library errors (shprobe::Error) reach main, which prints them.
 #pragma once
 #include "app/toolkit.h"
-#include "image/environment.h"
+#include "shprobe/image/environment.h"
 
 #include <CLI/CLI.hpp>
 #include <cmath>

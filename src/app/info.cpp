@@ -1,7 +1,7 @@
 // `shprobe info`: the Vulkan devices, which one a bake would use, and the features it relies on.
 #include "app/commands.h"
-#include "gpu/projector.h"
-#include "vk/context.h"
+#include "shprobe/gpu/projector.h"
+#include "shprobe/vk/context.h"
 
 #include <cstdio>
 

@@ -1,8 +1,8 @@
 // shprobe: bakes HDR environments into spherical-harmonics light probes on the GPU.
 #include "app/bench.h"
 #include "app/commands.h"
-#include "io/output_file.h"
-#include "sh/error.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/error.h"
 
 #include <cstdio>
 #include <exception>

@@ -3,14 +3,14 @@
 // order-5 reconstructions and lit spheres side by side.
 #include "app/commands.h"
 #include "app/stopwatch.h"
-#include "io/output_file.h"
-#include "render/grid.h"
-#include "render/image_output.h"
-#include "render/offscreen.h"
-#include "render/render_input.h"
-#include "sh/error.h"
-#include "vk/check.h"
-#include "vk/context.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/render/grid.h"
+#include "shprobe/render/image_output.h"
+#include "shprobe/render/offscreen.h"
+#include "shprobe/render/render_input.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
+#include "shprobe/vk/context.h"
 
 #include <cmath>
 #include <cstdio>

@@ -1,11 +1,11 @@
 // `shprobe view`: the interactive GLFW viewer (src/render/viewer.h); `--screenshot FILE --frames N`
 // saves frame N and exits, for tests and scripts.
 #include "app/commands.h"
-#include "gpu/projector.h"
-#include "io/output_file.h"
-#include "render/render_input.h"
-#include "render/viewer.h"
-#include "vk/check.h"
+#include "shprobe/gpu/projector.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/render/render_input.h"
+#include "shprobe/render/viewer.h"
+#include "shprobe/vk/check.h"
 
 namespace shprobe {
 

@@ -1,14 +1,14 @@
-#include "gpu/probe_baker.h"
+#include "shprobe/gpu/probe_baker.h"
 
-#include "gpu_interface.h"
-#include "texel_geometry.h"
-#include "sh/basis.h"
-#include "sh/cubemap.h"
-#include "sh/error.h"
-#include "sh/irradiance.h"
+#include "shprobe/glsl/gpu_interface.h"
+#include "shprobe/glsl/texel_geometry.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/cubemap.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/irradiance.h"
 #include "shprobe/shprobe_spirv.h"
-#include "vk/check.h"
-#include "vk/image.h"
+#include "shprobe/vk/check.h"
+#include "shprobe/vk/image.h"
 
 #include <algorithm>
 #include <string>

@@ -31,9 +31,9 @@
 //   buffer or on one queue, but must not run concurrently on different queues. Different sets
 //   are independent.
 #pragma once
-#include "vk/context.h"
-#include "vk/pipeline.h"
-#include "vk/resources.h"
+#include "shprobe/vk/context.h"
+#include "shprobe/vk/pipeline.h"
+#include "shprobe/vk/resources.h"
 
 #include <cstdint>
 #include <span>

@@ -1,11 +1,11 @@
-#include "gpu/projector.h"
+#include "shprobe/gpu/projector.h"
 
-#include "gpu_interface.h"
-#include "sh/basis.h"
-#include "sh/error.h"
-#include "vk/check.h"
-#include "vk/image.h"
-#include "vk/resources.h"
+#include "shprobe/glsl/gpu_interface.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
+#include "shprobe/vk/image.h"
+#include "shprobe/vk/resources.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,12 +2,12 @@
 // gpu/probe_baker.h (project.comp, reduce.comp, convolve.comp) and reads the coefficients back,
 // all in one submission however many cube maps there are.
 #pragma once
-#include "gpu/probe_baker.h"
-#include "sh/coefficients.h"
-#include "sh/cubemap.h"
-#include "vk/context.h"
-#include "vk/image.h"
-#include "vk/resources.h"
+#include "shprobe/gpu/probe_baker.h"
+#include "shprobe/sh/coefficients.h"
+#include "shprobe/sh/cubemap.h"
+#include "shprobe/vk/context.h"
+#include "shprobe/vk/image.h"
+#include "shprobe/vk/resources.h"
 
 #include <span>
 #include <string>

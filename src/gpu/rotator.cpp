@@ -1,10 +1,10 @@
-#include "gpu/rotator.h"
+#include "shprobe/gpu/rotator.h"
 
-#include "gpu_interface.h"
-#include "sh/basis.h"
-#include "sh/error.h"
+#include "shprobe/glsl/gpu_interface.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
 #include "shprobe/shprobe_spirv.h"
-#include "vk/resources.h"
+#include "shprobe/vk/resources.h"
 
 #include <glm/vec4.hpp>
 

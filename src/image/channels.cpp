@@ -1,7 +1,7 @@
-#include "image/channels.h"
+#include "shprobe/image/channels.h"
 
-#include "io/input_file.h"
-#include "sh/error.h"
+#include "shprobe/io/input_file.h"
+#include "shprobe/sh/error.h"
 
 #include <algorithm>
 #include <array>

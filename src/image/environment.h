@@ -1,7 +1,7 @@
 // Loading HDR environments into cube maps: equirect, horizontal and vertical crosses, six face
 // files, and the built-in procedural sky. Layouts and orientations follow CONVENTIONS.md.
 #pragma once
-#include "sh/cubemap.h"
+#include "shprobe/sh/cubemap.h"
 #include <array>
 #include <cstddef>
 #include <cstdint>

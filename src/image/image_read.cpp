@@ -1,10 +1,10 @@
 // Reading environment images through OpenImageIO and loading them as cube maps: single images
 // (equirect or cross) and six face files. Every failure is an Error(Input) naming the file.
-#include "image/environment.h"
+#include "shprobe/image/environment.h"
 
-#include "image/channels.h"
-#include "io/input_file.h"
-#include "sh/error.h"
+#include "shprobe/image/channels.h"
+#include "shprobe/io/input_file.h"
+#include "shprobe/sh/error.h"
 
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>

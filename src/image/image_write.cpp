@@ -1,8 +1,8 @@
 // Writing images through OpenImageIO into memory, then to the destination through OutputFile.
-#include "image/image_write.h"
+#include "shprobe/image/image_write.h"
 
-#include "io/output_file.h"
-#include "sh/error.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/error.h"
 
 #include <OpenImageIO/imageio.h>
 #include <algorithm>

@@ -1,7 +1,7 @@
 // Writing images through OpenImageIO. The encoded file goes to the destination through
 // OutputFile (io/output_file.h): whole or not at all, every write checked.
 #pragma once
-#include "sh/cubemap.h"
+#include "shprobe/sh/cubemap.h"
 
 #include <cstdint>
 #include <string>

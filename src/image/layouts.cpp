@@ -1,8 +1,8 @@
 // Image layouts of environment maps (equirect, crosses) turned into cube maps, and cube-map
 // resizing. Face order, orientation and the cross layouts are those of CONVENTIONS.md.
-#include "image/environment.h"
+#include "shprobe/image/environment.h"
 
-#include "sh/error.h"
+#include "shprobe/sh/error.h"
 
 #include <algorithm>
 #include <array>

@@ -1,5 +1,5 @@
 // The built-in default environment: a procedural sky (gradient, ground, sun disc), +Y up.
-#include "image/environment.h"
+#include "shprobe/image/environment.h"
 
 #include <algorithm>
 #include <cmath>

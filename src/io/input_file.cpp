@@ -1,6 +1,6 @@
-#include "io/input_file.h"
+#include "shprobe/io/input_file.h"
 
-#include "sh/error.h"
+#include "shprobe/sh/error.h"
 
 #include <cctype>
 #include <cerrno>

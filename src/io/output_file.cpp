@@ -1,7 +1,7 @@
-#include "io/output_file.h"
+#include "shprobe/io/output_file.h"
 
-#include "io/input_file.h"
-#include "sh/error.h"
+#include "shprobe/io/input_file.h"
+#include "shprobe/sh/error.h"
 
 #include <cerrno>
 #include <climits>

@@ -1,13 +1,13 @@
-#include "io/probe_export.h"
+#include "shprobe/io/probe_export.h"
 
-#include "image/image_write.h"
-#include "io/input_file.h"
-#include "io/output_file.h"
-#include "sh/basis.h"
-#include "sh/cubemap.h"
-#include "sh/error.h"
-#include "sh/folding.h"
-#include "sh/irradiance.h"
+#include "shprobe/image/image_write.h"
+#include "shprobe/io/input_file.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/cubemap.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/folding.h"
+#include "shprobe/sh/irradiance.h"
 
 #include <array>
 #include <cctype>

@@ -2,7 +2,7 @@
 // a GLSL or C/C++ header of coefficients folded for the render shader, and the irradiance itself
 // drawn into an equirect map or a horizontal-cross cube map (EXR).
 #pragma once
-#include "sh/coefficients.h"
+#include "shprobe/sh/coefficients.h"
 
 #include <cstdint>
 #include <span>

@@ -1,9 +1,9 @@
-#include "io/probe_file.h"
+#include "shprobe/io/probe_file.h"
 
-#include "io/input_file.h"
-#include "io/output_file.h"
-#include "sh/basis.h"
-#include "sh/error.h"
+#include "shprobe/io/input_file.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
 
 #include <algorithm>
 #include <cmath>

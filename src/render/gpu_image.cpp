@@ -1,7 +1,7 @@
-#include "render/gpu_image.h"
+#include "shprobe/render/gpu_image.h"
 
-#include "sh/error.h"
-#include "vk/check.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
 
 #include <algorithm>
 #include <cstring>

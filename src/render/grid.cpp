@@ -1,6 +1,6 @@
-#include "render/grid.h"
+#include "shprobe/render/grid.h"
 
-#include "sh/error.h"
+#include "shprobe/sh/error.h"
 
 #include <algorithm>
 #include <cmath>

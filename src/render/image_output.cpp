@@ -1,8 +1,8 @@
-#include "render/image_output.h"
+#include "shprobe/render/image_output.h"
 
-#include "image/image_write.h"
-#include "io/output_file.h"
-#include "sh/error.h"
+#include "shprobe/image/image_write.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/error.h"
 
 #include <algorithm>
 #include <cctype>

@@ -1,7 +1,7 @@
 // Parametric meshes: a grid of (u, v) vertices wrapped around the shape, two triangles per cell.
-#include "render/meshes.h"
+#include "shprobe/render/meshes.h"
 
-#include "sh/error.h"
+#include "shprobe/sh/error.h"
 
 #include <cmath>
 #include <functional>

@@ -1,7 +1,7 @@
-#include "render/offscreen.h"
+#include "shprobe/render/offscreen.h"
 
-#include "sh/error.h"
-#include "vk/check.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
 
 #include <cstring>
 

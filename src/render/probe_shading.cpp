@@ -1,10 +1,10 @@
 // Folding SH probes for the render shaders (sh_irradiance.glsl; the fold itself is sh/folding.h)
 // and the double references of the shading modes.
-#include "render/probe_shading.h"
+#include "shprobe/render/probe_shading.h"
 
-#include "sh/basis.h"
-#include "sh/error.h"
-#include "sh/irradiance.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/irradiance.h"
 
 #include <algorithm>
 #include <cmath>

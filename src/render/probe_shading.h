@@ -5,10 +5,10 @@
 // (shaders/include/sun_light.h). Also the double-precision references of the three shading modes
 // and of the sun, which the tests compare the shaders with.
 #pragma once
-#include "render_interface.h"
-#include "sh/coefficients.h"
-#include "sh/folding.h"
-#include "sh/lights.h"
+#include "shprobe/glsl/render_interface.h"
+#include "shprobe/sh/coefficients.h"
+#include "shprobe/sh/folding.h"
+#include "shprobe/sh/lights.h"
 
 #include <array>
 #include <optional>

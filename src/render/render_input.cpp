@@ -1,8 +1,8 @@
-#include "render/render_input.h"
+#include "shprobe/render/render_input.h"
 
-#include "image/environment.h"
-#include "io/probe_file.h"
-#include "sh/error.h"
+#include "shprobe/image/environment.h"
+#include "shprobe/io/probe_file.h"
+#include "shprobe/sh/error.h"
 
 #include <algorithm>
 #include <chrono>

@@ -1,6 +1,6 @@
-#include "render/scene.h"
+#include "shprobe/render/scene.h"
 
-#include "sh/error.h"
+#include "shprobe/sh/error.h"
 
 #include <cmath>
 #include <glm/ext/matrix_clip_space.hpp>

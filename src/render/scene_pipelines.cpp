@@ -1,11 +1,11 @@
-#include "render/scene_pipelines.h"
+#include "shprobe/render/scene_pipelines.h"
 
-#include "render/gpu_image.h"
-#include "render/meshes.h"
-#include "render_interface.h"
-#include "sh/error.h"
+#include "shprobe/render/gpu_image.h"
+#include "shprobe/render/meshes.h"
+#include "shprobe/glsl/render_interface.h"
+#include "shprobe/sh/error.h"
 #include "shprobe/shprobe_render_spirv.h"
-#include "vk/check.h"
+#include "shprobe/vk/check.h"
 
 #include <array>
 #include <cstddef>

@@ -1,9 +1,9 @@
-#include "render/scene_renderer.h"
+#include "shprobe/render/scene_renderer.h"
 
-#include "render/meshes.h"
-#include "render_interface.h"
-#include "sh/error.h"
-#include "vk/check.h"
+#include "shprobe/render/meshes.h"
+#include "shprobe/glsl/render_interface.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,7 @@
-#include "render/swapchain.h"
+#include "shprobe/render/swapchain.h"
 
-#include "sh/error.h"
-#include "vk/check.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
 
 #include <algorithm>
 

@@ -1,10 +1,10 @@
-#include "render/tonemap.h"
+#include "shprobe/render/tonemap.h"
 
-#include "render/gpu_image.h"
-#include "render/scene_pipelines.h"
-#include "render_interface.h"
+#include "shprobe/render/gpu_image.h"
+#include "shprobe/render/scene_pipelines.h"
+#include "shprobe/glsl/render_interface.h"
 #include "shprobe/shprobe_render_spirv.h"
-#include "vk/check.h"
+#include "shprobe/vk/check.h"
 
 #include <array>
 

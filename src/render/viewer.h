@@ -6,8 +6,8 @@
 // The title shows the settings and the last bake time. The only file that includes GLFW is
 // viewer.cpp; the library's core never links it.
 #pragma once
-#include "render/render_input.h"
-#include "render/view_state.h"
+#include "shprobe/render/render_input.h"
+#include "shprobe/render/view_state.h"
 
 #include <string>
 #include <vector>

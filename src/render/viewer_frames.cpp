@@ -1,8 +1,8 @@
-#include "render/viewer_frames.h"
+#include "shprobe/render/viewer_frames.h"
 
-#include "render/gpu_image.h"
-#include "sh/error.h"
-#include "vk/check.h"
+#include "shprobe/render/gpu_image.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
 
 #include <algorithm>
 #include <cstring>

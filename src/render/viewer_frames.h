@@ -2,9 +2,9 @@
 // targets at its size, one command buffer, its fence and the acquire semaphore (one frame in
 // flight), and screenshots read back from the presented image.
 #pragma once
-#include "render/scene_renderer.h"
-#include "render/swapchain.h"
-#include "render/tonemap.h"
+#include "shprobe/render/scene_renderer.h"
+#include "shprobe/render/swapchain.h"
+#include "shprobe/render/tonemap.h"
 
 #include <cstdint>
 #include <vector>

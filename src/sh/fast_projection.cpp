@@ -30,7 +30,7 @@
 #include "basis.h"
 #include "error.h"
 #include "rotation.h"
-#include "texel_geometry.h"
+#include "shprobe/glsl/texel_geometry.h"
 
 #include <algorithm>
 #include <array>

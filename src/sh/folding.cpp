@@ -1,10 +1,10 @@
 // Folded SH coefficients. Basis polynomials: CONVENTIONS.md through l = 2, Sloan ("Stupid SH
 // Tricks", seed 000, appendix A2) and Brown (seed 003) with Sloan's Condon-Shortley signs for l = 3, 4.
-#include "sh/folding.h"
+#include "shprobe/sh/folding.h"
 
-#include "sh/basis.h"
-#include "sh/error.h"
-#include "sh/irradiance.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/irradiance.h"
 
 #include <algorithm>
 #include <cmath>

@@ -8,7 +8,7 @@
 // Used by the render shaders' uniforms (src/render/probe_shading.h) and the header export formats
 // (src/io/probe_export.h), so that both hand the shader the same numbers.
 #pragma once
-#include "sh/coefficients.h"
+#include "shprobe/sh/coefficients.h"
 
 #include <array>
 #include <glm/vec3.hpp>

@@ -1,6 +1,6 @@
-#include "vk/context.h"
+#include "shprobe/vk/context.h"
 
-#include "vk/check.h"
+#include "shprobe/vk/check.h"
 
 #include <algorithm>
 #include <cctype>

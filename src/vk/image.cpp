@@ -1,8 +1,8 @@
-#include "vk/image.h"
+#include "shprobe/vk/image.h"
 
-#include "sh/error.h"
-#include "vk/check.h"
-#include "vk/resources.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
+#include "shprobe/vk/resources.h"
 
 #include <string>
 

@@ -1,6 +1,6 @@
-#include "vk/pipeline.h"
+#include "shprobe/vk/pipeline.h"
 
-#include "vk/check.h"
+#include "shprobe/vk/check.h"
 
 #include <array>
 #include <vector>

@@ -2,8 +2,8 @@
 // image samplers and storage images), push-constant range and pipeline, specialized by workgroup width and
 // SH order.
 #pragma once
-#include "vk/context.h"
-#include "vk/resources.h"
+#include "shprobe/vk/context.h"
+#include "shprobe/vk/resources.h"
 #include <cstdint>
 #include <span>
 #include <vector>

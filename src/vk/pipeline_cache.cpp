@@ -1,9 +1,9 @@
-#include "vk/pipeline_cache.h"
+#include "shprobe/vk/pipeline_cache.h"
 
-#include "io/input_file.h"
-#include "io/output_file.h"
-#include "sh/error.h"
-#include "vk/check.h"
+#include "shprobe/io/input_file.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/vk/check.h"
 
 #include <cerrno>
 #include <cstdio>

@@ -1,6 +1,6 @@
-#include "vk/resources.h"
+#include "shprobe/vk/resources.h"
 
-#include "vk/check.h"
+#include "shprobe/vk/check.h"
 
 #include <algorithm>
 #include <atomic>

@@ -1,6 +1,6 @@
 // Buffers and one-shot command submission. Plain handles; createBuffer / destroyBuffer.
 #pragma once
-#include "vk/context.h"
+#include "shprobe/vk/context.h"
 #include <functional>
 
 namespace shprobe {

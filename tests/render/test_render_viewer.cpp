@@ -7,10 +7,10 @@
 #include "run_program.h"
 #include "test_inputs.h"
 
-#include "gpu/projector.h"
-#include "render/render_input.h"
-#include "render/view_state.h"
-#include "sh/rotation.h"
+#include "shprobe/gpu/projector.h"
+#include "shprobe/render/render_input.h"
+#include "shprobe/render/view_state.h"
+#include "shprobe/sh/rotation.h"
 
 #include <OpenImageIO/imageio.h>
 #include <cstdlib>
