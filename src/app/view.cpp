@@ -37,10 +37,10 @@ void runView(const ViewOptions& options) {
     ImageSize size = parseImageSize(options.size, "--size");
     if (!options.screenshot.empty())
         checkOutputsAreNotInputs({&options.screenshot, 1}, filesReadBy(options.input));
-    // A bad probe file is refused before a window opens (and where there is no display).
-    if (isProbeFile(options.input)) readProbeInput(options.input);
     ViewerOptions viewer;
     viewer.input = options.input;
+    // A bad probe file is refused before a window opens (and where there is no display).
+    if (isProbeFile(options.input)) viewer.probe = readProbeInput(options.input);
     viewer.inputOptions = {options.faceSize, options.sanitize, options.maxPixels};
     viewer.width = size.width;
     viewer.height = size.height;

@@ -278,7 +278,7 @@ void updateTitle(GLFWwindow* window, const Session& session, std::string& shown)
 
 void startSession(const Context& context, const ViewerOptions& options, GLFWwindow* window,
                   Session& session) {
-    session.input = loadRenderInput(context, options.input, options.inputOptions);
+    session.input = options.probe ? *options.probe : loadRenderInput(context, options.input, options.inputOptions);
     session.foldOrder = std::min(session.input.probe.order, kMaxRenderOrder);
     ProbeShading probe = foldProbe(session.input.probe, std::max(options.view.order, session.foldOrder),
                                    session.input.name, session.input.sun);

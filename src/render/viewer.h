@@ -9,6 +9,7 @@
 #include "shprobe/render/render_input.h"
 #include "shprobe/render/view_state.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,9 @@ namespace shprobe {
 
 struct ViewerOptions {
     std::string input; // probe (.json), environment image, or empty: the built-in sky
+    // The probe when the caller has read it already (standard input can be read only once);
+    // otherwise input is loaded.
+    std::optional<RenderInput> probe;
     RenderInputOptions inputOptions;
     uint32_t width = 960; // window size (screen coordinates)
     uint32_t height = 600;
