@@ -5,8 +5,8 @@
 # validates it with spirv-val, and embeds it as a uint32_t array in a generated source file that
 # defines, in namespace shprobe::spirv, one std::span<const uint32_t> per module named after it
 # (project.comp.glsl -> shprobe::spirv::project_comp), declared in the generated header
-# "shprobe/<target>.h". <target> is a static library holding them, so the program needs no shader
-# file at run time. Nothing is written into the source tree.
+# "shprobe/<target>.h". <target> is a static library holding them (position-independent code, in
+# every build), so the program needs no shader file at run time. Nothing is written into the source tree.
 function(shprobe_compile_shaders target)
     cmake_parse_arguments(ARG "" "INCLUDE_DIR" "SOURCES;DEPENDS" ${ARGN})
     set(spirv_dir ${PROJECT_BINARY_DIR}/spirv)
@@ -55,6 +55,9 @@ namespace shprobe::spirv {
 ${definitions}}
 ")
     add_library(${target} STATIC ${embedded_source} ${embedded_headers})
+    # Linked into the shared libraries when BUILD_SHARED_LIBS is on, and installed for engines that
+    # may link it into their own shared objects.
+    set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON)
     target_include_directories(${target} PUBLIC ${PROJECT_BINARY_DIR}/generated)
     target_compile_features(${target} PUBLIC cxx_std_20)
 endfunction()

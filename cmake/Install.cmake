@@ -1,25 +1,41 @@
-# cmake --install: the libraries, their headers, the SPIR-V modules, the GLSL includes and a CMake
-# package, so that another project can do
+# cmake --install: the libraries, their headers, the SPIR-V modules, the GLSL includes, a CMake
+# package and a pkg-config file, so that another project can do
 #
 #   find_package(shprobe 0.1 REQUIRED)
 #   target_link_libraries(app PRIVATE shprobe::shprobe)   # or only read ${shprobe_SPIRV_DIR}/*.spv
 #
+# or `c++ -std=c++20 app.cpp $(pkg-config --cflags --libs shprobe)` (add --static after a static
+# build), and include <shprobe/io/probe_file.h>, <shprobe/version.h>, ...
+#
 # Installed layout (GNUInstallDirs; <prefix> is CMAKE_INSTALL_PREFIX or `--prefix`):
-#   bin/shprobe                                the command-line program
-#   lib/libshprobe*.a                          shprobe_sh, shprobe, shprobe_spirv, shprobe_render,
-#                                              shprobe_render_spirv (static; exported as shprobe::sh,
-#                                              shprobe::shprobe, shprobe::spirv, shprobe::render,
-#                                              shprobe::render_spirv)
+#   bin/shprobe                                the command-line program (RUNPATH $ORIGIN/../lib when
+#                                              the libraries are shared)
+#   lib/libshprobe{_sh,,_render}.a             shprobe_sh, shprobe, shprobe_render (exported as
+#     or .so -> .so.0.1 -> .so.0.1.0           shprobe::sh, shprobe::shprobe, shprobe::render): static
+#                                              by default, shared with -DBUILD_SHARED_LIBS=ON (soname
+#                                              major.minor, RUNPATH $ORIGIN)
+#   lib/libshprobe{,_render}_spirv.a           the embedded modules, static and position-independent in
+#                                              both builds (exported as shprobe::spirv and
+#                                              shprobe::render_spirv; inside the .so files when shared)
 #   include/shprobe/{sh,io,image,vk,gpu,render}/*.h   C++ headers, included as <shprobe/sh/basis.h>
 #                                              (include dir: include), as in the build tree
-#   include/shprobe/shprobe_spirv.h            the embedded-module declarations (generated)
+#   include/shprobe/version.h                  SHPROBE_VERSION_MAJOR/MINOR/PATCH/STRING (generated)
+#   include/shprobe/shprobe{,_render}_spirv.h  the embedded-module declarations (generated)
 #   include/shprobe/glsl/                      shaders/include: the C++/GLSL shared headers
 #                                              (<shprobe/glsl/gpu_interface.h>) and the GLSL includes
 #   share/shprobe/spirv/*.spv, INTERFACE.md    every module built into the libraries, and its contract
-#   lib/cmake/shprobe/                         shprobeConfig.cmake, version file, exported targets
+#   lib/cmake/shprobe/                         shprobeConfig.cmake, shprobeConfigVersion.cmake (same
+#                                              major.minor: 0.x may break the interface), the targets
+#   lib/pkgconfig/shprobe.pc                   Cflags -I<prefix>/include; Libs render, shprobe, sh;
+#                                              Requires vulkan glm; static builds add Libs.private
+#                                              (the spirv archives) and Requires.private OpenImageIO
+#   share/doc/shprobe/LICENSE
 #
-# The config file sets shprobe_SPIRV_DIR, shprobe_INTERFACE_DOC, shprobe_GLSL_DIR and shprobe_MODULES.
-# The GLFW viewer (shprobe_viewer) stays private: the installed libraries never need a window system.
+# The config file sets shprobe_SPIRV_DIR, shprobe_INTERFACE_DOC, shprobe_GLSL_DIR and shprobe_MODULES,
+# and finds only what the installed headers include (Vulkan, glm): no installed header includes
+# OpenImageIO or nlohmann/json, which the libraries link privately (see "what a static build's
+# consumers link" below for the static case). The GLFW viewer (shprobe_viewer) stays private: the
+# installed libraries never need a window system.
 #
 # Only the top-level project installs anything (as VMA does). This file runs after every target is
 # defined (the last line of the top-level CMakeLists.txt), so it can adjust their properties here.
@@ -44,7 +60,7 @@ set(shprobe_installed_libraries
     shprobe_render_spirv render_spirv)
 
 # The targets name source- and build-tree include directories, which an export may not carry.
-# Keep each for the build tree only and add its installed counterpart.
+# Keep each for the build tree only; install(TARGETS ... INCLUDES DESTINATION) below adds include/.
 function(shprobe_relocate_includes target)
     get_target_property(includes ${target} INTERFACE_INCLUDE_DIRECTORIES)
     if(NOT includes)
@@ -59,7 +75,6 @@ function(shprobe_relocate_includes target)
         endif()
     endforeach()
     set_target_properties(${target} PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "${relocated}")
-    target_include_directories(${target} INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
 endfunction()
 
 set(shprobe_export_targets "")
@@ -70,6 +85,93 @@ while(shprobe_installed_libraries)
     set_target_properties(${target} PROPERTIES EXPORT_NAME ${export_name})
     list(APPEND shprobe_export_targets ${target})
 endwhile()
+get_target_property(shprobe_library_type shprobe TYPE) # STATIC_LIBRARY or SHARED_LIBRARY
+
+# --- what a static build's consumers link --------------------------------------------------------
+# A static library's PRIVATE dependencies are still link items of whatever links it, so CMake exports
+# them as $<LINK_ONLY:...>. Exported as the target OpenImageIO::OpenImageIO, that would make the
+# package config find_dependency(OpenImageIO), and on Debian OpenImageIO's config loads Imath's,
+# which prints, at every configure of every consumer, that the imported target
+# Imath::PyImath_Python3_11 names a file that does not exist (PyImath is packaged apart). Hiding
+# that message (CMAKE_MESSAGE_LOG_LEVEL around the call) would hide whatever else those configs or
+# the consumer report too. Instead the exported targets name the two files that the static
+# libraries' objects call into, libOpenImageIO and libOpenImageIO_Util, as found here: shared
+# libraries that bring their own dependencies, and all that OpenImageIO.pc gives pkg-config users.
+# A consumer links the same libraries with no OpenImageIO config to load. The price: the package
+# names the OpenImageIO files it was built against, as the static libraries are tied to that ABI
+# anyway. A static OpenImageIO has dependencies of its own, so then the package finds its config.
+# nlohmann_json is header-only and no installed header includes it: consumers need nothing of it.
+# A shared build exports no private dependency at all.
+set(SHPROBE_CONFIG_FIND_PRIVATE "") # spliced into shprobeConfig.cmake
+
+# The file an imported library target links: its location for this build type, else for the first
+# of its imported configurations, else its plain location.
+function(shprobe_imported_location out target)
+    string(TOUPPER "${CMAKE_BUILD_TYPE}" build_type)
+    set(properties IMPORTED_LOCATION_${build_type})
+    get_target_property(configurations ${target} IMPORTED_CONFIGURATIONS)
+    foreach(configuration IN LISTS configurations)
+        list(APPEND properties IMPORTED_LOCATION_${configuration})
+    endforeach()
+    foreach(property IN LISTS properties ITEMS IMPORTED_LOCATION)
+        get_target_property(location ${target} ${property})
+        if(location)
+            set(${out} "${location}" PARENT_SCOPE)
+            return()
+        endif()
+    endforeach()
+    message(FATAL_ERROR "cmake/Install.cmake: no file to link for ${target}")
+endfunction()
+
+if(shprobe_library_type STREQUAL "STATIC_LIBRARY")
+    get_target_property(oiio_type OpenImageIO::OpenImageIO TYPE)
+    get_target_property(oiio_util_type OpenImageIO::OpenImageIO_Util TYPE)
+    if(oiio_type STREQUAL "SHARED_LIBRARY" AND oiio_util_type STREQUAL "SHARED_LIBRARY")
+        shprobe_imported_location(oiio_file OpenImageIO::OpenImageIO)
+        shprobe_imported_location(oiio_util_file OpenImageIO::OpenImageIO_Util)
+        set(oiio_installed "$<INSTALL_INTERFACE:$<LINK_ONLY:${oiio_file}>>"
+                           "$<INSTALL_INTERFACE:$<LINK_ONLY:${oiio_util_file}>>")
+    else()
+        set(oiio_installed "$<INSTALL_INTERFACE:$<LINK_ONLY:OpenImageIO::OpenImageIO>>")
+        set(SHPROBE_CONFIG_FIND_PRIVATE "find_dependency(OpenImageIO CONFIG) # a static OpenImageIO")
+    endif()
+    foreach(target IN LISTS shprobe_export_targets)
+        get_target_property(links ${target} INTERFACE_LINK_LIBRARIES)
+        if(NOT links)
+            continue()
+        endif()
+        set(exported "")
+        foreach(item IN LISTS links)
+            if(item STREQUAL "$<LINK_ONLY:OpenImageIO::OpenImageIO>")
+                list(APPEND exported "$<BUILD_INTERFACE:${item}>" ${oiio_installed})
+            elseif(item STREQUAL "$<LINK_ONLY:nlohmann_json::nlohmann_json>")
+                list(APPEND exported "$<BUILD_INTERFACE:${item}>")
+            elseif(item MATCHES "OpenImageIO::|nlohmann_json::")
+                message(FATAL_ERROR "cmake/Install.cmake: ${target} links ${item}, which the package "
+                                    "cannot export without finding that dependency; export it as above")
+            else()
+                list(APPEND exported "${item}")
+            endif()
+        endforeach()
+        set_target_properties(${target} PROPERTIES INTERFACE_LINK_LIBRARIES "${exported}")
+    endforeach()
+endif()
+
+# --- shared libraries: sonames and run paths -----------------------------------------------------
+# The soname carries major.minor, the compatibility shprobeConfigVersion.cmake promises (0.x: a minor
+# version may break the interface), so a program built against 0.1 never loads a 0.2 library.
+# In the build tree, CMake's build RPATH lets the programs and tests find the shared libraries.
+# Installed, the program finds them in the prefix's library folder ($ORIGIN/../lib) and each library
+# its sibling (libshprobe_render.so needs libshprobe.so; a RUNPATH serves only the dependencies of
+# the file that carries it), so a prefix works wherever it is unpacked, without LD_LIBRARY_PATH.
+if(shprobe_library_type STREQUAL "SHARED_LIBRARY")
+    file(RELATIVE_PATH bin_to_lib ${CMAKE_INSTALL_FULL_BINDIR} ${CMAKE_INSTALL_FULL_LIBDIR})
+    set_target_properties(shprobe_cli PROPERTIES INSTALL_RPATH "$ORIGIN/${bin_to_lib}")
+    set_target_properties(shprobe_sh shprobe shprobe_render PROPERTIES
+        INSTALL_RPATH "$ORIGIN"
+        VERSION ${PROJECT_VERSION}
+        SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR})
+endif()
 
 install(TARGETS ${shprobe_export_targets}
     EXPORT shprobeTargets
@@ -89,6 +191,7 @@ foreach(folder sh io image vk gpu render)
         PATTERN "viewer_frames.h" EXCLUDE)
 endforeach()
 install(FILES
+        ${SHPROBE_INCLUDE_DIR}/shprobe/version.h
         ${PROJECT_BINARY_DIR}/generated/shprobe/shprobe_spirv.h
         ${PROJECT_BINARY_DIR}/generated/shprobe/shprobe_render_spirv.h
     DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR})
@@ -138,11 +241,15 @@ set_and_check(shprobe_INTERFACE_DOC "@PACKAGE_SHPROBE_INSTALL_SPIRVDIR@/INTERFAC
 set_and_check(shprobe_GLSL_DIR "@PACKAGE_SHPROBE_INSTALL_GLSLDIR@")
 set(shprobe_MODULES "@shprobe_modules@")
 
+# What the installed headers include and the libraries link publicly. OpenImageIO and nlohmann_json
+# are private to the libraries (cmake/Install.cmake, "what a static build's consumers link").
 include(CMakeFindDependencyMacro)
 find_dependency(Vulkan)
 find_dependency(glm CONFIG)
-find_dependency(OpenImageIO CONFIG)
-find_dependency(nlohmann_json CONFIG)
+if(NOT TARGET glm::glm AND TARGET glm) # some of Debian's glm configs define only `glm`
+    add_library(glm::glm ALIAS glm)
+endif()
+@SHPROBE_CONFIG_FIND_PRIVATE@
 
 include("${CMAKE_CURRENT_LIST_DIR}/shprobeTargets.cmake")
 
@@ -156,6 +263,38 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/shprobeConfigVersion.cmak
     COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/shprobeConfig.cmake ${PROJECT_BINARY_DIR}/shprobeConfigVersion.cmake
     DESTINATION ${SHPROBE_INSTALL_CMAKEDIR})
+
+# --- pkg-config ----------------------------------------------------------------------------------
+# shprobe.pc names absolute paths, and `cmake --install --prefix` picks the prefix after configure:
+# the file is configured here with everything but the prefix, which the install step fills in.
+set(SHPROBE_INSTALL_PKGCONFIGDIR ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+foreach(dir LIBDIR INCLUDEDIR DATADIR)
+    if(IS_ABSOLUTE "${CMAKE_INSTALL_${dir}}")
+        set(SHPROBE_PC_${dir} "${CMAKE_INSTALL_${dir}}")
+    else()
+        set(SHPROBE_PC_${dir} "\${prefix}/${CMAKE_INSTALL_${dir}}")
+    endif()
+endforeach()
+# Libraries every link needs come in Libs. A static build's links also need the embedded modules and
+# OpenImageIO (pkg-config --static); a shared build's libraries carry both.
+if(shprobe_library_type STREQUAL "STATIC_LIBRARY")
+    set(SHPROBE_PC_PRIVATE
+        "Requires.private: OpenImageIO\nLibs.private: -lshprobe_render_spirv -lshprobe_spirv")
+else()
+    set(SHPROBE_PC_PRIVATE "")
+endif()
+set(SHPROBE_PC_PREFIX "@CMAKE_INSTALL_PREFIX@") # for the install step's configure_file
+configure_file(${PROJECT_SOURCE_DIR}/cmake/shprobe.pc.in ${PROJECT_BINARY_DIR}/pkgconfig/shprobe.pc.in @ONLY)
+install(CODE "set(shprobe_pc_template \"${PROJECT_BINARY_DIR}/pkgconfig/shprobe.pc.in\")
+set(shprobe_pc_destination \"${SHPROBE_INSTALL_PKGCONFIGDIR}\")")
+install(CODE [[
+    if(NOT IS_ABSOLUTE "${shprobe_pc_destination}")
+        set(shprobe_pc_destination "${CMAKE_INSTALL_PREFIX}/${shprobe_pc_destination}")
+    endif()
+    get_filename_component(shprobe_pc_folder "${shprobe_pc_template}" DIRECTORY)
+    configure_file("${shprobe_pc_template}" "${shprobe_pc_folder}/shprobe.pc" @ONLY)
+    file(INSTALL "${shprobe_pc_folder}/shprobe.pc" DESTINATION "${shprobe_pc_destination}")
+]])
 
 # --- license -------------------------------------------------------------------------------------
 install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/shprobe)

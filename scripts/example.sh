@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# The installed package seen by an engine: installs shprobe into a temporary prefix, builds
-# examples/bake_probe against that prefix alone (find_package(shprobe) for the .spv folder; no
-# shprobe C++), runs it on lavapipe with the validation layer, and checks its coefficients:
+# The installed package seen by an engine: installs shprobe into a temporary prefix and builds the
+# examples against that prefix alone; neither CMake configure may print a warning.
+#
+# examples/bake_probe (find_package(shprobe) for the .spv folder; no shprobe C++) runs on lavapipe
+# with the validation layer, and its coefficients are checked:
 #   1. white furnace (radiance 1 everywhere): L_00 = sqrt(4 pi), E_00 = pi sqrt(4 pi), the rest 0,
 #      within 1e-5 of L_00 (fp32 sums of 6 x 32^2 texels; measured about 3e-8);
 #   2. a sky with a sun, order 5, 6 x 128^2: the example writes its texels as six PFM faces and
@@ -9,7 +11,20 @@
 #      channel's first coefficient (L_00 or E_00; same modules, same dispatch plan: in practice identical);
 #   3. the same radiance against `shprobe bake --backend reference`, the double-precision reference, within
 #      1e-5 of L_00 (fp32 texel weights and sums; measured about 1e-7).
-# SHPROBE_BUILD_DIR picks the build to install (default ./build, built here if needed).
+#
+# examples/probe_reader (the C++ library: readProbe, rotate, evaluate) is built twice, with CMake
+# (find_package + shprobe::shprobe) and with pkg-config alone, and both are run on probes that the
+# installed `shprobe light` writes, against closed forms:
+#   4. ambient radiance c, written as irradiance: E(n) = pi c at any normal, under any rotation;
+#   5. a directional light of intensity I from d (Sloan's normalization), rotated by R: E(R d) = pi I
+#      at the probe's order, for every order.
+#   Both within 1e-7 of the value: the files keep 9 significant digits (at most 5e-9 of each
+#   coefficient), the band rotations are orthogonal and, at the light's own direction, every term of
+#   E is positive, so the stored rounding moves E by at most 5e-9 of itself; the rest is double
+#   arithmetic (measured: 6e-10 and 4e-10). Any slip of convention (pi, sqrt(4 pi), a band factor,
+#   a rotation's sense) is off by far more.
+# SHPROBE_BUILD_DIR picks the build to install (default ./build, built here if needed); the same
+# checks serve a -DBUILD_SHARED_LIBS=ON build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${SHPROBE_BUILD_DIR:-build}
@@ -22,7 +37,24 @@ cmake --build "$build" -j"$(nproc)"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" > /dev/null
-cmake -S examples/bake_probe -B "$work/example" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$work/prefix" > /dev/null
+prefix=$work/prefix
+
+# The package config finds only what the installed headers include, so none may include these.
+if grep -rlE '#include *[<"](OpenImageIO|nlohmann)/' "$prefix/include"; then
+  echo "FAIL: installed headers include a private dependency"; exit 1
+fi
+
+# CMake configure of an example against the prefix, which must print nothing but "-- " status lines:
+# no "CMake Warning", and no notice of a dependency's config (such as Imath's missing-file message).
+configure() { # source folder, build folder
+  if ! cmake -S "$1" -B "$2" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" > "$2.log" 2>&1; then
+    cat "$2.log"; echo "FAIL: configure of $1"; exit 1
+  fi
+  if grep -q 'CMake.*Warning' "$2.log" || grep -v -e '^-- ' -e '^$' "$2.log" > /dev/null; then
+    cat "$2.log"; echo "FAIL: the configure of $1 is not silent"; exit 1
+  fi
+}
+configure examples/bake_probe "$work/example"
 cmake --build "$work/example" > /dev/null
 example=$work/example/bake_probe
 
@@ -61,4 +93,57 @@ compare() { # tag, probe file, tolerance relative to the first coefficient
 compare L "$work/radiance.json" 1e-6
 compare E "$work/irradiance.json" 1e-6
 compare L "$work/cpu.json" 1e-5
+
+echo "== probe_reader: the C++ library through the package, built with CMake and with pkg-config"
+configure examples/probe_reader "$work/reader"
+cmake --build "$work/reader" > /dev/null
+PKG_CONFIG_PATH=$(dirname "$(find "$prefix" -name shprobe.pc)")
+export PKG_CONFIG_PATH
+libdir=$(pkg-config --variable=libdir shprobe)
+if [ -e "$libdir/libshprobe.so" ]; then # shared: the program finds the libraries by its RUNPATH
+  pc_options=(); link_options=("-Wl,-rpath,$libdir")
+else # static: Libs.private and Requires.private as well
+  pc_options=(--static); link_options=()
+fi
+# shellcheck disable=SC2046 # pkg-config's flags are words
+c++ -std=c++20 -O2 -Wall -Wextra -Wpedantic examples/probe_reader/main.cpp -o "$work/probe_reader_pc" \
+  $(pkg-config --cflags --libs "${pc_options[@]}" shprobe) "${link_options[@]}"
+version=$(sed -n 's/^project(shprobe VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)
+if [ "$(pkg-config --modversion shprobe)" != "$version" ]; then
+  echo "FAIL: shprobe.pc is not version $version"; exit 1
+fi
+
+"$prefix/bin/shprobe" light --order 3 --irradiance --ambient 0.25,0.5,2 -o "$work/ambient.json" > /dev/null
+"$prefix/bin/shprobe" light --order 5 --directional 1,0,0 1,2,4 -o "$work/directional.json" > /dev/null
+# R d for R = Rz(gamma) Ry(beta) Rz(alpha) (degrees) and d = +x, as "x,y,z".
+rotated_x() {
+  awk -v a="$1" -v b="$2" -v g="$3" 'BEGIN { r = atan2(0, -1) / 180; a *= r; b *= r; g *= r
+    x = cos(a); y = sin(a); z = 0                                   # Rz(alpha) x
+    t = cos(b) * x + sin(b) * z; z = cos(b) * z - sin(b) * x; x = t # Ry(beta)
+    t = cos(g) * x - sin(g) * y; y = sin(g) * x + cos(g) * y; x = t # Rz(gamma)
+    printf "%.17g,%.17g,%.17g\n", x, y, z }'
+}
+# Runs probe_reader and checks its version line and E against pi * (r, g, b), within 1e-7 (see the top).
+expect() { # label, r g b, probe_reader arguments...
+  local label=$1 rgb=$2 out
+  shift 2
+  out=$("$@")
+  echo "$out"
+  awk -v label="$label" -v version="$version" -v rgb="$rgb" '
+    BEGIN { pi = atan2(0, -1); split(rgb, e, " ") }
+    NR == 1 && $2 != version "," { print "FAIL: " label ": prints version " $2 ", not " version; exit 1 }
+    $1 == "irradiance" { seen = 1
+      for (c = 1; c <= 3; ++c) {
+        d = ($(c + 1) - pi * e[c]) / (pi * e[c]); if (d < 0) d = -d; if (d > worst) worst = d } }
+    END { if (!seen) { print "FAIL: " label ": no irradiance line"; exit 1 }
+          printf "%s: largest difference %.3g of the closed form (tolerance 1e-7)\n", label, worst
+          if (worst > 1e-7) { print "FAIL: " label; exit 1 } }' <<< "$out"
+}
+for how in CMake pkg-config; do
+  reader=$work/reader/probe_reader
+  [ "$how" = pkg-config ] && reader=$work/probe_reader_pc
+  expect "$how: ambient 0.25,0.5,2, E = pi c" "0.25 0.5 2" "$reader" "$work/ambient.json" 30,60,45 1,-2,0.5
+  expect "$how: directional 1,2,4 from x rotated by 30,60,45, E(R x) = pi I" "1 2 4" \
+    "$reader" "$work/directional.json" 30,60,45 "$(rotated_x 30 60 45)"
+done
 echo "example: OK"

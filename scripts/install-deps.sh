@@ -10,6 +10,7 @@ packages=(
   libglm-dev libglfw3-dev
   libopenimageio-dev openimageio-tools
   libgtest-dev libcli11-dev nlohmann-json3-dev
+  clang-format  # scripts/check-format.sh
   xvfb xauth
   blender-data  # real HDR environments for the tests (eight equirect EXRs)
 )
@@ -18,6 +19,9 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# node and npm run the engines' own code in test_engine_exports; a node already installed (e.g.
+# NodeSource's, which bundles npm) is kept.
+command -v node >/dev/null && command -v npm >/dev/null || missing+=(nodejs npm)
 [ ${#missing[@]} -eq 0 ] && exit 0
 
 sudo_cmd=""

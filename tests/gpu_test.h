@@ -10,7 +10,7 @@
 namespace shprobe::testing {
 
 class GpuTest : public ::testing::Test {
-protected:
+  protected:
     static void SetUpTestSuite() {
         ContextOptions options;
         options.validation = true;
@@ -23,12 +23,13 @@ protected:
     }
     void SetUp() override { messagesBefore_ = context_->validationMessages(); }
     void TearDown() override {
-        EXPECT_EQ(context_->validationMessages(), messagesBefore_) << "Vulkan validation messages (see stderr)";
+        EXPECT_EQ(context_->validationMessages(), messagesBefore_)
+            << "Vulkan validation messages (see stderr)";
     }
 
     static const Context& context() { return *context_; }
 
-private:
+  private:
     static inline std::unique_ptr<Context> context_;
     uint32_t messagesBefore_ = 0;
 };

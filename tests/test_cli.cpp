@@ -11,11 +11,11 @@
 // ctest runs this with VK_ICD_FILENAMES = lavapipe and SHPROBE_VALIDATION=1, which the children
 // inherit: any validation message fails their bake. Each GPU bake costs a process start with the
 // validation layer (~0.3-1 s), so images are tiny and the runs a few dozen.
+#include "render/run_program.h"
 #include "shprobe/image/environment.h"
 #include "shprobe/image/image_write.h"
 #include "shprobe/io/probe_export.h"
 #include "shprobe/io/probe_file.h"
-#include "render/run_program.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/folding.h"
@@ -45,7 +45,6 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
 
 namespace shprobe {
 namespace {
@@ -341,10 +340,12 @@ TEST_F(Cli, GpuAndCpuBackendsAgree) {
         double worst = 0.0;
         for (int i = 0; i < 25; ++i)
             for (int k = 0; k < 3; ++k) {
-                EXPECT_NEAR(g.rgb[i][k], c.rgb[i][k], tolerance) << name << " coefficient " << i << " channel " << k;
+                EXPECT_NEAR(g.rgb[i][k], c.rgb[i][k], tolerance)
+                    << name << " coefficient " << i << " channel " << k;
                 worst = std::max(worst, std::abs(g.rgb[i][k] - c.rgb[i][k]));
             }
-        std::printf("[ info     ] %s: worst |x - reference| = %.3g |L00|\n", name, worst / std::abs(c.rgb[0].r));
+        std::printf("[ info     ] %s: worst |x - reference| = %.3g |L00|\n", name,
+                    worst / std::abs(c.rgb[0].r));
     }
     // The input has energy beyond band 0: the comparison is not of zeros.
     EXPECT_GT(std::abs(c.rgb[3].r), 0.1 * std::abs(c.rgb[0].r)); // l=1 m=+1, from the x term
@@ -567,13 +568,16 @@ TEST_F(CliFailures, NoVulkanDevice) {
 // a request that matches no device is a device error (exit 4) naming what was asked for.
 TEST_F(Cli, DeviceIsChosenByIndexOrName) {
     for (const char* device : {"0", "LLVMpipe"}) {
-        RunResult result = runOk({"bake", "--face-size", "4", "--device", device, "-q", "-o", file("device.json")});
+        RunResult result =
+            runOk({"bake", "--face-size", "4", "--device", device, "-q", "-o", file("device.json")});
         EXPECT_CONTAINS(result.out, "llvmpipe");
     }
 }
 
 TEST_F(CliFailures, UnknownDevice) {
-    expectFailure({{"bake", "--face-size", "4", "--device", "no-such-gpu", "-o", "OUT"}, 4, {"no-such-gpu", "shprobe info"}});
+    expectFailure({{"bake", "--face-size", "4", "--device", "no-such-gpu", "-o", "OUT"},
+                   4,
+                   {"no-such-gpu", "shprobe info"}});
 }
 
 // ---- The toolkit through the program: windows, lights, sun extraction, rotate, light ---------
@@ -582,7 +586,8 @@ TEST_F(CliFailures, UnknownDevice) {
 double relativeDifference(const ShCoefficients& a, const ShCoefficients& b) {
     double worst = 0.0, dc = std::max({std::abs(a.rgb[0].r), std::abs(a.rgb[0].g), std::abs(a.rgb[0].b)});
     for (size_t i = 0; i < a.rgb.size(); ++i)
-        for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(a.rgb[i][c] - b.rgb[i][c]));
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(worst, std::abs(a.rgb[i][c] - b.rgb[i][c]));
     return worst / dc;
 }
 
@@ -593,7 +598,8 @@ double relativeDifference(const ShCoefficients& a, const ShCoefficients& b) {
 TEST_F(Cli, DeringingMakesIrradianceNonNegative) {
     runOk({"bake", "--order", "5", "--irradiance", "-o", file("plain.json")});
     runOk({"bake", "--order", "5", "--irradiance", "--window", "dering", "-o", file("gpu.json")});
-    runOk({"bake", "--order", "5", "--irradiance", "--window", "dering", "--backend", "cpu", "-o", file("cpu.json")});
+    runOk({"bake", "--order", "5", "--irradiance", "--window", "dering", "--backend", "cpu", "-o",
+           file("cpu.json")});
     ShCoefficients plain = readProbeFile(file("plain.json"));
     ShCoefficients gpu = readProbeFile(file("gpu.json"));
     EXPECT_LT(minimumOnSphere(plain).value, 0.0) << "the test needs a sky whose irradiance rings negative";
@@ -606,8 +612,9 @@ TEST_F(Cli, DeringingMakesIrradianceNonNegative) {
 // with and without them is exactly the probe `shprobe light` writes for the same lights (fp32
 // coefficients: 1e-6 relative).
 TEST_F(Cli, BakeLightsEqualTheLightCommand) {
-    std::vector<std::string> lights = {"--directional", "0.3,0.8,-0.5", "3,2,1", "--sphere", "0,1,0", "10",
-                                       "1,1,2", "--ambient", "0.1,0.2,0.3"};
+    std::vector<std::string> lights = {"--directional", "0.3,0.8,-0.5", "3,2,1",
+                                       "--sphere",      "0,1,0",        "10",
+                                       "1,1,2",         "--ambient",    "0.1,0.2,0.3"};
     std::vector<std::string> withLights = {"bake", "--order", "5", "-o", file("lit.json")};
     withLights.insert(withLights.end(), lights.begin(), lights.end());
     std::vector<std::string> lightOnly = {"light", "--order", "5", "-o", file("lights.json")};
@@ -632,10 +639,12 @@ TEST_F(Cli, ExtractSunFindsTheBuiltInSun) {
     std::ifstream in(file("rest.json"));
     nlohmann::json json = nlohmann::json::parse(in);
     ASSERT_TRUE(json.contains("sun")) << json.dump();
-    glm::dvec3 direction(json["sun"]["direction"][0], json["sun"]["direction"][1], json["sun"]["direction"][2]);
+    glm::dvec3 direction(json["sun"]["direction"][0], json["sun"]["direction"][1],
+                         json["sun"]["direction"][2]);
     glm::dvec3 expected = glm::normalize(SkyParameters{}.sunDirection);
     EXPECT_LT(std::acos(std::min(1.0, glm::dot(direction, expected))) * 180.0 / M_PI, 0.1);
-    EXPECT_NEAR(json["sun"]["angular_radius_degrees"].get<double>(), SkyParameters{}.sunAngularRadius * 180.0 / M_PI,
+    EXPECT_NEAR(json["sun"]["angular_radius_degrees"].get<double>(),
+                SkyParameters{}.sunAngularRadius * 180.0 / M_PI,
                 0.02 * SkyParameters{}.sunAngularRadius * 180.0 / M_PI);
     runOk({"bake", "-q", "-o", file("whole.json")});
     EXPECT_LT(readProbeFile(file("rest.json")).rgb[0].r, 0.5 * readProbeFile(file("whole.json")).rgb[0].r);
@@ -649,7 +658,9 @@ TEST_F(Cli, RotateTakesEulerQuaternionOrMatrix) {
     ShCoefficients sky = readProbeFile(file("sky.json"));
     ShCoefficients expected = rotate(makeShRotation(rotationFromEulerZYZ(0.0, 90.0, 0.0), 4), sky);
     const std::vector<std::vector<std::string>> forms = {
-        {"--euler", "0,90,0"}, {"--quat", "0.7071067811865476,0,0.7071067811865476,0"}, {"--matrix", "0,0,1,0,1,0,-1,0,0"}};
+        {"--euler", "0,90,0"},
+        {"--quat", "0.7071067811865476,0,0.7071067811865476,0"},
+        {"--matrix", "0,0,1,0,1,0,-1,0,0"}};
     for (const std::vector<std::string>& form : forms) {
         runOk({"rotate", file("sky.json"), form[0], form[1], "-o", file("rotated.json")});
         EXPECT_LT(relativeDifference(readProbeFile(file("rotated.json")), expected), 1e-8) << form[0];
@@ -658,13 +669,15 @@ TEST_F(Cli, RotateTakesEulerQuaternionOrMatrix) {
 
 TEST_F(CliFailures, RotateRefusesBadRotations) {
     runShprobe({"light", "--ambient", "1,1,1", "-o", file("probe.json")}, folder() / "logs", {});
-    expectFailure({{"rotate", file("probe.json"), "--matrix", "1,0,0,0,1,0,0,0,2", "-o", "OUT"}, 2, {"orthonormal"}});
+    expectFailure(
+        {{"rotate", file("probe.json"), "--matrix", "1,0,0,0,1,0,0,0,2", "-o", "OUT"}, 2, {"orthonormal"}});
     expectFailure({{"rotate", file("probe.json"), "-o", "OUT"}, 2, {"--euler", "--quat", "--matrix"}});
     expectFailure({{"rotate", file("missing.json"), "--euler", "0,90,0", "-o", "OUT"}, 2, {"missing.json"}});
 }
 
 TEST_F(CliFailures, BadLightsAndWindows) {
-    expectFailure({{"bake", "--directional", "0,1", "1,1,1", "-o", "OUT"}, 2, {"--directional", "3 numbers"}});
+    expectFailure(
+        {{"bake", "--directional", "0,1", "1,1,1", "-o", "OUT"}, 2, {"--directional", "3 numbers"}});
     expectFailure({{"bake", "--sphere", "0,1,0", "-5", "1,1,1", "-o", "OUT"}, 2, {"--sphere", "radius"}});
     expectFailure({{"bake", "--window", "gauss:3", "-o", "OUT"}, 2, {"--window"}});
     expectFailure({{"light", "-o", "OUT"}, 2, {"at least one"}});
@@ -683,7 +696,8 @@ TEST_F(Cli, FormatsHoldTheSameProbe) {
     ASSERT_EQ(binary[0].order, 4);
     for (size_t i = 0; i < json.rgb.size(); ++i)
         for (int c = 0; c < 3; ++c)
-            EXPECT_NEAR(binary[0].rgb[i][c], json.rgb[i][c], 5e-9 * std::abs(json.rgb[0][c])) << "coefficient " << i;
+            EXPECT_NEAR(binary[0].rgb[i][c], json.rgb[i][c], 5e-9 * std::abs(json.rgb[0][c]))
+                << "coefficient " << i;
     Image cross = readImage(file("cross.exr"));
     EXPECT_EQ(cross.width, 64);
     EXPECT_EQ(cross.height, 48);

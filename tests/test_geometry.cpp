@@ -1,8 +1,8 @@
 // Texel geometry: cube-map face table, solid angles (double reference and the fp32 shader form),
 // the inverse maps, and equirect directions and solid angles.
+#include "shprobe/glsl/texel_geometry.h"
 #include "shprobe/sh/cubemap.h"
 #include "shprobe/sh/error.h"
-#include "shprobe/glsl/texel_geometry.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

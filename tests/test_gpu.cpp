@@ -58,7 +58,8 @@ Cubemap hotSunCubemap(int faceSize) {
 // One coefficient set as the bakes write it: n^2 vec4, rgb used.
 ShCoefficients readCoefficientSet(const glm::vec4* values, int order, Quantity quantity) {
     ShCoefficients set = makeCoefficients(order, quantity);
-    for (size_t i = 0; i < set.rgb.size(); ++i) set.rgb[i] = glm::dvec3(glm::vec3(values[i]));
+    for (size_t i = 0; i < set.rgb.size(); ++i)
+        set.rgb[i] = glm::dvec3(glm::vec3(values[i]));
     return set;
 }
 
@@ -199,9 +200,11 @@ TEST_F(GpuProjection, WindowIsAppliedByTheConvolutionShader) {
 
         ShCoefficients expected = applyWindow(projectCubemap(cubemap, order), window);
         EXPECT_LT(relativeError(windowed.radiance, expected), kGpuTolerance) << "order " << order;
-        EXPECT_LT(relativeError(windowed.irradiance, convolveIrradiance(expected)), kGpuTolerance) << "order " << order;
+        EXPECT_LT(relativeError(windowed.irradiance, convolveIrradiance(expected)), kGpuTolerance)
+            << "order " << order;
         EXPECT_LT(relativeError(convolved.radiance, expected), kGpuTolerance) << "order " << order;
-        EXPECT_LT(relativeError(convolved.irradiance, convolveIrradiance(expected)), kGpuTolerance) << "order " << order;
+        EXPECT_LT(relativeError(convolved.irradiance, convolveIrradiance(expected)), kGpuTolerance)
+            << "order " << order;
         EXPECT_GT(relativeError(windowed.radiance, gpu.radiance), 1e-2) << "the window changed nothing";
     }
 }
@@ -215,7 +218,8 @@ TEST_F(GpuProjection, HugeWorkPerInvocationStaysCorrect) {
     Cubemap cubemap = noiseCubemap(384, 8);
     for (int order : {1, 3, 8}) {
         GpuBake gpu = bake(cubemap, {.order = order, .workgroupSize = 8, .texelsPerInvocation = 1u << 20});
-        EXPECT_LT(relativeError(gpu.radiance, projectCubemap(cubemap, order)), kGpuTolerance) << "order " << order;
+        EXPECT_LT(relativeError(gpu.radiance, projectCubemap(cubemap, order)), kGpuTolerance)
+            << "order " << order;
     }
 }
 
@@ -260,7 +264,8 @@ TEST_F(GpuProjection, BatchEqualsSingleBakesInOneSubmission) {
     const std::vector<Cubemap> cubemaps = {noiseCubemap(16, 11), noiseCubemap(33, 12), hotSunCubemap(16),
                                            noiseCubemap(1, 13), noiseCubemap(33, 14)};
     std::vector<const Cubemap*> batch;
-    for (const Cubemap& cubemap : cubemaps) batch.push_back(&cubemap);
+    for (const Cubemap& cubemap : cubemaps)
+        batch.push_back(&cubemap);
     Projector projector = createProjector(context(), {.order = 5});
     const uint64_t submissionsBefore = submissionCount();
     std::vector<GpuBake> batched = bakeCubemaps(context(), projector, batch);
@@ -270,7 +275,8 @@ TEST_F(GpuProjection, BatchEqualsSingleBakesInOneSubmission) {
         GpuBake single = bakeCubemap(context(), projector, cubemaps[k]);
         EXPECT_EQ(batched[k].radiance.rgb, single.radiance.rgb) << "probe " << k;
         EXPECT_EQ(batched[k].irradiance.rgb, single.irradiance.rgb) << "probe " << k;
-        EXPECT_LT(relativeError(batched[k].radiance, projectCubemap(cubemaps[k], 5)), kGpuTolerance) << "probe " << k;
+        EXPECT_LT(relativeError(batched[k].radiance, projectCubemap(cubemaps[k], 5)), kGpuTolerance)
+            << "probe " << k;
     }
     destroyProjector(context(), projector);
 }
@@ -281,7 +287,8 @@ TEST_F(GpuProjection, HalfFloatInputMatchesTheReferenceOfItsValues) {
     Cubemap cubemap = hotSunCubemap(32);
     cubemap.at(2, 10, 6) = glm::vec4(6e4f, 5e4f, 4e4f, 1.0f); // the sun, within the half range
     Cubemap rounded = cubemap;
-    for (glm::vec4& texel : rounded.texels) texel = glm::unpackHalf4x16(glm::packHalf4x16(texel));
+    for (glm::vec4& texel : rounded.texels)
+        texel = glm::unpackHalf4x16(glm::packHalf4x16(texel));
     Projector projector = createProjector(context(), {.order = 3, .texelFormat = TexelFormat::Rgba16F});
     GpuBake gpu = bakeCubemap(context(), projector, cubemap);
     EXPECT_LT(relativeError(gpu.radiance, projectCubemap(rounded, 3)), kGpuTolerance);
@@ -308,14 +315,17 @@ class GpuResidentBake : public GpuTest {
         probes.staging = createBuffer(context(), bytes * cubemaps.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                       MemoryUse::Upload, "test upload");
         for (size_t k = 0; k < cubemaps.size(); ++k)
-            std::memcpy(static_cast<char*>(probes.staging.mapped) + k * bytes, cubemaps[k].texels.data(), bytes);
-        probes.image = createImage(context(), {.extent = {n, n},
-                                               .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                               .what = "test probes",
-                                               .layers = uint32_t(6 * cubemaps.size())});
+            std::memcpy(static_cast<char*>(probes.staging.mapped) + k * bytes, cubemaps[k].texels.data(),
+                        bytes);
+        probes.image =
+            createImage(context(), {.extent = {n, n},
+                                    .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                    .what = "test probes",
+                                    .layers = uint32_t(6 * cubemaps.size())});
         changeLayout(commands, probes.image,
-                     {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
-                      0, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT});
+                     {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                      VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                      VK_ACCESS_TRANSFER_WRITE_BIT});
         VkBufferImageCopy region{};
         region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, probes.image.layers};
         region.imageExtent = {n, n, 1};
@@ -337,17 +347,21 @@ TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
     const std::vector<Cubemap> second = {noiseCubemap(9, 23)};
     const VkDeviceSize alignment = device.info.limits.minStorageBufferOffsetAlignment;
     const VkDeviceSize firstOffset = alignment; // not at the start of the buffer
-    const VkDeviceSize secondOffset = firstOffset + (probeBakeOutputBytes(order, 3) + alignment - 1) / alignment * alignment;
-    Buffer output = createBuffer(device, secondOffset + probeBakeOutputBytes(order, 1),
-                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "caller's coefficients");
+    const VkDeviceSize secondOffset =
+        firstOffset + (probeBakeOutputBytes(order, 3) + alignment - 1) / alignment * alignment;
+    Buffer output =
+        createBuffer(device, secondOffset + probeBakeOutputBytes(order, 1),
+                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "caller's coefficients");
     Probes firstProbes, secondProbes;
     ProbeBakeSet firstSet, secondSet;
     const uint64_t submissionsBefore = submissionCount();
     submitAndWait(context(), [&](VkCommandBuffer commands) {
         firstProbes = upload(first, commands);
         secondProbes = upload(second, commands);
-        firstSet = createProbeBakeSet(device, baker, {firstProbes.image.view, 24, 3, output.buffer, firstOffset});
-        secondSet = createProbeBakeSet(device, baker, {secondProbes.image.view, 9, 1, output.buffer, secondOffset});
+        firstSet =
+            createProbeBakeSet(device, baker, {firstProbes.image.view, 24, 3, output.buffer, firstOffset});
+        secondSet =
+            createProbeBakeSet(device, baker, {secondProbes.image.view, 9, 1, output.buffer, secondOffset});
         recordProbeBake(commands, baker, firstSet);
         recordProbeBake(commands, baker, secondSet);
         recordProbeBake(commands, baker, firstSet); // again: the scratch buffer is reused safely
@@ -357,15 +371,18 @@ TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
     invalidateBuffer(device, output);
 
     auto expectProbe = [&](VkDeviceSize offset, uint32_t probes, uint32_t k, const Cubemap& cubemap) {
-        const auto* values = reinterpret_cast<const glm::vec4*>(static_cast<const char*>(output.mapped) + offset);
+        const auto* values =
+            reinterpret_cast<const glm::vec4*>(static_cast<const char*>(output.mapped) + offset);
         ShCoefficients reference = projectCubemap(cubemap, order);
         const size_t n2 = size_t(coefficientCount(order));
         ShCoefficients radiance = readCoefficientSet(values + k * n2, order, Quantity::Radiance);
-        ShCoefficients irradiance = readCoefficientSet(values + (probes + k) * n2, order, Quantity::Irradiance);
+        ShCoefficients irradiance =
+            readCoefficientSet(values + (probes + k) * n2, order, Quantity::Irradiance);
         EXPECT_LT(relativeError(radiance, reference), kGpuTolerance) << "probe " << k;
         EXPECT_LT(relativeError(irradiance, convolveIrradiance(reference)), kGpuTolerance) << "probe " << k;
     };
-    for (uint32_t k = 0; k < 3; ++k) expectProbe(firstOffset, 3, k, first[k]);
+    for (uint32_t k = 0; k < 3; ++k)
+        expectProbe(firstOffset, 3, k, first[k]);
     expectProbe(secondOffset, 1, 0, second[0]);
 
     destroyProbeBakeSet(device, secondSet);
@@ -417,12 +434,16 @@ TEST_F(GpuResidentBake, SampledModuleMatchesTheReferenceForAnyWorkgroupShape) {
 
 TEST_F(GpuResidentBake, RefusesTargetsItCannotBake) {
     ProbeBaker baker = createProbeBaker(context(), {.order = 3});
-    Buffer output = createBuffer(context(), 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "out");
-    GpuImage image = createImage(context(), {.extent = {4, 4}, .usage = VK_IMAGE_USAGE_SAMPLED_BIT, .what = "probe",
-                                             .layers = 6});
-    EXPECT_THROW(createProbeBakeSet(context(), baker, {image.view, 4, 1, output.buffer, 1}), Error) << "misaligned";
-    EXPECT_THROW(createProbeBakeSet(context(), baker, {image.view, 0, 1, output.buffer, 0}), Error) << "face size 0";
-    EXPECT_THROW(createProbeBakeSet(context(), baker, {VK_NULL_HANDLE, 4, 1, output.buffer, 0}), Error) << "no view";
+    Buffer output =
+        createBuffer(context(), 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "out");
+    GpuImage image = createImage(
+        context(), {.extent = {4, 4}, .usage = VK_IMAGE_USAGE_SAMPLED_BIT, .what = "probe", .layers = 6});
+    EXPECT_THROW(createProbeBakeSet(context(), baker, {image.view, 4, 1, output.buffer, 1}), Error)
+        << "misaligned";
+    EXPECT_THROW(createProbeBakeSet(context(), baker, {image.view, 0, 1, output.buffer, 0}), Error)
+        << "face size 0";
+    EXPECT_THROW(createProbeBakeSet(context(), baker, {VK_NULL_HANDLE, 4, 1, output.buffer, 0}), Error)
+        << "no view";
     destroyImage(context(), image);
     destroyBuffer(context(), output);
     destroyProbeBaker(context(), baker);
@@ -493,7 +514,8 @@ std::vector<ShCoefficients> randomProbes(int order, int count, uint32_t seed) {
     std::vector<ShCoefficients> probes;
     for (int p = 0; p < count; ++p) {
         ShCoefficients probe = makeCoefficients(order, Quantity::Radiance);
-        for (glm::dvec3& c : probe.rgb) c = {uniform(random), uniform(random), uniform(random)};
+        for (glm::dvec3& c : probe.rgb)
+            c = {uniform(random), uniform(random), uniform(random)};
         probes.push_back(probe);
     }
     return probes;
@@ -502,7 +524,8 @@ std::vector<ShCoefficients> randomProbes(int order, int count, uint32_t seed) {
 double largestDifference(const ShCoefficients& a, const ShCoefficients& b) {
     double worst = 0.0;
     for (size_t i = 0; i < a.rgb.size(); ++i)
-        for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(a.rgb[i][c] - b.rgb[i][c]));
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(worst, std::abs(a.rgb[i][c] - b.rgb[i][c]));
     return worst;
 }
 
@@ -533,7 +556,8 @@ TEST_F(GpuRotation, EachProbeWithItsOwnRotationMatchesTheCpu) {
     EXPECT_THROW(rotateOnGpu(context(), rotator, std::span(rotations).first(2), probes), Error);
     destroyRotator(context(), rotator);
     for (size_t p = 0; p < probes.size(); ++p)
-        EXPECT_LT(largestDifference(gpu[p], rotate(rotations[p], probes[p])), kGpuRotationTolerance) << "probe " << p;
+        EXPECT_LT(largestDifference(gpu[p], rotate(rotations[p], probes[p])), kGpuRotationTolerance)
+            << "probe " << p;
 }
 
 } // namespace

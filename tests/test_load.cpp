@@ -16,7 +16,8 @@ constexpr long kMiB = 1024;
 // A tiny equirect HDR (16 x 8: 4 x 4 faces), different for each index.
 void writeSmallEnvironment(const std::string& path, int index) {
     std::vector<float> pixels(16 * 8 * 3);
-    for (size_t p = 0; p < pixels.size(); ++p) pixels[p] = float((p * 7 + size_t(index) * 13) % 97) / 97.0f;
+    for (size_t p = 0; p < pixels.size(); ++p)
+        pixels[p] = float((p * 7 + size_t(index) * 13) % 97) / 97.0f;
     auto out = OIIO::ImageOutput::create(path);
     ASSERT_TRUE(out) << path;
     ASSERT_TRUE(out->open(path, OIIO::ImageSpec(16, 8, 3, OIIO::TypeDesc::FLOAT)));
@@ -28,7 +29,8 @@ void writeSmallEnvironment(const std::string& path, int index) {
 // small bake.
 long baselineKiB(const TemporaryFolder& folder) {
     writeSmallEnvironment(folder / "one.hdr", 0);
-    RunResult run = runProgram({"bake", folder / "one.hdr", "-o", folder / "one.json"}, folder.path() / "logs");
+    RunResult run =
+        runProgram({"bake", folder / "one.hdr", "-o", folder / "one.json"}, folder.path() / "logs");
     EXPECT_EQ(run.exitCode, 0) << describe(run);
     return run.peakKiB;
 }
@@ -67,7 +69,8 @@ TEST(Load, ThousandSmallProbesInOneBatch) {
 TEST(Load, OneCubeMapOf4096SquaredFaces) {
     TemporaryFolder folder("shprobe_load_4096");
     const long baseline = baselineKiB(folder);
-    RunResult run = runProgram({"bake", "--face-size", "4096", "-o", folder / "sky.json"}, folder.path() / "logs");
+    RunResult run =
+        runProgram({"bake", "--face-size", "4096", "-o", folder / "sky.json"}, folder.path() / "logs");
     ASSERT_EQ(run.exitCode, 0) << describe(run);
     const long dataKiB = 6L * 4096 * 4096 * 16 / 1024;
     EXPECT_LE(run.peakKiB, baseline + 3 * dataKiB + 256 * kMiB)

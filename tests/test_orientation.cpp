@@ -26,10 +26,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <map>
-#include <ostream>
 #include <glm/geometric.hpp>
+#include <map>
 #include <numbers>
+#include <ostream>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -49,12 +49,24 @@ const char* const kFaceNames[kFaceCount] = {"+X", "-X", "+Y", "-Y", "+Z", "-Z"};
 glm::dvec3 tableDirection(int face, double a, double b) {
     glm::dvec3 d;
     switch (face) {
-    case 0: d = {1, -b, -a}; break;
-    case 1: d = {-1, -b, a}; break;
-    case 2: d = {a, 1, b}; break;
-    case 3: d = {a, -1, -b}; break;
-    case 4: d = {a, -b, 1}; break;
-    default: d = {-a, -b, -1}; break;
+    case 0:
+        d = {1, -b, -a};
+        break;
+    case 1:
+        d = {-1, -b, a};
+        break;
+    case 2:
+        d = {a, 1, b};
+        break;
+    case 3:
+        d = {a, -1, -b};
+        break;
+    case 4:
+        d = {a, -b, 1};
+        break;
+    default:
+        d = {-a, -b, -1};
+        break;
     }
     return glm::normalize(d);
 }
@@ -118,8 +130,8 @@ Quadrant quadrantOf(int index) { // 0..23
     return {index / 4, (index % 2) ? 1 : -1, ((index / 2) % 2) ? 1 : -1};
 }
 std::string describe(const Quadrant& q) {
-    return std::string("face ") + kFaceNames[q.face] + ", quadrant " + (q.signA < 0 ? "a<0 (left)" : "a>0 (right)") +
-           " " + (q.signB < 0 ? "b<0 (top)" : "b>0 (bottom)");
+    return std::string("face ") + kFaceNames[q.face] + ", quadrant " +
+           (q.signA < 0 ? "a<0 (left)" : "a>0 (right)") + " " + (q.signB < 0 ? "b<0 (top)" : "b>0 (bottom)");
 }
 bool insideQuadrant(const glm::dvec3& d, const Quadrant& q) {
     TablePoint p = tableFacePoint(d);
@@ -163,10 +175,10 @@ glm::dvec3 l1Direction(const ShCoefficients& sh) {
 
 // ---- Building the lit environments ----------------------------------------------------------------
 
-constexpr int kFaceSize = 8;         // cube and crosses: each quadrant is 4 x 4 texels
-constexpr int kEquirectWidth = 256;  // equirect 256 x 128, loaded as cube faces of 64
+constexpr int kFaceSize = 8;        // cube and crosses: each quadrant is 4 x 4 texels
+constexpr int kEquirectWidth = 256; // equirect 256 x 128, loaded as cube faces of 64
 constexpr int kEquirectHeight = 128;
-constexpr int kOrder = 2;            // L0 and L1 are all the test reads
+constexpr int kOrder = 2; // L0 and L1 are all the test reads
 
 const glm::vec4 kLit(1.0f, 1.0f, 1.0f, 1.0f);
 const glm::vec4 kDark(0.0f, 0.0f, 0.0f, 1.0f);
@@ -188,7 +200,8 @@ Image quadrantCross(const Quadrant& q, const std::vector<std::string>& rows, boo
         std::istringstream tokens(row);
         std::string token;
         int count = 0;
-        while (tokens >> token) ++count;
+        while (tokens >> token)
+            ++count;
         columns = std::max(columns, count);
     }
     Image cross = makeImage(columns * n, int(rows.size()) * n);
@@ -212,8 +225,9 @@ Image quadrantEquirect(const Quadrant& q) {
     Image image = makeImage(kEquirectWidth, kEquirectHeight);
     for (int j = 0; j < kEquirectHeight; ++j)
         for (int i = 0; i < kEquirectWidth; ++i)
-            image.at(i, j) =
-                insideQuadrant(tableEquirectDirection(i, j, kEquirectWidth, kEquirectHeight), q) ? kLit : kDark;
+            image.at(i, j) = insideQuadrant(tableEquirectDirection(i, j, kEquirectWidth, kEquirectHeight), q)
+                                 ? kLit
+                                 : kDark;
     return image;
 }
 
@@ -262,14 +276,21 @@ void expectPointsIntoQuadrant(const ShCoefficients& sh, const Quadrant& q, const
 
 enum class InputPath { Cube, HorizontalCross, VerticalCross, EquirectDirect, EquirectLoaded };
 const char* pathName(InputPath path);
-void PrintTo(InputPath path, std::ostream* out) { *out << pathName(path); }
+void PrintTo(InputPath path, std::ostream* out) {
+    *out << pathName(path);
+}
 const char* pathName(InputPath path) {
     switch (path) {
-    case InputPath::Cube: return "cube";
-    case InputPath::HorizontalCross: return "hcross";
-    case InputPath::VerticalCross: return "vcross";
-    case InputPath::EquirectDirect: return "equirect_direct";
-    case InputPath::EquirectLoaded: return "equirect_loaded";
+    case InputPath::Cube:
+        return "cube";
+    case InputPath::HorizontalCross:
+        return "hcross";
+    case InputPath::VerticalCross:
+        return "vcross";
+    case InputPath::EquirectDirect:
+        return "equirect_direct";
+    case InputPath::EquirectLoaded:
+        return "equirect_loaded";
     }
     return "?";
 }
@@ -280,13 +301,15 @@ class LitQuadrant : public ::testing::TestWithParam<std::tuple<InputPath, int>> 
         std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
         for (char& c : name)
             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-        folder_ = fs::temp_directory_path() / ("shprobe_test_orientation_" + std::to_string(getpid()) + "_" + name);
+        folder_ =
+            fs::temp_directory_path() / ("shprobe_test_orientation_" + std::to_string(getpid()) + "_" + name);
         fs::remove_all(folder_);
         fs::create_directories(folder_);
     }
     static void TearDownTestSuite() {
         for (const auto& [path, angle] : worstAngles())
-            std::printf("%s: L1 direction at most %.3g degrees from the quadrant's centroid\n", path.c_str(), angle);
+            std::printf("%s: L1 direction at most %.3g degrees from the quadrant's centroid\n", path.c_str(),
+                        angle);
     }
     ~LitQuadrant() override {
         std::error_code ignored;
@@ -335,13 +358,14 @@ TEST_P(LitQuadrant, L1PointsIntoIt) {
 std::string quadrantTestName(const ::testing::TestParamInfo<LitQuadrant::ParamType>& info) {
     static const char* const faces[kFaceCount] = {"PX", "NX", "PY", "NY", "PZ", "NZ"};
     Quadrant q = quadrantOf(std::get<1>(info.param));
-    return std::string(pathName(std::get<0>(info.param))) + "_" + faces[q.face] + (q.signA < 0 ? "_left" : "_right") +
-           (q.signB < 0 ? "_top" : "_bottom");
+    return std::string(pathName(std::get<0>(info.param))) + "_" + faces[q.face] +
+           (q.signA < 0 ? "_left" : "_right") + (q.signB < 0 ? "_top" : "_bottom");
 }
 
 INSTANTIATE_TEST_SUITE_P(Orientation, LitQuadrant,
                          ::testing::Combine(::testing::Values(InputPath::Cube, InputPath::HorizontalCross,
-                                                              InputPath::VerticalCross, InputPath::EquirectDirect,
+                                                              InputPath::VerticalCross,
+                                                              InputPath::EquirectDirect,
                                                               InputPath::EquirectLoaded),
                                             ::testing::Range(0, 24)),
                          quadrantTestName);
@@ -367,7 +391,8 @@ TEST(Orientation, LibraryGeometryFollowsTheConventionsTable) {
             }
     for (int j = 0; j < 8; ++j)
         for (int i = 0; i < 16; ++i)
-            EXPECT_LT(glm::length(equirectDirection(i, j, 16, 8) - tableEquirectDirection(i, j, 16, 8)), 1e-12)
+            EXPECT_LT(glm::length(equirectDirection(i, j, 16, 8) - tableEquirectDirection(i, j, 16, 8)),
+                      1e-12)
                 << "equirectDirection (" << i << ", " << j << ")";
     // The formula as written above says what CONVENTIONS.md says in words: the image's center looks
     // along -Z, its right quarter along +X, its top row is +Y.
@@ -395,7 +420,8 @@ const glm::dvec3 kAmbient(0.05, 0.04, 0.03);
 
 glm::dvec3 lobeRadiance(const glm::dvec3& d) {
     glm::dvec3 sum = kAmbient;
-    for (const Lobe& lobe : kLobes) sum += lobe.colour * std::exp(lobe.sharpness * (glm::dot(d, lobe.axis) - 1.0));
+    for (const Lobe& lobe : kLobes)
+        sum += lobe.colour * std::exp(lobe.sharpness * (glm::dot(d, lobe.axis) - 1.0));
     return sum;
 }
 
@@ -403,7 +429,8 @@ Image lobeEquirect(int width, int height) {
     Image image = makeImage(width, height);
     for (int j = 0; j < height; ++j)
         for (int i = 0; i < width; ++i)
-            image.at(i, j) = glm::vec4(glm::vec3(lobeRadiance(tableEquirectDirection(i, j, width, height))), 1.0f);
+            image.at(i, j) =
+                glm::vec4(glm::vec3(lobeRadiance(tableEquirectDirection(i, j, width, height))), 1.0f);
     return image;
 }
 
@@ -413,7 +440,8 @@ double maxRelativeDifference(const ShCoefficients& x, const ShCoefficients& y, i
     double worst = 0.0;
     for (int c = 0; c < 3; ++c)
         for (int i = 0; i < order * order; ++i)
-            worst = std::max(worst, std::abs(x.rgb[size_t(i)][c] - y.rgb[size_t(i)][c]) / std::abs(x.rgb[0][c]));
+            worst =
+                std::max(worst, std::abs(x.rgb[size_t(i)][c] - y.rgb[size_t(i)][c]) / std::abs(x.rgb[0][c]));
     return worst;
 }
 
@@ -434,7 +462,8 @@ constexpr double kSyntheticToleranceOrder5 = 5e-4;
 TEST(EquirectProjection, DirectAgreesWithConvertedCubemap) {
     Image equirect = lobeEquirect(512, 256);
     Cubemap cubemap = equirectToCubemap(equirect, 128);
-    for (auto [order, tolerance] : {std::pair{3, kSyntheticToleranceOrder3}, std::pair{5, kSyntheticToleranceOrder5}}) {
+    for (auto [order, tolerance] :
+         {std::pair{3, kSyntheticToleranceOrder3}, std::pair{5, kSyntheticToleranceOrder5}}) {
         ShCoefficients direct = projectEquirect(equirect, order);
         ShCoefficients converted = projectCubemap(cubemap, order);
         double difference = maxRelativeDifference(direct, converted, order);

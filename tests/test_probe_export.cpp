@@ -39,13 +39,14 @@ ShCoefficients randomProbe(int order, Quantity quantity, uint32_t seed) {
     std::mt19937 random(seed);
     std::uniform_real_distribution<double> uniform(-1.0, 1.0);
     ShCoefficients probe = makeCoefficients(order, quantity);
-    for (glm::dvec3& c : probe.rgb) c = {uniform(random), uniform(random), uniform(random)};
+    for (glm::dvec3& c : probe.rgb)
+        c = {uniform(random), uniform(random), uniform(random)};
     probe.rgb[0] = {3.0, 2.5, 2.0}; // a positive mean, as real probes have
     return probe;
 }
 
 class ExportFiles : public ::testing::Test {
-protected:
+  protected:
     ExportFiles() : folder_(fs::temp_directory_path() / ("shprobe_test_export_" + std::to_string(getpid()))) {
         fs::create_directories(folder_);
     }
@@ -55,7 +56,7 @@ protected:
     }
     std::string file(const std::string& name) const { return (folder_ / name).string(); }
 
-private:
+  private:
     fs::path folder_;
 };
 
@@ -63,7 +64,8 @@ private:
 TEST_F(ExportFiles, BinaryRoundTripsEveryOrderAndQuantity) {
     for (int order = 1; order <= 8; ++order)
         for (Quantity quantity : {Quantity::Radiance, Quantity::Irradiance}) {
-            std::vector<ShCoefficients> probes = {randomProbe(order, quantity, 1), randomProbe(order, quantity, 2)};
+            std::vector<ShCoefficients> probes = {randomProbe(order, quantity, 1),
+                                                  randomProbe(order, quantity, 2)};
             writeBinaryProbes(file("probes.bin"), probes);
             std::vector<ShCoefficients> read = readBinaryProbes(file("probes.bin"));
             ASSERT_EQ(read.size(), 2u);
@@ -82,7 +84,9 @@ TEST(BinaryProbes, HeaderIsTheDocumentedLayout) {
     std::string bytes = probesToBinary(std::span(&probe, 1));
     ASSERT_EQ(bytes.size(), kBinaryProbeHeaderBytes + 9u * 3u * 4u);
     EXPECT_EQ(bytes.substr(0, 4), "SHPB");
-    auto word = [&](size_t offset) { return uint32_t(uint8_t(bytes[offset])) | uint32_t(uint8_t(bytes[offset + 1])) << 8; };
+    auto word = [&](size_t offset) {
+        return uint32_t(uint8_t(bytes[offset])) | uint32_t(uint8_t(bytes[offset + 1])) << 8;
+    };
     EXPECT_EQ(word(4), 1u);  // version
     EXPECT_EQ(word(8), 3u);  // order
     EXPECT_EQ(word(12), 1u); // irradiance
@@ -94,7 +98,8 @@ TEST(BinaryProbes, MalformedFilesAreRefused) {
     ShCoefficients probe = randomProbe(3, Quantity::Radiance, 4);
     std::string valid = probesToBinary(std::span(&probe, 1));
     expectInputError([&] { parseBinaryProbes(valid.substr(0, 20), "short.bin"); }, "truncated header");
-    expectInputError([&] { parseBinaryProbes(valid.substr(0, valid.size() - 4), "cut.bin"); }, "truncated data");
+    expectInputError([&] { parseBinaryProbes(valid.substr(0, valid.size() - 4), "cut.bin"); },
+                     "truncated data");
     std::string magic = valid;
     magic[0] = 'X';
     expectInputError([&] { parseBinaryProbes(magic, "magic.bin"); }, "magic");
@@ -102,9 +107,11 @@ TEST(BinaryProbes, MalformedFilesAreRefused) {
     order[8] = 9;
     expectInputError([&] { parseBinaryProbes(order, "order.bin"); }, "order 9");
     std::string nan = valid;
-    for (int i = 0; i < 4; ++i) nan[kBinaryProbeHeaderBytes + 4 + i] = char(0xff);
+    for (int i = 0; i < 4; ++i)
+        nan[kBinaryProbeHeaderBytes + 4 + i] = char(0xff);
     expectInputError([&] { parseBinaryProbes(nan, "nan.bin"); }, "NaN");
-    std::vector<ShCoefficients> mixed = {randomProbe(3, Quantity::Radiance, 5), randomProbe(5, Quantity::Radiance, 6)};
+    std::vector<ShCoefficients> mixed = {randomProbe(3, Quantity::Radiance, 5),
+                                         randomProbe(5, Quantity::Radiance, 6)};
     expectInputError([&] { probesToBinary(mixed); }, "mixed orders");
 }
 
@@ -315,7 +322,8 @@ TEST_F(ExportFiles, IrradianceEquirectHoldsEOverPi) {
     for (int j = 0; j < 32; ++j)
         for (int i = 0; i < 64; ++i) {
             glm::dvec3 expected = evaluate(irradiance, equirectDirection(i, j, 64, 32)) / std::numbers::pi;
-            for (int c = 0; c < 3; ++c) EXPECT_NEAR(image.at(i, j)[c], expected[c], 1e-6 * 3.0) << i << "," << j;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(image.at(i, j)[c], expected[c], 1e-6 * 3.0) << i << "," << j;
         }
 }
 

@@ -26,10 +26,11 @@
 #include <string>
 #include <vector>
 
-#define VK_CHECK(call)                                                                                         \
-    do {                                                                                                       \
-        VkResult result_ = (call);                                                                             \
-        if (result_ != VK_SUCCESS) fail(std::string(#call) + " failed with VkResult " + std::to_string(result_)); \
+#define VK_CHECK(call)                                                                                       \
+    do {                                                                                                     \
+        VkResult result_ = (call);                                                                           \
+        if (result_ != VK_SUCCESS)                                                                           \
+            fail(std::string(#call) + " failed with VkResult " + std::to_string(result_));                   \
     } while (0)
 
 namespace {
@@ -43,10 +44,10 @@ namespace {
 
 constexpr uint32_t kSpecWorkgroupWidth = 0; // specialization constant ids
 constexpr uint32_t kSpecOrder = 1;
-constexpr uint32_t kWidth = 64;             // workgroup width of all three modules here
-constexpr uint32_t kFaces = 6;              // layers per probe: probe p's face f is layer 6p + f
-constexpr uint32_t kTexelsPerPosition = 6;  // project.comp: one position = the same texel of six faces
-constexpr uint32_t kProbes = 1;             // probes per bake; the modules take many, this example one
+constexpr uint32_t kWidth = 64;            // workgroup width of all three modules here
+constexpr uint32_t kFaces = 6;             // layers per probe: probe p's face f is layer 6p + f
+constexpr uint32_t kTexelsPerPosition = 6; // project.comp: one position = the same texel of six faces
+constexpr uint32_t kProbes = 1;            // probes per bake; the modules take many, this example one
 constexpr VkFormat kTexelFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 
 struct ProjectParams { // project.comp, 4 bytes
@@ -82,7 +83,8 @@ double irradianceFactor(int l) {
     if (l == 1) return 2.0 * pi / 3.0;
     if (l % 2 == 1) return 0.0;
     double binomial = 1.0; // C(l, l/2) / 2^l
-    for (int k = 1; k <= l / 2; ++k) binomial *= (2.0 * k - 1.0) / (2.0 * k);
+    for (int k = 1; k <= l / 2; ++k)
+        binomial *= (2.0 * k - 1.0) / (2.0 * k);
     double sign = (l / 2) % 2 == 1 ? 1.0 : -1.0;
     return 2.0 * pi * sign / ((l + 2.0) * (l - 1.0)) * binomial;
 }
@@ -127,7 +129,8 @@ std::vector<Coefficient> makeCubemap(const Options& options) {
     texels.reserve(size_t(kFaces) * n * n);
     for (int face = 0; face < int(kFaces); ++face)
         for (uint32_t j = 0; j < n; ++j)
-            for (uint32_t i = 0; i < n; ++i) texels.push_back(radianceAt(options.environment, texelDirection(face, i, j, n)));
+            for (uint32_t i = 0; i < n; ++i)
+                texels.push_back(radianceAt(options.environment, texelDirection(face, i, j, n)));
     return texels;
 }
 
@@ -162,7 +165,8 @@ struct Gpu {
 
 int gValidationMessages = 0;
 
-VKAPI_ATTR VkBool32 VKAPI_CALL onValidation(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
+VKAPI_ATTR VkBool32 VKAPI_CALL onValidation(VkDebugUtilsMessageSeverityFlagBitsEXT,
+                                            VkDebugUtilsMessageTypeFlagsEXT,
                                             const VkDebugUtilsMessengerCallbackDataEXT* data, void*) {
     std::fprintf(stderr, "validation: %s\n", data->pMessage);
     ++gValidationMessages;
@@ -203,7 +207,8 @@ bool suitable(VkPhysicalDevice physical, uint32_t& queueFamily) {
     properties.pNext = &subgroup;
     vkGetPhysicalDeviceProperties2(physical, &properties);
     VkSubgroupFeatureFlags needed = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
-    if (properties.properties.apiVersion < VK_API_VERSION_1_1 || !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ||
+    if (properties.properties.apiVersion < VK_API_VERSION_1_1 ||
+        !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ||
         (subgroup.supportedOperations & needed) != needed)
         return false;
     VkFormatProperties format;
@@ -232,7 +237,8 @@ void createDevice(Gpu& gpu) {
             gpu.physical = physical;
             break;
         }
-    if (!gpu.physical) fail("no Vulkan 1.1 device with subgroup arithmetic in compute shaders and sampled RGBA32F");
+    if (!gpu.physical)
+        fail("no Vulkan 1.1 device with subgroup arithmetic in compute shaders and sampled RGBA32F");
     VkPhysicalDeviceProperties properties;
     vkGetPhysicalDeviceProperties(gpu.physical, &properties);
     gpu.limits = properties.limits;
@@ -253,7 +259,8 @@ void createDevice(Gpu& gpu) {
 // --- memory: buffers and the cube-map image -------------------------------------------------------
 
 // The first allowed memory type with all flags of the first preference any type meets.
-uint32_t memoryType(const Gpu& gpu, uint32_t allowed, std::initializer_list<VkMemoryPropertyFlags> preferences) {
+uint32_t memoryType(const Gpu& gpu, uint32_t allowed,
+                    std::initializer_list<VkMemoryPropertyFlags> preferences) {
     VkPhysicalDeviceMemoryProperties memory;
     vkGetPhysicalDeviceMemoryProperties(gpu.physical, &memory);
     for (VkMemoryPropertyFlags wanted : preferences)
@@ -325,8 +332,9 @@ Image createCubemapImage(const Gpu& gpu, uint32_t size, uint32_t layers) {
     VK_CHECK(vkCreateImage(gpu.device, &info, nullptr, &image.image));
     VkMemoryRequirements requirements;
     vkGetImageMemoryRequirements(gpu.device, image.image, &requirements);
-    image.memory = allocate(gpu, requirements,
-                            memoryType(gpu, requirements.memoryTypeBits, {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0}));
+    image.memory =
+        allocate(gpu, requirements,
+                 memoryType(gpu, requirements.memoryTypeBits, {VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0}));
     VK_CHECK(vkBindImageMemory(gpu.device, image.image, image.memory, 0));
 
     VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
@@ -432,7 +440,8 @@ Program createProgram(const Gpu& gpu, const Options& options, const ProgramInfo&
     pipelineInfo.stage.pName = "main";
     pipelineInfo.stage.pSpecializationInfo = &specialization;
     pipelineInfo.layout = program.layout;
-    VK_CHECK(vkCreateComputePipelines(gpu.device, VK_NULL_HANDLE, 1, &pipelineInfo, nullptr, &program.pipeline));
+    VK_CHECK(
+        vkCreateComputePipelines(gpu.device, VK_NULL_HANDLE, 1, &pipelineInfo, nullptr, &program.pipeline));
     return program;
 }
 
@@ -487,17 +496,19 @@ void dispatch(VkCommandBuffer commands, const Program& program, VkDescriptorSet 
               uint32_t groupsX, uint32_t groupsY) {
     vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
     vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set, 0, nullptr);
-    vkCmdPushConstants(commands, program.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, program.pushConstantSize, constants);
+    vkCmdPushConstants(commands, program.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, program.pushConstantSize,
+                       constants);
     vkCmdDispatch(commands, groupsX, groupsY, 1);
 }
 
 // Compute writes, made visible to `destinationAccess` at `destinationStage`.
-void barrier(VkCommandBuffer commands, VkPipelineStageFlags destinationStage, VkAccessFlags destinationAccess) {
+void barrier(VkCommandBuffer commands, VkPipelineStageFlags destinationStage,
+             VkAccessFlags destinationAccess) {
     VkMemoryBarrier memory{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     memory.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
     memory.dstAccessMask = destinationAccess;
-    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, destinationStage, 0, 1, &memory, 0, nullptr,
-                         0, nullptr);
+    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, destinationStage, 0, 1, &memory, 0,
+                         nullptr, 0, nullptr);
 }
 
 struct LayoutChange {
@@ -525,16 +536,18 @@ void changeLayout(VkCommandBuffer commands, const Image& image, const LayoutChan
 // The staging buffer's layers into the image, left in SHADER_READ_ONLY_OPTIMAL for compute reads.
 void recordUpload(VkCommandBuffer commands, const Buffer& staging, const Image& image) {
     changeLayout(commands, image,
-                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT});
+                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                  VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_ACCESS_TRANSFER_WRITE_BIT});
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.layers};
     region.imageExtent = {image.size, image.size, 1};
-    vkCmdCopyBufferToImage(commands, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+    vkCmdCopyBufferToImage(commands, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                           &region);
     changeLayout(commands, image,
                  {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                  VK_ACCESS_SHADER_READ_BIT});
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
 }
 
 VkCommandBuffer beginCommands(const Gpu& gpu, VkCommandPool pool) {
@@ -579,15 +592,18 @@ Programs createPrograms(const Gpu& gpu, const Options& options) {
     const VkDescriptorType buffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     Programs programs;
     programs.sampler = createNearestSampler(gpu);
-    programs.project =
-        createProgram(gpu, options, {"project.comp.spv", {image, buffer}, sizeof(ProjectParams), programs.sampler});
-    programs.reduce = createProgram(gpu, options, {"reduce.comp.spv", {buffer, buffer}, sizeof(ReduceParams)});
-    programs.convolve = createProgram(gpu, options, {"convolve.comp.spv", {buffer, buffer}, sizeof(ConvolveParams)});
+    programs.project = createProgram(
+        gpu, options, {"project.comp.spv", {image, buffer}, sizeof(ProjectParams), programs.sampler});
+    programs.reduce =
+        createProgram(gpu, options, {"reduce.comp.spv", {buffer, buffer}, sizeof(ReduceParams)});
+    programs.convolve =
+        createProgram(gpu, options, {"convolve.comp.spv", {buffer, buffer}, sizeof(ConvolveParams)});
     return programs;
 }
 
 void destroyPrograms(const Gpu& gpu, Programs& programs) {
-    for (Program* program : {&programs.convolve, &programs.reduce, &programs.project}) destroyProgram(gpu, *program);
+    for (Program* program : {&programs.convolve, &programs.reduce, &programs.project})
+        destroyProgram(gpu, *program);
     vkDestroySampler(gpu.device, programs.sampler, nullptr);
 }
 
@@ -605,14 +621,16 @@ BakePlan planBake(const Gpu& gpu, const Options& options) {
     const uint64_t slotBytes = uint64_t(order) * order * sizeof(Coefficient);
     const uint64_t maxGroups = std::min<uint64_t>(gpu.limits.maxComputeWorkGroupCount[0],
                                                   gpu.limits.maxStorageBufferRange / slotBytes / kProbes);
-    const uint64_t least = maxGroups ? ((positions + maxGroups - 1) / maxGroups + kWidth - 1) / kWidth : UINT64_MAX;
+    const uint64_t least =
+        maxGroups ? ((positions + maxGroups - 1) / maxGroups + kWidth - 1) / kWidth : UINT64_MAX;
     const uint64_t most = maxPositionsPerInvocation(order);
     if (least > most)
         fail("face size " + std::to_string(options.faceSize) + " at order " + std::to_string(order) +
              " needs more workgroups than one dispatch allows on this device");
     const uint64_t requested = (256u + kTexelsPerPosition - 1) / kTexelsPerPosition;
     const uint64_t perInvocation = std::clamp<uint64_t>(requested, std::max<uint64_t>(least, 1), most);
-    return {options.faceSize, order, uint32_t((positions + kWidth * perInvocation - 1) / (kWidth * perInvocation))};
+    return {options.faceSize, order,
+            uint32_t((positions + kWidth * perInvocation - 1) / (kWidth * perInvocation))};
 }
 
 // Everything one bake allocates.
@@ -638,8 +656,8 @@ VkDescriptorPool createDescriptorPool(const Gpu& gpu) {
 
 // The buffers of INTERFACE.md's table (partial slots, radiance, output), the image and its
 // staging copy, and the three descriptor sets.
-BakeResources createBakeResources(const Gpu& gpu, const Programs& programs, const std::vector<Coefficient>& texels,
-                                  const BakePlan& plan) {
+BakeResources createBakeResources(const Gpu& gpu, const Programs& programs,
+                                  const std::vector<Coefficient>& texels, const BakePlan& plan) {
     if (plan.faceSize > gpu.limits.maxImageDimension2D)
         fail("face size " + std::to_string(plan.faceSize) + " exceeds maxImageDimension2D " +
              std::to_string(gpu.limits.maxImageDimension2D));
@@ -665,7 +683,8 @@ BakeResources createBakeResources(const Gpu& gpu, const Programs& programs, cons
 void destroyBakeResources(const Gpu& gpu, BakeResources& r) {
     vkDestroyCommandPool(gpu.device, r.commandPool, nullptr);
     vkDestroyDescriptorPool(gpu.device, r.pool, nullptr);
-    for (Buffer* buffer : {&r.output, &r.radiance, &r.partials}) destroyBuffer(gpu, *buffer);
+    for (Buffer* buffer : {&r.output, &r.radiance, &r.partials})
+        destroyBuffer(gpu, *buffer);
     destroyImage(gpu, r.cubemaps);
     destroyBuffer(gpu, r.staging);
 }
@@ -674,14 +693,16 @@ void destroyBakeResources(const Gpu& gpu, BakeResources& r) {
 // from vec4 outputOffset on.
 ConvolveParams convolveParams(uint32_t order, bool irradiance, uint32_t outputOffset) {
     ConvolveParams params{};
-    for (uint32_t l = 0; l < order; ++l) params.bandScale[l] = irradiance ? float(irradianceFactor(int(l))) : 1.0f;
+    for (uint32_t l = 0; l < order; ++l)
+        params.bandScale[l] = irradiance ? float(irradianceFactor(int(l))) : 1.0f;
     params.outputOffset = outputOffset;
     return params;
 }
 
 // upload -> project -> reduce -> convolve twice into one output: radiance at 0, irradiance after
 // all probes' radiance (INTERFACE.md's output layout).
-void recordBake(VkCommandBuffer commands, const Programs& programs, const BakeResources& r, const BakePlan& plan) {
+void recordBake(VkCommandBuffer commands, const Programs& programs, const BakeResources& r,
+                const BakePlan& plan) {
     const uint32_t coefficients = plan.order * plan.order;
     const ProjectParams project{plan.faceSize};
     const ReduceParams reduce{plan.groups};
@@ -690,7 +711,8 @@ void recordBake(VkCommandBuffer commands, const Programs& programs, const BakeRe
     recordUpload(commands, r.staging, r.cubemaps);
     dispatch(commands, programs.project, r.project, &project, plan.groups, kProbes);
     barrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
-    dispatch(commands, programs.reduce, r.reduce, &reduce, coefficients, kProbes); // one workgroup per coefficient
+    dispatch(commands, programs.reduce, r.reduce, &reduce, coefficients,
+             kProbes); // one workgroup per coefficient
     barrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
     dispatch(commands, programs.convolve, r.convolve, &radiance, 1, kProbes);
     // Not needed (disjoint parts of one binding); shprobe records it too, for hazard tracking that
@@ -700,7 +722,8 @@ void recordBake(VkCommandBuffer commands, const Programs& programs, const BakeRe
     barrier(commands, VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
 }
 
-Bake bake(const Gpu& gpu, const Programs& programs, const std::vector<Coefficient>& texels, const Options& options) {
+Bake bake(const Gpu& gpu, const Programs& programs, const std::vector<Coefficient>& texels,
+          const Options& options) {
     const BakePlan plan = planBake(gpu, options);
     BakeResources r = createBakeResources(gpu, programs, texels, plan);
     VkCommandBuffer commands = beginCommands(gpu, r.commandPool);
@@ -721,14 +744,16 @@ Bake bake(const Gpu& gpu, const Programs& programs, const std::vector<Coefficien
 
 void printCoefficients(const char* tag, const std::vector<Coefficient>& coefficients) {
     for (size_t i = 0; i < coefficients.size(); ++i)
-        std::printf("%s %2zu %16.9g %16.9g %16.9g\n", tag, i, coefficients[i].r, coefficients[i].g, coefficients[i].b);
+        std::printf("%s %2zu %16.9g %16.9g %16.9g\n", tag, i, coefficients[i].r, coefficients[i].g,
+                    coefficients[i].b);
 }
 
 uint32_t parseNumber(const std::string& text, uint32_t low, uint32_t high, const char* what) {
     char* end = nullptr;
     unsigned long value = std::strtoul(text.c_str(), &end, 10);
     if (text.empty() || *end || value < low || value > high)
-        fail(std::string(what) + " must be " + std::to_string(low) + ".." + std::to_string(high) + ", got " + text);
+        fail(std::string(what) + " must be " + std::to_string(low) + ".." + std::to_string(high) + ", got " +
+             text);
     return uint32_t(value);
 }
 
@@ -740,13 +765,20 @@ Options parseOptions(int argc, char** argv) {
             if (i + 1 >= argc) fail(arg + " needs a value");
             return argv[++i];
         };
-        if (arg == "--environment") options.environment = value();
-        else if (arg == "--face-size") options.faceSize = parseNumber(value(), 1, 16384, "--face-size");
-        else if (arg == "--order") options.order = parseNumber(value(), 1, 8, "--order");
-        else if (arg == "--write-faces") options.writeFaces = value();
-        else if (arg == "--spirv-dir") options.spirvDir = value();
-        else if (arg == "--validation") options.validation = true;
-        else fail("unknown option " + arg);
+        if (arg == "--environment")
+            options.environment = value();
+        else if (arg == "--face-size")
+            options.faceSize = parseNumber(value(), 1, 16384, "--face-size");
+        else if (arg == "--order")
+            options.order = parseNumber(value(), 1, 8, "--order");
+        else if (arg == "--write-faces")
+            options.writeFaces = value();
+        else if (arg == "--spirv-dir")
+            options.spirvDir = value();
+        else if (arg == "--validation")
+            options.validation = true;
+        else
+            fail("unknown option " + arg);
     }
     if (options.environment != "white" && options.environment != "sky")
         fail("--environment must be white or sky, got " + options.environment);

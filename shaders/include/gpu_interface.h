@@ -22,7 +22,8 @@ SHPROBE_BEGIN
 // may round a perfect square down on some devices.
 SHPROBE_FN uint bandOfIndex(uint index) {
     uint l = 0u;
-    while ((l + 1u) * (l + 1u) <= index) ++l;
+    while ((l + 1u) * (l + 1u) <= index)
+        ++l;
     return l;
 }
 

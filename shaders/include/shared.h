@@ -5,7 +5,10 @@
 
 #ifdef __cplusplus
 #include <glm/glm.hpp>
-#define SHPROBE_BEGIN namespace shprobe::gpu { using namespace glm; using uint = glm::uint;
+#define SHPROBE_BEGIN                                                                                        \
+    namespace shprobe::gpu {                                                                                 \
+    using namespace glm;                                                                                     \
+    using uint = glm::uint;
 #define SHPROBE_END }
 #define SHPROBE_FN inline
 #define SHPROBE_CONST constexpr

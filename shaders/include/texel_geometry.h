@@ -24,18 +24,26 @@ SHPROBE_FN float texelCenterCoord(uint i, uint faceSize) {
 // normalized (a, b, 1) it gives unit directions, so one normalization serves all six faces.
 SHPROBE_FN vec3 orientToFace(uint face, vec3 v) {
     switch (face) {
-    case 0u: return vec3(v.z, -v.y, -v.x);
-    case 1u: return vec3(-v.z, -v.y, v.x);
-    case 2u: return vec3(v.x, v.z, v.y);
-    case 3u: return vec3(v.x, -v.z, -v.y);
-    case 4u: return vec3(v.x, -v.y, v.z);
-    default: return vec3(-v.x, -v.y, -v.z);
+    case 0u:
+        return vec3(v.z, -v.y, -v.x);
+    case 1u:
+        return vec3(-v.z, -v.y, v.x);
+    case 2u:
+        return vec3(v.x, v.z, v.y);
+    case 3u:
+        return vec3(v.x, -v.z, -v.y);
+    case 4u:
+        return vec3(v.x, -v.y, v.z);
+    default:
+        return vec3(-v.x, -v.y, -v.z);
     }
 }
 
 // The GPU projection visits the positions (i, j) with i, j < ceil(N / 2), each with its mirror
 // images (N - 1 - i, j), (i, N - 1 - j) and (N - 1 - i, N - 1 - j): four texels per face.
-SHPROBE_FN uint quadrantSize(uint faceSize) { return (faceSize + 1u) / 2u; }
+SHPROBE_FN uint quadrantSize(uint faceSize) {
+    return (faceSize + 1u) / 2u;
+}
 
 // Unnormalized direction through face-local point (a, b) of a face.
 SHPROBE_FN vec3 faceDirection(uint face, float a, float b) {

@@ -4,6 +4,7 @@
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
 #include "app/toolkit.h"
+#include "shprobe/io/engine_export.h"
 #include "shprobe/io/output_file.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/irradiance.h"
@@ -156,19 +157,7 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
         ->capture_default_str();
     command->add_flag("-q,--quiet", options.quiet,
                       "Print the summary only, not the coefficients (batch: not the line per probe)");
-    command
-        ->add_option(
-            "--format", options.format,
-            "json (CONVENTIONS' coefficient file), binary (packed float32, see README), glsl or cpp "
-            "(a GLSL or C/C++ header of coefficients folded for sh_irradiance.glsl: radiance for "
-            "shRadiance, with --irradiance for shIrradianceOverPi; orders 1-5), or the irradiance "
-            "drawn as an EXR map: irradiance-equirect, irradiance-cross. Default: from -o's extension "
-            "(.json, .bin, .glsl, .h, .exr), else json")
-        ->check(CLI::IsMember({"json", "binary", "glsl", "cpp", "irradiance-equirect", "irradiance-cross"}));
-    command
-        ->add_option("--map-size", options.mapSize,
-                     "Irradiance maps: equirect width (even; default 512) or cross face size (default 128)")
-        ->check(CLI::Range(1, 16384));
+    addFormatOptions(*command, options.format, options.mapSize, options.mirror);
     command->add_flag(
         "--extract-sun", options.extractSun,
         "Take the sun out of the environment and write it beside the probe of the rest, as \"sun\" "
@@ -179,6 +168,28 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
         "\"no sun found\" and the environment stays whole");
     addLightOptions(*command, options.lights);
     addWindowOption(*command, options.window);
+}
+
+void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool& mirror) {
+    std::vector<std::string> names;
+    std::string help = "Output format (docs/exports.md):";
+    for (const ExportFormat& each : exportFormats()) {
+        names.push_back(each.name);
+        help += std::string(" ") + each.name + " (" + each.what + ", " + each.extension + ");";
+    }
+    help += " default: from -o's extension, else json. The engine formats hold bands 0..2. gltf's "
+            "required specularImages are one mip of the probe's own diffuse radiance E/pi (a probe has no "
+            "prefiltered specular environment), for bake and convert alike";
+    command.add_option("--format", format, help)->check(CLI::IsMember(names));
+    command
+        .add_option("--map-size", mapSize,
+                    "Irradiance maps: equirect width (even; default 512) or cross face size (default 128)")
+        ->check(CLI::Range(1, 16384));
+    command
+        .add_option("--mirror", mirror,
+                    "filament: on (default) matches cmgen's default mirroring of the cube map (x -> -x), "
+                    "off matches cmgen --no-mirror")
+        ->capture_default_str();
 }
 
 void runBake(const BakeOptions& given) {

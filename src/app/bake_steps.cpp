@@ -1,6 +1,7 @@
 #include "app/bake_steps.h"
 
 #include "app/toolkit.h"
+#include "shprobe/io/engine_export.h"
 #include "shprobe/io/probe_export.h"
 #include "shprobe/sh/fast_projection.h"
 #include "shprobe/sh/folding.h"
@@ -39,22 +40,25 @@ bool isHeaderFormat(const std::string& format) {
     return format == "glsl" || format == "cpp";
 }
 
-// The format an output name's extension names; empty when it names none (".txt", "/dev/null").
-std::string formatOfExtension(const std::string& path) {
-    std::string extension = std::filesystem::path(path).extension().string();
-    for (char& c : extension)
-        c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (extension == ".json") return "json";
-    if (extension == ".bin") return "binary";
-    if (extension == ".glsl") return "glsl";
-    if (extension == ".h" || extension == ".hpp") return "cpp";
-    if (extension == ".exr") return "irradiance-equirect";
-    return "";
+const ExportFormat& formatNamed(const std::string& name) {
+    const ExportFormat* format = findExportFormat(name);
+    if (!format) throw Error(ErrorKind::Input, "--format " + name + " is not one of " + exportFormatNames());
+    return *format;
 }
 
-bool extensionAgrees(const std::string& named, const std::string& format) {
+// The format an output name's extension names; empty when it names none (".txt", "/dev/null").
+std::string formatOfExtension(const std::string& path) {
+    const ExportFormat* format = formatOfOutputName(path);
+    return format ? format->name : "";
+}
+
+// The extension names no format, the format itself, the other irradiance map, or the last part of
+// the format's extension (-o x.json --format threejs: ".three.json" ends in ".json").
+bool extensionAgrees(const std::string& output, const std::string& named, const std::string& format) {
+    const std::string extension = std::filesystem::path(output).extension().string();
     return named.empty() || named == format ||
-           (named == "irradiance-equirect" && format == "irradiance-cross");
+           (named == "irradiance-equirect" && format == "irradiance-cross") ||
+           (!extension.empty() && std::string_view(formatNamed(format).extension).ends_with(extension));
 }
 
 } // namespace
@@ -127,26 +131,26 @@ std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& envi
 }
 
 const char* formatExtension(const std::string& format) {
-    if (format == "json") return ".json";
-    if (format == "binary") return ".bin";
-    if (format == "glsl") return ".glsl";
-    if (format == "cpp") return ".h";
-    return ".exr"; // irradiance-equirect, irradiance-cross
+    return formatNamed(format).extension;
+}
+
+void settleFormatAndOutput(std::string& format, std::string& output) {
+    const std::string named = output.empty() ? "" : formatOfExtension(output);
+    if (format.empty()) format = named.empty() ? "json" : named;
+    if (!extensionAgrees(output, named, format))
+        throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
+                                          format + "; use the extension " + formatExtension(format) +
+                                          " or leave out --format");
+    if (output.empty()) output = std::string("probe") + formatExtension(format);
 }
 
 BakeOptions withFormatAndOutput(BakeOptions options) {
-    const std::string named = options.output.empty() ? "" : formatOfExtension(options.output);
-    if (options.format.empty()) options.format = named.empty() ? "json" : named;
-    if (!extensionAgrees(named, options.format))
-        throw Error(ErrorKind::Input, "-o " + options.output + " names a " + named +
-                                          " file but --format is " + options.format + "; use the extension " +
-                                          formatExtension(options.format) + " or leave out --format");
-    if (options.output.empty()) options.output = std::string("probe") + formatExtension(options.format);
+    settleFormatAndOutput(options.format, options.output);
     return options;
 }
 
 OutputContent formatContent(const std::string& format) {
-    return format == "json" || isHeaderFormat(format) ? OutputContent::Text : OutputContent::Binary;
+    return formatNamed(format).content;
 }
 
 std::vector<std::string> filesReadBy(const std::string& input) {
@@ -162,13 +166,14 @@ std::vector<std::string> filesReadBy(const std::string& input) {
 }
 
 void checkFormatOptions(const BakeOptions& options) {
+    const ExportFormat& format = formatNamed(options.format);
     if (isHeaderFormat(options.format) && options.order > kMaxFoldedOrder)
         throw Error(ErrorKind::Input, "--format " + options.format + " holds orders 1 to " +
                                           std::to_string(kMaxFoldedOrder) +
                                           " (what sh_irradiance.glsl evaluates), "
                                           "not --order " +
                                           std::to_string(options.order));
-    if (isHeaderFormat(options.format) && options.extractSun)
+    if (options.extractSun && format.sun == SunHandling::Refused)
         throw Error(ErrorKind::Input,
                     "--extract-sun: --format " + options.format +
                         " holds the coefficients only and would drop the sun; use --format json");
@@ -178,13 +183,8 @@ void checkFormatOptions(const BakeOptions& options) {
 
 void writeOutput(const BakeOptions& options, const std::string& path, const ShCoefficients& probe,
                  const ProbeMetadata& metadata) {
-    if (options.format == "json") return writeProbeFile(path, probe, metadata);
-    if (options.format == "binary") return writeBinaryProbes(path, std::span(&probe, 1));
-    if (options.format == "glsl") return writeProbeHeader(path, probe, HeaderLanguage::Glsl, metadata.source);
-    if (options.format == "cpp") return writeProbeHeader(path, probe, HeaderLanguage::C, metadata.source);
-    if (options.format == "irradiance-equirect")
-        return writeIrradianceEquirect(path, probe, options.mapSize > 0 ? options.mapSize : 512);
-    writeIrradianceCross(path, probe, options.mapSize > 0 ? options.mapSize : 128);
+    ExportOptions exportOptions{.metadata = metadata, .mapSize = options.mapSize, .mirror = options.mirror};
+    formatNamed(options.format).write(path, probe, exportOptions);
 }
 
 ProbeMetadata metadataFor(const BakeOptions& options, const Environment& environment,

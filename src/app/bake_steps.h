@@ -90,6 +90,8 @@ const char* formatExtension(const std::string& format);
 // when the extension names none); without -o, the output is "probe" and the format's extension.
 // An -o extension that names another format than --format is refused (Error(Input)).
 BakeOptions withFormatAndOutput(BakeOptions options);
+// The same rule on a format and an output name (convert).
+void settleFormatAndOutput(std::string& format, std::string& output);
 
 // Whether the format's files are text (json, glsl, cpp) or binary (standard output takes both;
 // a terminal only text).

@@ -1,8 +1,8 @@
 #include "app/bench_device.h"
 #include "app/stopwatch.h"
 
-#include "shprobe/gpu/probe_baker.h"
 #include "shprobe/glsl/gpu_interface.h"
+#include "shprobe/gpu/probe_baker.h"
 #include "shprobe/shprobe_bench_spirv.h"
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/pipeline.h"

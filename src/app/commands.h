@@ -38,6 +38,16 @@ struct BakeOptions {
     std::string format;          // json | binary | glsl | cpp | irradiance-equirect | irradiance-cross;
                                  // empty: from the output's extension, else json
     int mapSize = 0;             // irradiance maps: equirect width or face size (0: 512 / 128)
+    bool mirror = true;          // filament: cmgen's default mirroring (off: cmgen --no-mirror)
+};
+
+// `shprobe convert IN -o OUT [--format F]`: a probe file in, any output format out (convert.cpp).
+struct ConvertOptions {
+    std::string input;  // a probe file (JSON; .bin: the first probe of a binary file); "-": stdin
+    std::string output; // empty: "probe" and the format's extension
+    std::string format; // empty: from the output's extension, else json
+    int mapSize = 0;
+    bool mirror = true;
 };
 
 struct InfoOptions {
@@ -132,6 +142,12 @@ std::vector<std::string> filesReadBy(const std::string& input);
 
 void addBakeCommand(CLI::App& app, BakeOptions& options);
 void runBake(const BakeOptions& options);
+
+// --format (the formats of io/engine_export.h), --map-size and --mirror, as bake and convert take them.
+void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool& mirror);
+
+void addConvertCommand(CLI::App& app, ConvertOptions& options);
+void runConvert(const ConvertOptions& options);
 
 void addInfoCommand(CLI::App& app, InfoOptions& options);
 void runInfo(const InfoOptions& options);

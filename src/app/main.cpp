@@ -3,6 +3,7 @@
 #include "app/commands.h"
 #include "shprobe/io/output_file.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/version.h"
 
 #include <cstdio>
 #include <exception>
@@ -38,7 +39,15 @@ int main(int argc, char** argv) {
     shprobe::removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
     CLI::App app{"shprobe: bake HDR environments into spherical-harmonics light probes with Vulkan"};
     app.require_subcommand(1);
+    app.add_flag_callback(
+        "--version",
+        [] {
+            std::printf("shprobe %s\n", SHPROBE_VERSION_STRING);
+            throw CLI::Success();
+        },
+        "Print the version and exit");
     shprobe::BakeOptions bake;
+    shprobe::ConvertOptions convert;
     shprobe::InfoOptions info;
     shprobe::RenderOptions render;
     shprobe::ViewOptions view;
@@ -46,6 +55,7 @@ int main(int argc, char** argv) {
     shprobe::LightCommandOptions light;
     shprobe::BenchOptions bench;
     shprobe::addBakeCommand(app, bake);
+    shprobe::addConvertCommand(app, convert);
     shprobe::addInfoCommand(app, info);
     shprobe::addRenderCommand(app, render);
     shprobe::addViewCommand(app, view);
@@ -63,6 +73,7 @@ int main(int argc, char** argv) {
 
     try {
         if (app.got_subcommand("bake")) shprobe::runBake(bake);
+        if (app.got_subcommand("convert")) shprobe::runConvert(convert);
         if (app.got_subcommand("info")) shprobe::runInfo(info);
         if (app.got_subcommand("render")) shprobe::runRender(render);
         if (app.got_subcommand("view")) shprobe::runView(view);

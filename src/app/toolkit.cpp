@@ -68,7 +68,8 @@ glm::dmat3 chosenRotation(const RotateOptions& options) {
         const std::vector<double>& q = options.quaternion;
         return rotationFromQuaternion(q[0], q[1], q[2], q[3]);
     }
-    return rotationFromRowMajor(std::span<const double, 9>(options.matrix.data(), 9));
+    // A reflection (det -1) is allowed: a change to a left-handed frame needs one.
+    return orthogonalFromRowMajor(std::span<const double, 9>(options.matrix.data(), 9));
 }
 
 std::string joined(const std::vector<double>& values) {
@@ -164,10 +165,13 @@ void addRotateCommand(CLI::App& app, RotateOptions& options) {
         ->expected(4)
         ->delimiter(',')
         ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // rotationFromQuaternion says when it is not unit
-    command->add_option("--matrix", options.matrix, "R00,R01,...,R22 rotation matrix, row-major")
+    command
+        ->add_option("--matrix", options.matrix,
+                     "R00,R01,...,R22 orthogonal matrix, row-major: a rotation, or a reflection (det -1) "
+                     "for a change of handedness")
         ->expected(9)
         ->delimiter(',')
-        ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // rotationFromRowMajor says when it is no rotation
+        ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // orthogonalFromRowMajor says when it is not orthogonal
 }
 
 void runRotate(const RotateOptions& options) {

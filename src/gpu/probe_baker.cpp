@@ -24,7 +24,9 @@ VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
     return (value + alignment - 1) / alignment * alignment;
 }
 
-VkDeviceSize coefficientSetBytes(int order) { return VkDeviceSize(coefficientCount(order)) * kCoefficientBytes; }
+VkDeviceSize coefficientSetBytes(int order) {
+    return VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
+}
 
 // A projection position is a texel and its three mirror images on each of the six faces
 // (quadrantSize, texel_geometry.h).
@@ -50,17 +52,20 @@ uint32_t groupsPerProbe(const Context& context, const ProbeBakerOptions& options
     const VkDeviceSize quadrant = gpu::quadrantSize(faceSize);
     const VkDeviceSize positions = quadrant * quadrant;
     const VkDeviceSize maxSlots = limits.maxStorageBufferRange / coefficientSetBytes(options.order);
-    const VkDeviceSize maxGroups = std::min<VkDeviceSize>(limits.maxComputeWorkGroupCount[0], maxSlots / probes);
+    const VkDeviceSize maxGroups =
+        std::min<VkDeviceSize>(limits.maxComputeWorkGroupCount[0], maxSlots / probes);
     const VkDeviceSize perGroup = (positions + maxGroups - 1) / std::max<VkDeviceSize>(maxGroups, 1);
     const VkDeviceSize least = (perGroup + options.workgroupSize - 1) / options.workgroupSize;
     const uint32_t most = maxPositionsPerInvocation(options.order);
     if (maxGroups == 0 || least > most)
         throw Error(ErrorKind::Input, "GPU bake: " + std::to_string(probes) + " probe(s) of face size " +
-                                          std::to_string(faceSize) + " at order " + std::to_string(options.order) +
+                                          std::to_string(faceSize) + " at order " +
+                                          std::to_string(options.order) +
                                           " are more than one bake can hold on " + context.info.name +
                                           "; bake fewer probes at a time");
     const uint32_t requested = (options.texelsPerInvocation + kTexelsPerPosition - 1) / kTexelsPerPosition;
-    const VkDeviceSize perInvocation = std::clamp<VkDeviceSize>(requested, std::max<VkDeviceSize>(least, 1), most);
+    const VkDeviceSize perInvocation =
+        std::clamp<VkDeviceSize>(requested, std::max<VkDeviceSize>(least, 1), most);
     const VkDeviceSize perWorkgroup = perInvocation * options.workgroupSize;
     return uint32_t((positions + perWorkgroup - 1) / perWorkgroup);
 }
@@ -85,8 +90,8 @@ void scratchReuseBarrier(VkCommandBuffer commands) {
     VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
     barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1,
-                         &barrier, 0, nullptr, 0, nullptr);
+    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                         0, 1, &barrier, 0, nullptr, 0, nullptr);
 }
 
 void checkWindow(int order, std::span<const double> window) {
@@ -99,7 +104,8 @@ void checkTarget(const Context& context, const ProbeBakeTarget& target) {
     if (!target.cubemaps || !target.output)
         throw Error(ErrorKind::Input, "GPU bake: the target needs a cube-map view and an output buffer");
     if (target.faceSize < 1 || target.faceSize > context.info.limits.maxImageDimension2D)
-        throw Error(ErrorKind::Input, "GPU bake: face size " + std::to_string(target.faceSize) + " is outside 1.." +
+        throw Error(ErrorKind::Input, "GPU bake: face size " + std::to_string(target.faceSize) +
+                                          " is outside 1.." +
                                           std::to_string(context.info.limits.maxImageDimension2D));
     if (target.probeCount < 1 || target.probeCount > context.info.limits.maxComputeWorkGroupCount[1])
         throw Error(ErrorKind::Input, "GPU bake: " + std::to_string(target.probeCount) +
@@ -107,9 +113,10 @@ void checkTarget(const Context& context, const ProbeBakeTarget& target) {
                                           std::to_string(context.info.limits.maxComputeWorkGroupCount[1]) +
                                           " on " + context.info.name);
     if (target.outputOffset % context.info.limits.minStorageBufferOffsetAlignment != 0)
-        throw Error(ErrorKind::Input, "GPU bake: output offset " + std::to_string(target.outputOffset) +
-                                          " is not a multiple of minStorageBufferOffsetAlignment (" +
-                                          std::to_string(context.info.limits.minStorageBufferOffsetAlignment) + ")");
+        throw Error(ErrorKind::Input,
+                    "GPU bake: output offset " + std::to_string(target.outputOffset) +
+                        " is not a multiple of minStorageBufferOffsetAlignment (" +
+                        std::to_string(context.info.limits.minStorageBufferOffsetAlignment) + ")");
 }
 
 struct ProjectModule {
@@ -119,9 +126,12 @@ struct ProjectModule {
 
 ProjectModule projectModule(CubemapBinding binding) {
     switch (binding) {
-    case CubemapBinding::StorageRgba32F: return {"project_rgba32f.comp", spirv::project_rgba32f_comp};
-    case CubemapBinding::StorageRgba16F: return {"project_rgba16f.comp", spirv::project_rgba16f_comp};
-    case CubemapBinding::SampledImage: break;
+    case CubemapBinding::StorageRgba32F:
+        return {"project_rgba32f.comp", spirv::project_rgba32f_comp};
+    case CubemapBinding::StorageRgba16F:
+        return {"project_rgba16f.comp", spirv::project_rgba16f_comp};
+    case CubemapBinding::SampledImage:
+        break;
     }
     return {"project.comp", spirv::project_comp};
 }
@@ -129,7 +139,8 @@ ProjectModule projectModule(CubemapBinding binding) {
 } // namespace
 
 VkImageLayout cubemapLayout(CubemapBinding binding) {
-    return binding == CubemapBinding::SampledImage ? VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL : VK_IMAGE_LAYOUT_GENERAL;
+    return binding == CubemapBinding::SampledImage ? VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+                                                   : VK_IMAGE_LAYOUT_GENERAL;
 }
 
 Context borrowDevice(const ExternalDevice& device) {
@@ -151,15 +162,17 @@ Context borrowDevice(const ExternalDevice& device) {
     context.info.subgroupArithmetic = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
                                       (subgroup.supportedOperations & needed) == needed;
     if (!context.info.subgroupArithmetic)
-        throw Error(ErrorKind::Device, context.info.name +
-                                           " cannot bake probes: project.comp needs basic and arithmetic subgroup "
-                                           "operations in compute shaders");
+        throw Error(ErrorKind::Device,
+                    context.info.name +
+                        " cannot bake probes: project.comp needs basic and arithmetic subgroup "
+                        "operations in compute shaders");
 
     uint32_t familyCount = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(device.physicalDevice, &familyCount, nullptr);
     std::vector<VkQueueFamilyProperties> families(familyCount);
     vkGetPhysicalDeviceQueueFamilyProperties(device.physicalDevice, &familyCount, families.data());
-    if (device.queueFamily >= familyCount || !(families[device.queueFamily].queueFlags & VK_QUEUE_COMPUTE_BIT))
+    if (device.queueFamily >= familyCount ||
+        !(families[device.queueFamily].queueFlags & VK_QUEUE_COMPUTE_BIT))
         throw Error(ErrorKind::Device, "queue family " + std::to_string(device.queueFamily) + " of " +
                                            context.info.name + " does not do compute work");
     return context;
@@ -167,8 +180,8 @@ Context borrowDevice(const ExternalDevice& device) {
 
 ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& options) {
     if (options.order < 1 || options.order > kMaxOrder)
-        throw Error(ErrorKind::Input, "order " + std::to_string(options.order) + " is outside 1.." +
-                                          std::to_string(kMaxOrder));
+        throw Error(ErrorKind::Input,
+                    "order " + std::to_string(options.order) + " is outside 1.." + std::to_string(kMaxOrder));
     if (options.texelsPerInvocation < 1)
         throw Error(ErrorKind::Input, "texels per invocation must be at least 1");
     // project.comp's reduction keeps vec3 subgroup totals (16 bytes in shared memory each) for
@@ -191,15 +204,15 @@ ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& opt
     try {
         if (sampled) baker.sampler = createSampler(context, VK_FILTER_NEAREST);
         const ProjectModule module = projectModule(options.cubemaps);
-        baker.project = createComputeProgram(context, {.name = module.name,
-                                                       .spirv = module.spirv,
-                                                       .bindings = sampled ? std::span(kSampledBindings)
-                                                                           : std::span(kStorageBindings),
-                                                       .immutableSampler = baker.sampler,
-                                                       .pushConstantSize = sizeof(gpu::ProjectParams),
-                                                       .localSize = options.workgroupSize,
-                                                       .order = order,
-                                                       .cache = options.pipelineCache});
+        baker.project = createComputeProgram(
+            context, {.name = module.name,
+                      .spirv = module.spirv,
+                      .bindings = sampled ? std::span(kSampledBindings) : std::span(kStorageBindings),
+                      .immutableSampler = baker.sampler,
+                      .pushConstantSize = sizeof(gpu::ProjectParams),
+                      .localSize = options.workgroupSize,
+                      .order = order,
+                      .cache = options.pipelineCache});
         // The reduction and convolution handle one value per coefficient: a small workgroup is enough.
         baker.reduce = createComputeProgram(context, {.name = "reduce.comp",
                                                       .spirv = spirv::reduce_comp,
@@ -234,7 +247,8 @@ VkDeviceSize probeBakeOutputBytes(int order, uint32_t probeCount) {
     return 2 * VkDeviceSize(probeCount) * coefficientSetBytes(order);
 }
 
-ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker, const ProbeBakeTarget& target) {
+ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker,
+                                const ProbeBakeTarget& target) {
     checkTarget(context, target);
     const int order = baker.options.order;
     const VkDeviceSize setBytes = coefficientSetBytes(order);
@@ -245,17 +259,21 @@ ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker,
     const VkDeviceSize radianceBytes = VkDeviceSize(target.probeCount) * setBytes;
     set.radianceOffset = alignUp(partialBytes, context.info.limits.minStorageBufferOffsetAlignment);
     try {
-        set.scratch = createBuffer(context, set.radianceOffset + radianceBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                   MemoryUse::Device, "bake scratch (partial sums)");
+        set.scratch =
+            createBuffer(context, set.radianceOffset + radianceBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                         MemoryUse::Device, "bake scratch (partial sums)");
         const bool sampled = baker.options.cubemaps == CubemapBinding::SampledImage;
-        set.pool = createDescriptorPool(
-            context, {.sets = 3, .storageBuffers = 5, .imageSamplers = sampled ? 1u : 0u, .storageImages = sampled ? 0u : 1u});
-        const BindingTarget project[] = {{.imageView = target.cubemaps}, {set.scratch.buffer, 0, partialBytes}};
+        set.pool = createDescriptorPool(context, {.sets = 3,
+                                                  .storageBuffers = 5,
+                                                  .imageSamplers = sampled ? 1u : 0u,
+                                                  .storageImages = sampled ? 0u : 1u});
+        const BindingTarget project[] = {{.imageView = target.cubemaps},
+                                         {set.scratch.buffer, 0, partialBytes}};
         const BindingTarget reduce[] = {{set.scratch.buffer, 0, partialBytes},
                                         {set.scratch.buffer, set.radianceOffset, radianceBytes}};
-        const BindingTarget convolve[] = {{set.scratch.buffer, set.radianceOffset, radianceBytes},
-                                          {target.output, target.outputOffset,
-                                           probeBakeOutputBytes(order, target.probeCount)}};
+        const BindingTarget convolve[] = {
+            {set.scratch.buffer, set.radianceOffset, radianceBytes},
+            {target.output, target.outputOffset, probeBakeOutputBytes(order, target.probeCount)}};
         set.project = createDescriptorSet(context, set.pool, baker.project, project);
         set.reduce = createDescriptorSet(context, set.pool, baker.reduce, reduce);
         set.convolve = createDescriptorSet(context, set.pool, baker.convolve, convolve);
@@ -279,7 +297,8 @@ void recordConvolutions(VkCommandBuffer commands, const ProbeBaker& baker, VkDes
     // Radiance (windowed) first, then irradiance after all probes' radiance: the output layout.
     const uint32_t irradianceOffset = probes * uint32_t(coefficientCount(order));
     // The two dispatches write disjoint parts of the output, so they need no barrier between them.
-    dispatch(commands, baker.convolve, convolveSet, convolveParams(order, window, Quantity::Radiance, 0), {1, probes});
+    dispatch(commands, baker.convolve, convolveSet, convolveParams(order, window, Quantity::Radiance, 0),
+             {1, probes});
     dispatch(commands, baker.convolve, convolveSet,
              convolveParams(order, window, Quantity::Irradiance, irradianceOffset), {1, probes});
 }

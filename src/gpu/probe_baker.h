@@ -61,10 +61,10 @@ enum class CubemapBinding { SampledImage, StorageRgba32F, StorageRgba16F };
 VkImageLayout cubemapLayout(CubemapBinding binding);
 
 struct ProbeBakerOptions {
-    int order = 3;                          // 1..kMaxOrder
+    int order = 3; // 1..kMaxOrder
     CubemapBinding cubemaps = CubemapBinding::SampledImage;
-    uint32_t workgroupSize = 64;            // invocations per projection workgroup
-    uint32_t texelsPerInvocation = 256;     // work per invocation (capped by order for lavapipe)
+    uint32_t workgroupSize = 64;                    // invocations per projection workgroup
+    uint32_t texelsPerInvocation = 256;             // work per invocation (capped by order for lavapipe)
     VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional
 };
 
@@ -87,7 +87,7 @@ struct ProbeBakeTarget {
     uint32_t faceSize = 0;                 // N: the layers are N x N
     uint32_t probeCount = 1;
     VkBuffer output = VK_NULL_HANDLE;
-    VkDeviceSize outputOffset = 0;         // a multiple of minStorageBufferOffsetAlignment
+    VkDeviceSize outputOffset = 0; // a multiple of minStorageBufferOffsetAlignment
 };
 
 VkDeviceSize probeBakeOutputBytes(int order, uint32_t probeCount);
@@ -106,7 +106,8 @@ struct ProbeBakeSet {
 };
 
 // Throws Error(Input) when the target exceeds what the device can bake in one dispatch.
-ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker, const ProbeBakeTarget& target);
+ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker,
+                                const ProbeBakeTarget& target);
 // After the last command buffer that used it completed.
 void destroyProbeBakeSet(const Context& context, ProbeBakeSet& set);
 

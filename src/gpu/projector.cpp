@@ -32,8 +32,9 @@ void checkCubemap(const Cubemap& cubemap) {
         throw Error(ErrorKind::Input, "GPU bake: face size " + std::to_string(cubemap.faceSize) +
                                           " is outside 1.." + std::to_string(kMaxGpuFaceSize));
     if (cubemap.texels.size() != size_t(kFaceCount) * cubemap.faceSize * cubemap.faceSize)
-        throw Error(ErrorKind::Input, "GPU bake: the cube map holds " + std::to_string(cubemap.texels.size()) +
-                                          " texels, not 6 x " + std::to_string(cubemap.faceSize) + "^2");
+        throw Error(ErrorKind::Input, "GPU bake: the cube map holds " +
+                                          std::to_string(cubemap.texels.size()) + " texels, not 6 x " +
+                                          std::to_string(cubemap.faceSize) + "^2");
 }
 
 // Copies the texels into the staging memory in the image's format (faces follow each other, as
@@ -47,7 +48,8 @@ void packTexels(const Cubemap& cubemap, TexelFormat format, void* destination) {
     for (const glm::vec4& texel : cubemap.texels) {
         glm::vec3 rgb(texel);
         if (glm::any(glm::greaterThan(glm::abs(rgb), glm::vec3(kHalfMax))))
-            throw Error(ErrorKind::Input, "GPU bake: a texel of " + std::to_string(std::max({rgb.r, rgb.g, rgb.b})) +
+            throw Error(ErrorKind::Input, "GPU bake: a texel of " +
+                                              std::to_string(std::max({rgb.r, rgb.g, rgb.b})) +
                                               " does not fit RGBA16F (at most 65504); use RGBA32F");
         *out++ = glm::packHalf4x16(glm::vec4(rgb, 0.0f));
     }
@@ -106,7 +108,8 @@ GpuBake readProbe(const Buffer& output, VkDeviceSize offset, int order, size_t p
     GpuBake bake;
     try {
         bake.radiance = readCoefficients(output, offset + k * setBytes, order, Quantity::Radiance);
-        bake.irradiance = readCoefficients(output, offset + (probes + k) * setBytes, order, Quantity::Irradiance);
+        bake.irradiance =
+            readCoefficients(output, offset + (probes + k) * setBytes, order, Quantity::Irradiance);
     } catch (const Error& error) {
         bake.failure = error.what();
     }
@@ -124,7 +127,8 @@ CubemapBinding uploadBinding(const Context& context, TexelFormat format) {
     // Vulkan requires storage-image support with optimal tiling for both formats; checked anyway.
     VkFormatProperties properties{};
     vkGetPhysicalDeviceFormatProperties(context.physicalDevice, imageFormat(format), &properties);
-    if (!(properties.optimalTilingFeatures & VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT)) return CubemapBinding::SampledImage;
+    if (!(properties.optimalTilingFeatures & VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT))
+        return CubemapBinding::SampledImage;
     return format == TexelFormat::Rgba16F ? CubemapBinding::StorageRgba16F : CubemapBinding::StorageRgba32F;
 }
 
@@ -132,14 +136,16 @@ CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubema
                                   TexelFormat format) {
     CubemapUpload upload;
     upload.binding = uploadBinding(context, format);
-    const VkImageUsageFlags readUsage =
-        upload.binding == CubemapBinding::SampledImage ? VK_IMAGE_USAGE_SAMPLED_BIT : VK_IMAGE_USAGE_STORAGE_BIT;
+    const VkImageUsageFlags readUsage = upload.binding == CubemapBinding::SampledImage
+                                            ? VK_IMAGE_USAGE_SAMPLED_BIT
+                                            : VK_IMAGE_USAGE_STORAGE_BIT;
     upload.faceSize = uint32_t(cubemaps.front()->faceSize);
     upload.probeCount = uint32_t(cubemaps.size());
-    const VkDeviceSize cubemapBytes = kFaceCount * VkDeviceSize(upload.faceSize) * upload.faceSize * texelBytes(format);
+    const VkDeviceSize cubemapBytes =
+        kFaceCount * VkDeviceSize(upload.faceSize) * upload.faceSize * texelBytes(format);
     try {
-        upload.staging = createBuffer(context, cubemapBytes * cubemaps.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                      MemoryUse::Upload, "cube-map upload");
+        upload.staging = createBuffer(context, cubemapBytes * cubemaps.size(),
+                                      VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, "cube-map upload");
         for (size_t k = 0; k < cubemaps.size(); ++k) {
             checkCubemap(*cubemaps[k]);
             if (uint32_t(cubemaps[k]->faceSize) != upload.faceSize)
@@ -160,17 +166,18 @@ CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubema
 
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload) {
     changeLayout(commands, upload.image,
-                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT});
+                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                  VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_ACCESS_TRANSFER_WRITE_BIT});
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, upload.image.layers};
     region.imageExtent = {upload.faceSize, upload.faceSize, 1};
-    vkCmdCopyBufferToImage(commands, upload.staging.buffer, upload.image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                           1, &region);
+    vkCmdCopyBufferToImage(commands, upload.staging.buffer, upload.image.image,
+                           VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
     changeLayout(commands, upload.image,
                  {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, cubemapLayout(upload.binding),
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                  VK_ACCESS_SHADER_READ_BIT});
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
 }
 
 void destroyCubemapUpload(const Context& context, CubemapUpload& upload) {
@@ -190,7 +197,9 @@ Projector createProjector(const Context& context, const ProjectorOptions& option
     return projector;
 }
 
-void destroyProjector(const Context& context, Projector& projector) { destroyProbeBaker(context, projector.baker); }
+void destroyProjector(const Context& context, Projector& projector) {
+    destroyProbeBaker(context, projector.baker);
+}
 
 VkDeviceSize batchTexelBytes(const Context& context) {
     VkDeviceSize largestHeap = 0;
@@ -204,7 +213,8 @@ VkDeviceSize batchTexelBytes(const Context& context) {
 std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& projector,
                                   std::span<const Cubemap* const> cubemaps, std::span<const double> window) {
     const int order = projector.options.order;
-    for (const Cubemap* cubemap : cubemaps) checkCubemap(*cubemap);
+    for (const Cubemap* cubemap : cubemaps)
+        checkCubemap(*cubemap);
     if (cubemaps.empty()) return {};
 
     std::vector<BakeGroup> groups = groupByFaceSize(context, cubemaps);
@@ -222,25 +232,30 @@ std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& proje
                               "coefficients");
         for (BakeGroup& group : groups) {
             std::vector<const Cubemap*> members;
-            for (size_t index : group.members) members.push_back(cubemaps[index]);
+            for (size_t index : group.members)
+                members.push_back(cubemaps[index]);
             group.upload = createCubemapUpload(context, members, projector.options.texelFormat);
             if (group.upload.binding != projector.baker.options.cubemaps)
                 throw Error(ErrorKind::Device, "GPU bake: cube maps uploaded for another binding than the "
                                                "projector's pipelines read");
-            group.set = createProbeBakeSet(context, projector.baker,
-                                           {group.upload.image.view, group.faceSize, uint32_t(group.members.size()),
-                                            output.buffer, group.outputOffset});
+            group.set =
+                createProbeBakeSet(context, projector.baker,
+                                   {group.upload.image.view, group.faceSize, uint32_t(group.members.size()),
+                                    output.buffer, group.outputOffset});
         }
         timestamps = createTimestampPool(context);
 
         submitAndWait(context, [&](VkCommandBuffer commands) {
-            for (const BakeGroup& group : groups) recordCubemapUpload(commands, group.upload);
+            for (const BakeGroup& group : groups)
+                recordCubemapUpload(commands, group.upload);
             if (timestamps) {
                 vkCmdResetQueryPool(commands, timestamps, 0, 2);
                 vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);
             }
-            for (const BakeGroup& group : groups) recordProbeBake(commands, projector.baker, group.set, window);
-            if (timestamps) vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
+            for (const BakeGroup& group : groups)
+                recordProbeBake(commands, projector.baker, group.set, window);
+            if (timestamps)
+                vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
             computeWriteBarrier(commands); // the coefficients, to the host
         });
 
@@ -275,9 +290,11 @@ GpuBake convolveOnGpu(const Context& context, const Projector& projector, const 
                       std::span<const double> window) {
     const int order = projector.options.order;
     if (radiance.order != order || radiance.quantity != Quantity::Radiance)
-        throw Error(ErrorKind::Input, "GPU convolution: expected order-" + std::to_string(order) + " radiance");
+        throw Error(ErrorKind::Input,
+                    "GPU convolution: expected order-" + std::to_string(order) + " radiance");
     std::vector<glm::vec4> raw;
-    for (const glm::dvec3& c : radiance.rgb) raw.emplace_back(glm::vec3(c), 0.0f);
+    for (const glm::dvec3& c : radiance.rgb)
+        raw.emplace_back(glm::vec3(c), 0.0f);
     const VkDeviceSize setBytes = raw.size() * kCoefficientBytes;
     const VkDeviceSize outputBytes = probeBakeOutputBytes(order, 1);
 
@@ -290,7 +307,8 @@ GpuBake convolveOnGpu(const Context& context, const Projector& projector, const 
     };
     GpuBake bake;
     try {
-        input = createBuffer(context, setBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+        input = createBuffer(context, setBytes,
+                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                              MemoryUse::Device, "radiance to convolve");
         output = createBuffer(context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback,
                               "coefficients");

@@ -16,10 +16,10 @@
 namespace shprobe {
 
 struct ProjectorOptions {
-    int order = 3;                       // 1..kMaxOrder
-    uint32_t workgroupSize = 64;         // invocations per workgroup
-    uint32_t texelsPerInvocation = 256;  // sets the workgroup count: more texels, fewer reductions;
-                                         // capped by order for lavapipe's loop limit (probe_baker.cpp)
+    int order = 3;                      // 1..kMaxOrder
+    uint32_t workgroupSize = 64;        // invocations per workgroup
+    uint32_t texelsPerInvocation = 256; // sets the workgroup count: more texels, fewer reductions;
+                                        // capped by order for lavapipe's loop limit (probe_baker.cpp)
     // How the texels are stored on the GPU: RGBA32F as loaded, or RGBA16F (half the bytes to read;
     // values beyond the half range, +-65504, are refused).
     TexelFormat texelFormat = TexelFormat::Rgba32F;
@@ -77,10 +77,11 @@ GpuBake bakeCubemap(const Context& context, const Projector& projector, const Cu
 
 // Bakes several cube maps (any face sizes) with one submission; results in input order. The window,
 // if any, applies to all of them. A probe whose coefficients are not finite (fp32 sums overflowed)
-// comes back with `failure` set; the others are unaffected. (bakeCubemap throws instead.) The texels of all cube maps must fit batchTexelBytes(context):
-// split larger batches into chunks.
+// comes back with `failure` set; the others are unaffected. (bakeCubemap throws instead.) The texels of all
+// cube maps must fit batchTexelBytes(context): split larger batches into chunks.
 std::vector<GpuBake> bakeCubemaps(const Context& context, const Projector& projector,
-                                  std::span<const Cubemap* const> cubemaps, std::span<const double> window = {});
+                                  std::span<const Cubemap* const> cubemaps,
+                                  std::span<const double> window = {});
 
 // The most texel bytes (6 N^2 texels of 16 bytes per cube map, summed) one bakeCubemaps call accepts
 // on this device.

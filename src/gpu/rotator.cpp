@@ -15,17 +15,21 @@ namespace {
 constexpr uint32_t kWorkgroupSize = 64;
 
 // Floats taken by one rotation's band matrices: sum over l < order of (2l+1)^2.
-size_t matrixFloats(int order) { return size_t(order) * (4 * size_t(order) * order - 1) / 3; }
+size_t matrixFloats(int order) {
+    return size_t(order) * (4 * size_t(order) * order - 1) / 3;
+}
 
 void checkInputs(const Rotator& rotator, std::span<const ShRotation> rotations,
                  std::span<const ShCoefficients> probes) {
     if (rotations.size() != 1 && rotations.size() != probes.size())
-        throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(rotations.size()) + " rotations for " +
-                                          std::to_string(probes.size()) + " probes (give 1 or one per probe)");
+        throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(rotations.size()) +
+                                          " rotations for " + std::to_string(probes.size()) +
+                                          " probes (give 1 or one per probe)");
     for (const ShRotation& rotation : rotations)
         if (rotation.order != rotator.order)
-            throw Error(ErrorKind::Input, "GPU rotation: a rotation of order " + std::to_string(rotation.order) +
-                                              " for a rotator of order " + std::to_string(rotator.order));
+            throw Error(ErrorKind::Input, "GPU rotation: a rotation of order " +
+                                              std::to_string(rotation.order) + " for a rotator of order " +
+                                              std::to_string(rotator.order));
     for (const ShCoefficients& probe : probes)
         if (probe.order != rotator.order || probe.rgb.size() != size_t(coefficientCount(probe.order)))
             throw Error(ErrorKind::Input, "GPU rotation: a probe of order " + std::to_string(probe.order) +
@@ -35,14 +39,16 @@ void checkInputs(const Rotator& rotator, std::span<const ShRotation> rotations,
 std::vector<float> packMatrices(std::span<const ShRotation> rotations) {
     std::vector<float> packed;
     for (const ShRotation& rotation : rotations)
-        for (const std::vector<double>& band : rotation.bands) packed.insert(packed.end(), band.begin(), band.end());
+        for (const std::vector<double>& band : rotation.bands)
+            packed.insert(packed.end(), band.begin(), band.end());
     return packed;
 }
 
 std::vector<glm::vec4> packProbes(std::span<const ShCoefficients> probes) {
     std::vector<glm::vec4> packed;
     for (const ShCoefficients& probe : probes)
-        for (const glm::dvec3& c : probe.rgb) packed.emplace_back(glm::vec3(c), 0.0f);
+        for (const glm::dvec3& c : probe.rgb)
+            packed.emplace_back(glm::vec3(c), 0.0f);
     return packed;
 }
 
@@ -50,10 +56,12 @@ std::vector<glm::vec4> packProbes(std::span<const ShCoefficients> probes) {
 
 Rotator createRotator(const Context& context, int order) {
     if (order < 1 || order > kMaxOrder)
-        throw Error(ErrorKind::Input, "order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxOrder));
+        throw Error(ErrorKind::Input,
+                    "order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxOrder));
     Rotator rotator;
     rotator.order = order;
-    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                                     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                                                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
     rotator.program = createComputeProgram(context, {.name = "rotate.comp",
                                                      .spirv = spirv::rotate_comp,
@@ -64,7 +72,9 @@ Rotator createRotator(const Context& context, int order) {
     return rotator;
 }
 
-void destroyRotator(const Context& context, Rotator& rotator) { destroyComputeProgram(context, rotator.program); }
+void destroyRotator(const Context& context, Rotator& rotator) {
+    destroyComputeProgram(context, rotator.program);
+}
 
 std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& rotator,
                                         std::span<const ShRotation> rotations,
@@ -89,12 +99,13 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
     try {
         matrixBuffer = createBuffer(context, matrixBytes, usage, MemoryUse::Device, "rotation matrices");
         probeBuffer = createBuffer(context, probeBytes, usage, MemoryUse::Device, "probes to rotate");
-        rotatedBuffer = createBuffer(context, probeBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback,
-                                     "rotated probes");
+        rotatedBuffer = createBuffer(context, probeBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                     MemoryUse::Readback, "rotated probes");
         uploadBuffer(context, matrixBuffer, matrices.data(), matrixBytes);
         uploadBuffer(context, probeBuffer, input.data(), probeBytes);
         pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 3});
-        BindingTarget targets[] = {{matrixBuffer.buffer, 0, matrixBytes}, {probeBuffer.buffer, 0, probeBytes},
+        BindingTarget targets[] = {{matrixBuffer.buffer, 0, matrixBytes},
+                                   {probeBuffer.buffer, 0, probeBytes},
                                    {rotatedBuffer.buffer, 0, probeBytes}};
         VkDescriptorSet set = createDescriptorSet(context, pool, rotator.program, targets);
 
@@ -103,8 +114,8 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
         uint32_t groups = uint32_t((input.size() + kWorkgroupSize - 1) / kWorkgroupSize);
         if (groups > context.info.limits.maxComputeWorkGroupCount[0])
             throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(probes.size()) +
-                                              " probes are more than one dispatch can rotate on " + context.info.name +
-                                              "; rotate them in smaller batches");
+                                              " probes are more than one dispatch can rotate on " +
+                                              context.info.name + "; rotate them in smaller batches");
         submitAndWait(context, [&](VkCommandBuffer commands) {
             dispatch(commands, rotator.program, set, params, {groups});
             computeWriteBarrier(commands);
@@ -113,7 +124,8 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
         auto* values = static_cast<const glm::vec4*>(rotatedBuffer.mapped);
         for (const ShCoefficients& probe : probes) {
             ShCoefficients result = makeCoefficients(probe.order, probe.quantity);
-            for (glm::dvec3& c : result.rgb) c = glm::dvec3(glm::vec3(*values++));
+            for (glm::dvec3& c : result.rgb)
+                c = glm::dvec3(glm::vec3(*values++));
             rotated.push_back(std::move(result));
         }
     } catch (...) {

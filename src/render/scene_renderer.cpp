@@ -1,7 +1,7 @@
 #include "shprobe/render/scene_renderer.h"
 
-#include "shprobe/render/meshes.h"
 #include "shprobe/glsl/render_interface.h"
+#include "shprobe/render/meshes.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/vk/check.h"
 

@@ -1,8 +1,8 @@
 #include "shprobe/render/tonemap.h"
 
+#include "shprobe/glsl/render_interface.h"
 #include "shprobe/render/gpu_image.h"
 #include "shprobe/render/scene_pipelines.h"
-#include "shprobe/glsl/render_interface.h"
 #include "shprobe/shprobe_render_spirv.h"
 #include "shprobe/vk/check.h"
 

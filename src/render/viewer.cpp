@@ -278,7 +278,8 @@ void updateTitle(GLFWwindow* window, const Session& session, std::string& shown)
 
 void startSession(const Context& context, const ViewerOptions& options, GLFWwindow* window,
                   Session& session) {
-    session.input = options.probe ? *options.probe : loadRenderInput(context, options.input, options.inputOptions);
+    session.input =
+        options.probe ? *options.probe : loadRenderInput(context, options.input, options.inputOptions);
     session.foldOrder = std::min(session.input.probe.order, kMaxRenderOrder);
     ProbeShading probe = foldProbe(session.input.probe, std::max(options.view.order, session.foldOrder),
                                    session.input.name, session.input.sun);
@@ -336,7 +337,7 @@ void saveScreenshot(const Context& context, const ViewerOptions& options, const 
     if (options.screenshot.empty() || shown < options.frames) return;
     VkExtent2D extent = session.frames.swapchain.extent;
     writeSrgbImage(options.screenshot, int(extent.width), int(extent.height),
-                      readCapture(context, session.frames));
+                   readCapture(context, session.frames));
     std::printf("shprobe view: frame %d (%ux%u) saved to %s\n", shown, extent.width, extent.height,
                 options.screenshot.c_str());
 }

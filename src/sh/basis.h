@@ -8,8 +8,12 @@ namespace shprobe {
 
 constexpr int kMaxOrder = 8;
 
-constexpr int coefficientCount(int order) { return order * order; }
-constexpr int shIndex(int l, int m) { return l * (l + 1) + m; }
+constexpr int coefficientCount(int order) {
+    return order * order;
+}
+constexpr int shIndex(int l, int m) {
+    return l * (l + 1) + m;
+}
 // Band l of flat index i.
 int shBand(int index);
 

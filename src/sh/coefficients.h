@@ -1,7 +1,7 @@
 // A probe: RGB SH coefficients of radiance or irradiance, in flat-index order.
 #pragma once
-#include <glm/vec3.hpp>
 #include <cstddef>
+#include <glm/vec3.hpp>
 #include <vector>
 
 namespace shprobe {

@@ -2,9 +2,9 @@
 // Cube-map face order and orientation are Vulkan's; see shaders/include/texel_geometry.h for the
 // diagram and the face direction table shared with the shaders.
 #pragma once
+#include <cstddef>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
-#include <cstddef>
 #include <vector>
 
 namespace shprobe {
@@ -15,7 +15,9 @@ constexpr int kFaceCount = 6;
 // How texels are stored outside a Cubemap (which holds RGBA32F): 4 channels (RGBA, alpha ignored)
 // of IEEE single or half floats.
 enum class TexelFormat { Rgba32F, Rgba16F };
-constexpr size_t texelBytes(TexelFormat format) { return format == TexelFormat::Rgba16F ? 8 : 16; }
+constexpr size_t texelBytes(TexelFormat format) {
+    return format == TexelFormat::Rgba16F ? 8 : 16;
+}
 
 // Six N x N faces, face after face in Face order, rows top to bottom, RGBA32F (alpha unused).
 // This is also the layout the GPU projection reads.

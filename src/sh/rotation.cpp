@@ -146,7 +146,9 @@ std::string rowMajorText(const glm::dmat3& R) {
 
 } // namespace
 
-void validateRotation(const glm::dmat3& R) {
+namespace {
+
+void requireOrthonormal(const glm::dmat3& R) {
     requireFinite(R);
     const glm::dmat3 gram = glm::transpose(R) * R;
     double deviation = 0.0;
@@ -158,6 +160,20 @@ void validateRotation(const glm::dmat3& R) {
         throw Error(ErrorKind::Input, "matrix (" + rowMajorText(R) +
                                           ") is not orthonormal: |R^T R - I| = " + std::to_string(deviation));
     }
+}
+
+} // namespace
+
+void validateOrthogonal(const glm::dmat3& Q) {
+    requireOrthonormal(Q);
+    const double det = glm::determinant(Q);
+    if (std::abs(std::abs(det) - 1.0) > kRotationTolerance)
+        throw Error(ErrorKind::Input,
+                    "matrix (" + rowMajorText(Q) + ") is not orthogonal: determinant " + std::to_string(det));
+}
+
+void validateRotation(const glm::dmat3& R) {
+    requireOrthonormal(R);
     const double det = glm::determinant(R);
     if (std::abs(det - 1.0) > kRotationTolerance) {
         throw Error(ErrorKind::Input,
@@ -165,14 +181,29 @@ void validateRotation(const glm::dmat3& R) {
     }
 }
 
-glm::dmat3 rotationFromRowMajor(std::span<const double, 9> rowMajor) {
+namespace {
+
+glm::dmat3 fromRowMajor(std::span<const double, 9> rowMajor) {
     glm::dmat3 R(0.0);
     for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c)
             R[c][r] = rowMajor[size_t(3 * r + c)];
     }
+    return R;
+}
+
+} // namespace
+
+glm::dmat3 rotationFromRowMajor(std::span<const double, 9> rowMajor) {
+    glm::dmat3 R = fromRowMajor(rowMajor);
     validateRotation(R);
     return R;
+}
+
+glm::dmat3 orthogonalFromRowMajor(std::span<const double, 9> rowMajor) {
+    glm::dmat3 Q = fromRowMajor(rowMajor);
+    validateOrthogonal(Q);
+    return Q;
 }
 
 // The matrix of v -> q v q* (e.g. Shoemake, "Animating rotation with quaternion curves", 1985).
@@ -219,7 +250,7 @@ glm::dmat3 rotationFromEulerZYZ(double alphaDegrees, double betaDegrees, double 
 
 ShRotation makeShRotation(const glm::dmat3& R, int order) {
     requireOrder(order);
-    validateRotation(R);
+    validateOrthogonal(R);
     ShRotation rotation{order, {std::vector<double>{1.0}}};
     if (order == 1) return rotation;
     const BandMatrix one = bandOne(R);

@@ -35,16 +35,24 @@ struct ShRotation {
 
 // Throws Error(Input) unless R is orthonormal with det +1, both within kRotationTolerance.
 void validateRotation(const glm::dmat3& R);
+// The same for an orthogonal matrix, proper (det +1) or improper (det -1: a reflection, such as a
+// change to a left-handed frame).
+void validateOrthogonal(const glm::dmat3& Q);
 
 // R from 9 numbers, row-major (r00, r01, r02, r10, ...); validated.
 glm::dmat3 rotationFromRowMajor(std::span<const double, 9> rowMajor);
+// An orthogonal matrix (a rotation or a reflection) from 9 numbers, row-major; validated.
+glm::dmat3 orthogonalFromRowMajor(std::span<const double, 9> rowMajor);
 // R from a unit quaternion (w, x, y, z), v' = q v q*; |q| must be 1 within kRotationTolerance
 // (q is then normalized).
 glm::dmat3 rotationFromQuaternion(double w, double x, double y, double z);
 // R = Rz(gamma) Ry(beta) Rz(alpha), angles in degrees (CONVENTIONS.md; seed 002, eq. 6).
 glm::dmat3 rotationFromEulerZYZ(double alphaDegrees, double betaDegrees, double gammaDegrees);
 
-// The band matrices of R (validated) for order 1..kMaxOrder.
+// The band matrices of R (validated) for order 1..kMaxOrder. R may be improper (det -1): each
+// step of the recurrence is linear in R's entries, so D^l is homogeneous of degree l and
+// D^l(-R) = (-1)^l D^l(R), the parity y_lm(-w) = (-1)^l y_lm(w) asks for; g(w) = f(R^T w) then
+// holds for reflections too (test_engine_exports checks it against projections).
 ShRotation makeShRotation(const glm::dmat3& R, int order);
 
 // Rotated coefficients; the probe's order must equal the rotation's. Works for radiance and

@@ -70,7 +70,7 @@ GpuImage createImage(const Context& context, const GpuImageDesc& desc) {
 
         VkImageViewCreateInfo view{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
         view.image = image.image;
-        view.viewType = desc.cube ? VK_IMAGE_VIEW_TYPE_CUBE
+        view.viewType = desc.cube          ? VK_IMAGE_VIEW_TYPE_CUBE
                         : image.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY
                                            : VK_IMAGE_VIEW_TYPE_2D;
         view.format = desc.format;

@@ -51,7 +51,8 @@ VkPipeline createPipeline(const Context& context, VkShaderModule module, VkPipel
     // Specialization constant ids 0 and 1: SHPROBE_SPEC_LOCAL_SIZE, SHPROBE_SPEC_ORDER.
     std::array<uint32_t, 2> values{desc.localSize, desc.order};
     std::array<VkSpecializationMapEntry, 2> entries{{{0, 0, 4}, {1, 4, 4}}};
-    VkSpecializationInfo specialization{uint32_t(entries.size()), entries.data(), sizeof(values), values.data()};
+    VkSpecializationInfo specialization{uint32_t(entries.size()), entries.data(), sizeof(values),
+                                        values.data()};
 
     VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
@@ -70,9 +71,10 @@ VkPipeline createPipeline(const Context& context, VkShaderModule module, VkPipel
 ComputeProgram createComputeProgram(const Context& context, const ComputeProgramDesc& desc) {
     if (desc.localSize == 0 || desc.localSize > context.info.limits.maxComputeWorkGroupSize[0] ||
         desc.localSize > context.info.limits.maxComputeWorkGroupInvocations)
-        throw Error(ErrorKind::Input, std::string(desc.name) + ": workgroup size " + std::to_string(desc.localSize) +
-                                          " is not supported by " + context.info.name + " (at most " +
-                                          std::to_string(context.info.limits.maxComputeWorkGroupInvocations) + ")");
+        throw Error(ErrorKind::Input,
+                    std::string(desc.name) + ": workgroup size " + std::to_string(desc.localSize) +
+                        " is not supported by " + context.info.name + " (at most " +
+                        std::to_string(context.info.limits.maxComputeWorkGroupInvocations) + ")");
     ComputeProgram program;
     program.bindings.assign(desc.bindings.begin(), desc.bindings.end());
     program.pushConstantSize = desc.pushConstantSize;
@@ -110,12 +112,12 @@ VkDescriptorPool createDescriptorPool(const Context& context, const DescriptorPo
     return pool;
 }
 
-VkDescriptorSet createDescriptorSet(const Context& context, VkDescriptorPool pool, const ComputeProgram& program,
-                                    std::span<const BindingTarget> targets) {
+VkDescriptorSet createDescriptorSet(const Context& context, VkDescriptorPool pool,
+                                    const ComputeProgram& program, std::span<const BindingTarget> targets) {
     if (targets.size() != program.bindings.size())
         throw Error(ErrorKind::Device, "descriptor set with " + std::to_string(targets.size()) +
-                                           " targets for a program with " + std::to_string(program.bindings.size()) +
-                                           " bindings");
+                                           " targets for a program with " +
+                                           std::to_string(program.bindings.size()) + " bindings");
     VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     allocate.descriptorPool = pool;
     allocate.descriptorSetCount = 1;
@@ -154,7 +156,8 @@ void dispatchRaw(VkCommandBuffer commands, const ComputeProgram& program, VkDesc
     vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_COMPUTE, program.pipeline);
     vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_COMPUTE, program.layout, 0, 1, &set, 0, nullptr);
     if (constantsSize)
-        vkCmdPushConstants(commands, program.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, constantsSize, constants);
+        vkCmdPushConstants(commands, program.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, constantsSize,
+                           constants);
     vkCmdDispatch(commands, groups.x, groups.y, 1);
 }
 

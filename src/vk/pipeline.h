@@ -11,9 +11,10 @@
 namespace shprobe {
 
 struct ComputeProgramDesc {
-    const char* name = "";                       // for error messages
-    std::span<const uint32_t> spirv;             // the module's words
-    std::span<const VkDescriptorType> bindings;  // binding i of set 0: STORAGE_BUFFER, COMBINED_IMAGE_SAMPLER or STORAGE_IMAGE
+    const char* name = "";           // for error messages
+    std::span<const uint32_t> spirv; // the module's words
+    std::span<const VkDescriptorType>
+        bindings; // binding i of set 0: STORAGE_BUFFER, COMBINED_IMAGE_SAMPLER or STORAGE_IMAGE
     VkSampler immutableSampler = VK_NULL_HANDLE; // the sampler of every combined image sampler
     uint32_t pushConstantSize = 0;               // bytes
     uint32_t localSize = 64;                     // specialization constant 0
@@ -44,8 +45,8 @@ struct BindingTarget {
 
 // Allocates a descriptor set of the program from pool and points its bindings at the targets
 // (one per binding of the program, in binding order).
-VkDescriptorSet createDescriptorSet(const Context& context, VkDescriptorPool pool, const ComputeProgram& program,
-                                    std::span<const BindingTarget> targets);
+VkDescriptorSet createDescriptorSet(const Context& context, VkDescriptorPool pool,
+                                    const ComputeProgram& program, std::span<const BindingTarget> targets);
 
 struct DescriptorPoolSize {
     uint32_t sets = 0;

@@ -41,18 +41,23 @@ VkDeviceSize largestDeviceLocalHeap(const VkPhysicalDeviceMemoryProperties& memo
 // there is one, else any. Device-local types count only in the largest device-local heap while one
 // there qualifies: on discrete GPUs without resizable BAR the host-visible device-local heap is a
 // 256 MiB window, too small for large inputs. UINT32_MAX if none.
-uint32_t findMemoryType(const VkPhysicalDeviceMemoryProperties& memory, uint32_t typeBits, MemoryPreference want) {
+uint32_t findMemoryType(const VkPhysicalDeviceMemoryProperties& memory, uint32_t typeBits,
+                        MemoryPreference want) {
     const VkDeviceSize largestHeap = largestDeviceLocalHeap(memory);
     auto allowed = [&](uint32_t i) {
-        return (typeBits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & want.required) == want.required;
+        return (typeBits & (1u << i)) &&
+               (memory.memoryTypes[i].propertyFlags & want.required) == want.required;
     };
     auto inLargeHeap = [&](uint32_t i) {
         return !(want.required & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) ||
                memory.memoryHeaps[memory.memoryTypes[i].heapIndex].size == largestHeap;
     };
-    auto preferred = [&](uint32_t i) { return (memory.memoryTypes[i].propertyFlags & want.preferred) == want.preferred; };
-    for (auto acceptable : {std::function<bool(uint32_t)>([&](uint32_t i) { return inLargeHeap(i) && preferred(i); }),
-                            std::function<bool(uint32_t)>(inLargeHeap), std::function<bool(uint32_t)>(preferred)})
+    auto preferred = [&](uint32_t i) {
+        return (memory.memoryTypes[i].propertyFlags & want.preferred) == want.preferred;
+    };
+    for (auto acceptable :
+         {std::function<bool(uint32_t)>([&](uint32_t i) { return inLargeHeap(i) && preferred(i); }),
+          std::function<bool(uint32_t)>(inLargeHeap), std::function<bool(uint32_t)>(preferred)})
         for (uint32_t i = 0; i < memory.memoryTypeCount; ++i)
             if (allowed(i) && acceptable(i)) return i;
     for (uint32_t i = 0; i < memory.memoryTypeCount; ++i)
@@ -60,7 +65,9 @@ uint32_t findMemoryType(const VkPhysicalDeviceMemoryProperties& memory, uint32_t
     return UINT32_MAX;
 }
 
-std::string sizeText(VkDeviceSize size) { return std::to_string((size + (1 << 20) - 1) >> 20) + " MiB"; }
+std::string sizeText(VkDeviceSize size) {
+    return std::to_string((size + (1 << 20) - 1) >> 20) + " MiB";
+}
 
 VkDeviceMemory allocateMemory(const Context& context, VkMemoryRequirements requirements, uint32_t type,
                               const char* what) {
@@ -71,8 +78,8 @@ VkDeviceMemory allocateMemory(const Context& context, VkMemoryRequirements requi
     VkDeviceMemory memory = VK_NULL_HANDLE;
     VkResult result = vkAllocateMemory(context.device, &info, nullptr, &memory);
     if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
-        throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(requirements.size) + " for " + what +
-                                           ": out of memory on " + context.info.name +
+        throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(requirements.size) + " for " +
+                                           what + ": out of memory on " + context.info.name +
                                            "; try a smaller --face-size");
     VK_CHECK(result);
     return memory;
@@ -81,15 +88,18 @@ VkDeviceMemory allocateMemory(const Context& context, VkMemoryRequirements requi
 } // namespace
 
 void checkAllocationSize(const Context& context, VkDeviceSize size, uint32_t memoryType, const char* what) {
-    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    VkPhysicalDeviceMaintenance3Properties maintenance3{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
     VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &maintenance3};
     vkGetPhysicalDeviceProperties2(context.physicalDevice, &properties);
-    const VkDeviceSize heap = context.memory.memoryHeaps[context.memory.memoryTypes[memoryType].heapIndex].size;
+    const VkDeviceSize heap =
+        context.memory.memoryHeaps[context.memory.memoryTypes[memoryType].heapIndex].size;
     const VkDeviceSize limit = std::min(heap, maintenance3.maxMemoryAllocationSize);
     if (size > limit)
         throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(size) + " for " + what +
-                                           ": more than one allocation may hold on " + context.info.name + " (" +
-                                           sizeText(limit) + "); try a smaller --face-size or fewer probes at a time");
+                                           ": more than one allocation may hold on " + context.info.name +
+                                           " (" + sizeText(limit) +
+                                           "); try a smaller --face-size or fewer probes at a time");
 }
 
 Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
@@ -128,7 +138,8 @@ void destroyBuffer(const Context& context, Buffer& buffer) {
     buffer = Buffer{};
 }
 
-void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size, const std::function<void(void*)>& fill) {
+void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size,
+                 const std::function<void(void*)>& fill) {
     if (buffer.mapped) {
         fill(buffer.mapped);
         if (!buffer.coherent) {
@@ -139,7 +150,8 @@ void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size, cons
         }
         return;
     }
-    Buffer staging = createBuffer(context, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, "staging");
+    Buffer staging =
+        createBuffer(context, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, "staging");
     try {
         fill(staging.mapped);
         submitAndWait(context, [&](VkCommandBuffer commands) {
@@ -155,7 +167,8 @@ void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size, cons
 }
 
 void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size) {
-    writeBuffer(context, buffer, size, [&](void* destination) { std::memcpy(destination, data, size_t(size)); });
+    writeBuffer(context, buffer, size,
+                [&](void* destination) { std::memcpy(destination, data, size_t(size)); });
 }
 
 void invalidateBuffer(const Context& context, const Buffer& buffer) {
@@ -166,7 +179,9 @@ void invalidateBuffer(const Context& context, const Buffer& buffer) {
     VK_CHECK(vkInvalidateMappedMemoryRanges(context.device, 1, &range));
 }
 
-uint64_t submissionCount() { return gSubmissions; }
+uint64_t submissionCount() {
+    return gSubmissions;
+}
 
 void submitAndWait(const Context& context, const std::function<void(VkCommandBuffer)>& record) {
     VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};

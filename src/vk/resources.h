@@ -30,7 +30,8 @@ void destroyBuffer(const Context& context, Buffer& buffer);
 
 // Fills the first `size` bytes of the buffer with `fill(destination)`: in place when the buffer is
 // mapped, through a staging buffer otherwise (the buffer then needs VK_BUFFER_USAGE_TRANSFER_DST_BIT).
-void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size, const std::function<void(void*)>& fill);
+void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size,
+                 const std::function<void(void*)>& fill);
 // writeBuffer with a plain copy of data.
 void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size);
 // Makes device writes to a mapped buffer visible to the host (no-op for coherent memory).

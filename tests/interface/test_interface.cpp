@@ -33,13 +33,15 @@ std::vector<std::string> split(const std::string& text, char separator) {
 std::vector<std::string> words(const std::string& line) {
     std::istringstream stream(line);
     std::vector<std::string> result;
-    for (std::string word; stream >> word;) result.push_back(word);
+    for (std::string word; stream >> word;)
+        result.push_back(word);
     return result;
 }
 
 std::string join(const std::vector<std::string>& parts, size_t from = 0) {
     std::string result;
-    for (size_t i = from; i < parts.size(); ++i) result += (i > from ? " " : "") + parts[i];
+    for (size_t i = from; i < parts.size(); ++i)
+        result += (i > from ? " " : "") + parts[i];
     return result;
 }
 
@@ -57,7 +59,8 @@ std::string run(const std::string& command) {
     if (!pipe) throw std::runtime_error("cannot run " + command);
     std::string output;
     char buffer[4096];
-    for (size_t n; (n = fread(buffer, 1, sizeof(buffer), pipe)) > 0;) output.append(buffer, n);
+    for (size_t n; (n = fread(buffer, 1, sizeof(buffer), pipe)) > 0;)
+        output.append(buffer, n);
     if (pclose(pipe) != 0) throw std::runtime_error("failed: " + command);
     return output;
 }
@@ -89,7 +92,8 @@ std::map<std::string, Statements> parseDocument(const std::string& text) {
             modules[module];
             continue;
         }
-        if (module.empty()) throw std::runtime_error("INTERFACE.md: an interface block must start with module");
+        if (module.empty())
+            throw std::runtime_error("INTERFACE.md: an interface block must start with module");
         if (w[0] == "storage_buffer" || w[0] == "uniform_buffer") owner = w.at(1) + "." + w.at(2);
         if (w[0] == "push_constant") owner = "push";
         if (w[0] == "member") w.insert(w.begin() + 1, owner);
@@ -102,16 +106,18 @@ std::map<std::string, Statements> parseDocument(const std::string& text) {
 
 // Size in bytes of a member, for the push-constant block's size (the reflection gives none).
 uint32_t memberSize(const json& member) {
-    static const std::map<std::string, uint32_t> sizes{{"uint", 4},  {"int", 4},   {"float", 4}, {"vec2", 8},
-                                                       {"vec3", 12}, {"vec4", 16}, {"uvec4", 16}, {"mat4", 64}};
+    static const std::map<std::string, uint32_t> sizes{{"uint", 4},   {"int", 4},   {"float", 4},
+                                                       {"vec2", 8},   {"vec3", 12}, {"vec4", 16},
+                                                       {"uvec4", 16}, {"mat4", 64}};
     uint32_t size = sizes.at(member.at("type").get<std::string>());
-    if (member.contains("array")) size = member.at("array_stride").get<uint32_t>() * member["array"][0].get<uint32_t>();
+    if (member.contains("array"))
+        size = member.at("array_stride").get<uint32_t>() * member["array"][0].get<uint32_t>();
     return size;
 }
 
 // Flattens a block's members into statements; returns the end of the last member.
-uint32_t flatten(const json& types, const std::string& type, const std::string& owner, const std::string& prefix,
-                 uint32_t base, Statements& out) {
+uint32_t flatten(const json& types, const std::string& type, const std::string& owner,
+                 const std::string& prefix, uint32_t base, Statements& out) {
     uint32_t end = 0;
     for (const json& member : types.at(type).at("members")) {
         std::string path = prefix + member.at("name").get<std::string>();
@@ -127,7 +133,8 @@ uint32_t flatten(const json& types, const std::string& type, const std::string& 
             line += count == 0 ? "[]" : "[" + std::to_string(count) + "]";
         }
         line += " " + std::to_string(offset);
-        if (member.contains("array_stride")) line += " stride " + std::to_string(member["array_stride"].get<int>());
+        if (member.contains("array_stride"))
+            line += " stride " + std::to_string(member["array_stride"].get<int>());
         if (member.contains("matrix_stride"))
             line += " matrix_stride " + std::to_string(member["matrix_stride"].get<int>());
         if (member.value("row_major", false)) line += " row_major";
@@ -138,8 +145,8 @@ uint32_t flatten(const json& types, const std::string& type, const std::string& 
 }
 
 std::string location(const json& variable) {
-    return std::to_string(variable.at("location").get<int>()) + " " + variable.at("type").get<std::string>() + " " +
-           variable.at("name").get<std::string>();
+    return std::to_string(variable.at("location").get<int>()) + " " + variable.at("type").get<std::string>() +
+           " " + variable.at("name").get<std::string>();
 }
 
 Statements reflectResources(const json& r) {
@@ -157,34 +164,47 @@ Statements reflectResources(const json& r) {
     }
     for (const json& c : r.value("specialization_constants", json::array())) {
         std::string name = c.at("name");
-        out.insert("spec " + std::to_string(c.at("id").get<int>()) + " " + c.at("type").get<std::string>() + " " +
-                   std::to_string(c.at("default_value").get<long long>()) + " " + (name.empty() ? "-" : name));
+        out.insert("spec " + std::to_string(c.at("id").get<int>()) + " " + c.at("type").get<std::string>() +
+                   " " + std::to_string(c.at("default_value").get<long long>()) + " " +
+                   (name.empty() ? "-" : name));
     }
-    for (const json& v : r.value("inputs", json::array())) out.insert("input " + location(v));
-    for (const json& v : r.value("outputs", json::array())) out.insert("output " + location(v));
+    for (const json& v : r.value("inputs", json::array()))
+        out.insert("input " + location(v));
+    for (const json& v : r.value("outputs", json::array()))
+        out.insert("output " + location(v));
     for (const json& b : r.value("ssbos", json::array())) {
-        std::string owner = std::to_string(b.at("set").get<int>()) + "." + std::to_string(b.at("binding").get<int>());
-        std::string access = b.value("readonly", false) ? "readonly" : b.value("writeonly", false) ? "writeonly" : "readwrite";
-        out.insert("storage_buffer " + std::to_string(b["set"].get<int>()) + " " + std::to_string(b["binding"].get<int>()) +
-                   " " + access + " " + b.at("name").get<std::string>());
+        std::string owner =
+            std::to_string(b.at("set").get<int>()) + "." + std::to_string(b.at("binding").get<int>());
+        std::string access = b.value("readonly", false)    ? "readonly"
+                             : b.value("writeonly", false) ? "writeonly"
+                                                           : "readwrite";
+        out.insert("storage_buffer " + std::to_string(b["set"].get<int>()) + " " +
+                   std::to_string(b["binding"].get<int>()) + " " + access + " " +
+                   b.at("name").get<std::string>());
         flatten(types, b.at("type"), owner, "", 0, out);
     }
     for (const json& b : r.value("ubos", json::array())) {
-        std::string owner = std::to_string(b.at("set").get<int>()) + "." + std::to_string(b.at("binding").get<int>());
-        out.insert("uniform_buffer " + std::to_string(b["set"].get<int>()) + " " + std::to_string(b["binding"].get<int>()) +
-                   " " + b.at("name").get<std::string>() + " " + std::to_string(b.at("block_size").get<int>()));
+        std::string owner =
+            std::to_string(b.at("set").get<int>()) + "." + std::to_string(b.at("binding").get<int>());
+        out.insert("uniform_buffer " + std::to_string(b["set"].get<int>()) + " " +
+                   std::to_string(b["binding"].get<int>()) + " " + b.at("name").get<std::string>() + " " +
+                   std::to_string(b.at("block_size").get<int>()));
         flatten(types, b.at("type"), owner, "", 0, out);
     }
     for (const json& t : r.value("textures", json::array()))
-        out.insert("sampler " + std::to_string(t.at("set").get<int>()) + " " + std::to_string(t.at("binding").get<int>()) +
-                   " " + t.at("type").get<std::string>() + " " + t.at("name").get<std::string>());
-    for (const json& t : r.value("images", json::array()))
-        out.insert("storage_image " + std::to_string(t.at("set").get<int>()) + " " + std::to_string(t.at("binding").get<int>()) +
-                   " " + (t.value("readonly", false) ? "readonly" : t.value("writeonly", false) ? "writeonly" : "readwrite") +
-                   " " + t.at("type").get<std::string>() + " " + t.value("format", std::string("unknown")) + " " +
+        out.insert("sampler " + std::to_string(t.at("set").get<int>()) + " " +
+                   std::to_string(t.at("binding").get<int>()) + " " + t.at("type").get<std::string>() + " " +
                    t.at("name").get<std::string>());
-    for (const char* kind : {"separate_images", "separate_samplers", "acceleration_structures",
-                             "subpass_inputs"})
+    for (const json& t : r.value("images", json::array()))
+        out.insert("storage_image " + std::to_string(t.at("set").get<int>()) + " " +
+                   std::to_string(t.at("binding").get<int>()) + " " +
+                   (t.value("readonly", false)    ? "readonly"
+                    : t.value("writeonly", false) ? "writeonly"
+                                                  : "readwrite") +
+                   " " + t.at("type").get<std::string>() + " " + t.value("format", std::string("unknown")) +
+                   " " + t.at("name").get<std::string>());
+    for (const char* kind :
+         {"separate_images", "separate_samplers", "acceleration_structures", "subpass_inputs"})
         for (const json& other : r.value(kind, json::array()))
             out.insert(std::string("unsupported ") + kind + " " + other.value("name", std::string()));
     for (const json& p : r.value("push_constants", json::array())) {
@@ -216,7 +236,8 @@ Statements reflectHeader(const std::string& disassembly) {
 }
 
 Statements reflectModule(const std::string& spv) {
-    Statements out = reflectResources(json::parse(run(std::string(SPIRV_CROSS) + " '" + spv + "' --reflect")));
+    Statements out =
+        reflectResources(json::parse(run(std::string(SPIRV_CROSS) + " '" + spv + "' --reflect")));
     Statements header = reflectHeader(run(std::string(SPIRV_DIS) + " '" + spv + "'"));
     out.insert(header.begin(), header.end());
     return out;
@@ -226,7 +247,8 @@ std::string listDifference(const Statements& a, const Statements& b) {
     Statements only;
     std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::inserter(only, only.begin()));
     std::string text;
-    for (const std::string& s : only) text += "\n    " + s;
+    for (const std::string& s : only)
+        text += "\n    " + s;
     return text;
 }
 
@@ -241,7 +263,8 @@ TEST(Interface, DocumentsExactlyTheLibraryModules) {
     ASSERT_FALSE(kLibraryModules.empty());
     std::set<std::string> built(kLibraryModules.begin(), kLibraryModules.end());
     std::set<std::string> described;
-    for (const auto& [module, statements] : documented()) described.insert(module);
+    for (const auto& [module, statements] : documented())
+        described.insert(module);
     EXPECT_EQ(built, described) << "the modules of shprobe_spirv and shprobe_render_spirv must each have one "
                                    "interface block in "
                                 << SHPROBE_INTERFACE_DOC;
@@ -254,9 +277,10 @@ TEST(Interface, EveryModuleMatchesItsReflection) {
         if (found == documented().end()) continue; // reported by DocumentsExactlyTheLibraryModules
         Statements reflected = reflectModule(std::string(SHPROBE_SPIRV_DIR) + "/" + module + ".spv");
         const Statements& written = found->second;
-        EXPECT_TRUE(written == reflected) << module << ".spv against INTERFACE.md\n  in the module, not in the document:"
-                                      << listDifference(reflected, written)
-                                      << "\n  in the document, not in the module:" << listDifference(written, reflected);
+        EXPECT_TRUE(written == reflected)
+            << module << ".spv against INTERFACE.md\n  in the module, not in the document:"
+            << listDifference(reflected, written)
+            << "\n  in the document, not in the module:" << listDifference(written, reflected);
     }
 }
 

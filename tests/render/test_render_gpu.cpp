@@ -5,11 +5,11 @@
 // (E_probe(n) + E_sun(n) per pixel); the display bytes and EXR output.
 #include "render_test.h"
 
+#include "shprobe/glsl/render_interface.h"
 #include "shprobe/image/environment.h"
 #include "shprobe/render/image_output.h"
 #include "shprobe/render/probe_shading.h"
 #include "shprobe/render/scene.h"
-#include "shprobe/glsl/render_interface.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/cubemap.h"
 #include "shprobe/sh/error.h"

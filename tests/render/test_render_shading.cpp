@@ -3,12 +3,12 @@
 // double), the non-linear L1 model's properties (seed 004), the seed-000 facts for a delta light
 // on the references, the sun's exact irradiance (against quadrature, and the fp32 code the shaders
 // run, sun_light.h, against it), and the errors for probes the renderer cannot use.
+#include "shprobe/glsl/sun_light.h"
 #include "shprobe/render/probe_shading.h"
 #include "shprobe/render/scene.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/irradiance.h"
-#include "shprobe/glsl/sun_light.h"
 
 #include <gtest/gtest.h>
 

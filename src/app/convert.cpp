@@ -1,0 +1,78 @@
+// `shprobe convert`: a probe file in, any format of io/engine_export.h out, so that baking and
+// exporting are separate steps. The output name and format follow bake's rule (settleFormatAndOutput).
+#include "app/bake_steps.h"
+#include "app/commands.h"
+#include "shprobe/io/engine_export.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/io/probe_export.h"
+#include "shprobe/io/probe_file.h"
+#include "shprobe/sh/error.h"
+
+#include <cstdio>
+#include <filesystem>
+
+namespace shprobe {
+
+namespace {
+
+bool isBinaryProbeName(const std::string& path) {
+    return std::filesystem::path(path).extension() == ".bin";
+}
+
+// A JSON coefficient file (with its sun, if any), or the first probe of a binary file.
+Probe readAnyProbe(const std::string& path) {
+    if (!isBinaryProbeName(path)) return readProbe(path);
+    std::vector<ShCoefficients> probes = readBinaryProbes(path);
+    if (probes.empty()) throw Error(ErrorKind::Input, path + ": the binary file holds no probe");
+    return Probe{probes.front(), std::nullopt};
+}
+
+void checkProbeFits(const Probe& probe, const ExportFormat& format, const std::string& input) {
+    if (probe.sun && format.sun == SunHandling::Refused)
+        throw Error(ErrorKind::Input,
+                    input + " has a sun beside its coefficients, which --format " + format.name +
+                        " would drop; add it back first (shprobe light) or use --format json");
+    if (probe.coefficients.order > format.maxOrder && format.maxOrder < 3)
+        throw Error(ErrorKind::Input, "--format " + std::string(format.name) + " holds orders 1 to " +
+                                          std::to_string(format.maxOrder));
+}
+
+} // namespace
+
+void addConvertCommand(CLI::App& app, ConvertOptions& options) {
+    CLI::App* command = app.add_subcommand(
+        "convert",
+        "Write a probe file in another format: the engine exports of docs/exports.md and bake's formats");
+    command
+        ->add_option("probe", options.input, "Probe file: JSON (readProbe) or .bin; - reads standard input")
+        ->required();
+    command->add_option(
+        "-o,--output", options.output,
+        "Output file (default: probe and the format's extension); - writes to standard output");
+    addFormatOptions(*command, options.format, options.mapSize, options.mirror);
+}
+
+void runConvert(const ConvertOptions& given) {
+    ConvertOptions options = given;
+    settleFormatAndOutput(options.format, options.output);
+    const ExportFormat& format = *findExportFormat(options.format);
+    checkOutputPath(options.output, format.content);
+    if (options.input != "-") checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
+    const Probe probe = readAnyProbe(options.input);
+    checkProbeFits(probe, format, options.input);
+
+    ExportOptions exportOptions{.mapSize = options.mapSize, .mirror = options.mirror};
+    exportOptions.metadata.source = options.input == "-" ? "standard input" : options.input;
+    exportOptions.metadata.sun = probe.sun;
+    format.write(options.output, probe.coefficients, exportOptions);
+
+    FILE* report = reportStream(options.output);
+    std::fprintf(report, "shprobe convert: %s -> %s (%s, order %d %s)\n", options.input.c_str(),
+                 options.output.c_str(), format.name, probe.coefficients.order,
+                 quantityName(probe.coefficients.quantity));
+    if (probe.coefficients.order > format.maxOrder)
+        std::fprintf(report, "  %s holds bands 0..%d; the probe's higher bands are not in it\n", format.name,
+                     format.maxOrder - 1);
+}
+
+} // namespace shprobe

@@ -1,0 +1,489 @@
+// The table of output formats and the engine formats' coefficients and files. Each engine's frame,
+// basis sign and scaling is taken from the engine function named beside it (docs/exports.md has
+// the derivations); the formulas are transcribed, no engine code is copied.
+#include "shprobe/io/engine_export.h"
+
+#include "shprobe/io/probe_export.h"
+#include "shprobe/sh/basis.h"
+#include "shprobe/sh/cubemap.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/folding.h"
+#include "shprobe/sh/irradiance.h"
+#include "shprobe/sh/rotation.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <numbers>
+#include <optional>
+#include <vector>
+
+namespace shprobe {
+
+namespace {
+
+constexpr int kEngineOrder = 3; // every engine format holds bands 0..2
+
+// ---- Frames ----------------------------------------------------------------------------------
+
+glm::dmat3 fromRows(std::array<double, 9> rows) {
+    glm::dmat3 m(0.0);
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            m[c][r] = rows[size_t(3 * r + c)];
+    return m;
+}
+
+// ---- Coefficients ----------------------------------------------------------------------------
+
+// What an engine's nine values are, before its frame and basis sign.
+enum class EngineQuantity {
+    Radiance,               // L_lm
+    Irradiance,             // E_lm = A_l L_lm
+    IrradianceOverPi,       // E_lm / pi
+    FoldedIrradianceOverPi, // k_i A_l L_lm / pi: sum c_i p_i(n) = E(n) / pi, y_20 not split
+};
+
+struct EngineConvention {
+    EngineQuantity quantity;
+    bool condonShortley; // false: the engine's y_lm is ours times (-1)^m
+};
+
+EngineConvention conventionOf(Engine engine) {
+    switch (engine) {
+    case Engine::ThreeJs: // SphericalHarmonics3.getBasisAt: 0.488603 y, ... (no phase)
+        return {EngineQuantity::Radiance, false};
+    case Engine::Babylon: // sphericalPolynomial.ts SH3ylmBasisConstants: -sqrt(3/4pi) y, ...
+        return {EngineQuantity::IrradianceOverPi, true};
+    case Engine::Gltf: // glTF loader EXT_lights_image_based.ts: FromArray, then / pi
+        return {EngineQuantity::Irradiance, true};
+    case Engine::Filament: // CubemapSH::preprocessSHForShader
+    case Engine::Unity:    // UnityCG.cginc SHEvalLinearL0L1 / SHEvalLinearL2 on the stored values
+        return {EngineQuantity::FoldedIrradianceOverPi, true};
+    case Engine::Godot: // scene_forward_clustered.glsl lightmap capture: 2 c2 sh[1] y, ... (no phase)
+        return {EngineQuantity::Radiance, false};
+    }
+    return {EngineQuantity::Radiance, true};
+}
+
+// Bands 0..2 of the probe's radiance, missing bands 0.
+ShCoefficients radianceBands(const ShCoefficients& probe) {
+    const int kept = std::min(probe.order, kEngineOrder);
+    std::optional<ShCoefficients> radiance = radianceOf(probe, kept); // A_l != 0 for l <= 2
+    ShCoefficients bands = makeCoefficients(kEngineOrder, Quantity::Radiance);
+    std::copy(radiance->rgb.begin(), radiance->rgb.end(), bands.rgb.begin());
+    return bands;
+}
+
+double quantityScale(EngineQuantity quantity, int index) {
+    const double a = irradianceBandFactor(shBand(index));
+    switch (quantity) {
+    case EngineQuantity::Radiance:
+        return 1.0;
+    case EngineQuantity::Irradiance:
+        return a;
+    case EngineQuantity::IrradianceOverPi:
+        return a / std::numbers::pi;
+    case EngineQuantity::FoldedIrradianceOverPi:
+        return basisPolynomialScale(index) * a / std::numbers::pi;
+    }
+    return 1.0;
+}
+
+// (-1)^m: our basis has the Condon-Shortley phase, an engine without it flips odd m.
+double phaseSign(int index) {
+    const int l = shBand(index);
+    return (index - l * (l + 1)) % 2 == 0 ? 1.0 : -1.0;
+}
+
+// ---- Text ------------------------------------------------------------------------------------
+
+// The shortest decimal that reads back to the same double.
+std::string number(double value) {
+    char text[32];
+    std::to_chars_result result = std::to_chars(text, text + sizeof text, value);
+    return std::string(text, result.ptr);
+}
+
+std::string rgbArray(const glm::dvec3& c) {
+    return "[" + number(c.r) + ", " + number(c.g) + ", " + number(c.b) + "]";
+}
+
+// [[r, g, b], ...] one row a line, indented.
+std::string rowsArray(const EngineCoefficients& c, const std::string& indent) {
+    std::string text = "[\n";
+    for (size_t i = 0; i < c.size(); ++i)
+        text += indent + "  " + rgbArray(c[i]) + (i + 1 < c.size() ? ",\n" : "\n");
+    return text + indent + "]";
+}
+
+// A name-based UUID (version 8 layout) from the text's FNV-1a hashes: the same probe gives the
+// same file.
+std::string uuidOf(const std::string& text) {
+    uint64_t h1 = 1469598103934665603ull, h2 = 1099511628211ull * 31;
+    for (unsigned char c : text) {
+        h1 = (h1 ^ c) * 1099511628211ull;
+        h2 = (h2 ^ c) * 1099511628211ull + 7;
+    }
+    char out[40];
+    std::snprintf(out, sizeof out, "%08x-%04x-8%03x-%04x-%012llx", unsigned(h1 >> 32),
+                  unsigned(h1 >> 16) & 0xffff, unsigned(h1) & 0xfff, unsigned(0x8000 | (h2 >> 48 & 0x3fff)),
+                  static_cast<unsigned long long>(h2 & 0xffffffffffffull));
+    return out;
+}
+
+// three.js: the object LightProbe.toJSON writes (Object3D.toJSON + Light.toJSON + data.object.sh
+// = sh.toArray(): coefficient after coefficient, r g b), as ObjectLoader.parseObject reads it
+// (case 'LightProbe': new SphericalHarmonics3().fromArray(data.sh), data.intensity).
+std::string threeJsText(const EngineCoefficients& c) {
+    std::string sh;
+    for (size_t i = 0; i < c.size(); ++i)
+        sh += (i ? ", " : "") + number(c[i].r) + ", " + number(c[i].g) + ", " + number(c[i].b);
+    return "{\n"
+           "  \"metadata\": {\"version\": 4.6, \"type\": \"Object\", \"generator\": \"shprobe\"},\n"
+           "  \"object\": {\n"
+           "    \"uuid\": \"" +
+           uuidOf(sh) +
+           "\",\n"
+           "    \"type\": \"LightProbe\",\n"
+           "    \"name\": \"shprobe\",\n"
+           "    \"layers\": 1,\n"
+           "    \"matrix\": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1],\n"
+           "    \"up\": [0, 1, 0],\n"
+           "    \"color\": 16777215,\n"
+           "    \"intensity\": 1,\n"
+           "    \"sh\": [" +
+           sh +
+           "]\n"
+           "  }\n"
+           "}\n";
+}
+
+// Filament: the lines `cmgen --sh-shader` writes to sh.txt, "(r, g, b); // Llm, ...".
+std::string filamentText(const EngineCoefficients& c) {
+    std::string text;
+    for (int i = 0; i < int(c.size()); ++i) {
+        const int l = shBand(i);
+        text += "(" + number(c[size_t(i)].r) + ", " + number(c[size_t(i)].g) + ", " + number(c[size_t(i)].b) +
+                "); // L" + std::to_string(l) + std::to_string(i - l * (l + 1)) +
+                ", irradiance, pre-scaled base\n";
+    }
+    return text;
+}
+
+// Unity: SphericalHarmonicsL2's 27 floats channel-major (sh[channel, coefficient] at
+// 9 channel + coefficient), under "coefficients" so that JsonUtility reads it into a float[].
+std::string unityText(const EngineCoefficients& c) {
+    std::string values;
+    for (int channel = 0; channel < 3; ++channel)
+        for (size_t i = 0; i < c.size(); ++i)
+            values += std::string(channel || i ? ", " : "") + number(c[i][channel]);
+    return "{\n  \"type\": \"UnityEngine.Rendering.SphericalHarmonicsL2\",\n"
+           "  \"layout\": \"channel-major: sh[channel, i] = coefficients[9 * channel + i]\",\n"
+           "  \"coefficients\": [" +
+           values + "]\n}\n";
+}
+
+// ---- glTF --------------------------------------------------------------------------------------
+
+constexpr int kSpecularFaceSize = 16; // EXT_lights_image_based: square, power of two
+
+uint32_t crc32(std::string_view bytes) {
+    uint32_t crc = 0xffffffffu;
+    for (unsigned char b : bytes) {
+        crc ^= b;
+        for (int k = 0; k < 8; ++k)
+            crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+void appendBigEndian(std::string& out, uint32_t value) {
+    for (int shift = 24; shift >= 0; shift -= 8)
+        out += char((value >> shift) & 0xff);
+}
+
+void appendChunk(std::string& png, const char* type, const std::string& data) {
+    appendBigEndian(png, uint32_t(data.size()));
+    const std::string typed = std::string(type, 4) + data;
+    png += typed;
+    appendBigEndian(png, crc32(typed));
+}
+
+// zlib stream of stored (uncompressed) deflate blocks (RFC 1950, 1951).
+std::string zlibStored(const std::string& raw) {
+    std::string out = "\x78\x01";
+    size_t offset = 0;
+    do {
+        const size_t n = std::min<size_t>(raw.size() - offset, 65535);
+        const bool last = offset + n == raw.size();
+        out += char(last ? 1 : 0);
+        out += char(n & 0xff), out += char(n >> 8), out += char(~n & 0xff), out += char((~n >> 8) & 0xff);
+        out.append(raw, offset, n);
+        offset += n;
+    } while (offset < raw.size());
+    uint32_t a = 1, b = 0;
+    for (unsigned char c : raw)
+        a = (a + c) % 65521, b = (b + a) % 65521;
+    appendBigEndian(out, (b << 16) | a);
+    return out;
+}
+
+// An 8-bit RGBA PNG of rows top down.
+std::string encodePng(int size, const std::vector<uint8_t>& rgba) {
+    std::string png = "\x89PNG\r\n\x1a\n";
+    std::string header;
+    appendBigEndian(header, uint32_t(size));
+    appendBigEndian(header, uint32_t(size));
+    header += std::string("\x08\x06\x00\x00\x00", 5); // 8 bits, RGBA, deflate, no filter, no interlace
+    appendChunk(png, "IHDR", header);
+    std::string raw;
+    for (int j = 0; j < size; ++j) {
+        raw += '\0'; // filter: none
+        raw.append(reinterpret_cast<const char*>(rgba.data()) + size_t(j) * size * 4, size_t(size) * 4);
+    }
+    appendChunk(png, "IDAT", zlibStored(raw));
+    appendChunk(png, "IEND", "");
+    return png;
+}
+
+// RGBD as EXT_lights_image_based's PNGs hold HDR (Babylon's toRGBD in helperFunctions.fx):
+// D = floor(max(255 / max(rgb), 1)) / 255, rgb' = (rgb D)^(1/2.2), alpha D.
+std::array<uint8_t, 4> rgbd(const glm::dvec3& color) {
+    const double maxRgb = std::max({color.r, color.g, color.b, 1e-6});
+    const double d = std::clamp(std::floor(std::max(255.0 / maxRgb, 1.0)) / 255.0, 0.0, 1.0);
+    auto byte = [](double v) { return uint8_t(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); };
+    auto gamma = [&](double v) { return byte(std::pow(std::max(v * d, 0.0), 1.0 / 2.2)); };
+    return {gamma(color.r), gamma(color.g), gamma(color.b), byte(d)};
+}
+
+// One face of the probe's diffuse radiance E/pi (CONVENTIONS.md face orientation), flipped about
+// its vertical axis as the extension asks of every face image.
+std::string specularFacePng(const ShCoefficients& irradiance, int face) {
+    std::vector<uint8_t> rgba;
+    for (int j = 0; j < kSpecularFaceSize; ++j)
+        for (int i = kSpecularFaceSize - 1; i >= 0; --i) {
+            glm::dvec3 c =
+                evaluate(irradiance, texelDirection(face, i, j, kSpecularFaceSize)) / std::numbers::pi;
+            for (uint8_t b : rgbd(c))
+                rgba.push_back(b);
+        }
+    return encodePng(kSpecularFaceSize, rgba);
+}
+
+std::string base64(std::string_view bytes) {
+    static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (size_t i = 0; i < bytes.size(); i += 3) {
+        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
+        if (i + 1 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 1])) << 8;
+        if (i + 2 < bytes.size()) v |= uint32_t(uint8_t(bytes[i + 2]));
+        out += digits[v >> 18 & 63];
+        out += digits[v >> 12 & 63];
+        out += i + 1 < bytes.size() ? digits[v >> 6 & 63] : '=';
+        out += i + 2 < bytes.size() ? digits[v & 63] : '=';
+    }
+    return out;
+}
+
+std::string jsonString(const std::string& text) {
+    std::string out = "\"";
+    for (unsigned char c : text) {
+        if (c == '"' || c == '\\')
+            out += '\\', out += char(c);
+        else if (c < 0x20)
+            out += ' ';
+        else
+            out += char(c);
+    }
+    return out + "\"";
+}
+
+// A glTF 2.0 asset holding one EXT_lights_image_based light, referenced by the scene. The
+// specular cube is one mip of the probe's own diffuse radiance E/pi (RGBD PNGs): a probe carries
+// no prefiltered specular environment, and the extension requires the images.
+std::string gltfText(const ShCoefficients& probe, const EngineCoefficients& c, const std::string& source) {
+    ShCoefficients irradiance = convolveIrradiance(radianceBands(probe));
+    std::string images, faces;
+    for (int face = 0; face < kFaceCount; ++face) {
+        images += std::string(face ? ",\n" : "") +
+                  "    {\"mimeType\": \"image/png\", \"uri\": \"data:image/png;base64," +
+                  base64(specularFacePng(irradiance, face)) + "\"}";
+        faces += (face ? ", " : "") + std::to_string(face);
+    }
+    return "{\n"
+           "  \"asset\": {\"version\": \"2.0\", \"generator\": \"shprobe\", \"extras\": {\"source\": " +
+           jsonString(source) +
+           ", \"specularImages\": \"one mip of the probe's diffuse radiance E/pi, not a prefiltered "
+           "specular environment\"}},\n"
+           "  \"extensionsUsed\": [\"EXT_lights_image_based\"],\n"
+           "  \"extensions\": {\n"
+           "    \"EXT_lights_image_based\": {\n"
+           "      \"lights\": [{\n"
+           "        \"name\": \"shprobe\",\n"
+           "        \"rotation\": [0, 0, 0, 1],\n"
+           "        \"intensity\": 1,\n"
+           "        \"irradianceCoefficients\": " +
+           rowsArray(c, "        ") +
+           ",\n"
+           "        \"specularImageSize\": " +
+           std::to_string(kSpecularFaceSize) +
+           ",\n"
+           "        \"specularImages\": [[" +
+           faces +
+           "]]\n"
+           "      }]\n"
+           "    }\n"
+           "  },\n"
+           "  \"images\": [\n" +
+           images +
+           "\n  ],\n"
+           "  \"scene\": 0,\n"
+           "  \"scenes\": [{\"extensions\": {\"EXT_lights_image_based\": {\"light\": 0}}}]\n"
+           "}\n";
+}
+
+// ---- The table -------------------------------------------------------------------------------
+
+void writeEngineFile(const std::string& path, const ShCoefficients& probe, const ExportOptions& options,
+                     Engine engine) {
+    writeOutputFile(path, engineFileText(probe, engine, options), OutputContent::Text);
+}
+
+template <Engine engine>
+void writeEngine(const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
+    writeEngineFile(path, probe, options, engine);
+}
+
+constexpr ExportFormat kFormats[] = {
+    {"json", ".json", OutputContent::Text, SunHandling::Written, kMaxOrder, "CONVENTIONS' coefficient file",
+     [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
+         writeProbeFile(path, probe, options.metadata);
+     }},
+    {"binary", ".bin", OutputContent::Binary, SunHandling::Dropped, kMaxOrder, "packed float32 (README)",
+     [](const std::string& path, const ShCoefficients& probe, const ExportOptions&) {
+         writeBinaryProbes(path, std::span(&probe, 1));
+     }},
+    {"glsl", ".glsl", OutputContent::Text, SunHandling::Refused, kMaxFoldedOrder,
+     "GLSL header folded for sh_irradiance.glsl",
+     [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
+         writeProbeHeader(path, probe, HeaderLanguage::Glsl, options.metadata.source);
+     }},
+    {"cpp", ".h", OutputContent::Text, SunHandling::Refused, kMaxFoldedOrder,
+     "C/C++ header folded for sh_irradiance.glsl",
+     [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
+         writeProbeHeader(path, probe, HeaderLanguage::C, options.metadata.source);
+     }},
+    {"irradiance-equirect", ".exr", OutputContent::Binary, SunHandling::Dropped, kMaxOrder,
+     "E/pi drawn as an equirect EXR",
+     [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
+         writeIrradianceEquirect(path, probe, options.mapSize > 0 ? options.mapSize : 512);
+     }},
+    {"irradiance-cross", ".exr", OutputContent::Binary, SunHandling::Dropped, kMaxOrder,
+     "E/pi drawn as a cross EXR",
+     [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
+         writeIrradianceCross(path, probe, options.mapSize > 0 ? options.mapSize : 128);
+     }},
+    {"threejs", ".three.json", OutputContent::Text, SunHandling::Refused, kEngineOrder,
+     "three.js LightProbe JSON (ObjectLoader, LightProbe.fromJSON)", writeEngine<Engine::ThreeJs>},
+    {"babylon", ".babylon.json", OutputContent::Text, SunHandling::Refused, kEngineOrder,
+     "Babylon.js SphericalHarmonics.FromArray array (E/pi, left-handed scene)", writeEngine<Engine::Babylon>},
+    {"gltf", ".gltf", OutputContent::Text, SunHandling::Refused, kEngineOrder,
+     "glTF 2.0 asset with an EXT_lights_image_based light", writeEngine<Engine::Gltf>},
+    {"filament", ".filament.txt", OutputContent::Text, SunHandling::Refused, kEngineOrder,
+     "Filament sh.txt as cmgen --sh-shader writes it (see --mirror)", writeEngine<Engine::Filament>},
+    {"unity", ".unity.json", OutputContent::Text, SunHandling::Refused, kEngineOrder,
+     "Unity SphericalHarmonicsL2, 27 floats channel-major", writeEngine<Engine::Unity>},
+    {"godot", ".godot.json", OutputContent::Text, SunHandling::Refused, kEngineOrder,
+     "Godot LightmapGI capture SH: 9 radiance colors", writeEngine<Engine::Godot>},
+};
+
+std::string lowercase(std::string text) {
+    for (char& c : text)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    return text;
+}
+
+} // namespace
+
+std::span<const ExportFormat> exportFormats() {
+    return kFormats;
+}
+
+const ExportFormat* findExportFormat(std::string_view name) {
+    for (const ExportFormat& format : kFormats)
+        if (name == format.name) return &format;
+    return nullptr;
+}
+
+const ExportFormat* formatOfOutputName(const std::string& path) {
+    const std::string name = lowercase(path);
+    const ExportFormat* best = nullptr;
+    for (const ExportFormat& format : kFormats) {
+        const std::string_view extension = format.extension;
+        bool matches = name.size() > extension.size() && name.ends_with(extension);
+        if (matches && (!best || extension.size() > std::string_view(best->extension).size())) best = &format;
+    }
+    if (!best && name.ends_with(".hpp")) return findExportFormat("cpp");
+    return best;
+}
+
+std::string exportFormatNames() {
+    std::string names;
+    for (const ExportFormat& format : kFormats)
+        names += std::string(names.empty() ? "" : ", ") + format.name;
+    return names;
+}
+
+glm::dmat3 engineFrame(Engine engine, bool mirror) {
+    switch (engine) {
+    case Engine::ThreeJs: // common.glsl.js equirectUv: u = atan(z, x) / 2pi + 0.5: centre +X, right +Z
+        return fromRows({0, 0, -1, 0, 1, 0, 1, 0, 0});
+    case Engine::Babylon: // panoramaToCubemap.ts CalcProjectionSpherical: centre +Z, right +X, left-handed
+        return fromRows({1, 0, 0, 0, 1, 0, 0, 0, -1});
+    case Engine::Gltf: // right-handed, Y up; cube faces +X..-Z as CONVENTIONS' (OpenGL's)
+        return glm::dmat3(1.0);
+    case Engine::Filament: // CubemapUtils::equirectangularToCubemap, then mirrorCubemap (x -> -x)
+        return mirror ? fromRows({-1, 0, 0, 0, 1, 0, 0, 0, -1}) : fromRows({1, 0, 0, 0, 1, 0, 0, 0, -1});
+    case Engine::Unity: // Skybox-Panoramic.shader ToRadialCoords: centre +X, right -Z, left-handed
+        return fromRows({0, 0, -1, 0, 1, 0, -1, 0, 0});
+    case Engine::Godot: // sky.glsl panorama coordinates atan(x, -z): centre +Z, right -X
+        return fromRows({-1, 0, 0, 0, 1, 0, 0, 0, -1});
+    }
+    return glm::dmat3(1.0);
+}
+
+EngineCoefficients engineCoefficients(const ShCoefficients& probe, Engine engine, bool mirror) {
+    const EngineConvention convention = conventionOf(engine);
+    const ShCoefficients turned =
+        rotate(makeShRotation(engineFrame(engine, mirror), kEngineOrder), radianceBands(probe));
+    EngineCoefficients c{};
+    for (int i = 0; i < int(c.size()); ++i) {
+        const double sign = convention.condonShortley ? 1.0 : phaseSign(i);
+        c[size_t(i)] = sign * quantityScale(convention.quantity, i) * turned.rgb[size_t(i)];
+    }
+    return c;
+}
+
+std::string engineFileText(const ShCoefficients& probe, Engine engine, const ExportOptions& options) {
+    const EngineCoefficients c = engineCoefficients(probe, engine, options.mirror);
+    switch (engine) {
+    case Engine::ThreeJs:
+        return threeJsText(c);
+    case Engine::Babylon:
+    case Engine::Godot:
+        return rowsArray(c, "") + "\n";
+    case Engine::Gltf:
+        return gltfText(probe, c, options.metadata.source);
+    case Engine::Filament:
+        return filamentText(c);
+    case Engine::Unity:
+        return unityText(c);
+    }
+    return {};
+}
+
+} // namespace shprobe

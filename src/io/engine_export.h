@@ -1,0 +1,72 @@
+// Every format shprobe writes a probe in, in one table: the coefficient file and the existing
+// exports (probe_file.h, probe_export.h) and the files each engine reads as it is (three.js,
+// Babylon.js, glTF EXT_lights_image_based, Filament, Unity, Godot). `bake --format`, `convert
+// --format`, the output names and the writers all read the table. docs/exports.md tells, per
+// engine, the frame, the basis sign, the pre-scaling and the layout, and the engine source each
+// follows.
+#pragma once
+#include "shprobe/io/output_file.h"
+#include "shprobe/io/probe_file.h"
+#include "shprobe/sh/coefficients.h"
+
+#include <array>
+#include <glm/mat3x3.hpp>
+#include <glm/vec3.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace shprobe {
+
+// What a writer may need beside the coefficients.
+struct ExportOptions {
+    ProbeMetadata metadata; // json keeps it all; the headers and glTF copy metadata.source
+    int mapSize = 0;        // irradiance maps: equirect width or face size (0: 512 / 128)
+    bool mirror = true;     // filament: the frame of cmgen's default mirroring (cmgen --no-mirror: false)
+};
+
+// What a format does with the sun of --extract-sun (or of a probe file that has one).
+enum class SunHandling {
+    Written, // json: beside the coefficients
+    Dropped, // binary, the irradiance maps: the coefficients (or their drawing) only
+    Refused, // the headers and engine formats: asking for a sun they would drop is an error
+};
+
+struct ExportFormat {
+    const char* name;      // the --format value
+    const char* extension; // of its files; an output name ending in it chooses the format
+    OutputContent content;
+    SunHandling sun;
+    int maxOrder;     // highest order it holds whole (engine formats: 3; they take bands 0..2)
+    const char* what; // one line for --help
+    void (*write)(const std::string& path, const ShCoefficients& probe, const ExportOptions& options);
+};
+
+std::span<const ExportFormat> exportFormats();
+// nullptr for a name that is no format.
+const ExportFormat* findExportFormat(std::string_view name);
+// The format whose extension the output name ends in (the longest, case-insensitive:
+// "x.three.json" is threejs, "x.json" json); nullptr when none (".txt", "/dev/null", "-").
+const ExportFormat* formatOfOutputName(const std::string& path);
+// "json, binary, ..." for messages and help.
+std::string exportFormatNames();
+
+// ---- Engine coefficients ---------------------------------------------------------------------
+
+enum class Engine { ThreeJs, Babylon, Gltf, Filament, Unity, Godot };
+
+// The engine's frame: a direction d of shprobe's frame (CONVENTIONS.md) is F d in the engine's.
+// Improper (det -1) for the left-handed engines and for Filament without mirroring.
+glm::dmat3 engineFrame(Engine engine, bool mirror = true);
+
+// The 9 rgb values the engine takes, in its order (flat index l(l+1)+m, as all six use), its frame,
+// its basis sign and its pre-scaling (docs/exports.md). Bands past 2 are dropped, missing bands are
+// 0; an irradiance probe is turned back into radiance where the engine needs it (bands 0..2 all
+// have A_l != 0).
+using EngineCoefficients = std::array<glm::dvec3, 9>;
+EngineCoefficients engineCoefficients(const ShCoefficients& probe, Engine engine, bool mirror = true);
+
+// The file contents of the text engine formats (what the table's writers write).
+std::string engineFileText(const ShCoefficients& probe, Engine engine, const ExportOptions& options);
+
+} // namespace shprobe
