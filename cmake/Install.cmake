@@ -29,7 +29,8 @@
 #   lib/pkgconfig/shprobe.pc                   Cflags -I<prefix>/include; Libs render, shprobe, sh;
 #                                              Requires vulkan glm; static builds add Libs.private
 #                                              (the spirv archives) and Requires.private OpenImageIO
-#   share/doc/shprobe/LICENSE
+#   share/doc/shprobe/LICENSE                  the license
+#   share/doc/shprobe/conventions.md           the SH, cube-map and coefficient-file conventions
 #
 # The config file sets shprobe_SPIRV_DIR, shprobe_INTERFACE_DOC, shprobe_GLSL_DIR and shprobe_MODULES,
 # and finds only what the installed headers include (Vulkan, glm): no installed header includes
@@ -296,5 +297,6 @@ install(CODE [[
     file(INSTALL "${shprobe_pc_folder}/shprobe.pc" DESTINATION "${shprobe_pc_destination}")
 ]])
 
-# --- license -------------------------------------------------------------------------------------
-install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/shprobe)
+# --- license and conventions ---------------------------------------------------------------------
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE ${PROJECT_SOURCE_DIR}/docs/conventions.md
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/shprobe)

@@ -2,7 +2,7 @@
 // the shading of a surface of normal d (albedo 1), or a flat colour (SHPROBE_SPEC_BACKGROUND). The
 // probe's sun, if any (sun_light.h), is in the reconstruction as its disc and in the shading as
 // light; the environment image already holds it.
-// The camera is a perspective one or a panorama (equirect, CONVENTIONS.md) by u.camera.w.
+// The camera is a perspective one or a panorama (equirect, docs/conventions.md) by u.camera.w.
 // Outputs: location 0 colour; location 1 direction (xyz = d, w = SHPROBE_DIRECTION_*).
 #version 450
 #extension GL_GOOGLE_include_directive : require

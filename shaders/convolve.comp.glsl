@@ -1,6 +1,7 @@
 #version 450
 // Applies a per-band scale to SH coefficients: with bandScale[l] = A_l this is the Lambertian
-// (clamped-cosine) convolution E_lm = A_l L_lm (Ramamoorthi & Hanrahan 2001; seed 001, seed 003).
+// (clamped-cosine) convolution E_lm = A_l L_lm (Ramamoorthi & Hanrahan 2001, "An Efficient
+// Representation for Irradiance Environment Maps"; A_l as in Brown, "Spherical Harmonic Basis Functions").
 // A window (de-ringing) multiplies into bandScale on the host, so it needs no other pass.
 //
 // Interface (shaders/INTERFACE.md):

@@ -20,7 +20,7 @@ using testing::randomDirections;
 
 constexpr double kPi = std::numbers::pi;
 
-// The golden values of CONVENTIONS.md are printed to 9 decimals: rounding leaves at most 5e-10.
+// The golden values of docs/conventions.md are printed to 9 decimals: rounding leaves at most 5e-10.
 constexpr double kGoldenError = 1e-9;
 // Recurrence and closed forms are different double evaluations of the same polynomials of unit
 // vectors with values of order 1: they differ by a few ulps times a few dozen operations.
@@ -43,7 +43,7 @@ std::vector<double> basisAt(int order, const glm::dvec3& d) {
     return y;
 }
 
-// Checks: y_i(d) at d = normalize(0.3, -0.5, 0.8) equals the 25 golden values of CONVENTIONS.md,
+// Checks: y_i(d) at d = normalize(0.3, -0.5, 0.8) equals the 25 golden values of docs/conventions.md,
 // which fix the convention (signs, Condon-Shortley phase, normalization, index order).
 TEST(Basis, GoldenValues) {
     const std::vector<double> y = basisAt(5, glm::normalize(glm::dvec3(0.3, -0.5, 0.8)));

@@ -127,7 +127,7 @@ TEST(Layouts, NamesParseAndPrintBack) {
 
 // ---- Crosses ----------------------------------------------------------------------------------
 
-// Cross positions in face-size units, from CONVENTIONS.md, in Face order.
+// Cross positions in face-size units, from docs/conventions.md, in Face order.
 struct Slot {
     int column;
     int row;

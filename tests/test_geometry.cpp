@@ -19,9 +19,9 @@ constexpr double kPi = std::numbers::pi;
 
 // Sums of up to 6 * 256^2 double solid angles of size about 4/N^2: rounding only.
 constexpr double kSolidAngleSumError = 1e-11;
-// CONVENTIONS.md gives the N = 4 check values to 12 decimals.
+// docs/conventions.md gives the N = 4 check values to 12 decimals.
 constexpr double kCheckValueError = 1e-11;
-// CONVENTIONS.md: the fp32 solid angle must match the double formula within 1e-5 relative.
+// docs/conventions.md: the fp32 solid angle must match the double formula within 1e-5 relative.
 constexpr double kFp32SolidAngleRelativeError = 1e-5;
 // fp32 direction: corners rounded to 2^-24, then normalized; a few ulps of float.
 constexpr double kFp32DirectionError = 1e-6;
@@ -44,7 +44,7 @@ TEST(Geometry, CubeSolidAnglesSumToFourPi) {
     EXPECT_NEAR(texelSolidAngle(0, 0, 1), 4.0 * kPi / 6.0, kCheckValueError);
 }
 
-// Checks: the N = 4 values CONVENTIONS.md gives for the four-atan2 formula, and the face's mirror
+// Checks: the N = 4 values docs/conventions.md gives for the four-atan2 formula, and the face's mirror
 // symmetries (corner texels equal, and so on).
 TEST(Geometry, CubeSolidAngleCheckValues) {
     EXPECT_NEAR(texelSolidAngle(0, 0, 4), 0.081455587595, kCheckValueError);
@@ -73,7 +73,7 @@ double worstFp32SolidAngleError(int n, int stride) {
 
 // Checks: the fp32 solid angle of texel_geometry.h (what the shaders use) matches the double
 // four-atan2 formula within 1e-5 relative for every texel, at every face size from 1 to 64 and at
-// 127, 256, 511, 1024, 2048 and 4096 (CONVENTIONS.md demands every size up to 4096; these cover
+// 127, 256, 511, 1024, 2048 and 4096 (docs/conventions.md demands every size up to 4096; these cover
 // small, odd, power-of-two and the largest). Prints the worst error per size.
 TEST(Geometry, Fp32SolidAngleMatchesDoubleAtEverySize) {
     double worstSmall = 0.0;
@@ -139,7 +139,7 @@ TEST(Geometry, DirectionToFaceAxes) {
 }
 
 // "Up" (top row, small b) and "left" (column 0, small a) of each face, read off the table of
-// CONVENTIONS.md: e.g. +X (1, -b, -a) has y > 0 on its top row and z > 0 on its left column.
+// docs/conventions.md: e.g. +X (1, -b, -a) has y > 0 on its top row and z > 0 on its left column.
 struct FaceOrientation {
     Face face;
     glm::dvec3 up;
@@ -177,7 +177,7 @@ void expectSameEdge(Face first, double a0, double b0, Face second, double a1, do
         << ", " << b1 << ")";
 }
 
-// Checks: faces meet as in the horizontal cross of CONVENTIONS.md, [ -X +Z +X -Z ] with +Y above
+// Checks: faces meet as in the horizontal cross of docs/conventions.md, [ -X +Z +X -Z ] with +Y above
 // and -Y below +Z: the right edge (a = 1) of each face is the left edge (a = -1) of the next, and
 // the bottom (b = 1) of +Y is the top (b = -1) of +Z, whose bottom is the top of -Y.
 TEST(Geometry, FacesMeetAsInTheCross) {
@@ -219,7 +219,7 @@ TEST(Geometry, EquirectRoundTrip) {
     }
 }
 
-// Checks: the orientation of CONVENTIONS.md: the image center looks along -Z, the right quarter
+// Checks: the orientation of docs/conventions.md: the image center looks along -Z, the right quarter
 // along +X, the left quarter along -X, the top edge is +Y and the bottom edge -Y; +Z is on the
 // seam, which maps into [0, W).
 TEST(Geometry, EquirectOrientation) {

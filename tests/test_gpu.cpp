@@ -143,7 +143,7 @@ TEST_F(GpuProjection, ConstantEnvironmentGivesOnlyDcAndPiIrradiance) {
         EXPECT_NEAR(gpu.radiance.rgb[0][channel], l00, kGpuTolerance * l00);
         for (size_t i = 1; i < gpu.radiance.rgb.size(); ++i)
             EXPECT_NEAR(gpu.radiance.rgb[i][channel], 0.0, kGpuTolerance * l00) << "coefficient " << i;
-        // E(n) = pi c for every normal (seed 001: the clamped cosine integrates to pi).
+        // E(n) = pi c for every normal (Ramamoorthi & Hanrahan: the clamped cosine integrates to pi).
         EXPECT_NEAR(irradiance[channel], M_PI * c, kGpuTolerance * M_PI * c);
     }
 }
@@ -227,8 +227,8 @@ TEST_F(GpuProjection, HugeWorkPerInvocationStaysCorrect) {
 // workgroups asks for 65536 workgroups: one more than a dispatch row allows
 // (maxComputeWorkGroupCount[0] = 65535 on lavapipe), so the baker doubles the work per invocation,
 // and 32768 partial slots remain. A reduction looping over that many slots in one
-// invocation loses some of them without a word under lavapipe's 65535-iteration loop cap (it did:
-// L_00 came out 3% low at 3072^2); reduce.comp strides over the slots with a whole workgroup per
+// invocation loses some of them without a word under lavapipe's 65535-iteration loop cap (measured:
+// L_00 3% low at 3072^2, docs/gpu-path.md); reduce.comp strides over the slots with a whole workgroup per
 // coefficient.
 TEST_F(GpuProjection, ManyPartialSlotsAreAllSummed) {
     Cubemap cubemap = noiseCubemap(2048, 9);
@@ -450,7 +450,7 @@ TEST_F(GpuResidentBake, RefusesTargetsItCannotBake) {
 }
 
 // The texel solid angle as the GPU evaluates it (texel_geometry.h compiled to SPIR-V, with the
-// device's own atan and sqrt) against the double four-atan2 formula of CONVENTIONS.md: within
+// device's own atan and sqrt) against the double four-atan2 formula of docs/conventions.md: within
 // 1e-5 relative for every texel of faces 1..64 and of sizes up to 4096.
 class GpuSolidAngles : public GpuTest {
   protected:

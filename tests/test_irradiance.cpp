@@ -21,7 +21,7 @@ using testing::randomDirections;
 
 constexpr double kPi = std::numbers::pi;
 
-// CONVENTIONS.md prints A_2..A_8 to 9 decimals.
+// docs/conventions.md prints A_2..A_8 to 9 decimals.
 constexpr double kPrintedValueError = 1e-9;
 // Gauss-Legendre quadrature is exact for the polynomials P_l(t) t; what is left is rounding of
 // about 20 terms whose sizes reach 1 (P_16 takes values up to 1 with alternating-sign sums).
@@ -30,7 +30,7 @@ constexpr double kQuadratureError = 1e-10;
 // wide margin while still pinning the exact fractions of the delta-light test.
 constexpr double kEvaluationError = 1e-9;
 
-// Checks: A_0..A_8 equal the values CONVENTIONS.md prints (pi, 2pi/3, pi/4, 0, -pi/24, 0, ...).
+// Checks: A_0..A_8 equal the values docs/conventions.md prints (pi, 2pi/3, pi/4, 0, -pi/24, 0, ...).
 TEST(Irradiance, BandFactorValues) {
     const double expected[] = {kPi, 2.0 * kPi / 3.0, 0.785398163, 0.0,         -0.130899694,
                                0.0, 0.049087385,     0.0,         -0.024543693};
@@ -82,7 +82,7 @@ ShCoefficients deltaLight(int order, const glm::dvec3& d0) {
     return radiance;
 }
 
-// Checks Sloan's facts (seed 000) for a delta light, whose exact irradiance is max(0, n.d0): by the
+// Checks Sloan's facts ("Stupid SH Tricks") for a delta light, whose exact irradiance is max(0, n.d0): by the
 // addition theorem E(n) = sum_l A_l (2l+1)/(4 pi) P_l(n.d0). Order 3 gives 1/4 + 1/2 + 5/16 = 17/16
 // at the light (overshoots 1 by 1/16) and 1/4 - 1/2 + 5/16 = 1/16 opposite it (a back lobe);
 // order 5 adds -9/96: 31/32 at the light and -1/32 opposite ("a -1 lobe against a peak of 31").

@@ -108,8 +108,8 @@ ShCoefficients sphericalLightCoefficients(int order, double radius, const glm::d
 
 // --- Zonal harmonics and recurrences -------------------------------------------------------------
 
-// Checks the spherical light's zonal harmonics against the closed forms of Sloan's appendix A3
-// (the seed lost them in extraction; these are 2 pi K_l integral_{cos r}^1 P_l worked out by hand):
+// Checks the spherical light's zonal harmonics against the closed forms of Sloan's appendix A3 ("Stupid
+// SH Tricks"), written out here as 2 pi K_l integral_{cos r}^1 P_l worked by hand:
 // z0 = sqrt(pi) (1 - cos r), z1 = sqrt(3 pi)/2 sin^2 r, z2 = sqrt(5 pi)/2 cos r sin^2 r,
 // z3 = sqrt(7 pi)/8 sin^2 r (5 cos^2 r - 1).
 TEST(Lights, SphericalZonalMatchesClosedForms) {
@@ -142,8 +142,9 @@ TEST(Lights, SphericalZonalMatchesDefinitionForTinyAndLargeCaps) {
     }
 }
 
-// Checks seed 002's recurrence (11) against its definition f_l(z) = 1/(1-z) integral_z^1 P_l, by
-// exact quadrature for 20 bands, and its two base cases f_0 = 1, f_1 = (1+z)/2; also f_l(1) = 1.
+// Checks Lisle & Huang's recurrence (11) ("Algorithms for Spherical Harmonic Lighting") against its
+// definition f_l(z) = 1/(1-z) integral_z^1 P_l, by exact quadrature for 20 bands, and its two base
+// cases f_0 = 1, f_1 = (1+z)/2; also f_l(1) = 1.
 TEST(Lights, CircularWindowRecurrenceMatchesDefinition) {
     for (double z : {-1.0, -0.6, 0.0, 0.3, 0.9, 0.999}) {
         const std::vector<double> f = circularWindowFactors(z, kZonalBands);
@@ -159,8 +160,8 @@ TEST(Lights, CircularWindowRecurrenceMatchesDefinition) {
     }
 }
 
-// Checks that the two papers' routes agree: a circular window of power P (seed 002, recurrence) is
-// the spherical light of radiance P / capSolidAngle (seed 000, zonal closed form).
+// Checks that the two papers' routes agree: a circular window of power P (Lisle & Huang, recurrence)
+// is the spherical light of radiance P / capSolidAngle (Sloan, zonal closed form).
 TEST(Lights, CircularWindowEqualsSphericalLightOfSamePower) {
     for (double degrees : {2.0, 25.0, 120.0}) {
         const double aperture = degrees * kDegree;
@@ -201,7 +202,7 @@ TEST(Lights, SphericalLightMatchesDrawnCap) {
     EXPECT_LT(errors.back(), kFinalError);
 }
 
-// Checks the same for seed 002's circular window (aperture 25 degrees, power 4 pi, coefficients up
+// Checks the same for Lisle & Huang's circular window (aperture 25 degrees, power 4 pi, coefficients up
 // to 3.5): measured 1.0e-2, 2.5e-3, 6.4e-4.
 TEST(Lights, CircularWindowMatchesDrawnCap) {
     constexpr double kMinimumRatio = 3.5;

@@ -5,13 +5,13 @@
 // of such tools; each of them moves at least one quadrant's light to another quadrant or face.
 //
 // Independence: the face direction table, the inverse (direction -> face, a, b), the equirect
-// direction formula and the cross layouts are written here again from the text of CONVENTIONS.md,
+// direction formula and the cross layouts are written here again from the text of docs/conventions.md,
 // not taken from the library, so a mistake made consistently in the library's geometry and in its
 // loaders cannot cancel out. The library's directionToFace is checked as well, as the brief's
 // decoding of the result, but the expected quadrant always comes from the table below.
 //
 // Also here: the equirect map projected directly agrees with the same map converted to a cube map
-// and projected (CONVENTIONS.md, "Equirectangular maps"), on a synthetic map and, where installed,
+// and projected (docs/conventions.md, "Equirectangular maps"), on a synthetic map and, where installed,
 // on a real HDR environment.
 #include "shprobe/image/environment.h"
 #include "shprobe/image/image_write.h"
@@ -40,7 +40,7 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kPi = std::numbers::pi;
 
-// ---- CONVENTIONS.md, written again --------------------------------------------------------------
+// ---- docs/conventions.md, written again ---------------------------------------------------------
 
 const char* const kFaceNames[kFaceCount] = {"+X", "-X", "+Y", "-Y", "+Z", "-Z"};
 
@@ -96,7 +96,7 @@ glm::dvec3 tableEquirectDirection(int i, int j, int width, int height) {
     return tableEquirectAt((i + 0.5) / width, (j + 0.5) / height);
 }
 
-// The cross layouts, as CONVENTIONS.md draws them; a slot is found by the face's name.
+// The cross layouts, as docs/conventions.md draws them; a slot is found by the face's name.
 // Horizontal (4:3): [ . +Y . . ] [ -X +Z +X -Z ] [ . -Y . . ].
 // Vertical (3:4):   [ . +Y . ] [ -X +Z +X ] [ . -Y . ] [ . -Z . ], with -Z rotated 180 degrees.
 const std::vector<std::string> kHorizontalCrossRows = {". +Y . .", "-X +Z +X -Z", ". -Y . ."};
@@ -166,7 +166,7 @@ std::string text(const glm::dvec3& v) {
     return buffer;
 }
 
-// The L1 direction of channel r: y_1,-1 = -c y, y_1,0 = c z, y_1,1 = -c x (CONVENTIONS.md), so the
+// The L1 direction of channel r: y_1,-1 = -c y, y_1,0 = c z, y_1,1 = -c x (docs/conventions.md), so the
 // first moment of the radiance is proportional to (-L_1,1, -L_1,-1, L_1,0).
 glm::dvec3 l1Direction(const ShCoefficients& sh) {
     return glm::normalize(glm::dvec3(-sh.rgb[size_t(shIndex(1, 1))].r, -sh.rgb[size_t(shIndex(1, -1))].r,
@@ -192,7 +192,7 @@ Cubemap quadrantCubemap(const Quadrant& q) {
     return cubemap;
 }
 
-// A cross image with the quadrant painted where CONVENTIONS.md puts that face's texel (i, j).
+// A cross image with the quadrant painted where docs/conventions.md puts that face's texel (i, j).
 Image quadrantCross(const Quadrant& q, const std::vector<std::string>& rows, bool negativeZRotated) {
     const int n = kFaceSize;
     int columns = 0;
@@ -256,7 +256,7 @@ void expectPointsIntoQuadrant(const ShCoefficients& sh, const Quadrant& q, const
     TablePoint own = tableFacePoint(d);
     FacePoint library = directionToFace(d);
     std::string context = path + ", " + describe(q) + ": L1 direction " + text(d) + ", expected near " +
-                          text(expected) + " (centroid of the quadrant, from the CONVENTIONS table)";
+                          text(expected) + " (centroid of the quadrant, from the docs/conventions.md table)";
     // Decoded with the table written here (independent of the code under test)...
     EXPECT_EQ(own.face, q.face) << context << "; it points into face " << kFaceNames[own.face];
     EXPECT_GT(own.a * q.signA, 0.0) << context << "; its a is " << own.a;
@@ -371,7 +371,7 @@ INSTANTIATE_TEST_SUITE_P(Orientation, LitQuadrant,
                          quadrantTestName);
 
 // Diagnosis: when a quadrant test fails, this tells whether the library's geometry itself departs
-// from the CONVENTIONS table (then every path fails alike) or a loader places a face wrongly (then
+// from the docs/conventions.md table (then every path fails alike) or a loader places a face wrongly (then
 // only its path fails). The library computes in double: 1e-12 is rounding.
 TEST(Orientation, LibraryGeometryFollowsTheConventionsTable) {
     for (int face = 0; face < kFaceCount; ++face)
@@ -394,7 +394,7 @@ TEST(Orientation, LibraryGeometryFollowsTheConventionsTable) {
             EXPECT_LT(glm::length(equirectDirection(i, j, 16, 8) - tableEquirectDirection(i, j, 16, 8)),
                       1e-12)
                 << "equirectDirection (" << i << ", " << j << ")";
-    // The formula as written above says what CONVENTIONS.md says in words: the image's center looks
+    // The formula as written above says what docs/conventions.md says in words: the image's center looks
     // along -Z, its right quarter along +X, its top row is +Y.
     EXPECT_LT(glm::length(tableEquirectAt(0.5, 0.5) - glm::dvec3(0, 0, -1)), 1e-15);
     EXPECT_LT(glm::length(tableEquirectAt(0.75, 0.5) - glm::dvec3(1, 0, 0)), 1e-15);

@@ -310,8 +310,8 @@ TEST_F(ExportFiles, GlslHeadersCompile) {
     EXPECT_TRUE(fs::exists(file("use.spv")));
 }
 
-// Each pixel is E(n) / pi at its direction (CONVENTIONS' equirect mapping), computed in double and
-// stored as float: agreement to float rounding of the largest value.
+// Each pixel is E(n) / pi at its direction (the equirect mapping of docs/conventions.md), computed in double
+// and stored as float: agreement to float rounding of the largest value.
 TEST_F(ExportFiles, IrradianceEquirectHoldsEOverPi) {
     ShCoefficients radiance = randomProbe(3, Quantity::Radiance, 7);
     writeIrradianceEquirect(file("irradiance.exr"), radiance, 64);

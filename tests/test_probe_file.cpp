@@ -1,4 +1,4 @@
-// Coefficient files (README "Conventions", coefficient files): what is written reads back the
+// Coefficient files (docs/conventions.md, "Coefficient files"): what is written reads back the
 // same, and every malformed or wrong-schema file is refused with a message naming the file and the
 // offending field.
 #include "shprobe/io/output_file.h"

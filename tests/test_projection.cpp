@@ -179,7 +179,7 @@ glm::dvec3 smoothEnvironment(const glm::dvec3& d) {
 }
 
 // Checks: a cube map and an equirect map of the same analytic environment give the same
-// coefficients (CONVENTIONS.md: equirect and cube-map paths agree up to discretization error).
+// coefficients (docs/conventions.md: equirect and cube-map paths agree up to discretization error).
 TEST(Projection, CubemapAndEquirectAgree) {
     const ShCoefficients cube = projectCubemap(cubemapOf(128, smoothEnvironment), kMaxOrder);
     const ShCoefficients equirect = projectEquirect(equirectOf(1024, 512, smoothEnvironment), kMaxOrder);

@@ -1,5 +1,7 @@
-// Windows, de-ringing, and the seeds' facts about truncated irradiance: Sloan's order-3 and
-// order-5 lobes, Lisle-Huang's H_2n recurrence for A_l, and the L1 antipodal identity of seed 004.
+// Windows, de-ringing, and the papers' facts about truncated irradiance: Sloan's order-3 and
+// order-5 lobes ("Stupid SH Tricks"), Lisle-Huang's H_2n recurrence for A_l ("Algorithms for
+// Spherical Harmonic Lighting"), and the L1 antipodal identity of Geomerics' notes ("Odd terms in
+// the SH irradiance expansion").
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/cubemap.h"
 #include "shprobe/sh/error.h"
@@ -39,8 +41,8 @@ constexpr double kNonNegativeTolerance = 1e-12;
 
 const glm::dvec3 kSunDirection = glm::normalize(glm::dvec3(0.3, -0.5, 0.8));
 
-// The seed's sky: uniform radiance 0.2 plus a sun of radius 0.5 degree and power 50 (radiance
-// about 2.1e5), built analytically.
+// The sky the de-ringing tests use: uniform radiance 0.2 plus a sun of radius 0.5 degree and power 50
+// (radiance about 2.1e5), built analytically; unwindowed, its expansion goes negative.
 ShCoefficients skyWithSun(int order) {
     ShCoefficients radiance = makeCoefficients(order, Quantity::Radiance);
     addAmbient(radiance, glm::dvec3(0.2, 0.25, 0.3));
@@ -116,7 +118,7 @@ TEST(Windowing, KnownValues) {
     }
 }
 
-// --- The seeds' facts ---------------------------------------------------------------------------
+// --- The papers' facts --------------------------------------------------------------------------
 
 // The order-n irradiance of a unit-power delta light from d0.
 ShCoefficients deltaIrradiance(int order) {
@@ -126,10 +128,10 @@ ShCoefficients deltaIrradiance(int order) {
     return convolveIrradiance(radiance);
 }
 
-// Checks Sloan's facts (seed 000) on the irradiance of a delta light, E(t) = sum_l A_l (2l+1)/(4 pi)
-// P_l(t), t = n.d. Order 3: E = 3/32 + t/2 + 15 t^2/32, which gives 17/16 facing the light (a 1/16
-// overshoot) and 1/16 opposite (the back lobe: "17 against 1"); it also dips to -19/480 at
-// t = -8/15, which minimumOnSphere must find. Order 5 adds -3/32 P_4(t): 31/32 facing and -1/32
+// Checks Sloan's facts ("Stupid SH Tricks") on the irradiance of a delta light,
+// E(t) = sum_l A_l (2l+1)/(4 pi) P_l(t), t = n.d. Order 3: E = 3/32 + t/2 + 15 t^2/32, which gives 17/16
+// facing the light (a 1/16 overshoot) and 1/16 opposite (the back lobe: "17 against 1"); it also dips to
+// -19/480 at t = -8/15, which minimumOnSphere must find. Order 5 adds -3/32 P_4(t): 31/32 facing and -1/32
 // opposite ("a -1 lobe against a peak of 31"), which is also its minimum.
 TEST(Windowing, SloanTruncatedClampedCosineFacts) {
     const ShCoefficients order3 = deltaIrradiance(3);
@@ -151,8 +153,9 @@ TEST(Windowing, SloanTruncatedClampedCosineFacts) {
     EXPECT_NEAR(glm::dot(minimum5.direction, kSunDirection), -1.0, 1e-6);
 }
 
-// Checks Lisle & Huang's H_2n recurrence (seed 002, eq. 10), H_0 = 1, H_2n+2 = (1/2 - n)/(2 + n) H_2n,
-// with H_1 = 2/3 and H_l = 0 for odd l > 1, against CONVENTIONS' closed form: A_l = pi H_l for l <= 8.
+// Checks Lisle & Huang's H_2n recurrence ("Algorithms for Spherical Harmonic Lighting", eq. 10),
+// H_0 = 1, H_2n+2 = (1/2 - n)/(2 + n) H_2n, with H_1 = 2/3 and H_l = 0 for odd l > 1, against the
+// closed form of docs/conventions.md: A_l = pi H_l for l <= 8.
 TEST(Windowing, HRecurrenceGivesBandFactors) {
     std::array<double, 9> h{};
     h[0] = 1.0;
@@ -198,13 +201,13 @@ double exactIrradiance(const Cubemap& cubemap, const glm::dvec3& n) {
     return sum;
 }
 
-// Checks seed 004's antipodal identity n.R1 = (I(n) - I(-n)) / 4, with its renormalized units
-// R1 = 1/(4 pi) integral w R(w) and I(n) = (1/pi) integral_H n.w R(w) = E(n)/pi. In our units
-// R1 = (-L11, -L1-1, L10) / (4 pi c), c = sqrt(3/(4 pi)). It holds for any environment because
-// max(0, t) - max(0, -t) = t; so the odd part of the SH irradiance, which is only band 1
-// (A_l = 0 for odd l > 1), is exact at any order even where E_sh(n) itself is not: on a sky with a
-// sun, at order 3, measured |E_sh(n) - E(n)| up to 0.48 (9.33 against 8.85) while both sides of
-// the identity agree to 4e-14.
+// Checks the antipodal identity of Geomerics' "Odd terms in the SH irradiance expansion",
+// n.R1 = (I(n) - I(-n)) / 4, with its renormalized units R1 = 1/(4 pi) integral w R(w) and
+// I(n) = (1/pi) integral_H n.w R(w) = E(n)/pi. In our units R1 = (-L11, -L1-1, L10) / (4 pi c),
+// c = sqrt(3/(4 pi)). It holds for any environment because max(0, t) - max(0, -t) = t; so the odd
+// part of the SH irradiance, which is only band 1 (A_l = 0 for odd l > 1), is exact at any order even where
+// E_sh(n) itself is not: on a sky with a sun, at order 3, measured |E_sh(n) - E(n)| up to 0.48 (9.33
+// against 8.85) while both sides of the identity agree to 4e-14.
 TEST(Windowing, L1AntipodalIdentity) {
     constexpr double kIdentityError = 1e-12; // sums over 6144 texels of terms up to ~1
     const Cubemap cubemap = testEnvironment();

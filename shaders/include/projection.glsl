@@ -1,7 +1,7 @@
 // The projection modules' code (project.comp and its storage-image variants, shaders/INTERFACE.md):
 // each workgroup writes the solid-angle-weighted sum, over its texels, of L(w) y_i(w) dOmega into
-// one partial slot (SH_COEFFICIENTS vec4, rgb used). Sloan, "Stupid SH Tricks" (seed 000),
-// projection from cube maps with exact texel solid angles.
+// one partial slot (SH_COEFFICIENTS vec4, rgb used). Sloan, "Stupid Spherical Harmonics (SH)
+// Tricks", projection from cube maps with exact texel solid angles.
 //
 // Positions (i, j) cover the quarter of a face with i, j < ceil(N / 2) (quadrantSize); with each
 // comes its column mirror (N - 1 - i, j), row mirror (i, N - 1 - j) and both. The solid angle and
@@ -119,8 +119,8 @@ void main() {
     uint quadrant = quadrantSize(faceSize);
     int firstLayer = int(gl_WorkGroupID.y) * 6;
     START_STREAM(quadrant)
-    // Face pair by face pair, eight texels at a time: one pass reading all 24 texels of a position
-    // ran 20% slower on lavapipe (`shprobe bench`). PAIR is a literal, so the masks are constants,
+    // Face pair by face pair, eight texels at a time: faster on lavapipe than one pass reading all 24
+    // texels of a position (docs/gpu-path.md). PAIR is a literal, so the masks are constants,
     // and radiance[] and basis[] are indexed by constants only.
 #define READ_MIRRORS(face, mask)                                      \
     radiance[mask] = readRadiance(walk.i, walk.j, face);              \

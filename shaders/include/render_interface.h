@@ -19,7 +19,7 @@
 // What a surface of normal n shows (scene.frag) and what the shading background shows.
 #define SHPROBE_SHADING_RADIANCE 0     // the SH reconstruction of the radiance, L(n); no albedo
 #define SHPROBE_SHADING_IRRADIANCE 1   // albedo * E(n) / pi from the order-3 or order-5 expansion
-#define SHPROBE_SHADING_L1_NONLINEAR 2 // albedo * the non-linear L1 model of E(n) / pi (seed 004)
+#define SHPROBE_SHADING_L1_NONLINEAR 2 // albedo * Geomerics' non-linear L1 model of E(n) / pi
 
 // What pixels without a surface show (background.frag), along the view direction d.
 #define SHPROBE_BACKGROUND_COLOR 0       // FrameUniforms.backgroundColor
@@ -29,7 +29,7 @@
 
 // Camera projections (FrameUniforms.camera.w).
 #define SHPROBE_PROJECTION_PERSPECTIVE 0
-#define SHPROBE_PROJECTION_PANORAMA 1 // every direction, equirect layout of CONVENTIONS.md
+#define SHPROBE_PROJECTION_PANORAMA 1 // every direction, equirect layout of docs/conventions.md
 
 // The direction target's w: what the pixel's colour was evaluated from.
 #define SHPROBE_DIRECTION_NONE 0.0     // background colour or environment texture
@@ -57,7 +57,7 @@ struct RenderUniforms {
     // the constant of the basis polynomial y_i = k_i p_i and s_l a per-band scale.
     vec4 radiance[SHPROBE_FOLDED_COUNT];   // s_l = 1: the radiance reconstruction L(d)
     vec4 irradiance[SHPROBE_FOLDED_COUNT]; // s_l = A_l / pi: E(n) / pi
-    // Non-linear L1 model (seed 004): [0].rgb = R0, [1..3].rgb = x, y, z of R1 per channel.
+    // Non-linear L1 model (Geomerics): [0].rgb = R0, [1..3].rgb = x, y, z of R1 per channel.
     vec4 l1[4];
     RenderSun sun;
 };

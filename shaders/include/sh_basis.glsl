@@ -1,5 +1,5 @@
-// Real orthonormal SH basis in GLSL, Condon-Shortley phase, flat index l(l+1)+m (CONVENTIONS in
-// README.md). The includer declares `const uint SH_ORDER` (usually a specialization constant)
+// Real orthonormal SH basis in GLSL, Condon-Shortley phase, flat index l(l+1)+m
+// (docs/conventions.md). The includer declares `const uint SH_ORDER` (usually a specialization constant)
 // first; then SH_COEFFICIENTS = SH_ORDER^2 and shEvalBasis(d, y) fills y[0..SH_COEFFICIENTS).
 #ifndef SHPROBE_SH_BASIS_GLSL
 #define SHPROBE_SH_BASIS_GLSL
@@ -9,8 +9,8 @@ const uint SH_COEFFICIENTS = SH_ORDER * SH_ORDER;
 // glslang 12 refuses literal indices into arrays sized by a specialization constant.
 const uint SH_BASIS_CAPACITY = 64u;
 
-// Bands 0-4 as closed-form polynomials in x, y, z (Sloan, "Stupid SH Tricks", seed 000, with the
-// signs of CONVENTIONS.md). SH_ORDER is a constant when the pipeline is built, so the bands not
+// Bands 0-4 as closed-form polynomials in x, y, z (Sloan, "Stupid SH Tricks", with the
+// signs of docs/conventions.md). SH_ORDER is a constant when the pipeline is built, so the bands not
 // needed disappear, and the remaining code is straight-line: no loops, no indexing at run time.
 void shEvalBands0To4(vec3 d, inout float y[SH_BASIS_CAPACITY]) {
     float x = d.x, yy = d.y, z = d.z;
@@ -52,7 +52,7 @@ void shEvalBands0To4(vec3 d, inout float y[SH_BASIS_CAPACITY]) {
 //   y_l,+-(l-1) = sqrt(2l+1) z y_l-1,+-(l-1)
 //   y_l,+-m     = a_lm (z y_l-1,+-m - b_lm y_l-2,+-m),  a_lm = sqrt((4l^2-1)/(l^2-m^2)),
 //                 b_lm = sqrt(((l-1)^2-m^2)/(4(l-1)^2-1))
-// (Lisle & Huang 2007, seed 002 section 2.1, in normalized form.)
+// (Lisle & Huang 2007, "Algorithms for Spherical Harmonic Lighting", section 2.1, in normalized form.)
 void shEvalBand(uint l, vec3 d, inout float y[SH_BASIS_CAPACITY]) {
     uint c = l * (l + 1u), p = (l - 1u) * l, q = (l - 2u) * (l - 1u);
     float sectoral = -sqrt(float(2u * l + 1u) / float(2u * l));

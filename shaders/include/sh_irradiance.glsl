@@ -1,6 +1,8 @@
 // SH irradiance and radiance for a normal, from folded RGB coefficients, in the polynomial form of
-// Sloan's irradiance shader ("Stupid SH Tricks", appendix A10; seeds 000 and 001), extended to
-// order 5; and the non-linear L1 irradiance model of Geomerics (seed 004).
+// Sloan's irradiance shader ("Stupid Spherical Harmonics (SH) Tricks", appendix A10, with the
+// convolution of Ramamoorthi & Hanrahan, "An Efficient Representation for Irradiance Environment
+// Maps"), extended to order 5; and the non-linear L1 irradiance model of Geomerics' notes on SH
+// irradiance.
 //
 // USAGE (any renderer; needs nothing but this file):
 //   #include "sh_irradiance.glsl"
@@ -8,7 +10,7 @@
 //   vec3 outgoing = albedo * shIrradianceOverPi(coefficients, n, 3u); // or 5u
 //
 // Folding (CPU, src/render/probe_shading.cpp): with y_i = k_i p_i(x, y, z) the real orthonormal
-// basis with the Condon-Shortley phase (CONVENTIONS.md) written as a constant k_i times the
+// basis with the Condon-Shortley phase (docs/conventions.md) written as a constant k_i times the
 // polynomial p_i evaluated below, and s_l a per-band scale, the CPU stores c_i = s_l k_i f_i, so
 // sum_i c_i p_i(n) = sum_i s_l f_i y_i(n) costs one multiply-add per coefficient:
 //   - irradiance / pi: s_l = A_l / pi (A_0 = pi, A_1 = 2pi/3, A_2 = pi/4, A_3 = 0, A_4 = -pi/24),
@@ -67,7 +69,7 @@ vec3 shRadiance(vec4 c[SH_FOLDED_COUNT], vec3 d, uint order) {
     return l;
 }
 
-// Non-linear L1 irradiance of one channel (Geomerics, seed 004), as E(n) / pi:
+// Non-linear L1 irradiance of one channel (Geomerics' notes on L1 irradiance), as E(n) / pi:
 //   I(n) = R0 (a + (1 - a)(p + 1) q^p),  q = (1 + R1^.n) / 2,  p = 1 + 2 r,  a = (1 - r) / (1 + r),
 // r = |R1| / R0, with R0 = (1/4pi) int L and R1 = (1/4pi) int L w over the sphere (renormalized L0
 // and L1). It is >= 0 for any normal, its mean over the sphere is R0 (the L0 energy of the linear

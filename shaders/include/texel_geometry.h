@@ -1,5 +1,6 @@
-// Cube-map texel geometry, shared by C++ and GLSL. Conventions: README.md, "Conventions", and
-// the Vulkan specification, "Cube Map Face Selection". Layer order and face orientation:
+// Cube-map texel geometry, shared by C++ and GLSL. Conventions: docs/conventions.md, "Cube-map faces"
+// and "Texel weight", and the Vulkan specification, "Cube Map Face Selection". Layer order and face
+// orientation:
 //
 //              +----+
 //              | +Y |          face 0 +X: ( 1, -b, -a)   face 1 -X: (-1, -b,  a)
@@ -63,7 +64,7 @@ SHPROBE_FN float triangleSolidAngle(vec3 p0, vec3 p1, vec3 p2, float tripleProdu
 }
 
 // Exact solid angle of texel (i, j) of an N x N face, accurate in fp32 at every face size.
-// The four-atan2 form of CONVENTIONS.md cancels catastrophically in fp32 (terms near 0.5,
+// The four-atan2 form of docs/conventions.md cancels catastrophically in fp32 (terms near 0.5,
 // result near 4/N^2). Here the texel, with corners (a, b, 1) on the plane z = 1, is split into two
 // triangles whose triple products both equal its area (2/N)^2, taken from N itself rather than from
 // differences of rounded corner coordinates; every term of the denominator is positive and only

@@ -37,7 +37,8 @@ std::string oneLine(std::string text) {
 
 int main(int argc, char** argv) {
     shprobe::removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
-    CLI::App app{"shprobe: bake HDR environments into spherical-harmonics light probes with Vulkan"};
+    CLI::App app{"shprobe: bake HDR environments into spherical-harmonics light probes with Vulkan "
+                 "(conventions: docs/conventions.md)"};
     app.require_subcommand(1);
     app.add_flag_callback(
         "--version",

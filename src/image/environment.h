@@ -1,5 +1,5 @@
 // Loading HDR environments into cube maps: equirect, horizontal and vertical crosses, six face
-// files, and the built-in procedural sky. Layouts and orientations follow CONVENTIONS.md.
+// files, and the built-in procedural sky. Layouts and orientations follow docs/conventions.md.
 #pragma once
 #include "shprobe/sh/cubemap.h"
 #include <array>

@@ -1,5 +1,5 @@
 // Image layouts of environment maps (equirect, crosses) turned into cube maps, and cube-map
-// resizing. Face order, orientation and the cross layouts are those of CONVENTIONS.md.
+// resizing. Face order, orientation and the cross layouts are those of docs/conventions.md.
 #include "shprobe/image/environment.h"
 
 #include "shprobe/sh/error.h"

@@ -260,7 +260,7 @@ std::array<uint8_t, 4> rgbd(const glm::dvec3& color) {
     return {gamma(color.r), gamma(color.g), gamma(color.b), byte(d)};
 }
 
-// One face of the probe's diffuse radiance E/pi (CONVENTIONS.md face orientation), flipped about
+// One face of the probe's diffuse radiance E/pi (face orientation of docs/conventions.md), flipped about
 // its vertical axis as the extension asks of every face image.
 std::string specularFacePng(const ShCoefficients& irradiance, int face) {
     std::vector<uint8_t> rgba;
@@ -359,7 +359,8 @@ void writeEngine(const std::string& path, const ShCoefficients& probe, const Exp
 }
 
 constexpr ExportFormat kFormats[] = {
-    {"json", ".json", OutputContent::Text, SunHandling::Written, kMaxOrder, "CONVENTIONS' coefficient file",
+    {"json", ".json", OutputContent::Text, SunHandling::Written, kMaxOrder,
+     "the coefficient file of docs/conventions.md",
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeProbeFile(path, probe, options.metadata);
      }},
@@ -444,7 +445,7 @@ glm::dmat3 engineFrame(Engine engine, bool mirror) {
         return fromRows({0, 0, -1, 0, 1, 0, 1, 0, 0});
     case Engine::Babylon: // panoramaToCubemap.ts CalcProjectionSpherical: centre +Z, right +X, left-handed
         return fromRows({1, 0, 0, 0, 1, 0, 0, 0, -1});
-    case Engine::Gltf: // right-handed, Y up; cube faces +X..-Z as CONVENTIONS' (OpenGL's)
+    case Engine::Gltf: // right-handed, Y up; cube faces +X..-Z as docs/conventions.md's (OpenGL's)
         return glm::dmat3(1.0);
     case Engine::Filament: // CubemapUtils::equirectangularToCubemap, then mirrorCubemap (x -> -x)
         return mirror ? fromRows({-1, 0, 0, 0, 1, 0, 0, 0, -1}) : fromRows({1, 0, 0, 0, 1, 0, 0, 0, -1});

@@ -55,7 +55,7 @@ std::string exportFormatNames();
 
 enum class Engine { ThreeJs, Babylon, Gltf, Filament, Unity, Godot };
 
-// The engine's frame: a direction d of shprobe's frame (CONVENTIONS.md) is F d in the engine's.
+// The engine's frame: a direction d of shprobe's frame (docs/conventions.md) is F d in the engine's.
 // Improper (det -1) for the left-handed engines and for Filament without mirroring.
 glm::dmat3 engineFrame(Engine engine, bool mirror = true);
 

@@ -72,7 +72,7 @@ glm::vec4 reflectedRadiance(const ShCoefficients& irradiance, const glm::dvec3& 
     return glm::vec4(glm::vec3(evaluate(irradiance, direction) / std::numbers::pi), 1.0f);
 }
 
-// Where each face sits in a horizontal cross, in face units (CONVENTIONS.md):
+// Where each face sits in a horizontal cross, in face units (docs/conventions.md):
 // [ . +Y . . ] [ -X +Z +X -Z ] [ . -Y . . ], indexed by Face.
 constexpr std::array<std::array<int, 2>, kFaceCount> kCrossSlots{
     {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}}};

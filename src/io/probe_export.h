@@ -58,7 +58,7 @@ void writeProbeHeader(const std::string& path, const ShCoefficients& probe, Head
 
 // The irradiance of a probe (its convolution when it holds radiance) drawn as the radiance a white
 // Lambertian surface facing each direction reflects, E(n) / pi: a W x W/2 equirect map (directions
-// of CONVENTIONS.md) or a horizontal cross (4:3) of faceSize faces, empty cells black. EXR (linear
+// of docs/conventions.md) or a horizontal cross (4:3) of faceSize faces, empty cells black. EXR (linear
 // float); written atomically.
 void writeIrradianceEquirect(const std::string& path, const ShCoefficients& probe, int width);
 void writeIrradianceCross(const std::string& path, const ShCoefficients& probe, int faceSize);

@@ -1,4 +1,4 @@
-// Coefficient files (CONVENTIONS.md, "Coefficient files"): JSON with format "shprobe.sh",
+// Coefficient files (docs/conventions.md, "Coefficient files"): JSON with format "shprobe.sh",
 // version 1, the SH convention, order, quantity and order^2 rows of [r, g, b].
 #pragma once
 #include "shprobe/sh/coefficients.h"

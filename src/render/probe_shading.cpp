@@ -120,7 +120,7 @@ RenormalizedL1 renormalizedL1(const ShCoefficients& radiance) {
     return l1;
 }
 
-// Geomerics' model (seed 004), per channel: R0 (a + (1 - a)(p + 1) q^p).
+// Geomerics' non-linear L1 model (their notes on SH irradiance), per channel: R0 (a + (1 - a)(p + 1) q^p).
 glm::dvec3 l1NonLinearOverPi(const ShCoefficients& radiance, const glm::dvec3& n) {
     RenormalizedL1 l1 = renormalizedL1(radiance);
     glm::dvec3 result(0.0);

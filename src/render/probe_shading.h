@@ -19,7 +19,7 @@ namespace shprobe {
 enum class ShadingMode {
     Radiance,    // L(n): the SH reconstruction of the environment (no convolution, no albedo)
     Irradiance,  // albedo E(n) / pi, E from the order-3 or order-5 expansion
-    L1NonLinear, // albedo times the non-linear L1 model of E(n) / pi (Geomerics, seed 004)
+    L1NonLinear, // albedo times the non-linear L1 model of E(n) / pi (Geomerics' L1 notes)
 };
 
 // "radiance", "irradiance", "l1-nonlinear"; parse throws Error(Input) for anything else.
@@ -54,7 +54,8 @@ ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string
 // double radius (sin^2(r/2) rather than 1 - cos r, which cancels for small r).
 gpu::RenderSun foldSun(const SphericalLight& sun);
 
-// Renormalized L0 and L1 of radiance (seed 004): R0 = (1/4pi) int L, R1 = (1/4pi) int L w, per channel.
+// Renormalized L0 and L1 of radiance (Geomerics' L1 notes), per channel:
+// R0 = (1/4pi) int L, R1 = (1/4pi) int L w.
 struct RenormalizedL1 {
     glm::dvec3 r0;
     glm::dvec3 r1[3]; // x, y, z components, each rgb

@@ -46,7 +46,7 @@ RenderInput loadRenderInput(const Context& context, const std::string& path,
 ShCoefficients bakeRadiance(const Context& context, const Projector& projector, const Cubemap& cubemap,
                             double& milliseconds);
 
-// The environment rotated by R: the light that came from d comes from R d (CONVENTIONS.md,
+// The environment rotated by R: the light that came from d comes from R d (docs/conventions.md,
 // "Rotations"). Each texel takes the bilinear sample of the source at R^T d.
 Cubemap rotateCubemap(const Cubemap& cubemap, const glm::dmat3& rotation);
 

@@ -25,7 +25,7 @@ Background parseBackground(const std::string& name);
 
 enum class Projection {
     Perspective,
-    Panorama, // every direction in the equirect layout of CONVENTIONS.md; shapes are not drawn
+    Panorama, // every direction in the equirect layout of docs/conventions.md; shapes are not drawn
 };
 
 struct Camera {

@@ -1,5 +1,6 @@
-// Real orthonormal SH with the Condon-Shortley phase (CONVENTIONS.md): the Lisle-Huang recurrence
-// (seed 002, section 2.1) and, to check it, the closed-form polynomials through l = 4.
+// Real orthonormal SH with the Condon-Shortley phase (docs/conventions.md): the recurrence of Lisle &
+// Huang, "Algorithms for Spherical Harmonic Lighting", section 2.1, and, to check it, the closed-form
+// polynomials through l = 4.
 #include "basis.h"
 
 #include "error.h"
@@ -29,7 +30,7 @@ void requireOrderFits(int order, int maxOrder, std::span<double> out) {
     }
 }
 
-// Factor turning the recurrence's unnormalized Y_lm into y_lm (CONVENTIONS.md): sqrt(2) K_l^|m|
+// Factor turning the recurrence's unnormalized Y_lm into y_lm (docs/conventions.md): sqrt(2) K_l^|m|
 // for m != 0, K_l^0 for m = 0. The Condon-Shortley phase is already in the recurrence's Y_lm.
 double recurrenceNormalization(int l, int m) {
     return m == 0 ? shNormalization(l, 0) : std::numbers::sqrt2 * shNormalization(l, m);
@@ -49,7 +50,8 @@ const NormalizationTable& normalizationTable() {
     return table;
 }
 
-// Unnormalized Y_lm by the Lisle-Huang recurrence (seed 002, section 2.1), stored at l(l+1)+m.
+// Unnormalized Y_lm by the Lisle-Huang recurrence ("Algorithms for Spherical Harmonic Lighting",
+// section 2.1), stored at l(l+1)+m.
 class RecurrenceBasis {
   public:
     RecurrenceBasis(std::span<double> y, const glm::dvec3& d) : y_(y), d_(d) {}
@@ -92,7 +94,8 @@ class RecurrenceBasis {
     glm::dvec3 d_;
 };
 
-// Closed forms (Sloan, seed 000, appendix; Brown, seed 003, with Sloan's signs: odd m carries a minus).
+// Closed forms (Sloan, "Stupid Spherical Harmonics (SH) Tricks", appendix; Brown, "Spherical Harmonic
+// Basis Functions", with Sloan's signs: odd m carries a minus).
 void closedFormBand0(std::span<double> out) {
     out[0] = 0.5 * std::sqrt(1.0 / kPi);
 }
@@ -158,7 +161,7 @@ int shBand(int index) {
     return l;
 }
 
-// K_l^|m| = sqrt((2l+1)/(4 pi) (l-|m|)!/(l+|m|)!) (CONVENTIONS.md), the factorial ratio as the
+// K_l^|m| = sqrt((2l+1)/(4 pi) (l-|m|)!/(l+|m|)!) (docs/conventions.md), the factorial ratio as the
 // product 1 / ((l-|m|+1) ... (l+|m|)).
 double shNormalization(int l, int m) {
     const int absM = std::abs(m);

@@ -1,4 +1,4 @@
-// Real orthonormal spherical harmonics with the Condon-Shortley phase (CONVENTIONS.md).
+// Real orthonormal spherical harmonics with the Condon-Shortley phase (docs/conventions.md).
 // Order n = number of bands: l = 0..n-1, n^2 coefficients, flat index i = l(l+1) + m.
 #pragma once
 #include <glm/vec3.hpp>
@@ -18,12 +18,12 @@ constexpr int shIndex(int l, int m) {
 int shBand(int index);
 
 // y_i(d) for i < order^2 at unit direction d, by the algebraic recurrence of Lisle & Huang
-// (seed 002, section 2.1) followed by the normalization K_lm. Order 1..kMaxOrder.
-// out must hold coefficientCount(order) values.
+// ("Algorithms for Spherical Harmonic Lighting", section 2.1) followed by the normalization K_lm.
+// Order 1..kMaxOrder. out must hold coefficientCount(order) values.
 void evalBasis(int order, const glm::dvec3& d, std::span<double> out);
 
-// The same basis from the closed-form polynomials (Sloan, seed 000; Brown, seed 003 with
-// Sloan's signs), order 1..5. Used to check the recurrence.
+// The same basis from the closed-form polynomials (Sloan, "Stupid Spherical Harmonics (SH) Tricks";
+// Brown, "Spherical Harmonic Basis Functions", with Sloan's signs), order 1..5. Used to check the recurrence.
 void evalBasisClosedForm(int order, const glm::dvec3& d, std::span<double> out);
 
 // Normalization constant K_l^|m| = sqrt((2l+1)/(4 pi) (l-|m|)!/(l+|m|)!).

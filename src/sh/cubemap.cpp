@@ -1,5 +1,6 @@
-// Double-precision texel geometry of cube maps and equirect maps (CONVENTIONS.md, "Cube maps" and
-// "Equirectangular maps"). The float twin used by the shaders is shaders/include/texel_geometry.h.
+// Double-precision texel geometry of cube maps and equirect maps (docs/conventions.md, "Cube-map
+// faces", "Texel weight" and "Equirectangular maps"). The float twin used by the shaders is
+// shaders/include/texel_geometry.h.
 #include "cubemap.h"
 
 #include "error.h"
@@ -32,7 +33,7 @@ double texelEdgeCoord(int i, int faceSize) {
     return 2.0 * i / faceSize - 1.0;
 }
 
-// Unnormalized direction of face-local (a, b): the table of CONVENTIONS.md (Vulkan face order).
+// Unnormalized direction of face-local (a, b): the table of docs/conventions.md (Vulkan face order).
 glm::dvec3 unnormalizedFaceDirection(int face, double a, double b) {
     switch (Face(face)) {
     case Face::PositiveX:
@@ -61,7 +62,7 @@ Face majorAxisFace(const glm::dvec3& d) {
 }
 
 // F(a, b) = atan2(a b, sqrt(a^2 + b^2 + 1)): the solid angle of the face region between the face
-// center and corner (a, b), signed (CONVENTIONS.md, "Texel weight").
+// center and corner (a, b), signed (docs/conventions.md, "Texel weight").
 double cornerSolidAngle(double a, double b) {
     return std::atan2(a * b, std::sqrt(a * a + b * b + 1.0));
 }
@@ -109,7 +110,7 @@ FacePoint directionToFace(const glm::dvec3& d) {
     return {}; // unreachable: majorAxisFace returns one of the six faces
 }
 
-// Omega = F(a0, b0) - F(a0, b1) - F(a1, b0) + F(a1, b1) (CONVENTIONS.md). In double the
+// Omega = F(a0, b0) - F(a0, b1) - F(a1, b0) + F(a1, b1) (docs/conventions.md). In double the
 // cancellation costs about 1e-16 / (4/N^2) relative: below 1e-9 at N = 4096.
 double texelSolidAngle(int i, int j, int faceSize) {
     const double a0 = texelEdgeCoord(i, faceSize);
@@ -120,7 +121,8 @@ double texelSolidAngle(int i, int j, int faceSize) {
            cornerSolidAngle(a1, b1);
 }
 
-// CONVENTIONS.md: theta = pi v, phi = 2 pi u - pi, d = (sin theta sin phi, cos theta, -sin theta cos phi).
+// docs/conventions.md, "Equirectangular maps": theta = pi v, phi = 2 pi u - pi,
+// d = (sin theta sin phi, cos theta, -sin theta cos phi).
 glm::dvec3 equirectDirection(int i, int j, int width, int height) {
     const double theta = kPi * (j + 0.5) / height;
     const double phi = 2.0 * kPi * (i + 0.5) / width - kPi;

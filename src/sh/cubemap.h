@@ -43,7 +43,7 @@ struct Image {
 };
 Image makeImage(int width, int height);
 
-// Unit direction through the center of texel (i, j) of a face (CONVENTIONS.md), in double.
+// Unit direction through the center of texel (i, j) of a face (docs/conventions.md), in double.
 glm::dvec3 texelDirection(int face, int i, int j, int faceSize);
 // Unit direction of face-local point (a, b) in [-1, 1]^2.
 glm::dvec3 faceDirection(int face, double a, double b);
@@ -55,11 +55,11 @@ struct FacePoint {
 };
 FacePoint directionToFace(const glm::dvec3& d);
 
-// Exact solid angle of texel (i, j) of an N x N face: the four-atan2 formula of CONVENTIONS.md,
-// in double (relative error about 1e-9 at N = 4096).
+// Exact solid angle of texel (i, j) of an N x N face: the four-atan2 formula of docs/conventions.md
+// ("Texel weight"), in double (relative error about 1e-9 at N = 4096).
 double texelSolidAngle(int i, int j, int faceSize);
 
-// Equirect (latitude-longitude) maps, CONVENTIONS.md: pixel (i, j) of W x H.
+// Equirect (latitude-longitude) maps, docs/conventions.md: pixel (i, j) of W x H.
 glm::dvec3 equirectDirection(int i, int j, int width, int height);
 // Continuous pixel coordinates (x in [0, W), y in [0, H], H only at the -Y pole) of a direction;
 // inverse of the above (pixel (i, j) maps back to (i + 0.5, j + 0.5)).

@@ -322,7 +322,7 @@ Lanes texelSolidAngles(const Plan& plan, int firstColumn, int row, const Lanes& 
 }
 
 // y_k, k < Order^2, at eight unit directions (x, y, z): the Lisle-Huang recurrence of basis.cpp
-// (seed 002, section 2.1) on float lanes, then the normalization.
+// ("Algorithms for Spherical Harmonic Lighting", section 2.1) on float lanes, then the normalization.
 template <int Order>
 void evalBasisLanes(const Lanes& x, const Lanes& y, const Lanes& z, const float* normalization, Lanes* out) {
     const auto at = [out](int l, int m) -> Lanes& { return out[shIndex(l, m)]; };

@@ -1,5 +1,6 @@
-// Folded SH coefficients. Basis polynomials: CONVENTIONS.md through l = 2, Sloan ("Stupid SH
-// Tricks", seed 000, appendix A2) and Brown (seed 003) with Sloan's Condon-Shortley signs for l = 3, 4.
+// Folded SH coefficients. Basis polynomials: docs/conventions.md through l = 2, Sloan ("Stupid SH
+// Tricks", appendix A2) and Brown ("Spherical Harmonic Basis Functions") with Sloan's Condon-Shortley
+// signs for l = 3, 4.
 #include "shprobe/sh/folding.h"
 
 #include "shprobe/sh/basis.h"
@@ -17,7 +18,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// k_i of y_i = k_i p_i, i = l(l+1) + m, l <= 4. K_l^m of CONVENTIONS.md times the integer factors
+// k_i of y_i = k_i p_i, i = l(l+1) + m, l <= 4. K_l^m of docs/conventions.md times the integer factors
 // of the associated Legendre polynomials, with the (-1)^m phase on odd m.
 const std::array<double, kFoldedCount>& polynomialScales() {
     static const std::array<double, kFoldedCount> scales = [] {

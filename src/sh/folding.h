@@ -1,8 +1,8 @@
 // SH coefficients folded for evaluation as polynomials, the form shaders/include/sh_irradiance.glsl
-// takes: with y_i = k_i p_i(x, y, z) (the basis of CONVENTIONS.md written as a constant k_i times
+// takes: with y_i = k_i p_i(x, y, z) (the basis of docs/conventions.md written as a constant k_i times
 // a polynomial p_i) and s_l a per-band scale, the folded coefficient is c_i = s_l k_i f_i, so that
 // sum_i c_i p_i(n) = sum_i s_l f_i y_i(n) costs one multiply-add per coefficient. As in Sloan's
-// irradiance shader ("Stupid SH Tricks", seed 000, appendix A10), y_20 = k_6 (3 z^2 - 1) is split:
+// irradiance shader (Sloan, "Stupid SH Tricks", appendix A10), y_20 = k_6 (3 z^2 - 1) is split:
 // p_6 = z^2 with c_6 = 3 s_2 k_6 f_6, and the constant -s_2 k_6 f_6 goes into c_0.
 //
 // Used by the render shaders' uniforms (src/render/probe_shading.h) and the header export formats
@@ -20,7 +20,7 @@ namespace shprobe {
 constexpr int kMaxFoldedOrder = 5;
 constexpr int kFoldedCount = kMaxFoldedOrder * kMaxFoldedOrder;
 
-// y_i = basisPolynomialScale(i) * basisPolynomial(i, d) for i < 25 (CONVENTIONS.md; Sloan's signs:
+// y_i = basisPolynomialScale(i) * basisPolynomial(i, d) for i < 25 (docs/conventions.md; Sloan's signs:
 // the odd-m constants are negative). The polynomials are the ones sh_irradiance.glsl evaluates,
 // except that the shader evaluates z^2 for y_20 = k (3 z^2 - 1) (Sloan's split, above).
 // Throw Error(Input) for an index outside 0..24.

@@ -1,5 +1,6 @@
-// Lambertian convolution E_lm = A_l L_lm (Ramamoorthi & Hanrahan; seeds 001 and 003) and evaluation
-// of a probe, E(n) = sum E_lm y_lm(n) (CONVENTIONS.md, "Radiance, irradiance").
+// Lambertian convolution E_lm = A_l L_lm (Ramamoorthi & Hanrahan, "An Efficient Representation for
+// Irradiance Environment Maps"; Brown, "Spherical Harmonic Basis Functions", for A_l) and evaluation
+// of a probe, E(n) = sum E_lm y_lm(n) (docs/conventions.md, "Radiance, irradiance").
 #include "irradiance.h"
 
 #include "basis.h"
@@ -33,7 +34,8 @@ void requireCoefficientCount(const ShCoefficients& coefficients) {
 
 } // namespace
 
-// A_0 = pi, A_1 = 2 pi / 3, A_l = 0 for odd l > 1, and for even l (CONVENTIONS.md; Brown, seed 003)
+// A_0 = pi, A_1 = 2 pi / 3, A_l = 0 for odd l > 1, and for even l (docs/conventions.md; Brown,
+// "Spherical Harmonic Basis Functions")
 // A_l = 2 pi (-1)^(l/2 - 1) / ((l+2)(l-1)) * l! / (2^l ((l/2)!)^2), which also gives A_0 = pi.
 double irradianceBandFactor(int l) {
     if (l < 0) throw Error(ErrorKind::Input, "no SH band l = " + std::to_string(l));

@@ -1,5 +1,6 @@
 // Lambertian (clamped-cosine) convolution and evaluation of SH probes.
-// E_lm = A_l L_lm (Ramamoorthi & Hanrahan; seed 001, seed 003); the A_l closed form of CONVENTIONS.md.
+// E_lm = A_l L_lm (Ramamoorthi & Hanrahan, "An Efficient Representation for Irradiance Environment
+// Maps"); the A_l closed form (Brown, "Spherical Harmonic Basis Functions") of docs/conventions.md.
 #pragma once
 #include "coefficients.h"
 #include <glm/vec3.hpp>

@@ -3,9 +3,9 @@
 //
 // All lights are circularly symmetric about a direction d, so their coefficients follow from their
 // zonal harmonics z_l (the coefficients of the light centred on +z) by the zonal-to-direction rule
-// L_lm = sqrt(4 pi / (2l+1)) z_l y_lm(d) (Sloan, seed 000, "zonal harmonics"; Lisle & Huang, seed 002,
-// Proposition 3.2). Directions point from the probe towards the light and need not be unit length.
-// Angles are in radians.
+// L_lm = sqrt(4 pi / (2l+1)) z_l y_lm(d) (Sloan, "Stupid Spherical Harmonics (SH) Tricks", zonal
+// harmonics; Lisle & Huang, "Algorithms for Spherical Harmonic Lighting", Proposition 3.2). Directions point
+// from the probe towards the light and need not be unit length. Angles are in radians.
 #pragma once
 #include "coefficients.h"
 #include "cubemap.h"
@@ -38,9 +38,10 @@ double capAngularRadius(double solidAngle);
 double deltaLightPeak(int order);
 
 enum class DirectionalNormalization {
-    // Sloan (seed 000, "Normalization"): L_lm = (pi / s_n) I y_lm(d), so that at the probe's own
+    // Sloan ("Stupid SH Tricks", "Normalization"): L_lm = (pi / s_n) I y_lm(d), so that at the probe's own
     // order a white Lambertian surface facing the light reflects radiance E(d) / pi = I, i.e. its
-    // irradiance is E(d) = pi I ("irradiance I" in the 1/pi-normalized units of seeds 000 and 004).
+    // irradiance is E(d) = pi I ("irradiance I" in the 1/pi-normalized units of Sloan and of Geomerics'
+    // notes).
     // At order 3 the scale is 16 pi / 17, at order 5 32 pi / 31.
     Sloan,
     // A delta of power I: L_lm = I y_lm(d). The exact irradiance at the facing normal is I; the
@@ -57,8 +58,8 @@ void addDirectionalLight(ShCoefficients& radiance, const DirectionalLight& light
 
 // --- Spherical light (a uniform cap) -----------------------------------------------------------
 
-// Zonal harmonics of a cap of angular radius r and unit radiance, l = 0..order-1 (Sloan, seed 000,
-// appendix A3): z_l = 2 pi K_l integral_{cos r}^1 P_l(t) dt, in the closed form
+// Zonal harmonics of a cap of angular radius r and unit radiance, l = 0..order-1 (Sloan, "Stupid SH
+// Tricks", appendix A3): z_l = 2 pi K_l integral_{cos r}^1 P_l(t) dt, in the closed form
 // z_0 = 2 pi K_0 (1 - cos r), z_l = 2 pi K_l sin^2(r) P_l'(cos r) / (l (l+1)) for l >= 1 (e.g.
 // z_1 = sqrt(3 pi)/2 sin^2 r, z_2 = sqrt(5 pi)/2 cos r sin^2 r), free of cancellation for small r.
 // Any order >= 1 (the add* functions are limited to kMaxOrder by the basis).
@@ -71,15 +72,15 @@ struct SphericalLight {
 };
 void addSphericalLight(ShCoefficients& radiance, const SphericalLight& light);
 
-// --- Circular light window (Lisle & Huang, seed 002, section 3.2) ------------------------------
+// --- Circular light window (Lisle & Huang, "Algorithms for SH Lighting", section 3.2) ---------
 
-// f_l(z) = 1/(1-z) integral_z^1 P_l(t) dt, l = 0..order-1, by the recurrence (11) of seed 002:
+// f_l(z) = 1/(1-z) integral_z^1 P_l(t) dt, l = 0..order-1, by Lisle & Huang's recurrence (11):
 // f_0 = 1, f_1 = (1+z)/2, f_{l+1} = ((2l+1) z f_l - (l-1) f_{l-1}) / (l+2). z = cos(aperture) in
 // [-1, 1]; at z = 1 (an aperture too small for cos to tell it from 0) every f_l is 1, the limit.
 // Any order >= 1.
 std::vector<double> circularWindowFactors(double cosAperture, int order);
 
-// A cap of aperture zeta emitting a total power P (seed 002 uses P = 4 pi): radiance
+// A cap of aperture zeta emitting a total power P (Lisle & Huang use P = 4 pi): radiance
 // P / (2 pi (1 - cos zeta)) inside, and L_lm = P f_l(cos zeta) y_lm(d). The same light as a
 // SphericalLight of that radiance, computed by the other paper's route.
 struct CircularWindow {

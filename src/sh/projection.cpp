@@ -1,5 +1,6 @@
-// Reference projection L_lm = sum_texels L(w) y_lm(w) Omega (Sloan, seed 000, "projection from
-// cube maps"), each texel weighted by its exact solid angle; accumulated in double. Alpha is ignored.
+// Reference projection L_lm = sum_texels L(w) y_lm(w) Omega (Sloan, "Stupid Spherical Harmonics (SH)
+// Tricks", projection from cube maps), each texel weighted by its exact solid angle; accumulated in double.
+// Alpha is ignored.
 #include "projection.h"
 
 #include "basis.h"

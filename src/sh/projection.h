@@ -1,5 +1,6 @@
 // Double-precision reference projection of environments onto SH: L_lm = sum L(w) y_lm(w) dOmega,
-// each texel weighted by its exact solid angle (Sloan, seed 000, "projection from cube maps").
+// each texel weighted by its exact solid angle (Sloan, "Stupid Spherical Harmonics (SH) Tricks",
+// projection from cube maps).
 #pragma once
 #include "coefficients.h"
 #include "cubemap.h"

@@ -2,7 +2,7 @@
 // Ruedenberg's (J. Phys. Chem. 100, 6342, 1996; corrected in J. Phys. Chem. A 102, 9099, 1998):
 // D^l_mn = u U + v V + w W, where U, V, W combine band 1 with band l-1 through the helper P. It is
 // written for the real basis WITHOUT the Condon-Shortley phase (y_1,-1, y_10, y_11 proportional to
-// +y, +z, +x); our basis (CONVENTIONS.md) multiplies y_lm by (-1)^m, so D_ours = (-1)^(m+n) D_IR.
+// +y, +z, +x); our basis (docs/conventions.md) multiplies y_lm by (-1)^m, so D_ours = (-1)^(m+n) D_IR.
 #include "rotation.h"
 
 #include "basis.h"

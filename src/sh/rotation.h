@@ -1,15 +1,15 @@
 // Rotation of SH coefficients, orders 1..kMaxOrder, in double precision.
 //
-// Convention (CONVENTIONS.md, "Rotations"): rotating a probe f by R gives the coefficients of
+// Convention (docs/conventions.md, "Rotations"): rotating a probe f by R gives the coefficients of
 // g(w) = f(R^T w), so a light that came from d comes from R d (column vectors, v' = R v).
 //
 // Each band l is rotated by its own (2l+1) x (2l+1) orthogonal matrix D^l, built from R by the
 // real-basis recurrence of Ivanic & Ruedenberg (J. Phys. Chem. 100, 6342, 1996, with their
 // corrections in J. Phys. Chem. A 102, 9099, 1998), written for the real basis without the
-// Condon-Shortley phase and converted to ours by D'_mn = (-1)^(m+n) D_mn. (Seed 003, Brown, lists
-// corrected equations for the related recursion of Choi, Ivanic, Gordon & Ruedenberg, 1999, which
-// goes through the complex basis, in a sign convention that is not ours.) The tests check the
-// result against exact projections of rotated environments, to 1e-10, through order 8.
+// Condon-Shortley phase and converted to ours by D'_mn = (-1)^(m+n) D_mn. (Brown, "Spherical Harmonic Basis
+// Functions", lists corrected equations for the related recursion of Choi, Ivanic, Gordon & Ruedenberg, 1999,
+// which goes through the complex basis, in a sign convention that is not ours.) The tests check the result
+// against exact projections of rotated environments, to 1e-10, through order 8.
 //
 // Matrices: every glm::dmat3 here is the mathematical matrix R acting as v' = R * v. GLM stores it
 // column-major, so element (row r, column c) is R[c][r]. Use rotationFromRowMajor for the 9 numbers of
@@ -46,7 +46,8 @@ glm::dmat3 orthogonalFromRowMajor(std::span<const double, 9> rowMajor);
 // R from a unit quaternion (w, x, y, z), v' = q v q*; |q| must be 1 within kRotationTolerance
 // (q is then normalized).
 glm::dmat3 rotationFromQuaternion(double w, double x, double y, double z);
-// R = Rz(gamma) Ry(beta) Rz(alpha), angles in degrees (CONVENTIONS.md; seed 002, eq. 6).
+// R = Rz(gamma) Ry(beta) Rz(alpha), angles in degrees (docs/conventions.md; Lisle & Huang,
+// "Algorithms for Spherical Harmonic Lighting", eq. 6).
 glm::dmat3 rotationFromEulerZYZ(double alphaDegrees, double betaDegrees, double gammaDegrees);
 
 // The band matrices of R (validated) for order 1..kMaxOrder. R may be improper (det -1): each

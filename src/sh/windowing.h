@@ -1,7 +1,7 @@
 // Windowing of SH probes (band-wise scale factors that damp the high bands) and Sloan's de-ringing:
 // the weakest window that makes the reconstructed function non-negative over the whole sphere.
 //
-// A window of width w (in bands, w > 0) scales band l by (Sloan, seed 000, "Windowing"):
+// A window of width w (in bands, w > 0) scales band l by (Sloan, "Stupid SH Tricks", "Windowing"):
 //   Hanning: h_l = (1 + cos(pi l / w)) / 2                       for l < w, 0 for l >= w
 //   Lanczos: s_l = sin(pi l / w) / (pi l / w) (s_0 = 1)          for l < w, 0 for l >= w
 // Band 0 is never changed. Its strength is 1/w: strength 0 (w = +infinity) is the identity, and
@@ -51,7 +51,7 @@ struct DeringResult {
     double minimum = 0.0;            // minimumOnSphere of the windowed target (>= 0)
 };
 
-// Sloan's de-ringing (seed 000, "Windowing"; Sloan, "Deringing Spherical Harmonics", SIGGRAPH Asia
+// Sloan's de-ringing ("Stupid SH Tricks", "Windowing"; Sloan, "Deringing Spherical Harmonics", SIGGRAPH Asia
 // 2017): the weakest window whose target is non-negative on the sphere (minimumOnSphere >= 0).
 // Non-negativity is not monotone in the strength 1/w (at order 5 a sky with a sun is non-negative
 // for a band of weak windows and negative again for medium ones), so the strengths k/scanSteps are

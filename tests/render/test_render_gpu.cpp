@@ -1,8 +1,8 @@
 // The render shaders on the device (lavapipe in CI) against the double references, pixel by pixel
 // at the normals the shader used (read back from the float direction target): orders 3 and 5,
-// every mode, on the sphere and on full-sphere panoramas; Sloan's delta-light facts (seed 000);
-// the non-linear L1 model's positivity and energy (seed 004); a probe file's sun, added analytically
-// (E_probe(n) + E_sun(n) per pixel); the display bytes and EXR output.
+// every mode, on the sphere and on full-sphere panoramas; Sloan's delta-light facts ("Stupid SH
+// Tricks"); the non-linear L1 model's positivity and energy (Geomerics' L1 notes); a probe file's sun, added
+// analytically (E_probe(n) + E_sun(n) per pixel); the display bytes and EXR output.
 #include "render_test.h"
 
 #include "shprobe/glsl/render_interface.h"
@@ -324,7 +324,7 @@ TEST_F(RenderTest, SunAddsNothingWhereItIsBelowTheHorizon) {
     }
 }
 
-// ---- Sloan's facts (seed 000) -----------------------------------------------------------------
+// ---- Sloan's facts ("Stupid SH Tricks") -------------------------------------------------------
 
 // The pixel of the rendered sphere whose normal points most nearly along d: its value and normal.
 struct Sample {
@@ -371,7 +371,7 @@ TEST_F(RenderTest, DirectionalLightOrderThreeAndFiveAsSloanSays) {
     EXPECT_NEAR(pole[3] / antipode[3], 17.0, 17.0 * 1e-2) << "17 at the light, 1 opposite";
 }
 
-// ---- The non-linear L1 model (seed 004) -------------------------------------------------------
+// ---- The non-linear L1 model (Geomerics) ------------------------------------------------------
 
 // Mean over the sphere of a panorama's pixels, each weighted by its exact solid angle.
 glm::dvec3 sphereMean(const RenderedImage& image) {

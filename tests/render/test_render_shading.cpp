@@ -1,8 +1,8 @@
 // CPU side of the render shaders (no device): the basis polynomials and their constants, the
 // folding of probes (checked by evaluating the folded terms the way sh_irradiance.glsl does, in
-// double), the non-linear L1 model's properties (seed 004), the seed-000 facts for a delta light
-// on the references, the sun's exact irradiance (against quadrature, and the fp32 code the shaders
-// run, sun_light.h, against it), and the errors for probes the renderer cannot use.
+// double), the non-linear L1 model's properties (Geomerics), Sloan's "Stupid SH Tricks" facts for a delta
+// light on the references, the sun's exact irradiance (against quadrature, and the fp32 code the shaders run,
+// sun_light.h, against it), and the errors for probes the renderer cannot use.
 #include "shprobe/glsl/sun_light.h"
 #include "shprobe/render/probe_shading.h"
 #include "shprobe/render/scene.h"
@@ -92,7 +92,7 @@ TEST(RenderShading, PolynomialsTimesConstantsAreTheBasis) {
 }
 
 TEST(RenderShading, SloanConstantsOfOrderThree) {
-    // Sloan's shader constants with the 1/pi of the Lambertian BRDF (seed 001): c1 = A_1 K_1 / pi =
+    // Sloan's shader constants with the 1/pi of the Lambertian BRDF ("Stupid SH Tricks"): c1 = A_1 K_1 / pi =
     // sqrt(3)/(3 sqrt(pi)), c2 = A_2 K_(2,+-2 etc.) / pi = sqrt(15)/(8 sqrt(pi)), c3 = sqrt(5)/(16 sqrt(pi)),
     // c0 = 1/(2 sqrt(pi)); note the minus signs of the odd-m terms (y, x, yz, xz).
     const double sqrtPi = std::sqrt(kPi);
@@ -154,7 +154,7 @@ TEST(RenderShading, IrradianceProbesFoldLikeTheirRadiance) {
 
 TEST(RenderShading, DeltaLightFactsOfSloan) {
     // A delta light of power pi along d: exact E(n)/pi = max(n.d, 0), 1 at the pole, 0 opposite.
-    // Sloan (seed 000): order 3 gives 17/16 at the pole and 1/16 opposite; order 5 gives 31/32 and
+    // Sloan ("Stupid SH Tricks"): order 3 gives 17/16 at the pole and 1/16 opposite; order 5 gives 31/32 and
     // -1/32 ("-1 against a peak of 31").
     const glm::dvec3 d = glm::normalize(glm::dvec3(0.2, 0.5, -0.8));
     ShCoefficients light = deltaLights({{d, glm::dvec3(kPi)}}, 5);
@@ -182,14 +182,15 @@ TEST(RenderShading, NonLinearL1IsNonNegativeKeepsEnergyAndRange) {
         for (int c = 0; c < 3; ++c) {
             glm::dvec3 r1(l1.r1[0][c], l1.r1[1][c], l1.r1[2][c]);
             EXPECT_GE(lowest[c], 0.0) << "channel " << c;
-            // The model's range is 4 |R1| (seed 004); random normals come within ~1% of the extremes.
+            // The model's range is 4 |R1| (Geomerics); random normals come within ~1% of the extremes.
             EXPECT_NEAR(highest[c] - lowest[c], 4.0 * glm::length(r1), 0.02 * 4.0 * l1.r0[c] + 1e-12) << c;
         }
     }
 }
 
 TEST(RenderShading, LinearL1GoesNegativeWhereTheNonLinearModelDoesNot) {
-    // A delta light: R1 = R0, the linear model R0 + 2 R1.n reaches -R0 opposite the light (seed 004).
+    // A delta light: R1 = R0, the linear model R0 + 2 R1.n reaches -R0 opposite the light (Geomerics' L1
+    // notes).
     const glm::dvec3 d(0.0, 1.0, 0.0);
     ShCoefficients light = deltaLights({{d, glm::dvec3(1.0)}}, 2);
     RenormalizedL1 l1 = renormalizedL1(light);
