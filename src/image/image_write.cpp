@@ -32,9 +32,8 @@ Image srgbEncoded(const Image& image) {
 // OutputFile exists first, so that a run interrupted while encoding removes its temporary file.
 // writePixels(output, format) writes the pixels; `format` is the file's pixel type.
 template <typename WritePixels>
-void encodeImage(const std::string& destination, const std::string& format, const OIIO::ImageSpec& spec,
-                 WritePixels writePixels) {
-    OutputFile file(destination, OutputContent::Binary);
+std::string encodeInMemory(const std::string& destination, const std::string& format,
+                           const OIIO::ImageSpec& spec, WritePixels writePixels) {
     MemoryFile memory;
     std::unique_ptr<OIIO::ImageOutput> output =
         OIIO::ImageOutput::create(format.empty() ? destination : format);
@@ -42,7 +41,14 @@ void encodeImage(const std::string& destination, const std::string& format, cons
     if (!output->open(memory.path(), spec)) failWrite(destination, output->geterror());
     if (!writePixels(*output, output->spec().format)) failWrite(destination, output->geterror());
     if (!output->close()) failWrite(destination, output->geterror());
-    file.write(memory.contents());
+    return memory.contents();
+}
+
+template <typename WritePixels>
+void encodeImage(const std::string& destination, const std::string& format, const OIIO::ImageSpec& spec,
+                 WritePixels writePixels) {
+    OutputFile file(destination, OutputContent::Binary);
+    file.write(encodeInMemory(destination, format, spec, writePixels));
     file.commit();
 }
 
@@ -63,6 +69,17 @@ void writeImage(const std::string& path, const Image& image, const std::string& 
         // OIIO converts our floats to the file's type.
         return stored.is_floating_point() ? writeTexels(output, image)
                                           : writeTexels(output, srgbEncoded(image));
+    });
+}
+
+std::string encodeRgba8(const std::string& format, int width, int height, const std::vector<uint8_t>& rgba) {
+    const std::string what = "a " + format + " image";
+    if (width < 1 || height < 1 || rgba.size() != size_t(width) * size_t(height) * 4)
+        failWrite(what, "the image has no pixels or a wrong byte count");
+    OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:UnassociatedAlpha", 1); // the bytes as they are: alpha is not multiplied in
+    return encodeInMemory(what, format, spec, [&](OIIO::ImageOutput& output, OIIO::TypeDesc) {
+        return output.write_image(OIIO::TypeDesc::UINT8, rgba.data());
     });
 }
 

@@ -19,4 +19,8 @@ void writeImage(const std::string& path, const Image& image, const std::string& 
 // extension's format (PNG, JPEG); alpha is dropped.
 void writeSrgbImage(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba);
 
+// The bytes of an 8-bit RGBA file of OpenImageIO's format `format` ("png") holding RGBA8 bytes
+// (rows top down) as they are, for files embedded in others (a glTF's data URIs).
+std::string encodeRgba8(const std::string& format, int width, int height, const std::vector<uint8_t>& rgba);
+
 } // namespace shprobe

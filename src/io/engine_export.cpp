@@ -3,6 +3,8 @@
 // the derivations); the formulas are transcribed, no engine code is copied.
 #include "shprobe/io/engine_export.h"
 
+#include "shprobe/image/image_write.h"
+
 #include "shprobe/io/probe_export.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/cubemap.h"
@@ -191,65 +193,6 @@ std::string unityText(const EngineCoefficients& c) {
 
 constexpr int kSpecularFaceSize = 16; // EXT_lights_image_based: square, power of two
 
-uint32_t crc32(std::string_view bytes) {
-    uint32_t crc = 0xffffffffu;
-    for (unsigned char b : bytes) {
-        crc ^= b;
-        for (int k = 0; k < 8; ++k)
-            crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-    }
-    return ~crc;
-}
-
-void appendBigEndian(std::string& out, uint32_t value) {
-    for (int shift = 24; shift >= 0; shift -= 8)
-        out += char((value >> shift) & 0xff);
-}
-
-void appendChunk(std::string& png, const char* type, const std::string& data) {
-    appendBigEndian(png, uint32_t(data.size()));
-    const std::string typed = std::string(type, 4) + data;
-    png += typed;
-    appendBigEndian(png, crc32(typed));
-}
-
-// zlib stream of stored (uncompressed) deflate blocks (RFC 1950, 1951).
-std::string zlibStored(const std::string& raw) {
-    std::string out = "\x78\x01";
-    size_t offset = 0;
-    do {
-        const size_t n = std::min<size_t>(raw.size() - offset, 65535);
-        const bool last = offset + n == raw.size();
-        out += char(last ? 1 : 0);
-        out += char(n & 0xff), out += char(n >> 8), out += char(~n & 0xff), out += char((~n >> 8) & 0xff);
-        out.append(raw, offset, n);
-        offset += n;
-    } while (offset < raw.size());
-    uint32_t a = 1, b = 0;
-    for (unsigned char c : raw)
-        a = (a + c) % 65521, b = (b + a) % 65521;
-    appendBigEndian(out, (b << 16) | a);
-    return out;
-}
-
-// An 8-bit RGBA PNG of rows top down.
-std::string encodePng(int size, const std::vector<uint8_t>& rgba) {
-    std::string png = "\x89PNG\r\n\x1a\n";
-    std::string header;
-    appendBigEndian(header, uint32_t(size));
-    appendBigEndian(header, uint32_t(size));
-    header += std::string("\x08\x06\x00\x00\x00", 5); // 8 bits, RGBA, deflate, no filter, no interlace
-    appendChunk(png, "IHDR", header);
-    std::string raw;
-    for (int j = 0; j < size; ++j) {
-        raw += '\0'; // filter: none
-        raw.append(reinterpret_cast<const char*>(rgba.data()) + size_t(j) * size * 4, size_t(size) * 4);
-    }
-    appendChunk(png, "IDAT", zlibStored(raw));
-    appendChunk(png, "IEND", "");
-    return png;
-}
-
 // RGBD as EXT_lights_image_based's PNGs hold HDR (Babylon's toRGBD in helperFunctions.fx):
 // D = floor(max(255 / max(rgb), 1)) / 255, rgb' = (rgb D)^(1/2.2), alpha D.
 std::array<uint8_t, 4> rgbd(const glm::dvec3& color) {
@@ -271,7 +214,7 @@ std::string specularFacePng(const ShCoefficients& irradiance, int face) {
             for (uint8_t b : rgbd(c))
                 rgba.push_back(b);
         }
-    return encodePng(kSpecularFaceSize, rgba);
+    return encodeRgba8("png", kSpecularFaceSize, kSpecularFaceSize, rgba);
 }
 
 std::string base64(std::string_view bytes) {
