@@ -49,6 +49,7 @@ struct RunOptions {
     // Run as user nobody when this process is root, for whom permission bits do not count.
     bool asOtherUser = false;
     std::string standardInput = "/dev/null";
+    int standardOutput = -1; // a descriptor for stdout instead of the log file (a pipe)
     // Where the child runs; with removeWorkingFolder it removes that (empty) folder before it
     // starts shprobe, which then runs in a working folder that no longer exists.
     std::string workingFolder;
@@ -115,7 +116,8 @@ class Child {
   private:
     [[noreturn]] void becomeShprobe(char** argv, char** envp, bool drop, const RunOptions& options) const {
         int in = open(options.standardInput.c_str(), O_RDONLY);
-        int out = open(outPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        int out = options.standardOutput >= 0 ? options.standardOutput
+                                              : open(outPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
         int err = open(errPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
         if (in < 0 || out < 0 || err < 0 || dup2(in, 0) < 0 || dup2(out, 1) < 0 || dup2(err, 2) < 0)
             _exit(126);

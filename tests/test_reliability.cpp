@@ -23,6 +23,7 @@
 #include <sys/mount.h>
 #include <sys/stat.h>
 #include <thread>
+#include <unistd.h>
 
 namespace shprobe {
 namespace {
@@ -169,6 +170,50 @@ TEST_F(Reliability, DevicesFifosAndStandardOutputAreStreams) {
     reader.join();
     EXPECT_NO_THROW(parseProbe(received, "fifo"));
     EXPECT_EQ(fs::status(folder() / "probe.fifo").type(), fs::file_type::fifo);
+}
+
+// A reader that goes away: the write fails with EPIPE, said in one line with exit 3, rather than
+// the program ending by SIGPIPE without a word.
+TEST_F(Reliability, ABrokenPipeIsAWriteError) {
+    int pipeEnds[2];
+    ASSERT_EQ(pipe(pipeEnds), 0);
+    close(pipeEnds[0]); // no reader
+    RunResult result =
+        run({"light", "--order", "8", "--ambient", "1,1,1", "-o", "-"}, {.standardOutput = pipeEnds[1]});
+    close(pipeEnds[1]);
+    expectMessage({{}, 3, {"cannot write -: broken pipe"}}, result);
+}
+
+// A replaced file keeps its permissions; a file the user may not write is not replaced (as a
+// shell's > would refuse it), even though the folder would allow the rename.
+TEST_F(Reliability, ReplacedFilesKeepTheirPermissions) {
+    writeText(folder() / "private.json", "earlier\n");
+    fs::permissions(folder() / "private.json", fs::perms::owner_read | fs::perms::owner_write);
+    runOk({"light", "--ambient", "1,1,1", "-o", file("private.json")});
+    EXPECT_EQ(fs::status(folder() / "private.json").permissions(),
+              fs::perms::owner_read | fs::perms::owner_write);
+    if (geteuid() != 0) GTEST_SKIP() << "the read-only case needs root to run the program as user nobody";
+    fs::permissions(folder(), fs::perms::all); // the folder lets nobody rename into it
+    writeText(folder() / "readonly.json", "earlier\n");
+    fs::permissions(folder() / "readonly.json", fs::perms::owner_read | fs::perms::others_read);
+    expectMessage({{}, 3, {"cannot write " + file("readonly.json"), "permission denied"}},
+                  run({"light", "--ambient", "1,1,1", "-o", file("readonly.json")}, {.asOtherUser = true}));
+    EXPECT_EQ(readText(folder() / "readonly.json"), "earlier\n");
+}
+
+// The kernel's rule for links in shared sticky folders (fs.protected_symlinks), applied by the
+// writer that follows links itself: another user's link in /tmp is not followed, so root cannot
+// be made to replace the file it points to.
+TEST_F(Reliability, AnotherUsersLinkInASharedStickyFolderIsNotFollowed) {
+    if (geteuid() != 0) GTEST_SKIP() << "needs root to give the link to another user";
+    fs::create_directories(folder() / "shared");
+    fs::permissions(folder() / "shared", fs::perms::all | fs::perms::sticky_bit);
+    writeText(folder() / "victim.txt", "victim\n");
+    fs::create_symlink(folder() / "victim.txt", folder() / "shared" / "probe.json");
+    ASSERT_EQ(lchown(file("shared/probe.json").c_str(), kNobody, kNobody), 0);
+    expectMessage({{}, 3, {"permission denied", "sticky"}},
+                  run({"light", "--ambient", "1,1,1", "-o", file("shared/probe.json")}));
+    EXPECT_EQ(readText(folder() / "victim.txt"), "victim\n");
 }
 
 // Probe readers take "-" for standard input; a device or a FIFO in place of a probe file is

@@ -5,8 +5,10 @@
 #include "shprobe/sh/error.h"
 #include "shprobe/version.h"
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
+#include <fcntl.h>
 #include <string>
 
 namespace {
@@ -33,9 +35,20 @@ std::string oneLine(std::string text) {
     return text;
 }
 
+// Descriptors 0-2 that the parent closed are opened on /dev/null, so that no file the program
+// opens takes their place (a probe file read as standard input, an output sent to standard
+// output). A reader that goes away makes a write fail with EPIPE ("cannot write -: broken pipe",
+// exit 3) instead of ending the program by SIGPIPE without a word.
+void prepareStandardStreams() {
+    for (int fd = 0; fd <= 2; ++fd)
+        if (fcntl(fd, F_GETFD) < 0) open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    std::signal(SIGPIPE, SIG_IGN);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    prepareStandardStreams();
     shprobe::removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
     CLI::App app{"shprobe: bake HDR environments into spherical-harmonics light probes with Vulkan "
                  "(conventions: docs/conventions.md)"};

@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -21,7 +22,7 @@ namespace {
 struct Descriptor {
     int fd = -1;
     ~Descriptor() {
-        if (fd > 2) close(fd);
+        if (fd >= 0) close(fd);
     }
 };
 
@@ -61,6 +62,13 @@ std::string readAll(int fd, const std::string& path, uint64_t maxBytes, const ch
     for (;;) {
         ssize_t got = read(fd, buffer, sizeof(buffer));
         if (got < 0 && errno == EINTR) continue;
+        if (got < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) { // a non-blocking pipe, empty for now
+            struct pollfd ready {
+                fd, POLLIN, 0
+            };
+            poll(&ready, 1, -1);
+            continue;
+        }
         if (got < 0) throwInputError(path, errno);
         if (got == 0) return text;
         if (text.size() + size_t(got) > maxBytes)

@@ -11,6 +11,7 @@
 #include <fcntl.h>
 #include <map>
 #include <mutex>
+#include <poll.h>
 #include <pthread.h>
 #include <random>
 #include <set>
@@ -79,6 +80,17 @@ int ownDescriptor(const std::string& folder, const std::string& name) {
     return std::stoi(name);
 }
 
+// The kernel's rule for links in sticky, world-writable folders (/tmp; Linux's
+// fs.protected_symlinks): such a link is followed only when its owner is the follower or the
+// folder's owner, so that nobody can plant /tmp/probe.json -> /etc/passwd for root to replace.
+// The links are followed here by hand, so the rule is applied here too.
+bool mayFollowLink(const std::string& folder, const struct stat& link) {
+    struct stat status {};
+    if (stat(folder.c_str(), &status) != 0) return false;
+    const bool shared = (status.st_mode & S_ISVTX) && (status.st_mode & S_IWOTH);
+    return !shared || link.st_uid == geteuid() || link.st_uid == status.st_uid;
+}
+
 // The folder a new or replaced file goes into must exist and be writable.
 void checkFolder(const std::string& destination, const std::string& folder) {
     struct stat status {};
@@ -109,6 +121,9 @@ OutputTarget resolveTarget(const std::string& destination) {
         if (S_ISLNK(status.st_mode)) {
             if (int descriptor = ownDescriptor(folder, name); descriptor >= 0)
                 return {OutputTarget::Descriptor, path, descriptor};
+            if (!mayFollowLink(folder, status))
+                failWrite(destination,
+                          "permission denied (a link in a shared sticky folder owned by another user)");
             char target[PATH_MAX];
             ssize_t length = readlink(path.c_str(), target, sizeof(target) - 1);
             if (length < 0) failWriteErrno(destination, errno);
@@ -118,6 +133,9 @@ OutputTarget resolveTarget(const std::string& destination) {
         }
         if (S_ISREG(status.st_mode)) {
             checkFolder(destination, folder);
+            // Replacing is renaming, which the folder allows; a file the user may not write is left
+            // alone all the same, as a shell's > would.
+            if (access(path.c_str(), W_OK) != 0) failWriteErrno(destination, errno);
             return {OutputTarget::File, path};
         }
         if (S_ISDIR(status.st_mode)) failWrite(destination, "it is a folder");
@@ -167,8 +185,17 @@ std::string temporaryName(const std::string& target) {
     char tag[16];
     std::snprintf(tag, sizeof(tag), ".%08x.tmp", unsigned(random()));
     const size_t fixed = 1 + std::string(tag).size();
-    if (fixed + extension.size() > NAME_MAX) extension.clear();
-    stem.resize(std::min(stem.size(), NAME_MAX - fixed - extension.size()));
+    // The folder's own limit (143 bytes on eCryptfs, 255 on most file systems).
+    long folderLimit = pathconf(folderOf(target).c_str(), _PC_NAME_MAX);
+    const size_t limit = folderLimit > long(fixed) ? size_t(folderLimit) : size_t(NAME_MAX);
+    if (fixed + extension.size() > limit) extension.clear();
+    if (stem.size() > limit - fixed - extension.size()) {
+        stem.resize(limit - fixed - extension.size());
+        // Cut at a character: file systems that check UTF-8 refuse half a character.
+        while (!stem.empty() && (static_cast<unsigned char>(stem.back()) & 0xC0) == 0x80)
+            stem.pop_back();
+        if (!stem.empty() && static_cast<unsigned char>(stem.back()) >= 0xC0) stem.pop_back();
+    }
     return folderOf(target) + "/." + stem + tag + extension;
 }
 
@@ -188,6 +215,15 @@ int openStream(const std::string& destination, const OutputTarget& target) {
                  : open(target.path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
     if (fd < 0) failWriteErrno(destination, errno);
     return fd;
+}
+
+// The rename itself reaches the disk with the folder's entry: after a crash the new file is there,
+// not the old one. Best effort: a folder that cannot be opened or synced is left as it is.
+void syncFolder(const std::string& folder) {
+    int fd = open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return;
+    fsync(fd);
+    close(fd);
 }
 
 const int kInterruptSignals[] = {SIGINT, SIGTERM, SIGHUP};
@@ -275,6 +311,13 @@ void OutputFile::write(std::string_view bytes) {
     while (!bytes.empty()) {
         ssize_t written = ::write(descriptor_, bytes.data(), bytes.size());
         if (written < 0 && errno == EINTR) continue;
+        if (written < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) { // a non-blocking pipe is full
+            struct pollfd ready {
+                descriptor_, POLLOUT, 0
+            };
+            poll(&ready, 1, -1);
+            continue;
+        }
         if (written < 0) failWriteErrno(destination_, errno);
         if (written == 0) failWriteErrno(destination_, ENOSPC);
         bytes.remove_prefix(size_t(written));
@@ -287,6 +330,10 @@ void OutputFile::commit() {
     // nothing to flush (pipes and devices answer fsync with EINVAL).
     if (!temporary_.empty() && fsync(descriptor_) != 0 && errno != EINVAL)
         failWriteErrno(destination_, errno);
+    // A replaced file keeps its permissions (a private file stays private).
+    struct stat replaced {};
+    if (!temporary_.empty() && stat(target_.c_str(), &replaced) == 0)
+        fchmod(descriptor_, replaced.st_mode & 07777);
     int descriptor = descriptor_;
     descriptor_ = -1;
     if (close(descriptor) != 0 && errno != EINTR) failWriteErrno(destination_, errno);
@@ -299,6 +346,7 @@ void OutputFile::commit() {
     if (std::rename(temporary_.c_str(), target_.c_str()) != 0) failWriteErrno(destination_, errno);
     committed_ = true;
     files.paths.erase(temporary_);
+    syncFolder(folderOf(target_));
 }
 
 void writeOutputFile(const std::string& path, std::string_view contents, OutputContent content) {

@@ -91,6 +91,11 @@ VkPipelineCache loadPipelineCache(const Context& context, const std::string& pat
     info.initialDataSize = data.size();
     info.pInitialData = data.empty() ? nullptr : data.data();
     VkPipelineCache cache = VK_NULL_HANDLE;
+    if (!data.empty() && vkCreatePipelineCache(context.device, &info, nullptr, &cache) == VK_SUCCESS)
+        return cache;
+    if (!data.empty()) warnOnce(path + ": the driver refused the cached data");
+    info.initialDataSize = 0;
+    info.pInitialData = nullptr;
     VK_CHECK(vkCreatePipelineCache(context.device, &info, nullptr, &cache));
     return cache;
 }
