@@ -9,7 +9,10 @@
 #
 # Installed layout (GNUInstallDirs; <prefix> is CMAKE_INSTALL_PREFIX or `--prefix`):
 #   bin/shprobe                                the command-line program (RUNPATH $ORIGIN/../lib when
-#                                              the libraries are shared)
+#                                              the libraries are shared); needs no window system
+#   bin/shprobe-view                           the viewer, which `shprobe view` runs from shprobe's
+#                                              folder; the only file that needs GLFW (same RUNPATH; not
+#                                              built with -DSHPROBE_BUILD_VIEWER=OFF)
 #   lib/libshprobe{_sh,,_render}.a             shprobe_sh, shprobe, shprobe_render (exported as
 #     or .so -> .so.0.1 -> .so.0.1.0           shprobe::sh, shprobe::shprobe, shprobe::render): static
 #                                              by default, shared with -DBUILD_SHARED_LIBS=ON (soname
@@ -24,6 +27,7 @@
 #   include/shprobe/glsl/                      shaders/include: the C++/GLSL shared headers
 #                                              (<shprobe/glsl/gpu_interface.h>) and the GLSL includes
 #   share/shprobe/spirv/*.spv, INTERFACE.md    every module built into the libraries, and its contract
+#   share/shprobe/shaders/*.glsl               the modules' sources (compile with -I include/shprobe/glsl)
 #   lib/cmake/shprobe/                         shprobeConfig.cmake, shprobeConfigVersion.cmake (same
 #                                              major.minor: 0.x may break the interface), the targets
 #   lib/pkgconfig/shprobe.pc                   Cflags -I<prefix>/include; Libs render, shprobe, sh;
@@ -36,7 +40,7 @@
 # and finds only what the installed headers include (Vulkan, glm): no installed header includes
 # OpenImageIO or nlohmann/json, which the libraries link privately (see "what a static build's
 # consumers link" below for the static case). The GLFW viewer (shprobe_viewer) stays private: the
-# installed libraries never need a window system.
+# installed libraries and bin/shprobe never need a window system; only bin/shprobe-view links it.
 #
 # Only the top-level project installs anything (as VMA does). This file runs after every target is
 # defined (the last line of the top-level CMakeLists.txt), so it can adjust their properties here.
@@ -87,6 +91,11 @@ while(shprobe_installed_libraries)
     list(APPEND shprobe_export_targets ${target})
 endwhile()
 get_target_property(shprobe_library_type shprobe TYPE) # STATIC_LIBRARY or SHARED_LIBRARY
+# The programs, installed side by side: `shprobe view` runs shprobe-view from shprobe's folder.
+set(shprobe_programs shprobe_cli)
+if(TARGET shprobe_view_cli) # SHPROBE_BUILD_VIEWER
+    list(APPEND shprobe_programs shprobe_view_cli)
+endif()
 
 # --- what a static build's consumers link --------------------------------------------------------
 # A static library's PRIVATE dependencies are still link items of whatever links it, so CMake exports
@@ -167,7 +176,7 @@ endif()
 # the file that carries it), so a prefix works wherever it is unpacked, without LD_LIBRARY_PATH.
 if(shprobe_library_type STREQUAL "SHARED_LIBRARY")
     file(RELATIVE_PATH bin_to_lib ${CMAKE_INSTALL_FULL_BINDIR} ${CMAKE_INSTALL_FULL_LIBDIR})
-    set_target_properties(shprobe_cli PROPERTIES INSTALL_RPATH "$ORIGIN/${bin_to_lib}")
+    set_target_properties(${shprobe_programs} PROPERTIES INSTALL_RPATH "$ORIGIN/${bin_to_lib}")
     set_target_properties(shprobe_sh shprobe shprobe_render PROPERTIES
         INSTALL_RPATH "$ORIGIN"
         VERSION ${PROJECT_VERSION}
@@ -179,7 +188,7 @@ install(TARGETS ${shprobe_export_targets}
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(TARGETS shprobe_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS ${shprobe_programs} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
 # --- headers -------------------------------------------------------------------------------------
 # The public API: everything under these folders of src/ except the viewer's window-system headers.
@@ -218,6 +227,11 @@ list(TRANSFORM shprobe_modules APPEND ".spv" OUTPUT_VARIABLE shprobe_module_file
 list(TRANSFORM shprobe_module_files PREPEND "${PROJECT_BINARY_DIR}/spirv/")
 install(FILES ${shprobe_module_files} ${PROJECT_SOURCE_DIR}/shaders/INTERFACE.md
     DESTINATION ${SHPROBE_INSTALL_SPIRVDIR})
+# The modules' sources (INTERFACE.md, "Sources": glslangValidator --target-env vulkan1.1
+# -I <prefix>/include/shprobe/glsl).
+list(TRANSFORM shprobe_modules APPEND ".glsl" OUTPUT_VARIABLE shprobe_module_sources)
+list(TRANSFORM shprobe_module_sources PREPEND "${PROJECT_SOURCE_DIR}/shaders/")
+install(FILES ${shprobe_module_sources} DESTINATION ${CMAKE_INSTALL_DATADIR}/shprobe/shaders)
 
 # --- CMake package -------------------------------------------------------------------------------
 install(EXPORT shprobeTargets NAMESPACE shprobe:: DESTINATION ${SHPROBE_INSTALL_CMAKEDIR})

@@ -2,13 +2,17 @@
 # The installed package seen by an engine: installs shprobe into a temporary prefix and builds the
 # examples against that prefix alone; neither CMake configure may print a warning.
 #
-# examples/bake_probe (find_package(shprobe) for the .spv folder; no shprobe C++) runs on lavapipe
-# with the validation layer, and its coefficients are checked:
+# examples/bake_probe (find_package(shprobe) for the .spv folder and the shared headers; no shprobe
+# library) runs on lavapipe with the validation layer, and its plan and coefficients are checked:
+#   0. each bake's dispatch plan, as the example prints it, is a row of the installed INTERFACE.md's
+#      table of plans (which test_interface recomputes with dispatch_plan.h, the baker's plan);
 #   1. white furnace (radiance 1 everywhere): L_00 = sqrt(4 pi), E_00 = pi sqrt(4 pi), the rest 0,
-#      within 1e-5 of L_00 (fp32 sums of 6 x 32^2 texels; measured about 3e-8);
+#      within 1e-5 of L_00 (fp32 sums of 6 x 32^2 texels; measured 3.5e-7 for L_00 and 1.7e-6 for
+#      E_00, about an ulp of each fp32 value);
 #   2. a sky with a sun, order 5, 6 x 128^2: the example writes its texels as six PFM faces and
 #      `shprobe bake` projects the same file; radiance and irradiance must agree within 1e-6 of each
-#      channel's first coefficient (L_00 or E_00; same modules, same dispatch plan: in practice identical);
+#      channel's first coefficient (L_00 or E_00; same modules, and the same dispatch plan, as both
+#      take dispatch_plan.h's defaults: in practice identical);
 #   3. the same radiance against `shprobe bake --backend reference`, the double-precision reference, within
 #      1e-5 of L_00 (fp32 texel weights and sums; measured about 1e-7).
 #
@@ -23,6 +27,9 @@
 #   E is positive, so the stored rounding moves E by at most 5e-9 of itself; the rest is double
 #   arithmetic (measured: 6e-10 and 4e-10). Any slip of convention (pi, sqrt(4 pi), a band factor,
 #   a rotation's sense) is off by far more.
+#
+# Last, INTERFACE.md's "Sources": every installed module's source is installed, and glslang, with the
+# options the document gives, compiles it into the installed module, byte for byte.
 # SHPROBE_BUILD_DIR picks the build to install (default ./build, built here if needed); the same
 # checks serve a -DBUILD_SHARED_LIBS=ON build.
 set -euo pipefail
@@ -58,6 +65,22 @@ configure examples/bake_probe "$work/example"
 cmake --build "$work/example" > /dev/null
 example=$work/example/bake_probe
 
+# The example's "plan:" line (INTERFACE.md's columns) must be a row of the installed document's table
+# of plans (the table whose header starts "| N | n | probes |").
+check_plan() { # example output
+  local plan rows
+  plan=$(awk '$1 == "plan:" { $1 = ""; print substr($0, 2) }' "$1")
+  rows=$(awk -F'|' '/^\| N \| n \| probes \|/ { on = 1; next }
+    on && /^\| ---/ { next }
+    on && /^\|/ { line = ""; for (i = 2; i < NF; ++i) { gsub(/ /, "", $i); line = line (i > 2 ? " " : "") $i }
+                  print line; next }
+    on { exit }' "$prefix/share/shprobe/spirv/INTERFACE.md")
+  if [ -z "$plan" ] || ! grep -Fxq -- "$plan" <<< "$rows"; then
+    echo "FAIL: the example's plan '$plan' is not a row of INTERFACE.md's table of plans"; exit 1
+  fi
+  echo "plan $plan: a row of INTERFACE.md's table of plans"
+}
+
 # Rows "L i r g b" / "E i r g b" of the example; prints them as "i r g b".
 rows() { awk -v tag="$1" '$1 == tag { print $2, $3, $4, $5 }' "$2"; }
 # Coefficient rows of a probe file, numbered.
@@ -65,6 +88,7 @@ json_rows() { awk '/"coefficients"/ { on = 1; next } on && /\[/ { gsub(/[][,]/, 
 
 echo "== white furnace"
 "$example" --environment white --face-size 32 --order 3 --validation | tee "$work/white.txt"
+check_plan "$work/white.txt"
 for tag in L E; do
   rows "$tag" "$work/white.txt" | awk -v tag="$tag" '
     BEGIN { pi = atan2(0, -1); l00 = sqrt(4 * pi); expected0 = (tag == "L") ? l00 : pi * l00; worst = 0 }
@@ -78,6 +102,7 @@ done
 echo "== sky: the example against shprobe bake on the same texels"
 mkdir -p "$work/faces"
 "$example" --environment sky --face-size 128 --order 5 --write-faces "$work/faces" --validation | tee "$work/sky.txt"
+check_plan "$work/sky.txt"
 "$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 -o "$work/radiance.json" -q
 "$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 --irradiance -o "$work/irradiance.json" -q
 "$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 --backend reference -o "$work/cpu.json" -q
@@ -146,4 +171,18 @@ for how in CMake pkg-config; do
   expect "$how: directional 1,2,4 from x rotated by 30,60,45, E(R x) = pi I" "1 2 4" \
     "$reader" "$work/directional.json" 30,60,45 "$(rotated_x 30 60 45)"
 done
+echo "== module sources: installed, and compiled as INTERFACE.md says into the installed modules"
+glsl_dir=$prefix/include/shprobe/glsl
+for spv in "$prefix"/share/shprobe/spirv/*.spv; do
+  module=$(basename "$spv" .spv) # project.comp
+  source=$prefix/share/shprobe/shaders/$module.glsl
+  if [ ! -f "$source" ]; then
+    echo "FAIL: $module's source is not installed (INTERFACE.md: share/shprobe/shaders/$module.glsl)"; exit 1
+  fi
+  glslangValidator --target-env vulkan1.1 -S "${module##*.}" -I"$glsl_dir" -o "$work/$module.spv" "$source" > /dev/null
+  if ! cmp -s "$spv" "$work/$module.spv"; then
+    echo "FAIL: the installed $module.glsl does not compile into the installed $module.spv"; exit 1
+  fi
+done
+echo "every installed module compiles from its installed source"
 echo "example: OK"

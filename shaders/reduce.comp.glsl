@@ -3,10 +3,14 @@
 // Workgroup (i, p) sums coefficient i of probe p, whose slots are p * partialCount ..
 // (p + 1) * partialCount - 1: invocation t adds slots t, t + width, t + 2 width, ..., then invocation 0 adds the
 // invocations' sums in order. The order is fixed, so the same input gives bit-identical
-// coefficients on every run, and each invocation loops partialCount / width times, which keeps
-// lavapipe's 65535-iteration loop limit out of reach for millions of slots. Sums are compensated
-// (Kahan 1965) so their error stays at a few ulps of the total; `precise` keeps the compiler from
-// reassociating the compensation away.
+// coefficients on every run.
+// Workaround(llvmpipe, Mesa 22.3): each invocation loops partialCount / width times, which keeps
+// llvmpipe's 65535-iteration loop limit (dispatch_plan.h, maxPositionsPerInvocation) out of reach
+// for millions of slots; one invocation looping over 32768 slots lost some of them
+// (docs/gpu-path.md). A whole workgroup per coefficient is a sound reduction on any device, so
+// nothing here needs dropping elsewhere.
+// Sums are compensated (Kahan 1965) so their error stays at a few ulps of the total; `precise`
+// keeps the compiler from reassociating the compensation away.
 //
 // Interface (shaders/INTERFACE.md):
 //   set 0, binding 0: readonly buffer, vec4 partials[]: partialCount slots of SH_COEFFICIENTS vec4

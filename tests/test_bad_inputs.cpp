@@ -553,9 +553,9 @@ TEST(VulkanErrors, DeviceLostNamesTheResultTheCallAndTheStep) {
     EXPECT_EQ(deviceErrorOf(lost).find("while"), std::string::npos);
 
     std::string submit = vkErrorMessage(VK_ERROR_DEVICE_LOST, "vkQueueSubmit(queue, 1, &submit, fence)",
-                                        "/build/shprobe/src/gpu/projector.cpp", 120);
+                                        "/build/shprobe/src/gpu/host_bake.cpp", 120);
     EXPECT_CONTAINS(submit, "vkQueueSubmit(queue, 1, &submit, fence) failed with VK_ERROR_DEVICE_LOST (-4) "
-                            "(src/gpu/projector.cpp:120): the Vulkan device was lost");
+                            "(src/gpu/host_bake.cpp:120): the Vulkan device was lost");
 }
 
 TEST(VulkanErrors, OutOfMemoryIsSaidInWords) {

@@ -57,14 +57,14 @@ TEST(Geometry, CubeSolidAngleCheckValues) {
     }
 }
 
-// Worst relative error of shprobe::gpu::texelSolidAngle (fp32) against the double formula over the
+// Worst relative error of shprobe::gpu::texelSolidAngleFp32 against the double formula over the
 // texels (i, j) of one face with i, j multiples of stride (the six faces share their solid angles).
 double worstFp32SolidAngleError(int n, int stride) {
     double worst = 0.0;
     for (int j = 0; j < n; j += stride) {
         for (int i = 0; i < n; i += stride) {
             const double reference = texelSolidAngle(i, j, n);
-            const double fp32 = gpu::texelSolidAngle(gpu::uint(i), gpu::uint(j), gpu::uint(n));
+            const double fp32 = gpu::texelSolidAngleFp32(gpu::uint(i), gpu::uint(j), gpu::uint(n));
             worst = std::max(worst, std::abs(fp32 - reference) / reference);
         }
     }
@@ -90,7 +90,8 @@ TEST(Geometry, Fp32SolidAngleMatchesDoubleAtEverySize) {
     }
 }
 
-// Checks: the double texelDirection equals the normalized fp32 faceDirection of texel_geometry.h
+// Checks: the double texelDirection equals the normalized fp32 unnormalizedFaceDirection of
+// texel_geometry.h
 // for every texel of every face, so CPU reference and shaders sample the same directions.
 TEST(Geometry, TexelDirectionMatchesShaderTable) {
     for (int n : {1, 2, 3, 8, 31, 64}) {
@@ -99,7 +100,8 @@ TEST(Geometry, TexelDirectionMatchesShaderTable) {
                 for (int i = 0; i < n; ++i) {
                     const float a = gpu::texelCenterCoord(gpu::uint(i), gpu::uint(n));
                     const float b = gpu::texelCenterCoord(gpu::uint(j), gpu::uint(n));
-                    const glm::dvec3 shader = glm::normalize(gpu::faceDirection(gpu::uint(face), a, b));
+                    const glm::dvec3 shader =
+                        glm::normalize(gpu::unnormalizedFaceDirection(gpu::uint(face), a, b));
                     const glm::dvec3 reference = texelDirection(face, i, j, n);
                     ASSERT_LT(glm::length(shader - reference), kFp32DirectionError)
                         << "face " << face << ", texel (" << i << ", " << j << "), N = " << n;

@@ -3,8 +3,8 @@
 // per subgroup size 4, 8, 16, 32).
 #include "gpu_test.h"
 
+#include "shprobe/gpu/host_bake.h"
 #include "shprobe/gpu/probe_baker.h"
-#include "shprobe/gpu/projector.h"
 #include "shprobe/gpu/rotator.h"
 #include "shprobe/image/environment.h"
 #include "shprobe/sh/basis.h"
@@ -85,10 +85,16 @@ double relativeError(const ShCoefficients& gpu, const ShCoefficients& reference)
 
 class GpuProjection : public GpuTest {
   protected:
-    GpuBake bake(const Cubemap& cubemap, const ProjectorOptions& options) {
-        Projector projector = createProjector(context(), options);
-        GpuBake result = bakeCubemap(context(), projector, cubemap);
-        destroyProjector(context(), projector);
+    // The pipelines for host cube maps uploaded in `format`, as the program creates them.
+    ProbeBaker hostBaker(ProbeBakerOptions options, TexelFormat format = TexelFormat::Rgba32F) {
+        options.cubemaps = uploadBinding(context(), format);
+        return createProbeBaker(context(), options);
+    }
+
+    GpuBake bake(const Cubemap& cubemap, const ProbeBakerOptions& options) {
+        ProbeBaker baker = hostBaker(options);
+        GpuBake result = bakeCubemap(context(), baker, cubemap);
+        destroyProbeBaker(context(), baker);
         return result;
     }
 
@@ -193,10 +199,10 @@ TEST_F(GpuProjection, WindowIsAppliedByTheConvolutionShader) {
     for (int order : {3, 5}) {
         std::vector<double> window = windowFactors(WindowKind::Hanning, 3.5, order);
         GpuBake gpu = bake(cubemap, {.order = order});
-        Projector projector = createProjector(context(), {.order = order});
-        GpuBake windowed = bakeCubemap(context(), projector, cubemap, window);
-        GpuBake convolved = convolveOnGpu(context(), projector, gpu.radiance, window);
-        destroyProjector(context(), projector);
+        ProbeBaker baker = hostBaker({.order = order});
+        GpuBake windowed = bakeCubemap(context(), baker, cubemap, window);
+        GpuBake convolved = convolveOnGpu(context(), baker, gpu.radiance, window);
+        destroyProbeBaker(context(), baker);
 
         ShCoefficients expected = applyWindow(projectCubemap(cubemap, order), window);
         EXPECT_LT(relativeError(windowed.radiance, expected), kGpuTolerance) << "order " << order;
@@ -211,7 +217,7 @@ TEST_F(GpuProjection, WindowIsAppliedByTheConvolutionShader) {
 
 // lavapipe stops loops after 65535 iterations, nested ones included, and the sums are then silently
 // wrong: asking for far more texels per invocation than that allows must still give the right sums
-// (the projector caps the work per invocation by order).
+// (the baker caps the work per invocation by order).
 TEST_F(GpuProjection, HugeWorkPerInvocationStaysCorrect) {
     // 192^2 positions (each a texel and its mirror images): one 8-wide workgroup would loop 4608 times
     // per face pair, with 18 basis-recurrence iterations in each at order 8.
@@ -249,12 +255,12 @@ TEST_F(GpuProjection, RunsAtTheRequestedSubgroupSize) {
 }
 
 TEST_F(GpuProjection, RejectsBadOrdersAndFaces) {
-    EXPECT_THROW(createProjector(context(), {.order = 0}), Error);
-    EXPECT_THROW(createProjector(context(), {.order = 9}), Error);
-    Projector projector = createProjector(context(), {.order = 3});
+    EXPECT_THROW(hostBaker({.order = 0}), Error);
+    EXPECT_THROW(hostBaker({.order = 9}), Error);
+    ProbeBaker baker = hostBaker({.order = 3});
     Cubemap empty;
-    EXPECT_THROW(bakeCubemap(context(), projector, empty), Error);
-    destroyProjector(context(), projector);
+    EXPECT_THROW(bakeCubemap(context(), baker, empty), Error);
+    destroyProbeBaker(context(), baker);
 }
 
 // A batch bakes each probe exactly as a bake of it alone would (same dispatch shapes, the same fixed
@@ -266,19 +272,19 @@ TEST_F(GpuProjection, BatchEqualsSingleBakesInOneSubmission) {
     std::vector<const Cubemap*> batch;
     for (const Cubemap& cubemap : cubemaps)
         batch.push_back(&cubemap);
-    Projector projector = createProjector(context(), {.order = 5});
+    ProbeBaker baker = hostBaker({.order = 5});
     const uint64_t submissionsBefore = submissionCount();
-    std::vector<GpuBake> batched = bakeCubemaps(context(), projector, batch);
+    std::vector<GpuBake> batched = bakeCubemaps(context(), baker, batch);
     EXPECT_EQ(submissionCount() - submissionsBefore, 1u) << "a batch of 5 probes, 3 face sizes";
     ASSERT_EQ(batched.size(), cubemaps.size());
     for (size_t k = 0; k < cubemaps.size(); ++k) {
-        GpuBake single = bakeCubemap(context(), projector, cubemaps[k]);
+        GpuBake single = bakeCubemap(context(), baker, cubemaps[k]);
         EXPECT_EQ(batched[k].radiance.rgb, single.radiance.rgb) << "probe " << k;
         EXPECT_EQ(batched[k].irradiance.rgb, single.irradiance.rgb) << "probe " << k;
         EXPECT_LT(relativeError(batched[k].radiance, projectCubemap(cubemaps[k], 5)), kGpuTolerance)
             << "probe " << k;
     }
-    destroyProjector(context(), projector);
+    destroyProbeBaker(context(), baker);
 }
 
 // RGBA16F input: the GPU reads halves, so the reference is the projection of the half-rounded
@@ -289,12 +295,12 @@ TEST_F(GpuProjection, HalfFloatInputMatchesTheReferenceOfItsValues) {
     Cubemap rounded = cubemap;
     for (glm::vec4& texel : rounded.texels)
         texel = glm::unpackHalf4x16(glm::packHalf4x16(texel));
-    Projector projector = createProjector(context(), {.order = 3, .texelFormat = TexelFormat::Rgba16F});
-    GpuBake gpu = bakeCubemap(context(), projector, cubemap);
+    ProbeBaker baker = hostBaker({.order = 3}, TexelFormat::Rgba16F);
+    GpuBake gpu = bakeCubemap(context(), baker, cubemap);
     EXPECT_LT(relativeError(gpu.radiance, projectCubemap(rounded, 3)), kGpuTolerance);
     cubemap.at(0, 0, 0) = glm::vec4(1e5f, 0.0f, 0.0f, 1.0f);
-    EXPECT_THROW(bakeCubemap(context(), projector, cubemap), Error);
-    destroyProjector(context(), projector);
+    EXPECT_THROW(bakeCubemap(context(), baker, cubemap), Error);
+    destroyProbeBaker(context(), baker);
 }
 
 // The renderer's path (probe_baker.h): a baker on a borrowed device, the caller's own image, command
@@ -341,7 +347,7 @@ class GpuResidentBake : public GpuTest {
 
 TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
     const int order = 3;
-    Context device = borrowDevice({context().physicalDevice, context().device, context().queueFamily});
+    Device device = borrowDevice({context().physicalDevice, context().device, context().queueFamily});
     ProbeBaker baker = createProbeBaker(device, {.order = order});
     const std::vector<Cubemap> first = {noiseCubemap(24, 21), noiseCubemap(24, 22), hotSunCubemap(24)};
     const std::vector<Cubemap> second = {noiseCubemap(9, 23)};
@@ -400,7 +406,7 @@ TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
 // every texel once whatever the width.
 TEST_F(GpuResidentBake, SampledModuleMatchesTheReferenceForAnyWorkgroupShape) {
     const int order = 4;
-    Context device = borrowDevice({context().physicalDevice, context().device, context().queueFamily});
+    Device device = borrowDevice({context().physicalDevice, context().device, context().queueFamily});
     const std::vector<Cubemap> cubemaps = {noiseCubemap(24, 31)};
     const ShCoefficients reference = projectCubemap(cubemaps[0], order);
     Buffer output = createBuffer(device, probeBakeOutputBytes(order, 1), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,

@@ -1,9 +1,11 @@
 // bake_probe: bakes an SH light probe with shprobe's installed SPIR-V modules and plain Vulkan.
 //
-// Everything here comes from share/shprobe/spirv/INTERFACE.md: the bindings, the push-constant
-// layouts (declared below and pinned by static_asserts), the specialization constants, the
-// dispatch rules of project.comp, reduce.comp and convolve.comp, and the output layout. No shprobe
-// C++ is linked or included; the only thing the package provides is the folder of the .spv files.
+// Everything here comes from the installed package: share/shprobe/spirv/INTERFACE.md gives the
+// bindings, barriers, the dispatch rules of project.comp, reduce.comp and convolve.comp, and the
+// output layout; the headers shared by shprobe's C++ and its shaders, from the GLSL folder
+// (find_package(shprobe): shprobe_GLSL_DIR), give the push-constant structs, the specialization
+// constant ids (gpu_interface.h) and the dispatch plan (dispatch_plan.h). No shprobe library is
+// linked.
 //
 //   bake_probe [--environment white|sky] [--face-size N] [--order N] [--write-faces DIR]
 //              [--spirv-dir DIR] [--validation]
@@ -12,6 +14,9 @@
 // sqrt(4 pi), every other coefficient 0), `sky` a smooth gradient with a soft sun. It is uploaded
 // into a 2D-array image of six RGBA32F layers, which project.comp samples. --write-faces writes the
 // same texels as DIR/px.pfm ... DIR/nz.pfm, which `shprobe bake 'DIR/{face}.pfm'` reads.
+#include "dispatch_plan.h"
+#include "gpu_interface.h"
+
 #include <vulkan/vulkan.h>
 
 #include <algorithm>
@@ -40,41 +45,19 @@ namespace {
     std::exit(1);
 }
 
-// --- the interface, from INTERFACE.md ------------------------------------------------------------
+// --- the interface: INTERFACE.md and the shared headers ------------------------------------------
 
-constexpr uint32_t kSpecWorkgroupWidth = 0; // specialization constant ids
-constexpr uint32_t kSpecOrder = 1;
-constexpr uint32_t kWidth = 64;            // workgroup width of all three modules here
-constexpr uint32_t kFaces = 6;             // layers per probe: probe p's face f is layer 6p + f
-constexpr uint32_t kTexelsPerPosition = 6; // project.comp: one position = the same texel of six faces
-constexpr uint32_t kProbes = 1;            // probes per bake; the modules take many, this example one
+namespace glsl = shprobe::gpu; // the shared headers' C++ namespace
+
+constexpr uint32_t kWidth = glsl::kDefaultWorkgroupWidth; // workgroup width of all three modules here
+constexpr uint32_t kFaces = 6;  // layers per probe: probe p's face f is layer 6p + f
+constexpr uint32_t kProbes = 1; // probes per bake; the modules take many, this example one
 constexpr VkFormat kTexelFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
-
-struct ProjectParams { // project.comp, 4 bytes
-    uint32_t faceSize;
-};
-static_assert(sizeof(ProjectParams) == 4);
-
-struct ReduceParams { // reduce.comp, 4 bytes
-    uint32_t partialCount;
-};
-static_assert(sizeof(ReduceParams) == 4);
-
-struct ConvolveParams { // convolve.comp, 36 bytes: vec4 bandScale[2] (band l at float l), uint outputOffset
-    float bandScale[8];
-    uint32_t outputOffset; // in vec4: where probe 0's output starts in binding 1
-};
-static_assert(sizeof(ConvolveParams) == 36 && offsetof(ConvolveParams, outputOffset) == 32);
 
 struct Coefficient { // every coefficient buffer, and the texels: vec4, rgb + unused w
     float r, g, b, unused;
 };
 static_assert(sizeof(Coefficient) == 16);
-
-// The lavapipe loop cap of project.comp: positions per invocation at order n.
-uint32_t maxPositionsPerInvocation(uint32_t n) {
-    return 32768u / (1u + 6u * (1u + n * n + n * n / 2u));
-}
 
 // A_l, the clamped-cosine convolution factor of band l.
 double irradianceFactor(int l) {
@@ -431,7 +414,7 @@ Program createProgram(const Gpu& gpu, const Options& options, const ProgramInfo&
     VK_CHECK(vkCreatePipelineLayout(gpu.device, &layoutInfo, nullptr, &program.layout));
 
     const uint32_t values[2] = {kWidth, options.order};
-    const VkSpecializationMapEntry entries[2] = {{kSpecWorkgroupWidth, 0, 4}, {kSpecOrder, 4, 4}};
+    const VkSpecializationMapEntry entries[2] = {{SHPROBE_SPEC_LOCAL_SIZE, 0, 4}, {SHPROBE_SPEC_ORDER, 4, 4}};
     VkSpecializationInfo specialization{2, entries, sizeof(values), values};
     VkComputePipelineCreateInfo pipelineInfo{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     pipelineInfo.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
@@ -593,11 +576,11 @@ Programs createPrograms(const Gpu& gpu, const Options& options) {
     Programs programs;
     programs.sampler = createNearestSampler(gpu);
     programs.project = createProgram(
-        gpu, options, {"project.comp.spv", {image, buffer}, sizeof(ProjectParams), programs.sampler});
+        gpu, options, {"project.comp.spv", {image, buffer}, sizeof(glsl::ProjectParams), programs.sampler});
     programs.reduce =
-        createProgram(gpu, options, {"reduce.comp.spv", {buffer, buffer}, sizeof(ReduceParams)});
+        createProgram(gpu, options, {"reduce.comp.spv", {buffer, buffer}, sizeof(glsl::ReduceParams)});
     programs.convolve =
-        createProgram(gpu, options, {"convolve.comp.spv", {buffer, buffer}, sizeof(ConvolveParams)});
+        createProgram(gpu, options, {"convolve.comp.spv", {buffer, buffer}, sizeof(glsl::ConvolveParams)});
     return programs;
 }
 
@@ -607,30 +590,34 @@ void destroyPrograms(const Gpu& gpu, Programs& programs) {
     vkDestroySampler(gpu.device, programs.sampler, nullptr);
 }
 
-// What one bake dispatches: N, the SH order and project.comp's workgroups per probe.
+// What one bake dispatches: N, the SH order and project.comp's workgroups per probe, with the
+// plan's inputs from the device and its intermediate values, printed for scripts/example.sh to
+// hold against INTERFACE.md's table of plans.
 struct BakePlan {
     uint32_t faceSize = 0, order = 0, groups = 0;
+    uint32_t maxWorkGroupCountX = 0, maxStorageBufferRange = 0;
+    uint32_t positions = 0, maxGroups = 0, maxPositions = 0, perInvocation = 0;
 };
 
-// project.comp's workgroups per probe (INTERFACE.md, shprobe's plan): about 43 positions (256
-// texels) per invocation, at least as many as maxComputeWorkGroupCount[0] and one binding of
-// partial slots (maxStorageBufferRange) allow, at most lavapipe's loop cap.
+// shprobe's plan (dispatch_plan.h, INTERFACE.md): shprobe's default texels per invocation, at
+// least as many positions per invocation as maxComputeWorkGroupCount[0] and one binding of partial
+// slots (maxStorageBufferRange) allow, at most lavapipe's loop cap.
 BakePlan planBake(const Gpu& gpu, const Options& options) {
-    const uint32_t order = options.order;
-    const uint64_t positions = uint64_t(options.faceSize) * options.faceSize;
-    const uint64_t slotBytes = uint64_t(order) * order * sizeof(Coefficient);
-    const uint64_t maxGroups = std::min<uint64_t>(gpu.limits.maxComputeWorkGroupCount[0],
-                                                  gpu.limits.maxStorageBufferRange / slotBytes / kProbes);
-    const uint64_t least =
-        maxGroups ? ((positions + maxGroups - 1) / maxGroups + kWidth - 1) / kWidth : UINT64_MAX;
-    const uint64_t most = maxPositionsPerInvocation(order);
-    if (least > most)
-        fail("face size " + std::to_string(options.faceSize) + " at order " + std::to_string(order) +
+    BakePlan plan{.faceSize = options.faceSize, .order = options.order};
+    plan.maxWorkGroupCountX = gpu.limits.maxComputeWorkGroupCount[0];
+    plan.maxStorageBufferRange = gpu.limits.maxStorageBufferRange;
+    plan.positions = glsl::projectionPositions(options.faceSize);
+    const uint32_t slotBytes = options.order * options.order * uint32_t(sizeof(Coefficient));
+    plan.maxGroups =
+        glsl::maxGroupsPerProbe(plan.maxWorkGroupCountX, plan.maxStorageBufferRange, slotBytes, kProbes);
+    plan.maxPositions = glsl::maxPositionsPerInvocation(options.order);
+    plan.perInvocation = glsl::planPositionsPerInvocation(plan.positions, glsl::kDefaultTexelsPerInvocation,
+                                                          kWidth, plan.maxGroups, plan.maxPositions);
+    if (plan.perInvocation == 0)
+        fail("face size " + std::to_string(options.faceSize) + " at order " + std::to_string(options.order) +
              " needs more workgroups than one dispatch allows on this device");
-    const uint64_t requested = (256u + kTexelsPerPosition - 1) / kTexelsPerPosition;
-    const uint64_t perInvocation = std::clamp<uint64_t>(requested, std::max<uint64_t>(least, 1), most);
-    return {options.faceSize, order,
-            uint32_t((positions + kWidth * perInvocation - 1) / (kWidth * perInvocation))};
+    plan.groups = glsl::planGroups(plan.positions, plan.perInvocation, kWidth);
+    return plan;
 }
 
 // Everything one bake allocates.
@@ -691,10 +678,10 @@ void destroyBakeResources(const Gpu& gpu, BakeResources& r) {
 
 // Per-band scales of convolve.comp: 1 (radiance) or A_l (irradiance, E_lm = A_l L_lm), written
 // from vec4 outputOffset on.
-ConvolveParams convolveParams(uint32_t order, bool irradiance, uint32_t outputOffset) {
-    ConvolveParams params{};
+glsl::ConvolveParams convolveParams(uint32_t order, bool irradiance, uint32_t outputOffset) {
+    glsl::ConvolveParams params{};
     for (uint32_t l = 0; l < order; ++l)
-        params.bandScale[l] = irradiance ? float(irradianceFactor(int(l))) : 1.0f;
+        params.bandScale[l / 4][l % 4] = irradiance ? float(irradianceFactor(int(l))) : 1.0f;
     params.outputOffset = outputOffset;
     return params;
 }
@@ -704,10 +691,10 @@ ConvolveParams convolveParams(uint32_t order, bool irradiance, uint32_t outputOf
 void recordBake(VkCommandBuffer commands, const Programs& programs, const BakeResources& r,
                 const BakePlan& plan) {
     const uint32_t coefficients = plan.order * plan.order;
-    const ProjectParams project{plan.faceSize};
-    const ReduceParams reduce{plan.groups};
-    const ConvolveParams radiance = convolveParams(plan.order, false, 0);
-    const ConvolveParams irradiance = convolveParams(plan.order, true, kProbes * coefficients);
+    const glsl::ProjectParams project{plan.faceSize};
+    const glsl::ReduceParams reduce{plan.groups};
+    const glsl::ConvolveParams radiance = convolveParams(plan.order, false, 0);
+    const glsl::ConvolveParams irradiance = convolveParams(plan.order, true, kProbes * coefficients);
     recordUpload(commands, r.staging, r.cubemaps);
     dispatch(commands, programs.project, r.project, &project, plan.groups, kProbes);
     barrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
@@ -732,6 +719,11 @@ Bake bake(const Gpu& gpu, const Programs& programs, const std::vector<Coefficien
     submitAndWait(gpu, commands);
     std::printf("input: %s, 6 x %u x %u texels, order %u, %u workgroups of %u\n", options.environment.c_str(),
                 plan.faceSize, plan.faceSize, plan.order, plan.groups, kWidth);
+    // The columns of INTERFACE.md's table of plans, in its order.
+    std::printf("plan: %u %u %u %u %u %u %u %u %u %u %u %u\n", plan.faceSize, plan.order, kProbes,
+                glsl::kDefaultTexelsPerInvocation, kWidth, plan.maxWorkGroupCountX,
+                plan.maxStorageBufferRange, plan.positions, plan.maxGroups, plan.maxPositions,
+                plan.perInvocation, plan.groups);
 
     // Probe 0: radiance at vec4 0, irradiance at kProbes * n^2.
     const uint32_t coefficients = plan.order * plan.order;
@@ -770,7 +762,7 @@ Options parseOptions(int argc, char** argv) {
         else if (arg == "--face-size")
             options.faceSize = parseNumber(value(), 1, 16384, "--face-size");
         else if (arg == "--order")
-            options.order = parseNumber(value(), 1, 8, "--order");
+            options.order = parseNumber(value(), 1, SHPROBE_MAX_ORDER, "--order");
         else if (arg == "--write-faces")
             options.writeFaces = value();
         else if (arg == "--spirv-dir")

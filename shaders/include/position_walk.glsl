@@ -3,6 +3,7 @@
 // without a division per step (a vector integer division is a loop of scalar ones on CPUs).
 #ifndef SHPROBE_POSITION_WALK_GLSL
 #define SHPROBE_POSITION_WALK_GLSL
+#include "dispatch_plan.h"
 
 struct PositionWalk {
     uint i, j;                    // the current position
@@ -32,15 +33,18 @@ void stepWalk(inout PositionWalk walk, uint gridSize) {
 // the next subgroup's (three times faster than a grid-wide stride). The width is a power of two
 // that divides the workgroup and is the same in every invocation of the dispatch (gl_SubgroupSize
 // is, in these SPIR-V 1.3 modules without varying subgroup sizes), so the streams cover every
-// position once whatever the hardware's subgroups really are. The includer enables GL_KHR_shader_subgroup_basic.
-// It is a macro declaring `first`, `end` and `lanes` where it is used: computed in a function,
-// returned in a struct or through out parameters, they come out wrong on llvmpipe 22.3 (test_gpu
-// caught it at order 8 with many positions per invocation).
+// position once whatever the hardware's subgroups really are. Each invocation walks at most
+// positionsPerInvocation positions (dispatch_plan.h), the number the dispatch plan bounds.
+// The includer enables GL_KHR_shader_subgroup_basic.
+// Workaround(llvmpipe, Mesa 22.3): START_STREAM is a macro declaring `first`, `end` and `lanes`
+// where it is used: computed in a function, returned in a struct or through out parameters, they
+// come out wrong on llvmpipe (test_gpu caught it at order 8 with many positions per invocation).
+// Elsewhere a function returning a struct would do; test_gpu at order 8 tells whether a driver
+// needs the macro.
 #define START_STREAM(gridSize)                                                                   \
     uint lanes = min(gl_SubgroupSize, gl_WorkGroupSize.x & (~gl_WorkGroupSize.x + 1u));          \
     uint streamPositions = (gridSize) * (gridSize);                                              \
-    uint streamInvocations = gl_NumWorkGroups.x * gl_WorkGroupSize.x;                            \
-    uint perInvocation = (streamPositions + streamInvocations - 1u) / streamInvocations;         \
+    uint perInvocation = positionsPerInvocation(streamPositions, gl_NumWorkGroups.x, gl_WorkGroupSize.x); \
     uint stream = gl_GlobalInvocationID.x / lanes;                                               \
     uint first = stream * lanes * perInvocation + gl_GlobalInvocationID.x % lanes;               \
     uint end = min((stream + 1u) * lanes * perInvocation, streamPositions);

@@ -19,9 +19,9 @@
 //   push constants: ProjectParams (gpu_interface.h)
 //   specialization: 0 = workgroup width, 1 = SH order (1..8)
 //   dispatch (groups, probes, 1): the invocations share the ceil(N / 2)^2 positions of probe
-//   gl_WorkGroupID.y in streams (main), in one loop per face pair. lavapipe ends loops after 65535
-//   iterations (nested loops count against the outermost): keep the positions per invocation
-//   times 6 (1 + n^2 + n^2 / 2), a bound with room to spare, below that at order n.
+//   gl_WorkGroupID.y in streams (main), in one loop per face pair. Any groups >= 1 is correct;
+//   on llvmpipe the positions per invocation must stay within maxPositionsPerInvocation
+//   (dispatch_plan.h, the loop-cap workaround), which shprobe's plan there ensures.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -45,11 +45,13 @@ const uint REDUCTION_CHUNK = (SHPROBE_REDUCTION_ENTRIES + gl_WorkGroupSize.x - 1
 shared vec3 subgroupSums[REDUCTION_CHUNK * gl_WorkGroupSize.x];
 shared uint subgroupCount;
 
-// The reduction relies only on subgroupAdd, subgroupElect, gl_SubgroupID and
-// gl_SubgroupInvocationID, not on gl_SubgroupSize or gl_NumSubgroups: lavapipe (Mesa 22.3)
+// Workaround(llvmpipe, Mesa 22.3): the reduction relies only on subgroupAdd, subgroupElect,
+// gl_SubgroupID and gl_SubgroupInvocationID, not on gl_SubgroupSize or gl_NumSubgroups: lavapipe
 // reports a subgroup size of 32 under LP_NATIVE_VECTOR_WIDTH=1024 on 256-bit CPUs while running
-// subgroups of 16, and rounds gl_NumSubgroups down when the width is not a multiple of it.
-// (START_STREAM takes gl_SubgroupSize only as a stream width, correct for any power of two.)
+// subgroups of 16, and rounds gl_NumSubgroups down when the width is not a multiple of it. So the
+// subgroups are counted (countSubgroups) and each subgroup's size is its subgroupAdd(1); where
+// both built-ins are right, gl_NumSubgroups and gl_SubgroupSize would do. (START_STREAM takes
+// gl_SubgroupSize only as a stream width, correct for any power of two.)
 void countSubgroups() {
     if (gl_LocalInvocationIndex == 0u) subgroupCount = 0u;
     barrier();
@@ -105,7 +107,7 @@ void signedSums(inout vec3 radiance[8]) {
 // The solid angle of texel (i, j). On an odd face the middle column (row) is its own mirror image
 // and is read twice: each read counts half.
 float positionWeight(uint i, uint j, uint faceSize) {
-    float weight = texelSolidAngle(i, j, faceSize);
+    float weight = texelSolidAngleFp32(i, j, faceSize);
     if (2u * i + 1u == faceSize) weight *= 0.5f;
     if (2u * j + 1u == faceSize) weight *= 0.5f;
     return weight;
@@ -119,9 +121,10 @@ void main() {
     uint quadrant = quadrantSize(faceSize);
     int firstLayer = int(gl_WorkGroupID.y) * 6;
     START_STREAM(quadrant)
-    // Face pair by face pair, eight texels at a time: faster on lavapipe than one pass reading all 24
-    // texels of a position (docs/gpu-path.md). PAIR is a literal, so the masks are constants,
-    // and radiance[] and basis[] are indexed by constants only.
+    // Workaround(llvmpipe, Mesa 22.3): for speed, face pair by face pair, eight texels at a time;
+    // one pass reading all 24 texels of a position ran 20% slower on lavapipe (docs/gpu-path.md).
+    // Both give the same sums, and another device may prefer the one pass. PAIR is a literal, so
+    // the masks are constants, and radiance[] and basis[] are indexed by constants only.
 #define READ_MIRRORS(face, mask)                                      \
     radiance[mask] = readRadiance(walk.i, walk.j, face);              \
     radiance[mask ^ column] = readRadiance(mirrorI, walk.j, face);    \
@@ -150,10 +153,12 @@ void main() {
     }
     PROJECT_PAIR(0) PROJECT_PAIR(1) PROJECT_PAIR(2)
 
-    // Every sum is reduced over its subgroup before the first barrier. llvmpipe runs a shader with
-    // barriers as a coroutine, and a value live across a barrier is written to the coroutine's
-    // frame wherever it is assigned: every iteration, for the sums. The subgroup totals are assigned
-    // once, and a few chunks of them take few barriers (each barrier switches every subgroup).
+    // Workaround(llvmpipe, Mesa 22.3): for speed, every sum is reduced over its subgroup before the
+    // first barrier. llvmpipe runs a shader with barriers as a coroutine, and a value live across a
+    // barrier is written to the coroutine's frame wherever it is assigned: every iteration, for the
+    // sums (order 5 15% faster, docs/benchmark.md). The subgroup totals are assigned once, and a few
+    // chunks of them take few barriers (each barrier switches every subgroup). Harmless elsewhere:
+    // the subgroup adds are needed anyway.
 #define SUBGROUP_TOTAL(k, l, m) vec3 subgroupTotal##k = k < SH_COEFFICIENTS ? subgroupAdd(sum##k) : vec3(0.0f);
     SH_EACH_COEFFICIENT(SUBGROUP_TOTAL)
     countSubgroups();

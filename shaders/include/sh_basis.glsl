@@ -1,13 +1,21 @@
 // Real orthonormal SH basis in GLSL, Condon-Shortley phase, flat index l(l+1)+m
 // (docs/conventions.md). The includer declares `const uint SH_ORDER` (usually a specialization constant)
 // first; then SH_COEFFICIENTS = SH_ORDER^2 and shEvalBasis(d, y) fills y[0..SH_COEFFICIENTS).
+//
+// The shaders' one basis. The C++ one (src/sh/basis.h, evalBasisRecurrence: the double reference
+// and the fast CPU projection) runs the unnormalized Lisle-Huang recurrence from band 0 and
+// normalizes at the end. Here bands 0-4 are closed forms and the recurrence, in normalized form, only
+// continues them: on llvmpipe a loop over the bands keeps the basis array in memory, and returning
+// before the loop made order-3 projection four times faster (docs/gpu-path.md). Both are checked
+// against each other by test_gpu (GPU against CPU projections at orders 1, 3, 5 and 8).
 #ifndef SHPROBE_SH_BASIS_GLSL
 #define SHPROBE_SH_BASIS_GLSL
+#include "gpu_interface.h"
 
 const uint SH_COEFFICIENTS = SH_ORDER * SH_ORDER;
-// Basis arrays have room for order 8 and only their first SH_COEFFICIENTS entries are written:
-// glslang 12 refuses literal indices into arrays sized by a specialization constant.
-const uint SH_BASIS_CAPACITY = 64u;
+// Basis arrays have room for the highest order and only their first SH_COEFFICIENTS entries are
+// written: glslang 12 refuses literal indices into arrays sized by a specialization constant.
+const uint SH_BASIS_CAPACITY = uint(SHPROBE_MAX_COEFFICIENTS);
 
 // Bands 0-4 as closed-form polynomials in x, y, z (Sloan, "Stupid SH Tricks", with the
 // signs of docs/conventions.md). SH_ORDER is a constant when the pipeline is built, so the bands not
@@ -72,15 +80,19 @@ void shEvalBand(uint l, vec3 d, inout float y[SH_BASIS_CAPACITY]) {
 
 void shEvalBasis(vec3 d, out float y[SH_BASIS_CAPACITY]) {
     shEvalBands0To4(d, y);
-    // Without this early return llvmpipe keeps y in memory even when the loop below runs zero
-    // times, and the projection at order 3 runs four times slower.
+    // Workaround(llvmpipe, Mesa 22.3): without this early return llvmpipe keeps y in memory even
+    // when the loop below runs zero times, and the projection at order 3 runs four times slower.
+    // The loop alone gives the same values; drop the return where a driver keeps y in registers.
     if (SH_ORDER <= 5u) return;
     for (uint l = 5u; l < SH_ORDER; ++l) shEvalBand(l, d, y);
 }
 
 // Every coefficient up to SH_BASIS_CAPACITY as X(index, l, m), for code that needs one variable
-// per coefficient: llvmpipe keeps an array that is ever indexed in a loop in memory, with a masked
-// per-lane store for every write, so accumulators are spelled out as sum0, sum1, ... instead.
+// per coefficient.
+// Workaround(llvmpipe, Mesa 22.3): llvmpipe keeps an array that is ever indexed in a loop in
+// memory, with a masked per-lane store for every write, so accumulators are spelled out as sum0,
+// sum1, ... instead (docs/benchmark.md). An array of sums indexed in a loop over the coefficients
+// gives the same values where a driver keeps it in registers.
 #define SH_EACH_COEFFICIENT(X) X(0, 0, 0) X(1, 1, -1) X(2, 1, 0) X(3, 1, 1) X(4, 2, -2) \
     X(5, 2, -1) X(6, 2, 0) X(7, 2, 1) X(8, 2, 2) X(9, 3, -3) X(10, 3, -2) X(11, 3, -1) X(12, 3, 0) \
     X(13, 3, 1) X(14, 3, 2) X(15, 3, 3) X(16, 4, -4) X(17, 4, -3) X(18, 4, -2) X(19, 4, -1) \
@@ -91,6 +103,13 @@ void shEvalBasis(vec3 d, out float y[SH_BASIS_CAPACITY]) {
     X(48, 6, 6) X(49, 7, -7) X(50, 7, -6) X(51, 7, -5) X(52, 7, -4) X(53, 7, -3) X(54, 7, -2) \
     X(55, 7, -1) X(56, 7, 0) X(57, 7, 1) X(58, 7, 2) X(59, 7, 3) X(60, 7, 4) X(61, 7, 5) \
     X(62, 7, 6) X(63, 7, 7)
+
+// The list holds every coefficient of the highest order (gpu_interface.h), no more, no fewer.
+#define SH_COUNT_COEFFICIENT(k, l, m) +1
+#if (0 SH_EACH_COEFFICIENT(SH_COUNT_COEFFICIENT)) != SHPROBE_MAX_COEFFICIENTS
+#error "SH_EACH_COEFFICIENT must list SHPROBE_MAX_COEFFICIENTS coefficients"
+#endif
+#undef SH_COUNT_COEFFICIENT
 
 // Parity of y_lm in x, y and z: y_lm is Re or Im of (x + iy)^|m| (terms x^(|m| - 2k) y^(2k) for
 // cos(m phi), m > 0; x^(|m| - 1 - 2k) y^(2k + 1) for sin(|m| phi), m < 0) times a polynomial in z of

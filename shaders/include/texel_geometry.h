@@ -46,8 +46,9 @@ SHPROBE_FN uint quadrantSize(uint faceSize) {
     return (faceSize + 1u) / 2u;
 }
 
-// Unnormalized direction through face-local point (a, b) of a face.
-SHPROBE_FN vec3 faceDirection(uint face, float a, float b) {
+// Unnormalized direction through face-local point (a, b) of a face (shprobe::faceDirection of
+// sh/cubemap.h is the unit one, in double).
+SHPROBE_FN vec3 unnormalizedFaceDirection(uint face, float a, float b) {
     return orientToFace(face, vec3(a, b, 1.0f));
 }
 
@@ -63,13 +64,14 @@ SHPROBE_FN float triangleSolidAngle(vec3 p0, vec3 p1, vec3 p2, float tripleProdu
     return 2.0f * preciseAtan(abs(tripleProduct) / denominator);
 }
 
-// Exact solid angle of texel (i, j) of an N x N face, accurate in fp32 at every face size.
+// Exact solid angle of texel (i, j) of an N x N face, accurate in fp32 at every face size (what
+// the shaders weigh texels by; shprobe::texelSolidAngle of sh/cubemap.h is the double reference).
 // The four-atan2 form of docs/conventions.md cancels catastrophically in fp32 (terms near 0.5,
 // result near 4/N^2). Here the texel, with corners (a, b, 1) on the plane z = 1, is split into two
 // triangles whose triple products both equal its area (2/N)^2, taken from N itself rather than from
 // differences of rounded corner coordinates; every term of the denominator is positive and only
 // mildly sensitive to the corners' rounding. No cancellation anywhere: a few ulps of error.
-SHPROBE_FN float texelSolidAngle(uint i, uint j, uint faceSize) {
+SHPROBE_FN float texelSolidAngleFp32(uint i, uint j, uint faceSize) {
     float h = 1.0f / float(faceSize); // half the texel's width in face coordinates
     float a = texelCenterCoord(i, faceSize);
     float b = texelCenterCoord(j, faceSize);

@@ -73,17 +73,16 @@ void runSingleBake(const BakeOptions& options) {
     start = Clock::now();
     BakeResult result;
     if (options.backend == "gpu") {
-        withGpu(options, [&](const Context& context, const Projector& projector) {
+        withGpu(options, [&](const Context& context, const ProbeBaker& baker) {
             DeviceStep step("baking " + environment.description);
             const Cubemap* cubemap = &environment.cubemap;
-            result = bakeOnGpu(options, context, projector, std::span(&cubemap, 1))[0];
+            result = bakeOnGpu(options, context, baker, std::span(&cubemap, 1))[0];
         });
     } else {
         result = bakeOnCpu(options, environment.cubemap);
     }
     double bakeMs = millisecondsSince(start);
-    if (!result.failure.empty())
-        throw Error(ErrorKind::Input, environment.description + ": " + result.failure);
+    requireUsable(result, environment.description);
 
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
     writeOutput(options, options.output, written, metadataFor(options, environment, result, sun));

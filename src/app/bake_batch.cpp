@@ -189,16 +189,13 @@ std::optional<Loaded> loadItem(Batch& batch, const BatchItem& item) {
 
 void writeItem(Batch& batch, const Loaded& loaded, const BakeResult& result) {
     const BakeOptions& options = batch.options;
-    if (!result.failure.empty()) {
-        reportFailure(batch, *loaded.item, Error(ErrorKind::Input, result.failure));
-        return;
-    }
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
     try {
+        requireUsable(result, loaded.environment.description);
         writeOutput(options, loaded.item->output, written,
                     metadataFor(options, loaded.environment, result, loaded.sun));
     } catch (const Error& error) {
-        if (error.kind() != ErrorKind::Output) throw;
+        if (error.kind() == ErrorKind::Device) throw;
         reportFailure(batch, *loaded.item, error);
         return;
     }
@@ -296,13 +293,13 @@ void runBatchBake(const BakeOptions& options) {
     Clock::time_point start = Clock::now();
     Batch batch{options, ProgressBar{items.size()}};
     if (options.backend == "gpu") {
-        withGpu(options, [&](const Context& context, const Projector& projector) {
+        withGpu(options, [&](const Context& context, const ProbeBaker& baker) {
             printBatchStart(options, items.size(), context.info.name);
             VkDeviceSize chunkBytes = batchTexelBytes(context);
             if (options.batchBytes > 0) chunkBytes = std::min<VkDeviceSize>(chunkBytes, options.batchBytes);
             bakeInChunks(batch, items, chunkBytes, [&](std::span<const Cubemap* const> cubemaps) {
                 DeviceStep step("baking a chunk of " + std::to_string(cubemaps.size()) + " probes");
-                return bakeOnGpu(options, context, projector, cubemaps);
+                return bakeOnGpu(options, context, baker, cubemaps);
             });
         });
     } else {

@@ -83,27 +83,24 @@ VkDeviceSize cubemapBytes(const Cubemap& cubemap) {
     return VkDeviceSize(cubemap.texels.size()) * sizeof(glm::vec4);
 }
 
-std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& context,
-                                  const Projector& projector, std::span<const Cubemap* const> cubemaps) {
-    std::vector<GpuBake> bakes;
-    if (cubemaps.size() == 1 && cubemapBytes(*cubemaps[0]) > batchTexelBytes(context))
-        bakes.push_back(bakeCubemap(context, projector, *cubemaps[0]));
-    else
-        bakes = bakeCubemaps(context, projector, cubemaps);
+std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& context, const ProbeBaker& baker,
+                                  std::span<const Cubemap* const> cubemaps) {
     std::vector<BakeResult> results;
-    for (GpuBake& bake : bakes) {
-        double deviceMs = bake.deviceMilliseconds;
-        if (!bake.failure.empty()) {
-            results.push_back({{}, {}, context.info.name, deviceMs, bake.failure});
-            continue;
-        }
-        if (needsFinishing(options)) {
+    for (GpuBake& bake : bakeCubemaps(context, baker, cubemaps)) {
+        BakeResult result{bake.radiance, bake.irradiance, context.info.name, bake.deviceMilliseconds};
+        if (needsFinishing(options) && isFinite(bake)) {
             Finished finished = finish(options, bake.radiance);
-            bake = convolveOnGpu(context, projector, finished.radiance, finished.window);
+            GpuBake convolved = convolveOnGpu(context, baker, finished.radiance, finished.window);
+            result.radiance = convolved.radiance;
+            result.irradiance = convolved.irradiance;
         }
-        results.push_back({bake.radiance, bake.irradiance, context.info.name, deviceMs});
+        results.push_back(std::move(result));
     }
     return results;
+}
+
+void requireUsable(const BakeResult& result, const std::string& input) {
+    requireFinite(GpuBake{result.radiance, result.irradiance}, input);
 }
 
 const char* cpuBackendName(const BakeOptions& options) {

@@ -2,11 +2,12 @@
 // loading an input, baking cube maps on the GPU or the CPU, finishing and writing a probe.
 #pragma once
 #include "app/commands.h"
-#include "shprobe/gpu/projector.h"
+#include "shprobe/gpu/host_bake.h"
 #include "shprobe/image/environment.h"
 #include "shprobe/io/output_file.h"
 #include "shprobe/io/probe_file.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/context.h"
 #include "shprobe/vk/pipeline_cache.h"
@@ -24,7 +25,6 @@ struct BakeResult {
     ShCoefficients irradiance;
     std::string device; // "cpu reference" or the GPU's name
     double deviceMilliseconds = 0.0;
-    std::string failure; // why this probe cannot be written (its sums overflowed); empty if fine
 };
 
 // An empty input is the built-in sky.
@@ -32,49 +32,49 @@ Environment loadInput(const BakeOptions& options, const std::string& input);
 
 VkDeviceSize cubemapBytes(const Cubemap& cubemap);
 
-// Runs work(context, projector) with a device and the pipelines of the options' order, created once
-// for any number of bakes and released here; any validation message fails the run. The pipelines
-// come through the on-disk pipeline cache (vk/pipeline_cache.h), saved right after they exist.
+// Runs work(context, baker) with a device and the bake pipelines of the options' order, created
+// once for any number of bakes and released here; any validation message fails the run. The
+// pipelines come through the on-disk pipeline cache (vk/pipeline_cache.h), saved right after they
+// exist.
 template <typename Work> void withGpu(const BakeOptions& options, Work&& work) {
-    ContextOptions contextOptions;
-    contextOptions.device = options.device;
-    contextOptions.validation = options.validation;
-    Context context = createContext(contextOptions);
-    VkPipelineCache cache = VK_NULL_HANDLE;
-    try {
+    uint32_t validationMessages = 0;
+    {
+        ContextOptions contextOptions;
+        contextOptions.device = options.device;
+        contextOptions.validation = options.validation;
+        Context context = createContext(contextOptions);
+        ScopeExit destroy([&] {
+            validationMessages = context.validationMessages();
+            destroyContext(context);
+        });
         const std::string cachePath = pipelineCachePath(context);
-        cache = loadPipelineCache(context, cachePath);
+        context.pipelineCache = loadPipelineCache(context, cachePath);
+        ScopeExit destroyCache(
+            [&] { vkDestroyPipelineCache(context.device, context.pipelineCache, nullptr); });
         std::optional<DeviceStep> creating(std::in_place, "creating the bake pipelines", DeviceWork::Setup);
-        Projector projector = createProjector(context, {.order = options.order,
-                                                        .workgroupSize = options.workgroupSize,
-                                                        .texelsPerInvocation = options.texelsPerInvocation,
-                                                        .pipelineCache = cache});
-        savePipelineCache(context, cache, cachePath);
+        ProbeBaker baker =
+            createProbeBaker(context, {.order = options.order,
+                                       .cubemaps = uploadBinding(context, TexelFormat::Rgba32F),
+                                       .workgroupSize = options.workgroupSize,
+                                       .texelsPerInvocation = options.texelsPerInvocation});
+        ScopeExit destroyBaker([&] { destroyProbeBaker(context, baker); });
+        savePipelineCache(context, context.pipelineCache, cachePath);
         creating.reset();
-        try {
-            work(std::as_const(context), std::as_const(projector));
-        } catch (...) {
-            destroyProjector(context, projector);
-            throw;
-        }
-        destroyProjector(context, projector);
-    } catch (...) {
-        if (cache) vkDestroyPipelineCache(context.device, cache, nullptr);
-        destroyContext(context);
-        throw;
+        work(std::as_const(context), std::as_const(baker));
     }
-    vkDestroyPipelineCache(context.device, cache, nullptr);
-    uint32_t validationMessages = context.validationMessages();
-    destroyContext(context);
     if (validationMessages > 0)
         throw Error(ErrorKind::Device,
                     std::to_string(validationMessages) + " Vulkan validation messages (above)");
 }
 
-// The cube maps of a chunk in one submission (bakeCubemaps), or alone through bakeCubemap when one
-// is larger than a chunk may be; then, per probe, the lights and the window (convolve.comp).
-std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& context,
-                                  const Projector& projector, std::span<const Cubemap* const> cubemaps);
+// The cube maps of a chunk in one submission (bakeCubemaps); then, per probe, the lights and the
+// window (convolve.comp). A probe whose sums overflowed comes back as computed, for
+// requireUsable to refuse.
+std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& context, const ProbeBaker& baker,
+                                  std::span<const Cubemap* const> cubemaps);
+
+// Throws Error(Input) naming the input when the result's coefficients are not finite.
+void requireUsable(const BakeResult& result, const std::string& input);
 
 // "cpu": the fast float path on all cores; "reference": the double-precision reference.
 const char* cpuBackendName(const BakeOptions& options);

@@ -6,11 +6,12 @@
 #include "app/bench.h"
 #include "app/bench_device.h"
 #include "app/stopwatch.h"
-#include "shprobe/gpu/projector.h"
+#include "shprobe/gpu/host_bake.h"
 #include "shprobe/io/output_file.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/fast_projection.h"
 #include "shprobe/sh/projection.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/context.h"
 
 #include <glm/gtc/packing.hpp>
@@ -185,14 +186,15 @@ class Bench {
     }
 
     void runGpu(const Cubemap& cubemap, TexelFormat format, int order, const ShCoefficients* reference) {
-        Projector projector = createProjector(context_, {.order = order, .texelFormat = format});
-        GpuBake bake = bakeCubemap(context_, projector, cubemap); // untimed: llvmpipe compiles at first use
+        ProbeBaker baker =
+            createProbeBaker(context_, {.order = order, .cubemaps = uploadBinding(context_, format)});
+        ScopeExit destroyBaker([&] { destroyProbeBaker(context_, baker); });
+        GpuBake bake = bakeCubemap(context_, baker, cubemap); // untimed: llvmpipe compiles at first use
         double deviceMs = INFINITY;
         double wallMs = bestMilliseconds(options_.repeat, [&] {
-            bake = bakeCubemap(context_, projector, cubemap);
+            bake = bakeCubemap(context_, baker, cubemap);
             deviceMs = std::min(deviceMs, bake.deviceMilliseconds);
         });
-        destroyProjector(context_, projector);
         const double error = reference ? errorToReference(bake.radiance, *reference) : -1.0;
         if (bake.deviceMilliseconds > 0.0)
             add(cubemap.faceSize, format, order, "gpu projection (device)", deviceMs, error);
@@ -309,26 +311,19 @@ void runBench(const BenchOptions& options) {
     ContextOptions contextOptions;
     contextOptions.device = options.device;
     Context context = createContext(contextOptions);
+    ScopeExit destroy([&] { destroyContext(context); });
     std::printf("device: %s (%s), %s, subgroup size %u; CPU threads: %u\n", context.info.name.c_str(),
                 deviceTypeName(context.info.type), context.info.driver.c_str(), context.info.subgroupSize,
                 std::thread::hardware_concurrency());
     std::printf("%6s  %-7s  %5s  %-44s %10s %10s %7s %9s  %s\n", "face", "format", "order", "path", "ms",
                 "Mtexel/s", "GB/s", "of bound", "error/|L00|");
-    std::vector<Measurement> measurements;
-    PipelineCreations pipelineCreations;
-    try {
-        Bench bench(options, context);
-        for (int faceSize : options.faceSizes)
-            bench.runFaceSize(faceSize);
-        measurements = bench.measurements();
-        pipelineCreations = measurePipelines(context, options.orders);
-    } catch (...) {
-        destroyContext(context);
-        throw;
-    }
+    Bench bench(options, context);
+    for (int faceSize : options.faceSizes)
+        bench.runFaceSize(faceSize);
+    const PipelineCreations pipelineCreations = measurePipelines(context, options.orders);
     if (!options.json.empty())
-        writeOutputFile(options.json, reportJson(context, measurements, pipelineCreations).dump(2) + "\n");
-    destroyContext(context);
+        writeOutputFile(options.json,
+                        reportJson(context, bench.measurements(), pipelineCreations).dump(2) + "\n");
 }
 
 } // namespace shprobe

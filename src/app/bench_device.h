@@ -2,7 +2,7 @@
 // projection's access pattern, and the cost of creating the pipelines with and without a
 // pipeline cache.
 #pragma once
-#include "shprobe/gpu/projector.h"
+#include "shprobe/gpu/host_bake.h"
 #include "shprobe/sh/cubemap.h"
 #include "shprobe/vk/context.h"
 
@@ -14,12 +14,12 @@ namespace shprobe {
 double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format, int repeat);
 
 struct PipelineCreation {
-    double firstMilliseconds = 0.0;  // createProjector with an empty pipeline cache
+    double firstMilliseconds = 0.0;  // createProbeBaker with an empty pipeline cache
     double cachedMilliseconds = 0.0; // again, with a cache loaded from the first one's saved data
     size_t cacheBytes = 0;           // the saved data (a driver without a real cache saves a header)
 };
 
-// Creates and destroys the projector's pipelines twice, the second time from a cache that went
+// Creates and destroys the bake pipelines twice, the second time from a cache that went
 // through a file (as the next run of the program would see it).
 PipelineCreation measurePipelineCreation(const Context& context, int order);
 

@@ -2,6 +2,7 @@
 // plain options struct; library errors (shprobe::Error) reach main, which prints them.
 #pragma once
 #include "app/toolkit.h"
+#include "shprobe/glsl/dispatch_plan.h"
 #include "shprobe/image/environment.h"
 
 #include <CLI/CLI.hpp>
@@ -29,8 +30,8 @@ struct BakeOptions {
     int64_t maxPixels = kDefaultMaxImagePixels; // larger image files are refused from their header
     std::string device;
     bool validation = false;
-    uint32_t workgroupSize = 64;
-    uint32_t texelsPerInvocation = 256;
+    uint32_t workgroupSize = gpu::kDefaultWorkgroupWidth;
+    uint32_t texelsPerInvocation = gpu::kDefaultTexelsPerInvocation;
     bool quiet = false;          // no coefficient table
     LightOptions lights;         // analytic lights added to the environment's radiance
     std::string window = "none"; // none | hanning:W | lanczos:W | dering | dering-lanczos
@@ -165,7 +166,10 @@ void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize
 void addRenderCommand(CLI::App& app, RenderOptions& options);
 void runRender(const RenderOptions& options);
 
-void addViewCommand(CLI::App& app, ViewOptions& options);
+// The viewer, shprobe-view (view.cpp, view_main.cpp): a program of its own, the only one that links
+// GLFW; `shprobe view ARGS` runs it with ARGS.
+inline constexpr char kViewSummary[] = "Open a window: environment, lit sphere and torus, orbit camera";
+void addViewOptions(CLI::App& command, ViewOptions& options);
 void runView(const ViewOptions& options);
 
 } // namespace shprobe

@@ -1,6 +1,6 @@
 // `shprobe info`: the Vulkan devices, which one a bake would use, and the features it relies on.
 #include "app/commands.h"
-#include "shprobe/gpu/projector.h"
+#include "shprobe/gpu/host_bake.h"
 #include "shprobe/vk/context.h"
 
 #include <cstdio>

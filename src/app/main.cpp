@@ -1,70 +1,56 @@
 // shprobe: bakes HDR environments into spherical-harmonics light probes on the GPU.
 #include "app/bench.h"
 #include "app/commands.h"
-#include "shprobe/io/output_file.h"
+#include "app/program.h"
 #include "shprobe/sh/error.h"
-#include "shprobe/version.h"
 
-#include <csignal>
-#include <cstdio>
-#include <exception>
-#include <fcntl.h>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <string>
+#include <string_view>
+#include <unistd.h>
+#include <vector>
 
 namespace {
 
-// Exit codes: 0 success, 2 bad input or usage, 3 output not written, 4 Vulkan device problem.
-int exitCode(shprobe::ErrorKind kind) {
-    switch (kind) {
-    case shprobe::ErrorKind::Input:
-        return 2;
-    case shprobe::ErrorKind::Output:
-        return 3;
-    case shprobe::ErrorKind::Device:
-        return 4;
-    }
-    return 1;
-}
-
-// An error is one line; a library's message may hold several.
-std::string oneLine(std::string text) {
-    while (!text.empty() && text.back() == '\n')
-        text.pop_back();
-    for (char& c : text)
-        if (c == '\n') c = ' ';
-    return text;
-}
-
-// Descriptors 0-2 that the parent closed are opened on /dev/null, so that no file the program
-// opens takes their place (a probe file read as standard input, an output sent to standard
-// output). A reader that goes away makes a write fail with EPIPE ("cannot write -: broken pipe",
-// exit 3) instead of ending the program by SIGPIPE without a word.
-void prepareStandardStreams() {
-    for (int fd = 0; fd <= 2; ++fd)
-        if (fcntl(fd, F_GETFD) < 0) open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
-    std::signal(SIGPIPE, SIG_IGN);
+// `shprobe view ARGS`: the viewer is a program of its own, shprobe-view, so that shprobe links no
+// window system. It is taken from this program's folder (the build folder, or the installed bin/),
+// never from PATH, so that a shprobe runs its own build's viewer, and it replaces this process with
+// ARGS untouched and shprobe's argv[0] (it then reads as `shprobe view`). A build without GLFW has
+// none: exit 4, as for a missing display or device.
+void runViewer(char** argv) {
+    std::error_code error;
+    const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+    if (error)
+        throw shprobe::Error(shprobe::ErrorKind::Device,
+                             "cannot find the viewer: /proc/self/exe: " + error.message());
+    const std::string viewer = (self.parent_path() / "shprobe-view").string();
+    std::vector<char*> args{argv[0]};
+    for (char** arg = argv + 2; *arg != nullptr; ++arg)
+        args.push_back(*arg);
+    args.push_back(nullptr);
+    execv(viewer.c_str(), args.data());
+    if (errno == ENOENT)
+        throw shprobe::Error(shprobe::ErrorKind::Device,
+                             "the viewer is not installed: there is no " + viewer +
+                                 " (a build with -DSHPROBE_BUILD_VIEWER=OFF has none, nor needs GLFW); "
+                                 "`shprobe render` draws the same scene to an image file");
+    throw shprobe::Error(shprobe::ErrorKind::Device,
+                         "cannot run the viewer " + viewer + ": " + std::strerror(errno));
 }
 
 } // namespace
 
 int main(int argc, char** argv) {
-    prepareStandardStreams();
-    shprobe::removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
     CLI::App app{"shprobe: bake HDR environments into spherical-harmonics light probes with Vulkan "
                  "(conventions: docs/conventions.md)"};
     app.require_subcommand(1);
-    app.add_flag_callback(
-        "--version",
-        [] {
-            std::printf("shprobe %s\n", SHPROBE_VERSION_STRING);
-            throw CLI::Success();
-        },
-        "Print the version and exit");
+    shprobe::addVersionFlag(app, "shprobe");
     shprobe::BakeOptions bake;
     shprobe::ConvertOptions convert;
     shprobe::InfoOptions info;
     shprobe::RenderOptions render;
-    shprobe::ViewOptions view;
     shprobe::RotateOptions rotate;
     shprobe::LightCommandOptions light;
     shprobe::BenchOptions bench;
@@ -72,37 +58,25 @@ int main(int argc, char** argv) {
     shprobe::addConvertCommand(app, convert);
     shprobe::addInfoCommand(app, info);
     shprobe::addRenderCommand(app, render);
-    shprobe::addViewCommand(app, view);
+    app.add_subcommand("view",
+                       std::string(shprobe::kViewSummary) +
+                           " (runs shprobe-view, installed beside shprobe: see `shprobe view "
+                           "--help`; exit 4 where it is not, as in a build with SHPROBE_BUILD_VIEWER=OFF)");
     shprobe::addRotateCommand(app, rotate);
     shprobe::addLightCommand(app, light);
     shprobe::addBenchCommand(app, bench);
 
-    try {
-        app.parse(argc, argv);
-    } catch (const CLI::ParseError& e) {
-        if (e.get_exit_code() == 0) return app.exit(e); // --help
-        std::fprintf(stderr, "shprobe: error: %s (see --help)\n", oneLine(e.what()).c_str());
-        return 2;
-    }
-
-    try {
+    // Everything after `view` is the viewer's, --help included, and goes to it untouched: only
+    // `shprobe view` itself is parsed here.
+    const bool view = argc > 1 && std::string_view(argv[1]) == "view";
+    return shprobe::runProgram(app, "shprobe", view ? 2 : argc, argv, [&] {
+        if (view) runViewer(argv);
         if (app.got_subcommand("bake")) shprobe::runBake(bake);
         if (app.got_subcommand("convert")) shprobe::runConvert(convert);
         if (app.got_subcommand("info")) shprobe::runInfo(info);
         if (app.got_subcommand("render")) shprobe::runRender(render);
-        if (app.got_subcommand("view")) shprobe::runView(view);
         if (app.got_subcommand("rotate")) shprobe::runRotate(rotate);
         if (app.got_subcommand("light")) shprobe::runLight(light);
         if (app.got_subcommand("bench")) shprobe::runBench(bench);
-    } catch (const shprobe::Error& e) {
-        std::fprintf(stderr, "shprobe: error: %s\n", oneLine(e.what()).c_str());
-        return exitCode(e.kind());
-    } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "shprobe: error: out of memory\n");
-        return 1;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "shprobe: internal error: %s\n", oneLine(e.what()).c_str());
-        return 1;
-    }
-    return 0;
+    });
 }

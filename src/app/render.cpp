@@ -9,6 +9,7 @@
 #include "shprobe/render/offscreen.h"
 #include "shprobe/render/render_input.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/context.h"
 
@@ -49,25 +50,20 @@ void renderInput(const Context& context, const RenderOptions& options, ImageSize
                                    result.input.name, result.input.sun);
     float exposure = autoExposure(result.input.probe, result.input.sun) * std::exp2(options.exposure);
     OffscreenRenderer renderer = createOffscreenRenderer(context);
-    try {
-        setProbe(renderer.scene, probe);
-        if (result.input.environment) setEnvironment(context, renderer.scene, *result.input.environment);
-        Clock::time_point start = Clock::now();
-        if (options.grid) {
-            result.image = renderGrid(context, renderer, {size.width, exposure});
-        } else {
-            result.background = chooseBackground(options, result.input, probe);
-            Scene scene = sphereScene(orbitCamera(options.yaw, options.pitch, 3.2f), options.order,
-                                      parseShadingMode(options.mode), result.background);
-            scene.backgroundColor = glm::vec3(0.05f);
-            result.image = renderOffscreen(context, renderer, scene, {size.width, size.height}, exposure);
-        }
-        result.renderMilliseconds = millisecondsSince(start);
-    } catch (...) {
-        destroyOffscreenRenderer(context, renderer);
-        throw;
+    ScopeExit releaseRenderer([&] { destroyOffscreenRenderer(context, renderer); });
+    setProbe(renderer.scene, probe);
+    if (result.input.environment) setEnvironment(context, renderer.scene, *result.input.environment);
+    Clock::time_point start = Clock::now();
+    if (options.grid) {
+        result.image = renderGrid(context, renderer, {size.width, exposure});
+    } else {
+        result.background = chooseBackground(options, result.input, probe);
+        Scene scene = sphereScene(orbitCamera(options.yaw, options.pitch, 3.2f), options.order,
+                                  parseShadingMode(options.mode), result.background);
+        scene.backgroundColor = glm::vec3(0.05f);
+        result.image = renderOffscreen(context, renderer, scene, {size.width, size.height}, exposure);
     }
-    destroyOffscreenRenderer(context, renderer);
+    result.renderMilliseconds = millisecondsSince(start);
 }
 
 // Probe files are read and checked before any device work, environments baked on the device.
@@ -83,24 +79,19 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
     contextOptions.validation = options.validation;
     contextOptions.graphics = true;
     Context context = createContext(contextOptions);
-    try {
-        if (!isProbeFile(options.input)) {
-            DeviceStep step("baking " +
-                            (options.input.empty() ? std::string("the built-in sky") : options.input));
-            result.input = loadRenderInput(context, options.input,
-                                           {options.faceSize, options.sanitize, options.maxPixels});
-        }
+    ScopeExit releaseContext([&] { destroyContext(context); });
+    if (!isProbeFile(options.input)) {
+        DeviceStep step("baking " +
+                        (options.input.empty() ? std::string("the built-in sky") : options.input));
+        result.input =
+            loadRenderInput(context, options.input, {options.faceSize, options.sanitize, options.maxPixels});
+    }
+    {
         DeviceStep step("rendering " + options.output);
         renderInput(context, options, size, result);
-    } catch (...) {
-        destroyContext(context);
-        throw;
     }
-    uint32_t validationMessages = context.validationMessages();
-    destroyContext(context);
-    if (validationMessages > 0)
-        throw Error(ErrorKind::Device,
-                    std::to_string(validationMessages) + " Vulkan validation messages (above)");
+    if (uint32_t messages = context.validationMessages(); messages > 0)
+        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
     return result;
 }
 

@@ -1,7 +1,8 @@
-// `shprobe view`: the interactive GLFW viewer (src/render/viewer.h); `--screenshot FILE --frames N`
-// saves frame N and exits, for tests and scripts.
+// The viewer's command line, shprobe-view's (view_main.cpp), which `shprobe view` runs: the interactive
+// GLFW viewer (src/render/viewer.h); `--screenshot FILE --frames N` saves frame N and exits, for tests
+// and scripts.
 #include "app/commands.h"
-#include "shprobe/gpu/projector.h"
+#include "shprobe/gpu/host_bake.h"
 #include "shprobe/io/output_file.h"
 #include "shprobe/render/render_input.h"
 #include "shprobe/render/viewer.h"
@@ -9,28 +10,26 @@
 
 namespace shprobe {
 
-void addViewCommand(CLI::App& app, ViewOptions& options) {
-    CLI::App* command =
-        app.add_subcommand("view", "Open a window: environment, lit sphere and torus, orbit camera");
-    command->add_option("input", options.input,
-                        "Probe file (.json) or environment image (baked first); default: the built-in sky");
-    command->add_option("--size", options.size, "Window size, N or WxH")->capture_default_str();
-    command->add_option("--order", options.order, "Initial SH order: 3 or 5 (keys 3, 5)")
+void addViewOptions(CLI::App& command, ViewOptions& options) {
+    command.add_option("input", options.input,
+                       "Probe file (.json) or environment image (baked first); default: the built-in sky");
+    command.add_option("--size", options.size, "Window size, N or WxH")->capture_default_str();
+    command.add_option("--order", options.order, "Initial SH order: 3 or 5 (keys 3, 5)")
         ->check(CLI::IsMember({3, 5}))
         ->capture_default_str();
-    command->add_option("--mode", options.mode, "Initial shading mode (key M)")
+    command.add_option("--mode", options.mode, "Initial shading mode (key M)")
         ->check(CLI::IsMember({"radiance", "irradiance", "l1-nonlinear"}))
         ->capture_default_str();
-    command->add_option("--screenshot", options.screenshot, "Save frame --frames to this PNG and exit");
-    command->add_option("--frames", options.frames, "Exit after this many frames")
+    command.add_option("--screenshot", options.screenshot, "Save frame --frames to this PNG and exit");
+    command.add_option("--frames", options.frames, "Exit after this many frames")
         ->check(CLI::Range(1, 1 << 30));
     command
-        ->add_option("--keys", options.keys,
-                     "Key presses to replay, one before each frame: 3 5 m b left right + - r q")
+        .add_option("--keys", options.keys,
+                    "Key presses to replay, one before each frame: 3 5 m b left right + - r q")
         ->delimiter(',');
-    addExposureOption(*command, options.exposure);
-    addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
-    addDeviceOptions(*command, options.device, options.validation);
+    addExposureOption(command, options.exposure);
+    addEnvironmentInputOptions(command, options.faceSize, options.sanitize, options.maxPixels);
+    addDeviceOptions(command, options.device, options.validation);
 }
 
 void runView(const ViewOptions& options) {

@@ -1,11 +1,12 @@
 #include "shprobe/gpu/probe_baker.h"
 
+#include "shprobe/glsl/dispatch_plan.h"
 #include "shprobe/glsl/gpu_interface.h"
-#include "shprobe/glsl/texel_geometry.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/cubemap.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/irradiance.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/shprobe_spirv.h"
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/image.h"
@@ -18,56 +19,30 @@ namespace shprobe {
 
 namespace {
 
-constexpr VkDeviceSize kCoefficientBytes = 16; // rgb + padding, std430 vec4
-
 VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
     return (value + alignment - 1) / alignment * alignment;
 }
 
-VkDeviceSize coefficientSetBytes(int order) {
-    return VkDeviceSize(coefficientCount(order)) * kCoefficientBytes;
-}
-
-// A projection position is a texel and its three mirror images on each of the six faces
-// (quadrantSize, texel_geometry.h).
-constexpr uint32_t kTexelsPerPosition = 4 * kFaceCount;
-
-// llvmpipe (lavapipe) ends any loop after 65535 iterations, counting the iterations of nested loops
-// against the outermost one, and past the limit the sums are silently wrong. Each face pair's loop
-// runs fewer than 1 + 6 (1 + n^2 + n^2 / 2) iterations per position at order n (one basis
-// evaluation: a few times fewer), whatever the compiler unrolls. Half the limit leaves a margin;
-// other devices lose nothing by the cap.
-uint32_t maxPositionsPerInvocation(int order) {
-    uint32_t n = uint32_t(order);
-    return 32768u / (1u + 6u * (1u + n * n + n * n / 2u));
-}
-
-// Projection workgroups per probe for N x N faces: as many as the requested work per invocation
-// gives, fewer when one dispatch row (maxComputeWorkGroupCount[0]) or the partial slots of all
-// probes in one storage-buffer binding need it, and never so few that an invocation passes
-// lavapipe's loop cap; a target that cannot meet all of them is refused.
-uint32_t groupsPerProbe(const Context& context, const ProbeBakerOptions& options, uint32_t faceSize,
+// Projection workgroups per probe for N x N faces: shprobe's dispatch plan (glsl/dispatch_plan.h,
+// shared with the shaders and stated in shaders/INTERFACE.md) under this device's limits. A target
+// the plan cannot fit in one bake is refused.
+uint32_t groupsPerProbe(const Device& device, const ProbeBakerOptions& options, uint32_t faceSize,
                         uint32_t probes) {
-    const VkPhysicalDeviceLimits& limits = context.info.limits;
-    const VkDeviceSize quadrant = gpu::quadrantSize(faceSize);
-    const VkDeviceSize positions = quadrant * quadrant;
-    const VkDeviceSize maxSlots = limits.maxStorageBufferRange / coefficientSetBytes(options.order);
-    const VkDeviceSize maxGroups =
-        std::min<VkDeviceSize>(limits.maxComputeWorkGroupCount[0], maxSlots / probes);
-    const VkDeviceSize perGroup = (positions + maxGroups - 1) / std::max<VkDeviceSize>(maxGroups, 1);
-    const VkDeviceSize least = (perGroup + options.workgroupSize - 1) / options.workgroupSize;
-    const uint32_t most = maxPositionsPerInvocation(options.order);
-    if (maxGroups == 0 || least > most)
+    const VkPhysicalDeviceLimits& limits = device.info.limits;
+    const uint32_t positions = gpu::projectionPositions(faceSize);
+    const uint32_t maxGroups =
+        gpu::maxGroupsPerProbe(limits.maxComputeWorkGroupCount[0], limits.maxStorageBufferRange,
+                               uint32_t(coefficientSetBytes(options.order)), probes);
+    const uint32_t perInvocation =
+        gpu::planPositionsPerInvocation(positions, options.texelsPerInvocation, options.workgroupSize,
+                                        maxGroups, gpu::maxPositionsPerInvocation(uint32_t(options.order)));
+    if (perInvocation == 0)
         throw Error(ErrorKind::Input, "GPU bake: " + std::to_string(probes) + " probe(s) of face size " +
                                           std::to_string(faceSize) + " at order " +
                                           std::to_string(options.order) +
-                                          " are more than one bake can hold on " + context.info.name +
+                                          " are more than one bake can hold on " + device.info.name +
                                           "; bake fewer probes at a time");
-    const uint32_t requested = (options.texelsPerInvocation + kTexelsPerPosition - 1) / kTexelsPerPosition;
-    const VkDeviceSize perInvocation =
-        std::clamp<VkDeviceSize>(requested, std::max<VkDeviceSize>(least, 1), most);
-    const VkDeviceSize perWorkgroup = perInvocation * options.workgroupSize;
-    return uint32_t((positions + perWorkgroup - 1) / perWorkgroup);
+    return gpu::planGroups(positions, perInvocation, options.workgroupSize);
 }
 
 // Per-band scales for convolve.comp: the window alone (radiance) or A_l times the window
@@ -100,23 +75,23 @@ void checkWindow(int order, std::span<const double> window) {
                                           std::to_string(order));
 }
 
-void checkTarget(const Context& context, const ProbeBakeTarget& target) {
+void checkTarget(const Device& device, const ProbeBakeTarget& target) {
     if (!target.cubemaps || !target.output)
         throw Error(ErrorKind::Input, "GPU bake: the target needs a cube-map view and an output buffer");
-    if (target.faceSize < 1 || target.faceSize > context.info.limits.maxImageDimension2D)
+    if (target.faceSize < 1 || target.faceSize > device.info.limits.maxImageDimension2D)
         throw Error(ErrorKind::Input, "GPU bake: face size " + std::to_string(target.faceSize) +
                                           " is outside 1.." +
-                                          std::to_string(context.info.limits.maxImageDimension2D));
-    if (target.probeCount < 1 || target.probeCount > context.info.limits.maxComputeWorkGroupCount[1])
+                                          std::to_string(device.info.limits.maxImageDimension2D));
+    if (target.probeCount < 1 || target.probeCount > device.info.limits.maxComputeWorkGroupCount[1])
         throw Error(ErrorKind::Input, "GPU bake: " + std::to_string(target.probeCount) +
                                           " probes in one bake; 1.." +
-                                          std::to_string(context.info.limits.maxComputeWorkGroupCount[1]) +
-                                          " on " + context.info.name);
-    if (target.outputOffset % context.info.limits.minStorageBufferOffsetAlignment != 0)
-        throw Error(ErrorKind::Input,
-                    "GPU bake: output offset " + std::to_string(target.outputOffset) +
-                        " is not a multiple of minStorageBufferOffsetAlignment (" +
-                        std::to_string(context.info.limits.minStorageBufferOffsetAlignment) + ")");
+                                          std::to_string(device.info.limits.maxComputeWorkGroupCount[1]) +
+                                          " on " + device.info.name);
+    if (target.outputOffset % device.info.limits.minStorageBufferOffsetAlignment != 0)
+        throw Error(ErrorKind::Input, "GPU bake: output offset " + std::to_string(target.outputOffset) +
+                                          " is not a multiple of minStorageBufferOffsetAlignment (" +
+                                          std::to_string(device.info.limits.minStorageBufferOffsetAlignment) +
+                                          ")");
 }
 
 struct ProjectModule {
@@ -143,42 +118,43 @@ VkImageLayout cubemapLayout(CubemapBinding binding) {
                                                    : VK_IMAGE_LAYOUT_GENERAL;
 }
 
-Context borrowDevice(const ExternalDevice& device) {
-    Context context;
-    context.physicalDevice = device.physicalDevice;
-    context.device = device.device;
-    context.queueFamily = device.queueFamily;
+Device borrowDevice(const ExternalDevice& external) {
+    Device device;
+    device.physicalDevice = external.physicalDevice;
+    device.device = external.device;
+    device.queueFamily = external.queueFamily;
+    device.pipelineCache = external.pipelineCache;
 
     VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
     VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &subgroup};
-    vkGetPhysicalDeviceProperties2(device.physicalDevice, &properties);
-    vkGetPhysicalDeviceMemoryProperties(device.physicalDevice, &context.memory);
-    context.info.name = properties.properties.deviceName;
-    context.info.type = properties.properties.deviceType;
-    context.info.apiVersion = properties.properties.apiVersion;
-    context.info.limits = properties.properties.limits;
-    context.info.subgroupSize = subgroup.subgroupSize;
+    vkGetPhysicalDeviceProperties2(external.physicalDevice, &properties);
+    vkGetPhysicalDeviceMemoryProperties(external.physicalDevice, &device.memory);
+    device.info.name = properties.properties.deviceName;
+    device.info.type = properties.properties.deviceType;
+    device.info.apiVersion = properties.properties.apiVersion;
+    device.info.limits = properties.properties.limits;
+    device.info.subgroupSize = subgroup.subgroupSize;
     const VkSubgroupFeatureFlags needed = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
-    context.info.subgroupArithmetic = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
-                                      (subgroup.supportedOperations & needed) == needed;
-    if (!context.info.subgroupArithmetic)
+    device.info.subgroupArithmetic = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+                                     (subgroup.supportedOperations & needed) == needed;
+    if (!device.info.subgroupArithmetic)
         throw Error(ErrorKind::Device,
-                    context.info.name +
+                    device.info.name +
                         " cannot bake probes: project.comp needs basic and arithmetic subgroup "
                         "operations in compute shaders");
 
     uint32_t familyCount = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(device.physicalDevice, &familyCount, nullptr);
+    vkGetPhysicalDeviceQueueFamilyProperties(external.physicalDevice, &familyCount, nullptr);
     std::vector<VkQueueFamilyProperties> families(familyCount);
-    vkGetPhysicalDeviceQueueFamilyProperties(device.physicalDevice, &familyCount, families.data());
-    if (device.queueFamily >= familyCount ||
-        !(families[device.queueFamily].queueFlags & VK_QUEUE_COMPUTE_BIT))
-        throw Error(ErrorKind::Device, "queue family " + std::to_string(device.queueFamily) + " of " +
-                                           context.info.name + " does not do compute work");
-    return context;
+    vkGetPhysicalDeviceQueueFamilyProperties(external.physicalDevice, &familyCount, families.data());
+    if (external.queueFamily >= familyCount ||
+        !(families[external.queueFamily].queueFlags & VK_QUEUE_COMPUTE_BIT))
+        throw Error(ErrorKind::Device, "queue family " + std::to_string(external.queueFamily) + " of " +
+                                           device.info.name + " does not do compute work");
+    return device;
 }
 
-ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& options) {
+ProbeBaker createProbeBaker(const Device& device, const ProbeBakerOptions& options) {
     if (options.order < 1 || options.order > kMaxOrder)
         throw Error(ErrorKind::Input,
                     "order " + std::to_string(options.order) + " is outside 1.." + std::to_string(kMaxOrder));
@@ -188,9 +164,9 @@ ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& opt
     // whole workgroups, as many coefficients at a time as SHPROBE_REDUCTION_ENTRIES allows.
     const VkDeviceSize width = options.workgroupSize;
     const VkDeviceSize reductionEntries = (SHPROBE_REDUCTION_ENTRIES + width - 1) / width * width;
-    if (reductionEntries * 16 + 16 > context.info.limits.maxComputeSharedMemorySize)
+    if (reductionEntries * 16 + 16 > device.info.limits.maxComputeSharedMemorySize)
         throw Error(ErrorKind::Input, "workgroup size " + std::to_string(options.workgroupSize) +
-                                          " needs more shared memory than " + context.info.name + " has");
+                                          " needs more shared memory than " + device.info.name + " has");
     const bool sampled = options.cubemaps == CubemapBinding::SampledImage;
     static constexpr VkDescriptorType kSampledBindings[] = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                                                             VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
@@ -201,92 +177,86 @@ ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& opt
     const uint32_t order = uint32_t(options.order);
     ProbeBaker baker;
     baker.options = options;
-    try {
-        if (sampled) baker.sampler = createSampler(context, VK_FILTER_NEAREST);
-        const ProjectModule module = projectModule(options.cubemaps);
-        baker.project = createComputeProgram(
-            context, {.name = module.name,
-                      .spirv = module.spirv,
-                      .bindings = sampled ? std::span(kSampledBindings) : std::span(kStorageBindings),
-                      .immutableSampler = baker.sampler,
-                      .pushConstantSize = sizeof(gpu::ProjectParams),
-                      .localSize = options.workgroupSize,
-                      .order = order,
-                      .cache = options.pipelineCache});
-        // The reduction and convolution handle one value per coefficient: a small workgroup is enough.
-        baker.reduce = createComputeProgram(context, {.name = "reduce.comp",
-                                                      .spirv = spirv::reduce_comp,
-                                                      .bindings = kBufferBindings,
-                                                      .pushConstantSize = sizeof(gpu::ReduceParams),
-                                                      .localSize = 64,
-                                                      .order = order,
-                                                      .cache = options.pipelineCache});
-        baker.convolve = createComputeProgram(context, {.name = "convolve.comp",
-                                                        .spirv = spirv::convolve_comp,
-                                                        .bindings = kBufferBindings,
-                                                        .pushConstantSize = sizeof(gpu::ConvolveParams),
-                                                        .localSize = 64,
-                                                        .order = order,
-                                                        .cache = options.pipelineCache});
-    } catch (...) {
-        destroyProbeBaker(context, baker);
-        throw;
-    }
+    OnFailure undo([&] { destroyProbeBaker(device, baker); });
+    if (sampled) baker.sampler = createSampler(device, VK_FILTER_NEAREST);
+    const ProjectModule module = projectModule(options.cubemaps);
+    baker.project = createComputeProgram(
+        device, {.name = module.name,
+                 .spirv = module.spirv,
+                 .bindings = sampled ? std::span(kSampledBindings) : std::span(kStorageBindings),
+                 .immutableSampler = baker.sampler,
+                 .pushConstantSize = sizeof(gpu::ProjectParams),
+                 .localSize = options.workgroupSize,
+                 .order = order});
+    // The reduction and convolution handle one value per coefficient: a small workgroup is enough.
+    auto bufferProgram = [&](const char* name, std::span<const uint32_t> spirv, uint32_t pushConstantSize) {
+        return createComputeProgram(device, {.name = name,
+                                             .spirv = spirv,
+                                             .bindings = kBufferBindings,
+                                             .pushConstantSize = pushConstantSize,
+                                             .localSize = 64,
+                                             .order = order});
+    };
+    baker.reduce = bufferProgram("reduce.comp", spirv::reduce_comp, sizeof(gpu::ReduceParams));
+    baker.convolve = bufferProgram("convolve.comp", spirv::convolve_comp, sizeof(gpu::ConvolveParams));
     return baker;
 }
 
-void destroyProbeBaker(const Context& context, ProbeBaker& baker) {
-    destroyComputeProgram(context, baker.convolve);
-    destroyComputeProgram(context, baker.reduce);
-    destroyComputeProgram(context, baker.project);
-    if (baker.sampler) vkDestroySampler(context.device, baker.sampler, nullptr);
+void destroyProbeBaker(const Device& device, ProbeBaker& baker) {
+    destroyComputeProgram(device, baker.convolve);
+    destroyComputeProgram(device, baker.reduce);
+    destroyComputeProgram(device, baker.project);
+    if (baker.sampler) vkDestroySampler(device.device, baker.sampler, nullptr);
     baker = ProbeBaker{};
+}
+
+VkDeviceSize coefficientSetBytes(int order) {
+    return VkDeviceSize(coefficientCount(order)) * sizeof(float[4]); // a std430 vec4: rgb, padding
+}
+
+VkDeviceSize probeOutputOffset(int order, uint32_t probeCount, uint32_t probe, Quantity quantity) {
+    const uint32_t slot = quantity == Quantity::Radiance ? probe : probeCount + probe;
+    return slot * coefficientSetBytes(order);
 }
 
 VkDeviceSize probeBakeOutputBytes(int order, uint32_t probeCount) {
     return 2 * VkDeviceSize(probeCount) * coefficientSetBytes(order);
 }
 
-ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker,
+ProbeBakeSet createProbeBakeSet(const Device& device, const ProbeBaker& baker,
                                 const ProbeBakeTarget& target) {
-    checkTarget(context, target);
+    checkTarget(device, target);
     const int order = baker.options.order;
     const VkDeviceSize setBytes = coefficientSetBytes(order);
     ProbeBakeSet set;
     set.target = target;
-    set.groupsPerProbe = groupsPerProbe(context, baker.options, target.faceSize, target.probeCount);
+    set.groupsPerProbe = groupsPerProbe(device, baker.options, target.faceSize, target.probeCount);
     const VkDeviceSize partialBytes = VkDeviceSize(target.probeCount) * set.groupsPerProbe * setBytes;
     const VkDeviceSize radianceBytes = VkDeviceSize(target.probeCount) * setBytes;
-    set.radianceOffset = alignUp(partialBytes, context.info.limits.minStorageBufferOffsetAlignment);
-    try {
-        set.scratch =
-            createBuffer(context, set.radianceOffset + radianceBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                         MemoryUse::Device, "bake scratch (partial sums)");
-        const bool sampled = baker.options.cubemaps == CubemapBinding::SampledImage;
-        set.pool = createDescriptorPool(context, {.sets = 3,
-                                                  .storageBuffers = 5,
-                                                  .imageSamplers = sampled ? 1u : 0u,
-                                                  .storageImages = sampled ? 0u : 1u});
-        const BindingTarget project[] = {{.imageView = target.cubemaps},
-                                         {set.scratch.buffer, 0, partialBytes}};
-        const BindingTarget reduce[] = {{set.scratch.buffer, 0, partialBytes},
-                                        {set.scratch.buffer, set.radianceOffset, radianceBytes}};
-        const BindingTarget convolve[] = {
-            {set.scratch.buffer, set.radianceOffset, radianceBytes},
-            {target.output, target.outputOffset, probeBakeOutputBytes(order, target.probeCount)}};
-        set.project = createDescriptorSet(context, set.pool, baker.project, project);
-        set.reduce = createDescriptorSet(context, set.pool, baker.reduce, reduce);
-        set.convolve = createDescriptorSet(context, set.pool, baker.convolve, convolve);
-    } catch (...) {
-        destroyProbeBakeSet(context, set);
-        throw;
-    }
+    set.radianceOffset = alignUp(partialBytes, device.info.limits.minStorageBufferOffsetAlignment);
+    OnFailure undo([&] { destroyProbeBakeSet(device, set); });
+    set.scratch = createBuffer(device, set.radianceOffset + radianceBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                               MemoryUse::Device, "bake scratch (partial sums)");
+    const bool sampled = baker.options.cubemaps == CubemapBinding::SampledImage;
+    set.pool = createDescriptorPool(device, {.sets = 3,
+                                             .storageBuffers = 5,
+                                             .imageSamplers = sampled ? 1u : 0u,
+                                             .storageImages = sampled ? 0u : 1u});
+    const BindingTarget project[] = {{.imageView = target.cubemaps}, {set.scratch.buffer, 0, partialBytes}};
+    const BindingTarget reduce[] = {{set.scratch.buffer, 0, partialBytes},
+                                    {set.scratch.buffer, set.radianceOffset, radianceBytes}};
+    const BindingTarget convolve[] = {
+        {set.scratch.buffer, set.radianceOffset, radianceBytes},
+        {target.output, target.outputOffset, probeBakeOutputBytes(order, target.probeCount)}};
+    set.project = createDescriptorSet(device, set.pool, baker.project, project);
+    set.reduce = createDescriptorSet(device, set.pool, baker.reduce, reduce);
+    set.convolve = createDescriptorSet(device, set.pool, baker.convolve, convolve);
     return set;
 }
 
-void destroyProbeBakeSet(const Context& context, ProbeBakeSet& set) {
-    if (set.pool) vkDestroyDescriptorPool(context.device, set.pool, nullptr);
-    destroyBuffer(context, set.scratch);
+void destroyProbeBakeSet(const Device& device, ProbeBakeSet& set) {
+    if (set.pool) vkDestroyDescriptorPool(device.device, set.pool, nullptr);
+    destroyBuffer(device, set.scratch);
     set = ProbeBakeSet{};
 }
 

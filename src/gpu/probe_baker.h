@@ -2,7 +2,7 @@
 // into the caller's command buffer, the coefficients into the caller's buffer. No submission, no
 // wait and no host access happen here; the caller decides when the work runs and what follows it.
 //
-//   Context device = borrowDevice({physicalDevice, device, queueFamily});   // once
+//   Device device = borrowDevice({physicalDevice, device, queueFamily});    // once
 //   ProbeBaker baker = createProbeBaker(device, {.order = 3});
 //   ProbeBakeSet set = createProbeBakeSet(device, baker, {cubemapsView, 256, probeCount, buffer, 0});
 //   recordProbeBake(commandBuffer, baker, set);                              // per bake
@@ -31,6 +31,8 @@
 //   buffer or on one queue, but must not run concurrently on different queues. Different sets
 //   are independent.
 #pragma once
+#include "shprobe/glsl/dispatch_plan.h"
+#include "shprobe/sh/coefficients.h"
 #include "shprobe/vk/context.h"
 #include "shprobe/vk/pipeline.h"
 #include "shprobe/vk/resources.h"
@@ -45,12 +47,13 @@ struct ExternalDevice {
     VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
     VkDevice device = VK_NULL_HANDLE;
     uint32_t queueFamily = 0; // a family with VK_QUEUE_COMPUTE_BIT, where the bakes will run
+    VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional: the bakers' pipelines go through it
 };
 
-// A Context over borrowed handles (no instance, queue or command pool of its own); enough to
-// create and destroy bakers. Throws Error(Device) naming what the device lacks for baking.
-// Never pass it to destroyContext.
-Context borrowDevice(const ExternalDevice& device);
+// The borrowed handles as the Device the bakers are created on (vk/context.h): no instance, queue
+// or command pool comes with it, since nothing here submits. Nothing is created, so nothing is to
+// be destroyed. Throws Error(Device) naming what the device lacks for baking.
+Device borrowDevice(const ExternalDevice& external);
 
 // How the projection reads the cube maps: project.comp samples an image of any format;
 // project_rgba32f.comp and project_rgba16f.comp read a storage image of that format. The values and
@@ -63,9 +66,8 @@ VkImageLayout cubemapLayout(CubemapBinding binding);
 struct ProbeBakerOptions {
     int order = 3; // 1..kMaxOrder
     CubemapBinding cubemaps = CubemapBinding::SampledImage;
-    uint32_t workgroupSize = 64;                    // invocations per projection workgroup
-    uint32_t texelsPerInvocation = 256;             // work per invocation (capped by order for lavapipe)
-    VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional
+    uint32_t workgroupSize = gpu::kDefaultWorkgroupWidth;            // invocations per projection workgroup
+    uint32_t texelsPerInvocation = gpu::kDefaultTexelsPerInvocation; // work per invocation (capped by order)
 };
 
 // Created once and reused for any number of bakes: the pipelines of project, reduce and convolve,
@@ -78,8 +80,8 @@ struct ProbeBaker {
     ComputeProgram convolve;
 };
 
-ProbeBaker createProbeBaker(const Context& context, const ProbeBakerOptions& options);
-void destroyProbeBaker(const Context& context, ProbeBaker& baker);
+ProbeBaker createProbeBaker(const Device& device, const ProbeBakerOptions& options);
+void destroyProbeBaker(const Device& device, ProbeBaker& baker);
 
 // One bake's input and output.
 struct ProbeBakeTarget {
@@ -90,6 +92,10 @@ struct ProbeBakeTarget {
     VkDeviceSize outputOffset = 0; // a multiple of minStorageBufferOffsetAlignment
 };
 
+// The output layout above: bytes of one probe's n^2 coefficients, where probe p's radiance or
+// irradiance starts (from ProbeBakeTarget::outputOffset), and the bytes of the whole output.
+VkDeviceSize coefficientSetBytes(int order);
+VkDeviceSize probeOutputOffset(int order, uint32_t probeCount, uint32_t probe, Quantity quantity);
 VkDeviceSize probeBakeOutputBytes(int order, uint32_t probeCount);
 
 // What the bakes of one target need, created once and reusable for any number of bakes of it:
@@ -106,10 +112,9 @@ struct ProbeBakeSet {
 };
 
 // Throws Error(Input) when the target exceeds what the device can bake in one dispatch.
-ProbeBakeSet createProbeBakeSet(const Context& context, const ProbeBaker& baker,
-                                const ProbeBakeTarget& target);
+ProbeBakeSet createProbeBakeSet(const Device& device, const ProbeBaker& baker, const ProbeBakeTarget& target);
 // After the last command buffer that used it completed.
-void destroyProbeBakeSet(const Context& context, ProbeBakeSet& set);
+void destroyProbeBakeSet(const Device& device, ProbeBakeSet& set);
 
 // Records project, reduce and both convolutions of every probe of the set: 4 dispatches whatever
 // the probe count. `window` holds one factor per band (de-ringing, sh/windowing.h) applied to

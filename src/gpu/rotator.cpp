@@ -3,6 +3,7 @@
 #include "shprobe/glsl/gpu_interface.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/shprobe_spirv.h"
 #include "shprobe/vk/resources.h"
 
@@ -54,7 +55,7 @@ std::vector<glm::vec4> packProbes(std::span<const ShCoefficients> probes) {
 
 } // namespace
 
-Rotator createRotator(const Context& context, int order) {
+Rotator createRotator(const Device& device, int order) {
     if (order < 1 || order > kMaxOrder)
         throw Error(ErrorKind::Input,
                     "order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxOrder));
@@ -63,17 +64,17 @@ Rotator createRotator(const Context& context, int order) {
     static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                                                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                                                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
-    rotator.program = createComputeProgram(context, {.name = "rotate.comp",
-                                                     .spirv = spirv::rotate_comp,
-                                                     .bindings = kBindings,
-                                                     .pushConstantSize = sizeof(gpu::RotateParams),
-                                                     .localSize = kWorkgroupSize,
-                                                     .order = uint32_t(order)});
+    rotator.program = createComputeProgram(device, {.name = "rotate.comp",
+                                                    .spirv = spirv::rotate_comp,
+                                                    .bindings = kBindings,
+                                                    .pushConstantSize = sizeof(gpu::RotateParams),
+                                                    .localSize = kWorkgroupSize,
+                                                    .order = uint32_t(order)});
     return rotator;
 }
 
-void destroyRotator(const Context& context, Rotator& rotator) {
-    destroyComputeProgram(context, rotator.program);
+void destroyRotator(const Device& device, Rotator& rotator) {
+    destroyComputeProgram(device, rotator.program);
 }
 
 std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& rotator,
@@ -87,52 +88,42 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
     const VkDeviceSize probeBytes = input.size() * sizeof(glm::vec4);
     const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
 
-    Buffer matrixBuffer, probeBuffer, rotatedBuffer;
-    VkDescriptorPool pool = VK_NULL_HANDLE;
-    auto release = [&] {
-        if (pool) vkDestroyDescriptorPool(context.device, pool, nullptr);
-        destroyBuffer(context, rotatedBuffer);
-        destroyBuffer(context, probeBuffer);
-        destroyBuffer(context, matrixBuffer);
-    };
-    std::vector<ShCoefficients> rotated;
-    try {
-        matrixBuffer = createBuffer(context, matrixBytes, usage, MemoryUse::Device, "rotation matrices");
-        probeBuffer = createBuffer(context, probeBytes, usage, MemoryUse::Device, "probes to rotate");
-        rotatedBuffer = createBuffer(context, probeBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                     MemoryUse::Readback, "rotated probes");
-        uploadBuffer(context, matrixBuffer, matrices.data(), matrixBytes);
-        uploadBuffer(context, probeBuffer, input.data(), probeBytes);
-        pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 3});
-        BindingTarget targets[] = {{matrixBuffer.buffer, 0, matrixBytes},
-                                   {probeBuffer.buffer, 0, probeBytes},
-                                   {rotatedBuffer.buffer, 0, probeBytes}};
-        VkDescriptorSet set = createDescriptorSet(context, pool, rotator.program, targets);
+    Buffer matrixBuffer = createBuffer(context, matrixBytes, usage, MemoryUse::Device, "rotation matrices");
+    ScopeExit releaseMatrices([&] { destroyBuffer(context, matrixBuffer); });
+    Buffer probeBuffer = createBuffer(context, probeBytes, usage, MemoryUse::Device, "probes to rotate");
+    ScopeExit releaseProbes([&] { destroyBuffer(context, probeBuffer); });
+    Buffer rotatedBuffer = createBuffer(context, probeBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                        MemoryUse::Readback, "rotated probes");
+    ScopeExit releaseRotated([&] { destroyBuffer(context, rotatedBuffer); });
+    uploadBuffer(context, matrixBuffer, matrices.data(), matrixBytes);
+    uploadBuffer(context, probeBuffer, input.data(), probeBytes);
+    VkDescriptorPool pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 3});
+    ScopeExit releasePool([&] { vkDestroyDescriptorPool(context.device, pool, nullptr); });
+    BindingTarget targets[] = {{matrixBuffer.buffer, 0, matrixBytes},
+                               {probeBuffer.buffer, 0, probeBytes},
+                               {rotatedBuffer.buffer, 0, probeBytes}};
+    VkDescriptorSet set = createDescriptorSet(context, pool, rotator.program, targets);
 
-        uint32_t stride = rotations.size() == 1 ? 0u : uint32_t(matrixFloats(rotator.order));
-        gpu::RotateParams params{uint32_t(probes.size()), stride};
-        uint32_t groups = uint32_t((input.size() + kWorkgroupSize - 1) / kWorkgroupSize);
-        if (groups > context.info.limits.maxComputeWorkGroupCount[0])
-            throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(probes.size()) +
-                                              " probes are more than one dispatch can rotate on " +
-                                              context.info.name + "; rotate them in smaller batches");
-        submitAndWait(context, [&](VkCommandBuffer commands) {
-            dispatch(commands, rotator.program, set, params, {groups});
-            computeWriteBarrier(commands);
-        });
-        invalidateBuffer(context, rotatedBuffer);
-        auto* values = static_cast<const glm::vec4*>(rotatedBuffer.mapped);
-        for (const ShCoefficients& probe : probes) {
-            ShCoefficients result = makeCoefficients(probe.order, probe.quantity);
-            for (glm::dvec3& c : result.rgb)
-                c = glm::dvec3(glm::vec3(*values++));
-            rotated.push_back(std::move(result));
-        }
-    } catch (...) {
-        release();
-        throw;
+    uint32_t stride = rotations.size() == 1 ? 0u : uint32_t(matrixFloats(rotator.order));
+    gpu::RotateParams params{uint32_t(probes.size()), stride};
+    uint32_t groups = uint32_t((input.size() + kWorkgroupSize - 1) / kWorkgroupSize);
+    if (groups > context.info.limits.maxComputeWorkGroupCount[0])
+        throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(probes.size()) +
+                                          " probes are more than one dispatch can rotate on " +
+                                          context.info.name + "; rotate them in smaller batches");
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        dispatch(commands, rotator.program, set, params, {groups});
+        computeWriteBarrier(commands);
+    });
+    invalidateBuffer(context, rotatedBuffer);
+    std::vector<ShCoefficients> rotated;
+    auto* values = static_cast<const glm::vec4*>(rotatedBuffer.mapped);
+    for (const ShCoefficients& probe : probes) {
+        ShCoefficients result = makeCoefficients(probe.order, probe.quantity);
+        for (glm::dvec3& c : result.rgb)
+            c = glm::dvec3(glm::vec3(*values++));
+        rotated.push_back(std::move(result));
     }
-    release();
     return rotated;
 }
 

@@ -16,8 +16,8 @@ struct Rotator {
     ComputeProgram program;
 };
 
-Rotator createRotator(const Context& context, int order);
-void destroyRotator(const Context& context, Rotator& rotator);
+Rotator createRotator(const Device& device, int order);
+void destroyRotator(const Device& device, Rotator& rotator);
 
 // Rotates every probe by rotations[0] when one rotation is given, or probe p by rotations[p] when
 // there are as many rotations as probes. All orders must be the rotator's. One submission.

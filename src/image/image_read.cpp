@@ -5,6 +5,7 @@
 #include "shprobe/image/channels.h"
 #include "shprobe/io/input_file.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
 
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
@@ -128,13 +129,8 @@ std::string sizeText(int width, int height) {
 void checkHeaderBounds(const std::string& path) {
     int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
     if (fd < 0) throwInputError(path, errno);
-    try {
-        checkImageHeader(fd, path);
-    } catch (...) {
-        close(fd);
-        throw;
-    }
-    close(fd);
+    ScopeExit closeFile([&] { close(fd); });
+    checkImageHeader(fd, path);
 }
 
 std::unique_ptr<OIIO::ImageInput> openImage(const std::string& path) {

@@ -1,7 +1,7 @@
 #include "shprobe/render/gpu_image.h"
 
 #include "shprobe/sh/error.h"
-#include "shprobe/vk/check.h"
+#include "shprobe/sh/scope_exit.h"
 
 #include <algorithm>
 #include <cstring>
@@ -46,35 +46,29 @@ GpuImage createCubeTexture(const Context& context, const Cubemap& cubemap) {
     std::vector<uint8_t> bytes = packTexels(cubemap, format);
     Buffer staging = createBuffer(context, bytes.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload,
                                   "environment upload");
-    GpuImage image;
-    try {
-        std::memcpy(staging.mapped, bytes.data(), bytes.size());
-        image = createImage(context, {format,
-                                      {size, size},
-                                      VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                      true,
-                                      "environment cube map"});
-        submitAndWait(context, [&](VkCommandBuffer commands) {
-            changeLayout(commands, image,
-                         {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                          VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                          VK_ACCESS_TRANSFER_WRITE_BIT});
-            VkBufferImageCopy region{};
-            region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 6}; // faces follow each other
-            region.imageExtent = {size, size, 1};
-            vkCmdCopyBufferToImage(commands, staging.buffer, image.image,
-                                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-            changeLayout(commands, image,
-                         {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                          VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
-        });
-    } catch (...) {
-        destroyImage(context, image);
-        destroyBuffer(context, staging);
-        throw;
-    }
-    destroyBuffer(context, staging);
+    ScopeExit releaseStaging([&] { destroyBuffer(context, staging); });
+    std::memcpy(staging.mapped, bytes.data(), bytes.size());
+    GpuImage image = createImage(context, {format,
+                                           {size, size},
+                                           VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                           true,
+                                           "environment cube map"});
+    OnFailure releaseImage([&] { destroyImage(context, image); });
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        changeLayout(commands, image,
+                     {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                      VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                      VK_ACCESS_TRANSFER_WRITE_BIT});
+        VkBufferImageCopy region{};
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 6}; // faces follow each other
+        region.imageExtent = {size, size, 1};
+        vkCmdCopyBufferToImage(commands, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                               &region);
+        changeLayout(commands, image,
+                     {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+    });
     return image;
 }
 

@@ -1,7 +1,8 @@
 #include "shprobe/render/offscreen.h"
 
 #include "shprobe/sh/error.h"
-#include "shprobe/vk/check.h"
+#include "shprobe/sh/scope_exit.h"
+#include "shprobe/vk/graphics.h"
 
 #include <cstring>
 
@@ -30,34 +31,23 @@ void destroyFrame(const Context& context, const OffscreenRenderer& renderer, Off
     destroySceneTargets(context, renderer.tonemapper, frame.targets);
 }
 
-VkFramebuffer createDisplayFramebuffer(const Context& context, const Tonemapper& tonemapper,
-                                       const GpuImage& image) {
-    VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-    info.renderPass = tonemapper.renderPass;
-    info.attachmentCount = 1;
-    info.pAttachments = &image.view;
-    info.width = image.extent.width;
-    info.height = image.extent.height;
-    info.layers = 1;
-    VkFramebuffer framebuffer = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateFramebuffer(context.device, &info, nullptr, &framebuffer));
-    return framebuffer;
-}
-
-void createFrame(const Context& context, const OffscreenRenderer& renderer, VkExtent2D extent,
-                 OffscreenFrame& frame) {
+OffscreenFrame createFrame(const Context& context, const OffscreenRenderer& renderer, VkExtent2D extent) {
+    OffscreenFrame frame;
+    OnFailure undo([&] { destroyFrame(context, renderer, frame); });
     frame.targets = createSceneTargets(context, renderer.scene, renderer.tonemapper, extent);
     frame.display =
         createImage(context, {kDisplayFormat, extent,
                               VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, false,
                               "display image"});
-    frame.displayFramebuffer = createDisplayFramebuffer(context, renderer.tonemapper, frame.display);
+    frame.displayFramebuffer =
+        createFramebuffer(context, renderer.tonemapper.renderPass, {&frame.display.view, 1}, extent);
     const VkDeviceSize pixels = VkDeviceSize(extent.width) * extent.height;
     const VkBufferUsageFlags usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     frame.colorReadback = createBuffer(context, pixels * 16, usage, MemoryUse::Readback, "colour readback");
     frame.directionReadback =
         createBuffer(context, pixels * 16, usage, MemoryUse::Readback, "direction readback");
     frame.displayReadback = createBuffer(context, pixels * 4, usage, MemoryUse::Readback, "display readback");
+    return frame;
 }
 
 Image readFloatImage(const Context& context, const Buffer& buffer, VkExtent2D extent) {
@@ -71,13 +61,9 @@ Image readFloatImage(const Context& context, const Buffer& buffer, VkExtent2D ex
 
 OffscreenRenderer createOffscreenRenderer(const Context& context) {
     OffscreenRenderer renderer;
-    try {
-        renderer.scene = createSceneRenderer(context);
-        renderer.tonemapper = createTonemapper(context, kDisplayFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-    } catch (...) {
-        destroyOffscreenRenderer(context, renderer);
-        throw;
-    }
+    OnFailure undo([&] { destroyOffscreenRenderer(context, renderer); });
+    renderer.scene = createSceneRenderer(context);
+    renderer.tonemapper = createTonemapper(context, kDisplayFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
     return renderer;
 }
 
@@ -92,32 +78,26 @@ RenderedImage renderOffscreen(const Context& context, OffscreenRenderer& rendere
         throw Error(ErrorKind::Input, "image size " + std::to_string(extent.width) + "x" +
                                           std::to_string(extent.height) + " is outside 1.." +
                                           std::to_string(kMaxExtent));
-    OffscreenFrame frame;
+    OffscreenFrame frame = createFrame(context, renderer, extent);
+    ScopeExit releaseFrame([&] { destroyFrame(context, renderer, frame); });
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        recordScene(context, commands, renderer.scene, frame.targets, scene);
+        recordTonemap(commands, renderer.tonemapper, frame.targets.tonemapInput, frame.displayFramebuffer,
+                      extent, exposure);
+        changeLayout(commands, frame.targets.color,
+                     {VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT});
+        copyImageToBuffer(commands, frame.targets.color, frame.colorReadback);
+        copyImageToBuffer(commands, frame.targets.direction, frame.directionReadback);
+        copyImageToBuffer(commands, frame.display, frame.displayReadback);
+    });
     RenderedImage result;
-    try {
-        createFrame(context, renderer, extent, frame);
-        submitAndWait(context, [&](VkCommandBuffer commands) {
-            recordScene(context, commands, renderer.scene, frame.targets, scene);
-            recordTonemap(commands, renderer.tonemapper, frame.targets.tonemapInput, frame.displayFramebuffer,
-                          extent, exposure);
-            changeLayout(commands, frame.targets.color,
-                         {VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                          VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT,
-                          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT});
-            copyImageToBuffer(commands, frame.targets.color, frame.colorReadback);
-            copyImageToBuffer(commands, frame.targets.direction, frame.directionReadback);
-            copyImageToBuffer(commands, frame.display, frame.displayReadback);
-        });
-        result.linear = readFloatImage(context, frame.colorReadback, extent);
-        result.directions = readFloatImage(context, frame.directionReadback, extent);
-        invalidateBuffer(context, frame.displayReadback);
-        const auto* bytes = static_cast<const uint8_t*>(frame.displayReadback.mapped);
-        result.display.assign(bytes, bytes + frame.displayReadback.size);
-    } catch (...) {
-        destroyFrame(context, renderer, frame);
-        throw;
-    }
-    destroyFrame(context, renderer, frame);
+    result.linear = readFloatImage(context, frame.colorReadback, extent);
+    result.directions = readFloatImage(context, frame.directionReadback, extent);
+    invalidateBuffer(context, frame.displayReadback);
+    const auto* bytes = static_cast<const uint8_t*>(frame.displayReadback.mapped);
+    result.display.assign(bytes, bytes + frame.displayReadback.size);
     return result;
 }
 

@@ -3,6 +3,7 @@
 #include "shprobe/image/environment.h"
 #include "shprobe/io/probe_file.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
 
 #include <algorithm>
 #include <chrono>
@@ -52,10 +53,15 @@ bool isProbeFile(const std::string& path) {
     return extension == ".json";
 }
 
-ShCoefficients bakeRadiance(const Context& context, const Projector& projector, const Cubemap& cubemap,
+ProbeBaker createRenderBaker(const Device& device) {
+    return createProbeBaker(
+        device, {.order = kRenderBakeOrder, .cubemaps = uploadBinding(device, TexelFormat::Rgba32F)});
+}
+
+ShCoefficients bakeRadiance(const Context& context, const ProbeBaker& baker, const Cubemap& cubemap,
                             double& milliseconds) {
     auto start = std::chrono::steady_clock::now();
-    GpuBake bake = bakeCubemap(context, projector, cubemap);
+    GpuBake bake = bakeCubemap(context, baker, cubemap);
     milliseconds =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return bake.radiance;
@@ -77,14 +83,9 @@ RenderInput loadRenderInput(const Context& context, const std::string& path,
     RenderInput input;
     input.name = path.empty() ? "built-in sky" : path;
     Environment environment = loadEnvironmentInput(path, options);
-    Projector projector = createProjector(context, {.order = kRenderBakeOrder});
-    try {
-        input.probe = bakeRadiance(context, projector, environment.cubemap, input.bakeMilliseconds);
-    } catch (...) {
-        destroyProjector(context, projector);
-        throw;
-    }
-    destroyProjector(context, projector);
+    ProbeBaker baker = createRenderBaker(context);
+    ScopeExit releaseBaker([&] { destroyProbeBaker(context, baker); });
+    input.probe = bakeRadiance(context, baker, environment.cubemap, input.bakeMilliseconds);
     input.environment = std::move(environment.cubemap);
     return input;
 }

@@ -2,7 +2,8 @@
 // environment image (or the built-in sky) baked on the GPU first, keeping the cube map for the
 // background.
 #pragma once
-#include "shprobe/gpu/projector.h"
+#include "shprobe/gpu/host_bake.h"
+#include "shprobe/gpu/probe_baker.h"
 #include "shprobe/image/environment.h"
 #include "shprobe/sh/coefficients.h"
 #include "shprobe/sh/cubemap.h"
@@ -42,8 +43,12 @@ RenderInput readProbeInput(const std::string& path); // probe files only; needs 
 RenderInput loadRenderInput(const Context& context, const std::string& path,
                             const RenderInputOptions& options);
 
-// Bakes radiance at the projector's order; `milliseconds` gets the wall time of the bake.
-ShCoefficients bakeRadiance(const Context& context, const Projector& projector, const Cubemap& cubemap,
+// The baker environments are baked with: order kRenderBakeOrder, texels uploaded as RGBA32F.
+// destroyProbeBaker when done.
+ProbeBaker createRenderBaker(const Device& device);
+
+// Bakes radiance at the baker's order; `milliseconds` gets the wall time of the bake.
+ShCoefficients bakeRadiance(const Context& context, const ProbeBaker& baker, const Cubemap& cubemap,
                             double& milliseconds);
 
 // The environment rotated by R: the light that came from d comes from R d (docs/conventions.md,

@@ -33,7 +33,4 @@ void destroyScenePipelines(const Context& context, ScenePipelines& pipelines);
 VkPipeline meshPipeline(const Context& context, ScenePipelines& pipelines, const Scene& scene);
 VkPipeline backgroundPipeline(const Context& context, ScenePipelines& pipelines, const Scene& scene);
 
-// Shader module from embedded SPIR-V words.
-VkShaderModule createShaderModule(const Context& context, const uint32_t* words, size_t wordCount);
-
 } // namespace shprobe

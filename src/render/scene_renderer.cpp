@@ -3,7 +3,9 @@
 #include "shprobe/glsl/render_interface.h"
 #include "shprobe/render/meshes.h"
 #include "shprobe/sh/error.h"
-#include "shprobe/vk/check.h"
+#include "shprobe/sh/scope_exit.h"
+#include "shprobe/vk/graphics.h"
+#include "shprobe/vk/pipeline.h"
 
 #include <algorithm>
 #include <array>
@@ -21,73 +23,38 @@ constexpr int kSphereRings = 64;
 constexpr float kTorusMajorRadius = 1.3f;
 constexpr float kTorusMinorRadius = 0.22f;
 
-GpuMesh createGpuMesh(const Context& context, const MeshData& mesh) {
-    GpuMesh gpuMesh;
-    try {
-        VkDeviceSize vertexBytes = mesh.vertices.size() * sizeof(MeshVertex);
-        VkDeviceSize indexBytes = mesh.indices.size() * sizeof(uint32_t);
-        gpuMesh.vertices = createBuffer(context, vertexBytes,
-                                        VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                        MemoryUse::Device, "mesh vertices");
-        gpuMesh.indices = createBuffer(context, indexBytes,
-                                       VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                       MemoryUse::Device, "mesh indices");
-        uploadBuffer(context, gpuMesh.vertices, mesh.vertices.data(), vertexBytes);
-        uploadBuffer(context, gpuMesh.indices, mesh.indices.data(), indexBytes);
-        gpuMesh.indexCount = uint32_t(mesh.indices.size());
-    } catch (...) {
-        destroyBuffer(context, gpuMesh.indices);
-        destroyBuffer(context, gpuMesh.vertices);
-        throw;
-    }
-    return gpuMesh;
-}
-
 void destroyGpuMesh(const Context& context, GpuMesh& mesh) {
     destroyBuffer(context, mesh.indices);
     destroyBuffer(context, mesh.vertices);
     mesh.indexCount = 0;
 }
 
-VkDescriptorPool createScenePool(const Context& context) {
-    std::array<VkDescriptorPoolSize, 2> sizes{
-        {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1}, {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}}};
-    VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    info.maxSets = 1;
-    info.poolSizeCount = uint32_t(sizes.size());
-    info.pPoolSizes = sizes.data();
-    VkDescriptorPool pool = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateDescriptorPool(context.device, &info, nullptr, &pool));
-    return pool;
+GpuMesh createGpuMesh(const Context& context, const MeshData& mesh) {
+    GpuMesh gpuMesh;
+    OnFailure undo([&] { destroyGpuMesh(context, gpuMesh); });
+    VkDeviceSize vertexBytes = mesh.vertices.size() * sizeof(MeshVertex);
+    VkDeviceSize indexBytes = mesh.indices.size() * sizeof(uint32_t);
+    gpuMesh.vertices = createBuffer(context, vertexBytes,
+                                    VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                    MemoryUse::Device, "mesh vertices");
+    gpuMesh.indices =
+        createBuffer(context, indexBytes, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                     MemoryUse::Device, "mesh indices");
+    uploadBuffer(context, gpuMesh.vertices, mesh.vertices.data(), vertexBytes);
+    uploadBuffer(context, gpuMesh.indices, mesh.indices.data(), indexBytes);
+    gpuMesh.indexCount = uint32_t(mesh.indices.size());
+    return gpuMesh;
 }
 
 void writeEnvironmentDescriptor(const Context& context, const SceneRenderer& renderer) {
-    VkDescriptorImageInfo image{renderer.sampler, renderer.environment.view,
-                                VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    write.dstSet = renderer.set;
-    write.dstBinding = 1;
-    write.descriptorCount = 1;
-    write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    write.pImageInfo = &image;
-    vkUpdateDescriptorSets(context.device, 1, &write, 0, nullptr);
+    writeDescriptor(context, renderer.set, 1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                    {.imageView = renderer.environment.view, .sampler = renderer.sampler});
 }
 
 VkDescriptorSet createSceneSet(const Context& context, const SceneRenderer& renderer) {
-    VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-    allocate.descriptorPool = renderer.pool;
-    allocate.descriptorSetCount = 1;
-    allocate.pSetLayouts = &renderer.pipelines.setLayout;
-    VkDescriptorSet set = VK_NULL_HANDLE;
-    VK_CHECK(vkAllocateDescriptorSets(context.device, &allocate, &set));
-    VkDescriptorBufferInfo buffer{renderer.uniforms.buffer, 0, sizeof(gpu::RenderUniforms)};
-    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    write.dstSet = set;
-    write.dstBinding = 0;
-    write.descriptorCount = 1;
-    write.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-    write.pBufferInfo = &buffer;
-    vkUpdateDescriptorSets(context.device, 1, &write, 0, nullptr);
+    VkDescriptorSet set = allocateDescriptorSet(context, renderer.pool, renderer.pipelines.setLayout);
+    writeDescriptor(context, set, 0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+                    {renderer.uniforms.buffer, 0, sizeof(gpu::RenderUniforms)});
     return set;
 }
 
@@ -152,22 +119,17 @@ void drawObjects(const Context& context, VkCommandBuffer commands, SceneRenderer
 
 SceneRenderer createSceneRenderer(const Context& context) {
     SceneRenderer renderer;
-    try {
-        renderer.pipelines = createScenePipelines(context);
-        renderer.sphere = createGpuMesh(context, makeSphereMesh(kSphereSegments, kSphereRings));
-        renderer.torus = createGpuMesh(context, makeTorusMesh(kTorusMajorRadius, kTorusMinorRadius, 96, 32));
-        renderer.uniforms =
-            createBuffer(context, sizeof(gpu::RenderUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
-                         MemoryUse::Upload, "render uniforms");
-        renderer.sampler = createSampler(context, VK_FILTER_LINEAR);
-        renderer.pool = createScenePool(context);
-        renderer.set = createSceneSet(context, renderer);
-        renderer.environment = createCubeTexture(context, blackCubemap());
-        writeEnvironmentDescriptor(context, renderer);
-    } catch (...) {
-        destroySceneRenderer(context, renderer);
-        throw;
-    }
+    OnFailure undo([&] { destroySceneRenderer(context, renderer); });
+    renderer.pipelines = createScenePipelines(context);
+    renderer.sphere = createGpuMesh(context, makeSphereMesh(kSphereSegments, kSphereRings));
+    renderer.torus = createGpuMesh(context, makeTorusMesh(kTorusMajorRadius, kTorusMinorRadius, 96, 32));
+    renderer.uniforms = createBuffer(context, sizeof(gpu::RenderUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                     MemoryUse::Upload, "render uniforms");
+    renderer.sampler = createSampler(context, VK_FILTER_LINEAR);
+    renderer.pool = createDescriptorPool(context, {.sets = 1, .imageSamplers = 1, .uniformBuffers = 1});
+    renderer.set = createSceneSet(context, renderer);
+    renderer.environment = createCubeTexture(context, blackCubemap());
+    writeEnvironmentDescriptor(context, renderer);
     return renderer;
 }
 
@@ -198,32 +160,21 @@ SceneTargets createSceneTargets(const Context& context, const SceneRenderer& ren
                                 const Tonemapper& tonemapper, VkExtent2D extent) {
     SceneTargets targets;
     targets.extent = extent;
-    try {
-        const VkImageUsageFlags attachment = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-        targets.color =
-            createImage(context, {kSceneColorFormat, extent,
-                                  attachment | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                                  false, "scene colour target"});
-        targets.direction =
-            createImage(context, {kSceneDirectionFormat, extent, attachment | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                                  false, "scene direction target"});
-        targets.depth =
-            createImage(context, {renderer.pipelines.depthFormat, extent,
-                                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "depth target"});
-        std::array<VkImageView, 3> views{targets.color.view, targets.direction.view, targets.depth.view};
-        VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-        info.renderPass = renderer.pipelines.renderPass;
-        info.attachmentCount = uint32_t(views.size());
-        info.pAttachments = views.data();
-        info.width = extent.width;
-        info.height = extent.height;
-        info.layers = 1;
-        VK_CHECK(vkCreateFramebuffer(context.device, &info, nullptr, &targets.framebuffer));
-        targets.tonemapInput = createTonemapInput(context, tonemapper, targets.color.view);
-    } catch (...) {
-        destroySceneTargets(context, tonemapper, targets);
-        throw;
-    }
+    OnFailure undo([&] { destroySceneTargets(context, tonemapper, targets); });
+    const VkImageUsageFlags attachment = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+    targets.color =
+        createImage(context, {kSceneColorFormat, extent,
+                              attachment | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                              false, "scene colour target"});
+    targets.direction =
+        createImage(context, {kSceneDirectionFormat, extent, attachment | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                              false, "scene direction target"});
+    targets.depth =
+        createImage(context, {renderer.pipelines.depthFormat, extent,
+                              VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "depth target"});
+    const std::array<VkImageView, 3> views{targets.color.view, targets.direction.view, targets.depth.view};
+    targets.framebuffer = createFramebuffer(context, renderer.pipelines.renderPass, views, extent);
+    targets.tonemapInput = createTonemapInput(context, tonemapper, targets.color.view);
     return targets;
 }
 
@@ -244,17 +195,7 @@ void recordScene(const Context& context, VkCommandBuffer commands, SceneRenderer
 
     std::array<VkClearValue, 3> clears{};
     clears[2].depthStencil = {1.0f, 0};
-    VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-    begin.renderPass = renderer.pipelines.renderPass;
-    begin.framebuffer = targets.framebuffer;
-    begin.renderArea = {{0, 0}, targets.extent};
-    begin.clearValueCount = uint32_t(clears.size());
-    begin.pClearValues = clears.data();
-    vkCmdBeginRenderPass(commands, &begin, VK_SUBPASS_CONTENTS_INLINE);
-    VkViewport viewport{0.0f, 0.0f, float(targets.extent.width), float(targets.extent.height), 0.0f, 1.0f};
-    VkRect2D scissor{{0, 0}, targets.extent};
-    vkCmdSetViewport(commands, 0, 1, &viewport);
-    vkCmdSetScissor(commands, 0, 1, &scissor);
+    beginRenderPass(commands, renderer.pipelines.renderPass, targets.framebuffer, targets.extent, clears);
     vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, renderer.pipelines.layout, 0, 1,
                             &renderer.set, 0, nullptr);
     drawObjects(context, commands, renderer, scene); // first: the background only fills what is left

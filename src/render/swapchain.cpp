@@ -1,7 +1,11 @@
 #include "shprobe/render/swapchain.h"
 
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
+#include "shprobe/vk/graphics.h"
+#include "shprobe/vk/image.h"
+#include "shprobe/vk/resources.h"
 
 #include <algorithm>
 
@@ -24,31 +28,6 @@ VkExtent2D chooseExtent(const VkSurfaceCapabilitiesKHR& capabilities, VkExtent2D
     return {
         std::clamp(wanted.width, capabilities.minImageExtent.width, capabilities.maxImageExtent.width),
         std::clamp(wanted.height, capabilities.minImageExtent.height, capabilities.maxImageExtent.height)};
-}
-
-VkImageView createView(const Context& context, VkImage image, VkFormat format) {
-    VkImageViewCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    info.image = image;
-    info.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    info.format = format;
-    info.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    VkImageView view = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateImageView(context.device, &info, nullptr, &view));
-    return view;
-}
-
-VkFramebuffer createFramebuffer(const Context& context, VkRenderPass renderPass, VkImageView view,
-                                VkExtent2D extent) {
-    VkFramebufferCreateInfo info{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-    info.renderPass = renderPass;
-    info.attachmentCount = 1;
-    info.pAttachments = &view;
-    info.width = extent.width;
-    info.height = extent.height;
-    info.layers = 1;
-    VkFramebuffer framebuffer = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateFramebuffer(context.device, &info, nullptr, &framebuffer));
-    return framebuffer;
 }
 
 VkSwapchainKHR createHandle(const Context& context, const VkSurfaceCapabilitiesKHR& capabilities,
@@ -99,24 +78,17 @@ Swapchain createSwapchain(const Context& context, VkExtent2D extent, VkFormat fo
     swapchain.format = format;
     swapchain.extent = chooseExtent(capabilities, extent);
     swapchain.copyable = capabilities.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-    try {
-        swapchain.swapchain = createHandle(context, capabilities, swapchain, oldSwapchain);
-        uint32_t count = 0;
-        VK_CHECK(vkGetSwapchainImagesKHR(context.device, swapchain.swapchain, &count, nullptr));
-        swapchain.images.resize(count);
-        VK_CHECK(
-            vkGetSwapchainImagesKHR(context.device, swapchain.swapchain, &count, swapchain.images.data()));
-        for (VkImage image : swapchain.images) {
-            swapchain.views.push_back(createView(context, image, format));
-            swapchain.framebuffers.push_back(
-                createFramebuffer(context, renderPass, swapchain.views.back(), swapchain.extent));
-            VkSemaphoreCreateInfo semaphore{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-            swapchain.renderDone.push_back(VK_NULL_HANDLE);
-            VK_CHECK(vkCreateSemaphore(context.device, &semaphore, nullptr, &swapchain.renderDone.back()));
-        }
-    } catch (...) {
-        destroySwapchain(context, swapchain);
-        throw;
+    OnFailure undo([&] { destroySwapchain(context, swapchain); });
+    swapchain.swapchain = createHandle(context, capabilities, swapchain, oldSwapchain);
+    uint32_t count = 0;
+    VK_CHECK(vkGetSwapchainImagesKHR(context.device, swapchain.swapchain, &count, nullptr));
+    swapchain.images.resize(count);
+    VK_CHECK(vkGetSwapchainImagesKHR(context.device, swapchain.swapchain, &count, swapchain.images.data()));
+    for (VkImage image : swapchain.images) {
+        swapchain.views.push_back(createImageView(context, image, VK_IMAGE_VIEW_TYPE_2D, format));
+        swapchain.framebuffers.push_back(
+            createFramebuffer(context, renderPass, {&swapchain.views.back(), 1}, swapchain.extent));
+        swapchain.renderDone.push_back(createSemaphore(context));
     }
     return swapchain;
 }

@@ -8,6 +8,7 @@
 #include "shprobe/render/viewer_frames.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/rotation.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 
 #define GLFW_INCLUDE_VULKAN
@@ -154,7 +155,7 @@ std::vector<int> scriptedKeys(const std::vector<std::string>& names) {
 
 struct Session {
     RenderInput input;
-    std::optional<Projector> projector; // re-bakes a rotated environment
+    std::optional<ProbeBaker> baker; // re-bakes a rotated environment
     SceneRenderer renderer;
     ViewerFrames frames;
     ViewState initial;
@@ -203,7 +204,7 @@ void rotateEnvironment(const Context& context, Session& session, float degrees) 
     session.view.environmentRotationDegrees =
         std::remainder(session.view.environmentRotationDegrees + degrees, 360.0f);
     glm::dmat3 rotation = environmentRotation(session.view.environmentRotationDegrees);
-    if (!session.input.environment || !session.projector) {
+    if (!session.input.environment || !session.baker) {
         ShCoefficients rotated =
             rotate(makeShRotation(rotation, session.input.probe.order), session.input.probe);
         std::optional<SphericalLight> sun = session.input.sun;
@@ -212,7 +213,7 @@ void rotateEnvironment(const Context& context, Session& session, float degrees) 
         return;
     }
     Cubemap rotated = rotateCubemap(*session.input.environment, rotation);
-    ShCoefficients probe = bakeRadiance(context, *session.projector, rotated, session.input.bakeMilliseconds);
+    ShCoefficients probe = bakeRadiance(context, *session.baker, rotated, session.input.bakeMilliseconds);
     setEnvironment(context, session.renderer, rotated);
     setProbe(session.renderer, foldProbe(probe, session.foldOrder, session.input.name));
 }
@@ -287,7 +288,7 @@ void startSession(const Context& context, const ViewerOptions& options, GLFWwind
     setProbe(session.renderer, probe);
     if (session.input.environment) {
         setEnvironment(context, session.renderer, *session.input.environment);
-        session.projector = createProjector(context, {.order = kRenderBakeOrder});
+        session.baker = createRenderBaker(context);
     }
     session.autoExposure = autoExposure(session.input.probe, session.input.sun);
     session.initial = usableView(session, options.view);
@@ -299,7 +300,7 @@ void startSession(const Context& context, const ViewerOptions& options, GLFWwind
 void endSession(const Context& context, Session& session) {
     destroyViewerFrames(context, session.frames);
     destroySceneRenderer(context, session.renderer);
-    if (session.projector) destroyProjector(context, *session.projector);
+    if (session.baker) destroyProbeBaker(context, *session.baker);
 }
 
 // Draws until the window closes or the requested frames are shown; returns the frames shown.
@@ -345,20 +346,15 @@ void saveScreenshot(const Context& context, const ViewerOptions& options, const 
 void runSession(const Context& context, const ViewerOptions& options, GLFWwindow* window,
                 InputEvents& events) {
     Session session;
-    try {
-        startSession(context, options, window, session);
-        std::printf("%s\n", viewSummary(session.view, session.input.name, session.input.bakeMilliseconds,
-                                        session.device)
-                                .c_str());
-        std::printf("keys: 3/5 order, M mode, B background, Left/Right rotate environment, +/- exposure, "
-                    "R reset, Esc quit; drag to orbit, scroll to zoom\n");
-        int shown = runFrames(context, options, window, session, events);
-        saveScreenshot(context, options, session, shown);
-    } catch (...) {
-        endSession(context, session);
-        throw;
-    }
-    endSession(context, session);
+    ScopeExit end([&] { endSession(context, session); });
+    startSession(context, options, window, session);
+    std::printf("%s\n",
+                viewSummary(session.view, session.input.name, session.input.bakeMilliseconds, session.device)
+                    .c_str());
+    std::printf("keys: 3/5 order, M mode, B background, Left/Right rotate environment, +/- exposure, "
+                "R reset, Esc quit; drag to orbit, scroll to zoom\n");
+    int shown = runFrames(context, options, window, session, events);
+    saveScreenshot(context, options, session, shown);
 }
 
 } // namespace
@@ -370,23 +366,12 @@ void runViewer(const ViewerOptions& options) {
     scriptedKeys(options.keys); // unknown names fail before a window opens
     InputEvents events;
     GLFWwindow* window = openWindow(options, events);
-    try {
-        Context context = createContext(viewerContextOptions(options, window));
-        try {
-            runSession(context, options, window, events);
-        } catch (...) {
-            destroyContext(context);
-            throw;
-        }
-        uint32_t messages = context.validationMessages();
-        destroyContext(context);
-        if (messages > 0)
-            throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
-    } catch (...) {
-        closeWindow(window);
-        throw;
-    }
-    closeWindow(window);
+    ScopeExit close([&] { closeWindow(window); }); // after the context, whose surface is the window's
+    Context context = createContext(viewerContextOptions(options, window));
+    ScopeExit release([&] { destroyContext(context); });
+    runSession(context, options, window, events);
+    if (uint32_t messages = context.validationMessages(); messages > 0)
+        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
 }
 
 } // namespace shprobe

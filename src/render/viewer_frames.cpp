@@ -2,6 +2,7 @@
 
 #include "shprobe/render/gpu_image.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 
 #include <algorithm>
@@ -10,24 +11,6 @@
 namespace shprobe {
 
 namespace {
-
-VkCommandBuffer allocateCommandBuffer(const Context& context) {
-    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    allocate.commandPool = context.commandPool;
-    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    allocate.commandBufferCount = 1;
-    VkCommandBuffer commands = VK_NULL_HANDLE;
-    VK_CHECK(vkAllocateCommandBuffers(context.device, &allocate, &commands));
-    return commands;
-}
-
-void createSync(const Context& context, ViewerFrames& frames) {
-    VkSemaphoreCreateInfo semaphore{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-    VK_CHECK(vkCreateSemaphore(context.device, &semaphore, nullptr, &frames.acquired));
-    VkFenceCreateInfo fence{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    fence.flags = VK_FENCE_CREATE_SIGNALED_BIT; // the first frame has nothing to wait for
-    VK_CHECK(vkCreateFence(context.device, &fence, nullptr, &frames.frameDone));
-}
 
 void createSizedResources(const Context& context, const SceneRenderer& renderer, ViewerFrames& frames,
                           VkExtent2D windowExtent, VkSwapchainKHR oldSwapchain) {
@@ -64,17 +47,10 @@ void prepareCapture(const Context& context, ViewerFrames& frames) {
 }
 
 void submit(const Context& context, ViewerFrames& frames, uint32_t imageIndex) {
-    VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
-    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-    submit.waitSemaphoreCount = 1;
-    submit.pWaitSemaphores = &frames.acquired;
-    submit.pWaitDstStageMask = &waitStage;
-    submit.commandBufferCount = 1;
-    submit.pCommandBuffers = &frames.commands;
-    submit.signalSemaphoreCount = 1;
-    submit.pSignalSemaphores = &frames.swapchain.renderDone[imageIndex];
     VK_CHECK(vkResetFences(context.device, 1, &frames.frameDone));
-    VK_CHECK(vkQueueSubmit(context.queue, 1, &submit, frames.frameDone));
+    submitCommands(context, frames.commands, frames.frameDone,
+                   {frames.acquired, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                    frames.swapchain.renderDone[imageIndex]});
 }
 
 bool present(const Context& context, const ViewerFrames& frames, uint32_t imageIndex) {
@@ -95,16 +71,13 @@ bool present(const Context& context, const ViewerFrames& frames, uint32_t imageI
 ViewerFrames createViewerFrames(const Context& context, const SceneRenderer& renderer,
                                 VkExtent2D windowExtent) {
     ViewerFrames frames;
-    try {
-        frames.tonemapper =
-            createTonemapper(context, pickSwapchainFormat(context), VK_IMAGE_LAYOUT_PRESENT_SRC_KHR);
-        createSizedResources(context, renderer, frames, windowExtent, VK_NULL_HANDLE);
-        frames.commands = allocateCommandBuffer(context);
-        createSync(context, frames);
-    } catch (...) {
-        destroyViewerFrames(context, frames);
-        throw;
-    }
+    OnFailure undo([&] { destroyViewerFrames(context, frames); });
+    frames.tonemapper =
+        createTonemapper(context, pickSwapchainFormat(context), VK_IMAGE_LAYOUT_PRESENT_SRC_KHR);
+    createSizedResources(context, renderer, frames, windowExtent, VK_NULL_HANDLE);
+    frames.commands = allocateCommandBuffer(context);
+    frames.acquired = createSemaphore(context);
+    frames.frameDone = createFence(context, true); // the first frame has nothing to wait for
     return frames;
 }
 
@@ -126,13 +99,8 @@ void recreateSwapchain(const Context& context, const SceneRenderer& renderer, Vi
     destroySceneTargets(context, frames.tonemapper, frames.targets);
     Swapchain old = frames.swapchain;
     frames.swapchain = Swapchain{};
-    try {
-        createSizedResources(context, renderer, frames, windowExtent, old.swapchain);
-    } catch (...) {
-        destroySwapchain(context, old);
-        throw;
-    }
-    destroySwapchain(context, old);
+    ScopeExit releaseOld([&] { destroySwapchain(context, old); }); // once the new one replaced it
+    createSizedResources(context, renderer, frames, windowExtent, old.swapchain);
 }
 
 void waitForFrame(const Context& context, const ViewerFrames& frames) {
@@ -150,9 +118,7 @@ FrameResult drawFrame(const Context& context, SceneRenderer& renderer, ViewerFra
     if (request.capture) prepareCapture(context, frames);
 
     VK_CHECK(vkResetCommandBuffer(frames.commands, 0));
-    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    VK_CHECK(vkBeginCommandBuffer(frames.commands, &begin));
+    beginCommands(frames.commands);
     recordScene(context, frames.commands, renderer, frames.targets, *request.scene);
     recordTonemap(frames.commands, frames.tonemapper, frames.targets.tonemapInput,
                   frames.swapchain.framebuffers[imageIndex], frames.swapchain.extent, request.exposure);

@@ -257,14 +257,12 @@ struct Plan {
     }
 };
 
-// y_lm = recurrence Y_lm times sqrt(2) K_l^|m| for m != 0, K_l^0 for m = 0 (as basis.cpp).
-std::array<float, coefficientCount(kMaxOrder)> recurrenceNormalization(int order) {
+// y_lm = recurrence Y_lm times recurrenceNormalization(l, m) (basis.h), in float.
+std::array<float, coefficientCount(kMaxOrder)> floatRecurrenceNormalization(int order) {
     std::array<float, coefficientCount(kMaxOrder)> normalization{};
     for (int l = 0; l < order; ++l) {
-        for (int m = -l; m <= l; ++m) {
-            const double k = shNormalization(l, m);
-            normalization[size_t(shIndex(l, m))] = float(m == 0 ? k : std::numbers::sqrt2 * k);
-        }
+        for (int m = -l; m <= l; ++m)
+            normalization[size_t(shIndex(l, m))] = float(recurrenceNormalization(l, m));
     }
     return normalization;
 }
@@ -286,7 +284,7 @@ Plan makePlan(const void* texels, TexelFormat format, int faceSize, int order) {
     plan.tablePairs = (plan.pairs + 3) / 4 * 4;
     plan.blockRows = (plan.positions + kMaxBlocks - 1) / kMaxBlocks;
     plan.blocks = (plan.positions + plan.blockRows - 1) / plan.blockRows;
-    plan.normalization = recurrenceNormalization(order);
+    plan.normalization = floatRecurrenceNormalization(order);
     return plan;
 }
 
@@ -310,48 +308,24 @@ Lanes expandedSolidAngles(const Lanes& inverseLength, int faceSize) {
 }
 
 // Solid angles of the texels of columns i0 .. i0+7 in a row. Below kMinExpandedFaceSize, the
-// shaders' formula (texelSolidAngle of texel_geometry.h) texel by texel: a few thousand calls at most.
+// shaders' formula (texelSolidAngleFp32 of texel_geometry.h) texel by texel: a few thousand calls at most.
 Lanes texelSolidAngles(const Plan& plan, int firstColumn, int row, const Lanes& inverseLength) {
     if (plan.faceSize >= kMinExpandedFaceSize) return expandedSolidAngles(inverseLength, plan.faceSize);
     Lanes solidAngles;
     for (int lane = 0; lane < kLaneCount; ++lane) {
         solidAngles[lane] =
-            gpu::texelSolidAngle(gpu::uint(firstColumn + lane), gpu::uint(row), gpu::uint(plan.faceSize));
+            gpu::texelSolidAngleFp32(gpu::uint(firstColumn + lane), gpu::uint(row), gpu::uint(plan.faceSize));
     }
     return solidAngles;
 }
 
-// y_k, k < Order^2, at eight unit directions (x, y, z): the Lisle-Huang recurrence of basis.cpp
-// ("Algorithms for Spherical Harmonic Lighting", section 2.1) on float lanes, then the normalization.
+// y_k, k < Order^2, at eight unit directions (x, y, z): the recurrence of basis.h on float lanes,
+// then the normalization. Order is a constant in each kernel, and so are the recurrence's loop bounds.
 template <int Order>
 void evalBasisLanes(const Lanes& x, const Lanes& y, const Lanes& z, const float* normalization, Lanes* out) {
-    const auto at = [out](int l, int m) -> Lanes& { return out[shIndex(l, m)]; };
-    out[0] = splat(1.0f);
-    if constexpr (Order > 1) {
-        at(1, -1) = -y;
-        at(1, 0) = z;
-        at(1, 1) = -x;
-    }
-    for (int l = 2; l < Order; ++l) {
-        // Y_l,l = (2l-1)(-x Y_l-1,l-1 + y Y_l-1,-(l-1)); Y_l,-l = (2l-1)(-y Y_l-1,l-1 - x Y_l-1,-(l-1)).
-        const float twoLMinusOne = float(2 * l - 1);
-        const Lanes cosine = at(l - 1, l - 1);
-        const Lanes sine = at(l - 1, -(l - 1));
-        at(l, l) = twoLMinusOne * (y * sine - x * cosine);
-        at(l, -l) = -twoLMinusOne * (y * cosine + x * sine);
-        // Y_l,+-m = ((2l-1) z Y_l-1,+-m - (l+m-1) Y_l-2,+-m) / (l-m), without the second term for m > l-2.
-        for (int m = 0; m < l; ++m) {
-            Lanes positive = twoLMinusOne * z * at(l - 1, m);
-            Lanes negative = twoLMinusOne * z * at(l - 1, -m);
-            if (m <= l - 2) {
-                positive -= float(l + m - 1) * at(l - 2, m);
-                negative -= float(l + m - 1) * at(l - 2, -m);
-            }
-            at(l, m) = positive * (1.0f / float(l - m));
-            at(l, -m) = negative * (1.0f / float(l - m));
-        }
-    }
-    out[0] = splat(normalization[0]); // Y_00 = 1
+    evalBasisRecurrence<float>(Order, x, y, z, out);
+    // Y_00 = 1: assigned rather than multiplied, as GCC 12 warns (wrongly) that it may be uninitialized.
+    out[0] = splat(normalization[0]);
     for (int k = 1; k < Order * Order; ++k)
         out[k] *= normalization[k];
 }

@@ -33,7 +33,7 @@ class DeviceStep {
 
 // The message VK_CHECK throws when `call` (its source text) returned `result`, e.g.
 // "vkQueueSubmit(...) failed with VK_ERROR_DEVICE_LOST (-4) while projecting the environment
-// (src/gpu/projector.cpp:120): the Vulkan device was lost ...".
+// (src/gpu/host_bake.cpp:120): the Vulkan device was lost ...".
 std::string vkErrorMessage(VkResult result, const char* call, const char* file, int line);
 [[noreturn]] void throwVkError(VkResult result, const char* call, const char* file, int line);
 

@@ -1,5 +1,6 @@
 #include "shprobe/vk/context.h"
 
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 
 #include <algorithm>
@@ -380,15 +381,8 @@ std::vector<DeviceInfo> listDevices(const ContextOptions& options) {
     ValidationLog log;
     bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
     VkInstance instance = createInstance(validation, &log);
-    std::vector<DeviceInfo> devices;
-    try {
-        devices = describeDevices(enumeratePhysicalDevices(instance));
-    } catch (...) {
-        vkDestroyInstance(instance, nullptr);
-        throw;
-    }
-    vkDestroyInstance(instance, nullptr);
-    return devices;
+    ScopeExit destroyInstance([&] { vkDestroyInstance(instance, nullptr); });
+    return describeDevices(enumeratePhysicalDevices(instance));
 }
 
 Context createContext(const ContextOptions& options) {
@@ -397,28 +391,24 @@ Context createContext(const ContextOptions& options) {
     bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
     context.validationLog = std::make_unique<ValidationLog>();
     context.instance = createInstance(validation, context.validationLog.get(), options.instanceExtensions);
-    try {
-        if (validation) context.messenger = createMessenger(context.instance, context.validationLog.get());
-        if (options.createSurface) context.surface = options.createSurface(context.instance);
-        std::vector<VkPhysicalDevice> physicalDevices = enumeratePhysicalDevices(context.instance);
-        std::vector<DeviceInfo> devices = describeDevices(physicalDevices);
-        applyRenderingRequirements(devices, physicalDevices, options, context.surface);
-        context.info = pickDevice(devices, requestedDevice(options));
-        context.physicalDevice = physicalDevices[context.info.index];
-        context.queueFamily = *findComputeQueueFamily(context.physicalDevice);
-        vkGetPhysicalDeviceMemoryProperties(context.physicalDevice, &context.memory);
-        context.device =
-            createLogicalDevice(context.physicalDevice, context.queueFamily, options.deviceExtensions);
-        vkGetDeviceQueue(context.device, context.queueFamily, 0, &context.queue);
+    OnFailure undo([&] { destroyContext(context); });
+    if (validation) context.messenger = createMessenger(context.instance, context.validationLog.get());
+    if (options.createSurface) context.surface = options.createSurface(context.instance);
+    std::vector<VkPhysicalDevice> physicalDevices = enumeratePhysicalDevices(context.instance);
+    std::vector<DeviceInfo> devices = describeDevices(physicalDevices);
+    applyRenderingRequirements(devices, physicalDevices, options, context.surface);
+    context.info = pickDevice(devices, requestedDevice(options));
+    context.physicalDevice = physicalDevices[context.info.index];
+    context.queueFamily = *findComputeQueueFamily(context.physicalDevice);
+    vkGetPhysicalDeviceMemoryProperties(context.physicalDevice, &context.memory);
+    context.device =
+        createLogicalDevice(context.physicalDevice, context.queueFamily, options.deviceExtensions);
+    vkGetDeviceQueue(context.device, context.queueFamily, 0, &context.queue);
 
-        VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-        pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-        pool.queueFamilyIndex = context.queueFamily;
-        VK_CHECK(vkCreateCommandPool(context.device, &pool, nullptr, &context.commandPool));
-    } catch (...) {
-        destroyContext(context);
-        throw;
-    }
+    VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pool.queueFamilyIndex = context.queueFamily;
+    VK_CHECK(vkCreateCommandPool(context.device, &pool, nullptr, &context.commandPool));
     return context;
 }
 

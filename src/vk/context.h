@@ -1,5 +1,5 @@
-// The Vulkan instance, the chosen physical device, a logical device with one compute queue, and
-// the validation messenger. Plain handles; createContext / destroyContext.
+// The Vulkan device the GPU passes work on (Device), and the program's own instance, device and
+// queue around it (Context). Plain handles; createContext / destroyContext.
 // Rendering asks for more through ContextOptions: a queue that also does graphics, extra instance
 // and device extensions, and a window surface the queue must present to.
 #pragma once
@@ -68,17 +68,28 @@ struct ValidationLog {
     std::atomic<uint32_t> messages{0};
 };
 
-struct Context {
+// What the GPU passes create their objects on: a logical device, what it is, and the pipeline
+// cache its pipelines go through. Nothing here submits work: whoever owns the device's queue does.
+// The program's own device (Context) is one, and so is an engine's device lent to shprobe
+// (borrowDevice, gpu/probe_baker.h).
+struct Device {
+    VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    uint32_t queueFamily = 0; // where the work recorded for this device runs
+    DeviceInfo info;
+    VkPhysicalDeviceMemoryProperties memory{};
+    VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional; destroyed by whoever set it
+};
+
+// The program's own Vulkan: the instance, the validation messenger, a window surface if asked
+// for, and the device it created, with that device's queue and a command pool for the
+// submissions of vk/resources.h. createContext / destroyContext.
+struct Context : Device {
     VkInstance instance = VK_NULL_HANDLE;
     VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
     VkSurfaceKHR surface = VK_NULL_HANDLE; // from ContextOptions::createSurface, if any
-    VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
-    VkDevice device = VK_NULL_HANDLE;
-    uint32_t queueFamily = 0;
     VkQueue queue = VK_NULL_HANDLE;
     VkCommandPool commandPool = VK_NULL_HANDLE;
-    DeviceInfo info;
-    VkPhysicalDeviceMemoryProperties memory{};
     std::unique_ptr<ValidationLog> validationLog;
 
     uint32_t validationMessages() const { return validationLog ? validationLog->messages.load() : 0; }

@@ -1,6 +1,7 @@
 #include "shprobe/vk/image.h"
 
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/resources.h"
 
@@ -11,11 +12,11 @@ namespace shprobe {
 namespace {
 
 // Device-local memory when the image allows it, else any type it allows.
-uint32_t imageMemoryType(const Context& context, uint32_t typeBits) {
+uint32_t imageMemoryType(const Device& device, uint32_t typeBits) {
     uint32_t fallback = UINT32_MAX;
-    for (uint32_t i = 0; i < context.memory.memoryTypeCount; ++i) {
+    for (uint32_t i = 0; i < device.memory.memoryTypeCount; ++i) {
         if (!(typeBits & (1u << i))) continue;
-        if (context.memory.memoryTypes[i].propertyFlags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) return i;
+        if (device.memory.memoryTypes[i].propertyFlags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) return i;
         if (fallback == UINT32_MAX) fallback = i;
     }
     return fallback;
@@ -29,64 +30,68 @@ VkImageAspectFlags aspectOf(VkFormat format) {
     return isDepthFormat(format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
 }
 
-void allocateAndBind(const Context& context, GpuImage& image, const char* what) {
+void allocateAndBind(const Device& device, GpuImage& image, const char* what) {
     VkMemoryRequirements requirements;
-    vkGetImageMemoryRequirements(context.device, image.image, &requirements);
+    vkGetImageMemoryRequirements(device.device, image.image, &requirements);
     VkMemoryAllocateInfo allocate{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     allocate.allocationSize = requirements.size;
-    allocate.memoryTypeIndex = imageMemoryType(context, requirements.memoryTypeBits);
+    allocate.memoryTypeIndex = imageMemoryType(device, requirements.memoryTypeBits);
     if (allocate.memoryTypeIndex == UINT32_MAX)
         throw Error(ErrorKind::Device, std::string("no memory type for ") + what);
-    checkAllocationSize(context, requirements.size, allocate.memoryTypeIndex, what);
-    VkResult result = vkAllocateMemory(context.device, &allocate, nullptr, &image.memory);
+    checkAllocationSize(device, requirements.size, allocate.memoryTypeIndex, what);
+    VkResult result = vkAllocateMemory(device.device, &allocate, nullptr, &image.memory);
     if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
-        throw Error(ErrorKind::Device, std::string("out of memory for ") + what + " on " + context.info.name);
+        throw Error(ErrorKind::Device, std::string("out of memory for ") + what + " on " + device.info.name);
     VK_CHECK(result);
-    VK_CHECK(vkBindImageMemory(context.device, image.image, image.memory, 0));
+    VK_CHECK(vkBindImageMemory(device.device, image.image, image.memory, 0));
 }
 
 } // namespace
 
-GpuImage createImage(const Context& context, const GpuImageDesc& desc) {
+GpuImage createImage(const Device& device, const GpuImageDesc& desc) {
     GpuImage image;
     image.format = desc.format;
     image.extent = desc.extent;
     image.layers = desc.cube ? 6 : desc.layers;
-    try {
-        VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-        info.flags = desc.cube ? VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT : 0;
-        info.imageType = VK_IMAGE_TYPE_2D;
-        info.format = desc.format;
-        info.extent = {desc.extent.width, desc.extent.height, 1};
-        info.mipLevels = 1;
-        info.arrayLayers = image.layers;
-        info.samples = VK_SAMPLE_COUNT_1_BIT;
-        info.tiling = VK_IMAGE_TILING_OPTIMAL;
-        info.usage = desc.usage;
-        info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-        info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-        VK_CHECK(vkCreateImage(context.device, &info, nullptr, &image.image));
-        allocateAndBind(context, image, desc.what);
+    OnFailure undo([&] { destroyImage(device, image); });
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.flags = desc.cube ? VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT : 0;
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = desc.format;
+    info.extent = {desc.extent.width, desc.extent.height, 1};
+    info.mipLevels = 1;
+    info.arrayLayers = image.layers;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = desc.usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    VK_CHECK(vkCreateImage(device.device, &info, nullptr, &image.image));
+    allocateAndBind(device, image, desc.what);
 
-        VkImageViewCreateInfo view{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-        view.image = image.image;
-        view.viewType = desc.cube          ? VK_IMAGE_VIEW_TYPE_CUBE
-                        : image.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY
-                                           : VK_IMAGE_VIEW_TYPE_2D;
-        view.format = desc.format;
-        view.subresourceRange = {aspectOf(desc.format), 0, 1, 0, image.layers};
-        VK_CHECK(vkCreateImageView(context.device, &view, nullptr, &image.view));
-    } catch (...) {
-        destroyImage(context, image);
-        throw;
-    }
+    const VkImageViewType viewType = desc.cube          ? VK_IMAGE_VIEW_TYPE_CUBE
+                                     : image.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY
+                                                        : VK_IMAGE_VIEW_TYPE_2D;
+    image.view = createImageView(device, image.image, viewType, desc.format, image.layers);
     return image;
 }
 
-void destroyImage(const Context& context, GpuImage& image) {
-    if (image.view) vkDestroyImageView(context.device, image.view, nullptr);
-    if (image.image) vkDestroyImage(context.device, image.image, nullptr);
-    if (image.memory) vkFreeMemory(context.device, image.memory, nullptr);
+VkImageView createImageView(const Device& device, VkImage image, VkImageViewType type, VkFormat format,
+                            uint32_t layers) {
+    VkImageViewCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    info.image = image;
+    info.viewType = type;
+    info.format = format;
+    info.subresourceRange = {aspectOf(format), 0, 1, 0, layers};
+    VkImageView view = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateImageView(device.device, &info, nullptr, &view));
+    return view;
+}
+
+void destroyImage(const Device& device, GpuImage& image) {
+    if (image.view) vkDestroyImageView(device.device, image.view, nullptr);
+    if (image.image) vkDestroyImage(device.device, image.image, nullptr);
+    if (image.memory) vkFreeMemory(device.device, image.memory, nullptr);
     image = GpuImage{};
 }
 
@@ -108,7 +113,7 @@ void changeLayout(VkCommandBuffer commands, const GpuImage& image, const LayoutC
     changeLayout(commands, image.image, aspectOf(image.format), image.layers, change);
 }
 
-VkSampler createSampler(const Context& context, VkFilter filter) {
+VkSampler createSampler(const Device& device, VkFilter filter) {
     VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
     info.magFilter = filter;
     info.minFilter = filter;
@@ -117,7 +122,7 @@ VkSampler createSampler(const Context& context, VkFilter filter) {
     info.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
     info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
     VkSampler sampler = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateSampler(context.device, &info, nullptr, &sampler));
+    VK_CHECK(vkCreateSampler(device.device, &info, nullptr, &sampler));
     return sampler;
 }
 

@@ -25,8 +25,13 @@ struct GpuImageDesc {
     uint32_t layers = 1;   // array layers, viewed as a 2D array when more than one
 };
 
-GpuImage createImage(const Context& context, const GpuImageDesc& desc);
-void destroyImage(const Context& context, GpuImage& image);
+GpuImage createImage(const Device& device, const GpuImageDesc& desc);
+void destroyImage(const Device& device, GpuImage& image);
+
+// A view of the first `layers` layers of mip 0 of an image of `format` (depth formats: the depth
+// aspect, others colour), for images created elsewhere too (a swapchain's).
+VkImageView createImageView(const Device& device, VkImage image, VkImageViewType type, VkFormat format,
+                            uint32_t layers = 1);
 
 // A layout transition of all layers and mips of the image, with its memory dependency.
 struct LayoutChange {
@@ -42,6 +47,6 @@ void changeLayout(VkCommandBuffer commands, VkImage image, VkImageAspectFlags as
                   const LayoutChange& change);
 
 // A sampler with the given filter for magnification and minification, clamped to the edges.
-VkSampler createSampler(const Context& context, VkFilter filter);
+VkSampler createSampler(const Device& device, VkFilter filter);
 
 } // namespace shprobe

@@ -1,5 +1,7 @@
 #include "shprobe/vk/pipeline.h"
 
+#include "shprobe/glsl/gpu_interface.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 
 #include <array>
@@ -9,48 +11,11 @@ namespace shprobe {
 
 namespace {
 
-VkShaderModule createShaderModule(const Context& context, std::span<const uint32_t> spirv) {
-    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    info.codeSize = spirv.size_bytes();
-    info.pCode = spirv.data();
-    VkShaderModule module = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateShaderModule(context.device, &info, nullptr, &module));
-    return module;
-}
-
-VkDescriptorSetLayout createSetLayout(const Context& context, std::span<const VkDescriptorType> types,
-                                      const VkSampler* immutableSampler) {
-    std::vector<VkDescriptorSetLayoutBinding> bindings(types.size());
-    for (uint32_t i = 0; i < bindings.size(); ++i) {
-        bool image = types[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-        bindings[i] = {i, types[i], 1, VK_SHADER_STAGE_COMPUTE_BIT, image ? immutableSampler : nullptr};
-    }
-    VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    info.bindingCount = uint32_t(bindings.size());
-    info.pBindings = bindings.data();
-    VkDescriptorSetLayout layout = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateDescriptorSetLayout(context.device, &info, nullptr, &layout));
-    return layout;
-}
-
-VkPipelineLayout createPipelineLayout(const Context& context, VkDescriptorSetLayout setLayout,
-                                      uint32_t pushConstantSize) {
-    VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, pushConstantSize};
-    VkPipelineLayoutCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-    info.setLayoutCount = 1;
-    info.pSetLayouts = &setLayout;
-    info.pushConstantRangeCount = pushConstantSize ? 1 : 0;
-    info.pPushConstantRanges = &range;
-    VkPipelineLayout layout = VK_NULL_HANDLE;
-    VK_CHECK(vkCreatePipelineLayout(context.device, &info, nullptr, &layout));
-    return layout;
-}
-
-VkPipeline createPipeline(const Context& context, VkShaderModule module, VkPipelineLayout layout,
+VkPipeline createPipeline(const Device& device, VkShaderModule module, VkPipelineLayout layout,
                           const ComputeProgramDesc& desc) {
-    // Specialization constant ids 0 and 1: SHPROBE_SPEC_LOCAL_SIZE, SHPROBE_SPEC_ORDER.
     std::array<uint32_t, 2> values{desc.localSize, desc.order};
-    std::array<VkSpecializationMapEntry, 2> entries{{{0, 0, 4}, {1, 4, 4}}};
+    std::array<VkSpecializationMapEntry, 2> entries{
+        {{SHPROBE_SPEC_LOCAL_SIZE, 0, 4}, {SHPROBE_SPEC_ORDER, 4, 4}}};
     VkSpecializationInfo specialization{uint32_t(entries.size()), entries.data(), sizeof(values),
                                         values.data()};
 
@@ -62,89 +27,145 @@ VkPipeline createPipeline(const Context& context, VkShaderModule module, VkPipel
     info.stage.pSpecializationInfo = &specialization;
     info.layout = layout;
     VkPipeline pipeline = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateComputePipelines(context.device, desc.cache, 1, &info, nullptr, &pipeline));
+    VK_CHECK(vkCreateComputePipelines(device.device, device.pipelineCache, 1, &info, nullptr, &pipeline));
     return pipeline;
 }
 
 } // namespace
 
-ComputeProgram createComputeProgram(const Context& context, const ComputeProgramDesc& desc) {
-    if (desc.localSize == 0 || desc.localSize > context.info.limits.maxComputeWorkGroupSize[0] ||
-        desc.localSize > context.info.limits.maxComputeWorkGroupInvocations)
+ComputeProgram createComputeProgram(const Device& device, const ComputeProgramDesc& desc) {
+    if (desc.localSize == 0 || desc.localSize > device.info.limits.maxComputeWorkGroupSize[0] ||
+        desc.localSize > device.info.limits.maxComputeWorkGroupInvocations)
         throw Error(ErrorKind::Input,
                     std::string(desc.name) + ": workgroup size " + std::to_string(desc.localSize) +
-                        " is not supported by " + context.info.name + " (at most " +
-                        std::to_string(context.info.limits.maxComputeWorkGroupInvocations) + ")");
+                        " is not supported by " + device.info.name + " (at most " +
+                        std::to_string(device.info.limits.maxComputeWorkGroupInvocations) + ")");
     ComputeProgram program;
     program.bindings.assign(desc.bindings.begin(), desc.bindings.end());
     program.pushConstantSize = desc.pushConstantSize;
-    try {
-        program.module = createShaderModule(context, desc.spirv);
-        program.setLayout = createSetLayout(context, desc.bindings, &desc.immutableSampler);
-        program.layout = createPipelineLayout(context, program.setLayout, desc.pushConstantSize);
-        program.pipeline = createPipeline(context, program.module, program.layout, desc);
-    } catch (...) {
-        destroyComputeProgram(context, program);
-        throw;
-    }
+    OnFailure undo([&] { destroyComputeProgram(device, program); });
+    std::vector<LayoutBinding> bindings;
+    for (VkDescriptorType type : desc.bindings)
+        bindings.push_back(
+            {type, VK_SHADER_STAGE_COMPUTE_BIT,
+             type == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER ? desc.immutableSampler : VK_NULL_HANDLE});
+    program.module = createShaderModule(device, desc.spirv);
+    program.setLayout = createSetLayout(device, bindings);
+    program.layout =
+        createPipelineLayout(device, program.setLayout, VK_SHADER_STAGE_COMPUTE_BIT, desc.pushConstantSize);
+    program.pipeline = createPipeline(device, program.module, program.layout, desc);
     return program;
 }
 
-void destroyComputeProgram(const Context& context, ComputeProgram& program) {
-    if (program.pipeline) vkDestroyPipeline(context.device, program.pipeline, nullptr);
-    if (program.layout) vkDestroyPipelineLayout(context.device, program.layout, nullptr);
-    if (program.setLayout) vkDestroyDescriptorSetLayout(context.device, program.setLayout, nullptr);
-    if (program.module) vkDestroyShaderModule(context.device, program.module, nullptr);
+void destroyComputeProgram(const Device& device, ComputeProgram& program) {
+    if (program.pipeline) vkDestroyPipeline(device.device, program.pipeline, nullptr);
+    if (program.layout) vkDestroyPipelineLayout(device.device, program.layout, nullptr);
+    if (program.setLayout) vkDestroyDescriptorSetLayout(device.device, program.setLayout, nullptr);
+    if (program.module) vkDestroyShaderModule(device.device, program.module, nullptr);
     program = ComputeProgram{};
 }
 
-VkDescriptorPool createDescriptorPool(const Context& context, const DescriptorPoolSize& size) {
+VkDescriptorPool createDescriptorPool(const Device& device, const DescriptorPoolSize& size) {
     std::vector<VkDescriptorPoolSize> sizes;
     if (size.storageBuffers) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, size.storageBuffers});
     if (size.imageSamplers) sizes.push_back({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, size.imageSamplers});
     if (size.storageImages) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, size.storageImages});
+    if (size.uniformBuffers) sizes.push_back({VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, size.uniformBuffers});
     VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    info.flags = size.freeSets ? VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT : 0;
     info.maxSets = size.sets;
     info.poolSizeCount = uint32_t(sizes.size());
     info.pPoolSizes = sizes.data();
     VkDescriptorPool pool = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateDescriptorPool(context.device, &info, nullptr, &pool));
+    VK_CHECK(vkCreateDescriptorPool(device.device, &info, nullptr, &pool));
     return pool;
 }
 
-VkDescriptorSet createDescriptorSet(const Context& context, VkDescriptorPool pool,
+VkDescriptorSet createDescriptorSet(const Device& device, VkDescriptorPool pool,
                                     const ComputeProgram& program, std::span<const BindingTarget> targets) {
     if (targets.size() != program.bindings.size())
         throw Error(ErrorKind::Device, "descriptor set with " + std::to_string(targets.size()) +
                                            " targets for a program with " +
                                            std::to_string(program.bindings.size()) + " bindings");
+    VkDescriptorSet set = allocateDescriptorSet(device, pool, program.setLayout);
+    writeDescriptors(device, set, program.bindings, targets);
+    return set;
+}
+
+VkShaderModule createShaderModule(const Device& device, std::span<const uint32_t> spirv) {
+    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    info.codeSize = spirv.size_bytes();
+    info.pCode = spirv.data();
+    VkShaderModule module = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateShaderModule(device.device, &info, nullptr, &module));
+    return module;
+}
+
+VkDescriptorSetLayout createSetLayout(const Device& device, std::span<const LayoutBinding> bindings) {
+    std::vector<VkDescriptorSetLayoutBinding> layoutBindings(bindings.size());
+    for (uint32_t i = 0; i < layoutBindings.size(); ++i) {
+        const LayoutBinding& binding = bindings[i];
+        layoutBindings[i] = {i, binding.type, 1, binding.stages,
+                             binding.immutableSampler ? &binding.immutableSampler : nullptr};
+    }
+    VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    info.bindingCount = uint32_t(layoutBindings.size());
+    info.pBindings = layoutBindings.data();
+    VkDescriptorSetLayout layout = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateDescriptorSetLayout(device.device, &info, nullptr, &layout));
+    return layout;
+}
+
+VkPipelineLayout createPipelineLayout(const Device& device, VkDescriptorSetLayout setLayout,
+                                      VkShaderStageFlags pushStages, uint32_t pushConstantSize) {
+    VkPushConstantRange range{pushStages, 0, pushConstantSize};
+    VkPipelineLayoutCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    info.setLayoutCount = 1;
+    info.pSetLayouts = &setLayout;
+    info.pushConstantRangeCount = pushConstantSize ? 1 : 0;
+    info.pPushConstantRanges = &range;
+    VkPipelineLayout layout = VK_NULL_HANDLE;
+    VK_CHECK(vkCreatePipelineLayout(device.device, &info, nullptr, &layout));
+    return layout;
+}
+
+VkDescriptorSet allocateDescriptorSet(const Device& device, VkDescriptorPool pool,
+                                      VkDescriptorSetLayout layout) {
     VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     allocate.descriptorPool = pool;
     allocate.descriptorSetCount = 1;
-    allocate.pSetLayouts = &program.setLayout;
+    allocate.pSetLayouts = &layout;
     VkDescriptorSet set = VK_NULL_HANDLE;
-    VK_CHECK(vkAllocateDescriptorSets(context.device, &allocate, &set));
+    VK_CHECK(vkAllocateDescriptorSets(device.device, &allocate, &set));
+    return set;
+}
 
+void writeDescriptors(const Device& device, VkDescriptorSet set, std::span<const VkDescriptorType> types,
+                      std::span<const BindingTarget> targets, uint32_t firstBinding) {
     std::vector<VkDescriptorBufferInfo> buffers(targets.size());
     std::vector<VkDescriptorImageInfo> images(targets.size());
     std::vector<VkWriteDescriptorSet> writes(targets.size());
     for (uint32_t i = 0; i < writes.size(); ++i) {
         buffers[i] = {targets[i].buffer, targets[i].offset, targets[i].size};
-        const bool storageImage = program.bindings[i] == VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-        images[i] = {VK_NULL_HANDLE, targets[i].imageView,
+        const bool storageImage = types[i] == VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+        images[i] = {targets[i].sampler, targets[i].imageView,
                      storageImage ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
         writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
         writes[i].dstSet = set;
-        writes[i].dstBinding = i;
+        writes[i].dstBinding = firstBinding + i;
         writes[i].descriptorCount = 1;
-        writes[i].descriptorType = program.bindings[i];
-        if (storageImage || program.bindings[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER)
+        writes[i].descriptorType = types[i];
+        if (storageImage || types[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER)
             writes[i].pImageInfo = &images[i];
         else
             writes[i].pBufferInfo = &buffers[i];
     }
-    vkUpdateDescriptorSets(context.device, uint32_t(writes.size()), writes.data(), 0, nullptr);
-    return set;
+    vkUpdateDescriptorSets(device.device, uint32_t(writes.size()), writes.data(), 0, nullptr);
+}
+
+void writeDescriptor(const Device& device, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
+                     const BindingTarget& target) {
+    writeDescriptors(device, set, {&type, 1}, {&target, 1}, binding);
 }
 
 void dispatchRaw(VkCommandBuffer commands, const ComputeProgram& program, VkDescriptorSet set,

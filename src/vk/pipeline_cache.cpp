@@ -67,11 +67,11 @@ bool isReplaceableFile(const std::string& path) {
 
 } // namespace
 
-std::string pipelineCachePath(const Context& context) {
+std::string pipelineCachePath(const Device& device) {
     std::string folder = cacheFolder();
     if (folder.empty()) return {};
     VkPhysicalDeviceProperties properties;
-    vkGetPhysicalDeviceProperties(context.physicalDevice, &properties);
+    vkGetPhysicalDeviceProperties(device.physicalDevice, &properties);
     static const char* kHex = "0123456789abcdef";
     std::string uuid;
     for (uint8_t byte : properties.pipelineCacheUUID) {
@@ -81,31 +81,31 @@ std::string pipelineCachePath(const Context& context) {
     return folder + "/pipelines-" + uuid + ".bin";
 }
 
-VkPipelineCache loadPipelineCache(const Context& context, const std::string& path) {
+VkPipelineCache loadPipelineCache(const Device& device, const std::string& path) {
     std::string data = readCache(path);
     VkPhysicalDeviceProperties properties;
-    vkGetPhysicalDeviceProperties(context.physicalDevice, &properties);
+    vkGetPhysicalDeviceProperties(device.physicalDevice, &properties);
     if (!headerMatches(data, properties)) data.clear();
 
     VkPipelineCacheCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_CACHE_CREATE_INFO};
     info.initialDataSize = data.size();
     info.pInitialData = data.empty() ? nullptr : data.data();
     VkPipelineCache cache = VK_NULL_HANDLE;
-    if (!data.empty() && vkCreatePipelineCache(context.device, &info, nullptr, &cache) == VK_SUCCESS)
+    if (!data.empty() && vkCreatePipelineCache(device.device, &info, nullptr, &cache) == VK_SUCCESS)
         return cache;
     if (!data.empty()) warnOnce(path + ": the driver refused the cached data");
     info.initialDataSize = 0;
     info.pInitialData = nullptr;
-    VK_CHECK(vkCreatePipelineCache(context.device, &info, nullptr, &cache));
+    VK_CHECK(vkCreatePipelineCache(device.device, &info, nullptr, &cache));
     return cache;
 }
 
-bool savePipelineCache(const Context& context, VkPipelineCache cache, const std::string& path) {
+bool savePipelineCache(const Device& device, VkPipelineCache cache, const std::string& path) {
     if (path.empty() || !cache || !isReplaceableFile(path)) return false;
     size_t size = 0;
-    if (vkGetPipelineCacheData(context.device, cache, &size, nullptr) != VK_SUCCESS) return false;
+    if (vkGetPipelineCacheData(device.device, cache, &size, nullptr) != VK_SUCCESS) return false;
     std::string data(size, '\0');
-    if (vkGetPipelineCacheData(context.device, cache, &size, data.data()) != VK_SUCCESS) return false;
+    if (vkGetPipelineCacheData(device.device, cache, &size, data.data()) != VK_SUCCESS) return false;
     data.resize(size);
     std::error_code ignored;
     std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ignored);

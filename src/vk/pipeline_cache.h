@@ -10,15 +10,15 @@ namespace shprobe {
 // The cache file for this device: $SHPROBE_CACHE_DIR, else $XDG_CACHE_HOME/shprobe, else
 // $HOME/.cache/shprobe, then "pipelines-<pipelineCacheUUID>.bin". Empty when none of the three is
 // set (no cache on disk then).
-std::string pipelineCachePath(const Context& context);
+std::string pipelineCachePath(const Device& device);
 
 // A cache holding the file's data when it was written for this device (same vendor, device and
 // pipelineCacheUUID in its header, Vulkan spec "Pipeline Cache Header"); empty otherwise, or when
 // the file is missing or unreadable: a cache is only ever an optimization.
-VkPipelineCache loadPipelineCache(const Context& context, const std::string& path);
+VkPipelineCache loadPipelineCache(const Device& device, const std::string& path);
 
 // Writes the cache's data to path atomically (temporary file, then rename). Returns false, after
 // creating the folder failed or writing failed, without throwing: a run does not fail for its cache.
-bool savePipelineCache(const Context& context, VkPipelineCache cache, const std::string& path);
+bool savePipelineCache(const Device& device, VkPipelineCache cache, const std::string& path);
 
 } // namespace shprobe

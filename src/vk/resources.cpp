@@ -1,5 +1,6 @@
 #include "shprobe/vk/resources.h"
 
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 
 #include <algorithm>
@@ -69,17 +70,17 @@ std::string sizeText(VkDeviceSize size) {
     return std::to_string((size + (1 << 20) - 1) >> 20) + " MiB";
 }
 
-VkDeviceMemory allocateMemory(const Context& context, VkMemoryRequirements requirements, uint32_t type,
+VkDeviceMemory allocateMemory(const Device& device, VkMemoryRequirements requirements, uint32_t type,
                               const char* what) {
-    checkAllocationSize(context, requirements.size, type, what);
+    checkAllocationSize(device, requirements.size, type, what);
     VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     info.allocationSize = requirements.size;
     info.memoryTypeIndex = type;
     VkDeviceMemory memory = VK_NULL_HANDLE;
-    VkResult result = vkAllocateMemory(context.device, &info, nullptr, &memory);
+    VkResult result = vkAllocateMemory(device.device, &info, nullptr, &memory);
     if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
         throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(requirements.size) + " for " +
-                                           what + ": out of memory on " + context.info.name +
+                                           what + ": out of memory on " + device.info.name +
                                            "; try a smaller --face-size");
     VK_CHECK(result);
     return memory;
@@ -87,22 +88,21 @@ VkDeviceMemory allocateMemory(const Context& context, VkMemoryRequirements requi
 
 } // namespace
 
-void checkAllocationSize(const Context& context, VkDeviceSize size, uint32_t memoryType, const char* what) {
+void checkAllocationSize(const Device& device, VkDeviceSize size, uint32_t memoryType, const char* what) {
     VkPhysicalDeviceMaintenance3Properties maintenance3{
         VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
     VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &maintenance3};
-    vkGetPhysicalDeviceProperties2(context.physicalDevice, &properties);
-    const VkDeviceSize heap =
-        context.memory.memoryHeaps[context.memory.memoryTypes[memoryType].heapIndex].size;
+    vkGetPhysicalDeviceProperties2(device.physicalDevice, &properties);
+    const VkDeviceSize heap = device.memory.memoryHeaps[device.memory.memoryTypes[memoryType].heapIndex].size;
     const VkDeviceSize limit = std::min(heap, maintenance3.maxMemoryAllocationSize);
     if (size > limit)
         throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(size) + " for " + what +
-                                           ": more than one allocation may hold on " + context.info.name +
+                                           ": more than one allocation may hold on " + device.info.name +
                                            " (" + sizeText(limit) +
                                            "); try a smaller --face-size or fewer probes at a time");
 }
 
-Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
+Buffer createBuffer(const Device& device, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
                     const char* what) {
     Buffer buffer;
     buffer.size = size;
@@ -110,31 +110,27 @@ Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlag
     info.size = size;
     info.usage = usage;
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    VK_CHECK(vkCreateBuffer(context.device, &info, nullptr, &buffer.buffer));
+    OnFailure undo([&] { destroyBuffer(device, buffer); });
+    VK_CHECK(vkCreateBuffer(device.device, &info, nullptr, &buffer.buffer));
 
-    try {
-        VkMemoryRequirements requirements;
-        vkGetBufferMemoryRequirements(context.device, buffer.buffer, &requirements);
-        uint32_t type = findMemoryType(context.memory, requirements.memoryTypeBits, memoryPreference(use));
-        if (type == UINT32_MAX)
-            throw Error(ErrorKind::Device, std::string("no suitable memory type for ") + what);
-        buffer.memory = allocateMemory(context, requirements, type, what);
-        VK_CHECK(vkBindBufferMemory(context.device, buffer.buffer, buffer.memory, 0));
+    VkMemoryRequirements requirements;
+    vkGetBufferMemoryRequirements(device.device, buffer.buffer, &requirements);
+    uint32_t type = findMemoryType(device.memory, requirements.memoryTypeBits, memoryPreference(use));
+    if (type == UINT32_MAX)
+        throw Error(ErrorKind::Device, std::string("no suitable memory type for ") + what);
+    buffer.memory = allocateMemory(device, requirements, type, what);
+    VK_CHECK(vkBindBufferMemory(device.device, buffer.buffer, buffer.memory, 0));
 
-        VkMemoryPropertyFlags flags = context.memory.memoryTypes[type].propertyFlags;
-        buffer.coherent = flags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-        if (flags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)
-            VK_CHECK(vkMapMemory(context.device, buffer.memory, 0, VK_WHOLE_SIZE, 0, &buffer.mapped));
-    } catch (...) {
-        destroyBuffer(context, buffer);
-        throw;
-    }
+    VkMemoryPropertyFlags flags = device.memory.memoryTypes[type].propertyFlags;
+    buffer.coherent = flags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    if (flags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)
+        VK_CHECK(vkMapMemory(device.device, buffer.memory, 0, VK_WHOLE_SIZE, 0, &buffer.mapped));
     return buffer;
 }
 
-void destroyBuffer(const Context& context, Buffer& buffer) {
-    if (buffer.buffer) vkDestroyBuffer(context.device, buffer.buffer, nullptr);
-    if (buffer.memory) vkFreeMemory(context.device, buffer.memory, nullptr); // unmaps implicitly
+void destroyBuffer(const Device& device, Buffer& buffer) {
+    if (buffer.buffer) vkDestroyBuffer(device.device, buffer.buffer, nullptr);
+    if (buffer.memory) vkFreeMemory(device.device, buffer.memory, nullptr); // unmaps implicitly
     buffer = Buffer{};
 }
 
@@ -152,18 +148,13 @@ void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size,
     }
     Buffer staging =
         createBuffer(context, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, "staging");
-    try {
-        fill(staging.mapped);
-        submitAndWait(context, [&](VkCommandBuffer commands) {
-            VkBufferCopy region{0, 0, size};
-            vkCmdCopyBuffer(commands, staging.buffer, buffer.buffer, 1, &region);
-            computeWriteBarrier(commands); // later submissions' shaders read what the copy wrote
-        });
-    } catch (...) {
-        destroyBuffer(context, staging);
-        throw;
-    }
-    destroyBuffer(context, staging);
+    ScopeExit releaseStaging([&] { destroyBuffer(context, staging); });
+    fill(staging.mapped);
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        VkBufferCopy region{0, 0, size};
+        vkCmdCopyBuffer(commands, staging.buffer, buffer.buffer, 1, &region);
+        computeWriteBarrier(commands); // later submissions' shaders read what the copy wrote
+    });
 }
 
 void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size) {
@@ -171,12 +162,12 @@ void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDe
                 [&](void* destination) { std::memcpy(destination, data, size_t(size)); });
 }
 
-void invalidateBuffer(const Context& context, const Buffer& buffer) {
+void invalidateBuffer(const Device& device, const Buffer& buffer) {
     if (buffer.coherent) return;
     VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
     range.memory = buffer.memory;
     range.size = VK_WHOLE_SIZE;
-    VK_CHECK(vkInvalidateMappedMemoryRanges(context.device, 1, &range));
+    VK_CHECK(vkInvalidateMappedMemoryRanges(device.device, 1, &range));
 }
 
 uint64_t submissionCount() {
@@ -184,56 +175,85 @@ uint64_t submissionCount() {
 }
 
 void submitAndWait(const Context& context, const std::function<void(VkCommandBuffer)>& record) {
+    VkCommandBuffer commands = allocateCommandBuffer(context);
+    ScopeExit freeCommands([&] { vkFreeCommandBuffers(context.device, context.commandPool, 1, &commands); });
+    beginCommands(commands);
+    record(commands);
+    VK_CHECK(vkEndCommandBuffer(commands));
+
+    VkFence fence = createFence(context);
+    ScopeExit destroyFence([&] { vkDestroyFence(context.device, fence, nullptr); });
+    submitCommands(context, commands, fence);
+    ++gSubmissions;
+    VK_CHECK(vkWaitForFences(context.device, 1, &fence, VK_TRUE, UINT64_MAX));
+}
+
+VkCommandBuffer allocateCommandBuffer(const Context& context) {
     VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     allocate.commandPool = context.commandPool;
     allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
     allocate.commandBufferCount = 1;
     VkCommandBuffer commands = VK_NULL_HANDLE;
     VK_CHECK(vkAllocateCommandBuffers(context.device, &allocate, &commands));
-    VkFence fence = VK_NULL_HANDLE;
-    try {
-        VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-        begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-        VK_CHECK(vkBeginCommandBuffer(commands, &begin));
-        record(commands);
-        VK_CHECK(vkEndCommandBuffer(commands));
-
-        VkFenceCreateInfo fenceInfo{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-        VK_CHECK(vkCreateFence(context.device, &fenceInfo, nullptr, &fence));
-        VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-        submit.commandBufferCount = 1;
-        submit.pCommandBuffers = &commands;
-        VK_CHECK(vkQueueSubmit(context.queue, 1, &submit, fence));
-        ++gSubmissions;
-        VK_CHECK(vkWaitForFences(context.device, 1, &fence, VK_TRUE, UINT64_MAX));
-    } catch (...) {
-        if (fence) vkDestroyFence(context.device, fence, nullptr);
-        vkFreeCommandBuffers(context.device, context.commandPool, 1, &commands);
-        throw;
-    }
-    vkDestroyFence(context.device, fence, nullptr);
-    vkFreeCommandBuffers(context.device, context.commandPool, 1, &commands);
+    return commands;
 }
 
-VkQueryPool createTimestampPool(const Context& context) {
-    if (!context.info.timestamps) return VK_NULL_HANDLE;
+void beginCommands(VkCommandBuffer commands) {
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VK_CHECK(vkBeginCommandBuffer(commands, &begin));
+}
+
+VkFence createFence(const Device& device, bool signalled) {
+    VkFenceCreateInfo info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    info.flags = signalled ? VK_FENCE_CREATE_SIGNALED_BIT : 0;
+    VkFence fence = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateFence(device.device, &info, nullptr, &fence));
+    return fence;
+}
+
+VkSemaphore createSemaphore(const Device& device) {
+    VkSemaphoreCreateInfo info{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    VkSemaphore semaphore = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateSemaphore(device.device, &info, nullptr, &semaphore));
+    return semaphore;
+}
+
+void submitCommands(const Context& context, VkCommandBuffer commands, VkFence fence, const QueueSync& sync) {
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    if (sync.wait) {
+        submit.waitSemaphoreCount = 1;
+        submit.pWaitSemaphores = &sync.wait;
+        submit.pWaitDstStageMask = &sync.waitStage;
+    }
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &commands;
+    if (sync.signal) {
+        submit.signalSemaphoreCount = 1;
+        submit.pSignalSemaphores = &sync.signal;
+    }
+    VK_CHECK(vkQueueSubmit(context.queue, 1, &submit, fence));
+}
+
+VkQueryPool createTimestampPool(const Device& device) {
+    if (!device.info.timestamps) return VK_NULL_HANDLE;
     VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     info.queryType = VK_QUERY_TYPE_TIMESTAMP;
     info.queryCount = 2;
     VkQueryPool pool = VK_NULL_HANDLE;
-    VK_CHECK(vkCreateQueryPool(context.device, &info, nullptr, &pool));
+    VK_CHECK(vkCreateQueryPool(device.device, &info, nullptr, &pool));
     return pool;
 }
 
-double timestampMilliseconds(const Context& context, VkQueryPool pool) {
+double timestampMilliseconds(const Device& device, VkQueryPool pool) {
     if (!pool) return 0.0;
     uint64_t ticks[2] = {};
-    VK_CHECK(vkGetQueryPoolResults(context.device, pool, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+    VK_CHECK(vkGetQueryPoolResults(device.device, pool, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
                                    VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
     // Only timestampValidBits bits count; masking the difference also handles a wrap-around.
-    uint32_t bits = context.info.timestampValidBits;
+    uint32_t bits = device.info.timestampValidBits;
     uint64_t mask = bits >= 64 ? ~uint64_t(0) : (uint64_t(1) << bits) - 1;
-    return double((ticks[1] - ticks[0]) & mask) * context.info.timestampPeriod * 1e-6;
+    return double((ticks[1] - ticks[0]) & mask) * device.info.timestampPeriod * 1e-6;
 }
 
 void computeWriteBarrier(VkCommandBuffer commands) {

@@ -1,4 +1,4 @@
-// Buffers and one-shot command submission. Plain handles; createBuffer / destroyBuffer.
+// Buffers, command buffers and their submission. Plain handles; createBuffer / destroyBuffer.
 #pragma once
 #include "shprobe/vk/context.h"
 #include <functional>
@@ -21,12 +21,12 @@ struct Buffer {
 
 // Throws Error(Device) naming `what` when size exceeds what one allocation of the memory type may
 // hold (its heap, maxMemoryAllocationSize): drivers may accept such a request and fail later.
-void checkAllocationSize(const Context& context, VkDeviceSize size, uint32_t memoryType, const char* what);
+void checkAllocationSize(const Device& device, VkDeviceSize size, uint32_t memoryType, const char* what);
 
 // `what` names the buffer in error messages ("input texels").
-Buffer createBuffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
+Buffer createBuffer(const Device& device, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,
                     const char* what);
-void destroyBuffer(const Context& context, Buffer& buffer);
+void destroyBuffer(const Device& device, Buffer& buffer);
 
 // Fills the first `size` bytes of the buffer with `fill(destination)`: in place when the buffer is
 // mapped, through a staging buffer otherwise (the buffer then needs VK_BUFFER_USAGE_TRANSFER_DST_BIT).
@@ -35,17 +35,37 @@ void writeBuffer(const Context& context, Buffer& buffer, VkDeviceSize size,
 // writeBuffer with a plain copy of data.
 void uploadBuffer(const Context& context, Buffer& buffer, const void* data, VkDeviceSize size);
 // Makes device writes to a mapped buffer visible to the host (no-op for coherent memory).
-void invalidateBuffer(const Context& context, const Buffer& buffer);
+void invalidateBuffer(const Device& device, const Buffer& buffer);
 
 // Records commands with `record`, submits them on the context's queue and waits for them.
 void submitAndWait(const Context& context, const std::function<void(VkCommandBuffer)>& record);
+
+// The pieces of a submission, for work that outlives one call (a viewer's frames):
+// A primary command buffer from the context's pool (free it there with vkFreeCommandBuffers).
+VkCommandBuffer allocateCommandBuffer(const Context& context);
+// Begins recording commands that are submitted once.
+void beginCommands(VkCommandBuffer commands);
+// `signalled`: the first wait on the fence returns at once.
+VkFence createFence(const Device& device, bool signalled = false);
+VkSemaphore createSemaphore(const Device& device);
+
+// What a submission waits for before `waitStage` and signals when done (presentation).
+struct QueueSync {
+    VkSemaphore wait = VK_NULL_HANDLE;
+    VkPipelineStageFlags waitStage = 0;
+    VkSemaphore signal = VK_NULL_HANDLE;
+};
+// Submits recorded commands on the context's queue; `fence` (optional) is signalled when they
+// completed.
+void submitCommands(const Context& context, VkCommandBuffer commands, VkFence fence,
+                    const QueueSync& sync = {});
 // Queue submissions made by submitAndWait in this process so far (tests count them).
 uint64_t submissionCount();
 
 // A pool of two timestamp queries, or VK_NULL_HANDLE when the queue cannot write timestamps.
-VkQueryPool createTimestampPool(const Context& context);
+VkQueryPool createTimestampPool(const Device& device);
 // Milliseconds between the pool's two timestamps (waits for them); 0 for VK_NULL_HANDLE.
-double timestampMilliseconds(const Context& context, VkQueryPool pool);
+double timestampMilliseconds(const Device& device, VkQueryPool pool);
 
 // A barrier making compute-shader (and transfer) writes visible to later compute reads, transfers
 // and host reads.

@@ -7,7 +7,6 @@
 #include "run_program.h"
 #include "test_inputs.h"
 
-#include "shprobe/gpu/projector.h"
 #include "shprobe/render/render_input.h"
 #include "shprobe/render/view_state.h"
 #include "shprobe/sh/rotation.h"
@@ -99,10 +98,10 @@ TEST_F(Viewer, KeysChangeOrderModeAndRotateTheEnvironment) {
     view.environmentRotationDegrees = 15.0f;
     view.exposureStops = 0.5f;
     Cubemap rotated = rotateCubemap(*input.environment, environmentRotation(15.0f));
-    Projector projector = createProjector(context(), {.order = kRenderBakeOrder});
+    ProbeBaker baker = createRenderBaker(context());
     double milliseconds = 0.0;
-    ShCoefficients probe = bakeRadiance(context(), projector, rotated, milliseconds);
-    destroyProjector(context(), projector);
+    ShCoefficients probe = bakeRadiance(context(), baker, rotated, milliseconds);
+    destroyProbeBaker(context(), baker);
     RenderedImage image = renderView(probe, input.probe, &rotated, view, shot);
     EXPECT_EQ(largestDifference(shot, image), 0);
 

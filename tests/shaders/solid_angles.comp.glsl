@@ -1,5 +1,5 @@
 #version 450
-// Test module: writes texelSolidAngle (shaders/include/texel_geometry.h) of every texel of one
+// Test module: writes texelSolidAngleFp32 (shaders/include/texel_geometry.h) of every texel of one
 // N x N face, so the GPU's own evaluation of the weight can be checked against the double formula.
 #extension GL_GOOGLE_include_directive : require
 
@@ -12,5 +12,5 @@ layout(push_constant, std430) uniform Push { uint faceSize; };
 void main() {
     uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     for (uint texel = gl_GlobalInvocationID.x; texel < faceSize * faceSize; texel += stride)
-        solidAngles[texel] = texelSolidAngle(texel % faceSize, texel / faceSize, faceSize);
+        solidAngles[texel] = texelSolidAngleFp32(texel % faceSize, texel / faceSize, faceSize);
 }

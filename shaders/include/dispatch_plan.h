@@ -1,0 +1,84 @@
+// project.comp's dispatch plan, shared by C++ and GLSL: how many positions a probe has, how many
+// each invocation walks, and how many workgroups per probe shprobe dispatches (shaders/INTERFACE.md,
+// "project.comp dispatch rules"). The shader walks positionsPerInvocation (START_STREAM,
+// position_walk.glsl); the baker (gpu/probe_baker.cpp) and examples/bake_probe plan with the rest.
+// 32-bit unsigned arithmetic only, so that both languages compute the same numbers: every value
+// stays below 2^32 for faces up to 65535 texels wide, workgroup widths up to 1024, and any device
+// limits.
+#ifndef SHPROBE_DISPATCH_PLAN_H
+#define SHPROBE_DISPATCH_PLAN_H
+#include "texel_geometry.h"
+
+SHPROBE_BEGIN
+
+// A projection position is a texel and its three mirror images (quadrantSize) on each of the six
+// faces.
+SHPROBE_CONST uint kTexelsPerPosition = 4u * 6u;
+
+// shprobe's defaults for the plan's free parameters (gpu/probe_baker.h, ProbeBakerOptions, and
+// `shprobe bake --texels-per-invocation`); any width the device allows and any number of texels
+// per invocation from 1 up give correct sums.
+SHPROBE_CONST uint kDefaultTexelsPerInvocation = 256u;
+SHPROBE_CONST uint kDefaultWorkgroupWidth = 64u;
+
+// ceil(a / b) for b > 0, without the overflow of (a + b - 1) / b.
+SHPROBE_FN uint divideRoundingUp(uint a, uint b) {
+    return a / b + uint(a % b != 0u);
+}
+
+// The positions of one probe of N x N faces: ceil(N / 2)^2.
+SHPROBE_FN uint projectionPositions(uint faceSize) {
+    uint quadrant = quadrantSize(faceSize);
+    return quadrant * quadrant;
+}
+
+// The positions each invocation walks when `groups` workgroups of `width` invocations share a
+// probe's positions: the walk's stride (START_STREAM). Any groups >= 1 cover all positions.
+SHPROBE_FN uint positionsPerInvocation(uint positions, uint groups, uint width) {
+    return divideRoundingUp(positions, groups * width);
+}
+
+// Workaround(llvmpipe, Mesa 22.3): llvmpipe ends a shader's loops after 65535 iterations in all
+// (Mesa, gallivm/lp_bld_limits.h: LP_MAX_TGSI_LOOP_ITERATIONS, "shared between every loop"),
+// nested loops counted against the outermost one, and the sums are then silently wrong. Each of
+// project.comp's three face-pair loops runs once per position, and a position costs it fewer than
+// 1 + 6 (1 + n^2 + floor(n^2 / 2)) iterations at order n, nested loops included. The bound is
+// deliberately loose (a basis evaluation takes a few times fewer, whatever the compiler unrolls),
+// and half the limit leaves a further margin. Other devices lose nothing by the cap, since the plan
+// never needs more positions per invocation than it allows; to drop it for a device, pass a larger
+// maxPositions to planPositionsPerInvocation.
+SHPROBE_FN uint maxPositionsPerInvocation(uint order) {
+    uint coefficients = order * order;
+    return 32768u / (1u + 6u * (1u + coefficients + coefficients / 2u));
+}
+
+// The most workgroups per probe a bake of `probes` probes may dispatch: one dispatch row
+// (maxComputeWorkGroupCount[0]) and the partial slots of all probes (slotBytes each: n^2 vec4)
+// in one storage-buffer binding (maxStorageBufferRange).
+SHPROBE_FN uint maxGroupsPerProbe(uint maxWorkGroupCountX, uint maxStorageBufferRange, uint slotBytes,
+                                  uint probes) {
+    return min(maxWorkGroupCountX, maxStorageBufferRange / slotBytes / probes);
+}
+
+// shprobe's positions per invocation: the requested texels per invocation in whole positions, but
+// at least as many as maxGroups workgroups of `width` need to cover the positions, and at most
+// maxPositions (maxPositionsPerInvocation). 0 when no number meets both bounds: the probes do not
+// fit one bake.
+SHPROBE_FN uint planPositionsPerInvocation(uint positions, uint texelsPerInvocation, uint width,
+                                           uint maxGroups, uint maxPositions) {
+    if (maxGroups == 0u) return 0u;
+    uint least = divideRoundingUp(divideRoundingUp(positions, maxGroups), width);
+    if (least > maxPositions) return 0u;
+    uint requested = divideRoundingUp(texelsPerInvocation, kTexelsPerPosition);
+    return clamp(requested, max(least, 1u), maxPositions);
+}
+
+// The workgroups per probe that give each invocation at most `perInvocation` positions; with
+// planPositionsPerInvocation's result, at most maxGroups.
+SHPROBE_FN uint planGroups(uint positions, uint perInvocation, uint width) {
+    return divideRoundingUp(positions, perInvocation * width);
+}
+
+SHPROBE_END
+
+#endif

@@ -1,0 +1,86 @@
+#include "app/program.h"
+
+#include "shprobe/io/output_file.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/version.h"
+
+#include <csignal>
+#include <cstdio>
+#include <exception>
+#include <fcntl.h>
+#include <string>
+
+namespace shprobe {
+
+namespace {
+
+int exitCode(ErrorKind kind) {
+    switch (kind) {
+    case ErrorKind::Input:
+        return 2;
+    case ErrorKind::Output:
+        return 3;
+    case ErrorKind::Device:
+        return 4;
+    }
+    return 1;
+}
+
+// An error is one line; a library's message may hold several.
+std::string oneLine(std::string text) {
+    while (!text.empty() && text.back() == '\n')
+        text.pop_back();
+    for (char& c : text)
+        if (c == '\n') c = ' ';
+    return text;
+}
+
+// Descriptors 0-2 that the parent closed are opened on /dev/null, so that no file the program
+// opens takes their place (a probe file read as standard input, an output sent to standard
+// output). A reader that goes away makes a write fail with EPIPE ("cannot write -: broken pipe",
+// exit 3) instead of ending the program by SIGPIPE without a word.
+void prepareStandardStreams() {
+    for (int fd = 0; fd <= 2; ++fd)
+        if (fcntl(fd, F_GETFD) < 0) open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    std::signal(SIGPIPE, SIG_IGN);
+}
+
+} // namespace
+
+void addVersionFlag(CLI::App& app, const char* program) {
+    app.add_flag_callback(
+        "--version",
+        [program] {
+            std::printf("%s %s\n", program, SHPROBE_VERSION_STRING);
+            throw CLI::Success();
+        },
+        "Print the version and exit");
+}
+
+int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std::function<void()>& run) {
+    prepareStandardStreams();
+    removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        if (e.get_exit_code() == 0) return app.exit(e); // --help, --version
+        std::fprintf(stderr, "%s: error: %s (see --help)\n", name, oneLine(e.what()).c_str());
+        return 2;
+    }
+
+    try {
+        run();
+    } catch (const Error& e) {
+        std::fprintf(stderr, "%s: error: %s\n", name, oneLine(e.what()).c_str());
+        return exitCode(e.kind());
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "%s: error: out of memory\n", name);
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: internal error: %s\n", name, oneLine(e.what()).c_str());
+        return 1;
+    }
+    return 0;
+}
+
+} // namespace shprobe

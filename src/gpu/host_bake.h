@@ -1,0 +1,84 @@
+// Baking cube maps held in host memory with the recorded bake of gpu/probe_baker.h: upload the
+// texels into an image, record the bake, submit, read the coefficients back; one submission
+// however many cube maps there are. The pipelines are a ProbeBaker whose binding is
+// uploadBinding(device, format); the texel format uploaded follows from that binding.
+#pragma once
+#include "shprobe/gpu/probe_baker.h"
+#include "shprobe/sh/coefficients.h"
+#include "shprobe/sh/cubemap.h"
+#include "shprobe/vk/context.h"
+#include "shprobe/vk/image.h"
+#include "shprobe/vk/resources.h"
+
+#include <span>
+#include <string>
+#include <vector>
+
+namespace shprobe {
+
+// The fastest way the projection can read cube maps uploaded in this format: as a storage image
+// where the device supports storage images of the format, else as a sampled image (RGBA32F).
+// RGBA16F reads half the bytes; values beyond the half range, +-65504, are refused at upload.
+CubemapBinding uploadBinding(const Device& device, TexelFormat format);
+
+// Cube maps of one face size in a 2D-array image, 6 layers each (probe_baker.h's layout), with the
+// staging buffer they are copied from.
+struct CubemapUpload {
+    uint32_t faceSize = 0;
+    uint32_t probeCount = 0;
+    CubemapBinding binding = CubemapBinding::SampledImage;
+    Buffer staging;
+    GpuImage image;
+};
+
+// Creates the image for a baker of this binding and fills the staging buffer (all cube maps must
+// have the same face size).
+CubemapUpload createCubemapUpload(const Device& device, std::span<const Cubemap* const> cubemaps,
+                                  CubemapBinding binding);
+// Records the copy and leaves the image as probe_baker.h asks: in cubemapLayout(upload.binding),
+// visible to compute-shader reads.
+void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload);
+void destroyCubemapUpload(const Device& device, CubemapUpload& upload);
+
+struct GpuBake {
+    ShCoefficients radiance;
+    ShCoefficients irradiance;
+    double deviceMilliseconds = 0.0; // from timestamps around the bake dispatches (all probes of the
+                                     // submission, uploads excluded); 0 where unsupported
+    uint32_t workgroups = 0;         // projection workgroups of this probe
+};
+
+// Largest face the GPU path accepts: texel indices are 32-bit (6 N^2 < 2^32).
+constexpr int kMaxGpuFaceSize = 16384;
+
+// Bakes several cube maps (any face sizes) with one submission; results in input order. `window`
+// holds one factor per band (windowing against ringing, sh/windowing.h); it scales both outputs,
+// as convolve.comp applies it: radiance L_lm w_l and irradiance A_l w_l L_lm. Empty: no window.
+// The coefficients are returned as the device computed them: a probe whose fp32 sums overflowed
+// (finite texels near 1e38) has coefficients that are not finite, and requireFinite says so; the
+// other probes are unaffected. The texels of all cube maps should fit batchTexelBytes(device):
+// split larger batches into chunks.
+std::vector<GpuBake> bakeCubemaps(const Context& context, const ProbeBaker& baker,
+                                  std::span<const Cubemap* const> cubemaps,
+                                  std::span<const double> window = {});
+
+// One cube map; throws Error(Input) where bakeCubemaps would return coefficients that are not finite.
+GpuBake bakeCubemap(const Context& context, const ProbeBaker& baker, const Cubemap& cubemap,
+                    std::span<const double> window = {});
+
+// The most texel bytes (6 N^2 texels of 16 bytes per cube map, summed) one bakeCubemaps call should
+// hold on this device.
+VkDeviceSize batchTexelBytes(const Device& device);
+
+// The convolution alone, on radiance computed elsewhere (after lights were added to it, or with a
+// window found from it, as de-ringing does). Fills radiance and irradiance of the result.
+GpuBake convolveOnGpu(const Context& context, const ProbeBaker& baker, const ShCoefficients& radiance,
+                      std::span<const double> window = {});
+
+// Throws Error(Input) "<what>: GPU bake: coefficient i is not finite (...)" when one of the bake's
+// coefficients is not finite: finite inputs whose fp32 sums overflowed, or a device that computed
+// garbage; either way no such probe may be handed on. `what` names the input.
+void requireFinite(const GpuBake& bake, const std::string& what);
+bool isFinite(const GpuBake& bake);
+
+} // namespace shprobe

@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# test_no_glfw: shprobe bakes where no display library is installed. The viewer, the only code that
+# links GLFW, is a program of its own, shprobe-view, which `shprobe view` runs. Checked, on the
+# program given as $1:
+#   1. no NEEDED entry (readelf -d) of shprobe, nor of the project's shared libraries it loads (a
+#      -DBUILD_SHARED_LIBS=ON build), names GLFW, X11 (libX*), xcb, Wayland, xkbcommon or GLX. What a
+#      system library such as OpenImageIO needs in turn is its packaging's and is not checked;
+#   2. a GPU bake of the built-in sky succeeds;
+#   3. `shprobe view` with no shprobe-view beside it (shprobe copied alone into a folder) exits 4 with
+#      one line, "shprobe: error: the viewer is not installed ...", naming the file it looked for;
+#   4. where the viewer is built: it does need GLFW (so that check 1 would see it), `shprobe view
+#      --help` is its help, and its errors read as shprobe's through `shprobe view` and as its own
+#      when run directly.
+set -euo pipefail
+shprobe=$1
+viewer=$(dirname "$shprobe")/shprobe-view
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+window_system='\[lib(glfw|X[A-Za-z0-9_-]*|xcb|wayland-|xkbcommon|GLX)'
+fail() { echo "FAIL: $*"; exit 1; }
+
+needed() { readelf -d "$1" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/[\1]/p'; }
+files=("$shprobe")
+while read -r library; do files+=("$library"); done < <(ldd "$shprobe" | awk '$1 ~ /^libshprobe/ { print $3 }')
+for file in "${files[@]}"; do
+  [ -n "$(needed "$file")" ] || fail "readelf finds no NEEDED entry in $file"
+  if needed "$file" | grep -E "$window_system"; then fail "$file needs a window-system library (above)"; fi
+  echo "no window-system library needed by $file"
+done
+
+"$shprobe" bake --face-size 8 -q -o "$work/probe.json" || fail "shprobe bake failed"
+[ -s "$work/probe.json" ] || fail "shprobe bake wrote no probe"
+echo "shprobe bake: OK"
+
+# Exit code, stderr and stdout of a run: "$code" "$err" "$out".
+run() {
+  set +e
+  "$@" > "$work/out" 2> "$work/err"
+  code=$?
+  set -e
+  out=$(cat "$work/out")
+  err=$(cat "$work/err")
+}
+expect_error() { # exit code, prefix of the single error line, command...
+  local expected=$1 prefix=$2
+  shift 2
+  run "$@"
+  [ "$code" = "$expected" ] || fail "$*: exit $code, not $expected: $err"
+  [ "$(wc -l < "$work/err")" = 1 ] || fail "$*: not one error line: $err"
+  [[ "$err" == "$prefix"* ]] || fail "$*: the error does not start with '$prefix': $err"
+}
+
+mkdir "$work/alone"
+cp "$shprobe" "$work/alone/shprobe"
+expect_error 4 "shprobe: error: the viewer is not installed" "$work/alone/shprobe" view --frames 1
+[[ "$err" == *"$work/alone/shprobe-view"* ]] || fail "the error does not name $work/alone/shprobe-view: $err"
+echo "shprobe view without shprobe-view: $err"
+
+if [ -x "$viewer" ]; then
+  needed "$viewer" | grep -q '\[libglfw' || fail "$viewer does not need libglfw: check 1 would not see it"
+  run "$shprobe" view --help
+  [ "$code" = 0 ] || fail "shprobe view --help: exit $code: $err"
+  [[ "$out" == *"Usage: shprobe view"* && "$out" == *"--screenshot"* ]] || fail "shprobe view --help: $out"
+  expect_error 2 "shprobe: error: " "$shprobe" view --order 4
+  expect_error 2 "shprobe-view: error: " "$viewer" --order 4
+  echo "shprobe view runs $viewer: OK"
+fi
+echo "test_no_glfw: OK"
