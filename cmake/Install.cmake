@@ -32,14 +32,16 @@
 #                                              major.minor: 0.x may break the interface), the targets
 #   lib/pkgconfig/shprobe.pc                   Cflags -I<prefix>/include; Libs render, shprobe, sh;
 #                                              Requires vulkan glm; static builds add Libs.private
-#                                              (the spirv archives) and Requires.private OpenImageIO
+#                                              (the spirv archives) and Requires.private OpenEXR
+#   lib/shprobe/libshprobe_oiio.so             the OpenImageIO plugin (image/oiio_plugin.h), loaded
+#                                              only for formats shprobe does not read itself
 #   share/doc/shprobe/LICENSE                  the license
 #   share/doc/shprobe/conventions.md           the SH, cube-map and coefficient-file conventions
 #
 # The config file sets shprobe_SPIRV_DIR, shprobe_INTERFACE_DOC, shprobe_GLSL_DIR and shprobe_MODULES,
 # and finds only what the installed headers include (Vulkan, glm): no installed header includes
-# OpenImageIO or nlohmann/json, which the libraries link privately (see "what a static build's
-# consumers link" below for the static case). The GLFW viewer (shprobe_viewer) stays private: the
+# OpenEXR, OpenImageIO or nlohmann/json, which the libraries link privately or the plugin alone
+# (see "what a static build's consumers link" below for the static case). The GLFW viewer (shprobe_viewer) stays private: the
 # installed libraries and bin/shprobe never need a window system; only bin/shprobe-view links it.
 #
 # Only the top-level project installs anything (as VMA does). This file runs after every target is
@@ -99,18 +101,18 @@ endif()
 
 # --- what a static build's consumers link --------------------------------------------------------
 # A static library's PRIVATE dependencies are still link items of whatever links it, so CMake exports
-# them as $<LINK_ONLY:...>. Exported as the target OpenImageIO::OpenImageIO, that would make the
-# package config find_dependency(OpenImageIO), and on Debian OpenImageIO's config loads Imath's,
-# which prints, at every configure of every consumer, that the imported target
-# Imath::PyImath_Python3_11 names a file that does not exist (PyImath is packaged apart). Hiding
-# that message (CMAKE_MESSAGE_LOG_LEVEL around the call) would hide whatever else those configs or
-# the consumer report too. Instead the exported targets name the two files that the static
-# libraries' objects call into, libOpenImageIO and libOpenImageIO_Util, as found here: shared
-# libraries that bring their own dependencies, and all that OpenImageIO.pc gives pkg-config users.
-# A consumer links the same libraries with no OpenImageIO config to load. The price: the package
-# names the OpenImageIO files it was built against, as the static libraries are tied to that ABI
-# anyway. A static OpenImageIO has dependencies of its own, so then the package finds its config.
-# nlohmann_json is header-only and no installed header includes it: consumers need nothing of it.
+# them as $<LINK_ONLY:...>. Exported as the target OpenEXR::OpenEXR, that would make the package
+# config find_dependency(OpenEXR), and on Debian OpenEXR's config loads Imath's, which prints, at
+# every configure of every consumer, that the imported target Imath::PyImath_Python3_11 names a
+# file that does not exist (PyImath is packaged apart). Hiding that message (CMAKE_MESSAGE_LOG_LEVEL
+# around the call) would hide whatever else those configs or the consumer report too. Instead the
+# exported targets name the shared library files that the static libraries' objects call into
+# (OpenEXR's, and those its target links: Iex, IlmThread, Imath), as found here: all that
+# OpenEXR.pc gives pkg-config users. A consumer links the same libraries with no config to load.
+# The price: the package names the files it was built against, as the static libraries are tied
+# to that ABI anyway. A static OpenEXR has dependencies of its own, so then the package finds its
+# config. nlohmann_json is header-only and no installed header includes it: consumers need nothing
+# of it. OpenImageIO is the plugin's alone (libshprobe_oiio.so), never linked by the libraries.
 # A shared build exports no private dependency at all.
 set(SHPROBE_CONFIG_FIND_PRIVATE "") # spliced into shprobeConfig.cmake
 
@@ -133,17 +135,44 @@ function(shprobe_imported_location out target)
     message(FATAL_ERROR "cmake/Install.cmake: no file to link for ${target}")
 endfunction()
 
+# The shared library files of an imported target and of the imported shared targets it links,
+# depth first; empty when one of them is not a shared library (its own config must be found then).
+function(shprobe_shared_files out target)
+    set(files "")
+    set(pending ${target})
+    set(seen "")
+    while(pending)
+        list(POP_FRONT pending item)
+        if(item IN_LIST seen OR NOT TARGET ${item})
+            continue()
+        endif()
+        list(APPEND seen ${item})
+        get_target_property(type ${item} TYPE)
+        if(type STREQUAL "SHARED_LIBRARY")
+            shprobe_imported_location(file ${item})
+            list(APPEND files ${file})
+        elseif(NOT type STREQUAL "INTERFACE_LIBRARY")
+            set(${out} "" PARENT_SCOPE)
+            return()
+        endif()
+        get_target_property(links ${item} INTERFACE_LINK_LIBRARIES)
+        if(links)
+            list(APPEND pending ${links})
+        endif()
+    endwhile()
+    set(${out} "${files}" PARENT_SCOPE)
+endfunction()
+
 if(shprobe_library_type STREQUAL "STATIC_LIBRARY")
-    get_target_property(oiio_type OpenImageIO::OpenImageIO TYPE)
-    get_target_property(oiio_util_type OpenImageIO::OpenImageIO_Util TYPE)
-    if(oiio_type STREQUAL "SHARED_LIBRARY" AND oiio_util_type STREQUAL "SHARED_LIBRARY")
-        shprobe_imported_location(oiio_file OpenImageIO::OpenImageIO)
-        shprobe_imported_location(oiio_util_file OpenImageIO::OpenImageIO_Util)
-        set(oiio_installed "$<INSTALL_INTERFACE:$<LINK_ONLY:${oiio_file}>>"
-                           "$<INSTALL_INTERFACE:$<LINK_ONLY:${oiio_util_file}>>")
+    shprobe_shared_files(openexr_files OpenEXR::OpenEXR)
+    if(openexr_files)
+        set(openexr_installed "")
+        foreach(file IN LISTS openexr_files)
+            list(APPEND openexr_installed "$<INSTALL_INTERFACE:$<LINK_ONLY:${file}>>")
+        endforeach()
     else()
-        set(oiio_installed "$<INSTALL_INTERFACE:$<LINK_ONLY:OpenImageIO::OpenImageIO>>")
-        set(SHPROBE_CONFIG_FIND_PRIVATE "find_dependency(OpenImageIO CONFIG) # a static OpenImageIO")
+        set(openexr_installed "$<INSTALL_INTERFACE:$<LINK_ONLY:OpenEXR::OpenEXR>>")
+        set(SHPROBE_CONFIG_FIND_PRIVATE "find_dependency(OpenEXR CONFIG) # a static OpenEXR")
     endif()
     foreach(target IN LISTS shprobe_export_targets)
         get_target_property(links ${target} INTERFACE_LINK_LIBRARIES)
@@ -152,11 +181,11 @@ if(shprobe_library_type STREQUAL "STATIC_LIBRARY")
         endif()
         set(exported "")
         foreach(item IN LISTS links)
-            if(item STREQUAL "$<LINK_ONLY:OpenImageIO::OpenImageIO>")
-                list(APPEND exported "$<BUILD_INTERFACE:${item}>" ${oiio_installed})
+            if(item STREQUAL "$<LINK_ONLY:OpenEXR::OpenEXR>")
+                list(APPEND exported "$<BUILD_INTERFACE:${item}>" ${openexr_installed})
             elseif(item STREQUAL "$<LINK_ONLY:nlohmann_json::nlohmann_json>")
                 list(APPEND exported "$<BUILD_INTERFACE:${item}>")
-            elseif(item MATCHES "OpenImageIO::|nlohmann_json::")
+            elseif(item MATCHES "OpenEXR::|Imath::|OpenImageIO::|nlohmann_json::")
                 message(FATAL_ERROR "cmake/Install.cmake: ${target} links ${item}, which the package "
                                     "cannot export without finding that dependency; export it as above")
             else()
@@ -189,6 +218,7 @@ install(TARGETS ${shprobe_export_targets}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS ${shprobe_programs} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS shprobe_oiio LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/shprobe) # image/oiio_plugin.h
 
 # --- headers -------------------------------------------------------------------------------------
 # The public API: everything under these folders of src/ except the viewer's window-system headers.
@@ -256,7 +286,7 @@ set_and_check(shprobe_INTERFACE_DOC "@PACKAGE_SHPROBE_INSTALL_SPIRVDIR@/INTERFAC
 set_and_check(shprobe_GLSL_DIR "@PACKAGE_SHPROBE_INSTALL_GLSLDIR@")
 set(shprobe_MODULES "@shprobe_modules@")
 
-# What the installed headers include and the libraries link publicly. OpenImageIO and nlohmann_json
+# What the installed headers include and the libraries link publicly. OpenEXR and nlohmann_json
 # are private to the libraries (cmake/Install.cmake, "what a static build's consumers link").
 include(CMakeFindDependencyMacro)
 find_dependency(Vulkan)
@@ -291,10 +321,10 @@ foreach(dir LIBDIR INCLUDEDIR DATADIR)
     endif()
 endforeach()
 # Libraries every link needs come in Libs. A static build's links also need the embedded modules and
-# OpenImageIO (pkg-config --static); a shared build's libraries carry both.
+# OpenEXR (pkg-config --static); a shared build's libraries carry both.
 if(shprobe_library_type STREQUAL "STATIC_LIBRARY")
     set(SHPROBE_PC_PRIVATE
-        "Requires.private: OpenImageIO\nLibs.private: -lshprobe_render_spirv -lshprobe_spirv")
+        "Requires.private: OpenEXR\nLibs.private: -lshprobe_render_spirv -lshprobe_spirv")
 else()
     set(SHPROBE_PC_PRIVATE "")
 endif()

@@ -9,8 +9,10 @@ packages=(
   glslang-tools spirv-tools spirv-cross
   libglm-dev libglfw3-dev
   libopenimageio-dev openimageio-tools
+  libopenexr-dev libstb-dev  # EXR, HDR, PNG, JPEG read and written directly (src/image/codec.h)
   libgtest-dev libcli11-dev nlohmann-json3-dev
   clang-format  # scripts/check-format.sh
+  hyperfine time python3  # scripts/bench-job.sh (whole processes, peak memory, its report)
   xvfb xauth
   blender-data  # real HDR environments for the tests (eight equirect EXRs)
 )

@@ -3,8 +3,10 @@
 # links GLFW, is a program of its own, shprobe-view, which `shprobe view` runs. Checked, on the
 # program given as $1:
 #   1. no NEEDED entry (readelf -d) of shprobe, nor of the project's shared libraries it loads (a
-#      -DBUILD_SHARED_LIBS=ON build), names GLFW, X11 (libX*), xcb, Wayland, xkbcommon or GLX. What a
-#      system library such as OpenImageIO needs in turn is its packaging's and is not checked;
+#      -DBUILD_SHARED_LIBS=ON build), names GLFW, X11 (libX*), xcb, Wayland, xkbcommon or GLX; and
+#      nothing the dynamic loader loads for shprobe at all (ldd: every library, however deep) is a
+#      window-system library or OpenImageIO (whose Debian build needs X11 through OpenCV and
+#      others): OpenImageIO is a plugin, loaded only for the formats shprobe does not read itself;
 #   2. a GPU bake of the built-in sky succeeds;
 #   3. `shprobe view` with no shprobe-view beside it (shprobe copied alone into a folder) exits 4 with
 #      one line, "shprobe: error: the viewer is not installed ...", naming the file it looked for;
@@ -27,6 +29,9 @@ for file in "${files[@]}"; do
   if needed "$file" | grep -E "$window_system"; then fail "$file needs a window-system library (above)"; fi
   echo "no window-system library needed by $file"
 done
+loaded='lib(glfw|X[A-Za-z0-9_-]*|xcb|wayland-|xkbcommon|GLX|OpenImageIO)[^ ]*'
+if ldd "$shprobe" | grep -E "$loaded"; then fail "$shprobe loads a window-system library or OpenImageIO (above)"; fi
+echo "no window-system library or OpenImageIO among the $(ldd "$shprobe" | wc -l) libraries $shprobe loads"
 
 "$shprobe" bake --face-size 8 -q -o "$work/probe.json" || fail "shprobe bake failed"
 [ -s "$work/probe.json" ] || fail "shprobe bake wrote no probe"

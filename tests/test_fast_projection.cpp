@@ -1,5 +1,5 @@
-// The fast float projection against the double reference, its half-float input, its independence
-// of the thread count, and its refusals.
+// The fast float projection of cube maps and equirect maps against the double reference and closed
+// forms, its half-float input, its independence of the thread count, and its refusals.
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/fast_projection.h"
@@ -14,7 +14,10 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <numbers>
 #include <random>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace shprobe {
@@ -46,13 +49,17 @@ double floatRoundingBound(int faceSize) {
 constexpr double kLargeFaceError = 1e-6;
 
 // Noise in [0, 1) in RGB; alpha, which the projection ignores, is NaN so that any leak shows.
-Cubemap noiseCubemap(int faceSize, unsigned seed) {
-    Cubemap cube = makeCubemap(faceSize);
+void fillNoise(std::vector<glm::vec4>& texels, unsigned seed) {
     std::mt19937 random(seed);
     std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (glm::vec4& texel : cube.texels)
+    for (glm::vec4& texel : texels)
         texel = glm::vec4(uniform(random), uniform(random), uniform(random), nan);
+}
+
+Cubemap noiseCubemap(int faceSize, unsigned seed) {
+    Cubemap cube = makeCubemap(faceSize);
+    fillNoise(cube.texels, seed);
     return cube;
 }
 
@@ -89,14 +96,20 @@ TEST(FastProjection, MatchesReference) {
     }
 }
 
-// Expected projection of a cube map lit at one texel only: c Omega y_k(d).
-ShCoefficients singleTexelProjection(int face, int i, int j, int faceSize, const glm::vec4& c) {
+// Expected projection of an environment lit in one texel only, of direction d and solid angle Omega:
+// c Omega y_k(d).
+ShCoefficients singleTexelProjection(const glm::dvec3& direction, double solidAngle, const glm::vec4& c) {
     ShCoefficients expected = makeCoefficients(kMaxOrder, Quantity::Radiance);
     std::array<double, coefficientCount(kMaxOrder)> basis{};
-    evalBasis(kMaxOrder, texelDirection(face, i, j, faceSize), basis);
+    evalBasis(kMaxOrder, direction, basis);
     for (size_t k = 0; k < basis.size(); ++k)
-        expected.rgb[k] = glm::dvec3(c) * (basis[k] * texelSolidAngle(i, j, faceSize));
+        expected.rgb[k] = glm::dvec3(c) * (basis[k] * solidAngle);
     return expected;
+}
+
+// The same for texel (i, j) of a face.
+ShCoefficients singleTexelProjection(int face, int i, int j, int faceSize, const glm::vec4& c) {
+    return singleTexelProjection(texelDirection(face, i, j, faceSize), texelSolidAngle(i, j, faceSize), c);
 }
 
 // A single texel is projected with the rounding of one table entry only, kTableRounding ulps of
@@ -226,29 +239,230 @@ TEST(FastProjection, LargeCubemapWithinTarget) {
     EXPECT_LT(error, kLargeFaceError);
 }
 
+// The kind of the Error that project() throws, -1 if it throws none.
+template <class Project> int errorKind(Project&& project) {
+    try {
+        project();
+    } catch (const Error& e) {
+        return int(e.kind());
+    }
+    return -1;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Equirect maps (projectEquirectFast): Fourier sums along each row in float, then the rows in double
+// (fast_projection.cpp, top of the file).
+
+Image noiseEquirect(int width, int height, unsigned seed) {
+    Image image = makeImage(width, height);
+    fillNoise(image.texels, seed);
+    return image;
+}
+
+// Bound of the equirect path's error relative to |L_00|, as floatRoundingBound for faces: per pixel
+// at most (W/4 + 3 + 1) u |L Omega y_l|m|(theta, 0)| (the float sums along a row of W/4 terms per
+// lane, the parity sums and the multiply-add; one rounding of the table entry cos(m phi) or
+// sin(m phi), which multiplies y_l|m|(theta, 0) rather than y_lm(w)). Summed over the sphere,
+// |L y_l|m|(theta, 0)| Omega is at most max L sqrt(4 pi) sqrt(2) (Cauchy-Schwarz; the square of
+// y_l|m|(theta, 0) integrates to 2 for m != 0, twice that of y_lm), so relative to |L_00| =
+// mean L sqrt(4 pi) the error is at most kMaxToMean sqrt(2) (W/4 + 4) u. Measured errors are 100 to
+// 1000 times smaller (10 for one-pixel-wide maps); the bound still catches a wrong sign, pixel,
+// weight or frame by far.
+double equirectRoundingBound(int width) {
+    return kMaxToMean * std::sqrt(2.0) * (width / 4.0 + 4.0) * kFloatEpsilon;
+}
+
+// Checks: noise projects as the reference does (projectEquirect, the same exact row solid angles)
+// at every order, for even and odd widths and heights, 1-pixel-high and 1-pixel-wide maps, a single
+// pixel, rows with and without an unpaired middle position, maps taller than wide.
+TEST(FastEquirectProjection, MatchesReference) {
+    const int sizes[][2] = {{1, 1}, {2, 1}, {3, 1},   {8, 1},   {1, 5},     {7, 3},    {16, 8},
+                            {5, 9}, {6, 2}, {33, 17}, {64, 32}, {257, 129}, {512, 256}};
+    for (const auto& [width, height] : sizes) {
+        const Image image = noiseEquirect(width, height, unsigned(width * 1000 + height));
+        for (int order = 1; order <= kMaxOrder; ++order) {
+            const double error =
+                errorRelativeToL00(projectEquirectFast(image, order), projectEquirect(image, order));
+            if (order == 1 || order == 3 || order == kMaxOrder)
+                std::printf("%3d x %3d, order %d: error / |L_00| = %.2e\n", width, height, order, error);
+            EXPECT_LT(error, equirectRoundingBound(width)) << width << " x " << height << ", order " << order;
+        }
+    }
+}
+
+// Checks (white furnace): a constant map c gives L_00 = c sqrt(4 pi) to double rounding, not just
+// float: c = 0.75 and the row sums of its multiples are exact in float (at most W = 512 terms of a
+// dyadic value), and the row solid angles, applied in double, sum to 4 pi. The other coefficients
+// equal the reference's (midpoint-rule error of the zonal even harmonics about +Y, see
+// test_projection) within the float bound.
+TEST(FastEquirectProjection, ConstantMapGivesExactL00) {
+    const float c = 0.75f;
+    for (const auto& [width, height] : {std::pair{512, 256}, std::pair{33, 17}, std::pair{1, 1}}) {
+        Image image = makeImage(width, height);
+        std::fill(image.texels.begin(), image.texels.end(), glm::vec4(c, c, c, 1.0f));
+        const ShCoefficients fast = projectEquirectFast(image, kMaxOrder);
+        const double l00 = c * std::sqrt(4.0 * std::numbers::pi);
+        for (int channel = 0; channel < 3; ++channel)
+            EXPECT_NEAR(fast.rgb[0][channel], l00, 1e-14 * l00) << width << " x " << height;
+        EXPECT_LT(errorRelativeToL00(fast, projectEquirect(image, kMaxOrder)), equirectRoundingBound(width))
+            << width << " x " << height;
+    }
+}
+
+// Expected projection of an equirect map lit at pixel (i, j) only: c Omega_j y_k(d).
+ShCoefficients singlePixelProjection(int i, int j, int width, int height, const glm::vec4& c) {
+    return singleTexelProjection(equirectDirection(i, j, width, height),
+                                 equirectRowSolidAngle(j, width, height), c);
+}
+
+// A single pixel is projected with two float roundings, of its table entry cos(m phi) or sin(m phi)
+// and of the product with its radiance (its parity sums are exact, with zeros), each relative to
+// |c Omega y_l|m|(theta, 0)|, which is at most sqrt(2l + 1) = sqrt(15) times |c Omega y_00| through
+// l = 7 (addition theorem at phi = 0, where the sines vanish). Twice that allows for the order of the
+// roundings; the rest is double. Measured: 6.3e-8.
+constexpr double kSinglePixelError = 4.0 * kFloatEpsilon * 3.873;
+
+// Checks: each pixel alone on small maps of odd and even widths and heights (middle columns and
+// rows, unpaired positions, one row, one column) projects to c Omega_j y_k(d): every pixel has its
+// own direction and its row's solid angle, whatever its place among its mirror images.
+TEST(FastEquirectProjection, EveryPixelAlone) {
+    const glm::vec4 c(1.0f, 2.0f, 0.5f, 0.0f);
+    double worst = 0.0;
+    for (const auto& [width, height] : {std::pair{1, 1}, std::pair{2, 1}, std::pair{5, 3}, std::pair{6, 4},
+                                        std::pair{1, 3}, std::pair{9, 2}}) {
+        Image image = makeImage(width, height);
+        for (int j = 0; j < height; ++j) {
+            for (int i = 0; i < width; ++i) {
+                image.at(i, j) = c;
+                const double error = errorRelativeToL00(projectEquirectFast(image, kMaxOrder),
+                                                        singlePixelProjection(i, j, width, height, c));
+                image.at(i, j) = glm::vec4(0.0f);
+                worst = std::max(worst, error);
+                EXPECT_LT(error, kSinglePixelError)
+                    << width << " x " << height << ", pixel (" << i << ", " << j << ")";
+            }
+        }
+    }
+    std::printf("single pixels: worst error / |L_00| = %.2e\n", worst);
+}
+
+// Checks (closed form): one lit row of constant c is a ring about +Y at colatitude theta_j. Its
+// frame sums cos(m phi_i) vanish for 0 < m < W, so only the zonal harmonics about +Y remain, and
+// by the rotation of zonal harmonics (Sloan, "Stupid Spherical Harmonics (SH) Tricks", zonal
+// harmonics) L_lm = c Omega_j W y_l0(theta_j) sqrt(4 pi / (2l + 1)) y_lm(+Y), y_l0(theta) the zonal
+// harmonic about the frame's axis. The error is that of the float sums along the row: at most
+// (W/4 + 4) u of sum_i |c Omega_j y_l|m|(theta_j, 0)| <= (W/4 + 4) u sqrt(15) |L_00| (see above).
+TEST(FastEquirectProjection, SingleRowIsARingAboutY) {
+    const glm::vec4 c(0.5f, 1.0f, 3.0f, 0.0f);
+    for (const auto& [width, height, row] :
+         {std::tuple{8, 5, 0}, std::tuple{16, 8, 5}, std::tuple{33, 17, 8}, std::tuple{64, 1, 0}}) {
+        Image image = makeImage(width, height);
+        for (int i = 0; i < width; ++i)
+            image.at(i, row) = c;
+        const double theta = std::numbers::pi * (row + 0.5) / height;
+        std::array<double, coefficientCount(kMaxOrder)> zonal{}, atY{};
+        evalBasis(kMaxOrder, {std::sin(theta), 0.0, std::cos(theta)}, zonal);
+        evalBasis(kMaxOrder, {0.0, 1.0, 0.0}, atY);
+        ShCoefficients expected = makeCoefficients(kMaxOrder, Quantity::Radiance);
+        for (int l = 0; l < kMaxOrder; ++l) {
+            for (int m = -l; m <= l; ++m) {
+                const double scale =
+                    equirectRowSolidAngle(row, width, height) * width * zonal[size_t(shIndex(l, 0))] *
+                    std::sqrt(4.0 * std::numbers::pi / (2 * l + 1)) * atY[size_t(shIndex(l, m))];
+                expected.rgb[size_t(shIndex(l, m))] = glm::dvec3(c) * scale;
+            }
+        }
+        const double error = errorRelativeToL00(projectEquirectFast(image, kMaxOrder), expected);
+        EXPECT_LT(error, (width / 4.0 + 4.0) * kFloatEpsilon * 3.873)
+            << width << " x " << height << ", row " << row;
+    }
+}
+
+// Checks: RGBA16F input gives exactly the result of the RGBA32F input of the same values (random
+// finite halves of every magnitude and sign), at two orders, on an odd and an even size.
+TEST(FastEquirectProjection, HalfInputEqualsFloatInput) {
+    std::mt19937 random(17);
+    std::uniform_int_distribution<int> bits(0, 0xffff);
+    for (const auto& [width, height] : {std::pair{64, 32}, std::pair{45, 23}}) {
+        std::vector<uint16_t> halves(size_t(width) * height * 4, 0);
+        Image floats = makeImage(width, height);
+        for (size_t v = 0; v < size_t(width) * height * 3; ++v) {
+            uint16_t value = 0x7c00;
+            while (!finiteHalf(value))
+                value = uint16_t(bits(random));
+            halves[v / 3 * 4 + v % 3] = value;
+            floats.texels[v / 3][int(v % 3)] = halfValue(value);
+        }
+        for (int order : {3, 8}) {
+            expectIdentical(projectEquirectFast(halves.data(), TexelFormat::Rgba16F, width, height, order),
+                            projectEquirectFast(floats, order), "random halves");
+        }
+    }
+}
+
+// Checks: the result is bit-identical for 1, 2 and 3 threads and for all cores (389 rows: 49 blocks
+// of 4 rows of positions).
+TEST(FastEquirectProjection, IdenticalForEveryThreadCount) {
+    const Image image = noiseEquirect(777, 389, 5);
+    const ShCoefficients single = projectEquirectFast(image, 5, {.threads = 1});
+    for (unsigned threads : {2u, 3u, 0u})
+        expectIdentical(projectEquirectFast(image, 5, {.threads = threads}), single, "threads");
+}
+
+// Checks: the accuracy target at a common equirect size, 2048 x 1024 at orders 3, 5 and 8,
+// within 1e-6 of |L_00| of the reference (one reference projection at order 8: lower orders are its
+// first coefficients, the same sums). The bound above allows 7e-5; the rows' rounding errors are
+// independent and mostly cancel (measured: 1e-8).
+TEST(FastEquirectProjection, LargeMapWithinTarget) {
+    const Image image = noiseEquirect(2048, 1024, 2048);
+    const ShCoefficients reference = projectEquirect(image, kMaxOrder);
+    for (int order : {3, 5, kMaxOrder}) {
+        ShCoefficients truncated = makeCoefficients(order, Quantity::Radiance);
+        std::copy_n(reference.rgb.begin(), truncated.rgb.size(), truncated.rgb.begin());
+        const double error = errorRelativeToL00(projectEquirectFast(image, order), truncated);
+        std::printf("2048 x 1024, order %d: error / |L_00| = %.2e\n", order, error);
+        EXPECT_LT(error, kLargeFaceError) << "order " << order;
+    }
+}
+
+// Checks: a width or height below 1, an order outside 1..8, no texels and an image whose texel
+// count disagrees with its size are input errors.
+TEST(FastEquirectProjection, InvalidInputThrows) {
+    const Image image = makeImage(4, 2);
+    const int input = int(ErrorKind::Input);
+    EXPECT_EQ(errorKind([&] { projectEquirectFast(image.texels.data(), TexelFormat::Rgba32F, 0, 2, 3); }),
+              input);
+    EXPECT_EQ(errorKind([&] { projectEquirectFast(image.texels.data(), TexelFormat::Rgba16F, 4, -1, 3); }),
+              input);
+    EXPECT_EQ(errorKind([&] { projectEquirectFast(image.texels.data(), TexelFormat::Rgba32F, 4, 2, 0); }),
+              input);
+    EXPECT_EQ(errorKind([&] {
+                  projectEquirectFast(image.texels.data(), TexelFormat::Rgba32F, 4, 2, kMaxOrder + 1);
+              }),
+              input);
+    EXPECT_EQ(errorKind([&] { projectEquirectFast(nullptr, TexelFormat::Rgba32F, 4, 2, 3); }), input);
+    EXPECT_EQ(errorKind([&] { projectEquirectFast(Image{}, 3); }), input);
+    Image truncated = image;
+    truncated.texels.pop_back();
+    EXPECT_EQ(errorKind([&] { projectEquirectFast(truncated, 3); }), input);
+}
+
 // Checks: a face size below 1, an order outside 1..8, no texels and a cube map whose texel count
 // disagrees with its size are input errors.
 TEST(FastProjection, InvalidInputThrows) {
     const Cubemap cube = makeCubemap(2);
-    const auto kind = [](auto&& project) {
-        try {
-            project();
-        } catch (const Error& e) {
-            return int(e.kind());
-        }
-        return -1;
-    };
     const int input = int(ErrorKind::Input);
-    EXPECT_EQ(kind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 0, 3); }), input);
-    EXPECT_EQ(kind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba16F, -2, 3); }), input);
-    EXPECT_EQ(kind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 2, 0); }), input);
-    EXPECT_EQ(kind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 2, kMaxOrder + 1); }),
-              input);
-    EXPECT_EQ(kind([&] { projectFacesFast(nullptr, TexelFormat::Rgba32F, 2, 3); }), input);
-    EXPECT_EQ(kind([&] { projectCubemapFast(Cubemap{}, 3); }), input);
+    EXPECT_EQ(errorKind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 0, 3); }), input);
+    EXPECT_EQ(errorKind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba16F, -2, 3); }), input);
+    EXPECT_EQ(errorKind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 2, 0); }), input);
+    EXPECT_EQ(
+        errorKind([&] { projectFacesFast(cube.texels.data(), TexelFormat::Rgba32F, 2, kMaxOrder + 1); }),
+        input);
+    EXPECT_EQ(errorKind([&] { projectFacesFast(nullptr, TexelFormat::Rgba32F, 2, 3); }), input);
+    EXPECT_EQ(errorKind([&] { projectCubemapFast(Cubemap{}, 3); }), input);
     Cubemap truncated = cube;
     truncated.texels.pop_back();
-    EXPECT_EQ(kind([&] { projectCubemapFast(truncated, 3); }), input);
+    EXPECT_EQ(errorKind([&] { projectCubemapFast(truncated, 3); }), input);
 }
 
 } // namespace

@@ -1,6 +1,6 @@
-// GPU projection and convolution (project.comp, reduce.comp, convolve.comp) against the
-// double-precision CPU reference, on whatever device the context picks (lavapipe in CI, run once
-// per subgroup size 4, 8, 16, 32).
+// GPU projection and convolution (project.comp, project_equirect.comp, reduce.comp, convolve.comp)
+// against the double-precision CPU reference, on whatever device the context picks (lavapipe in CI,
+// run once per subgroup size 4, 8, 16, 32).
 #include "gpu_test.h"
 
 #include "shprobe/gpu/host_bake.h"
@@ -9,6 +9,7 @@
 #include "shprobe/image/environment.h"
 #include "shprobe/sh/basis.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/fast_projection.h"
 #include "shprobe/sh/irradiance.h"
 #include "shprobe/sh/projection.h"
 #include "shprobe/sh/rotation.h"
@@ -22,6 +23,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <functional>
 #include <glm/geometric.hpp>
 #include <glm/gtc/packing.hpp>
 #include <random>
@@ -39,12 +42,17 @@ namespace {
 // wrong weight or basis entry would give.
 constexpr double kGpuTolerance = 2e-6;
 
-Cubemap noiseCubemap(int faceSize, uint32_t seed) {
-    Cubemap cubemap = makeCubemap(faceSize);
+// Noise in [0, 1) in RGB.
+void fillNoise(std::vector<glm::vec4>& texels, uint32_t seed) {
     std::mt19937 random(seed);
     std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-    for (glm::vec4& texel : cubemap.texels)
+    for (glm::vec4& texel : texels)
         texel = {uniform(random), uniform(random), uniform(random), 1.0f};
+}
+
+Cubemap noiseCubemap(int faceSize, uint32_t seed) {
+    Cubemap cubemap = makeCubemap(faceSize);
+    fillNoise(cubemap.texels, seed);
     return cubemap;
 }
 
@@ -315,26 +323,71 @@ class GpuResidentBake : public GpuTest {
 
     // 6 * count layers filled from the cube maps, transitioned as probe_baker.h asks.
     Probes upload(std::span<const Cubemap> cubemaps, VkCommandBuffer commands) {
+        std::vector<std::span<const glm::vec4>> texels;
+        for (const Cubemap& cubemap : cubemaps)
+            texels.emplace_back(cubemap.texels);
         const uint32_t n = uint32_t(cubemaps[0].faceSize);
-        const VkDeviceSize bytes = cubemaps[0].texels.size() * sizeof(glm::vec4);
+        return upload({n, n}, uint32_t(6 * cubemaps.size()), texels, commands);
+    }
+
+    // Records, in one command buffer of the test's own, what `prepare` uploads, then the bakes of the
+    // two sets it creates, the first twice (the scratch buffer is reused safely), and checks that the
+    // library submitted nothing of its own.
+    void recordTwoSetsInOneSubmission(const ProbeBaker& baker,
+                                      const std::function<void(VkCommandBuffer)>& prepare,
+                                      const ProbeBakeSet& firstSet, const ProbeBakeSet& secondSet) {
+        const uint64_t submissionsBefore = submissionCount();
+        submitAndWait(context(), [&](VkCommandBuffer commands) {
+            prepare(commands);
+            recordProbeBake(commands, baker, firstSet);
+            recordProbeBake(commands, baker, secondSet);
+            recordProbeBake(commands, baker, firstSet);
+            computeWriteBarrier(commands);
+        });
+        EXPECT_EQ(submissionCount() - submissionsBefore, 1u) << "only the test's own submission";
+    }
+
+    // Probe k of `probes` in the output layout at `offset` of a mapped buffer against the reference
+    // radiance and its convolution.
+    static void expectOutputProbe(const Buffer& output, VkDeviceSize offset, uint32_t probes, uint32_t k,
+                                  const ShCoefficients& reference) {
+        const auto* values =
+            reinterpret_cast<const glm::vec4*>(static_cast<const char*>(output.mapped) + offset);
+        const int order = reference.order;
+        const size_t n2 = size_t(coefficientCount(order));
+        ShCoefficients radiance = readCoefficientSet(values + k * n2, order, Quantity::Radiance);
+        ShCoefficients irradiance =
+            readCoefficientSet(values + (probes + k) * n2, order, Quantity::Irradiance);
+        EXPECT_LT(relativeError(radiance, reference), kGpuTolerance) << "probe " << k;
+        EXPECT_LT(relativeError(irradiance, convolveIrradiance(reference)), kGpuTolerance) << "probe " << k;
+    }
+
+    // `layers` layers of `extent`, filled from the probes' texels in turn (whole layers each).
+    Probes upload(VkExtent2D extent, uint32_t layers, std::span<const std::span<const glm::vec4>> texels,
+                  VkCommandBuffer commands) {
+        VkDeviceSize bytes = 0;
+        for (std::span<const glm::vec4> probe : texels)
+            bytes += probe.size_bytes();
         Probes probes;
-        probes.staging = createBuffer(context(), bytes * cubemaps.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                      MemoryUse::Upload, "test upload");
-        for (size_t k = 0; k < cubemaps.size(); ++k)
-            std::memcpy(static_cast<char*>(probes.staging.mapped) + k * bytes, cubemaps[k].texels.data(),
-                        bytes);
+        probes.staging = createBuffer(context(), bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload,
+                                      "test upload");
+        auto* out = static_cast<char*>(probes.staging.mapped);
+        for (std::span<const glm::vec4> probe : texels) {
+            std::memcpy(out, probe.data(), probe.size_bytes());
+            out += probe.size_bytes();
+        }
         probes.image =
-            createImage(context(), {.extent = {n, n},
+            createImage(context(), {.extent = extent,
                                     .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                                     .what = "test probes",
-                                    .layers = uint32_t(6 * cubemaps.size())});
+                                    .layers = layers});
         changeLayout(commands, probes.image,
                      {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                       VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
                       VK_ACCESS_TRANSFER_WRITE_BIT});
         VkBufferImageCopy region{};
         region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, probes.image.layers};
-        region.imageExtent = {n, n, 1};
+        region.imageExtent = {extent.width, extent.height, 1};
         vkCmdCopyBufferToImage(commands, probes.staging.buffer, probes.image.image,
                                VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
         changeLayout(commands, probes.image,
@@ -360,36 +413,21 @@ TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "caller's coefficients");
     Probes firstProbes, secondProbes;
     ProbeBakeSet firstSet, secondSet;
-    const uint64_t submissionsBefore = submissionCount();
-    submitAndWait(context(), [&](VkCommandBuffer commands) {
-        firstProbes = upload(first, commands);
-        secondProbes = upload(second, commands);
-        firstSet =
-            createProbeBakeSet(device, baker, {firstProbes.image.view, 24, 3, output.buffer, firstOffset});
-        secondSet =
-            createProbeBakeSet(device, baker, {secondProbes.image.view, 9, 1, output.buffer, secondOffset});
-        recordProbeBake(commands, baker, firstSet);
-        recordProbeBake(commands, baker, secondSet);
-        recordProbeBake(commands, baker, firstSet); // again: the scratch buffer is reused safely
-        computeWriteBarrier(commands);
-    });
-    EXPECT_EQ(submissionCount() - submissionsBefore, 1u) << "only the test's own submission";
+    recordTwoSetsInOneSubmission(
+        baker,
+        [&](VkCommandBuffer commands) {
+            firstProbes = upload(first, commands);
+            secondProbes = upload(second, commands);
+            firstSet = createProbeBakeSet(device, baker,
+                                          {firstProbes.image.view, 24, 3, output.buffer, firstOffset});
+            secondSet = createProbeBakeSet(device, baker,
+                                           {secondProbes.image.view, 9, 1, output.buffer, secondOffset});
+        },
+        firstSet, secondSet);
     invalidateBuffer(device, output);
-
-    auto expectProbe = [&](VkDeviceSize offset, uint32_t probes, uint32_t k, const Cubemap& cubemap) {
-        const auto* values =
-            reinterpret_cast<const glm::vec4*>(static_cast<const char*>(output.mapped) + offset);
-        ShCoefficients reference = projectCubemap(cubemap, order);
-        const size_t n2 = size_t(coefficientCount(order));
-        ShCoefficients radiance = readCoefficientSet(values + k * n2, order, Quantity::Radiance);
-        ShCoefficients irradiance =
-            readCoefficientSet(values + (probes + k) * n2, order, Quantity::Irradiance);
-        EXPECT_LT(relativeError(radiance, reference), kGpuTolerance) << "probe " << k;
-        EXPECT_LT(relativeError(irradiance, convolveIrradiance(reference)), kGpuTolerance) << "probe " << k;
-    };
     for (uint32_t k = 0; k < 3; ++k)
-        expectProbe(firstOffset, 3, k, first[k]);
-    expectProbe(secondOffset, 1, 0, second[0]);
+        expectOutputProbe(output, firstOffset, 3, k, projectCubemap(first[k], order));
+    expectOutputProbe(output, secondOffset, 1, 0, projectCubemap(second[0], order));
 
     destroyProbeBakeSet(device, secondSet);
     destroyProbeBakeSet(device, firstSet);
@@ -453,6 +491,353 @@ TEST_F(GpuResidentBake, RefusesTargetsItCannotBake) {
     destroyImage(context(), image);
     destroyBuffer(context(), output);
     destroyProbeBaker(context(), baker);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Equirect maps projected directly (project_equirect.comp and its storage variants), against the
+// double reference projectEquirect, which weights each pixel by the same exact row solid angle. The
+// tolerance is kGpuTolerance for the same reasons as for cube maps: per position, a weight and a
+// direction of a few ulps (preciseSinCosPi, equirect_geometry.h), one basis evaluation and n^2
+// multiply-adds of signed sums of eight pixels; about 32 positions summed per invocation by default,
+// a tree per workgroup, a compensated sum across workgroups.
+
+Image noiseEquirect(int width, int height, uint32_t seed) {
+    Image image = makeImage(width, height);
+    fillNoise(image.texels, seed);
+    return image;
+}
+
+// Noise with one pixel 10^5 times brighter: a sun the size of a pixel.
+Image hotPixelEquirect(int width, int height, uint32_t seed) {
+    Image image = noiseEquirect(width, height, seed);
+    image.at(width / 3, height / 5) = glm::vec4(1e5f, 9e4f, 8e4f, 1.0f);
+    return image;
+}
+
+// The first coefficients of a projection: the projection of a lower order (the same sums).
+ShCoefficients truncated(const ShCoefficients& coefficients, int order) {
+    ShCoefficients lower = makeCoefficients(order, coefficients.quantity);
+    std::copy_n(coefficients.rgb.begin(), lower.rgb.size(), lower.rgb.begin());
+    return lower;
+}
+
+class GpuEquirect : public GpuProjection {
+  protected:
+    static void TearDownTestSuite() {
+        for (ProbeBaker& baker : bakers_)
+            destroyProbeBaker(context(), baker);
+        GpuTest::TearDownTestSuite();
+    }
+
+    ProbeBaker equirectBaker(ProbeBakerOptions options, TexelFormat format = TexelFormat::Rgba32F) {
+        options.source = ProbeSource::Equirect;
+        return hostBaker(options, format);
+    }
+
+    // The program's own equirect baker of each order (storage RGBA32F, default workgroup shape),
+    // created once for the suite: on lavapipe a pipeline is compiled at its first dispatch, which
+    // takes seconds at order 8.
+    static const ProbeBaker& sharedBaker(int order) {
+        ProbeBaker& baker = bakers_[size_t(order - 1)];
+        if (!baker.project.pipeline) {
+            baker = createProbeBaker(context(), {.order = order,
+                                                 .cubemaps = uploadBinding(context(), TexelFormat::Rgba32F),
+                                                 .source = ProbeSource::Equirect});
+        }
+        return baker;
+    }
+
+  private:
+    static inline std::array<ProbeBaker, kMaxOrder> bakers_;
+};
+
+// Workaround(llvmpipe, Mesa 22.3), for test time: llvmpipe compiles a pipeline again for each class
+// of image it meets at a dispatch: whether the width and the height are powers of two (Mesa,
+// gallivm/lp_bld_sample.h: lp_static_texture_state, pot_width and pot_height) and whether the view
+// has one layer or more (measured: 0.7 s per class at order 6, 2.4 s at order 8, without a shader
+// cache). The tests take maps of every class, but not every class at every order: neither side a
+// power of two at every order; power-of-two widths and heights at orders 1, 3, 5 and 8 (the
+// blender-data maps, 1024 x 512, need that class at 3, 5 and 8 anyway); 1-pixel-high maps (H = 1 is
+// a power of two) at orders 1, 3 and 5; power-of-two widths over other heights, and two maps of one
+// size in one view, at orders 1 and 3. What the classes exercise (mirrors, the half turn, the
+// weights) does not depend on the order.
+struct SizeClass {
+    std::vector<Image> images;
+    std::vector<int> orders;
+};
+
+// Checks: every order 1..8 on maps of even and odd widths and heights, with and without the half
+// turn (even W), an odd W / 2 (a self-mirrored column), 1-pixel-high and 1-pixel-wide maps, a single
+// pixel, maps taller than wide and a hot pixel; all maps of a class and order in one batch (one
+// submission, one bake set per size), and a batch equals a bake of its map alone bit for bit.
+TEST_F(GpuEquirect, MatchesReferenceAtEverySizeAndOrder) {
+    const SizeClass classes[] = {
+        {{noiseEquirect(7, 3, 4), noiseEquirect(10, 5, 5), noiseEquirect(6, 3, 6), noiseEquirect(33, 17, 7),
+          noiseEquirect(5, 9, 8), hotPixelEquirect(130, 65, 9)},
+         {1, 2, 3, 4, 5, 6, 7, 8}},
+        {{noiseEquirect(3, 1, 1), noiseEquirect(6, 1, 2), noiseEquirect(6, 2, 3)}, {1, 3, 5}},
+        {{noiseEquirect(1, 1, 10), noiseEquirect(2, 1, 11), noiseEquirect(8, 1, 12), noiseEquirect(16, 8, 13),
+          hotPixelEquirect(64, 32, 14)},
+         {1, 3, 5, 8}},
+        {{noiseEquirect(1, 3, 15), noiseEquirect(2, 5, 16), noiseEquirect(16, 9, 17),
+          noiseEquirect(16, 9, 18)},
+         {1, 3}}};
+    double worst = 0.0;
+    for (const SizeClass& sizes : classes) {
+        std::vector<const Image*> batch;
+        for (const Image& image : sizes.images)
+            batch.push_back(&image);
+        for (int order : sizes.orders) {
+            const ProbeBaker& baker = sharedBaker(order);
+            const uint64_t submissionsBefore = submissionCount();
+            const std::vector<GpuBake> bakes = bakeEquirects(context(), baker, batch);
+            EXPECT_EQ(submissionCount() - submissionsBefore, 1u) << "order " << order;
+            ASSERT_EQ(bakes.size(), sizes.images.size());
+            for (size_t k = 0; k < bakes.size(); ++k) {
+                const Image& image = sizes.images[k];
+                const double error = relativeError(bakes[k].radiance, projectEquirect(image, order));
+                worst = std::max(worst, error);
+                EXPECT_LT(error, kGpuTolerance)
+                    << image.width << " x " << image.height << ", order " << order;
+            }
+            const GpuBake single = bakeEquirect(context(), baker, sizes.images.back());
+            EXPECT_EQ(single.radiance.rgb, bakes.back().radiance.rgb) << "order " << order;
+            EXPECT_EQ(single.irradiance.rgb, bakes.back().irradiance.rgb) << "order " << order;
+        }
+    }
+    RecordProperty("worst error", std::to_string(worst));
+}
+
+// Checks (white furnace): a constant map c gives L_00 = c sqrt(4 pi), as the exact row solid angles
+// sum to 4 pi, within the GPU tolerance. The even zonal harmonics about +Y keep the midpoint-rule
+// error the reference has too (test_projection), so the other coefficients and the irradiance are
+// held to the reference and its convolution.
+TEST_F(GpuEquirect, ConstantMapGivesExactDc) {
+    const float c = 0.75f;
+    Image image = makeImage(64, 32);
+    std::fill(image.texels.begin(), image.texels.end(), glm::vec4(c, c, c, 1.0f));
+    GpuBake gpu = bakeEquirect(context(), sharedBaker(3), image);
+    const double l00 = c * std::sqrt(4.0 * M_PI);
+    for (int channel = 0; channel < 3; ++channel)
+        EXPECT_NEAR(gpu.radiance.rgb[0][channel], l00, kGpuTolerance * l00);
+    const ShCoefficients reference = projectEquirect(image, 3);
+    EXPECT_LT(relativeError(gpu.radiance, reference), kGpuTolerance);
+    EXPECT_LT(relativeError(gpu.irradiance, convolveIrradiance(reference)), kGpuTolerance);
+}
+
+// A single lit pixel puts all the weight on one direction, so its coefficients carry the fp32
+// rounding of that direction undiluted: at l = 7 the basis changes by up to about l |y_lm| per unit
+// of angle, and a direction a few ulps off moves y_7m by about 1e-6 (measured up to 2.9e-6 of
+// |L_00| at the equator, where |y_7m| / y_00 reaches 2.6). Over a whole map these errors average
+// out (kGpuTolerance); for one pixel the bound is twice the measurement, still far below what a
+// wrong pixel, weight or sign gives (errors of order 1).
+constexpr double kSinglePixelGpuTolerance = 6e-6;
+
+// Checks (closed form): each pixel alone on small maps (an odd W / 2, an odd W, an odd H) projects
+// to c Omega_j y_k(d) at order 8, with every pixel's own direction and its row's solid angle
+// wherever it lies among the eight of its position. (One bake per map: views of one layer, the
+// classes MatchesReferenceAtEverySizeAndOrder compiles at order 8.)
+TEST_F(GpuEquirect, EveryPixelAloneIsBasisTimesSolidAngle) {
+    const glm::vec4 c(1.0f, 2.0f, 3.0f, 1.0f);
+    double worst = 0.0;
+    const ProbeBaker& baker = sharedBaker(kMaxOrder);
+    for (const auto& [width, height] : {std::pair{6, 3}, std::pair{5, 3}}) {
+        for (int j = 0; j < height; ++j)
+            for (int i = 0; i < width; ++i) {
+                Image image = makeImage(width, height);
+                image.at(i, j) = c;
+                ShCoefficients expected = makeCoefficients(kMaxOrder, Quantity::Radiance);
+                std::array<double, coefficientCount(kMaxOrder)> basis{};
+                evalBasis(kMaxOrder, equirectDirection(i, j, width, height), basis);
+                for (size_t k = 0; k < basis.size(); ++k)
+                    expected.rgb[k] = glm::dvec3(c) * (basis[k] * equirectRowSolidAngle(j, width, height));
+                const double error = relativeError(bakeEquirect(context(), baker, image).radiance, expected);
+                worst = std::max(worst, error);
+                EXPECT_LT(error, kSinglePixelGpuTolerance)
+                    << width << " x " << height << ", pixel (" << i << ", " << j << ")";
+            }
+    }
+    RecordProperty("worst error", std::to_string(worst));
+}
+
+// Checks: any workgroup width and any work per invocation give the reference's sums (one subgroup,
+// more subgroups than a subgroup has lanes, partial subgroups), for an even and an odd width.
+TEST_F(GpuEquirect, WorkgroupShapesDoNotChangeTheResult) {
+    const Image images[] = {noiseEquirect(30, 14, 21), noiseEquirect(29, 15, 22)};
+    const Image* batch[] = {&images[0], &images[1]};
+    for (uint32_t width : {1u, 3u, 100u}) {
+        for (uint32_t perInvocation : {1u, 256u}) {
+            ProbeBaker baker =
+                equirectBaker({.order = 3, .workgroupSize = width, .texelsPerInvocation = perInvocation});
+            const std::vector<GpuBake> bakes = bakeEquirects(context(), baker, batch);
+            destroyProbeBaker(context(), baker);
+            for (size_t k = 0; k < 2; ++k)
+                EXPECT_LT(relativeError(bakes[k].radiance, projectEquirect(images[k], 3)), kGpuTolerance)
+                    << images[k].width << " x " << images[k].height << ", workgroup " << width
+                    << ", texels per invocation " << perInvocation;
+        }
+    }
+}
+
+// Checks: far more texels per invocation than lavapipe's loop cap allows still give the right sums,
+// as the baker caps the positions per invocation by order (maxEquirectPositionsPerInvocation):
+// 768 x 384 is 192 x 192 positions, and one 8-wide workgroup would loop 4608 times per invocation,
+// with 18 basis-recurrence iterations in each at order 8 (at order 1, 4608 is within the cap).
+TEST_F(GpuEquirect, HugeWorkPerInvocationStaysCorrect) {
+    const Image image = noiseEquirect(768, 384, 23);
+    const ShCoefficients reference = projectEquirect(image, kMaxOrder);
+    for (int order : {3, kMaxOrder}) {
+        ProbeBaker baker =
+            equirectBaker({.order = order, .workgroupSize = 8, .texelsPerInvocation = 1u << 20});
+        GpuBake gpu = bakeEquirect(context(), baker, image);
+        destroyProbeBaker(context(), baker);
+        EXPECT_LT(relativeError(gpu.radiance, truncated(reference, order)), kGpuTolerance)
+            << "order " << order;
+    }
+}
+
+// Checks: RGBA16F input (project_equirect_rgba16f.comp) matches the reference of the half-rounded
+// values; values beyond the half range are refused.
+TEST_F(GpuEquirect, HalfFloatInputMatchesTheReferenceOfItsValues) {
+    Image image = noiseEquirect(48, 24, 24);
+    image.at(5, 20) = glm::vec4(6e4f, 5e4f, 4e4f, 1.0f); // a sun within the half range
+    Image rounded = image;
+    for (glm::vec4& texel : rounded.texels)
+        texel = glm::unpackHalf4x16(glm::packHalf4x16(texel));
+    ProbeBaker baker = equirectBaker({.order = 3}, TexelFormat::Rgba16F);
+    EXPECT_LT(relativeError(bakeEquirect(context(), baker, image).radiance, projectEquirect(rounded, 3)),
+              kGpuTolerance);
+    image.at(0, 0) = glm::vec4(1e5f, 0.0f, 0.0f, 1.0f);
+    EXPECT_THROW(bakeEquirect(context(), baker, image), Error);
+    destroyProbeBaker(context(), baker);
+}
+
+// Checks: a baker made for one source refuses the other's targets and sets, empty or inconsistent
+// maps are refused, and so are sizes the device cannot hold.
+TEST_F(GpuEquirect, RefusesWhatItCannotBake) {
+    ProbeBaker cubeBaker = hostBaker({.order = 3});
+    const ProbeBaker& baker = sharedBaker(3);
+    const Image image = noiseEquirect(8, 4, 25);
+    EXPECT_THROW(bakeEquirect(context(), cubeBaker, image), Error) << "a cube-map baker";
+    EXPECT_THROW(bakeCubemap(context(), baker, noiseCubemap(4, 26)), Error) << "an equirect baker";
+    EXPECT_THROW(bakeEquirect(context(), baker, Image{}), Error) << "no pixels";
+    Image truncatedImage = image;
+    truncatedImage.texels.pop_back();
+    EXPECT_THROW(bakeEquirect(context(), baker, truncatedImage), Error) << "texel count";
+    Buffer output =
+        createBuffer(context(), 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "out");
+    GpuImage gpuImage = createImage(
+        context(), {.extent = {8, 4}, .usage = VK_IMAGE_USAGE_STORAGE_BIT, .what = "equirect", .layers = 2});
+    EXPECT_THROW(createEquirectBakeSet(context(), baker, {gpuImage.view, 0, 4, 2, output.buffer, 0}), Error)
+        << "width 0";
+    EXPECT_THROW(createEquirectBakeSet(
+                     context(), baker,
+                     {gpuImage.view, 8, context().info.limits.maxImageDimension2D + 1, 2, output.buffer, 0}),
+                 Error)
+        << "too high";
+    EXPECT_THROW(createEquirectBakeSet(context(), cubeBaker, {gpuImage.view, 8, 4, 2, output.buffer, 0}),
+                 Error)
+        << "a cube-map baker";
+    EXPECT_THROW(createProbeBakeSet(context(), baker, {gpuImage.view, 4, 1, output.buffer, 0}), Error)
+        << "a cube-map target for an equirect baker";
+    destroyImage(context(), gpuImage);
+    destroyBuffer(context(), output);
+    destroyProbeBaker(context(), cubeBaker);
+}
+
+// Checks, on each HDR of Debian's blender-data (eight 1024 x 512 equirect maps of Blender's studio
+// lights, real skies with suns and dark interiors): the GPU bake and the fast CPU path at orders 3, 5
+// and 8 within 1e-6 of |L_00| of the double reference, the target. One reference projection
+// of each map at order 8 serves all three orders (the lower orders are its first coefficients).
+// Each map is baked alone, as `shprobe bake` bakes one file (views of one layer).
+TEST_F(GpuEquirect, BlenderStudioLightsWithinTarget) {
+    const std::filesystem::path folder = "/usr/share/blender/datafiles/studiolights/world";
+    if (!std::filesystem::is_directory(folder))
+        GTEST_SKIP() << folder << " is missing (Debian package blender-data)";
+    std::vector<std::filesystem::path> paths;
+    for (const auto& entry : std::filesystem::directory_iterator(folder))
+        if (entry.path().extension() == ".exr") paths.push_back(entry.path());
+    std::sort(paths.begin(), paths.end());
+    ASSERT_EQ(paths.size(), 8u);
+    std::vector<Image> images;
+    std::vector<ShCoefficients> references;
+    for (const auto& path : paths) {
+        images.push_back(readImage(path.string()));
+        references.push_back(projectEquirect(images.back(), kMaxOrder));
+    }
+    for (int order : {3, 5, kMaxOrder}) {
+        double worstGpu = 0.0, worstFast = 0.0;
+        for (size_t k = 0; k < images.size(); ++k) {
+            const ShCoefficients reference = truncated(references[k], order);
+            const double gpu =
+                relativeError(bakeEquirect(context(), sharedBaker(order), images[k]).radiance, reference);
+            const double fast = relativeError(projectEquirectFast(images[k], order), reference);
+            worstGpu = std::max(worstGpu, gpu);
+            worstFast = std::max(worstFast, fast);
+            std::printf("%s, order %d: error / |L_00| GPU %.2e, fast CPU %.2e\n", paths[k].filename().c_str(),
+                        order, gpu, fast);
+            EXPECT_LT(gpu, 1e-6) << paths[k].filename() << ", GPU, order " << order;
+            EXPECT_LT(fast, 1e-6) << paths[k].filename() << ", fast CPU, order " << order;
+        }
+        std::printf("blender-data, order %d: worst error / |L_00| GPU %.2e, fast CPU %.2e\n", order, worstGpu,
+                    worstFast);
+        RecordProperty("order " + std::to_string(order) + " GPU", std::to_string(worstGpu));
+        RecordProperty("order " + std::to_string(order) + " fast CPU", std::to_string(worstFast));
+    }
+}
+
+// The renderer's path for equirect maps (probe_baker.h): the caller's own sampled image, viewed as a
+// 2D array (two layers of one size; and one layer of a plain 2D image, through a 2D-array view of
+// it), the caller's command buffer and output buffer at an offset, a second bake of the first set,
+// and no submission by the library. This runs project_equirect.comp, the sampled-image module.
+TEST_F(GpuResidentBake, RecordsEquirectBakesIntoTheCallersCommandBuffer) {
+    const int order = 3;
+    Device device = borrowDevice({context().physicalDevice, context().device, context().queueFamily});
+    ProbeBaker baker = createProbeBaker(device, {.order = order, .source = ProbeSource::Equirect});
+    ASSERT_EQ(baker.options.cubemaps, CubemapBinding::SampledImage);
+    const std::vector<Image> first = {noiseEquirect(40, 20, 31), hotPixelEquirect(40, 20, 32)};
+    const Image second = noiseEquirect(17, 9, 33);
+    const VkDeviceSize alignment = device.info.limits.minStorageBufferOffsetAlignment;
+    const VkDeviceSize firstOffset = alignment;
+    const VkDeviceSize secondOffset =
+        firstOffset + (probeBakeOutputBytes(order, 2) + alignment - 1) / alignment * alignment;
+    Buffer output =
+        createBuffer(device, secondOffset + probeBakeOutputBytes(order, 1),
+                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "caller's coefficients");
+    const std::span<const glm::vec4> firstTexels[] = {first[0].texels, first[1].texels};
+    const std::span<const glm::vec4> secondTexels[] = {second.texels};
+    Probes firstProbes, secondProbes;
+    VkImageView secondView = VK_NULL_HANDLE;
+    ProbeBakeSet firstSet, secondSet;
+    recordTwoSetsInOneSubmission(
+        baker,
+        [&](VkCommandBuffer commands) {
+            firstProbes = upload({40, 20}, 2, firstTexels, commands);
+            secondProbes = upload({17, 9}, 1, secondTexels, commands);
+            secondView = createImageView(device, secondProbes.image.image, VK_IMAGE_VIEW_TYPE_2D_ARRAY,
+                                         secondProbes.image.format, 1);
+            firstSet = createEquirectBakeSet(device, baker,
+                                             {firstProbes.image.view, 40, 20, 2, output.buffer, firstOffset});
+            secondSet =
+                createEquirectBakeSet(device, baker, {secondView, 17, 9, 1, output.buffer, secondOffset});
+        },
+        firstSet, secondSet);
+    invalidateBuffer(device, output);
+    for (uint32_t k = 0; k < 2; ++k)
+        expectOutputProbe(output, firstOffset, 2, k, projectEquirect(first[k], order));
+    expectOutputProbe(output, secondOffset, 1, 0, projectEquirect(second, order));
+    EXPECT_THROW(recordProbeBake(VK_NULL_HANDLE, ProbeBaker{}, firstSet), Error)
+        << "a set recorded with a baker of the other source";
+
+    destroyProbeBakeSet(device, secondSet);
+    destroyProbeBakeSet(device, firstSet);
+    vkDestroyImageView(device.device, secondView, nullptr);
+    for (Probes* probes : {&firstProbes, &secondProbes}) {
+        destroyImage(context(), probes->image);
+        destroyBuffer(context(), probes->staging);
+    }
+    destroyBuffer(device, output);
+    destroyProbeBaker(device, baker);
 }
 
 // The texel solid angle as the GPU evaluates it (texel_geometry.h compiled to SPIR-V, with the

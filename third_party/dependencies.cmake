@@ -1,11 +1,26 @@
 # Dependency glue: every external package comes from Debian and is found here, once.
 # Targets used by the rest of the build:
 #   Vulkan::Vulkan, Vulkan::glslangValidator, SPIRV_VAL (program path), glm::glm,
-#   OpenImageIO::OpenImageIO, nlohmann_json::nlohmann_json, CLI11::CLI11, GTest::gtest_main.
+#   OpenImageIO::OpenImageIO, OpenEXR::OpenEXR, stb::stb, nlohmann_json::nlohmann_json,
+#   CLI11::CLI11, GTest::gtest_main.
 find_package(Vulkan 1.3 REQUIRED COMPONENTS glslangValidator)
 find_program(SPIRV_VAL spirv-val REQUIRED)
 find_package(glm CONFIG REQUIRED)
 find_package(OpenImageIO CONFIG REQUIRED)
+# EXR, Radiance HDR, PNG and JPEG are read and written without OpenImageIO (image/codec.h), whose
+# start-up (about 1 s: 264 shared libraries) a run that meets only those formats need not pay.
+# OpenEXR 3.1 (libopenexr-dev) reads and writes EXR; its config gives OpenEXR::OpenEXR (with Iex,
+# IlmThread, Imath and zlib).
+find_package(OpenEXR CONFIG REQUIRED)
+# stb_image and stb_image_write (libstb-dev) for HDR, PNG and JPEG, header-only: compiled into
+# src/image/stb_codec.cpp with only the three decoders shprobe reads. Debian's libstb.so (every stb
+# library, every decoder) is not linked. stb::stb carries the include folder only, as a system
+# folder (an imported target's are), so that stb's own code is compiled without our warnings.
+find_path(STB_INCLUDE_DIR stb_image.h PATH_SUFFIXES stb REQUIRED)
+if(NOT TARGET stb::stb)
+    add_library(stb::stb INTERFACE IMPORTED)
+    set_target_properties(stb::stb PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "${STB_INCLUDE_DIR}")
+endif()
 find_package(nlohmann_json CONFIG REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)
 if(SHPROBE_BUILD_TESTS)

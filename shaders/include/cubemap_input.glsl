@@ -1,5 +1,7 @@
-// The cube maps read by the projection modules, set 0, binding 0: probe p's face f is layer 6p + f,
-// N x N texels, faces and orientation as in texel_geometry.h.
+// The layered image read by the projection modules, set 0, binding 0. project.comp's cube maps:
+// probe p's face f is layer 6p + f, N x N texels, faces and orientation as in texel_geometry.h;
+// project_equirect.comp's equirect maps: probe p is layer p, W x H texels. The binding is named
+// SHPROBE_INPUT_NAME where the includer defines it (equirects), cubemaps otherwise.
 //
 // With SHPROBE_STORAGE_FORMAT defined (rgba32f or rgba16f, the view's format) the binding is a
 // storage image read with imageLoad, in VK_IMAGE_LAYOUT_GENERAL; without, a sampled image of any
@@ -9,15 +11,19 @@
 #ifndef SHPROBE_CUBEMAP_INPUT_GLSL
 #define SHPROBE_CUBEMAP_INPUT_GLSL
 
+#ifndef SHPROBE_INPUT_NAME
+#define SHPROBE_INPUT_NAME cubemaps
+#endif
+
 #ifdef SHPROBE_STORAGE_FORMAT
-layout(set = 0, binding = 0, SHPROBE_STORAGE_FORMAT) readonly uniform image2DArray cubemaps;
+layout(set = 0, binding = 0, SHPROBE_STORAGE_FORMAT) readonly uniform image2DArray SHPROBE_INPUT_NAME;
 vec3 readRadiance(uint i, uint j, int layer) {
-    return imageLoad(cubemaps, ivec3(i, j, layer)).rgb;
+    return imageLoad(SHPROBE_INPUT_NAME, ivec3(i, j, layer)).rgb;
 }
 #else
-layout(set = 0, binding = 0) uniform sampler2DArray cubemaps;
+layout(set = 0, binding = 0) uniform sampler2DArray SHPROBE_INPUT_NAME;
 vec3 readRadiance(uint i, uint j, int layer) {
-    return texelFetch(cubemaps, ivec3(i, j, layer), 0).rgb;
+    return texelFetch(SHPROBE_INPUT_NAME, ivec3(i, j, layer), 0).rgb;
 }
 #endif
 

@@ -33,6 +33,13 @@ struct ProjectParams {
     uint faceSize;
 };
 
+// project_equirect.comp: projects the W x H equirect maps (W = width, H = height) of the bound
+// image, one probe per workgroup row, into partial slots as project.comp does.
+struct EquirectParams {
+    uint width;
+    uint height;
+};
+
 // reduce.comp: sums each probe's partialCount partial slots into its coefficient set.
 struct ReduceParams {
     uint partialCount;
@@ -56,6 +63,7 @@ SHPROBE_END
 
 #ifdef __cplusplus
 static_assert(sizeof(shprobe::gpu::ProjectParams) == 4);
+static_assert(sizeof(shprobe::gpu::EquirectParams) == 8);
 static_assert(sizeof(shprobe::gpu::ReduceParams) == 4);
 static_assert(sizeof(shprobe::gpu::ConvolveParams) == 36);
 static_assert(sizeof(shprobe::gpu::RotateParams) == 8);

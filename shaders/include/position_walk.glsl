@@ -1,6 +1,7 @@
-// Texel positions (i, j) of an N x N grid visited with a fixed stride through the flat index
-// j N + i, shared by the modules that stride over faces. The row and column follow the index
-// without a division per step (a vector integer division is a loop of scalar ones on CPUs).
+// Texel positions (i, j) of a grid C positions wide (N x N for faces) visited with a fixed stride
+// through the flat index j C + i, shared by the modules that stride over images (gridSize below is
+// C). The row and column follow the index without a division per step (a vector integer division is
+// a loop of scalar ones on CPUs).
 #ifndef SHPROBE_POSITION_WALK_GLSL
 #define SHPROBE_POSITION_WALK_GLSL
 #include "dispatch_plan.h"
@@ -25,8 +26,9 @@ void stepWalk(inout PositionWalk walk, uint gridSize) {
     }
 }
 
-// The positions one invocation of a 1D dispatch takes out of an N x N grid (the projection's is a
-// quarter of the face, quadrantSize in texel_geometry.h): `lanes` neighbouring
+// The positions one invocation of a 1D dispatch takes out of a grid of positions (project.comp's is
+// a quarter of the face, quadrantSize in texel_geometry.h, N x N: START_STREAM(N);
+// project_equirect.comp's is C x R, equirect_geometry.h: START_STREAM_OF(C * R)): `lanes` neighbouring
 // invocations (a stream) take neighbouring positions side by side and walk forward together
 // through one contiguous range, [first, end) in steps of `lanes`. That is what GPU memory coalescing
 // wants, and what CPU prefetchers want under llvmpipe, which runs one subgroup's whole loop before
@@ -41,9 +43,10 @@ void stepWalk(inout PositionWalk walk, uint gridSize) {
 // come out wrong on llvmpipe (test_gpu caught it at order 8 with many positions per invocation).
 // Elsewhere a function returning a struct would do; test_gpu at order 8 tells whether a driver
 // needs the macro.
-#define START_STREAM(gridSize)                                                                   \
+#define START_STREAM(gridSize) START_STREAM_OF((gridSize) * (gridSize))
+#define START_STREAM_OF(positionCount)                                                           \
     uint lanes = min(gl_SubgroupSize, gl_WorkGroupSize.x & (~gl_WorkGroupSize.x + 1u));          \
-    uint streamPositions = (gridSize) * (gridSize);                                              \
+    uint streamPositions = (positionCount);                                                      \
     uint perInvocation = positionsPerInvocation(streamPositions, gl_NumWorkGroups.x, gl_WorkGroupSize.x); \
     uint stream = gl_GlobalInvocationID.x / lanes;                                               \
     uint first = stream * lanes * perInvocation + gl_GlobalInvocationID.x % lanes;               \

@@ -14,8 +14,8 @@
 //
 // The includer defines SHPROBE_STORAGE_FORMAT or not (cubemap_input.glsl) and nothing else.
 //   set 0, binding 0: the cube maps (cubemap_input.glsl)
-//   set 0, binding 1: buffer, vec4 partials[]: slot s holds SH_COEFFICIENTS vec4 at s * SH_COEFFICIENTS;
-//                     workgroup (g, p) writes slot p * gl_NumWorkGroups.x + g
+//   set 0, binding 1: the partial slots (partial_slot.glsl): workgroup (g, p) writes slot
+//                     p * gl_NumWorkGroups.x + g
 //   push constants: ProjectParams (gpu_interface.h)
 //   specialization: 0 = workgroup width, 1 = SH order (1..8)
 //   dispatch (groups, probes, 1): the invocations share the ceil(N / 2)^2 positions of probe
@@ -34,48 +34,9 @@ layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
 layout(constant_id = SHPROBE_SPEC_ORDER) const uint SH_ORDER = 3;
 
 #include "sh_basis.glsl"
+#include "partial_slot.glsl"
 
-layout(set = 0, binding = 1, std430) writeonly buffer Partials { vec4 partials[]; };
 layout(push_constant, std430) uniform Push { ProjectParams params; };
-
-// Coefficients reduced per pair of barriers, and their subgroup totals: one entry per subgroup
-// and coefficient (a subgroup of one invocation is the worst case), SHPROBE_REDUCTION_ENTRIES
-// rounded up to a multiple of the width.
-const uint REDUCTION_CHUNK = (SHPROBE_REDUCTION_ENTRIES + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
-shared vec3 subgroupSums[REDUCTION_CHUNK * gl_WorkGroupSize.x];
-shared uint subgroupCount;
-
-// Workaround(llvmpipe, Mesa 22.3): the reduction relies only on subgroupAdd, subgroupElect,
-// gl_SubgroupID and gl_SubgroupInvocationID, not on gl_SubgroupSize or gl_NumSubgroups: lavapipe
-// reports a subgroup size of 32 under LP_NATIVE_VECTOR_WIDTH=1024 on 256-bit CPUs while running
-// subgroups of 16, and rounds gl_NumSubgroups down when the width is not a multiple of it. So the
-// subgroups are counted (countSubgroups) and each subgroup's size is its subgroupAdd(1); where
-// both built-ins are right, gl_NumSubgroups and gl_SubgroupSize would do. (START_STREAM takes
-// gl_SubgroupSize only as a stream width, correct for any power of two.)
-void countSubgroups() {
-    if (gl_LocalInvocationIndex == 0u) subgroupCount = 0u;
-    barrier();
-    if (subgroupElect()) atomicMax(subgroupCount, gl_SubgroupID + 1u);
-    barrier();
-}
-
-// Sums the subgroup totals of coefficients first .. first + REDUCTION_CHUNK - 1 (fewer at the end),
-// stored at subgroupSums[c * width + subgroup], over the workgroup and writes them to the partial
-// slot. Works for any number of subgroups, including more subgroups than a subgroup has
-// invocations (lavapipe: 32 of 8), and for widths that are not a multiple of the subgroup size.
-void reduceChunk(uint first, uint slot, uint lanes) {
-    barrier();
-    if (gl_SubgroupID == 0u) {
-        for (uint c = 0u; c < REDUCTION_CHUNK && first + c < SH_COEFFICIENTS; ++c) {
-            vec3 total = vec3(0.0f);
-            for (uint s = gl_SubgroupInvocationID; s < subgroupCount; s += lanes)
-                total += subgroupSums[c * gl_WorkGroupSize.x + s];
-            total = subgroupAdd(total);
-            if (gl_LocalInvocationIndex == 0u) partials[slot + first + c] = vec4(total, 0.0f);
-        }
-    }
-    barrier(); // subgroupSums is reused by the next chunk
-}
 
 // The eight texels of face pair p (faces 2p and 2p + 1) at a position and its mirror images see
 // one direction d with its coordinates' signs changed in all eight ways (face table in
@@ -85,24 +46,6 @@ void reduceChunk(uint first, uint slot, uint lanes) {
 //   +Y ( a,  c,  b), -Y ( a, -c, -b): opposite y and z, column x, row z
 //   +Z ( a, -b,  c), -Z (-a, -b, -c): opposite x and z, column x, row y
 const uvec3 PAIR_REFLECTIONS[3] = uvec3[3](uvec3(5, 4, 2), uvec3(6, 1, 4), uvec3(5, 1, 2));
-
-// The axes in which y_lm is odd, as a mask like the reflections' (basisParity).
-uint oddAxes(int l, int m) {
-    uvec3 parity = basisParity(l, m);
-    return parity.x | (parity.y << 1u) | (parity.z << 2u);
-}
-
-// In: radiance[s] is the texel whose direction is d with the axes in s negated. Out: radiance[p]
-// is the sum over s of (-1)^|p & s| radiance[s], a Walsh-Hadamard transform: the sum that y_lm(d)
-// multiplies when y_lm is odd in the axes p, since y_lm(d reflected in s) = (-1)^|p & s| y_lm(d).
-// Twelve butterflies (24 vec3 additions and subtractions) give all eight.
-void signedSums(inout vec3 radiance[8]) {
-#define BUTTERFLY(s, t) { vec3 plus = radiance[s] + radiance[t]; radiance[t] = radiance[s] - radiance[t]; radiance[s] = plus; }
-    BUTTERFLY(0, 1) BUTTERFLY(2, 3) BUTTERFLY(4, 5) BUTTERFLY(6, 7)
-    BUTTERFLY(0, 2) BUTTERFLY(1, 3) BUTTERFLY(4, 6) BUTTERFLY(5, 7)
-    BUTTERFLY(0, 4) BUTTERFLY(1, 5) BUTTERFLY(2, 6) BUTTERFLY(3, 7)
-#undef BUTTERFLY
-}
 
 // The solid angle of texel (i, j). On an odd face the middle column (row) is its own mirror image
 // and is read twice: each read counts half.
@@ -114,8 +57,7 @@ float positionWeight(uint i, uint j, uint faceSize) {
 }
 
 void main() {
-#define DECLARE_SUM(k, l, m) vec3 sum##k = vec3(0.0f);
-    SH_EACH_COEFFICIENT(DECLARE_SUM)
+    SH_EACH_COEFFICIENT(SH_DECLARE_SUM)
 
     uint faceSize = params.faceSize;
     uint quadrant = quadrantSize(faceSize);
@@ -130,8 +72,6 @@ void main() {
     radiance[mask ^ column] = readRadiance(mirrorI, walk.j, face);    \
     radiance[mask ^ row] = readRadiance(walk.i, mirrorJ, face);       \
     radiance[mask ^ column ^ row] = readRadiance(mirrorI, mirrorJ, face);
-#define ACCUMULATE(k, l, m) \
-    if (k < SH_COEFFICIENTS) sum##k += (basis[k] * weight) * radiance[oddAxes(l, m)];
 #define PROJECT_PAIR(PAIR)                                                                       \
     {                                                                                            \
         const uint opposite = PAIR_REFLECTIONS[PAIR].x;                                          \
@@ -147,29 +87,11 @@ void main() {
             vec2 ab = vec2(texelCenterCoord(walk.i, faceSize), texelCenterCoord(walk.j, faceSize)); \
             float basis[SH_BASIS_CAPACITY];                                                      \
             shEvalBasis(orientToFace(2u * PAIR, normalize(vec3(ab, 1.0f))), basis);              \
-            SH_EACH_COEFFICIENT(ACCUMULATE)                                                      \
+            SH_EACH_COEFFICIENT(SH_ACCUMULATE)                                                   \
             stepWalk(walk, quadrant);                                                            \
         }                                                                                        \
     }
     PROJECT_PAIR(0) PROJECT_PAIR(1) PROJECT_PAIR(2)
 
-    // Workaround(llvmpipe, Mesa 22.3): for speed, every sum is reduced over its subgroup before the
-    // first barrier. llvmpipe runs a shader with barriers as a coroutine, and a value live across a
-    // barrier is written to the coroutine's frame wherever it is assigned: every iteration, for the
-    // sums (order 5 15% faster, docs/benchmark.md). The subgroup totals are assigned once, and a few
-    // chunks of them take few barriers (each barrier switches every subgroup). Harmless elsewhere:
-    // the subgroup adds are needed anyway.
-#define SUBGROUP_TOTAL(k, l, m) vec3 subgroupTotal##k = k < SH_COEFFICIENTS ? subgroupAdd(sum##k) : vec3(0.0f);
-    SH_EACH_COEFFICIENT(SUBGROUP_TOTAL)
-    countSubgroups();
-    uint subgroupLanes = subgroupAdd(1u); // invocations in this subgroup, as the hardware groups them
-    uint slot = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * SH_COEFFICIENTS;
-#define REDUCE(k, l, m)                                                                                 \
-    if (k < SH_COEFFICIENTS) {                                                                          \
-        const uint chunkIndex = uint(k) % REDUCTION_CHUNK;                                              \
-        if (subgroupElect()) subgroupSums[chunkIndex * gl_WorkGroupSize.x + gl_SubgroupID] = subgroupTotal##k; \
-        if (chunkIndex + 1u == REDUCTION_CHUNK || k + 1 == SH_COEFFICIENTS)                            \
-            reduceChunk(uint(k) - chunkIndex, slot, subgroupLanes);                                     \
-    }
-    SH_EACH_COEFFICIENT(REDUCE)
+    SH_WRITE_PARTIAL_SLOT
 }

@@ -82,7 +82,7 @@ void runSingleBake(const BakeOptions& options) {
         result = bakeOnCpu(options, environment.cubemap);
     }
     double bakeMs = millisecondsSince(start);
-    requireUsable(result, environment.description);
+    requireUsable(options, result, environment.description);
 
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
     writeOutput(options, options.output, written, metadataFor(options, environment, result, sun));

@@ -189,13 +189,18 @@ std::optional<Loaded> loadItem(Batch& batch, const BatchItem& item) {
 
 void writeItem(Batch& batch, const Loaded& loaded, const BakeResult& result) {
     const BakeOptions& options = batch.options;
+    try {
+        requireUsable(options, result, loaded.environment.description);
+    } catch (const Error& error) {
+        reportFailure(batch, *loaded.item, error);
+        return;
+    }
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
     try {
-        requireUsable(result, loaded.environment.description);
         writeOutput(options, loaded.item->output, written,
                     metadataFor(options, loaded.environment, result, loaded.sun));
     } catch (const Error& error) {
-        if (error.kind() == ErrorKind::Device) throw;
+        if (error.kind() != ErrorKind::Output) throw;
         reportFailure(batch, *loaded.item, error);
         return;
     }

@@ -73,8 +73,9 @@ template <typename Work> void withGpu(const BakeOptions& options, Work&& work) {
 std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& context, const ProbeBaker& baker,
                                   std::span<const Cubemap* const> cubemaps);
 
-// Throws Error(Input) naming the input when the result's coefficients are not finite.
-void requireUsable(const BakeResult& result, const std::string& input);
+// Throws Error(Input) naming the input when a GPU bake's coefficients are not finite (its fp32
+// sums overflowed). The CPU paths sum in double; the probe writers refuse what is not finite.
+void requireUsable(const BakeOptions& options, const BakeResult& result, const std::string& input);
 
 // "cpu": the fast float path on all cores; "reference": the double-precision reference.
 const char* cpuBackendName(const BakeOptions& options);

@@ -304,9 +304,11 @@ void addBenchCommand(CLI::App& app, BenchOptions& options) {
         ->capture_default_str();
     command->add_option("--json", options.json, "Also write the measurements to this JSON file");
     command->add_option("--device", options.device, "Vulkan device index or name part");
+    addBenchJobOptions(*command, options.job);
 }
 
 void runBench(const BenchOptions& options) {
+    if (benchJobRequested(options.job)) return runBenchJob(options.job, options.repeat, options.json);
     if (!options.json.empty()) checkOutputPath(options.json);
     ContextOptions contextOptions;
     contextOptions.device = options.device;

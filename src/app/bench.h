@@ -1,5 +1,7 @@
 // `shprobe bench`: projection speed against the memory-read bound (bench.cpp).
 #pragma once
+#include "app/bench_job.h"
+
 #include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
@@ -13,6 +15,7 @@ struct BenchOptions {
     int referenceMaxFaceSize = 2048; // the double reference takes seconds beyond this
     std::string json;
     std::string device;
+    BenchJobOptions job; // --decode, --write-layouts: the whole-job benchmark's in-process parts
 };
 
 void addBenchCommand(CLI::App& app, BenchOptions& options);

@@ -13,12 +13,13 @@
 #include <cstring>
 #include <glm/gtc/packing.hpp>
 #include <optional>
+#include <span>
+#include <string>
+#include <vector>
 
 namespace shprobe {
 
 namespace {
-
-constexpr float kHalfMax = 65504.0f;
 
 VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
     return (value + alignment - 1) / alignment * alignment;
@@ -38,52 +39,34 @@ void checkCubemap(const Cubemap& cubemap) {
                                           std::to_string(cubemap.faceSize) + "^2");
 }
 
+void checkEquirect(const Device& device, const Image& equirect) {
+    const int64_t largest = device.info.limits.maxImageDimension2D;
+    if (equirect.width < 1 || equirect.height < 1 || equirect.width > largest || equirect.height > largest)
+        throw Error(ErrorKind::Input, "GPU bake: equirect size " + std::to_string(equirect.width) + "x" +
+                                          std::to_string(equirect.height) + " is outside 1.." +
+                                          std::to_string(largest) + " on " + device.info.name);
+    if (equirect.texels.size() != size_t(equirect.width) * size_t(equirect.height))
+        throw Error(ErrorKind::Input, "GPU bake: the equirect map holds " +
+                                          std::to_string(equirect.texels.size()) + " texels, not " +
+                                          std::to_string(equirect.width) + " x " +
+                                          std::to_string(equirect.height));
+}
+
 // Copies the texels into the staging memory in the image's format (faces follow each other, as
 // layers do). RGBA16F refuses values a half cannot hold rather than clamping them silently.
-void packTexels(const Cubemap& cubemap, TexelFormat format, void* destination) {
+void packTexels(std::span<const glm::vec4> texels, TexelFormat format, void* destination) {
     if (format == TexelFormat::Rgba32F) {
-        std::memcpy(destination, cubemap.texels.data(), cubemap.texels.size() * sizeof(glm::vec4));
+        std::memcpy(destination, texels.data(), texels.size() * sizeof(glm::vec4));
         return;
     }
     auto* out = static_cast<uint64_t*>(destination);
-    for (const glm::vec4& texel : cubemap.texels) {
+    for (const glm::vec4& texel : texels) {
         glm::vec3 rgb(texel);
         if (glm::any(glm::greaterThan(glm::abs(rgb), glm::vec3(kHalfMax))))
             throw Error(ErrorKind::Input, "GPU bake: a texel of " +
                                               std::to_string(std::max({rgb.r, rgb.g, rgb.b})) +
                                               " does not fit RGBA16F (at most 65504); use RGBA32F");
         *out++ = glm::packHalf4x16(glm::vec4(rgb, 0.0f));
-    }
-}
-
-// Cube maps of one face size, baked from one image (one layer per face) with one bake set.
-struct BakeGroup {
-    std::vector<size_t> members; // indices into the batch
-    uint32_t faceSize = 0;
-    VkDeviceSize outputOffset = 0;
-    CubemapUpload upload;
-    ProbeBakeSet set;
-};
-
-// Groups by face size, in order of first appearance, at most maxImageArrayLayers / 6 probes each.
-std::vector<BakeGroup> groupByFaceSize(const Device& device, std::span<const Cubemap* const> cubemaps) {
-    const size_t maxProbes = std::max<size_t>(1, device.info.limits.maxImageArrayLayers / kFaceCount);
-    std::vector<BakeGroup> groups;
-    for (size_t i = 0; i < cubemaps.size(); ++i) {
-        uint32_t faceSize = uint32_t(cubemaps[i]->faceSize);
-        auto open = std::find_if(groups.begin(), groups.end(), [&](const BakeGroup& group) {
-            return group.faceSize == faceSize && group.members.size() < maxProbes;
-        });
-        if (open == groups.end()) open = groups.insert(groups.end(), BakeGroup{{}, faceSize});
-        open->members.push_back(i);
-    }
-    return groups;
-}
-
-void destroyGroups(const Device& device, std::vector<BakeGroup>& groups) {
-    for (BakeGroup& group : groups) {
-        destroyProbeBakeSet(device, group.set);
-        destroyCubemapUpload(device, group.upload);
     }
 }
 
@@ -114,6 +97,186 @@ TexelFormat uploadFormat(CubemapBinding binding) {
     return binding == CubemapBinding::StorageRgba16F ? TexelFormat::Rgba16F : TexelFormat::Rgba32F;
 }
 
+// The staging buffer and the image of an upload: `layers` layers of `extent` for `binding`, and
+// the texels of each probe (probeTexels, whole layers each) packed in turn.
+void createLayers(const Device& device, VkExtent2D extent, uint32_t layers, CubemapBinding binding,
+                  std::span<const std::span<const glm::vec4>> probeTexels, const char* what, Buffer& staging,
+                  GpuImage& image) {
+    const TexelFormat format = uploadFormat(binding);
+    const VkDeviceSize layerBytes = VkDeviceSize(extent.width) * extent.height * texelBytes(format);
+    staging =
+        createBuffer(device, layerBytes * layers, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, what);
+    auto* out = static_cast<char*>(staging.mapped);
+    for (std::span<const glm::vec4> texels : probeTexels) {
+        packTexels(texels, format, out);
+        out += texels.size() * texelBytes(format);
+    }
+    const VkImageUsageFlags readUsage =
+        binding == CubemapBinding::SampledImage ? VK_IMAGE_USAGE_SAMPLED_BIT : VK_IMAGE_USAGE_STORAGE_BIT;
+    image = createImage(device, {.format = imageFormat(format),
+                                 .extent = extent,
+                                 .usage = readUsage | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                 .what = what,
+                                 .layers = layers});
+}
+
+// Records the copy of every layer and leaves the image as probe_baker.h asks: in
+// cubemapLayout(binding), visible to compute-shader reads.
+void recordLayers(VkCommandBuffer commands, const Buffer& staging, const GpuImage& image,
+                  CubemapBinding binding) {
+    changeLayout(commands, image,
+                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                  VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_ACCESS_TRANSFER_WRITE_BIT});
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.layers};
+    region.imageExtent = {image.extent.width, image.extent.height, 1};
+    vkCmdCopyBufferToImage(commands, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                           &region);
+    changeLayout(commands, image,
+                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, cubemapLayout(binding),
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+}
+
+// A source kind's host side, for bakeBatch: cube maps (6 layers each) or equirect maps (1).
+struct CubemapSource {
+    using Texels = Cubemap;
+    using Upload = CubemapUpload;
+    static constexpr uint32_t kLayers = kFaceCount;
+    static void check(const Device&, const Cubemap& cubemap) { checkCubemap(cubemap); }
+    static VkExtent2D size(const Cubemap& cubemap) {
+        return {uint32_t(cubemap.faceSize), uint32_t(cubemap.faceSize)};
+    }
+    static Upload upload(const Device& device, std::span<const Cubemap* const> members,
+                         CubemapBinding binding) {
+        return createCubemapUpload(device, members, binding);
+    }
+    static void record(VkCommandBuffer commands, const Upload& upload) {
+        recordCubemapUpload(commands, upload);
+    }
+    static void destroy(const Device& device, Upload& upload) { destroyCubemapUpload(device, upload); }
+    static ProbeBakeSet bakeSet(const Device& device, const ProbeBaker& baker, const Upload& upload,
+                                VkBuffer output, VkDeviceSize offset) {
+        return createProbeBakeSet(device, baker,
+                                  {upload.image.view, upload.faceSize, upload.probeCount, output, offset});
+    }
+};
+
+struct EquirectSource {
+    using Texels = Image;
+    using Upload = EquirectUpload;
+    static constexpr uint32_t kLayers = 1;
+    static void check(const Device& device, const Image& equirect) { checkEquirect(device, equirect); }
+    static VkExtent2D size(const Image& equirect) {
+        return {uint32_t(equirect.width), uint32_t(equirect.height)};
+    }
+    static Upload upload(const Device& device, std::span<const Image* const> members,
+                         CubemapBinding binding) {
+        return createEquirectUpload(device, members, binding);
+    }
+    static void record(VkCommandBuffer commands, const Upload& upload) {
+        recordEquirectUpload(commands, upload);
+    }
+    static void destroy(const Device& device, Upload& upload) { destroyEquirectUpload(device, upload); }
+    static ProbeBakeSet bakeSet(const Device& device, const ProbeBaker& baker, const Upload& upload,
+                                VkBuffer output, VkDeviceSize offset) {
+        return createEquirectBakeSet(
+            device, baker, {upload.view, upload.width, upload.height, upload.probeCount, output, offset});
+    }
+};
+
+// Maps of one size, baked from one image (Source::kLayers layers per map) with one bake set.
+template <class Source> struct BakeGroup {
+    std::vector<size_t> members; // indices into the batch
+    VkExtent2D size{};
+    VkDeviceSize outputOffset = 0;
+    typename Source::Upload upload;
+    ProbeBakeSet set;
+};
+
+// Groups by size, in order of first appearance, at most maxImageArrayLayers / kLayers maps each.
+template <class Source>
+std::vector<BakeGroup<Source>> groupBySize(const Device& device,
+                                           std::span<const typename Source::Texels* const> sources) {
+    const size_t maxProbes = std::max<size_t>(1, device.info.limits.maxImageArrayLayers / Source::kLayers);
+    std::vector<BakeGroup<Source>> groups;
+    for (size_t i = 0; i < sources.size(); ++i) {
+        const VkExtent2D size = Source::size(*sources[i]);
+        auto open = std::find_if(groups.begin(), groups.end(), [&](const BakeGroup<Source>& group) {
+            return group.size.width == size.width && group.size.height == size.height &&
+                   group.members.size() < maxProbes;
+        });
+        if (open == groups.end()) open = groups.insert(groups.end(), BakeGroup<Source>{{}, size});
+        open->members.push_back(i);
+    }
+    return groups;
+}
+
+// bakeCubemaps and bakeEquirects: one upload and bake set per size, one submission.
+template <class Source>
+std::vector<GpuBake> bakeBatch(const Context& context, const ProbeBaker& baker,
+                               std::span<const typename Source::Texels* const> sources,
+                               std::span<const double> window) {
+    const int order = baker.options.order;
+    for (const typename Source::Texels* source : sources)
+        Source::check(context, *source);
+    if (sources.empty()) return {};
+
+    std::vector<BakeGroup<Source>> groups = groupBySize<Source>(context, sources);
+    ScopeExit releaseGroups([&] {
+        for (BakeGroup<Source>& group : groups) {
+            destroyProbeBakeSet(context, group.set);
+            Source::destroy(context, group.upload);
+        }
+    });
+    VkDeviceSize outputBytes = 0;
+    for (BakeGroup<Source>& group : groups) {
+        group.outputOffset = outputBytes;
+        outputBytes = alignUp(outputBytes + probeBakeOutputBytes(order, uint32_t(group.members.size())),
+                              context.info.limits.minStorageBufferOffsetAlignment);
+    }
+    Buffer output = createBuffer(context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                 MemoryUse::Readback, "coefficients");
+    ScopeExit releaseOutput([&] { destroyBuffer(context, output); });
+    for (BakeGroup<Source>& group : groups) {
+        std::vector<const typename Source::Texels*> members;
+        for (size_t index : group.members)
+            members.push_back(sources[index]);
+        group.upload = Source::upload(context, members, baker.options.cubemaps);
+        group.set = Source::bakeSet(context, baker, group.upload, output.buffer, group.outputOffset);
+    }
+    VkQueryPool timestamps = createTimestampPool(context);
+    ScopeExit releaseTimestamps([&] {
+        if (timestamps) vkDestroyQueryPool(context.device, timestamps, nullptr);
+    });
+
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        for (const BakeGroup<Source>& group : groups)
+            Source::record(commands, group.upload);
+        if (timestamps) {
+            vkCmdResetQueryPool(commands, timestamps, 0, 2);
+            vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);
+        }
+        for (const BakeGroup<Source>& group : groups)
+            recordProbeBake(commands, baker, group.set, window);
+        if (timestamps) vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
+        computeWriteBarrier(commands); // the coefficients, to the host
+    });
+
+    invalidateBuffer(context, output);
+    const double deviceMs = timestampMilliseconds(context, timestamps);
+    std::vector<GpuBake> bakes(sources.size());
+    for (const BakeGroup<Source>& group : groups)
+        for (size_t k = 0; k < group.members.size(); ++k) {
+            GpuBake& bake = bakes[group.members[k]];
+            bake = readProbe(output, group.outputOffset, order, uint32_t(group.members.size()), uint32_t(k));
+            bake.deviceMilliseconds = deviceMs;
+            bake.workgroups = group.set.groupsPerProbe;
+        }
+    return bakes;
+}
+
 } // namespace
 
 CubemapBinding uploadBinding(const Device& device, TexelFormat format) {
@@ -127,52 +290,64 @@ CubemapBinding uploadBinding(const Device& device, TexelFormat format) {
 
 CubemapUpload createCubemapUpload(const Device& device, std::span<const Cubemap* const> cubemaps,
                                   CubemapBinding binding) {
-    const TexelFormat format = uploadFormat(binding);
     CubemapUpload upload;
     upload.binding = binding;
-    const VkImageUsageFlags readUsage =
-        binding == CubemapBinding::SampledImage ? VK_IMAGE_USAGE_SAMPLED_BIT : VK_IMAGE_USAGE_STORAGE_BIT;
     upload.faceSize = uint32_t(cubemaps.front()->faceSize);
     upload.probeCount = uint32_t(cubemaps.size());
-    const VkDeviceSize cubemapBytes =
-        kFaceCount * VkDeviceSize(upload.faceSize) * upload.faceSize * texelBytes(format);
-    OnFailure undo([&] { destroyCubemapUpload(device, upload); });
-    upload.staging = createBuffer(device, cubemapBytes * cubemaps.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                  MemoryUse::Upload, "cube-map upload");
-    for (size_t k = 0; k < cubemaps.size(); ++k) {
-        checkCubemap(*cubemaps[k]);
-        if (uint32_t(cubemaps[k]->faceSize) != upload.faceSize)
+    std::vector<std::span<const glm::vec4>> texels;
+    for (const Cubemap* cubemap : cubemaps) {
+        checkCubemap(*cubemap);
+        if (uint32_t(cubemap->faceSize) != upload.faceSize)
             throw Error(ErrorKind::Input, "GPU bake: cube maps of one upload must share their face size");
-        packTexels(*cubemaps[k], format, static_cast<char*>(upload.staging.mapped) + k * cubemapBytes);
+        texels.emplace_back(cubemap->texels);
     }
-    upload.image = createImage(device, {.format = imageFormat(format),
-                                        .extent = {upload.faceSize, upload.faceSize},
-                                        .usage = readUsage | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                        .what = "cube maps to bake",
-                                        .layers = kFaceCount * upload.probeCount});
+    OnFailure undo([&] { destroyCubemapUpload(device, upload); });
+    createLayers(device, {upload.faceSize, upload.faceSize}, kFaceCount * upload.probeCount, binding, texels,
+                 "cube maps to bake", upload.staging, upload.image);
     return upload;
 }
 
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload) {
-    changeLayout(commands, upload.image,
-                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                  VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                  VK_ACCESS_TRANSFER_WRITE_BIT});
-    VkBufferImageCopy region{};
-    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, upload.image.layers};
-    region.imageExtent = {upload.faceSize, upload.faceSize, 1};
-    vkCmdCopyBufferToImage(commands, upload.staging.buffer, upload.image.image,
-                           VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-    changeLayout(commands, upload.image,
-                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, cubemapLayout(upload.binding),
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+    recordLayers(commands, upload.staging, upload.image, upload.binding);
 }
 
 void destroyCubemapUpload(const Device& device, CubemapUpload& upload) {
     destroyImage(device, upload.image);
     destroyBuffer(device, upload.staging);
     upload = CubemapUpload{};
+}
+
+EquirectUpload createEquirectUpload(const Device& device, std::span<const Image* const> equirects,
+                                    CubemapBinding binding) {
+    EquirectUpload upload;
+    upload.binding = binding;
+    upload.width = uint32_t(equirects.front()->width);
+    upload.height = uint32_t(equirects.front()->height);
+    upload.probeCount = uint32_t(equirects.size());
+    std::vector<std::span<const glm::vec4>> texels;
+    for (const Image* equirect : equirects) {
+        checkEquirect(device, *equirect);
+        if (uint32_t(equirect->width) != upload.width || uint32_t(equirect->height) != upload.height)
+            throw Error(ErrorKind::Input, "GPU bake: equirect maps of one upload must share their size");
+        texels.emplace_back(equirect->texels);
+    }
+    OnFailure undo([&] { destroyEquirectUpload(device, upload); });
+    createLayers(device, {upload.width, upload.height}, upload.probeCount, binding, texels,
+                 "equirect maps to bake", upload.staging, upload.image);
+    upload.view = createImageView(device, upload.image.image, VK_IMAGE_VIEW_TYPE_2D_ARRAY,
+                                  upload.image.format, upload.probeCount);
+    return upload;
+}
+
+void recordEquirectUpload(VkCommandBuffer commands, const EquirectUpload& upload) {
+    recordLayers(commands, upload.staging, upload.image, upload.binding);
+}
+
+void destroyEquirectUpload(const Device& device, EquirectUpload& upload) {
+    if (upload.view) vkDestroyImageView(device.device, upload.view, nullptr);
+    destroyImage(device, upload.image);
+    destroyBuffer(device, upload.staging);
+    upload = EquirectUpload{};
 }
 
 VkDeviceSize batchTexelBytes(const Device& device) {
@@ -186,60 +361,7 @@ VkDeviceSize batchTexelBytes(const Device& device) {
 
 std::vector<GpuBake> bakeCubemaps(const Context& context, const ProbeBaker& baker,
                                   std::span<const Cubemap* const> cubemaps, std::span<const double> window) {
-    const int order = baker.options.order;
-    for (const Cubemap* cubemap : cubemaps)
-        checkCubemap(*cubemap);
-    if (cubemaps.empty()) return {};
-
-    std::vector<BakeGroup> groups = groupByFaceSize(context, cubemaps);
-    ScopeExit releaseGroups([&] { destroyGroups(context, groups); });
-    VkDeviceSize outputBytes = 0;
-    for (BakeGroup& group : groups) {
-        group.outputOffset = outputBytes;
-        outputBytes = alignUp(outputBytes + probeBakeOutputBytes(order, uint32_t(group.members.size())),
-                              context.info.limits.minStorageBufferOffsetAlignment);
-    }
-    Buffer output = createBuffer(context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                 MemoryUse::Readback, "coefficients");
-    ScopeExit releaseOutput([&] { destroyBuffer(context, output); });
-    for (BakeGroup& group : groups) {
-        std::vector<const Cubemap*> members;
-        for (size_t index : group.members)
-            members.push_back(cubemaps[index]);
-        group.upload = createCubemapUpload(context, members, baker.options.cubemaps);
-        group.set = createProbeBakeSet(context, baker,
-                                       {group.upload.image.view, group.faceSize,
-                                        uint32_t(group.members.size()), output.buffer, group.outputOffset});
-    }
-    VkQueryPool timestamps = createTimestampPool(context);
-    ScopeExit releaseTimestamps([&] {
-        if (timestamps) vkDestroyQueryPool(context.device, timestamps, nullptr);
-    });
-
-    submitAndWait(context, [&](VkCommandBuffer commands) {
-        for (const BakeGroup& group : groups)
-            recordCubemapUpload(commands, group.upload);
-        if (timestamps) {
-            vkCmdResetQueryPool(commands, timestamps, 0, 2);
-            vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);
-        }
-        for (const BakeGroup& group : groups)
-            recordProbeBake(commands, baker, group.set, window);
-        if (timestamps) vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
-        computeWriteBarrier(commands); // the coefficients, to the host
-    });
-
-    invalidateBuffer(context, output);
-    const double deviceMs = timestampMilliseconds(context, timestamps);
-    std::vector<GpuBake> bakes(cubemaps.size());
-    for (const BakeGroup& group : groups)
-        for (size_t k = 0; k < group.members.size(); ++k) {
-            GpuBake& bake = bakes[group.members[k]];
-            bake = readProbe(output, group.outputOffset, order, uint32_t(group.members.size()), uint32_t(k));
-            bake.deviceMilliseconds = deviceMs;
-            bake.workgroups = group.set.groupsPerProbe;
-        }
-    return bakes;
+    return bakeBatch<CubemapSource>(context, baker, cubemaps, window);
 }
 
 GpuBake bakeCubemap(const Context& context, const ProbeBaker& baker, const Cubemap& cubemap,
@@ -247,6 +369,19 @@ GpuBake bakeCubemap(const Context& context, const ProbeBaker& baker, const Cubem
     const Cubemap* one[] = {&cubemap};
     GpuBake bake = bakeCubemaps(context, baker, one, window).front();
     requireFinite(bake, "the cube map");
+    return bake;
+}
+
+std::vector<GpuBake> bakeEquirects(const Context& context, const ProbeBaker& baker,
+                                   std::span<const Image* const> equirects, std::span<const double> window) {
+    return bakeBatch<EquirectSource>(context, baker, equirects, window);
+}
+
+GpuBake bakeEquirect(const Context& context, const ProbeBaker& baker, const Image& equirect,
+                     std::span<const double> window) {
+    const Image* one[] = {&equirect};
+    GpuBake bake = bakeEquirects(context, baker, one, window).front();
+    requireFinite(bake, "the equirect map");
     return bake;
 }
 
@@ -293,8 +428,7 @@ void requireFinite(const GpuBake& bake, const std::string& what) {
     const std::optional<size_t> irradiance = firstNonFinite(bake.irradiance);
     if (!radiance && !irradiance) return;
     const size_t index = radiance ? *radiance : *irradiance;
-    throw Error(ErrorKind::Input, what + ": GPU bake: " + (radiance ? "radiance" : "irradiance") +
-                                      " coefficient " + std::to_string(index) +
+    throw Error(ErrorKind::Input, what + ": GPU bake: coefficient " + std::to_string(index) +
                                       " is not finite (input values too large for fp32 sums?)");
 }
 

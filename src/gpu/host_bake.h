@@ -1,7 +1,8 @@
-// Baking cube maps held in host memory with the recorded bake of gpu/probe_baker.h: upload the
-// texels into an image, record the bake, submit, read the coefficients back; one submission
-// however many cube maps there are. The pipelines are a ProbeBaker whose binding is
-// uploadBinding(device, format); the texel format uploaded follows from that binding.
+// Baking cube maps or equirect maps held in host memory with the recorded bake of
+// gpu/probe_baker.h: upload the texels into an image, record the bake, submit, read the coefficients
+// back; one submission however many maps there are. The pipelines are a ProbeBaker whose binding is
+// uploadBinding(device, format) and whose source is the maps' (ProbeSource::Cubemaps or Equirect);
+// the texel format uploaded follows from that binding.
 #pragma once
 #include "shprobe/gpu/probe_baker.h"
 #include "shprobe/sh/coefficients.h"
@@ -16,7 +17,7 @@
 
 namespace shprobe {
 
-// The fastest way the projection can read cube maps uploaded in this format: as a storage image
+// The fastest way the projection can read maps uploaded in this format: as a storage image
 // where the device supports storage images of the format, else as a sampled image (RGBA32F).
 // RGBA16F reads half the bytes; values beyond the half range, +-65504, are refused at upload.
 CubemapBinding uploadBinding(const Device& device, TexelFormat format);
@@ -39,6 +40,25 @@ CubemapUpload createCubemapUpload(const Device& device, std::span<const Cubemap*
 // visible to compute-shader reads.
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload);
 void destroyCubemapUpload(const Device& device, CubemapUpload& upload);
+
+// Equirect maps of one size in a 2D-array image, one layer each (probe_baker.h's equirect layout),
+// with the staging buffer they are copied from; `view` is the 2D-array view the bake reads (one
+// layer included).
+struct EquirectUpload {
+    uint32_t width = 0;
+    uint32_t height = 0;
+    uint32_t probeCount = 0;
+    CubemapBinding binding = CubemapBinding::SampledImage;
+    Buffer staging;
+    GpuImage image;
+    VkImageView view = VK_NULL_HANDLE;
+};
+
+// As the cube-map upload functions, for equirect maps (all of one size).
+EquirectUpload createEquirectUpload(const Device& device, std::span<const Image* const> equirects,
+                                    CubemapBinding binding);
+void recordEquirectUpload(VkCommandBuffer commands, const EquirectUpload& upload);
+void destroyEquirectUpload(const Device& device, EquirectUpload& upload);
 
 struct GpuBake {
     ShCoefficients radiance;
@@ -65,6 +85,20 @@ std::vector<GpuBake> bakeCubemaps(const Context& context, const ProbeBaker& bake
 // One cube map; throws Error(Input) where bakeCubemaps would return coefficients that are not finite.
 GpuBake bakeCubemap(const Context& context, const ProbeBaker& baker, const Cubemap& cubemap,
                     std::span<const double> window = {});
+
+// Equirect maps (any sizes, each side at most maxImageDimension2D) projected directly, each pixel
+// weighted by its row's exact solid angle (sh/projection.h's projectEquirect is the reference), with
+// a baker made for them (ProbeSource::Equirect); otherwise as bakeCubemaps, one submission, results
+// in input order. Throws Error(Input) for an empty map or one whose texel count disagrees with its
+// size. The texels (W H of 16 bytes each, summed) should fit batchTexelBytes(device).
+std::vector<GpuBake> bakeEquirects(const Context& context, const ProbeBaker& baker,
+                                   std::span<const Image* const> equirects,
+                                   std::span<const double> window = {});
+
+// One equirect map; throws Error(Input) where bakeEquirects would return coefficients that are not
+// finite.
+GpuBake bakeEquirect(const Context& context, const ProbeBaker& baker, const Image& equirect,
+                     std::span<const double> window = {});
 
 // The most texel bytes (6 N^2 texels of 16 bytes per cube map, summed) one bakeCubemaps call should
 // hold on this device.

@@ -23,26 +23,44 @@ VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
     return (value + alignment - 1) / alignment * alignment;
 }
 
-// Projection workgroups per probe for N x N faces: shprobe's dispatch plan (glsl/dispatch_plan.h,
-// shared with the shaders and stated in shaders/INTERFACE.md) under this device's limits. A target
-// the plan cannot fit in one bake is refused.
-uint32_t groupsPerProbe(const Device& device, const ProbeBakerOptions& options, uint32_t faceSize,
+// A projection's positions per probe, the texels each holds and the loop cap on the positions
+// per invocation (glsl/dispatch_plan.h), and what the probes are, for messages.
+struct ProjectionShape {
+    uint32_t positions;
+    uint32_t texelsPerPosition;
+    uint32_t maxPositions;
+    std::string probes; // "probe(s) of face size 256"
+};
+
+ProjectionShape cubemapShape(uint32_t order, uint32_t faceSize) {
+    return {gpu::projectionPositions(faceSize), gpu::kTexelsPerPosition,
+            gpu::maxPositionsPerInvocation(order), "probe(s) of face size " + std::to_string(faceSize)};
+}
+
+ProjectionShape equirectShape(uint32_t order, uint32_t width, uint32_t height) {
+    return {gpu::equirectProjectionPositions(width, height), gpu::equirectTexelsPerPosition(width),
+            gpu::maxEquirectPositionsPerInvocation(order),
+            "equirect probe(s) of " + std::to_string(width) + "x" + std::to_string(height)};
+}
+
+// Projection workgroups per probe: shprobe's dispatch plan (glsl/dispatch_plan.h, shared with the
+// shaders and stated in shaders/INTERFACE.md) under this device's limits. A target the plan cannot
+// fit in one bake is refused.
+uint32_t groupsPerProbe(const Device& device, const ProbeBakerOptions& options, const ProjectionShape& shape,
                         uint32_t probes) {
     const VkPhysicalDeviceLimits& limits = device.info.limits;
-    const uint32_t positions = gpu::projectionPositions(faceSize);
     const uint32_t maxGroups =
         gpu::maxGroupsPerProbe(limits.maxComputeWorkGroupCount[0], limits.maxStorageBufferRange,
                                uint32_t(coefficientSetBytes(options.order)), probes);
     const uint32_t perInvocation =
-        gpu::planPositionsPerInvocation(positions, options.texelsPerInvocation, options.workgroupSize,
-                                        maxGroups, gpu::maxPositionsPerInvocation(uint32_t(options.order)));
+        gpu::planPositionsOf(shape.positions, shape.texelsPerPosition, options.texelsPerInvocation,
+                             options.workgroupSize, maxGroups, shape.maxPositions);
     if (perInvocation == 0)
-        throw Error(ErrorKind::Input, "GPU bake: " + std::to_string(probes) + " probe(s) of face size " +
-                                          std::to_string(faceSize) + " at order " +
-                                          std::to_string(options.order) +
+        throw Error(ErrorKind::Input, "GPU bake: " + std::to_string(probes) + " " + shape.probes +
+                                          " at order " + std::to_string(options.order) +
                                           " are more than one bake can hold on " + device.info.name +
                                           "; bake fewer probes at a time");
-    return gpu::planGroups(positions, perInvocation, options.workgroupSize);
+    return gpu::planGroups(shape.positions, perInvocation, options.workgroupSize);
 }
 
 // Per-band scales for convolve.comp: the window alone (radiance) or A_l times the window
@@ -75,13 +93,32 @@ void checkWindow(int order, std::span<const double> window) {
                                           std::to_string(order));
 }
 
-void checkTarget(const Device& device, const ProbeBakeTarget& target) {
-    if (!target.cubemaps || !target.output)
-        throw Error(ErrorKind::Input, "GPU bake: the target needs a cube-map view and an output buffer");
-    if (target.faceSize < 1 || target.faceSize > device.info.limits.maxImageDimension2D)
-        throw Error(ErrorKind::Input, "GPU bake: face size " + std::to_string(target.faceSize) +
+// What one bake reads and writes, whatever its source.
+struct BakeBindings {
+    VkImageView source;
+    uint32_t probeCount;
+    VkBuffer output;
+    VkDeviceSize outputOffset;
+};
+
+void checkSize(const Device& device, const char* what, uint32_t size) {
+    if (size < 1 || size > device.info.limits.maxImageDimension2D)
+        throw Error(ErrorKind::Input, std::string("GPU bake: ") + what + " " + std::to_string(size) +
                                           " is outside 1.." +
                                           std::to_string(device.info.limits.maxImageDimension2D));
+}
+
+void checkTarget(const Device& device, const ProbeBaker& baker, ProbeSource source,
+                 const BakeBindings& target) {
+    const bool equirect = source == ProbeSource::Equirect;
+    if (baker.options.source != source)
+        throw Error(ErrorKind::Input, std::string("GPU bake: a baker made for ") +
+                                          (equirect ? "cube maps" : "equirect maps") + " cannot bake " +
+                                          (equirect ? "equirect maps" : "cube maps"));
+    if (!target.source || !target.output)
+        throw Error(ErrorKind::Input, std::string("GPU bake: the target needs ") +
+                                          (equirect ? "an equirect view" : "a cube-map view") +
+                                          " and an output buffer");
     if (target.probeCount < 1 || target.probeCount > device.info.limits.maxComputeWorkGroupCount[1])
         throw Error(ErrorKind::Input, "GPU bake: " + std::to_string(target.probeCount) +
                                           " probes in one bake; 1.." +
@@ -99,16 +136,51 @@ struct ProjectModule {
     std::span<const uint32_t> spirv;
 };
 
-ProjectModule projectModule(CubemapBinding binding) {
+ProjectModule projectModule(ProbeSource source, CubemapBinding binding) {
+    const bool equirect = source == ProbeSource::Equirect;
     switch (binding) {
     case CubemapBinding::StorageRgba32F:
-        return {"project_rgba32f.comp", spirv::project_rgba32f_comp};
+        return equirect ? ProjectModule{"project_equirect_rgba32f.comp", spirv::project_equirect_rgba32f_comp}
+                        : ProjectModule{"project_rgba32f.comp", spirv::project_rgba32f_comp};
     case CubemapBinding::StorageRgba16F:
-        return {"project_rgba16f.comp", spirv::project_rgba16f_comp};
+        return equirect ? ProjectModule{"project_equirect_rgba16f.comp", spirv::project_equirect_rgba16f_comp}
+                        : ProjectModule{"project_rgba16f.comp", spirv::project_rgba16f_comp};
     case CubemapBinding::SampledImage:
         break;
     }
-    return {"project.comp", spirv::project_comp};
+    return equirect ? ProjectModule{"project_equirect.comp", spirv::project_equirect_comp}
+                    : ProjectModule{"project.comp", spirv::project_comp};
+}
+
+// The scratch buffer and descriptor sets of a bake of `groups` projection workgroups per probe.
+ProbeBakeSet createBakeSet(const Device& device, const ProbeBaker& baker, const BakeBindings& target,
+                           uint32_t groups) {
+    const int order = baker.options.order;
+    const VkDeviceSize setBytes = coefficientSetBytes(order);
+    ProbeBakeSet set;
+    set.source = baker.options.source;
+    set.groupsPerProbe = groups;
+    const VkDeviceSize partialBytes = VkDeviceSize(target.probeCount) * set.groupsPerProbe * setBytes;
+    const VkDeviceSize radianceBytes = VkDeviceSize(target.probeCount) * setBytes;
+    set.radianceOffset = alignUp(partialBytes, device.info.limits.minStorageBufferOffsetAlignment);
+    OnFailure undo([&] { destroyProbeBakeSet(device, set); });
+    set.scratch = createBuffer(device, set.radianceOffset + radianceBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                               MemoryUse::Device, "bake scratch (partial sums)");
+    const bool sampled = baker.options.cubemaps == CubemapBinding::SampledImage;
+    set.pool = createDescriptorPool(device, {.sets = 3,
+                                             .storageBuffers = 5,
+                                             .imageSamplers = sampled ? 1u : 0u,
+                                             .storageImages = sampled ? 0u : 1u});
+    const BindingTarget project[] = {{.imageView = target.source}, {set.scratch.buffer, 0, partialBytes}};
+    const BindingTarget reduce[] = {{set.scratch.buffer, 0, partialBytes},
+                                    {set.scratch.buffer, set.radianceOffset, radianceBytes}};
+    const BindingTarget convolve[] = {
+        {set.scratch.buffer, set.radianceOffset, radianceBytes},
+        {target.output, target.outputOffset, probeBakeOutputBytes(order, target.probeCount)}};
+    set.project = createDescriptorSet(device, set.pool, baker.project, project);
+    set.reduce = createDescriptorSet(device, set.pool, baker.reduce, reduce);
+    set.convolve = createDescriptorSet(device, set.pool, baker.convolve, convolve);
+    return set;
 }
 
 } // namespace
@@ -179,15 +251,17 @@ ProbeBaker createProbeBaker(const Device& device, const ProbeBakerOptions& optio
     baker.options = options;
     OnFailure undo([&] { destroyProbeBaker(device, baker); });
     if (sampled) baker.sampler = createSampler(device, VK_FILTER_NEAREST);
-    const ProjectModule module = projectModule(options.cubemaps);
+    const ProjectModule module = projectModule(options.source, options.cubemaps);
     baker.project = createComputeProgram(
-        device, {.name = module.name,
-                 .spirv = module.spirv,
-                 .bindings = sampled ? std::span(kSampledBindings) : std::span(kStorageBindings),
-                 .immutableSampler = baker.sampler,
-                 .pushConstantSize = sizeof(gpu::ProjectParams),
-                 .localSize = options.workgroupSize,
-                 .order = order});
+        device,
+        {.name = module.name,
+         .spirv = module.spirv,
+         .bindings = sampled ? std::span(kSampledBindings) : std::span(kStorageBindings),
+         .immutableSampler = baker.sampler,
+         .pushConstantSize = options.source == ProbeSource::Equirect ? uint32_t(sizeof(gpu::EquirectParams))
+                                                                     : uint32_t(sizeof(gpu::ProjectParams)),
+         .localSize = options.workgroupSize,
+         .order = order});
     // The reduction and convolution handle one value per coefficient: a small workgroup is enough.
     auto bufferProgram = [&](const char* name, std::span<const uint32_t> spirv, uint32_t pushConstantSize) {
         return createComputeProgram(device, {.name = name,
@@ -225,32 +299,28 @@ VkDeviceSize probeBakeOutputBytes(int order, uint32_t probeCount) {
 
 ProbeBakeSet createProbeBakeSet(const Device& device, const ProbeBaker& baker,
                                 const ProbeBakeTarget& target) {
-    checkTarget(device, target);
-    const int order = baker.options.order;
-    const VkDeviceSize setBytes = coefficientSetBytes(order);
-    ProbeBakeSet set;
+    const BakeBindings bindings{target.cubemaps, target.probeCount, target.output, target.outputOffset};
+    checkTarget(device, baker, ProbeSource::Cubemaps, bindings);
+    checkSize(device, "face size", target.faceSize);
+    const uint32_t groups =
+        groupsPerProbe(device, baker.options, cubemapShape(uint32_t(baker.options.order), target.faceSize),
+                       target.probeCount);
+    ProbeBakeSet set = createBakeSet(device, baker, bindings, groups);
     set.target = target;
-    set.groupsPerProbe = groupsPerProbe(device, baker.options, target.faceSize, target.probeCount);
-    const VkDeviceSize partialBytes = VkDeviceSize(target.probeCount) * set.groupsPerProbe * setBytes;
-    const VkDeviceSize radianceBytes = VkDeviceSize(target.probeCount) * setBytes;
-    set.radianceOffset = alignUp(partialBytes, device.info.limits.minStorageBufferOffsetAlignment);
-    OnFailure undo([&] { destroyProbeBakeSet(device, set); });
-    set.scratch = createBuffer(device, set.radianceOffset + radianceBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                               MemoryUse::Device, "bake scratch (partial sums)");
-    const bool sampled = baker.options.cubemaps == CubemapBinding::SampledImage;
-    set.pool = createDescriptorPool(device, {.sets = 3,
-                                             .storageBuffers = 5,
-                                             .imageSamplers = sampled ? 1u : 0u,
-                                             .storageImages = sampled ? 0u : 1u});
-    const BindingTarget project[] = {{.imageView = target.cubemaps}, {set.scratch.buffer, 0, partialBytes}};
-    const BindingTarget reduce[] = {{set.scratch.buffer, 0, partialBytes},
-                                    {set.scratch.buffer, set.radianceOffset, radianceBytes}};
-    const BindingTarget convolve[] = {
-        {set.scratch.buffer, set.radianceOffset, radianceBytes},
-        {target.output, target.outputOffset, probeBakeOutputBytes(order, target.probeCount)}};
-    set.project = createDescriptorSet(device, set.pool, baker.project, project);
-    set.reduce = createDescriptorSet(device, set.pool, baker.reduce, reduce);
-    set.convolve = createDescriptorSet(device, set.pool, baker.convolve, convolve);
+    return set;
+}
+
+ProbeBakeSet createEquirectBakeSet(const Device& device, const ProbeBaker& baker,
+                                   const EquirectBakeTarget& target) {
+    const BakeBindings bindings{target.equirects, target.probeCount, target.output, target.outputOffset};
+    checkTarget(device, baker, ProbeSource::Equirect, bindings);
+    checkSize(device, "equirect width", target.width);
+    checkSize(device, "equirect height", target.height);
+    const uint32_t groups = groupsPerProbe(
+        device, baker.options, equirectShape(uint32_t(baker.options.order), target.width, target.height),
+        target.probeCount);
+    ProbeBakeSet set = createBakeSet(device, baker, bindings, groups);
+    set.equirect = target;
     return set;
 }
 
@@ -276,10 +346,20 @@ void recordConvolutions(VkCommandBuffer commands, const ProbeBaker& baker, VkDes
 void recordProbeBake(VkCommandBuffer commands, const ProbeBaker& baker, const ProbeBakeSet& set,
                      std::span<const double> window) {
     checkWindow(baker.options.order, window); // before anything is recorded
-    const uint32_t probes = set.target.probeCount;
+    const bool equirect = set.source == ProbeSource::Equirect;
+    if (set.source != baker.options.source)
+        throw Error(ErrorKind::Input, std::string("GPU bake: a bake set of ") +
+                                          (equirect ? "equirect maps" : "cube maps") +
+                                          " recorded with a baker of the other source");
+    const uint32_t probes = equirect ? set.equirect.probeCount : set.target.probeCount;
     scratchReuseBarrier(commands);
-    dispatch(commands, baker.project, set.project, gpu::ProjectParams{set.target.faceSize},
-             {set.groupsPerProbe, probes});
+    if (equirect) {
+        dispatch(commands, baker.project, set.project,
+                 gpu::EquirectParams{set.equirect.width, set.equirect.height}, {set.groupsPerProbe, probes});
+    } else {
+        dispatch(commands, baker.project, set.project, gpu::ProjectParams{set.target.faceSize},
+                 {set.groupsPerProbe, probes});
+    }
     computeWriteBarrier(commands);
     dispatch(commands, baker.reduce, set.reduce, gpu::ReduceParams{set.groupsPerProbe},
              {uint32_t(coefficientCount(baker.options.order)), probes});

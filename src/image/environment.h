@@ -49,20 +49,21 @@ struct Environment {
     size_t replacedTexels = 0;    // non-finite texels replaced under NonFinitePolicy::Replace
 };
 
-// Reads an image file (any format OpenImageIO reads). 8-bit and 16-bit integer images are taken
-// as sRGB and decoded to linear, unless the file's colour space says linear; float images (EXR,
-// HDR) as linear. Channels are chosen by name (planChannels, image/channels.h): R, G, B (of the
+// Reads an image file: EXR, Radiance HDR, PNG and JPEG by shprobe's own readers, any other format
+// OpenImageIO reads through its plugin (image/codec.h); the format is the one the file's first
+// bytes name, whatever its extension. 8-bit and 16-bit integer images are taken as sRGB and
+// decoded to linear, unless the file's colour space says linear; float images (EXR, HDR) as
+// linear. Channels are chosen by name (planChannels, image/channels.h): R, G, B (of the
 // unprefixed layer, else of the first layer holding all three), OpenEXR's luminance/chroma Y, RY,
 // BY converted to RGB, or Y alone as grey (copied to R, G and B); only those channels are read,
 // and alpha and any further channel are ignored, never multiplied in. Texel values are kept as
 // stored: NaN and infinities are left to applyNonFinitePolicy, negative and huge finite values
 // are kept. Throws Error(Input) naming the file on any failure: "PATH: REASON" in the system's
 // words when the file cannot be opened (io/input_file.h: "permission denied", "too many levels of
-// symbolic links", ...); from the header, before OpenImageIO opens the file, when an EXR or PNG
+// symbolic links", ...); from the header, before a reader opens the file, when an EXR or PNG
 // header claims more bytes than the file holds (checkImageHeader); and from the header, before any
 // pixel is read, when the image has more than maxPixels pixels or a side longer than
-// kMaxImageSide. What the image libraries print themselves (libpng's "libpng error: ..." line)
-// does not reach stderr: their text is in the error.
+// kMaxImageSide.
 Image readImage(const std::string& path, int64_t maxPixels = kDefaultMaxImagePixels);
 
 // Resolves the six face files of a folder (px, nx, py, ny, pz, nz with any image extension) or of

@@ -1,14 +1,14 @@
-// Reading environment images through OpenImageIO and loading them as cube maps: single images
+// Reading environment images (image/codec.h) and loading them as cube maps: single images
 // (equirect or cross) and six face files. Every failure is an Error(Input) naming the file.
 #include "shprobe/image/environment.h"
 
 #include "shprobe/image/channels.h"
+#include "shprobe/image/codec.h"
+#include "shprobe/image/oiio_plugin.h"
 #include "shprobe/io/input_file.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/scope_exit.h"
 
-#include <OpenImageIO/imageio.h>
-#include <OpenImageIO/strutil.h>
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -18,102 +18,14 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <memory>
-#include <mutex>
 #include <span>
 #include <string_view>
-#include <sys/mman.h>
 #include <unistd.h>
 
 namespace shprobe {
 namespace fs = std::filesystem;
 
 namespace {
-
-// Library messages may span lines; an error is one line, so their lines are joined with "; ".
-std::string oneLine(std::string text) {
-    while (!text.empty() && text.back() == '\n')
-        text.pop_back();
-    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
-        text.replace(at, 1, "; ");
-    return text;
-}
-
-// libpng prints its errors and warnings to stderr itself ("libpng error: ..."), and OpenImageIO
-// then reports the same text as its error, which our one error line carries. While images are
-// opened and read, the process's stderr (fd 2) goes to an in-memory file; when the last read in
-// progress ends, every line printed meanwhile is passed on to the real stderr except libpng's.
-// Reads on several threads share one capture. Sanitizer builds leave stderr alone: a report must
-// reach it even if the read crashes.
-#if defined(__SANITIZE_ADDRESS__)
-#define SHPROBE_ADDRESS_SANITIZER 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SHPROBE_ADDRESS_SANITIZER 1
-#endif
-#endif
-
-class LibraryChatter {
-  public:
-    LibraryChatter() {
-#if !defined(SHPROBE_ADDRESS_SANITIZER)
-        Capture& capture = shared();
-        std::lock_guard lock(capture.mutex);
-        if (capture.readers++ == 0) capture.start();
-#endif
-    }
-    ~LibraryChatter() {
-#if !defined(SHPROBE_ADDRESS_SANITIZER)
-        Capture& capture = shared();
-        std::lock_guard lock(capture.mutex);
-        if (--capture.readers == 0) capture.stop();
-#endif
-    }
-    LibraryChatter(const LibraryChatter&) = delete;
-    LibraryChatter& operator=(const LibraryChatter&) = delete;
-
-  private:
-    struct Capture {
-        std::mutex mutex;
-        int readers = 0;
-        int file = -1;  // the in-memory file fd 2 points to
-        int saved = -1; // the real stderr
-        void start() {
-            std::fflush(stderr);
-            file = memfd_create("shprobe-image-messages", MFD_CLOEXEC);
-            saved = file >= 0 ? dup(STDERR_FILENO) : -1;
-            if (saved < 0 || dup2(file, STDERR_FILENO) < 0) release();
-        }
-        void stop() {
-            if (saved < 0) return;
-            std::fflush(stderr);
-            dup2(saved, STDERR_FILENO);
-            passOn();
-            release();
-        }
-        void passOn() const {
-            std::string text;
-            char buffer[4096];
-            ssize_t got = 0;
-            for (off_t at = 0; (got = pread(file, buffer, sizeof(buffer), at)) > 0; at += got)
-                text.append(buffer, size_t(got));
-            for (size_t start = 0; start < text.size();) {
-                size_t end = std::min(text.find('\n', start), text.size() - 1) + 1;
-                std::string_view line(text.data() + start, end - start);
-                if (!line.starts_with("libpng ")) std::fwrite(line.data(), 1, line.size(), stderr);
-                start = end;
-            }
-        }
-        void release() {
-            if (saved >= 0) close(saved);
-            if (file >= 0) close(file);
-            saved = file = -1;
-        }
-    };
-    static Capture& shared() {
-        static Capture* capture = new Capture; // never destroyed: reads may run while statics are
-        return *capture;
-    }
-};
 
 // File names of the faces in Face order (+X, -X, +Y, -Y, +Z, -Z), and the pattern placeholder.
 constexpr std::array<std::string_view, kFaceCount> kFaceNames{"px", "nx", "py", "ny", "pz", "nz"};
@@ -123,26 +35,31 @@ std::string sizeText(int width, int height) {
     return std::to_string(width) + "x" + std::to_string(height);
 }
 
-// OpenImageIO's readers allocate what a header claims before they find the file shorter (an EXR
+// Image readers allocate what a header claims before they find the file shorter (an EXR
 // attribute claiming 2 GiB, a PNG text chunk as long): the header is read within the file's size
-// first (image/channels.h).
-void checkHeaderBounds(const std::string& path) {
+// first (image/channels.h). The format is the one the file's first bytes name.
+ImageFormat checkHeaderAndFormat(const std::string& path) {
     int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
     if (fd < 0) throwInputError(path, errno);
     ScopeExit closeFile([&] { close(fd); });
     checkImageHeader(fd, path);
+    unsigned char start[16] = {};
+    const ssize_t got = pread(fd, start, sizeof start, 0);
+    return sniffImageFormat(start, size_t(std::max<ssize_t>(got, 0)));
 }
 
-std::unique_ptr<OIIO::ImageInput> openImage(const std::string& path) {
-    // Alpha is ignored, so colour must come as stored: OIIO would otherwise premultiply the
-    // unassociated alpha of PNG and similar formats into it.
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(path, &config);
-    if (!input)
-        throw Error(ErrorKind::Input,
-                    path + ": not an image OpenImageIO can read (" + oneLine(OIIO::geterror()) + ")");
-    return input;
+std::unique_ptr<ImageDecoder> openDecoder(const std::string& path, ImageFormat format) {
+    switch (format) {
+    case ImageFormat::Exr:
+        return openExrDecoder(path);
+    case ImageFormat::Hdr:
+    case ImageFormat::Png:
+    case ImageFormat::Jpeg:
+        return openStbDecoder(path, format);
+    case ImageFormat::Other:
+        break;
+    }
+    return oiioPlugin(ErrorKind::Input, path).openDecoder(path);
 }
 
 // "134217728 pixels (16384 x 8192)" for the default, the plain count for any other limit.
@@ -152,82 +69,49 @@ std::string pixelLimitText(int64_t maxPixels) {
 }
 
 // From the header alone: nothing of the size it claims has been allocated yet.
-void checkSpec(const std::string& path, const OIIO::ImageSpec& spec, int64_t maxPixels) {
-    if (spec.width < 1 || spec.height < 1)
+void checkHeader(const std::string& path, const ImageHeader& header, int64_t maxPixels) {
+    if (header.width < 1 || header.height < 1)
         throw Error(ErrorKind::Input,
-                    path + ": the image has no pixels (" + sizeText(spec.width, spec.height) + ")");
-    const int64_t pixels = int64_t(spec.width) * spec.height;
-    if (spec.width > kMaxImageSide || spec.height > kMaxImageSide)
-        throw Error(ErrorKind::Input, path + ": the image is " + sizeText(spec.width, spec.height) +
+                    path + ": the image has no pixels (" + sizeText(header.width, header.height) + ")");
+    const int64_t pixels = int64_t(header.width) * header.height;
+    if (header.width > kMaxImageSide || header.height > kMaxImageSide)
+        throw Error(ErrorKind::Input, path + ": the image is " + sizeText(header.width, header.height) +
                                           ", longer than the limit of " + std::to_string(kMaxImageSide) +
                                           " pixels per side");
     if (pixels > maxPixels)
-        throw Error(ErrorKind::Input, path + ": the image is " + sizeText(spec.width, spec.height) + " (" +
-                                          std::to_string(pixels) + " pixels), more than the limit of " +
-                                          pixelLimitText(maxPixels) + "; raise it with --max-pixels");
-    // Volume and deep images hold more than width x height values per channel.
-    if (spec.depth > 1 || spec.deep)
+        throw Error(ErrorKind::Input, path + ": the image is " + sizeText(header.width, header.height) +
+                                          " (" + std::to_string(pixels) +
+                                          " pixels), more than the limit of " + pixelLimitText(maxPixels) +
+                                          "; raise it with --max-pixels");
+    if (header.volumeOrDeep)
         throw Error(ErrorKind::Input, path + ": volume and deep images are not supported");
-    if (spec.nchannels < 1) throw Error(ErrorKind::Input, path + ": the image has no channels");
-}
-
-// Integer images are sRGB-encoded unless the file says otherwise; float images are linear.
-bool isSrgbEncoded(const OIIO::ImageSpec& spec) {
-    if (spec.format.is_floating_point()) return false;
-    std::string space = spec.get_string_attribute("oiio:ColorSpace");
-    bool linear = OIIO::Strutil::icontains(space, "linear") || OIIO::Strutil::istarts_with(space, "lin_");
-    return !linear;
-}
-
-// Reads channels [begin, end) into consecutive components of every texel from `first` on,
-// converted to float (integers normalized to [0, 1]).
-void readChannelRange(const std::string& path, OIIO::ImageInput& input, int begin, int end, float* first,
-                      int width) {
-    constexpr OIIO::stride_t texelStride = sizeof(glm::vec4);
-    if (!input.read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, first, texelStride, texelStride * width))
-        throw Error(ErrorKind::Input, path +
-                                          ": cannot read the pixels; the file may be truncated or corrupt (" +
-                                          oneLine(input.geterror()) + ")");
+    if (header.channels.empty()) throw Error(ErrorKind::Input, path + ": the image has no channels");
 }
 
 // Reads the planned channels only, straight into the RGBA texels: in one read when they lie
 // within four channels of each other (the usual R, G, B, or Y, BY, RY), else one read each.
 // Returns the texel component each planned channel landed in.
-std::array<int, 3> readPlannedChannels(const std::string& path, OIIO::ImageInput& input,
-                                       const ChannelPlan& plan, Image& image) {
+std::array<int, 3> readPlannedChannels(ImageDecoder& decoder, const ChannelPlan& plan, Image& image) {
     const auto planned = std::span(plan.channels).first(size_t(plan.count()));
     const auto [low, high] = std::minmax_element(planned.begin(), planned.end());
     const int begin = *low, end = *high + 1;
     if (end - begin <= 4) {
-        readChannelRange(path, input, begin, end, &image.texels[0].x, image.width);
+        decoder.readChannels(begin, end, &image.texels[0].x);
         return {plan.channels[0] - begin, plan.channels[1] - begin, plan.channels[2] - begin};
     }
     for (size_t i = 0; i < planned.size(); ++i)
-        readChannelRange(path, input, planned[i], planned[i] + 1, &image.texels[0][int(i)], image.width);
+        decoder.readChannels(planned[i], planned[i] + 1, &image.texels[0][int(i)]);
     return {0, 1, 2};
-}
-
-// The file's chromaticities attribute (float[8]: red, green, blue, white xy), or BT.709's.
-Chromaticities chromaticitiesOf(const OIIO::ImageSpec& spec) {
-    Chromaticities chromaticities;
-    float xy[8];
-    if (!spec.getattribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), xy))
-        return chromaticities;
-    chromaticities.red = {xy[0], xy[1]};
-    chromaticities.green = {xy[2], xy[3]};
-    chromaticities.blue = {xy[4], xy[5]};
-    chromaticities.white = {xy[6], xy[7]};
-    return chromaticities;
 }
 
 // Reads the channels the plan names and makes them RGB. The unused alpha is set to 1, as in every
 // cube map the library makes.
-Image readPixels(const std::string& path, OIIO::ImageInput& input, const OIIO::ImageSpec& spec,
-                 const ChannelPlan& plan) {
-    Image image = makeImage(spec.width, spec.height);
-    const std::array<int, 3> at = readPlannedChannels(path, input, plan, image);
+Image readPixels(const std::string& path, ImageDecoder& decoder, const ChannelPlan& plan) {
+    const ImageHeader& header = decoder.header();
+    Image image = makeImage(header.width, header.height);
+    const std::array<int, 3> at = readPlannedChannels(decoder, plan, image);
     const glm::vec3 weights = plan.meaning == ChannelMeaning::LuminanceChroma
-                                  ? luminanceWeights(chromaticitiesOf(spec), path)
+                                  ? luminanceWeights(header.chromaticities.value_or(Chromaticities{}), path)
                                   : glm::vec3(0.0f);
     for (glm::vec4& texel : image.texels) {
         glm::vec3 stored(texel[at[0]], texel[at[1]], texel[at[2]]);
@@ -373,18 +257,11 @@ Environment loadSingleImage(const std::string& path, const LoadOptions& options)
 
 Image readImage(const std::string& path, int64_t maxPixels) {
     checkInputFile(path, "an image file");
-    checkHeaderBounds(path);
-    Image image;
-    bool srgb = false;
-    {
-        LibraryChatter quiet;
-        std::unique_ptr<OIIO::ImageInput> input = openImage(path);
-        const OIIO::ImageSpec& spec = input->spec();
-        checkSpec(path, spec, maxPixels);
-        image = readPixels(path, *input, spec, planChannels(spec.channelnames, path));
-        srgb = isSrgbEncoded(spec);
-    }
-    if (srgb) decodeSrgb(image);
+    std::unique_ptr<ImageDecoder> decoder = openDecoder(path, checkHeaderAndFormat(path));
+    const ImageHeader& header = decoder->header();
+    checkHeader(path, header, maxPixels);
+    Image image = readPixels(path, *decoder, planChannels(header.channels, path));
+    if (header.srgb) decodeSrgb(image);
     return image;
 }
 

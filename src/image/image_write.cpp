@@ -1,12 +1,16 @@
-// Writing images through OpenImageIO into memory, then to the destination through OutputFile.
+// Writing images: EXR, HDR, PNG and JPEG by shprobe's own encoders (image/codec.h), other formats
+// through the OpenImageIO plugin, always into memory first, then to the destination through
+// OutputFile.
 #include "shprobe/image/image_write.h"
 
+#include "shprobe/image/codec.h"
+#include "shprobe/image/oiio_plugin.h"
 #include "shprobe/io/output_file.h"
 #include "shprobe/sh/error.h"
 
-#include <OpenImageIO/imageio.h>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace shprobe {
 namespace {
@@ -24,38 +28,57 @@ Image srgbEncoded(const Image& image) {
     return encoded;
 }
 
+// 8-bit values of encoded floats, rounded to nearest, as a float-to-uint8 conversion stores them.
+std::vector<uint8_t> toBytes(const Image& encoded) {
+    std::vector<uint8_t> bytes(encoded.texels.size() * 4);
+    for (size_t i = 0; i < encoded.texels.size(); ++i)
+        for (int c = 0; c < 4; ++c)
+            bytes[4 * i + size_t(c)] = uint8_t(std::clamp(encoded.texels[i][c], 0.0f, 1.0f) * 255.0f + 0.5f);
+    return bytes;
+}
+
 [[noreturn]] void failWrite(const std::string& destination, const std::string& why) {
     throw Error(ErrorKind::Output, "cannot write " + destination + ": " + why);
 }
 
-// Encodes with OpenImageIO into a MemoryFile, then writes its bytes to the destination. The
-// OutputFile exists first, so that a run interrupted while encoding removes its temporary file.
-// writePixels(output, format) writes the pixels; `format` is the file's pixel type.
-template <typename WritePixels>
-std::string encodeInMemory(const std::string& destination, const std::string& format,
-                           const OIIO::ImageSpec& spec, WritePixels writePixels) {
-    MemoryFile memory;
-    std::unique_ptr<OIIO::ImageOutput> output =
-        OIIO::ImageOutput::create(format.empty() ? destination : format);
-    if (!output) failWrite(destination, "no image format for this extension (" + OIIO::geterror() + ")");
-    if (!output->open(memory.path(), spec)) failWrite(destination, output->geterror());
-    if (!writePixels(*output, output->spec().format)) failWrite(destination, output->geterror());
-    if (!output->close()) failWrite(destination, output->geterror());
-    return memory.contents();
+FloatPixels rgbOf(const Image& image) {
+    return {image.width, image.height, 3, 4, &image.texels[0].x};
 }
 
-template <typename WritePixels>
-void encodeImage(const std::string& destination, const std::string& format, const OIIO::ImageSpec& spec,
-                 WritePixels writePixels) {
-    OutputFile file(destination, OutputContent::Binary);
-    file.write(encodeInMemory(destination, format, spec, writePixels));
+// The bytes of the file in a native format, or an empty optional for OpenImageIO's formats.
+std::optional<std::string> encodeNatively(ImageFormat format, const BytePixels& pixels,
+                                          const std::string& what) {
+    switch (format) {
+    case ImageFormat::Png:
+        return encodePng(pixels, what);
+    case ImageFormat::Jpeg:
+        return encodeJpeg(pixels, what);
+    default:
+        return std::nullopt;
+    }
+}
+
+// Through the plugin: OpenImageIO writes into a MemoryFile. The OutputFile exists first, so that a
+// run interrupted while encoding removes its temporary file.
+void writeThroughOiio(OiioImageRequest request) {
+    const OiioPlugin& plugin = oiioPlugin(ErrorKind::Output, "cannot write " + request.destination);
+    OutputFile file(request.destination, OutputContent::Binary);
+    MemoryFile memory;
+    request.memoryPath = memory.path();
+    plugin.encode(request);
+    file.write(memory.contents());
     file.commit();
 }
 
-bool writeTexels(OIIO::ImageOutput& output, const Image& image) {
-    constexpr OIIO::stride_t texelStride = sizeof(glm::vec4);
-    return output.write_image(OIIO::TypeDesc::FLOAT, image.texels.data(), texelStride,
-                              texelStride * image.width);
+void writeBytes(const std::string& path, const std::string& contents) {
+    OutputFile file(path, OutputContent::Binary);
+    file.write(contents);
+    file.commit();
+}
+
+ImageFormat formatOf(const std::string& path, const std::string& format) {
+    if (format == "openexr") return ImageFormat::Exr;
+    return format.empty() ? imageFormatOfName(path) : ImageFormat::Other;
 }
 
 } // namespace
@@ -63,35 +86,52 @@ bool writeTexels(OIIO::ImageOutput& output, const Image& image) {
 void writeImage(const std::string& path, const Image& image, const std::string& format) {
     if (image.width < 1 || image.height < 1 || image.texels.size() != size_t(image.width) * image.height)
         failWrite(path, "the image has no pixels or a wrong texel count");
-    OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
-    encodeImage(path, format, spec, [&](OIIO::ImageOutput& output, OIIO::TypeDesc stored) {
-        // The format may store integers (PNG, JPEG...): those hold sRGB, which readImage decodes.
-        // OIIO converts our floats to the file's type.
-        return stored.is_floating_point() ? writeTexels(output, image)
-                                          : writeTexels(output, srgbEncoded(image));
-    });
+    const ImageFormat kind = formatOf(path, format);
+    if (kind == ImageFormat::Exr) return writeBytes(path, encodeExr(rgbOf(image), path));
+    if (kind == ImageFormat::Hdr) return writeBytes(path, encodeHdr(rgbOf(image), path));
+    if (kind == ImageFormat::Png || kind == ImageFormat::Jpeg) {
+        // Integer formats hold sRGB, which readImage decodes.
+        const std::vector<uint8_t> bytes = toBytes(srgbEncoded(image));
+        return writeBytes(path, *encodeNatively(kind, {image.width, image.height, 3, 4, bytes.data()}, path));
+    }
+    Image encoded;
+    writeThroughOiio({.destination = path,
+                      .format = format,
+                      .width = image.width,
+                      .height = image.height,
+                      .floats = [&](bool storesFloats) {
+                          if (storesFloats) return rgbOf(image);
+                          encoded = srgbEncoded(image);
+                          return rgbOf(encoded);
+                      }});
 }
 
 std::string encodeRgba8(const std::string& format, int width, int height, const std::vector<uint8_t>& rgba) {
     const std::string what = "a " + format + " image";
     if (width < 1 || height < 1 || rgba.size() != size_t(width) * size_t(height) * 4)
         failWrite(what, "the image has no pixels or a wrong byte count");
-    OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:UnassociatedAlpha", 1); // the bytes as they are: alpha is not multiplied in
-    return encodeInMemory(what, format, spec, [&](OIIO::ImageOutput& output, OIIO::TypeDesc) {
-        return output.write_image(OIIO::TypeDesc::UINT8, rgba.data());
-    });
+    const BytePixels pixels{width, height, 4, 4, rgba.data()};
+    if (std::optional<std::string> bytes = encodeNatively(imageFormatOfName("." + format), pixels, what))
+        return *bytes;
+    const OiioPlugin& plugin = oiioPlugin(ErrorKind::Output, "cannot write " + what);
+    MemoryFile memory;
+    plugin.encode({.destination = what,
+                   .format = format,
+                   .memoryPath = memory.path(),
+                   .width = width,
+                   .height = height,
+                   .channels = 4,
+                   .bytes = &pixels});
+    return memory.contents();
 }
 
 void writeSrgbImage(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba) {
     if (width < 1 || height < 1 || rgba.size() != size_t(width) * size_t(height) * 4)
         failWrite(path, "the image has no pixels or a wrong byte count");
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", "sRGB");
-    encodeImage(path, "", spec, [&](OIIO::ImageOutput& output, OIIO::TypeDesc) {
-        // Alpha is dropped: 4-byte pixel stride over 3 channels.
-        return output.write_image(OIIO::TypeDesc::UINT8, rgba.data(), 4, OIIO::stride_t(width) * 4);
-    });
+    const BytePixels pixels{width, height, 3, 4, rgba.data()}; // alpha dropped: 4-byte pixel stride
+    if (std::optional<std::string> bytes = encodeNatively(imageFormatOfName(path), pixels, path))
+        return writeBytes(path, *bytes);
+    writeThroughOiio({.destination = path, .width = width, .height = height, .bytes = &pixels});
 }
 
 } // namespace shprobe

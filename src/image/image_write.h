@@ -1,5 +1,6 @@
-// Writing images through OpenImageIO. The encoded file goes to the destination through
-// OutputFile (io/output_file.h): whole or not at all, every write checked.
+// Writing images: EXR, HDR, PNG and JPEG by shprobe's own encoders, other formats through the
+// OpenImageIO plugin (image/codec.h). The encoded file goes to the destination through OutputFile
+// (io/output_file.h): whole or not at all, every write checked.
 #pragma once
 #include "shprobe/sh/cubemap.h"
 
@@ -9,8 +10,8 @@
 
 namespace shprobe {
 
-// Writes a linear float image; the format is OpenImageIO's format name `format` ("openexr"), or,
-// when empty, follows the extension (EXR keeps floats; integer formats such as PNG get the sRGB
+// Writes a linear float image; the format is OpenImageIO's format name `format` ("openexr", "tiff"),
+// or, when empty, follows the extension (EXR keeps floats; integer formats such as PNG get the sRGB
 // encoding that readImage decodes). Throws Error(Output) naming the file on failure, leaving no
 // partial file.
 void writeImage(const std::string& path, const Image& image, const std::string& format = "");

@@ -26,7 +26,6 @@ std::vector<uint8_t> packTexels(const Cubemap& cubemap, VkFormat format) {
         std::memcpy(bytes.data(), cubemap.texels.data(), bytes.size());
         return bytes;
     }
-    constexpr float kHalfMax = 65504.0f;
     std::vector<uint8_t> bytes(count * sizeof(uint64_t));
     for (size_t i = 0; i < count; ++i) {
         glm::vec4 texel(glm::clamp(glm::vec3(cubemap.texels[i]), -kHalfMax, kHalfMax), 1.0f);

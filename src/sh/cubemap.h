@@ -18,6 +18,8 @@ enum class TexelFormat { Rgba32F, Rgba16F };
 constexpr size_t texelBytes(TexelFormat format) {
     return format == TexelFormat::Rgba16F ? 8 : 16;
 }
+// The largest finite half float (IEEE 754 binary16): RGBA16F holds values within +-kHalfMax.
+constexpr float kHalfMax = 65504.0f;
 
 // Six N x N faces, face after face in Face order, rows top to bottom, RGBA32F (alpha unused).
 // This is also the layout the GPU projection reads.

@@ -1,6 +1,6 @@
-// Fast float projection of cube maps onto SH (fast_projection.h). The sums are the reference's
-// (projection.cpp), L_lm = sum L(w) y_lm(w) Omega, rearranged so that little more than the
-// multiply-adds remains per texel:
+// Fast float projection of cube maps and equirect maps onto SH (fast_projection.h). The sums are the
+// reference's (projection.cpp), L_lm = sum L(w) y_lm(w) Omega, rearranged so that little more than
+// the multiply-adds remains per texel. Cube maps:
 //
 // 1. One grid for six faces. Face f's unit direction at face-local (a, b) is P_f v, with
 //    v = (a, b, 1) / sqrt(a^2 + b^2 + 1) and P_f the signed permutation of orientToFace
@@ -20,11 +20,31 @@
 //    over each texel's four channels, serves both.
 // 4. Memory. The texels are asked for (prefetched) in memory order one face ahead, because the
 //    mirror images are read from both ends of two rows at once (see NextRows).
-// 5. Precision. Sums run in float along one row of positions (at most N/4 terms per lane), then
-//    in double across rows and faces.
-// 6. Threads. The rows are split into blocks fixed by the face size alone; each block's double sums
+// 5. Precision. Sums run in float along one row of positions (at most N/4 terms per lane, W/4 for
+//    an equirect map), then in double across rows and faces.
+// 6. Threads. The rows are split into blocks fixed by the input's size alone; each block's double sums
 //    are kept apart and the blocks are added in index order, so the result does not depend on the
 //    number of threads nor on which thread ran which block.
+//
+// Equirect maps (W x H, docs/conventions.md) go through the same rows, lanes, stages, blocks and
+// threads, as one face of W x H texels whose table serves every row:
+//
+// 7. Frame. The direction of pixel (i, j) is P v with v = (sin theta cos phi, sin theta sin phi,
+//    cos theta), theta = pi (j + 0.5) / H, phi = 2 pi (i + 0.5) / W - pi, and P a fixed reflection
+//    (kEquirectOrientation), turned into the world as a face's frame is (1.).
+// 8. Separation (the azimuthal Fourier transform first, then the Legendre transform, as in Driscoll
+//    and Healy, "Computing Fourier Transforms and Convolutions on the 2-Sphere", 1994). In the frame,
+//    y_l,m(v) = y_l,|m|(theta, 0) cos(m phi) for m >= 0 and y_l,|m|(theta, 0) sin(|m| phi) for m < 0,
+//    and every pixel of row j has the exact solid angle Omega_j = (2 pi / W)(cos theta_j -
+//    cos theta_j+1). So a row needs only its Fourier sums C_m = sum_i L cos(m phi_i) and
+//    S_m = sum_i L sin(m phi_i), m < n (2n - 1 of them), in float along the row; then, in double,
+//    T_l,m += Omega_j y_l,m(theta_j, 0) C_m and T_l,-m += Omega_j y_l,m(theta_j, 0) S_m. The table
+//    holds cos(m phi_i) and sin(m phi_i), the same for every row.
+// 9. Mirror symmetry. Column W-1-i has phi -> -phi (cosines even, sines odd), row H-1-j has
+//    theta -> pi - theta, under which y_l,m(theta, 0) takes the sign (-1)^(l+m) (P_l^m(-z) =
+//    (-1)^(l+m) P_l^m(z)). The four parity sums of a position serve as for a face: each Fourier sum
+//    is taken twice, with the radiance even and odd under the row mirror, 2 (2n - 1) multiply-adds per
+//    four texels (30 at order 8, against 64 for a face's position).
 #include "fast_projection.h"
 
 #include "basis.h"
@@ -44,6 +64,7 @@
 #include <memory>
 #include <new>
 #include <numbers>
+#include <span>
 #include <string>
 #include <thread>
 #include <utility>
@@ -218,10 +239,11 @@ bool processorHasF16c() {
 #endif
 
 // ------------------------------------------------------------------------------------------------
-// The plan: everything fixed by the input, its face size and the order, read by all threads.
+// The plan: everything fixed by the input, its size and the order, read by all threads.
 //
-// A position (i, j) stands for the four texels (i, j), (N-1-i, j), (i, N-1-j), (N-1-i, N-1-j) of a
-// face, for i, j < (N+1)/2 (face-local a, b <= 0). Two positions share lanes as a "pair".
+// A position (i, j) stands for the four texels (i, j), (W-1-i, j), (i, H-1-j), (W-1-i, H-1-j) of a
+// W x H face (a cube map's N x N; face-local a, b <= 0) or equirect map, for i < (W+1)/2 and
+// j < (H+1)/2. Two positions share lanes as a "pair".
 
 // Table lanes per pair: four coefficients at the pair's two positions per lanes.
 constexpr int tableLanesPerPair(int coefficients) {
@@ -235,26 +257,33 @@ constexpr int kMaxBlocks = 64;
 struct Plan {
     const std::byte* texels;
     size_t texelBytes;
-    int faceSize;
+    int width;  // texels per row: N for cube maps, whose faces are square
+    int height; // rows per face
+    int faces;  // kFaceCount, or 1 for an equirect map
     int order;
     int coefficients; // order^2
-    int positions;    // positions per row, also rows of positions: (N + 1) / 2
+    int positions;    // positions per row: (W + 1) / 2
+    int rows;         // rows of positions: (H + 1) / 2
     int pairs;        // pairs per row: ceil(positions / 2)
     int tablePairs;   // pairs rounded up to a multiple of 4 (the table is built 8 positions at a time)
+    int rowSums;      // lanes of float sums per face along a row (CubeTerms, EquirectTerms)
     int blockRows;    // rows of positions per block (the last block may hold fewer)
     int blocks;
     std::array<float, coefficientCount(kMaxOrder)> normalization; // of the recurrence's Y_lm
+    const Lanes* sharedTable = nullptr; // equirect maps: the table, the same for every row
 
     const std::byte* rowTexels(int face, int row) const {
-        return texels + (size_t(face) * size_t(faceSize) + size_t(row)) * size_t(faceSize) * texelBytes;
+        return texels + (size_t(face) * size_t(height) + size_t(row)) * size_t(width) * texelBytes;
     }
 
-    // Weight factor of column (or row) i of the positions: 1/2 where it is its own mirror image
-    // (the middle of an odd face), 0 beyond the positions (lanes past the end of a row).
-    float mirrorFactor(int i) const {
+    // Weight factor of column i of the positions: 1/2 where it is its own mirror image (the middle
+    // column of an odd width), 0 beyond the positions (lanes past the end of a row).
+    float columnFactor(int i) const {
         if (i >= positions) return 0.0f;
-        return i == faceSize - 1 - i ? 0.5f : 1.0f;
+        return i == width - 1 - i ? 0.5f : 1.0f;
     }
+    // The same for row j of the positions (the middle row of an odd height).
+    float rowFactor(int j) const { return j == height - 1 - j ? 0.5f : 1.0f; }
 };
 
 // y_lm = recurrence Y_lm times recurrenceNormalization(l, m) (basis.h), in float.
@@ -271,19 +300,25 @@ std::array<float, coefficientCount(kMaxOrder)> floatRecurrenceNormalization(int 
 // sums (4 lanes each, 8 KiB) stay in the L1 cache for the groups after the first.
 constexpr int kStagePairs = 64;
 
-Plan makePlan(const void* texels, TexelFormat format, int faceSize, int order) {
+// rowSums: lanes of float sums per face along a row (the Terms' kCount for this order).
+Plan makePlan(const void* texels, TexelFormat format, int width, int height, int faces, int order,
+              int rowSums) {
     Plan plan{};
     plan.texels = static_cast<const std::byte*>(texels);
     plan.texelBytes =
         format == TexelFormat::Rgba32F ? Rgba32FTexels::kTexelBytes : Rgba16FTexels::kTexelBytes;
-    plan.faceSize = faceSize;
+    plan.width = width;
+    plan.height = height;
+    plan.faces = faces;
     plan.order = order;
     plan.coefficients = coefficientCount(order);
-    plan.positions = (faceSize + 1) / 2;
+    plan.positions = (width + 1) / 2;
+    plan.rows = (height + 1) / 2;
     plan.pairs = (plan.positions + 1) / 2;
     plan.tablePairs = (plan.pairs + 3) / 4 * 4;
-    plan.blockRows = (plan.positions + kMaxBlocks - 1) / kMaxBlocks;
-    plan.blocks = (plan.positions + plan.blockRows - 1) / plan.blockRows;
+    plan.rowSums = rowSums;
+    plan.blockRows = (plan.rows + kMaxBlocks - 1) / kMaxBlocks;
+    plan.blocks = (plan.rows + plan.blockRows - 1) / plan.blockRows;
     plan.normalization = floatRecurrenceNormalization(order);
     return plan;
 }
@@ -310,11 +345,11 @@ Lanes expandedSolidAngles(const Lanes& inverseLength, int faceSize) {
 // Solid angles of the texels of columns i0 .. i0+7 in a row. Below kMinExpandedFaceSize, the
 // shaders' formula (texelSolidAngleFp32 of texel_geometry.h) texel by texel: a few thousand calls at most.
 Lanes texelSolidAngles(const Plan& plan, int firstColumn, int row, const Lanes& inverseLength) {
-    if (plan.faceSize >= kMinExpandedFaceSize) return expandedSolidAngles(inverseLength, plan.faceSize);
+    if (plan.width >= kMinExpandedFaceSize) return expandedSolidAngles(inverseLength, plan.width);
     Lanes solidAngles;
     for (int lane = 0; lane < kLaneCount; ++lane) {
         solidAngles[lane] =
-            gpu::texelSolidAngleFp32(gpu::uint(firstColumn + lane), gpu::uint(row), gpu::uint(plan.faceSize));
+            gpu::texelSolidAngleFp32(gpu::uint(firstColumn + lane), gpu::uint(row), gpu::uint(plan.width));
     }
     return solidAngles;
 }
@@ -339,10 +374,10 @@ Lanes centerCoords(int firstColumn, int faceSize) {
 // Mirror factors of columns i0 .. i0+7: all 1 but near the end of a row.
 Lanes columnFactors(const Plan& plan, int firstColumn) {
     const int lastColumn = firstColumn + kLaneCount - 1;
-    if (lastColumn < plan.positions && lastColumn < plan.faceSize - 1 - lastColumn) return splat(1.0f);
+    if (lastColumn < plan.positions && lastColumn < plan.width - 1 - lastColumn) return splat(1.0f);
     Lanes factors;
     for (int lane = 0; lane < kLaneCount; ++lane)
-        factors[lane] = plan.mirrorFactor(firstColumn + lane);
+        factors[lane] = plan.columnFactor(firstColumn + lane);
     return factors;
 }
 
@@ -371,11 +406,11 @@ void writeTableEntries(const Lanes& w0, const Lanes& w1, const Lanes& w2, const 
 // times instead, ready to multiply, makes a table four times as large, out of the L1 cache.)
 template <int Order> void fillBasisTable(const Plan& plan, int row, Lanes* table) {
     constexpr int count = Order * Order;
-    const float b = gpu::texelCenterCoord(gpu::uint(row), gpu::uint(plan.faceSize));
-    const float rowFactor = plan.mirrorFactor(row);
+    const float b = gpu::texelCenterCoord(gpu::uint(row), gpu::uint(plan.width));
+    const float rowFactor = plan.rowFactor(row);
     for (int group = 0; group < plan.pairs; group += kLaneCount / 2) {
         const int firstColumn = 2 * group;
-        const Lanes a = centerCoords(firstColumn, plan.faceSize);
+        const Lanes a = centerCoords(firstColumn, plan.width);
         const Lanes inverseLength = 1.0f / laneSqrt(a * a + (b * b + 1.0f));
         const Lanes weight = texelSolidAngles(plan, firstColumn, row, inverseLength) *
                              columnFactors(plan, firstColumn) * rowFactor;
@@ -417,16 +452,16 @@ void writeParitySums(const Lanes& texel, const Lanes& mirroredA, const Lanes& mi
     sums[3] = oddInX - oddInXMirroredB;
 }
 
-// The texels of one face at a row of positions: row j ("near") and its mirror row N-1-j ("far").
+// The texels of one face at a row of positions: row j ("near") and its mirror row H-1-j ("far").
 struct RowPair {
     const std::byte* near;
     const std::byte* far;
-    int faceSize;
+    int width;
     int completePairs; // pairs holding two positions; with an odd number of positions the last holds one
 };
 
 RowPair rowPair(const Plan& plan, int face, int row) {
-    return {plan.rowTexels(face, row), plan.rowTexels(face, plan.faceSize - 1 - row), plan.faceSize,
+    return {plan.rowTexels(face, row), plan.rowTexels(face, plan.height - 1 - row), plan.width,
             plan.positions / 2};
 }
 
@@ -444,11 +479,11 @@ struct NextRows {
 };
 
 NextRows nextRows(const Plan& plan, int face, int row, int lastRow) {
-    const int nextFace = (face + 1) % kFaceCount;
+    const int nextFace = (face + 1) % plan.faces;
     const int nextRow = nextFace == 0 ? row + 1 : row;
     if (nextRow >= lastRow) return {};
     const RowPair rows = rowPair(plan, nextFace, nextRow);
-    return {rows.near, rows.far, size_t(plan.faceSize) * plan.texelBytes, plan.pairs};
+    return {rows.near, rows.far, size_t(plan.width) * plan.texelBytes, plan.pairs};
 }
 
 // Asks for the share of the next rows that goes with pair p: at most 64 bytes (one cache line) of
@@ -459,36 +494,58 @@ void prefetchShare(const NextRows& next, int pair) {
     __builtin_prefetch(next.far + (next.rowBytes - 1 - offset), 0, 2);
 }
 
-// The parity sums of a pair of positions (i, i+1). Their mirror columns N-1-i, N-2-i are adjacent
+// The parity sums of a pair of positions (i, i+1). Their mirror columns W-1-i, W-2-i are adjacent
 // too, loaded together and swapped into the pair's order.
 template <class Texels> void loadParitySums(const RowPair& rows, int pair, Lanes* sums) {
     const size_t column = size_t(2 * pair) * Texels::kTexelBytes;
     if (pair < rows.completePairs) {
-        const size_t mirror = size_t(rows.faceSize - 2 - 2 * pair) * Texels::kTexelBytes;
+        const size_t mirror = size_t(rows.width - 2 - 2 * pair) * Texels::kTexelBytes;
         writeParitySums(Texels::loadTwo(rows.near + column), swapTexels(Texels::loadTwo(rows.near + mirror)),
                         Texels::loadTwo(rows.far + column), swapTexels(Texels::loadTwo(rows.far + mirror)),
                         sums);
     } else {
-        const size_t mirror = size_t(rows.faceSize - 1 - 2 * pair) * Texels::kTexelBytes;
+        const size_t mirror = size_t(rows.width - 1 - 2 * pair) * Texels::kTexelBytes;
         writeParitySums(Texels::loadOne(rows.near + column), Texels::loadOne(rows.near + mirror),
                         Texels::loadOne(rows.far + column), Texels::loadOne(rows.far + mirror), sums);
     }
 }
 
-// sums[k] += parity sum of y_k's class * table entry k, over `pairCount` pairs, for the coefficients
+// What the float sums along a row are, per face: kCount sums, sum q the multiply-adds of table entry
+// entry(q) with the parity sums of class parity(q); the table holds kTableEntries values per
+// position. Cube maps: the frame sums T_k of the coefficients themselves, from Omega y_k.
+template <int Order> struct CubeTerms {
+    static constexpr int kTableEntries = Order * Order;
+    static constexpr int kCount = Order * Order;
+    static constexpr int entry(int q) { return q; }
+    static constexpr int parity(int q) { return parityClass(q); }
+};
+
+// Equirect maps (top of the file): the table holds cos(m phi), m = 0 .. Order-1, then sin(m phi),
+// m = 1 .. Order-1; cosines are even under the column mirror (phi -> -phi), sines odd. Each entry
+// takes two sums, q = 2e for the radiance even under the row mirror (theta -> pi - theta) and
+// q = 2e + 1 for the odd one, side by side so that a group spreads each entry once.
+template <int Order> struct EquirectTerms {
+    static constexpr int kTableEntries = 2 * Order - 1;
+    static constexpr int kCount = 2 * kTableEntries;
+    static constexpr int entry(int q) { return q / 2; }
+    static constexpr int parity(int q) { return int(q / 2 >= Order) | (q % 2) << 1; }
+};
+
+// sums[q] += parity sum of term q's class * its table entry, over `pairCount` pairs, for the terms
 // First .. First+Count-1; paritySumsOf(p, local) points to pair p's four parity sums (in `local` or
-// elsewhere). Unrolled at compile time, so that each coefficient's parity class is a constant and
-// the accumulators stay in registers.
-template <int Order, int First, int Count, class ParitySums>
+// elsewhere). Unrolled at compile time, so that each term's parity class and table entry are
+// constants and the accumulators stay in registers.
+template <class Terms, int First, int Count, class ParitySums>
 void accumulateCoefficients(const ParitySums& paritySumsOf, const Lanes* table, int pairCount, Lanes* sums) {
     [&]<int... q>(std::integer_sequence<int, q...>) {
         Lanes accumulators[Count] = {sums[First + q]...};
         for (int p = 0; p < pairCount; ++p) {
             Lanes local[kParities];
             const Lanes* parity = paritySumsOf(p, local);
-            const Lanes* weights = table + size_t(p) * tableLanesPerPair(Order * Order);
+            const Lanes* weights = table + size_t(p) * tableLanesPerPair(Terms::kTableEntries);
             ((accumulators[q] +=
-              parity[parityClass(First + q)] * spreadCoefficient<(First + q) % 4>(weights[(First + q) / 4])),
+              parity[Terms::parity(First + q)] *
+              spreadCoefficient<Terms::entry(First + q) % 4>(weights[Terms::entry(First + q) / 4])),
              ...);
         }
         ((sums[First + q] = accumulators[q]), ...);
@@ -496,20 +553,20 @@ void accumulateCoefficients(const ParitySums& paritySumsOf, const Lanes* table, 
     (std::make_integer_sequence<int, Count>{});
 }
 
-// Coefficients per group: as many as fit the 16 vector registers of AVX2 next to the four parity
-// sums and a table entry and its spread value (at most 10), in groups of nearly equal size.
-constexpr int groupSize(int coefficients) {
-    const int groups = (coefficients + 9) / 10;
-    return (coefficients + groups - 1) / groups;
+// Terms per group: as many as fit the 16 vector registers of AVX2 next to the four parity sums and a
+// table entry and its spread value (at most 10), in groups of nearly equal size.
+constexpr int groupSize(int terms) {
+    const int groups = (terms + 9) / 10;
+    return (terms + groups - 1) / groups;
 }
 
-// All coefficients of a stage of pairs of one face, group after group. The first group reads the
-// texels, so that its arithmetic overlaps the loads from memory, and keeps their parity sums for
-// the other groups.
-template <int Order, class Texels>
+// All terms of a stage of pairs of one face, group after group. The first group reads the texels, so
+// that its arithmetic overlaps the loads from memory, and keeps their parity sums for the other
+// groups.
+template <class Terms, class Texels>
 void accumulateStage(const RowPair& rows, const NextRows& next, int firstPair, int pairCount,
                      const Lanes* table, Lanes* kept, Lanes* sums) {
-    constexpr int count = Order * Order;
+    constexpr int count = Terms::kCount;
     constexpr int group = groupSize(count);
     constexpr int groups = (count + group - 1) / group;
     const auto fromTexels = [&](int p, Lanes* local) {
@@ -519,9 +576,9 @@ void accumulateStage(const RowPair& rows, const NextRows& next, int firstPair, i
         return parity;
     };
     const auto fromKept = [&](int p, Lanes*) { return kept + kParities * p; };
-    accumulateCoefficients<Order, 0, group>(fromTexels, table, pairCount, sums);
+    accumulateCoefficients<Terms, 0, group>(fromTexels, table, pairCount, sums);
     [&]<int... g>(std::integer_sequence<int, g...>) {
-        (accumulateCoefficients<Order, (g + 1) * group, std::min(group, count - (g + 1) * group)>(
+        (accumulateCoefficients<Terms, (g + 1) * group, std::min(group, count - (g + 1) * group)>(
              fromKept, table, pairCount, sums),
          ...);
     }
@@ -533,20 +590,35 @@ void accumulateStage(const RowPair& rows, const NextRows& next, int firstPair, i
 
 // Per-thread working memory, allocated before the threads start.
 struct Scratch {
-    LaneArray table;      // tablePairs x tableLanesPerPair(order^2)
+    LaneArray table;      // cube maps: tablePairs x tableLanesPerPair(order^2), refilled per row
     LaneArray paritySums; // kStagePairs x 4
-    LaneArray rowSums;    // 6 faces x order^2, float sums of the current row
+    LaneArray rowSums;    // faces x rowSums, the float sums of the current row
 };
 
 Scratch makeScratch(const Plan& plan) {
-    return Scratch{makeLaneArray(size_t(plan.tablePairs) * size_t(tableLanesPerPair(plan.coefficients))),
-                   makeLaneArray(kStagePairs * kParities),
-                   makeLaneArray(size_t(kFaceCount) * size_t(plan.coefficients))};
+    const size_t tableLanes = plan.sharedTable != nullptr
+                                  ? 0
+                                  : size_t(plan.tablePairs) * size_t(tableLanesPerPair(plan.coefficients));
+    return Scratch{makeLaneArray(tableLanes), makeLaneArray(kStagePairs * kParities),
+                   makeLaneArray(size_t(plan.faces) * size_t(plan.rowSums))};
 }
 
 // Double sums, per face, coefficient and RGB channel, of one block of rows.
 size_t blockSumsSize(const Plan& plan) {
-    return size_t(kFaceCount) * size_t(plan.coefficients) * 3;
+    return size_t(plan.faces) * size_t(plan.coefficients) * 3;
+}
+
+// The float sums of one face along a row of positions, stage by stage; table: the row's.
+template <class Terms, class Texels>
+void accumulateRow(const Plan& plan, int face, int row, int lastRow, const Lanes* table, Scratch& scratch,
+                   Lanes* sums) {
+    const RowPair rows = rowPair(plan, face, row);
+    const NextRows next = nextRows(plan, face, row, lastRow);
+    for (int stage = 0; stage < plan.pairs; stage += kStagePairs) {
+        accumulateStage<Terms, Texels>(rows, next, stage, std::min(kStagePairs, plan.pairs - stage),
+                                       table + size_t(stage) * tableLanesPerPair(Terms::kTableEntries),
+                                       scratch.paritySums.get(), sums);
+    }
 }
 
 // Adds a row's float sums (two texels' RGBA per entry) to the block's double sums.
@@ -557,48 +629,80 @@ void addRowSums(const Plan& plan, const Lanes* rowSums, double* blockSums) {
     }
 }
 
-// One row of positions: its table, then the six faces along it.
-template <int Order, class Texels>
-void projectRow(const Plan& plan, int row, int lastRow, Scratch& scratch, double* blockSums) {
-    constexpr int count = Order * Order;
-    std::fill_n(scratch.rowSums.get(), kFaceCount * count, Lanes{});
-    fillBasisTable<Order>(plan, row, scratch.table.get());
-    for (int face = 0; face < kFaceCount; ++face) {
-        const RowPair rows = rowPair(plan, face, row);
-        const NextRows next = nextRows(plan, face, row, lastRow);
-        for (int stage = 0; stage < plan.pairs; stage += kStagePairs) {
-            accumulateStage<Order, Texels>(rows, next, stage, std::min(kStagePairs, plan.pairs - stage),
-                                           scratch.table.get() + size_t(stage) * tableLanesPerPair(count),
-                                           scratch.paritySums.get(), scratch.rowSums.get() + face * count);
+// Cube maps: one row of positions, its table, then the six faces along it.
+struct CubeRows {
+    template <int Order, class Texels>
+    static void project(const Plan& plan, int row, int lastRow, Scratch& scratch, double* blockSums) {
+        using Terms = CubeTerms<Order>;
+        std::fill_n(scratch.rowSums.get(), kFaceCount * Terms::kCount, Lanes{});
+        fillBasisTable<Order>(plan, row, scratch.table.get());
+        for (int face = 0; face < kFaceCount; ++face) {
+            accumulateRow<Terms, Texels>(plan, face, row, lastRow, scratch.table.get(), scratch,
+                                         scratch.rowSums.get() + face * Terms::kCount);
+        }
+        addRowSums(plan, scratch.rowSums.get(), blockSums);
+    }
+};
+
+// Adds an equirect row's Fourier sums (EquirectTerms) to the block's frame sums (top of the file):
+// T_l,m += Omega_j y_l,m(theta_j, 0) C_m and T_l,-m += Omega_j y_l,m(theta_j, 0) S_m, with the row
+// mirror's even sums where l + m is even and its odd sums where it is odd.
+void addEquirectRowSums(const Plan& plan, int row, const Lanes* rowSums, double* blockSums) {
+    const double theta = std::numbers::pi * (row + 0.5) / plan.height;
+    std::array<double, coefficientCount(kMaxOrder)> basis{};
+    evalBasis(plan.order, {std::sin(theta), 0.0, std::cos(theta)}, basis);
+    const double weight = equirectRowSolidAngle(row, plan.width, plan.height) * plan.rowFactor(row);
+    for (int l = 0; l < plan.order; ++l) {
+        for (int m = 0; m <= l; ++m) {
+            const double factor = weight * basis[size_t(shIndex(l, m))];
+            const Lanes& cosine = rowSums[2 * m + (l + m) % 2];
+            const Lanes& sine = rowSums[2 * (plan.order - 1 + m) + (l + m) % 2];
+            for (int c = 0; c < 3; ++c) {
+                blockSums[3 * size_t(shIndex(l, m)) + size_t(c)] +=
+                    factor * (double(cosine[c]) + double(cosine[kChannels + c]));
+                if (m > 0)
+                    blockSums[3 * size_t(shIndex(l, -m)) + size_t(c)] +=
+                        factor * (double(sine[c]) + double(sine[kChannels + c]));
+            }
         }
     }
-    addRowSums(plan, scratch.rowSums.get(), blockSums);
 }
+
+// Equirect maps: one row of positions along the shared table.
+struct EquirectRows {
+    template <int Order, class Texels>
+    static void project(const Plan& plan, int row, int lastRow, Scratch& scratch, double* blockSums) {
+        using Terms = EquirectTerms<Order>;
+        std::fill_n(scratch.rowSums.get(), Terms::kCount, Lanes{});
+        accumulateRow<Terms, Texels>(plan, 0, row, lastRow, plan.sharedTable, scratch, scratch.rowSums.get());
+        addEquirectRowSums(plan, row, scratch.rowSums.get(), blockSums);
+    }
+};
 
 // The rows of a block, in order (the texels of each row are asked for while the one before is
 // multiplied).
-template <int Order, class Texels>
+template <class Rows, int Order, class Texels>
 SHPROBE_KERNEL void projectBlock(const Plan& plan, int block, Scratch& scratch, double* blockSums) {
-    const int lastRow = std::min(plan.positions, (block + 1) * plan.blockRows);
+    const int lastRow = std::min(plan.rows, (block + 1) * plan.blockRows);
     for (int row = block * plan.blockRows; row < lastRow; ++row)
-        projectRow<Order, Texels>(plan, row, lastRow, scratch, blockSums);
+        Rows::template project<Order, Texels>(plan, row, lastRow, scratch, blockSums);
 }
 
 using BlockKernel = void (*)(const Plan&, int, Scratch&, double*);
 
-template <class Texels, int... orderMinusOne>
+template <class Rows, class Texels, int... orderMinusOne>
 BlockKernel blockKernelOf(int order, std::integer_sequence<int, orderMinusOne...>) {
-    const BlockKernel kernels[] = {&projectBlock<orderMinusOne + 1, Texels>...};
+    const BlockKernel kernels[] = {&projectBlock<Rows, orderMinusOne + 1, Texels>...};
     return kernels[order - 1];
 }
 
-BlockKernel blockKernel(TexelFormat format, int order) {
+template <class Rows> BlockKernel blockKernel(TexelFormat format, int order) {
     const auto orders = std::make_integer_sequence<int, kMaxOrder>{};
-    if (format == TexelFormat::Rgba32F) return blockKernelOf<Rgba32FTexels>(order, orders);
+    if (format == TexelFormat::Rgba32F) return blockKernelOf<Rows, Rgba32FTexels>(order, orders);
 #if SHPROBE_X86_CLONES
-    if (processorHasF16c()) return blockKernelOf<Rgba16FTexelsF16c>(order, orders);
+    if (processorHasF16c()) return blockKernelOf<Rows, Rgba16FTexelsF16c>(order, orders);
 #endif
-    return blockKernelOf<Rgba16FTexels>(order, orders);
+    return blockKernelOf<Rows, Rgba16FTexels>(order, orders);
 }
 
 // Runs every block on `threads` threads, the caller's among them; each takes the next block not yet
@@ -622,7 +726,26 @@ std::vector<double> projectBlocks(const Plan& plan, BlockKernel kernel, unsigned
 }
 
 // ------------------------------------------------------------------------------------------------
-// From the faces' frames to the world.
+// The equirect map's table, and from the frames to the world.
+
+// The table of an equirect map, the same for every row: for each pair of positions, cos(m phi) for
+// m < order, then sin(m phi) for 1 <= m < order, at its two columns (phi = 2 pi (i + 0.5) / W - pi),
+// times their column factors, in fillBasisTable's layout. Evaluated in double and rounded once.
+LaneArray makeEquirectTable(const Plan& plan) {
+    const int entries = 2 * plan.order - 1;
+    const int lanesPerPair = tableLanesPerPair(entries);
+    LaneArray table = makeLaneArray(size_t(plan.pairs) * size_t(lanesPerPair));
+    for (int i = 0; i < 2 * plan.pairs; ++i) {
+        const double phi = 2.0 * std::numbers::pi * (i + 0.5) / plan.width - std::numbers::pi;
+        const double factor = plan.columnFactor(i);
+        Lanes* pair = table.get() + size_t(i / 2) * size_t(lanesPerPair);
+        for (int e = 0; e < entries; ++e) {
+            const double value = e < plan.order ? std::cos(e * phi) : std::sin((e - plan.order + 1) * phi);
+            pair[e / 4][kChannels * (i % 2) + e % 4] = float(factor * value);
+        }
+    }
+    return table;
+}
 
 // P_f, the signed permutation taking face f's frame (a, b, 1) to the world (orientToFace).
 glm::dmat3 faceOrientation(int face) {
@@ -632,19 +755,27 @@ glm::dmat3 faceOrientation(int face) {
     return glm::dmat3(column({1.0f, 0.0f, 0.0f}), column({0.0f, 1.0f, 0.0f}), column({0.0f, 0.0f, 1.0f}));
 }
 
-// World coefficients of one face's frame sums T: D(Q_f) (-1)^l T with Q_f = -P_f (top of the file).
-ShCoefficients faceToWorld(int face, ShCoefficients frameSums) {
+// The equirect map's frame (top of the file): v = (sin theta cos phi, sin theta sin phi, cos theta)
+// is the world's (v_y, v_z, -v_x) (docs/conventions.md), a reflection like every P_f.
+const glm::dmat3 kEquirectOrientation(glm::dvec3(0.0, 0.0, -1.0), glm::dvec3(1.0, 0.0, 0.0),
+                                      glm::dvec3(0.0, 1.0, 0.0));
+
+// World coefficients of frame sums T in the frame P (a reflection, det P = -1): D(Q) (-1)^l T with
+// Q = -P (top of the file).
+ShCoefficients frameToWorld(const glm::dmat3& orientation, ShCoefficients frameSums) {
     for (int l = 1; l < frameSums.order; l += 2) {
         for (int m = -l; m <= l; ++m)
             frameSums.rgb[size_t(shIndex(l, m))] *= -1.0;
     }
-    return rotate(makeShRotation(-faceOrientation(face), frameSums.order), frameSums);
+    return rotate(makeShRotation(-orientation, frameSums.order), frameSums);
 }
 
-// The blocks' sums added in block order, per face, then turned into the world and added.
-ShCoefficients combineBlocks(const Plan& plan, const std::vector<double>& blockSums) {
+// The blocks' sums added in block order, per face, then turned into the world and added; face f's
+// frame is orientations[f].
+ShCoefficients combineBlocks(const Plan& plan, const std::vector<double>& blockSums,
+                             std::span<const glm::dmat3> orientations) {
     ShCoefficients world = makeCoefficients(plan.order, Quantity::Radiance);
-    for (int face = 0; face < kFaceCount; ++face) {
+    for (int face = 0; face < plan.faces; ++face) {
         ShCoefficients frameSums = makeCoefficients(plan.order, Quantity::Radiance);
         for (int block = 0; block < plan.blocks; ++block) {
             const double* sums = blockSums.data() + size_t(block) * blockSumsSize(plan) +
@@ -652,16 +783,14 @@ ShCoefficients combineBlocks(const Plan& plan, const std::vector<double>& blockS
             for (int k = 0; k < plan.coefficients; ++k)
                 frameSums.rgb[size_t(k)] += glm::dvec3(sums[3 * k], sums[3 * k + 1], sums[3 * k + 2]);
         }
-        const ShCoefficients faceWorld = faceToWorld(face, frameSums);
+        const ShCoefficients faceWorld = frameToWorld(orientations[size_t(face)], frameSums);
         for (int k = 0; k < plan.coefficients; ++k)
             world.rgb[size_t(k)] += faceWorld.rgb[size_t(k)];
     }
     return world;
 }
 
-void requireProjectable(const void* texels, int faceSize, int order) {
-    if (faceSize < 1)
-        throw Error(ErrorKind::Input, "cube-map face size must be positive, got " + std::to_string(faceSize));
+void requireProjectable(const void* texels, int order) {
     if (order < 1 || order > kMaxOrder) {
         throw Error(ErrorKind::Input,
                     "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
@@ -674,32 +803,74 @@ constexpr size_t kTexelsPerThread = size_t(1) << 17;
 
 // The threads asked for, or all cores but no more than the work is worth; never more than blocks.
 unsigned threadCount(const FastProjectionOptions& options, const Plan& plan) {
-    const size_t texels = size_t(kFaceCount) * size_t(plan.faceSize) * size_t(plan.faceSize);
+    const size_t texels = size_t(plan.faces) * size_t(plan.width) * size_t(plan.height);
     const size_t worth = std::max<size_t>(1, texels / kTexelsPerThread);
     const size_t wanted =
         options.threads != 0 ? options.threads : std::min<size_t>(std::thread::hardware_concurrency(), worth);
     return unsigned(std::clamp<size_t>(wanted, 1, size_t(plan.blocks)));
 }
 
+// Term counts by order, for the plan (the kernels know theirs at compile time).
+template <template <int> class Terms, int... orderMinusOne>
+int termCount(int order, std::integer_sequence<int, orderMinusOne...>) {
+    const int counts[] = {Terms<orderMinusOne + 1>::kCount...};
+    return counts[order - 1];
+}
+
+void requireTexelCount(size_t actual, size_t expected, const char* what) {
+    if (actual != expected) {
+        throw Error(ErrorKind::Input, std::string(what) + " holds " + std::to_string(actual) +
+                                          " texels, expected " + std::to_string(expected));
+    }
+}
+
 } // namespace
 
 ShCoefficients projectFacesFast(const void* texels, TexelFormat format, int faceSize, int order,
                                 const FastProjectionOptions& options) {
-    requireProjectable(texels, faceSize, order);
-    const Plan plan = makePlan(texels, format, faceSize, order);
-    return combineBlocks(plan, projectBlocks(plan, blockKernel(format, order), threadCount(options, plan)));
+    if (faceSize < 1)
+        throw Error(ErrorKind::Input, "cube-map face size must be positive, got " + std::to_string(faceSize));
+    requireProjectable(texels, order);
+    const Plan plan = makePlan(texels, format, faceSize, faceSize, kFaceCount, order,
+                               termCount<CubeTerms>(order, std::make_integer_sequence<int, kMaxOrder>{}));
+    std::array<glm::dmat3, kFaceCount> orientations;
+    for (int face = 0; face < kFaceCount; ++face)
+        orientations[size_t(face)] = faceOrientation(face);
+    return combineBlocks(
+        plan, projectBlocks(plan, blockKernel<CubeRows>(format, order), threadCount(options, plan)),
+        orientations);
 }
 
 ShCoefficients projectCubemapFast(const Cubemap& cubemap, int order, const FastProjectionOptions& options) {
     static_assert(sizeof(glm::vec4) == Rgba32FTexels::kTexelBytes,
                   "Cubemap texels are tightly packed RGBA32F");
-    const size_t expected =
-        size_t(kFaceCount) * size_t(std::max(cubemap.faceSize, 0)) * size_t(std::max(cubemap.faceSize, 0));
-    if (cubemap.texels.size() != expected) {
-        throw Error(ErrorKind::Input, "cube map holds " + std::to_string(cubemap.texels.size()) +
-                                          " texels, expected " + std::to_string(expected));
-    }
+    const size_t side = size_t(std::max(cubemap.faceSize, 0));
+    requireTexelCount(cubemap.texels.size(), size_t(kFaceCount) * side * side, "cube map");
     return projectFacesFast(cubemap.texels.data(), TexelFormat::Rgba32F, cubemap.faceSize, order, options);
+}
+
+ShCoefficients projectEquirectFast(const void* texels, TexelFormat format, int width, int height, int order,
+                                   const FastProjectionOptions& options) {
+    if (width < 1 || height < 1) {
+        throw Error(ErrorKind::Input, "equirect map size must be positive, got " + std::to_string(width) +
+                                          "x" + std::to_string(height));
+    }
+    requireProjectable(texels, order);
+    Plan plan = makePlan(texels, format, width, height, 1, order,
+                         termCount<EquirectTerms>(order, std::make_integer_sequence<int, kMaxOrder>{}));
+    const LaneArray table = makeEquirectTable(plan);
+    plan.sharedTable = table.get();
+    return combineBlocks(
+        plan, projectBlocks(plan, blockKernel<EquirectRows>(format, order), threadCount(options, plan)),
+        std::span(&kEquirectOrientation, 1));
+}
+
+ShCoefficients projectEquirectFast(const Image& equirect, int order, const FastProjectionOptions& options) {
+    requireTexelCount(equirect.texels.size(),
+                      size_t(std::max(equirect.width, 0)) * size_t(std::max(equirect.height, 0)),
+                      "equirect map");
+    return projectEquirectFast(equirect.texels.data(), TexelFormat::Rgba32F, equirect.width, equirect.height,
+                               order, options);
 }
 
 } // namespace shprobe

@@ -1,7 +1,8 @@
-// Fast projection of cube maps onto SH on the CPU: the sums of projectCubemap (projection.h), in
-// float on SIMD lanes and on all cores, for when speed matters and the double reference is not
-// asked for. Accuracy: within about 1e-6 of |L_00| of the reference at 6 x 2048^2 (float sums per
-// row, double across rows). The result is bit-identical for every thread count.
+// Fast projection of cube maps and equirect maps onto SH on the CPU: the sums of projectCubemap and
+// projectEquirect (projection.h), in float on SIMD lanes and on all cores, for when speed matters and
+// the double reference is not asked for. Accuracy: within about 1e-6 of |L_00| of the reference at
+// 6 x 2048^2 (float sums per row, double across rows), and so for equirect maps (measured in
+// docs/gpu-path.md). The result is bit-identical for every thread count.
 #pragma once
 #include "coefficients.h"
 #include "cubemap.h"
@@ -20,5 +21,15 @@ ShCoefficients projectFacesFast(const void* texels, TexelFormat format, int face
 // The same for a Cubemap; also throws Error(Input) if its texel count disagrees with its face size.
 ShCoefficients projectCubemapFast(const Cubemap& cubemap, int order,
                                   const FastProjectionOptions& options = {});
+
+// Radiance coefficients of an equirect map (docs/conventions.md, "Equirectangular maps"): texels are
+// width x height, rows top to bottom, RGBA; each pixel weighted by the exact solid angle of its row,
+// (2 pi / W)(cos theta_j - cos theta_j+1), as projectEquirect does. Throws Error(Input) for a size
+// below 1, an order out of range or no texels.
+ShCoefficients projectEquirectFast(const void* texels, TexelFormat format, int width, int height, int order,
+                                   const FastProjectionOptions& options = {});
+// The same for an Image; also throws Error(Input) if its texel count disagrees with its size.
+ShCoefficients projectEquirectFast(const Image& equirect, int order,
+                                   const FastProjectionOptions& options = {});
 
 } // namespace shprobe

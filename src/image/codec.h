@@ -1,0 +1,81 @@
+// Image codecs behind readImage and the image writers (image/environment.h, image/image_write.h).
+// EXR (OpenEXR), Radiance HDR, PNG and JPEG (stb_image, stb_image_write) are read and written by
+// small libraries linked into shprobe; any other format goes through OpenImageIO, which is loaded
+// only when such a file is met (image/oiio_plugin.h): a command that reads or writes none of them
+// does not pay for OpenImageIO's start-up and its hundreds of shared libraries.
+#pragma once
+#include "shprobe/image/channels.h"
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace shprobe {
+
+// What a decoder knows from the header, before any pixel is read.
+struct ImageHeader {
+    int width = 0;
+    int height = 0;
+    bool volumeOrDeep = false;                    // more than width x height values per channel
+    std::vector<std::string> channels;            // channel names, in OpenImageIO 2.4's order (planChannels)
+    bool srgb = false;                            // integer data that is sRGB-encoded (float data is linear)
+    std::optional<Chromaticities> chromaticities; // the file's own, if it states them
+};
+
+// An open image file. Errors are Error(Input) naming the file:
+//   "PATH: not an image <library> can read (REASON)"                    opening, header
+//   "PATH: cannot read the pixels; the file may be truncated or corrupt (REASON)"   pixels
+class ImageDecoder {
+  public:
+    virtual ~ImageDecoder() = default;
+    const ImageHeader& header() const { return header_; }
+    // Channels [begin, end) of every pixel, converted to float (integers normalized to [0, 1]),
+    // into consecutive floats from `first` on: pixel (x, y)'s channel begin + c lands at
+    // first[4 (y width + x) + c] (the RGBA texels of an Image). Called once per image, or once per
+    // planned channel when they lie apart.
+    virtual void readChannels(int begin, int end, float* first) = 0;
+
+  protected:
+    ImageHeader header_;
+};
+
+// The image formats shprobe reads and writes itself; Other: OpenImageIO's.
+enum class ImageFormat { Exr, Hdr, Png, Jpeg, Other };
+
+// From the file's first bytes (magic numbers), whatever its name.
+ImageFormat sniffImageFormat(const unsigned char* bytes, size_t count);
+// From an output name's extension (case-insensitive): .exr, .hdr, .png, .jpg/.jpeg; else Other.
+ImageFormat imageFormatOfName(const std::string& path);
+
+// Native decoders (exr_codec.cpp, stb_codec.cpp). `path` names a regular file already checked
+// by readImage (checkInputFile, checkImageHeader).
+std::unique_ptr<ImageDecoder> openExrDecoder(const std::string& path);
+std::unique_ptr<ImageDecoder> openStbDecoder(const std::string& path, ImageFormat format); // Hdr, Png, Jpeg
+
+// Pixels to encode: rows top down, `channels` interleaved values per pixel, `pixelStride` values
+// from one pixel to the next (4 for RGBA texels of which 3 channels are written).
+struct FloatPixels {
+    int width = 0;
+    int height = 0;
+    int channels = 3;
+    int pixelStride = 4;
+    const float* data = nullptr; // linear values
+};
+struct BytePixels {
+    int width = 0;
+    int height = 0;
+    int channels = 3; // 3: RGB, 4: RGBA (alpha unassociated, written as it is)
+    int pixelStride = 4;
+    const uint8_t* data = nullptr; // already sRGB-encoded (or data, for RGBA)
+};
+
+// The file's bytes. EXR: 32-bit floats, ZIP compression, scanlines; HDR: RGBE; PNG and JPEG
+// (quality 95): 8 bits per channel. Errors: Error(Output) "cannot write WHAT: REASON".
+std::string encodeExr(const FloatPixels& pixels, const std::string& what);
+std::string encodeHdr(const FloatPixels& pixels, const std::string& what);
+std::string encodePng(const BytePixels& pixels, const std::string& what);
+std::string encodeJpeg(const BytePixels& pixels, const std::string& what);
+
+} // namespace shprobe

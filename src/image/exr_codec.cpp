@@ -1,0 +1,273 @@
+// OpenEXR files read and written with the OpenEXR library itself (image/codec.h): the first part
+// of a file, scanline or tiled (its base level), as OpenImageIO read it, and 32-bit float RGB
+// files written into memory.
+#include "shprobe/image/codec.h"
+
+#include "shprobe/sh/error.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfChromaticitiesAttribute.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIO.h>
+#include <OpenEXR/ImfInputPart.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfThreading.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cstring>
+#include <exception>
+#include <mutex>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+namespace shprobe {
+
+namespace {
+
+// Library messages may span lines; an error is one line, so their lines are joined with "; ".
+std::string oneLine(std::string text) {
+    while (!text.empty() && text.back() == '\n')
+        text.pop_back();
+    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
+        text.replace(at, 1, "; ");
+    return text;
+}
+
+// OpenEXR decodes and encodes the chunks of a file (16 scanlines each with ZIP, 32 with PIZ and
+// DWAA, 256 with DWAB) on its global thread pool, which has no thread until it is given some:
+// here one per core, set once, before the first file is opened or written (test_codecs times
+// both ways on blender-data's files).
+void startThreadPool() {
+    static std::once_flag once;
+    std::call_once(once,
+                   [] { Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency()))); });
+}
+
+bool iequals(std::string_view a, std::string_view b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+               return std::tolower(static_cast<unsigned char>(x)) ==
+                      std::tolower(static_cast<unsigned char>(y));
+           });
+}
+
+// The order in which OpenImageIO 2.4 presents an OpenEXR file's channels (its exrinput.cpp,
+// "sorting into canonical order"), kept so that the channels planChannels sees, and so the plans,
+// are those of before: by layer (the name up to its last '.'), then within a layer the reserved
+// names in this order, then the others by name. A layer holding X and Y or Z (positions, normals)
+// puts X, Y, Z after B instead of Y after B. The file itself holds them sorted by full name, which
+// would, for one, make OpenImageIO's two-channel R, G (grey and alpha) G, R.
+struct ChannelName {
+    std::string name;
+    size_t layerLength = 0; // of the layer: the name up to and with its last '.', or 0
+    int rank = 10000;       // index among the reserved names; others last
+
+    std::string_view layer() const { return std::string_view(name).substr(0, layerLength); }
+    std::string_view suffix() const { return std::string_view(name).substr(layerLength); }
+};
+
+constexpr std::array<std::string_view, 20> kReservedNames{
+    "R",     "Red", "G",  "Green", "B",  "Blue", "Y",  "real", "imag",  "A",
+    "Alpha", "AR",  "RA", "AG",    "GA", "AB",   "BA", "Z",    "Depth", "Zback"};
+constexpr std::array<std::string_view, 21> kReservedNamesXyz{
+    "R", "Red",   "G",  "Green", "B",  "Blue", "X",  "Y",  "Z",     "real", "imag",
+    "A", "Alpha", "AR", "RA",    "AG", "GA",   "AB", "BA", "Depth", "Zback"};
+
+template <size_t N> int rankAmong(std::string_view suffix, const std::array<std::string_view, N>& names) {
+    for (size_t i = 0; i < N; ++i)
+        if (iequals(suffix, names[i])) return int(i);
+    return 10000;
+}
+
+std::vector<std::string> channelsInOpenImageIoOrder(const Imf::ChannelList& list) {
+    std::vector<ChannelName> channels;
+    for (auto channel = list.begin(); channel != list.end(); ++channel) {
+        std::string name = channel.name();
+        size_t dot = name.rfind('.');
+        channels.push_back({name, dot == std::string::npos ? 0 : dot + 1, 10000});
+    }
+    std::stable_sort(channels.begin(), channels.end(),
+                     [](const ChannelName& a, const ChannelName& b) { return a.layer() < b.layer(); });
+    for (auto begin = channels.begin(); begin != channels.end();) {
+        auto end = std::find_if(begin, channels.end(),
+                                [&](const ChannelName& c) { return c.layer() != begin->layer(); });
+        auto has = [&](std::string_view suffix) {
+            return std::any_of(begin, end, [&](const ChannelName& c) { return iequals(c.suffix(), suffix); });
+        };
+        const bool xyz = has("X") && (has("Y") || has("Z"));
+        for (auto channel = begin; channel != end; ++channel)
+            channel->rank = xyz ? rankAmong(channel->suffix(), kReservedNamesXyz)
+                                : rankAmong(channel->suffix(), kReservedNames);
+        std::sort(begin, end, [](const ChannelName& a, const ChannelName& b) {
+            return a.rank != b.rank ? a.rank < b.rank : a.suffix() < b.suffix();
+        });
+        begin = end;
+    }
+    std::vector<std::string> names;
+    for (ChannelName& channel : channels)
+        names.push_back(std::move(channel.name));
+    return names;
+}
+
+// A name as it may appear in a one-line message: control bytes become '?'.
+std::string printable(std::string text) {
+    for (char& c : text)
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+    return text;
+}
+
+glm::dvec2 xy(const Imath::V2f& v) {
+    return {double(v.x), double(v.y)};
+}
+
+class ExrDecoder final : public ImageDecoder {
+  public:
+    explicit ExrDecoder(const std::string& path) : path_(path) {
+        startThreadPool();
+        try {
+            file_ = std::make_unique<Imf::MultiPartInputFile>(path.c_str(), Imf::globalThreadCount());
+            const Imf::Header& header = file_->header(0);
+            const Imath::Box2i window = header.dataWindow();
+            dataWindow_ = window;
+            header_.width = int(std::min<int64_t>(int64_t(window.max.x) - window.min.x + 1, INT32_MAX));
+            header_.height = int(std::min<int64_t>(int64_t(window.max.y) - window.min.y + 1, INT32_MAX));
+            header_.volumeOrDeep = header.hasType() && Imf::isDeepData(header.type());
+            header_.channels = channelsInOpenImageIoOrder(header.channels());
+            header_.srgb = false; // OpenEXR holds linear values; OpenImageIO named them "Linear"
+            if (const auto* attribute =
+                    header.findTypedAttribute<Imf::ChromaticitiesAttribute>("chromaticities")) {
+                const Imf::Chromaticities& c = attribute->value();
+                header_.chromaticities = Chromaticities{xy(c.red), xy(c.green), xy(c.blue), xy(c.white)};
+            }
+            for (auto channel = header.channels().begin(); channel != header.channels().end(); ++channel)
+                if (channel.channel().xSampling != 1 || channel.channel().ySampling != 1)
+                    throw Error(ErrorKind::Input,
+                                path + ": channel " + printable(channel.name()) + " is subsampled (" +
+                                    std::to_string(channel.channel().xSampling) + " x " +
+                                    std::to_string(channel.channel().ySampling) +
+                                    "), which OpenImageIO cannot read; store the image at full resolution");
+            if (!header_.volumeOrDeep) part_ = std::make_unique<Imf::InputPart>(*file_, 0);
+        } catch (const Error&) {
+            throw;
+        } catch (const std::exception& error) {
+            throw Error(ErrorKind::Input,
+                        path + ": not an image OpenEXR can read (" + oneLine(error.what()) + ")");
+        }
+    }
+
+    void readChannels(int begin, int end, float* first) override {
+        if (!part_) throw Error(ErrorKind::Input, path_ + ": deep images are not supported");
+        if (begin < 0 || end > int(header_.channels.size()) || begin >= end || end - begin > 4)
+            throw Error(ErrorKind::Input, path_ + ": no channels " + std::to_string(begin) + " to " +
+                                              std::to_string(end) + " to read");
+        try {
+            const Imf::ChannelList& list = part_->header().channels();
+            constexpr size_t kTexel = 4 * sizeof(float);
+            const size_t row = kTexel * size_t(header_.width);
+            Imf::FrameBuffer frame;
+            std::vector<float*> unsignedChannels;
+            for (int c = begin; c < end; ++c) {
+                const std::string& name = header_.channels[size_t(c)];
+                float* at = first + (c - begin);
+                // Unsigned integers land as they are and are normalized below, as OpenImageIO did
+                // (OpenEXR itself would convert them to float unscaled).
+                const bool isUnsigned = list.findChannel(name)->type == Imf::UINT;
+                if (isUnsigned) unsignedChannels.push_back(at);
+                frame.insert(name, Imf::Slice::Make(isUnsigned ? Imf::UINT : Imf::FLOAT, at, dataWindow_,
+                                                    kTexel, row));
+            }
+            part_->setFrameBuffer(frame);
+            part_->readPixels(dataWindow_.min.y, dataWindow_.max.y);
+            const size_t texels = size_t(header_.width) * size_t(header_.height);
+            for (float* at : unsignedChannels)
+                for (size_t t = 0; t < texels; ++t) {
+                    uint32_t value;
+                    std::memcpy(&value, at + 4 * t, sizeof value);
+                    at[4 * t] = float(value) * (1.0f / 4294967295.0f); // as OpenImageIO's convert_type
+                }
+        } catch (const std::exception& error) {
+            throw Error(ErrorKind::Input,
+                        path_ + ": cannot read the pixels; the file may be truncated or corrupt (" +
+                            oneLine(error.what()) + ")");
+        }
+    }
+
+  private:
+    std::string path_;
+    std::unique_ptr<Imf::MultiPartInputFile> file_;
+    std::unique_ptr<Imf::InputPart> part_;
+    Imath::Box2i dataWindow_;
+};
+
+// An output stream into a string; OpenEXR seeks back to fill in the offset table at the end.
+class StringStream final : public Imf::OStream {
+  public:
+    explicit StringStream(std::string& bytes) : Imf::OStream("memory"), bytes_(bytes) {}
+    void write(const char c[], int n) override {
+        if (n <= 0) return;
+        if (position_ + uint64_t(n) > bytes_.size()) bytes_.resize(size_t(position_) + size_t(n));
+        std::memcpy(bytes_.data() + position_, c, size_t(n));
+        position_ += uint64_t(n);
+    }
+    uint64_t tellp() override { return position_; }
+    void seekp(uint64_t position) override { position_ = position; }
+
+  private:
+    std::string& bytes_;
+    uint64_t position_ = 0;
+};
+
+void checkPixels(const FloatPixels& pixels, const std::string& what) {
+    auto fail = [&](const std::string& reason) {
+        throw Error(ErrorKind::Output, "cannot write " + what + ": " + reason);
+    };
+    if (pixels.width < 1 || pixels.height < 1)
+        fail("the image has no pixels (" + std::to_string(pixels.width) + "x" +
+             std::to_string(pixels.height) + ")");
+    if (pixels.channels < 1 || pixels.channels > 4 || pixels.pixelStride < pixels.channels)
+        fail(std::to_string(pixels.channels) + " channels every " + std::to_string(pixels.pixelStride) +
+             " values cannot be written");
+    if (!pixels.data) fail("no pixels given");
+}
+
+} // namespace
+
+std::unique_ptr<ImageDecoder> openExrDecoder(const std::string& path) {
+    return std::make_unique<ExrDecoder>(path);
+}
+
+std::string encodeExr(const FloatPixels& pixels, const std::string& what) {
+    checkPixels(pixels, what);
+    startThreadPool();
+    // The channel names OpenImageIO gave 1 to 4 channels: Y; Y, A; R, G, B; R, G, B, A.
+    static const std::array<std::vector<const char*>, 4> kNames{
+        {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}}};
+    const std::vector<const char*>& names = kNames[size_t(pixels.channels - 1)];
+    std::string bytes;
+    try {
+        Imf::Header header(pixels.width, pixels.height, 1.0f, Imath::V2f(0, 0), 1.0f, Imf::INCREASING_Y,
+                           Imf::ZIP_COMPRESSION);
+        for (const char* name : names)
+            header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+        StringStream stream(bytes);
+        Imf::OutputFile file(stream, header, Imf::globalThreadCount());
+        const size_t texel = sizeof(float) * size_t(pixels.pixelStride);
+        Imf::FrameBuffer frame;
+        for (size_t c = 0; c < names.size(); ++c)
+            frame.insert(names[c],
+                         Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(pixels.data + c)),
+                                    texel, texel * size_t(pixels.width)));
+        file.setFrameBuffer(frame);
+        file.writePixels(pixels.height);
+    } catch (const std::exception& error) {
+        throw Error(ErrorKind::Output, "cannot write " + what + ": " + oneLine(error.what()));
+    }
+    return bytes;
+}
+
+} // namespace shprobe

@@ -1,0 +1,114 @@
+// The OpenImageIO plugin (image/oiio_plugin.h): a decoder and an encoder over OpenImageIO, built
+// as libshprobe_oiio.so and loaded only for the formats shprobe does not handle itself. It uses
+// nothing of the shprobe libraries but their headers, so that it loads into a program that links
+// them statically as well as shared.
+#include "shprobe/image/oiio_plugin.h"
+
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+
+namespace shprobe {
+namespace {
+
+// Library messages may span lines; an error is one line, so their lines are joined with "; ".
+std::string oneLine(std::string text) {
+    while (!text.empty() && text.back() == '\n')
+        text.pop_back();
+    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
+        text.replace(at, 1, "; ");
+    return text;
+}
+
+// Integer images are sRGB-encoded unless the file says otherwise; float images are linear.
+bool isSrgbEncoded(const OIIO::ImageSpec& spec) {
+    if (spec.format.is_floating_point()) return false;
+    std::string space = spec.get_string_attribute("oiio:ColorSpace");
+    bool linear = OIIO::Strutil::icontains(space, "linear") || OIIO::Strutil::istarts_with(space, "lin_");
+    return !linear;
+}
+
+// The file's chromaticities attribute (float[8]: red, green, blue, white xy), if it has one.
+std::optional<Chromaticities> chromaticitiesOf(const OIIO::ImageSpec& spec) {
+    float xy[8];
+    if (!spec.getattribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), xy))
+        return std::nullopt;
+    return Chromaticities{{xy[0], xy[1]}, {xy[2], xy[3]}, {xy[4], xy[5]}, {xy[6], xy[7]}};
+}
+
+class OiioDecoder : public ImageDecoder {
+  public:
+    explicit OiioDecoder(const std::string& path) : path_(path) {
+        // Alpha is ignored, so colour must come as stored: OIIO would otherwise premultiply the
+        // unassociated alpha of Targa and similar formats into it.
+        OIIO::ImageSpec config;
+        config.attribute("oiio:UnassociatedAlpha", 1);
+        input_ = OIIO::ImageInput::open(path, &config);
+        if (!input_)
+            throw Error(ErrorKind::Input,
+                        path + ": not an image OpenImageIO can read (" + oneLine(OIIO::geterror()) + ")");
+        const OIIO::ImageSpec& spec = input_->spec();
+        header_.width = spec.width;
+        header_.height = spec.height;
+        header_.volumeOrDeep = spec.depth > 1 || spec.deep;
+        header_.channels = spec.channelnames;
+        header_.srgb = isSrgbEncoded(spec);
+        header_.chromaticities = chromaticitiesOf(spec);
+    }
+
+    void readChannels(int begin, int end, float* first) override {
+        constexpr OIIO::stride_t texelStride = 4 * sizeof(float);
+        if (!input_->read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, first, texelStride,
+                                texelStride * header_.width))
+            throw Error(ErrorKind::Input,
+                        path_ + ": cannot read the pixels; the file may be truncated or corrupt (" +
+                            oneLine(input_->geterror()) + ")");
+    }
+
+  private:
+    std::string path_;
+    std::unique_ptr<OIIO::ImageInput> input_;
+};
+
+std::unique_ptr<ImageDecoder> openDecoder(const std::string& path) {
+    return std::make_unique<OiioDecoder>(path);
+}
+
+[[noreturn]] void failWrite(const std::string& destination, const std::string& why) {
+    throw Error(ErrorKind::Output, "cannot write " + destination + ": " + why);
+}
+
+bool writePixels(OIIO::ImageOutput& output, const OiioImageRequest& request) {
+    if (request.bytes) {
+        const BytePixels& pixels = *request.bytes;
+        const OIIO::stride_t stride = pixels.pixelStride;
+        return output.write_image(OIIO::TypeDesc::UINT8, pixels.data, stride, stride * pixels.width);
+    }
+    const FloatPixels pixels = request.floats(output.spec().format.is_floating_point());
+    const OIIO::stride_t stride = OIIO::stride_t(pixels.pixelStride * sizeof(float));
+    return output.write_image(OIIO::TypeDesc::FLOAT, pixels.data, stride, stride * pixels.width);
+}
+
+void encode(const OiioImageRequest& request) {
+    const std::string& destination = request.destination;
+    std::unique_ptr<OIIO::ImageOutput> output =
+        OIIO::ImageOutput::create(request.format.empty() ? destination : request.format);
+    if (!output) failWrite(destination, "no image format for this extension (" + OIIO::geterror() + ")");
+    OIIO::ImageSpec spec(request.width, request.height, request.channels,
+                         request.bytes ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
+    if (request.bytes) {
+        spec.attribute("oiio:UnassociatedAlpha", 1); // the bytes as they are
+        if (request.channels == 3) spec.attribute("oiio:ColorSpace", "sRGB");
+    }
+    if (!output->open(request.memoryPath, spec)) failWrite(destination, output->geterror());
+    if (!writePixels(*output, request)) failWrite(destination, output->geterror());
+    if (!output->close()) failWrite(destination, output->geterror());
+}
+
+constexpr OiioPlugin kPlugin{openDecoder, encode};
+
+} // namespace
+} // namespace shprobe
+
+extern "C" __attribute__((visibility("default"))) const shprobe::OiioPlugin* shprobe_oiio_plugin_v1() {
+    return &shprobe::kPlugin;
+}
