@@ -135,8 +135,8 @@ function(shprobe_imported_location out target)
     message(FATAL_ERROR "cmake/Install.cmake: no file to link for ${target}")
 endfunction()
 
-# The shared library files of an imported target and of the imported shared targets it links,
-# depth first; empty when one of them is not a shared library (its own config must be found then).
+# The shared library files of an imported target and of the imported targets it links, in the
+# order met; empty when one of them is a static library (its own config must be found then).
 function(shprobe_shared_files out target)
     set(files "")
     set(pending ${target})
@@ -148,7 +148,7 @@ function(shprobe_shared_files out target)
         endif()
         list(APPEND seen ${item})
         get_target_property(type ${item} TYPE)
-        if(type STREQUAL "SHARED_LIBRARY")
+        if(type MATCHES "^(SHARED|UNKNOWN)_LIBRARY$") # UNKNOWN: found by a find module (ZLIB::ZLIB)
             shprobe_imported_location(file ${item})
             list(APPEND files ${file})
         elseif(NOT type STREQUAL "INTERFACE_LIBRARY")

@@ -5,9 +5,11 @@
 //
 // With SHPROBE_STORAGE_FORMAT defined (rgba32f or rgba16f, the view's format) the binding is a
 // storage image read with imageLoad, in VK_IMAGE_LAYOUT_GENERAL; without, a sampled image of any
-// format read with texelFetch (the sampler does not matter). Both give the same values. On llvmpipe
-// a texel fetch is a called function that looks up per-lane mip-level addresses, and the storage
-// read is three times faster (`shprobe bench`, "gpu texel reads only").
+// format read with texelFetch (the sampler does not matter). Both give the same values. Not a
+// driver workaround: the storage variants are what any engine may bind (their own images in
+// RGBA32F or RGBA16F), and the host bakes pick them where the device supports the format. On
+// llvmpipe they also read three times faster (a texel fetch is a called function that looks up
+// per-lane mip-level addresses; `shprobe bench`, "gpu texel reads only").
 #ifndef SHPROBE_CUBEMAP_INPUT_GLSL
 #define SHPROBE_CUBEMAP_INPUT_GLSL
 

@@ -9,6 +9,7 @@
 #ifndef SHPROBE_DISPATCH_PLAN_H
 #define SHPROBE_DISPATCH_PLAN_H
 #include "equirect_geometry.h"
+#include "gpu_interface.h"
 #include "texel_geometry.h"
 
 SHPROBE_BEGIN
@@ -22,6 +23,8 @@ SHPROBE_CONST uint kTexelsPerPosition = 4u * 6u;
 // per invocation from 1 up give correct sums.
 SHPROBE_CONST uint kDefaultTexelsPerInvocation = 256u;
 SHPROBE_CONST uint kDefaultWorkgroupWidth = 64u;
+// reduce.comp and convolve.comp handle one value per coefficient: a small workgroup is enough.
+SHPROBE_CONST uint kCoefficientWorkgroupWidth = 64u;
 
 // ceil(a / b) for b > 0, without the overflow of (a + b - 1) / b.
 SHPROBE_FN uint divideRoundingUp(uint a, uint b) {
@@ -112,6 +115,14 @@ SHPROBE_FN uint planEquirectPositionsPerInvocation(uint imageWidth, uint imageHe
 
 // The workgroups per probe that give each invocation at most `perInvocation` positions; with
 // planPositionsPerInvocation's result, at most maxGroups.
+// Shared memory a projection workgroup of this width declares (partial_slot.glsl): a vec3 per
+// entry of its reduction chunk, SHPROBE_REDUCTION_ENTRIES rounded up to the width, counted as 16
+// bytes (a vec4: the layout of shared vec3 arrays is the implementation's), and the subgroup
+// count, counted as 16 bytes too. 8208 at width 64.
+SHPROBE_FN uint projectionSharedBytes(uint width) {
+    return 16u * divideRoundingUp(SHPROBE_REDUCTION_ENTRIES, width) * width + 16u;
+}
+
 SHPROBE_FN uint planGroups(uint positions, uint perInvocation, uint width) {
     return divideRoundingUp(positions, perInvocation * width);
 }

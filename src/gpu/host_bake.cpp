@@ -124,19 +124,8 @@ void createLayers(const Device& device, VkExtent2D extent, uint32_t layers, Cube
 // cubemapLayout(binding), visible to compute-shader reads.
 void recordLayers(VkCommandBuffer commands, const Buffer& staging, const GpuImage& image,
                   CubemapBinding binding) {
-    changeLayout(commands, image,
-                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                  VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                  VK_ACCESS_TRANSFER_WRITE_BIT});
-    VkBufferImageCopy region{};
-    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.layers};
-    region.imageExtent = {image.extent.width, image.extent.height, 1};
-    vkCmdCopyBufferToImage(commands, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
-                           &region);
-    changeLayout(commands, image,
-                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, cubemapLayout(binding),
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+    recordImageUpload(commands, staging.buffer, image, cubemapLayout(binding),
+                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
 }
 
 // A source kind's host side, for bakeBatch: cube maps (6 layers each) or equirect maps (1).
@@ -290,6 +279,7 @@ CubemapBinding uploadBinding(const Device& device, TexelFormat format) {
 
 CubemapUpload createCubemapUpload(const Device& device, std::span<const Cubemap* const> cubemaps,
                                   CubemapBinding binding) {
+    if (cubemaps.empty()) throw Error(ErrorKind::Input, "GPU bake: an upload of no cube maps");
     CubemapUpload upload;
     upload.binding = binding;
     upload.faceSize = uint32_t(cubemaps.front()->faceSize);

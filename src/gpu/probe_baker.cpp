@@ -232,11 +232,8 @@ ProbeBaker createProbeBaker(const Device& device, const ProbeBakerOptions& optio
                     "order " + std::to_string(options.order) + " is outside 1.." + std::to_string(kMaxOrder));
     if (options.texelsPerInvocation < 1)
         throw Error(ErrorKind::Input, "texels per invocation must be at least 1");
-    // project.comp's reduction keeps vec3 subgroup totals (16 bytes in shared memory each) for
-    // whole workgroups, as many coefficients at a time as SHPROBE_REDUCTION_ENTRIES allows.
-    const VkDeviceSize width = options.workgroupSize;
-    const VkDeviceSize reductionEntries = (SHPROBE_REDUCTION_ENTRIES + width - 1) / width * width;
-    if (reductionEntries * 16 + 16 > device.info.limits.maxComputeSharedMemorySize)
+    if (options.workgroupSize < 1) throw Error(ErrorKind::Input, "the workgroup size must be at least 1");
+    if (gpu::projectionSharedBytes(options.workgroupSize) > device.info.limits.maxComputeSharedMemorySize)
         throw Error(ErrorKind::Input, "workgroup size " + std::to_string(options.workgroupSize) +
                                           " needs more shared memory than " + device.info.name + " has");
     const bool sampled = options.cubemaps == CubemapBinding::SampledImage;
@@ -262,13 +259,12 @@ ProbeBaker createProbeBaker(const Device& device, const ProbeBakerOptions& optio
                                                                      : uint32_t(sizeof(gpu::ProjectParams)),
          .localSize = options.workgroupSize,
          .order = order});
-    // The reduction and convolution handle one value per coefficient: a small workgroup is enough.
     auto bufferProgram = [&](const char* name, std::span<const uint32_t> spirv, uint32_t pushConstantSize) {
         return createComputeProgram(device, {.name = name,
                                              .spirv = spirv,
                                              .bindings = kBufferBindings,
                                              .pushConstantSize = pushConstantSize,
-                                             .localSize = 64,
+                                             .localSize = gpu::kCoefficientWorkgroupWidth,
                                              .order = order});
     };
     baker.reduce = bufferProgram("reduce.comp", spirv::reduce_comp, sizeof(gpu::ReduceParams));

@@ -53,20 +53,9 @@ GpuImage createCubeTexture(const Context& context, const Cubemap& cubemap) {
                                            true,
                                            "environment cube map"});
     OnFailure releaseImage([&] { destroyImage(context, image); });
-    submitAndWait(context, [&](VkCommandBuffer commands) {
-        changeLayout(commands, image,
-                     {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                      VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                      VK_ACCESS_TRANSFER_WRITE_BIT});
-        VkBufferImageCopy region{};
-        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 6}; // faces follow each other
-        region.imageExtent = {size, size, 1};
-        vkCmdCopyBufferToImage(commands, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
-                               &region);
-        changeLayout(commands, image,
-                     {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                      VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                      VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+    submitAndWait(context, [&](VkCommandBuffer commands) { // faces follow each other in the buffer
+        recordImageUpload(commands, staging.buffer, image, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                          VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT);
     });
     return image;
 }

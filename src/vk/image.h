@@ -46,6 +46,12 @@ void changeLayout(VkCommandBuffer commands, const GpuImage& image, const LayoutC
 void changeLayout(VkCommandBuffer commands, VkImage image, VkImageAspectFlags aspect, uint32_t layers,
                   const LayoutChange& change);
 
+// Records the copy of every layer of the image from the buffer (rows tightly packed, layer after
+// layer, from offset 0) and leaves the image in `layout`, its texels visible to shader reads at
+// `readStage`. The image's earlier contents are discarded.
+void recordImageUpload(VkCommandBuffer commands, VkBuffer staging, const GpuImage& image,
+                       VkImageLayout layout, VkPipelineStageFlags readStage);
+
 // A sampler with the given filter for magnification and minification, clamped to the edges.
 VkSampler createSampler(const Device& device, VkFilter filter);
 
