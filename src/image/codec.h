@@ -41,6 +41,16 @@ class ImageDecoder {
     ImageHeader header_;
 };
 
+// A library's message as part of a one-line error: its lines joined with "; ". Inline, as the
+// OpenImageIO plugin uses it too and links nothing of shprobe's.
+inline std::string oneLine(std::string text) {
+    while (!text.empty() && text.back() == '\n')
+        text.pop_back();
+    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
+        text.replace(at, 1, "; ");
+    return text;
+}
+
 // The image formats shprobe reads and writes itself; Other: OpenImageIO's.
 enum class ImageFormat { Exr, Hdr, Png, Jpeg, Other };
 

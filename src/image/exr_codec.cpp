@@ -30,15 +30,6 @@ namespace shprobe {
 
 namespace {
 
-// Library messages may span lines; an error is one line, so their lines are joined with "; ".
-std::string oneLine(std::string text) {
-    while (!text.empty() && text.back() == '\n')
-        text.pop_back();
-    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
-        text.replace(at, 1, "; ");
-    return text;
-}
-
 // OpenEXR decodes and encodes the chunks of a file (16 scanlines each with ZIP, 32 with PIZ and
 // DWAA, 256 with DWAB) on its global thread pool, which has no thread until it is given some:
 // here one per core, set once, before the first file is opened or written (test_codecs times

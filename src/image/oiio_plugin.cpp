@@ -10,15 +10,6 @@
 namespace shprobe {
 namespace {
 
-// Library messages may span lines; an error is one line, so their lines are joined with "; ".
-std::string oneLine(std::string text) {
-    while (!text.empty() && text.back() == '\n')
-        text.pop_back();
-    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
-        text.replace(at, 1, "; ");
-    return text;
-}
-
 // Integer images are sRGB-encoded unless the file says otherwise; float images are linear.
 bool isSrgbEncoded(const OIIO::ImageSpec& spec) {
     if (spec.format.is_floating_point()) return false;
