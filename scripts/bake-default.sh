@@ -4,4 +4,4 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
-./build/shprobe bake -o probe.json
+./build/shprobe bake --backend gpu -o probe.json # --backend gpu: the Vulkan path even where auto would choose the CPU

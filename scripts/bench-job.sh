@@ -8,8 +8,8 @@
 # equirect (courtyard.exr), of a horizontal cross and of six face files made from it by shprobe
 # itself (`shprobe bench --write-layouts`) (bound: start + decode alone); a batch of the eight
 # blender-data HDRs with --out-dir (bound: the sum of their eight decodes, i.e. the decode-alone
-# throughput). Orders 3 and 5, the default face size and --face-size 1024, backends gpu, cpu and
-# reference. Each row: the median wall time, its bound, the ratio, and the peak memory (max RSS,
+# throughput). Orders 3 and 5, the default face size and --face-size 1024, backends auto (the
+# default: rows without --backend), gpu, cpu and reference. Each row: the median wall time, its bound, the ratio, and the peak memory (max RSS,
 # /usr/bin/time, one extra run); file bakes also show their peak above the same bake of the
 # built-in sky (a run with no input file).
 #
@@ -138,13 +138,13 @@ row() { # INPUT BACKEND ORDER FACE BOUND LABEL -- COMMAND...
 
 row start - - - self "start: minimal C program" -- "$tmp/minimal"
 row help - - - start "shprobe --help" -- "$shprobe" --help
-for backend in gpu cpu reference; do
+for backend in auto gpu cpu reference; do
   for order in "${orders[@]}"; do
     for face in default 1024; do
       opts=()
       [ "$order" = 3 ] || opts+=(--order "$order")
       [ "$face" = default ] || opts+=(--face-size "$face")
-      [ "$backend" = gpu ] || opts+=(--backend "$backend")
+      [ "$backend" = auto ] || opts+=(--backend "$backend")
       shown="${opts[*]}"
       shown="${shown:+ $shown}"
       row sky "$backend" "$order" "$face" start "bake (built-in sky)$shown" -- "$shprobe" bake "${opts[@]}"
@@ -255,17 +255,20 @@ for r in rows:
                  f"{r['peak_kib'] / 1024.0:9.1f} {over_text}")
 
 # The targets the job will be judged by, as measured (not pass/fail of this script).
-def find(inp, backend="gpu", order="3", face="default"):
+def find(inp, backend="auto", order="3", face="default"):
     return next((r for r in rows if r["input"] == inp and r["backend"] == backend and r["order"] == order
                  and r["face"] == face), None)
 help_row = next(r for r in rows if r["input"] == "help")
 bake = find("equirect")
+gpu_bake = find("equirect", backend="gpu")
 batch = find("batch")
 targets = [
     ("shprobe --help within 3x of the minimal start", help_row["ratio"], help_row["ratio"] <= 3.0,
      f"{help_row['ratio']:.2f}x"),
     ("bake courtyard.exr (defaults) within 1.5x of start + decode", bake["ratio"], bake["ratio"] <= 1.5,
      f"{bake['ratio']:.2f}x"),
+    ("bake courtyard.exr --backend gpu within 3x of start + decode", gpu_bake["ratio"], gpu_bake["ratio"] <= 3.0,
+     f"{gpu_bake['ratio']:.2f}x"),
     ("batch of the eight (defaults) at least 80% of decode throughput", batch["fraction_of_decode_throughput"],
      batch["fraction_of_decode_throughput"] >= 0.8, f"{batch['fraction_of_decode_throughput'] * 100:.0f}%"),
     ("bake courtyard.exr peak at most decoded image + 64 MiB above the sky's",
@@ -274,7 +277,7 @@ targets = [
      f"+{bake['peak_over_no_input_kib'] / 1024.0:.1f} MiB (decoded {bake['decoded_bytes'] / MiB:.1f} MiB + 64)"),
 ]
 lines.append("")
-lines.append("targets (gpu, order 3, default face size)")
+lines.append("targets (order 3, default face size; backend auto unless named)")
 for text, _, met, shown in targets:
     lines.append(f"  {text:70s} {shown:>32s}  {'met' if met else 'not met'}")
 print("\n".join(lines))

@@ -269,11 +269,14 @@ TEST_F(BadInputs, HugeFiniteTexelsAreBaked) {
     EXPECT_NEAR(readProbeFile(file("huge.json")).rgb[0].r, expected, 2e-6 * expected);
 }
 
-// 3e38 is finite too, but the GPU's fp32 sums overflow: refused (exit 2) with one line naming the
-// input, and nothing is written.
+// 3e38 is finite too, but the fp32 sums of the GPU and of the fast CPU path overflow: refused
+// (exit 2) with one line naming the input, and nothing is written; at the default backend too.
 TEST_F(BadInputs, TexelsOverflowingFp32SumsAreRefused) {
     writeImage(file("overflow.exr"), constantImage(32, 16, glm::vec3(3e38f)));
-    expectFailure({{"bake", file("overflow.exr"), "-o", "OUT"}, 2, {file("overflow.exr"), "not finite"}});
+    for (const char* backend : {"auto", "gpu", "cpu"})
+        expectFailure({{"bake", file("overflow.exr"), "--backend", backend, "-o", "OUT"},
+                       2,
+                       {file("overflow.exr"), "not finite", "fp32 sums"}});
 }
 
 // ---- Options out of range ---------------------------------------------------------------------

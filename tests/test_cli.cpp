@@ -44,6 +44,7 @@
 #include <sstream>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 
 namespace shprobe {
@@ -260,14 +261,17 @@ class Cli : public ::testing::Test {
 
 // ---- 1. The built-in sky ----------------------------------------------------------------------
 
-// `shprobe bake -o OUT.json` (built-in sky, GPU, order 3, radiance) exits 0, prints the summary
-// and the 9 coefficient rows, and writes a file readProbeFile accepts (order 3, radiance, 9 rows)
-// holding the printed values. `--order 5 --irradiance` gives 25 rows of E_lm = A_l L_lm.
+// `shprobe bake -o OUT.json` (built-in sky, order 3, radiance; the default backend, auto, bakes a
+// job this small on the CPU) exits 0, prints the summary and the 9 coefficient rows, and writes a file
+// readProbeFile accepts (order 3, radiance, 9 rows) holding the printed values. `--order 5 --irradiance`
+// gives 25 rows of E_lm = A_l L_lm.
 TEST_F(Cli, BakesTheBuiltInSky) {
     std::string out = file("sky.json");
     RunResult radiance = runOk({"bake", "-o", out});
     EXPECT_CONTAINS(radiance.out, "shprobe bake: built-in sky -> " + out);
-    EXPECT_CONTAINS(radiance.out, "backend  gpu: llvmpipe");
+    EXPECT_CONTAINS(radiance.out,
+                    "backend  cpu: cpu (float, all cores) (auto: a job this small is done on the "
+                    "CPU before Vulkan could start)");
     EXPECT_CONTAINS(radiance.out, "6 x 256 x 256 texels, order 3 (9 coefficients)");
     EXPECT_CONTAINS(radiance.out, "radiance coefficients (r g b):");
     std::vector<PrintedRow> rows = printedRows(radiance.out);
@@ -296,7 +300,7 @@ TEST_F(Cli, BakesTheBuiltInSky) {
     EXPECT_EQ(file5.quantity, Quantity::Irradiance);
     ASSERT_EQ(file5.rgb.size(), 25u);
     // Same sky: bands 0-2 of the irradiance are A_l times the radiance of the first bake (the two
-    // GPU runs reduce in different orders, hence the fp32-level tolerance); A_3 = 0.
+    // runs sum in different orders, hence the fp32-level tolerance); A_3 = 0.
     const double a[3] = {std::numbers::pi, 2.0 * std::numbers::pi / 3.0, std::numbers::pi / 4.0};
     double scale = std::abs(file3.rgb[0].r) * std::numbers::pi;
     for (int i = 0; i < 9; ++i)
@@ -309,14 +313,15 @@ TEST_F(Cli, BakesTheBuiltInSky) {
 
 // ---- 2. GPU = CPU through the program ---------------------------------------------------------
 
-// The same 64x32 equirect EXR (a smooth coloured function) baked with --backend gpu and
-// --backend cpu at order 5 gives the same coefficients to 2e-6 of |L00|. Both processes build the
-// same fp32 cube map (16^2 faces) from the file; they differ only in the projection: the GPU sums
-// 1536 fp32 products L y dOmega (weights within 4.4e-7 relative of the exact solid angle, basis
-// functions to a few fp32 ulps, compensated reduction) against the double reference. For this
-// smooth positive input every term is a few times L00 / texel count at most, so the fp32 error is a
-// few 1e-7 of |L00|; 2e-6 leaves margin while any mistake of weighting, orientation or basis moves
-// a coefficient by far more. The file keeps 9 significant digits, well below that.
+// The same 64x32 equirect EXR (a smooth coloured function) baked with --backend gpu, cpu and
+// reference at order 5 gives the same coefficients to 2e-6 of |L00|. Each process integrates the
+// decoded pixels directly (no cube map: "projected directly"), each weighted by its row's exact
+// solid angle; they differ only in arithmetic: the GPU and the fast CPU path sum 2048 fp32 products
+// L y dOmega (basis functions to a few fp32 ulps, compensated reduction) against the double
+// reference. For this smooth positive input every term is a few times L00 / pixel count at most, so
+// the fp32 error is a few 1e-7 of |L00|; 2e-6 leaves margin while any mistake of weighting,
+// orientation or basis moves a coefficient by far more. The file keeps 9 significant digits, well
+// below that. With --face-size the input is resampled to a cube map of that size first.
 TEST_F(Cli, GpuAndCpuBackendsAgree) {
     writeImage(file("smooth.exr"), smoothEquirect(64, 32));
     RunResult gpu =
@@ -326,7 +331,11 @@ TEST_F(Cli, GpuAndCpuBackendsAgree) {
     RunResult fast =
         runOk({"bake", file("smooth.exr"), "--order", "5", "--backend", "cpu", "-o", file("fast.json")});
     EXPECT_CONTAINS(gpu.out, "(equirect 64x32)");
-    EXPECT_CONTAINS(gpu.out, "6 x 16 x 16 texels, order 5 (25 coefficients)");
+    EXPECT_CONTAINS(gpu.out, "64 x 32 pixels projected directly, order 5 (25 coefficients)");
+    EXPECT_CONTAINS(gpu.out, "backend  gpu: llvmpipe");
+    RunResult resampled = runOk({"bake", file("smooth.exr"), "--order", "5", "--face-size", "16", "--backend",
+                                 "gpu", "-o", file("resampled.json")});
+    EXPECT_CONTAINS(resampled.out, "6 x 16 x 16 texels, order 5 (25 coefficients)");
     EXPECT_CONTAINS(cpu.out, "backend  reference: cpu reference");
     EXPECT_CONTAINS(fast.out, "backend  cpu: cpu (float, all cores)");
 
@@ -351,18 +360,55 @@ TEST_F(Cli, GpuAndCpuBackendsAgree) {
     EXPECT_GT(std::abs(c.rgb[3].r), 0.1 * std::abs(c.rgb[0].r)); // l=1 m=+1, from the x term
 }
 
+// --backend auto, the default: a job whose CPU projection takes less than a Vulkan start-up (the
+// program's constants: 1e9 texel-coefficients per core-second, 20 ms) is baked on the CPU without
+// Vulkan: it bakes with no driver at all. A larger one (an equirect map of 4 times that work at
+// order 8, sized from this machine's core count) asks the device: lavapipe is a CPU, so the CPU
+// path still runs, now saying so, and with no usable driver it runs on the CPU too. --device asks
+// for Vulkan, and the device is what runs.
+TEST_F(Cli, AutoBackendChoosesByJobAndDevice) {
+    const std::string small = "(auto: a job this small is done on the CPU before Vulkan could start)";
+    EnvironmentChanges noDriver{{"VK_ICD_FILENAMES", file("no_such_icd.json")},
+                                {"VK_DRIVER_FILES", std::nullopt}};
+    EXPECT_CONTAINS(runOk({"bake", "-q", "-o", file("sky.json")}).out,
+                    "backend  cpu: cpu (float, all cores) " + small);
+    RunResult withoutDriver = run({"bake", "-q", "-o", file("sky.json")}, noDriver);
+    EXPECT_EQ(withoutDriver.exitCode, 0) << describe(withoutDriver);
+    EXPECT_CONTAINS(withoutDriver.out, small);
+
+    const double work = 4.0 * 2e7 * std::max(1u, std::thread::hardware_concurrency());
+    const int height = 16 * int(std::ceil(std::sqrt(work / 64.0 / 2.0) / 16.0));
+    writeImage(file("large.exr"), smoothEquirect(2 * height, height));
+    const std::vector<std::string> large = {"bake", file("large.exr"), "--order", "8", "-q",
+                                            "-o",   file("large.json")};
+    EXPECT_CONTAINS(runOk(large).out,
+                    "backend  cpu: cpu (float, all cores) (auto: the Vulkan device is a CPU "
+                    "(llvmpipe");
+    RunResult largeWithoutDriver = run(large, noDriver);
+    EXPECT_EQ(largeWithoutDriver.exitCode, 0) << describe(largeWithoutDriver);
+    EXPECT_CONTAINS(largeWithoutDriver.out, "(auto: no Vulkan device could be used: ");
+
+    RunResult named = runOk({"bake", "--device", "0", "-q", "-o", file("named.json")});
+    EXPECT_CONTAINS(named.out, "backend  gpu: llvmpipe");
+    EXPECT_EQ(named.out.find("auto:"), std::string::npos) << named.out;
+}
+
 // ---- 3. Determinism ---------------------------------------------------------------------------
 
 // The same input baked twice on the GPU gives byte-identical coefficient rows in the file (the
 // reduction sums in a fixed order on the GPU).
 TEST_F(Cli, GpuBakeIsDeterministic) {
     writeImage(file("smooth.exr"), smoothEquirect(64, 32));
-    runOk({"bake", file("smooth.exr"), "--order", "8", "-q", "-o", file("first.json")});
-    runOk({"bake", file("smooth.exr"), "--order", "8", "-q", "-o", file("second.json")});
-    std::string first = coefficientRowsText(readText(file("first.json")));
-    std::string second = coefficientRowsText(readText(file("second.json")));
-    ASSERT_FALSE(first.empty());
-    EXPECT_EQ(first, second);
+    for (const char* backend : {"gpu", "cpu"}) {
+        runOk({"bake", file("smooth.exr"), "--order", "8", "--backend", backend, "-q", "-o",
+               file("first.json")});
+        runOk({"bake", file("smooth.exr"), "--order", "8", "--backend", backend, "-q", "-o",
+               file("second.json")});
+        std::string first = coefficientRowsText(readText(file("first.json")));
+        std::string second = coefficientRowsText(readText(file("second.json")));
+        ASSERT_FALSE(first.empty());
+        EXPECT_EQ(first, second) << backend;
+    }
     EXPECT_EQ(readProbeFile(file("first.json")).rgb.size(), 64u);
 }
 
@@ -537,14 +583,14 @@ TEST_F(CliFailures, OutputIntoReadOnlyFolder) {
     EXPECT_EQ(readText(readonly / "probe.json"), before);
 }
 
-// No Vulkan driver (VK_ICD_FILENAMES names a missing file, passed to the child explicitly): exit 4
-// and one line that suggests installing a driver / lavapipe; no file. The plain run has the
-// validation layer off, as a user's would be.
+// No Vulkan driver (VK_ICD_FILENAMES names a missing file, passed to the child explicitly) for a
+// --backend gpu bake: exit 4 and one line that suggests installing a driver / lavapipe; no file. The plain
+// run has the validation layer off, as a user's would be.
 TEST_F(CliFailures, NoVulkanDevice) {
     EnvironmentChanges noDriver{{"VK_ICD_FILENAMES", file("no_such_icd.json")},
                                 {"VK_DRIVER_FILES", std::nullopt},
                                 {"SHPROBE_VALIDATION", std::nullopt}};
-    expectFailure({{"bake", "--face-size", "8", "-o", "OUT"},
+    expectFailure({{"bake", "--backend", "gpu", "--face-size", "8", "-o", "OUT"},
                    4,
                    {"Vulkan", "lavapipe", "mesa-vulkan-drivers"},
                    false,
@@ -553,7 +599,8 @@ TEST_F(CliFailures, NoVulkanDevice) {
     // With validation on (as ctest runs), the loader's own diagnostics may come first through the
     // debug messenger, as "vulkan validation: ..." lines; the error itself is still one line, last.
     noDriver["SHPROBE_VALIDATION"] = "1";
-    RunResult validated = run({"bake", "--face-size", "8", "-o", file("validated.json")}, noDriver);
+    RunResult validated =
+        run({"bake", "--backend", "gpu", "--face-size", "8", "-o", file("validated.json")}, noDriver);
     EXPECT_EQ(validated.exitCode, 4) << describe(validated);
     std::vector<std::string> lines = linesOf(validated.err);
     ASSERT_FALSE(lines.empty());
@@ -687,8 +734,8 @@ TEST_F(CliFailures, BadLightsAndWindows) {
 // JSON with 9 significant digits, so they agree to 5e-9 relative), and an irradiance map has the
 // documented size; a format the program does not know is a usage error.
 TEST_F(Cli, FormatsHoldTheSameProbe) {
-    runOk({"bake", "--order", "4", "-q", "-o", file("probe.json")});
-    runOk({"bake", "--order", "4", "-q", "--format", "binary", "-o", file("probe.bin")});
+    runOk({"bake", "--order", "4", "--backend", "gpu", "-q", "-o", file("probe.json")});
+    runOk({"bake", "--order", "4", "--backend", "gpu", "-q", "--format", "binary", "-o", file("probe.bin")});
     runOk({"bake", "-q", "--format", "irradiance-cross", "--map-size", "16", "-o", file("cross.exr")});
     ShCoefficients json = readProbeFile(file("probe.json"));
     std::vector<ShCoefficients> binary = readBinaryProbes(file("probe.bin"));
@@ -772,8 +819,8 @@ TEST_F(CliFailures, EquirectLayoutOnA4To3ImageIsRefused) {
 
 // ---- 7. Batches --------------------------------------------------------------------------------
 
-// Inputs for batches: three different smooth environments, a.exr and b.exr (32x16 equirects, face
-// size 8: 6144 texel bytes each) and c.hdr (64x32, face size 16: 24576 bytes).
+// Inputs for batches: three different smooth environments, a.exr and b.exr (32x16 equirects,
+// projected directly: 512 texels, 8192 bytes each) and c.hdr (64x32: 2048 texels, 32768 bytes).
 class CliBatch : public Cli {
   protected:
     std::string a() const { return file("a.exr"); }
@@ -805,28 +852,28 @@ bool hasBatchSummary(const std::string& out, const std::string& counts) {
     return false;
 }
 
-// The same three inputs and options (order 4, irradiance) baked one by one with -o, as one batch (a
-// single GPU submission) and as a batch forced into chunks (--batch-bytes 13000: a and b in one
+// The same three inputs and options (order 4, irradiance, on the GPU) baked one by one with -o, as
+// one batch (a single GPU submission) and as a batch forced into chunks (--batch-bytes 17000: a and b in one
 // submission, c in another; c given through --list, between a comment and a blank line) give the
 // same files, byte for byte and number for number. No progress bar on stderr, which is not a
 // terminal here (runOk: stderr empty); the summary counts probes, texels and submissions.
 TEST_F(CliBatch, BatchEqualsSingleBakesProbeForProbe) {
     writeInputs();
-    const std::vector<std::string> shared = {"--order", "4", "--irradiance", "-q"};
+    const std::vector<std::string> shared = {"--order", "4", "--irradiance", "--backend", "gpu", "-q"};
     for (const char* name : {"a", "b", "c"}) {
         std::string input = name == std::string("c") ? c() : file(std::string(name) + ".exr");
         runOk(with({"bake", input, "-o", file(std::string("single_") + name + ".json")}, shared));
     }
     RunResult whole = runOk(with({"bake", a(), b(), c(), "--out-dir", file("whole")}, shared));
-    EXPECT_TRUE(hasBatchSummary(whole.out, "3 probes baked, 0 failed; 2304 texels in 1 GPU submission"))
+    EXPECT_TRUE(hasBatchSummary(whole.out, "3 probes baked, 0 failed; 3072 texels in 1 GPU submission"))
         << whole.out;
     EXPECT_CONTAINS(whole.out, "shprobe bake: 3 inputs -> " + file("whole"));
 
     writeText(file("list.txt"), "# the third input\n\n  " + c() + "  \n");
     RunResult chunked = runOk(with({"bake", a(), b(), "--list", file("list.txt"), "--out-dir",
-                                    file("chunked"), "--batch-bytes", "13000"},
+                                    file("chunked"), "--batch-bytes", "17000"},
                                    shared));
-    EXPECT_TRUE(hasBatchSummary(chunked.out, "3 probes baked, 0 failed; 2304 texels in 2 GPU submissions"))
+    EXPECT_TRUE(hasBatchSummary(chunked.out, "3 probes baked, 0 failed; 3072 texels in 2 GPU submissions"))
         << chunked.out;
 
     for (const char* name : {"a", "b", "c"}) {
@@ -850,13 +897,13 @@ TEST_F(CliBatch, BatchEqualsSingleBakesProbeForProbe) {
     EXPECT_EQ(entriesOf(folder() / "whole"), (std::vector<std::string>{"a.json", "b.json", "c.json"}));
 }
 
-// --backend cpu bakes a batch probe by probe with the double reference: the same files as -o.
+// --backend cpu bakes a batch probe by probe: the same files as -o.
 TEST_F(CliBatch, CpuBatchEqualsCpuBakes) {
     writeInputs();
     runOk({"bake", a(), "--backend", "cpu", "--order", "5", "-q", "-o", file("single_a.json")});
     RunResult batch =
         runOk({"bake", a(), c(), "--backend", "cpu", "--order", "5", "-q", "--out-dir", file("cpu")});
-    EXPECT_TRUE(hasBatchSummary(batch.out, "2 probes baked, 0 failed; 1920 texels; ")) << batch.out;
+    EXPECT_TRUE(hasBatchSummary(batch.out, "2 probes baked, 0 failed; 2560 texels; ")) << batch.out;
     EXPECT_EQ(readText(folder() / "cpu" / "a.json"), readText(file("single_a.json")));
     EXPECT_EQ(readProbeFile((folder() / "cpu" / "c.json").string()).rgb.size(), 25u);
 }
@@ -1005,9 +1052,10 @@ std::vector<std::array<float, 4>> headerEntries(const std::string& header) {
 // bits). Orders above 5 and --extract-sun (the sun would be lost) are refused with these formats.
 TEST_F(CliBatch, HeaderFormatsHoldTheFoldedProbe) {
     writeInputs();
-    runOk({"bake", a(), "--order", "5", "-q", "--format", "binary", "-o", file("a.bin")});
-    runOk({"bake", a(), "--order", "5", "-q", "--format", "cpp", "-o", file("a.h")});
-    runOk({"bake", a(), c(), "--order", "5", "-q", "--format", "glsl", "--out-dir", file("glsl")});
+    runOk({"bake", a(), "--order", "5", "--backend", "gpu", "-q", "--format", "binary", "-o", file("a.bin")});
+    runOk({"bake", a(), "--order", "5", "--backend", "gpu", "-q", "--format", "cpp", "-o", file("a.h")});
+    runOk({"bake", a(), c(), "--order", "5", "--backend", "gpu", "-q", "--format", "glsl", "--out-dir",
+           file("glsl")});
     std::vector<ShCoefficients> binary = readBinaryProbes(file("a.bin"));
     ASSERT_EQ(binary.size(), 1u);
     FoldedCoefficients expected = *foldCoefficients(binary[0], 5, FoldedQuantity::Radiance);

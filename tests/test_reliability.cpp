@@ -296,7 +296,7 @@ TEST_F(Reliability, UnreadableInputsSayPermissionDenied) {
 TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
     const std::string cache = file("cache");
     fs::create_directories(cache);
-    RunResult first = run({"bake", "--face-size", "4", "-q", "-o", file("first.json")},
+    RunResult first = run({"bake", "--backend", "gpu", "--face-size", "4", "-q", "-o", file("first.json")},
                           {.environment = {{"SHPROBE_CACHE_DIR", cache}}});
     ASSERT_EQ(first.exitCode, 0) << describe(first);
     std::vector<std::string> created = entriesOf(cache);
@@ -312,8 +312,9 @@ TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
     };
     auto expectWarning = [&](const std::string& what, const std::string& folderName) {
         SCOPED_TRACE(what);
-        RunResult result = run({"bake", "--face-size", "4", "-q", "-o", file("probe.json")},
-                               {.environment = {{"SHPROBE_CACHE_DIR", folderName}}});
+        RunResult result =
+            run({"bake", "--backend", "gpu", "--face-size", "4", "-q", "-o", file("probe.json")},
+                {.environment = {{"SHPROBE_CACHE_DIR", folderName}}});
         EXPECT_EQ(result.exitCode, 0) << describe(result);
         EXPECT_LT(result.seconds, 20.0) << "the cache must not make the run wait";
         EXPECT_EQ(linesOf(result.err).size(), 1u) << result.err;
@@ -332,7 +333,7 @@ TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
     std::vector<std::unique_ptr<Child>> runs;
     for (int i = 0; i < 4; ++i)
         runs.push_back(std::make_unique<Child>(
-            std::vector<std::string>{"bake", "--face-size", "8", "-q", "-o",
+            std::vector<std::string>{"bake", "--backend", "gpu", "--face-size", "8", "-q", "-o",
                                      file("run" + std::to_string(i) + ".json")},
             folder() / "logs", RunOptions{.environment = {{"SHPROBE_CACHE_DIR", shared}}}));
     for (std::unique_ptr<Child>& child : runs) {

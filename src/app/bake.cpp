@@ -40,12 +40,20 @@ void printCoefficients(FILE* report, const ShCoefficients& coefficients) {
 }
 
 void printSummary(FILE* report, const BakeOptions& options, const Environment& environment,
-                  const BakeResult& result, double loadMs, double bakeMs) {
-    int n = environment.cubemap.faceSize;
+                  const Backend& backend, const BakeResult& result, double loadMs, double bakeMs) {
     std::fprintf(report, "shprobe bake: %s -> %s\n", environment.description.c_str(), options.output.c_str());
-    std::fprintf(report, "  backend  %s: %s\n", options.backend.c_str(), result.device.c_str());
-    std::fprintf(report, "  input    6 x %d x %d texels, order %d (%d coefficients)\n", n, n, options.order,
-                 coefficientCount(options.order));
+    std::fprintf(report, "  backend  %s: %s", backend.name.c_str(), result.device.c_str());
+    if (!backend.reason.empty()) std::fprintf(report, " (auto: %s)", backend.reason.c_str());
+    std::fprintf(report, "\n");
+    if (environment.keptEquirect()) {
+        std::fprintf(report, "  input    %d x %d pixels projected directly, order %d (%d coefficients)\n",
+                     environment.equirect.width, environment.equirect.height, options.order,
+                     coefficientCount(options.order));
+    } else {
+        int n = environment.cubemap.faceSize;
+        std::fprintf(report, "  input    6 x %d x %d texels, order %d (%d coefficients)\n", n, n,
+                     options.order, coefficientCount(options.order));
+    }
     if (environment.replacedTexels > 0)
         std::fprintf(report, "  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
     if (hasLights(options.lights)) std::fprintf(report, "  lights   added to the environment's radiance\n");
@@ -71,25 +79,19 @@ void runSingleBake(const BakeOptions& options) {
     double loadMs = millisecondsSince(start);
 
     start = Clock::now();
-    BakeResult result;
-    if (options.backend == "gpu") {
-        withGpu(options, [&](const Context& context, const ProbeBaker& baker) {
-            DeviceStep step("baking " + environment.description);
-            const Cubemap* cubemap = &environment.cubemap;
-            result = bakeOnGpu(options, context, baker, std::span(&cubemap, 1))[0];
-        });
-    } else {
-        result = bakeOnCpu(options, environment.cubemap);
-    }
+    Backend backend = chooseBackend(options, projectionWork(options, environment));
+    const Environment* environments[] = {&environment};
+    BakeResult result = bake(options, backend, environments)[0];
+    if (backend.session) backend.session->finish();
     double bakeMs = millisecondsSince(start);
-    requireUsable(options, result, environment.description);
+    requireUsable(backend, result, environment.description);
 
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
-    writeOutput(options, options.output, written, metadataFor(options, environment, result, sun));
+    writeOutput(options, options.output, written, metadataFor(backend, options, environment, result, sun));
 
     // With the probe on standard output, the report goes to stderr.
     FILE* report = reportStream(options.output);
-    printSummary(report, options, environment, result, loadMs, bakeMs);
+    printSummary(report, options, environment, backend, result, loadMs, bakeMs);
     if (options.extractSun) printSun(report, sun);
     if (!options.quiet) printCoefficients(report, written);
 }
@@ -137,8 +139,10 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
     command
         ->add_option(
             "--backend", options.backend,
-            "gpu (Vulkan compute), cpu (float, all cores) or reference (the double-precision reference)")
-        ->check(CLI::IsMember({"gpu", "cpu", "reference"}))
+            "auto (the default: the fast CPU path for a job done sooner than Vulkan starts, or where the "
+            "only Vulkan device is a CPU, such as lavapipe; else Vulkan; --device asks for Vulkan), gpu "
+            "(Vulkan compute), cpu (float, all cores) or reference (the double-precision reference)")
+        ->check(CLI::IsMember({"auto", "gpu", "cpu", "reference"}))
         ->capture_default_str();
     command->add_flag("--irradiance", options.irradiance,
                       "Write irradiance E_lm = A_l L_lm instead of radiance");

@@ -149,6 +149,7 @@ struct Batch {
     bool inputFailed = false; // an input error among the failures (exit code 2, else 3)
     uint64_t texels = 0;
     size_t submissions = 0;
+    bool gpu = false; // baked with Vulkan (the summary counts the submissions)
 };
 
 // A line on stdout or stderr between redraws of the progress bar.
@@ -187,10 +188,19 @@ std::optional<Loaded> loadItem(Batch& batch, const BatchItem& item) {
     }
 }
 
-void writeItem(Batch& batch, const Loaded& loaded, const BakeResult& result) {
+// "6 x 256 x 256 texels" of a cube map, "1024 x 512 pixels" of an equirect map projected directly.
+std::string sizeOf(const Environment& environment) {
+    if (environment.keptEquirect())
+        return std::to_string(environment.equirect.width) + " x " +
+               std::to_string(environment.equirect.height) + " pixels";
+    std::string n = std::to_string(environment.cubemap.faceSize);
+    return "6 x " + n + " x " + n + " texels";
+}
+
+void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const BakeResult& result) {
     const BakeOptions& options = batch.options;
     try {
-        requireUsable(options, result, loaded.environment.description);
+        requireUsable(backend, result, loaded.environment.description);
     } catch (const Error& error) {
         reportFailure(batch, *loaded.item, error);
         return;
@@ -198,7 +208,7 @@ void writeItem(Batch& batch, const Loaded& loaded, const BakeResult& result) {
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
     try {
         writeOutput(options, loaded.item->output, written,
-                    metadataFor(options, loaded.environment, result, loaded.sun));
+                    metadataFor(backend, options, loaded.environment, result, loaded.sun));
     } catch (const Error& error) {
         if (error.kind() != ErrorKind::Output) throw;
         reportFailure(batch, *loaded.item, error);
@@ -206,37 +216,67 @@ void writeItem(Batch& batch, const Loaded& loaded, const BakeResult& result) {
     }
     ++batch.baked;
     ++batch.progress.done;
-    batch.texels += loaded.environment.cubemap.texels.size();
+    batch.texels += loaded.environment.texelCount();
     if (options.quiet) {
         batch.progress.draw();
         return;
     }
-    int n = loaded.environment.cubemap.faceSize;
-    std::string line = "  " + loaded.environment.description + " -> " + loaded.item->output + ", 6 x " +
-                       std::to_string(n) + " x " + std::to_string(n) + " texels";
+    std::string line = "  " + loaded.environment.description + " -> " + loaded.item->output + ", " +
+                       sizeOf(loaded.environment);
     if (loaded.environment.replacedTexels > 0)
         line += ", " + std::to_string(loaded.environment.replacedTexels) + " NaN/Inf texels replaced with 0";
     if (options.extractSun) line += loaded.sun ? ", sun taken out" : ", no sun found";
     printLine(batch, stdout, line);
 }
 
+void printBackend(const Backend& backend, const std::string& device) {
+    std::printf("  backend  %s: %s", backend.name.c_str(), device.c_str());
+    if (!backend.reason.empty()) std::printf(" (auto: %s)", backend.reason.c_str());
+    std::printf("\n");
+    std::fflush(stdout);
+}
+
+// The backend, chosen once the first input is loaded (auto: from its work times the number of
+// inputs), and the most texel bytes one chunk holds: a GPU submission's (--batch-bytes, at most
+// the device's), or one input on the CPU.
+struct BatchBackend {
+    Backend backend;
+    VkDeviceSize chunkBytes = 0;
+};
+
+BatchBackend chooseBatchBackend(Batch& batch, const Environment& first, size_t count) {
+    const BakeOptions& options = batch.options;
+    BatchBackend chosen{chooseBackend(options, projectionWork(options, first) * double(count)), 0};
+    std::string device = cpuBackendName(chosen.backend.name);
+    if (chosen.backend.session) {
+        const Context& context = chosen.backend.session->context();
+        device = context.info.name;
+        chosen.chunkBytes = batchTexelBytes(context);
+        if (options.batchBytes > 0)
+            chosen.chunkBytes = std::min<VkDeviceSize>(chosen.chunkBytes, options.batchBytes);
+    }
+    batch.progress.clear();
+    printBackend(chosen.backend, device);
+    batch.progress.draw();
+    return chosen;
+}
+
 // Loads the inputs in order and bakes them in chunks of at most chunkBytes texel bytes (a larger
-// cube map alone), one bakeChunk call each, writing each chunk's outputs before loading further:
-// at most one chunk and the cube map that opens the next are in memory.
-template <typename BakeChunk>
-void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items, VkDeviceSize chunkBytes,
-                  BakeChunk&& bakeChunk) {
+// input alone), one bake call each, writing each chunk's outputs before loading further: at most
+// one chunk and the input that opens the next are in memory.
+void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
+    std::optional<BatchBackend> chosen;
     std::vector<Loaded> chunk;
     VkDeviceSize bytes = 0;
     auto flush = [&] {
         if (chunk.empty()) return;
-        std::vector<const Cubemap*> cubemaps;
+        std::vector<const Environment*> environments;
         for (const Loaded& loaded : chunk)
-            cubemaps.push_back(&loaded.environment.cubemap);
-        std::vector<BakeResult> results = bakeChunk(std::span<const Cubemap* const>(cubemaps));
+            environments.push_back(&loaded.environment);
+        std::vector<BakeResult> results = bake(batch.options, chosen->backend, environments);
         ++batch.submissions;
         for (size_t i = 0; i < chunk.size(); ++i)
-            writeItem(batch, chunk[i], results[i]);
+            writeItem(batch, chosen->backend, chunk[i], results[i]);
         chunk.clear();
         bytes = 0;
     };
@@ -244,12 +284,15 @@ void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items, VkDeviceSiz
     for (const BatchItem& item : items) {
         std::optional<Loaded> loaded = loadItem(batch, item);
         if (!loaded) continue;
-        VkDeviceSize itemBytes = cubemapBytes(loaded->environment.cubemap);
-        if (!chunk.empty() && bytes + itemBytes > chunkBytes) flush();
+        if (!chosen) chosen = chooseBatchBackend(batch, loaded->environment, items.size());
+        VkDeviceSize itemBytes = environmentBytes(loaded->environment);
+        if (!chunk.empty() && bytes + itemBytes > chosen->chunkBytes) flush();
         bytes += itemBytes;
         chunk.push_back(std::move(*loaded));
     }
     flush();
+    batch.gpu = chosen && chosen->backend.session;
+    if (batch.gpu) chosen->backend.session->finish();
 }
 
 std::string texelCount(uint64_t texels) {
@@ -261,9 +304,9 @@ std::string texelCount(uint64_t texels) {
     return text;
 }
 
-void printBatchStart(const BakeOptions& options, size_t count, const std::string& device) {
-    std::printf("shprobe bake: %zu inputs -> %s (%s: %s, order %d, %s)\n", count, options.outDir.c_str(),
-                options.backend.c_str(), device.c_str(), options.order, options.format.c_str());
+void printBatchStart(const BakeOptions& options, size_t count) {
+    std::printf("shprobe bake: %zu inputs -> %s (order %d, %s)\n", count, options.outDir.c_str(),
+                options.order, options.format.c_str());
     std::fflush(stdout);
 }
 
@@ -271,7 +314,7 @@ void printBatchStart(const BakeOptions& options, size_t count, const std::string
 void finishBatch(Batch& batch, size_t count, double seconds) {
     batch.progress.clear();
     batch.progress.enabled = false;
-    std::string submissions = batch.options.backend == "gpu"
+    std::string submissions = batch.gpu
                                   ? " in " + std::to_string(batch.submissions) +
                                         (batch.submissions == 1 ? " GPU submission" : " GPU submissions")
                                   : std::string();
@@ -297,22 +340,8 @@ void runBatchBake(const BakeOptions& options) {
 
     Clock::time_point start = Clock::now();
     Batch batch{options, ProgressBar{items.size()}};
-    if (options.backend == "gpu") {
-        withGpu(options, [&](const Context& context, const ProbeBaker& baker) {
-            printBatchStart(options, items.size(), context.info.name);
-            VkDeviceSize chunkBytes = batchTexelBytes(context);
-            if (options.batchBytes > 0) chunkBytes = std::min<VkDeviceSize>(chunkBytes, options.batchBytes);
-            bakeInChunks(batch, items, chunkBytes, [&](std::span<const Cubemap* const> cubemaps) {
-                DeviceStep step("baking a chunk of " + std::to_string(cubemaps.size()) + " probes");
-                return bakeOnGpu(options, context, baker, cubemaps);
-            });
-        });
-    } else {
-        printBatchStart(options, items.size(), cpuBackendName(options));
-        bakeInChunks(batch, items, 0, [&](std::span<const Cubemap* const> cubemaps) {
-            return std::vector<BakeResult>{bakeOnCpu(options, *cubemaps[0])}; // chunks of one
-        });
-    }
+    printBatchStart(options, items.size());
+    bakeInChunks(batch, items);
     finishBatch(batch, items.size(), millisecondsSince(start) / 1000.0);
 }
 

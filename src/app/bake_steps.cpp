@@ -3,21 +3,33 @@
 #include "app/toolkit.h"
 #include "shprobe/io/engine_export.h"
 #include "shprobe/io/probe_export.h"
+#include "shprobe/sh/basis.h"
 #include "shprobe/sh/fast_projection.h"
 #include "shprobe/sh/folding.h"
 #include "shprobe/sh/irradiance.h"
 #include "shprobe/sh/lights.h"
 #include "shprobe/sh/projection.h"
+#include "shprobe/sh/scope_exit.h"
 #include "shprobe/sh/windowing.h"
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <thread>
 
 namespace shprobe {
 
 namespace {
 
 constexpr int kDefaultSkyFaceSize = 256;
+
+// --backend auto: the fast CPU path's speed, texels x coefficients per second per core, taken low
+// (a bake of 6 x 256^2 texels at order 3 in 0.9 ms on both cores of a 2-core VM is 2e9 per
+// core-second; half of it stands for slower cores), and the least a Vulkan start-up
+// takes (vkCreateInstance alone: 33 ms with Debian 12's four Mesa drivers installed, before any
+// device, pipeline or upload). A job whose CPU projection takes less is baked on the CPU at once.
+constexpr double kCpuWorkPerCoreSecond = 1e9;
+constexpr double kVulkanStartSeconds = 0.02;
 
 // The steps after the projection, the same on either backend: add the analytic lights, then choose
 // the window (de-ringing looks at the radiance with the lights in it).
@@ -70,6 +82,7 @@ Environment loadInput(const BakeOptions& options, const std::string& input) {
         load.faceSize = options.faceSize;
         load.nonFinite = options.sanitize ? NonFinitePolicy::Replace : NonFinitePolicy::Refuse;
         load.maxPixels = options.maxPixels;
+        load.keepEquirect = !options.extractSun; // the sun is found on a cube map
         return loadEnvironment(input, load);
     }
     Environment sky;
@@ -79,18 +92,117 @@ Environment loadInput(const BakeOptions& options, const std::string& input) {
     return sky;
 }
 
-VkDeviceSize cubemapBytes(const Cubemap& cubemap) {
-    return VkDeviceSize(cubemap.texels.size()) * sizeof(glm::vec4);
+GpuSession::GpuSession(const BakeOptions& options) : options_(options) {
+    ContextOptions contextOptions;
+    contextOptions.device = options.device;
+    contextOptions.validation = options.validation;
+    context_ = createContext(contextOptions);
+    OnFailure destroy([&] { destroyContext(context_); });
+    cachePath_ = pipelineCachePath(context_);
+    context_.pipelineCache = loadPipelineCache(context_, cachePath_);
 }
 
-std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& context, const ProbeBaker& baker,
-                                  std::span<const Cubemap* const> cubemaps) {
+GpuSession::~GpuSession() {
+    release();
+}
+
+const ProbeBaker& GpuSession::baker(ProbeSource source) {
+    std::optional<ProbeBaker>& baker = source == ProbeSource::Equirect ? equirectBaker_ : cubemapBaker_;
+    if (baker) return *baker;
+    DeviceStep step("creating the bake pipelines", DeviceWork::Setup);
+    baker = createProbeBaker(context_, {.order = options_.order,
+                                        .cubemaps = uploadBinding(context_, TexelFormat::Rgba32F),
+                                        .workgroupSize = options_.workgroupSize,
+                                        .texelsPerInvocation = options_.texelsPerInvocation,
+                                        .source = source});
+    savePipelineCache(context_, context_.pipelineCache, cachePath_);
+    return *baker;
+}
+
+void GpuSession::release() {
+    if (released_) return;
+    released_ = true;
+    for (std::optional<ProbeBaker>* baker : {&cubemapBaker_, &equirectBaker_})
+        if (*baker) destroyProbeBaker(context_, **baker);
+    vkDestroyPipelineCache(context_.device, context_.pipelineCache, nullptr);
+    destroyContext(context_);
+}
+
+void GpuSession::finish() {
+    uint32_t messages = context_.validationMessages();
+    release();
+    if (messages > 0)
+        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
+}
+
+double projectionWork(const BakeOptions& options, const Environment& environment) {
+    return double(environment.texelCount()) * coefficientCount(options.order);
+}
+
+Backend chooseBackend(const BakeOptions& options, double work) {
+    Backend backend{options.backend, "", nullptr};
+    if (options.backend == "cpu" || options.backend == "reference") return backend;
+    if (options.backend == "gpu" || !options.device.empty()) {
+        backend.name = "gpu";
+        backend.session = std::make_unique<GpuSession>(options);
+        return backend;
+    }
+    backend.name = "cpu";
+    double cpuSeconds = work / (kCpuWorkPerCoreSecond * std::max(1u, std::thread::hardware_concurrency()));
+    if (cpuSeconds < kVulkanStartSeconds) {
+        backend.reason = "a job this small is done on the CPU before Vulkan could start";
+        return backend;
+    }
+    try {
+        backend.session = std::make_unique<GpuSession>(options);
+    } catch (const Error& error) {
+        if (error.kind() != ErrorKind::Device) throw;
+        backend.reason = std::string("no Vulkan device could be used: ") + error.what();
+        return backend;
+    }
+    const DeviceInfo& device = backend.session->context().info;
+    if (device.type == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+        backend.reason = "the Vulkan device is a CPU (" + device.name + "), where this path is faster";
+        backend.session->finish();
+        backend.session.reset();
+        return backend;
+    }
+    backend.name = "gpu";
+    backend.reason = "a GPU";
+    return backend;
+}
+
+VkDeviceSize environmentBytes(const Environment& environment) {
+    return VkDeviceSize(environment.texelCount()) * sizeof(glm::vec4);
+}
+
+std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, GpuSession& session,
+                                  std::span<const Environment* const> environments) {
+    std::vector<const Cubemap*> cubemaps;
+    std::vector<const Image*> equirects;
+    for (const Environment* environment : environments) {
+        if (environment->keptEquirect())
+            equirects.push_back(&environment->equirect);
+        else
+            cubemaps.push_back(&environment->cubemap);
+    }
+    std::vector<GpuBake> cubemapBakes, equirectBakes;
+    if (!cubemaps.empty())
+        cubemapBakes = bakeCubemaps(session.context(), session.baker(ProbeSource::Cubemaps), cubemaps);
+    if (!equirects.empty())
+        equirectBakes = bakeEquirects(session.context(), session.baker(ProbeSource::Equirect), equirects);
+
     std::vector<BakeResult> results;
-    for (GpuBake& bake : bakeCubemaps(context, baker, cubemaps)) {
-        BakeResult result{bake.radiance, bake.irradiance, context.info.name, bake.deviceMilliseconds};
+    size_t nextCubemap = 0, nextEquirect = 0;
+    for (const Environment* environment : environments) {
+        bool equirect = environment->keptEquirect();
+        const GpuBake& bake = equirect ? equirectBakes[nextEquirect++] : cubemapBakes[nextCubemap++];
+        BakeResult result{bake.radiance, bake.irradiance, session.context().info.name,
+                          bake.deviceMilliseconds};
         if (needsFinishing(options) && isFinite(bake)) {
             Finished finished = finish(options, bake.radiance);
-            GpuBake convolved = convolveOnGpu(context, baker, finished.radiance, finished.window);
+            const ProbeBaker& baker = session.baker(equirect ? ProbeSource::Equirect : ProbeSource::Cubemaps);
+            GpuBake convolved = convolveOnGpu(session.context(), baker, finished.radiance, finished.window);
             result.radiance = convolved.radiance;
             result.irradiance = convolved.irradiance;
         }
@@ -99,24 +211,50 @@ std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& con
     return results;
 }
 
-void requireUsable(const BakeOptions& options, const BakeResult& result, const std::string& input) {
-    if (options.backend == "gpu") requireFinite(GpuBake{result.radiance, result.irradiance}, input);
+void requireUsable(const Backend& backend, const BakeResult& result, const std::string& input) {
+    const GpuBake coefficients{result.radiance, result.irradiance};
+    if (backend.name == "gpu") return requireFinite(coefficients, input);
+    if (isFinite(coefficients)) return;
+    throw Error(ErrorKind::Input,
+                input + ": CPU bake: the coefficients are not finite (input values too large for " +
+                    (backend.name == "reference" ? "double" : "fp32") + " sums?)");
 }
 
-const char* cpuBackendName(const BakeOptions& options) {
-    return options.backend == "reference" ? "cpu reference (double)" : "cpu (float, all cores)";
+const char* cpuBackendName(const std::string& backend) {
+    return backend == "reference" ? "cpu reference (double)" : "cpu (float, all cores)";
 }
 
-BakeResult bakeOnCpu(const BakeOptions& options, const Cubemap& cubemap) {
-    ShCoefficients radiance = options.backend == "reference" ? projectCubemap(cubemap, options.order)
-                                                             : projectCubemapFast(cubemap, options.order);
-    Finished finished = finish(options, radiance);
+ShCoefficients projectOnCpu(const std::string& backend, const Environment& environment, int order) {
+    bool reference = backend == "reference";
+    if (environment.keptEquirect())
+        return reference ? projectEquirect(environment.equirect, order)
+                         : projectEquirectFast(environment.equirect, order);
+    return reference ? projectCubemap(environment.cubemap, order)
+                     : projectCubemapFast(environment.cubemap, order);
+}
+
+BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, const Environment& environment) {
+    Finished finished = finish(options, projectOnCpu(backend, environment, options.order));
     BakeResult result;
     result.radiance =
         finished.window.empty() ? finished.radiance : applyWindow(finished.radiance, finished.window);
     result.irradiance = convolveIrradiance(result.radiance);
-    result.device = cpuBackendName(options);
+    result.device = cpuBackendName(backend);
     return result;
+}
+
+std::vector<BakeResult> bake(const BakeOptions& options, Backend& backend,
+                             std::span<const Environment* const> environments) {
+    if (backend.session) {
+        DeviceStep step(environments.size() == 1
+                            ? "baking " + environments[0]->description
+                            : "baking a chunk of " + std::to_string(environments.size()) + " probes");
+        return bakeOnGpu(options, *backend.session, environments);
+    }
+    std::vector<BakeResult> results;
+    for (const Environment* environment : environments)
+        results.push_back(bakeOnCpu(options, backend.name, *environment));
+    return results;
 }
 
 std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& environment) {
@@ -184,12 +322,12 @@ void writeOutput(const BakeOptions& options, const std::string& path, const ShCo
     formatNamed(options.format).write(path, probe, exportOptions);
 }
 
-ProbeMetadata metadataFor(const BakeOptions& options, const Environment& environment,
+ProbeMetadata metadataFor(const Backend& backend, const BakeOptions& options, const Environment& environment,
                           const BakeResult& result, const std::optional<ProbeSun>& sun) {
     ProbeMetadata metadata;
     metadata.source = environment.description;
-    metadata.faceSize = environment.cubemap.faceSize;
-    metadata.backend = options.backend;
+    metadata.faceSize = environment.cubemap.faceSize; // 0 (not written) for an equirect map kept as it is
+    metadata.backend = backend.name;
     metadata.device = result.device;
     metadata.window = options.window == "none" ? "" : options.window;
     metadata.sun = sun;

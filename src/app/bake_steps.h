@@ -7,11 +7,11 @@
 #include "shprobe/io/output_file.h"
 #include "shprobe/io/probe_file.h"
 #include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/context.h"
 #include "shprobe/vk/pipeline_cache.h"
 
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -27,59 +27,76 @@ struct BakeResult {
     double deviceMilliseconds = 0.0;
 };
 
-// An empty input is the built-in sky.
+// An empty input is the built-in sky. An equirect input is kept as decoded (projected directly)
+// unless a cube map is asked for (--face-size) or needed (--extract-sun).
 Environment loadInput(const BakeOptions& options, const std::string& input);
 
-VkDeviceSize cubemapBytes(const Cubemap& cubemap);
+// The device and the bake pipelines of a run, for any number of bakes. The pipelines of each source
+// (cube maps, equirect maps) are created the first time a bake needs them, so a run compiles only
+// what it bakes; they come through the on-disk pipeline cache (vk/pipeline_cache.h), saved right
+// after they exist. finish() fails the run if the validation layer printed any message.
+class GpuSession {
+  public:
+    explicit GpuSession(const BakeOptions& options);
+    ~GpuSession();
+    GpuSession(const GpuSession&) = delete;
+    GpuSession& operator=(const GpuSession&) = delete;
 
-// Runs work(context, baker) with a device and the bake pipelines of the options' order, created
-// once for any number of bakes and released here; any validation message fails the run. The
-// pipelines come through the on-disk pipeline cache (vk/pipeline_cache.h), saved right after they
-// exist.
-template <typename Work> void withGpu(const BakeOptions& options, Work&& work) {
-    uint32_t validationMessages = 0;
-    {
-        ContextOptions contextOptions;
-        contextOptions.device = options.device;
-        contextOptions.validation = options.validation;
-        Context context = createContext(contextOptions);
-        ScopeExit destroy([&] {
-            validationMessages = context.validationMessages();
-            destroyContext(context);
-        });
-        const std::string cachePath = pipelineCachePath(context);
-        context.pipelineCache = loadPipelineCache(context, cachePath);
-        ScopeExit destroyCache(
-            [&] { vkDestroyPipelineCache(context.device, context.pipelineCache, nullptr); });
-        std::optional<DeviceStep> creating(std::in_place, "creating the bake pipelines", DeviceWork::Setup);
-        ProbeBaker baker =
-            createProbeBaker(context, {.order = options.order,
-                                       .cubemaps = uploadBinding(context, TexelFormat::Rgba32F),
-                                       .workgroupSize = options.workgroupSize,
-                                       .texelsPerInvocation = options.texelsPerInvocation});
-        ScopeExit destroyBaker([&] { destroyProbeBaker(context, baker); });
-        savePipelineCache(context, context.pipelineCache, cachePath);
-        creating.reset();
-        work(std::as_const(context), std::as_const(baker));
-    }
-    if (validationMessages > 0)
-        throw Error(ErrorKind::Device,
-                    std::to_string(validationMessages) + " Vulkan validation messages (above)");
-}
+    const Context& context() const { return context_; }
+    const ProbeBaker& baker(ProbeSource source);
+    // Releases everything; throws Error(Device) when validation messages were printed.
+    void finish();
 
-// The cube maps of a chunk in one submission (bakeCubemaps); then, per probe, the lights and the
-// window (convolve.comp). A probe whose sums overflowed comes back as computed, for
-// requireUsable to refuse.
-std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, const Context& context, const ProbeBaker& baker,
-                                  std::span<const Cubemap* const> cubemaps);
+  private:
+    void release();
 
-// Throws Error(Input) naming the input when a GPU bake's coefficients are not finite (its fp32
-// sums overflowed). The CPU paths sum in double; the probe writers refuse what is not finite.
-void requireUsable(const BakeOptions& options, const BakeResult& result, const std::string& input);
+    const BakeOptions& options_;
+    Context context_;
+    std::string cachePath_;
+    std::optional<ProbeBaker> cubemapBaker_;
+    std::optional<ProbeBaker> equirectBaker_;
+    bool released_ = false;
+};
+
+// The backend a run bakes on and, for --backend auto, why: "gpu" (with its session), "cpu" or
+// "reference".
+struct Backend {
+    std::string name;
+    std::string reason;                  // auto only: why this backend
+    std::unique_ptr<GpuSession> session; // gpu only
+};
+
+// --backend gpu, cpu, reference as given; auto (the default) chooses by the job and the device:
+// the fast CPU path when the job's projection (work: texels x coefficients, all inputs) takes less
+// on the CPU than a Vulkan start-up alone (then no Vulkan instance is created), when the device is a
+// CPU (lavapipe: the fast CPU path projects faster than llvmpipe runs the shaders), or when no
+// Vulkan device can be used; Vulkan on a GPU. --device names a device to bake on: auto then means
+// gpu.
+Backend chooseBackend(const BakeOptions& options, double work);
+// The projection work of one input: texels times coefficients.
+double projectionWork(const BakeOptions& options, const Environment& environment);
+
+// The environments of a chunk baked together: the cube maps in one submission (bakeCubemaps), the
+// equirect maps in another (bakeEquirects); then, per probe, the lights and the window
+// (convolve.comp). A probe whose sums overflowed comes back as computed, for requireUsable to refuse.
+std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, GpuSession& session,
+                                  std::span<const Environment* const> environments);
+
+// Throws Error(Input) naming the input when a bake's coefficients are not finite: finite inputs
+// near 1e38 overflow the fp32 sums of the GPU and of the fast CPU path (the reference's double sums
+// only hold more), and no probe file holds infinities.
+void requireUsable(const Backend& backend, const BakeResult& result, const std::string& input);
 
 // "cpu": the fast float path on all cores; "reference": the double-precision reference.
-const char* cpuBackendName(const BakeOptions& options);
-BakeResult bakeOnCpu(const BakeOptions& options, const Cubemap& cubemap);
+const char* cpuBackendName(const std::string& backend);
+BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, const Environment& environment);
+
+// Bakes on the chosen backend, one environment or (gpu) a chunk.
+std::vector<BakeResult> bake(const BakeOptions& options, Backend& backend,
+                             std::span<const Environment* const> environments);
+
+// The bytes one environment's texels take in a GPU submission (the chunks of a batch).
+VkDeviceSize environmentBytes(const Environment& environment);
 
 // Takes the sun out of the environment when asked; the probe is then of the rest.
 std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& environment);
@@ -105,7 +122,7 @@ void checkFormatOptions(const BakeOptions& options);
 void writeOutput(const BakeOptions& options, const std::string& path, const ShCoefficients& probe,
                  const ProbeMetadata& metadata);
 
-ProbeMetadata metadataFor(const BakeOptions& options, const Environment& environment,
+ProbeMetadata metadataFor(const Backend& backend, const BakeOptions& options, const Environment& environment,
                           const BakeResult& result, const std::optional<ProbeSun>& sun);
 
 // Every input to its own file in options.outDir (bake_batch.cpp).

@@ -24,7 +24,7 @@ struct BakeOptions {
     int order = 3;
     std::string layout = "auto";
     int faceSize = 0;                           // 0: from the input (256 for the built-in sky)
-    std::string backend = "gpu";                // gpu | cpu (fast float) | reference (double)
+    std::string backend = "auto";               // auto | gpu | cpu (fast float) | reference (double)
     bool irradiance = false;                    // write E_lm instead of L_lm
     bool sanitize = false;                      // replace NaN/Inf texels with 0 instead of refusing
     int64_t maxPixels = kDefaultMaxImagePixels; // larger image files are refused from their header

@@ -40,13 +40,22 @@ struct LoadOptions {
     int faceSize = 0; // 0: chosen from the input (equirect width / 4, cross or face size)
     NonFinitePolicy nonFinite = NonFinitePolicy::Refuse;
     int64_t maxPixels = kDefaultMaxImagePixels; // per image file (each face of six face files)
+    // With faceSize 0, an equirect image is kept as it was decoded (Environment::equirect), for a
+    // projection that integrates it directly, instead of being resampled to a cube map.
+    bool keepEquirect = false;
 };
 
+// A cube map, or an equirect map kept as it was decoded (LoadOptions::keepEquirect): exactly one
+// of the two holds texels.
 struct Environment {
     Cubemap cubemap;
+    Image equirect;
     Layout layout = Layout::Auto; // the layout actually used
     std::string description;      // e.g. "sky.exr (equirect 1024x512)"
     size_t replacedTexels = 0;    // non-finite texels replaced under NonFinitePolicy::Replace
+
+    bool keptEquirect() const { return equirect.width > 0; }
+    size_t texelCount() const { return keptEquirect() ? equirect.texels.size() : cubemap.texels.size(); }
 };
 
 // Reads an image file: EXR, Radiance HDR, PNG and JPEG by shprobe's own readers, any other format
@@ -74,8 +83,13 @@ Image readImage(const std::string& path, int64_t maxPixels = kDefaultMaxImagePix
 std::array<std::string, kFaceCount> resolveFaceFiles(const std::string& path);
 bool isFacesSource(const std::string& path);
 
-// Loads an environment from a file, folder or pattern, as a cube map of options.faceSize.
+// Loads an environment from a file, folder or pattern, as a cube map of options.faceSize, or as the
+// equirect image itself (options.keepEquirect).
 Environment loadEnvironment(const std::string& path, const LoadOptions& options);
+
+// Throws Error(Input) unless the size is 2:1: a full sphere spans 360 by 180 degrees, and any other
+// shape would be stretched without a word.
+void checkEquirectShape(int width, int height);
 
 // Cube map of an equirect map: each texel averages a grid of supersamples (enough to cover the
 // equirect pixels under it), each bilinearly interpolated, wrapping in longitude.

@@ -229,6 +229,7 @@ Environment loadFaces(const std::string& source, const LoadOptions& options) {
 Layout chooseLayout(const Image& image, Layout requested) {
     if (requested == Layout::Faces)
         throw Error(ErrorKind::Input, "layout faces needs a folder or a pattern containing {face}");
+    if (requested == Layout::Equirect) checkEquirectShape(image.width, image.height);
     return requested == Layout::Auto ? detectLayout(image.width, image.height) : requested;
 }
 
@@ -244,16 +245,26 @@ Environment loadSingleImage(const std::string& path, const LoadOptions& options)
     environment.replacedTexels = applyNonFinitePolicy(image.texels, options.nonFinite, path);
     try {
         environment.layout = chooseLayout(image, options.layout);
-        environment.cubemap = imageToCubemap(image, environment.layout, options.faceSize);
+        if (environment.layout == Layout::Equirect && options.keepEquirect && options.faceSize == 0)
+            environment.equirect = std::move(image);
+        else
+            environment.cubemap = imageToCubemap(image, environment.layout, options.faceSize);
     } catch (const Error& error) {
         throw Error(error.kind(), path + ": " + error.what());
     }
+    const Image& decoded = environment.keptEquirect() ? environment.equirect : image;
     environment.description =
-        path + " (" + layoutName(environment.layout) + " " + sizeText(image.width, image.height) + ")";
+        path + " (" + layoutName(environment.layout) + " " + sizeText(decoded.width, decoded.height) + ")";
     return environment;
 }
 
 } // namespace
+
+void checkEquirectShape(int width, int height) {
+    if (width != 2 * height)
+        throw Error(ErrorKind::Input,
+                    "image is " + sizeText(width, height) + ", but an equirect image must be 2:1");
+}
 
 Image readImage(const std::string& path, int64_t maxPixels) {
     checkInputFile(path, "an image file");
