@@ -13,6 +13,9 @@
 #   bin/shprobe-view                           the viewer, which `shprobe view` runs from shprobe's
 #                                              folder; the only file that needs GLFW (same RUNPATH; not
 #                                              built with -DSHPROBE_BUILD_VIEWER=OFF)
+#   bin/shprobe-bench                          `shprobe bench`'s measurements alone: links no project
+#                                              library (no RUNPATH) and needs only the Vulkan loader,
+#                                              so the file can be copied alone to a GPU machine
 #   lib/libshprobe{_sh,,_render}.a             shprobe_sh, shprobe, shprobe_render (exported as
 #     or .so -> .so.0.1 -> .so.0.1.0           shprobe::sh, shprobe::shprobe, shprobe::render): static
 #                                              by default, shared with -DBUILD_SHARED_LIBS=ON (soname
@@ -93,7 +96,8 @@ while(shprobe_installed_libraries)
     list(APPEND shprobe_export_targets ${target})
 endwhile()
 get_target_property(shprobe_library_type shprobe TYPE) # STATIC_LIBRARY or SHARED_LIBRARY
-# The programs, installed side by side: `shprobe view` runs shprobe-view from shprobe's folder.
+# The programs that link the libraries, installed side by side: `shprobe view` runs shprobe-view from
+# shprobe's folder. shprobe-bench, installed beside them, links none (so needs no RUNPATH).
 set(shprobe_programs shprobe_cli)
 if(TARGET shprobe_view_cli) # SHPROBE_BUILD_VIEWER
     list(APPEND shprobe_programs shprobe_view_cli)
@@ -217,7 +221,7 @@ install(TARGETS ${shprobe_export_targets}
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(TARGETS ${shprobe_programs} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS ${shprobe_programs} shprobe_bench_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(TARGETS shprobe_oiio LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/shprobe) # image/oiio_plugin.h
 
 # --- headers -------------------------------------------------------------------------------------

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <future>
 
 namespace shprobe {
 
@@ -73,13 +74,20 @@ void checkSingleOutput(const BakeOptions& options) {
 void runSingleBake(const BakeOptions& options) {
     checkSingleOutput(options);
 
+    // Vulkan asked for: the device starts while the input decodes (vkCreateInstance alone takes tens
+    // of milliseconds). auto waits for the input, whose size it chooses by.
+    std::future<std::unique_ptr<GpuSession>> starting;
+    if (requestsVulkan(options))
+        starting = std::async(std::launch::async, [&] { return std::make_unique<GpuSession>(options); });
+
     Clock::time_point start = Clock::now();
     Environment environment = loadInput(options, options.inputs.empty() ? std::string() : options.inputs[0]);
     std::optional<ProbeSun> sun = takeOutSun(options, environment);
     double loadMs = millisecondsSince(start);
 
     start = Clock::now();
-    Backend backend = chooseBackend(options, projectionWork(options, environment));
+    Backend backend = starting.valid() ? gpuBackend(starting.get())
+                                       : chooseBackend(options, projectionWork(options, environment));
     const Environment* environments[] = {&environment};
     BakeResult result = bake(options, backend, environments)[0];
     if (backend.session) backend.session->finish();

@@ -139,14 +139,18 @@ double projectionWork(const BakeOptions& options, const Environment& environment
     return double(environment.texelCount()) * coefficientCount(options.order);
 }
 
+bool requestsVulkan(const BakeOptions& options) {
+    return options.backend == "gpu" || (options.backend == "auto" && !options.device.empty());
+}
+
+Backend gpuBackend(std::unique_ptr<GpuSession> session) {
+    return Backend{"gpu", "", std::move(session)};
+}
+
 Backend chooseBackend(const BakeOptions& options, double work) {
+    if (requestsVulkan(options)) return gpuBackend(std::make_unique<GpuSession>(options));
     Backend backend{options.backend, "", nullptr};
     if (options.backend == "cpu" || options.backend == "reference") return backend;
-    if (options.backend == "gpu" || !options.device.empty()) {
-        backend.name = "gpu";
-        backend.session = std::make_unique<GpuSession>(options);
-        return backend;
-    }
     backend.name = "cpu";
     double cpuSeconds = work / (kCpuWorkPerCoreSecond * std::max(1u, std::thread::hardware_concurrency()));
     if (cpuSeconds < kVulkanStartSeconds) {

@@ -73,6 +73,10 @@ struct Backend {
 // Vulkan device can be used; Vulkan on a GPU. --device names a device to bake on: auto then means
 // gpu.
 Backend chooseBackend(const BakeOptions& options, double work);
+// Whether the options ask for Vulkan whatever the job: --backend gpu, or a --device named.
+bool requestsVulkan(const BakeOptions& options);
+// The gpu backend on a session started beforehand (while the input decoded).
+Backend gpuBackend(std::unique_ptr<GpuSession> session);
 // The projection work of one input: texels times coefficients.
 double projectionWork(const BakeOptions& options, const Environment& environment);
 

@@ -9,6 +9,7 @@
 #include "shprobe/gpu/host_bake.h"
 #include "shprobe/io/output_file.h"
 #include "shprobe/sh/basis.h"
+#include "shprobe/sh/error.h"
 #include "shprobe/sh/fast_projection.h"
 #include "shprobe/sh/projection.h"
 #include "shprobe/sh/scope_exit.h"
@@ -288,27 +289,23 @@ nlohmann::ordered_json reportJson(const Context& context, const std::vector<Meas
 
 } // namespace
 
-void addBenchCommand(CLI::App& app, BenchOptions& options) {
-    CLI::App* command = app.add_subcommand(
-        "bench", "Measure every projection path against the machine's memory-read bound, in one run");
-    command->add_option("--sizes", options.faceSizes, "Face sizes")->capture_default_str();
-    command->add_option("--orders", options.orders, "SH orders")
+void addBenchOptions(CLI::App& command, BenchOptions& options) {
+    command.add_option("--sizes", options.faceSizes, "Face sizes")->capture_default_str();
+    command.add_option("--orders", options.orders, "SH orders")
         ->check(CLI::Range(1, kMaxOrder))
         ->capture_default_str();
-    command->add_option("--repeat", options.repeat, "Runs per measurement (the best counts)")
+    command.add_option("--repeat", options.repeat, "Runs per measurement (the best counts)")
         ->check(CLI::Range(1, 100))
         ->capture_default_str();
     command
-        ->add_option("--reference-max-size", options.referenceMaxFaceSize,
-                     "Largest face size for the (slow) double reference")
+        .add_option("--reference-max-size", options.referenceMaxFaceSize,
+                    "Largest face size for the (slow) double reference")
         ->capture_default_str();
-    command->add_option("--json", options.json, "Also write the measurements to this JSON file");
-    command->add_option("--device", options.device, "Vulkan device index or name part");
-    addBenchJobOptions(*command, options.job);
+    command.add_option("--json", options.json, "Also write the measurements to this JSON file");
+    command.add_option("--device", options.device, "Vulkan device index or name part");
 }
 
 void runBench(const BenchOptions& options) {
-    if (benchJobRequested(options.job)) return runBenchJob(options.job, options.repeat, options.json);
     if (!options.json.empty()) checkOutputPath(options.json);
     ContextOptions contextOptions;
     contextOptions.device = options.device;
@@ -323,6 +320,9 @@ void runBench(const BenchOptions& options) {
     for (int faceSize : options.faceSizes)
         bench.runFaceSize(faceSize);
     const PipelineCreations pipelineCreations = measurePipelines(context, options.orders);
+    // With the validation layer (SHPROBE_VALIDATION=1), a message fails the run as it fails a bake.
+    if (uint32_t messages = context.validationMessages(); messages > 0)
+        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
     if (!options.json.empty())
         writeOutputFile(options.json,
                         reportJson(context, bench.measurements(), pipelineCreations).dump(2) + "\n");

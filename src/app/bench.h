@@ -1,7 +1,8 @@
-// `shprobe bench`: projection speed against the memory-read bound (bench.cpp).
+// `shprobe bench` and shprobe-bench: projection speed against the memory-read bound, on generated
+// inputs (bench.cpp). It needs the Vulkan context and the GPU passes, and no image codec:
+// shprobe-bench (bench_main.cpp) is this alone, and `shprobe bench` adds the whole-job benchmark's
+// in-process parts (bench_job.h), which read and write image files.
 #pragma once
-#include "app/bench_job.h"
-
 #include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
@@ -15,10 +16,15 @@ struct BenchOptions {
     int referenceMaxFaceSize = 2048; // the double reference takes seconds beyond this
     std::string json;
     std::string device;
-    BenchJobOptions job; // --decode, --write-layouts: the whole-job benchmark's in-process parts
 };
 
-void addBenchCommand(CLI::App& app, BenchOptions& options);
+inline constexpr char kBenchSummary[] =
+    "Measure every projection path against the machine's memory-read bound, in one run";
+
+// The benchmark's options on `command`: `shprobe bench`, or shprobe-bench's own command line.
+void addBenchOptions(CLI::App& command, BenchOptions& options);
+// Prints a row per path, face size, format and order, then the pipeline creation times; --json
+// also writes them to a file.
 void runBench(const BenchOptions& options);
 
 } // namespace shprobe

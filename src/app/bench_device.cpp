@@ -29,13 +29,14 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
     const Cubemap* one[] = {&cubemap};
     CubemapUpload upload = createCubemapUpload(context, one, plan.cubemaps);
     ScopeExit destroyUpload([&] { destroyCubemapUpload(context, upload); });
-    // The projection's own workgroup count for this cube map, from a bake set over a placeholder output.
+    // The projection's own workgroup count for this cube map, from a bake set over a one-probe output.
     uint32_t groups = 0;
     {
         ProbeBaker baker = createProbeBaker(context, plan);
         ScopeExit destroyBaker([&] { destroyProbeBaker(context, baker); });
         Buffer placeholder =
-            createBuffer(context, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "placeholder");
+            createBuffer(context, probeBakeOutputBytes(plan.order, 1), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                         MemoryUse::Device, "placeholder");
         ScopeExit destroyPlaceholder([&] { destroyBuffer(context, placeholder); });
         ProbeBakeSet set = createProbeBakeSet(context, baker,
                                               {upload.image.view, upload.faceSize, 1, placeholder.buffer, 0});

@@ -1,5 +1,6 @@
 // shprobe: bakes HDR environments into spherical-harmonics light probes on the GPU.
 #include "app/bench.h"
+#include "app/bench_job.h"
 #include "app/commands.h"
 #include "app/program.h"
 #include "shprobe/sh/error.h"
@@ -40,6 +41,21 @@ void runViewer(char** argv) {
                          "cannot run the viewer " + viewer + ": " + std::strerror(errno));
 }
 
+// `shprobe bench`: the kernel benchmark (bench.h, all of shprobe-bench) and the whole-job
+// benchmark's in-process parts (bench_job.h), which read and write image files.
+void addBench(CLI::App& app, shprobe::BenchOptions& bench, shprobe::BenchJobOptions& job) {
+    CLI::App* command = app.add_subcommand("bench", shprobe::kBenchSummary);
+    shprobe::addBenchOptions(*command, bench);
+    shprobe::addBenchJobOptions(*command, job);
+    command->footer("shprobe-bench, installed beside shprobe, runs the same measurements without "
+                    "--decode and --write-layouts, and needs only the Vulkan loader (docs/benchmark.md)");
+}
+
+void runBench(const shprobe::BenchOptions& bench, const shprobe::BenchJobOptions& job) {
+    if (shprobe::benchJobRequested(job)) return shprobe::runBenchJob(job, bench.repeat, bench.json);
+    shprobe::runBench(bench);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -54,6 +70,7 @@ int main(int argc, char** argv) {
     shprobe::RotateOptions rotate;
     shprobe::LightCommandOptions light;
     shprobe::BenchOptions bench;
+    shprobe::BenchJobOptions benchJob;
     shprobe::addBakeCommand(app, bake);
     shprobe::addConvertCommand(app, convert);
     shprobe::addInfoCommand(app, info);
@@ -64,7 +81,7 @@ int main(int argc, char** argv) {
                            "--help`; exit 4 where it is not, as in a build with SHPROBE_BUILD_VIEWER=OFF)");
     shprobe::addRotateCommand(app, rotate);
     shprobe::addLightCommand(app, light);
-    shprobe::addBenchCommand(app, bench);
+    addBench(app, bench, benchJob);
 
     // Everything after `view` is the viewer's, --help included, and goes to it untouched: only
     // `shprobe view` itself is parsed here.
@@ -77,6 +94,6 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("render")) shprobe::runRender(render);
         if (app.got_subcommand("rotate")) shprobe::runRotate(rotate);
         if (app.got_subcommand("light")) shprobe::runLight(light);
-        if (app.got_subcommand("bench")) shprobe::runBench(bench);
+        if (app.got_subcommand("bench")) runBench(bench, benchJob);
     });
 }

@@ -1,6 +1,8 @@
 // The built-in default environment: a procedural sky (gradient, ground, sun disc), +Y up.
 #include "shprobe/image/environment.h"
 
+#include "shprobe/sh/parallel.h"
+
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
@@ -23,17 +25,28 @@ int sunSamplesPerSide(int faceSize, const SkyParameters& sky) {
     return int(std::min(samples, double(kMaxSunSamplesPerSide)));
 }
 
-// Whether any of texel (i, j) may lie inside the sun: its center is closer to the sun's center
-// than the sun's radius plus the texel's half-diagonal (at most sqrt(2) / faceSize radians).
-bool texelMayTouchSun(int face, int i, int j, int faceSize, const SkyParameters& sky) {
-    double cosine = glm::dot(texelDirection(face, i, j, faceSize), glm::normalize(sky.sunDirection));
-    double angle = std::acos(std::clamp(cosine, -1.0, 1.0));
-    return angle < sky.sunAngularRadius + std::sqrt(2.0) / faceSize;
+// Whether any of a texel may lie inside the sun: its center is closer to the sun's center than
+// the sun's radius plus the texel's half-diagonal (at most sqrt(2) / faceSize radians), compared
+// as cosines: the cosine of the angle to the sun's center, and the cosine of that limit.
+struct SunReach {
+    glm::dvec3 direction;
+    double cosLimit;
+};
+SunReach sunReach(int faceSize, const SkyParameters& sky) {
+    double limit = std::min(sky.sunAngularRadius + std::sqrt(2.0) / faceSize, M_PI);
+    return {glm::normalize(sky.sunDirection), std::cos(limit)};
 }
+bool texelMayTouchSun(int face, int i, int j, int faceSize, const SunReach& sun) {
+    return glm::dot(texelDirection(face, i, j, faceSize), sun.direction) > sun.cosLimit;
+}
+
+// Texels worth a thread: a few hundred microseconds of work.
+constexpr size_t kTexelsPerThread = 4096;
 
 // Mean sky radiance over an n x n grid in texel (i, j), each sample weighted by the solid angle
 // per unit face area, 1 / (1 + a^2 + b^2)^(3/2), so that mean x texel solid angle is the integral.
 glm::dvec3 texelMean(const SkyParameters& sky, int face, int i, int j, int faceSize, int n) {
+    if (n == 1) return skyRadiance(sky, texelDirection(face, i, j, faceSize)); // one sample: no weights
     double step = 2.0 / (double(faceSize) * n);
     glm::dvec3 sum(0.0);
     double weights = 0.0;
@@ -62,15 +75,17 @@ glm::dvec3 skyRadiance(const SkyParameters& sky, const glm::dvec3& direction) {
 
 Cubemap makeDefaultSky(int faceSize, const SkyParameters& sky) {
     Cubemap cubemap = makeCubemap(faceSize); // throws for a face size below 1
-    int sunSamples = sunSamplesPerSide(faceSize, sky);
-    for (int face = 0; face < kFaceCount; ++face) {
-        for (int j = 0; j < faceSize; ++j) {
-            for (int i = 0; i < faceSize; ++i) {
-                int n = texelMayTouchSun(face, i, j, faceSize, sky) ? sunSamples : 1;
-                cubemap.at(face, i, j) = glm::vec4(glm::vec3(texelMean(sky, face, i, j, faceSize, n)), 1.0f);
-            }
+    const int sunSamples = sunSamplesPerSide(faceSize, sky);
+    const SunReach sun = sunReach(faceSize, sky);
+    // Item r is row r % faceSize of face r / faceSize.
+    forEachItem(kFaceCount * faceSize, threadCount(cubemap.texels.size(), kTexelsPerThread), [&](int row) {
+        int face = row / faceSize;
+        int j = row % faceSize;
+        for (int i = 0; i < faceSize; ++i) {
+            int n = texelMayTouchSun(face, i, j, faceSize, sun) ? sunSamples : 1;
+            cubemap.at(face, i, j) = glm::vec4(glm::vec3(texelMean(sky, face, i, j, faceSize, n)), 1.0f);
         }
-    }
+    });
     return cubemap;
 }
 
