@@ -897,6 +897,26 @@ TEST_F(CliBatch, BatchEqualsSingleBakesProbeForProbe) {
     EXPECT_EQ(entriesOf(folder() / "whole"), (std::vector<std::string>{"a.json", "b.json", "c.json"}));
 }
 
+// A GPU batch of an equirect (projected directly) and a horizontal cross (a cube map) bakes both
+// kinds in one chunk, each with its own pipelines: the same files, byte for byte, as baking each
+// alone, in one chunk ("1 GPU submission" counts chunks; the two kinds are two submissions of it).
+TEST_F(CliBatch, MixedKindsBatchEqualsSingleBakes) {
+    writeInputs();
+    writeImage(file("cross.exr"), filledImage(32, 24, [](int i, int j) {
+                   return glm::vec3(1.0f + 0.03f * float(i), 0.5f + 0.02f * float(j), 0.25f);
+               }));
+    const std::vector<std::string> shared = {"--order", "3", "--backend", "gpu", "-q"};
+    runOk(with({"bake", a(), "-o", file("single_a.json")}, shared));
+    runOk(with({"bake", file("cross.exr"), "-o", file("single_cross.json")}, shared));
+    RunResult batch = runOk(with({"bake", a(), file("cross.exr"), "--out-dir", file("mixed")}, shared));
+    EXPECT_TRUE(hasBatchSummary(batch.out, "2 probes baked, 0 failed; 896 texels in 1 GPU submission"))
+        << batch.out;
+    EXPECT_EQ(readText(folder() / "mixed" / "a.json"), readText(file("single_a.json")));
+    EXPECT_EQ(readText(folder() / "mixed" / "cross.json"), readText(file("single_cross.json")));
+    EXPECT_NE(readProbeFile(file("single_a.json")).rgb[0].r,
+              readProbeFile(file("single_cross.json")).rgb[0].r);
+}
+
 // --backend cpu bakes a batch probe by probe: the same files as -o.
 TEST_F(CliBatch, CpuBatchEqualsCpuBakes) {
     writeInputs();
