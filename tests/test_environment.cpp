@@ -11,6 +11,7 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <chrono>
@@ -340,6 +341,34 @@ TEST(Equirect, ConstantStaysConstant) {
         EXPECT_NEAR(texel.r, 0.7f, 1e-6f);
         EXPECT_NEAR(texel.b, 3.0f, 1e-6f);
     }
+}
+
+// Bilinear interpolation reproduces a function linear in the pixel coordinates, so with one
+// sample per texel (width = 4 faceSize) every texel holds the equirect coordinates of its own
+// direction: red the column coordinate x (away from the seam, where x wraps), green the row
+// coordinate y (clamped at the outer pixel centers). 6 x 64^2 texels are enough to run on
+// several threads, and every texel is checked, so one skipped or written from another row's
+// direction fails.
+TEST(Equirect, EveryTexelSamplesItsOwnDirection) {
+    const int faceSize = 64;
+    const int width = 4 * faceSize, height = 2 * faceSize;
+    Image coordinates =
+        filledImage(width, height, [](int x, int y) { return glm::vec3(x + 0.5f, y + 0.5f, 0); });
+    Cubemap cubemap = equirectToCubemap(coordinates, faceSize);
+    int checked = 0;
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < faceSize; ++j)
+            for (int i = 0; i < faceSize; ++i) {
+                PixelPoint p = directionToEquirect(texelDirection(face, i, j, faceSize), width, height);
+                const glm::vec4& texel = cubemap.at(face, i, j);
+                // 1e-4 pixels: float rounding of values up to 256, far below a texel's spacing
+                ASSERT_NEAR(texel.g, std::clamp(p.y, 0.5, height - 0.5), 1e-4)
+                    << face << " " << i << " " << j;
+                if (p.x < 0.5 || p.x > width - 0.5) continue;
+                ASSERT_NEAR(texel.r, p.x, 1e-4) << face << " " << i << " " << j;
+                ++checked;
+            }
+    EXPECT_GT(checked, kFaceCount * faceSize * faceSize * 9 / 10);
 }
 
 TEST_F(EnvironmentFiles, LayoutOverrideMustFitTheImage) {
@@ -1134,6 +1163,24 @@ TEST(Resize, HalvingAveragesTwoByTwoBlocks) {
         (source.at(2, 2, 4) + source.at(2, 3, 4) + source.at(2, 2, 5) + source.at(2, 3, 5)) / 4.0f;
     EXPECT_NEAR(half.at(2, 1, 2).r, block.r, kResizeRounding * 4);
     EXPECT_NEAR(half.at(2, 1, 2).g, block.g, kResizeRounding * 4);
+}
+
+// Halving weighs each texel of a 2 x 2 block by exactly 1/2 per axis, and the sums of floats in
+// double are exact, so each texel is the block's mean rounded once to float: equal, not near.
+// 512 -> 256 is enough work to run on several threads; every texel of every face is checked.
+TEST(Resize, HalvingLargeFacesGivesEveryBlockMeanExactly) {
+    const int size = 256;
+    Cubemap source = randomCubemap(2 * size);
+    Cubemap half = resizeCubemap(source, size);
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < size; ++j)
+            for (int i = 0; i < size; ++i) {
+                glm::dvec4 sum = glm::dvec4(source.at(face, 2 * i, 2 * j)) +
+                                 glm::dvec4(source.at(face, 2 * i + 1, 2 * j)) +
+                                 glm::dvec4(source.at(face, 2 * i, 2 * j + 1)) +
+                                 glm::dvec4(source.at(face, 2 * i + 1, 2 * j + 1));
+                ASSERT_EQ(half.at(face, i, j), glm::vec4(sum / 4.0)) << face << " " << i << " " << j;
+            }
 }
 
 // ---- Default sky ------------------------------------------------------------------------------

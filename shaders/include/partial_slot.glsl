@@ -6,7 +6,7 @@
 // The includer enables GL_KHR_shader_subgroup_basic and GL_KHR_shader_subgroup_arithmetic, declares
 // the workgroup size and SH_ORDER and includes sh_basis.glsl first. In main:
 //   SH_EACH_COEFFICIENT(SH_DECLARE_SUM)   declares sum0, sum1, ... = 0
-//   SH_EACH_COEFFICIENT(SH_ACCUMULATE)    adds (basis[k] * weight) * radiance[oddAxes(l, m)] to sum k,
+//   SH_EACH_COEFFICIENT(SH_ACCUMULATE)    adds (basis[k] * weight) * radiance[SH_ODD_AXES(l, m)] to sum k,
 //                                         from the includer's float basis[], float weight and
 //                                         vec3 radiance[8] after signedSums
 //   SH_WRITE_PARTIAL_SLOT                 once, at the end: the workgroup's sums into its slot
@@ -57,11 +57,17 @@ void reduceChunk(uint first, uint slot, uint lanes) {
     barrier(); // subgroupSums is reused by the next chunk
 }
 
-// The axes in which y_lm is odd, as a mask, bit 0 x, bit 1 y, bit 2 z (basisParity).
-uint oddAxes(int l, int m) {
-    uvec3 parity = basisParity(l, m);
-    return parity.x | (parity.y << 1u) | (parity.z << 2u);
-}
+// The axes in which y_lm is odd, as a mask, bit 0 x, bit 1 y, bit 2 z. y_lm is Re or Im of
+// (x + iy)^|m| (terms x^(|m| - 2k) y^(2k) for cos(m phi), m > 0; x^(|m| - 1 - 2k) y^(2k + 1) for
+// sin(|m| phi), m < 0) times a polynomial in z of parity l - |m|; so for D = diag(+-1, +-1, +-1),
+// y_lm(D d) = y_lm(d) (-1)^(sum of the parities of the negated axes). The rule is a
+// constant expression of the literals l and m, so that every use indexes radiance[] by a constant
+// in the SPIR-V already. Called as a function, each of project.comp's 192 uses was a call for the
+// driver to inline and fold: lavapipe created the pipeline twice as slowly (docs/gpu-path.md,
+// "Start-up").
+#define SH_ODD_AXES(l, m)                                                                           \
+    ((m) > 0 ? ((m) & 1) | ((((l) - (m)) & 1) << 2)                                                 \
+             : (m) < 0 ? ((-(m) - 1) & 1) | 2 | ((((l) + (m)) & 1) << 2) : (((l) & 1) << 2))
 
 // In: radiance[s] is the texel whose direction is d with the axes in s negated. Out: radiance[p]
 // is the sum over s of (-1)^|p & s| radiance[s], a Walsh-Hadamard transform: the sum that y_lm(d)
@@ -77,7 +83,7 @@ void signedSums(inout vec3 radiance[8]) {
 
 #define SH_DECLARE_SUM(k, l, m) vec3 sum##k = vec3(0.0f);
 #define SH_ACCUMULATE(k, l, m) \
-    if (k < SH_COEFFICIENTS) sum##k += (basis[k] * weight) * radiance[oddAxes(l, m)];
+    if (k < SH_COEFFICIENTS) sum##k += (basis[k] * weight) * radiance[SH_ODD_AXES(l, m)];
 
 // Workaround(llvmpipe, Mesa 22.3): for speed, every sum is reduced over its subgroup before the
 // first barrier. llvmpipe runs a shader with barriers as a coroutine, and a value live across a

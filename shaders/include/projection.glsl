@@ -8,9 +8,9 @@
 // the normalized (a, b, 1) depend on the position only, and the eight texels of a face pair (two
 // opposite faces, four mirror images each) see one direction d with its coordinates' signs
 // changed in all eight ways. A sign change of x, y or z multiplies y_lm by +-1 according to its
-// parity in that coordinate (basisParity), so one basis evaluation serves eight texels, and each
-// coefficient multiplies one of eight signed sums of their radiance (signedSums): per 24 texels,
-// three basis evaluations and 3 n^2 multiply-adds instead of 24 and 24 n^2.
+// parity in that coordinate (SH_ODD_AXES, partial_slot.glsl), so one basis evaluation serves eight
+// texels, and each coefficient multiplies one of eight signed sums of their radiance (signedSums):
+// per 24 texels, three basis evaluations and 3 n^2 multiply-adds instead of 24 and 24 n^2.
 //
 // The includer defines SHPROBE_STORAGE_FORMAT or not (cubemap_input.glsl) and nothing else.
 //   set 0, binding 0: the cube maps (cubemap_input.glsl)

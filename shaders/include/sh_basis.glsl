@@ -111,16 +111,4 @@ void shEvalBasis(vec3 d, out float y[SH_BASIS_CAPACITY]) {
 #endif
 #undef SH_COUNT_COEFFICIENT
 
-// Parity of y_lm in x, y and z: y_lm is Re or Im of (x + iy)^|m| (terms x^(|m| - 2k) y^(2k) for
-// cos(m phi), m > 0; x^(|m| - 1 - 2k) y^(2k + 1) for sin(|m| phi), m < 0) times a polynomial in z of
-// parity l - |m|. So for D = diag(+-1, +-1, +-1), y_lm(D d) = y_lm(d) (-1)^(sum of the parities of
-// the negated axes).
-uvec3 basisParity(int l, int m) {
-    uint am = uint(abs(m));
-    uint zParity = uint(l) - am;
-    if (m > 0) return uvec3(am, 0u, zParity) & 1u;
-    if (m < 0) return uvec3(am - 1u, 1u, zParity) & 1u;
-    return uvec3(0u, 0u, zParity) & 1u;
-}
-
 #endif
