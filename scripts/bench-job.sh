@@ -11,7 +11,10 @@
 # throughput). Orders 3 and 5, the default face size and --face-size 1024, backends auto (the
 # default: rows without --backend), gpu, cpu and reference. Each row: the median wall time, its bound, the ratio, and the peak memory (max RSS,
 # /usr/bin/time, one extra run); file bakes also show their peak above the same bake of the
-# built-in sky (a run with no input file).
+# built-in sky (a run with no input file). File and batch rows also show `x once`: the median over
+# the bound with each decode as a process meets it, once per file (the median of each
+# measurement's first decode of the file); the best decode is of a file read again and again,
+# whose data the caches hold.
 #
 #   bash scripts/bench-job.sh [--quick] [--json FILE] [--build DIR] [--runs N] [--warmup N]
 #
@@ -183,14 +186,17 @@ MiB = 1024.0 * 1024.0
 
 # Each file's decode: its best over every measurement of the run (before, before each row, after).
 decode = json.load(open(f"{tmp}/decode/before.json"))
-samples = {}
+samples, firsts = {}, {}
 for name in sorted(glob.glob(f"{tmp}/decode/*.json")):
     for f in json.load(open(name))["files"]:
         samples.setdefault(f["path"], []).append(f["best_seconds"])
+        firsts.setdefault(f["path"], []).append(f["first_seconds"])
 for f in decode["files"]:
     f["measurements"] = len(samples[f["path"]])
     f["best_seconds_of_each_measurement"] = samples[f["path"]]
     f["best_seconds"] = min(samples[f["path"]])
+    # A file decoded once in a process, as a bake decodes it: the median of the first decodes.
+    f["once_seconds"] = statistics.median(firsts[f["path"]])
 decode["total_best_seconds"] = sum(f["best_seconds"] for f in decode["files"])
 decode["repeat"] = {"before_and_after": int(decode_repeat), "before_each_row": int(row_decode_repeat)}
 decoded = {f["path"]: f for f in decode["files"]}
@@ -222,12 +228,16 @@ for r in rows:
         r["decode_seconds"] = sum(f["best_seconds"] for f in keys[key])
         r["decoded_bytes"] = sum(f["decoded_bytes"] for f in keys[key])
         r["bound"] = start + r["decode_seconds"]
+        r["bound_once"] = start + sum(f["once_seconds"] for f in keys[key])
     else:  # batch: the decode-alone throughput of the same files
         r["decode_seconds"] = sum(f["best_seconds"] for f in keys[key])
         r["decoded_bytes"] = sum(f["decoded_bytes"] for f in keys[key])
         r["bound"] = r["decode_seconds"]
+        r["bound_once"] = sum(f["once_seconds"] for f in keys[key])
         r["fraction_of_decode_throughput"] = r["decode_seconds"] / r["median"]
     r["ratio"] = r["median"] / r["bound"]
+    if "bound_once" in r:
+        r["ratio_once"] = r["median"] / r["bound_once"]
     base = sky.get((r["backend"], r["order"], r["face"]))
     if r["input"] in ("equirect", "cross", "faces", "batch") and base:
         r["peak_over_no_input_kib"] = r["peak_kib"] - base["peak_kib"]
@@ -238,20 +248,21 @@ lines.append(f"runs: {runs} after {warmup} warmups per row (median; rows under 5
              f"best of {decode_repeat} before and after the rows and of {row_decode_repeat} before each; "
              f"minimal start {start * 1e3:.2f} ms")
 lines.append("")
-lines.append("decode alone (readImage, in process)    pixels      MiB   best ms  median of bests  measured  first ms")
+lines.append("decode alone (readImage, in process)    pixels      MiB   best ms  median of bests  measured  first ms  once ms")
 for f in decode["files"]:
     name = "/".join(f["path"].split("/")[-2:]) if "/faces/" in f["path"] else f["path"].split("/")[-1]
     lines.append(f"  {name:34s} {f['width']:>5d}x{f['height']:<5d} {f['decoded_bytes'] / MiB:6.1f} "
                  f"{f['best_seconds'] * 1e3:9.2f} {statistics.median(samples[f['path']]) * 1e3:16.2f} "
-                 f"{f['measurements']:9d} {f['first_seconds'] * 1e3:9.2f}")
+                 f"{f['measurements']:9d} {f['first_seconds'] * 1e3:9.2f} {f['once_seconds'] * 1e3:8.2f}")
 lines.append("")
 w = max(len(r["label"]) for r in rows)
-lines.append(f"{'row':{w}s}  {'median s':>9s} {'min s':>8s} {'bound s':>8s} {'x bound':>8s} "
+lines.append(f"{'row':{w}s}  {'median s':>9s} {'min s':>8s} {'bound s':>8s} {'x bound':>8s} {'x once':>7s} "
              f"{'peak MiB':>9s} {'+MiB vs sky':>11s}")
 for r in rows:
     over = r.get("peak_over_no_input_kib")
     over_text = f"{over / 1024.0:11.1f}" if over is not None else f"{'':11s}"
-    lines.append(f"{r['label']:{w}s}  {r['median']:9.4f} {r['min']:8.4f} {r['bound']:8.4f} {r['ratio']:8.2f} "
+    once_text = f"{r['ratio_once']:7.2f}" if "ratio_once" in r else f"{'':7s}"
+    lines.append(f"{r['label']:{w}s}  {r['median']:9.4f} {r['min']:8.4f} {r['bound']:8.4f} {r['ratio']:8.2f} {once_text} "
                  f"{r['peak_kib'] / 1024.0:9.1f} {over_text}")
 
 # The targets the job will be judged by, as measured (not pass/fail of this script).
