@@ -31,15 +31,8 @@ if grep -Ev "$allowed" <<< "$loaded"; then
 fi
 echo "ldd: $(tr '\n' ' ' <<< "$loaded")"
 
-# Exit code, stderr and stdout of a run: "$code" "$err" "$out".
-run() {
-  set +e
-  "$@" > "$work/out" 2> "$work/err"
-  code=$?
-  set -e
-  out=$(cat "$work/out")
-  err=$(cat "$work/err")
-}
+# shellcheck source=tests/run_capture.sh
+source "$(dirname "$0")/run_capture.sh"
 run "$bench" --help
 [ "$code" = 0 ] || fail "--help: exit $code: $err"
 [[ "$out" == *"Usage:"* && "$out" == *"--sizes"* && "$out" == *"--orders"* ]] || fail "--help: $out"

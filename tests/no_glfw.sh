@@ -37,15 +37,8 @@ echo "no window-system library or OpenImageIO among the $(ldd "$shprobe" | wc -l
 [ -s "$work/probe.json" ] || fail "shprobe bake wrote no probe"
 echo "shprobe bake: OK"
 
-# Exit code, stderr and stdout of a run: "$code" "$err" "$out".
-run() {
-  set +e
-  "$@" > "$work/out" 2> "$work/err"
-  code=$?
-  set -e
-  out=$(cat "$work/out")
-  err=$(cat "$work/err")
-}
+# shellcheck source=tests/run_capture.sh
+source "$(dirname "$0")/run_capture.sh"
 expect_error() { # exit code, prefix of the single error line, command...
   local expected=$1 prefix=$2
   shift 2
