@@ -1,6 +1,6 @@
-// `shprobe bake`: environments in, SH radiance or irradiance coefficients out, on the GPU or with
-// the double-precision CPU reference. One input is written to -o; several (or a --list) are a
-// batch written to --out-dir (bake_batch.cpp).
+// `shprobe bake`: environments in, SH radiance or irradiance coefficients out, on the GPU, the fast
+// CPU path or the double-precision CPU reference (bake_steps.h). One input is written to -o;
+// several (or a --list) are a batch written to --out-dir (bake_batch.cpp).
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
 #include "app/toolkit.h"
@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <future>
+#include <system_error>
 
 namespace shprobe {
 
@@ -43,18 +44,10 @@ void printCoefficients(FILE* report, const ShCoefficients& coefficients) {
 void printSummary(FILE* report, const BakeOptions& options, const Environment& environment,
                   const Backend& backend, const BakeResult& result, double loadMs, double bakeMs) {
     std::fprintf(report, "shprobe bake: %s -> %s\n", environment.description.c_str(), options.output.c_str());
-    std::fprintf(report, "  backend  %s: %s", backend.name.c_str(), result.device.c_str());
-    if (!backend.reason.empty()) std::fprintf(report, " (auto: %s)", backend.reason.c_str());
-    std::fprintf(report, "\n");
-    if (environment.keptEquirect()) {
-        std::fprintf(report, "  input    %d x %d pixels projected directly, order %d (%d coefficients)\n",
-                     environment.equirect.width, environment.equirect.height, options.order,
-                     coefficientCount(options.order));
-    } else {
-        int n = environment.cubemap.faceSize;
-        std::fprintf(report, "  input    6 x %d x %d texels, order %d (%d coefficients)\n", n, n,
-                     options.order, coefficientCount(options.order));
-    }
+    std::fprintf(report, "%s\n", backendLine(backend, result.device).c_str());
+    std::fprintf(report, "  input    %s%s, order %d (%d coefficients)\n", inputSize(environment).c_str(),
+                 environment.keptEquirect() ? " projected directly" : "", options.order,
+                 coefficientCount(options.order));
     if (environment.replacedTexels > 0)
         std::fprintf(report, "  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
     if (hasLights(options.lights)) std::fprintf(report, "  lights   added to the environment's radiance\n");
@@ -75,10 +68,15 @@ void runSingleBake(const BakeOptions& options) {
     checkSingleOutput(options);
 
     // Vulkan asked for: the device starts while the input decodes (vkCreateInstance alone takes tens
-    // of milliseconds). auto waits for the input, whose size it chooses by.
+    // of milliseconds); a failed load is reported once that start is over. auto waits for the
+    // input, whose size it chooses by. Where no thread can be started, the device starts after.
     std::future<std::unique_ptr<GpuSession>> starting;
-    if (requestsVulkan(options))
-        starting = std::async(std::launch::async, [&] { return std::make_unique<GpuSession>(options); });
+    if (requestsVulkan(options)) {
+        try {
+            starting = std::async(std::launch::async, [&] { return std::make_unique<GpuSession>(options); });
+        } catch (const std::system_error&) { // no thread: chooseBackend starts it after the load
+        }
+    }
 
     Clock::time_point start = Clock::now();
     Environment environment = loadInput(options, options.inputs.empty() ? std::string() : options.inputs[0]);
@@ -88,6 +86,7 @@ void runSingleBake(const BakeOptions& options) {
     start = Clock::now();
     Backend backend = starting.valid() ? gpuBackend(starting.get())
                                        : chooseBackend(options, projectionWork(options, environment));
+    fitBackend(backend, environment);
     const Environment* environments[] = {&environment};
     BakeResult result = bake(options, backend, environments)[0];
     if (backend.session) backend.session->finish();
@@ -131,9 +130,10 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
                      "ignored); needs --out-dir")
         ->type_name("FILE");
     command
-        ->add_option("--batch-bytes", options.batchBytes,
-                     "Batch: most texel bytes (6 x N^2 x 16 per cube map) one GPU submission bakes; default "
-                     "and upper bound: the device's limit")
+        ->add_option(
+            "--batch-bytes", options.batchBytes,
+            "Batch: most texel bytes (16 a texel: 6 x N^2 x 16 per cube map, W x H x 16 per equirect) "
+            "one GPU submission bakes; default and upper bound: the device's limit")
         ->type_name("N")
         ->check(numberFrom(1.0, HUGE_VAL));
     command->add_option("--order", options.order, "SH order = number of bands (3: 9 coefficients)")
@@ -142,13 +142,19 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
     command->add_option("--layout", options.layout, "Input layout")
         ->check(CLI::IsMember({"auto", "equirect", "hcross", "vcross", "faces"}))
         ->capture_default_str();
-    command->add_option("--face-size", options.faceSize, "Cube-map face size (default: from the input)")
+    command
+        ->add_option(
+            "--face-size", options.faceSize,
+            "Cube-map face size: crosses and face files are resized to it, equirect inputs resampled "
+            "to a cube map of it (default: the cross's or the faces' own size; equirect inputs are "
+            "projected directly, each pixel weighted by its solid angle)")
         ->check(CLI::Range(1, kMaxGpuFaceSize));
     command
         ->add_option(
             "--backend", options.backend,
             "auto (the default: the fast CPU path for a job done sooner than Vulkan starts, or where the "
-            "only Vulkan device is a CPU, such as lavapipe; else Vulkan; --device asks for Vulkan), gpu "
+            "only Vulkan device is a CPU, such as lavapipe; else Vulkan; --device and --validation ask for "
+            "Vulkan), gpu "
             "(Vulkan compute), cpu (float, all cores) or reference (the double-precision reference)")
         ->check(CLI::IsMember({"auto", "gpu", "cpu", "reference"}))
         ->capture_default_str();

@@ -1,5 +1,5 @@
-// `shprobe bake` with --out-dir: every input to its own file, baked in chunks of as many cube maps
-// as one GPU submission takes; bad inputs are reported and skipped.
+// `shprobe bake` with --out-dir: every input to its own file, baked in chunks of as many maps as one
+// GPU submission takes (or one by one on the CPU); bad inputs are reported and skipped.
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
 #include "shprobe/io/input_file.h"
@@ -188,15 +188,6 @@ std::optional<Loaded> loadItem(Batch& batch, const BatchItem& item) {
     }
 }
 
-// "6 x 256 x 256 texels" of a cube map, "1024 x 512 pixels" of an equirect map projected directly.
-std::string sizeOf(const Environment& environment) {
-    if (environment.keptEquirect())
-        return std::to_string(environment.equirect.width) + " x " +
-               std::to_string(environment.equirect.height) + " pixels";
-    std::string n = std::to_string(environment.cubemap.faceSize);
-    return "6 x " + n + " x " + n + " texels";
-}
-
 void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const BakeResult& result) {
     const BakeOptions& options = batch.options;
     try {
@@ -222,18 +213,11 @@ void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const
         return;
     }
     std::string line = "  " + loaded.environment.description + " -> " + loaded.item->output + ", " +
-                       sizeOf(loaded.environment);
+                       inputSize(loaded.environment);
     if (loaded.environment.replacedTexels > 0)
         line += ", " + std::to_string(loaded.environment.replacedTexels) + " NaN/Inf texels replaced with 0";
     if (options.extractSun) line += loaded.sun ? ", sun taken out" : ", no sun found";
     printLine(batch, stdout, line);
-}
-
-void printBackend(const Backend& backend, const std::string& device) {
-    std::printf("  backend  %s: %s", backend.name.c_str(), device.c_str());
-    if (!backend.reason.empty()) std::printf(" (auto: %s)", backend.reason.c_str());
-    std::printf("\n");
-    std::fflush(stdout);
 }
 
 // The backend, chosen once the first input is loaded (auto: from its work times the number of
@@ -255,9 +239,7 @@ BatchBackend chooseBatchBackend(Batch& batch, const Environment& first, size_t c
         if (options.batchBytes > 0)
             chosen.chunkBytes = std::min<VkDeviceSize>(chosen.chunkBytes, options.batchBytes);
     }
-    batch.progress.clear();
-    printBackend(chosen.backend, device);
-    batch.progress.draw();
+    printLine(batch, stdout, backendLine(chosen.backend, device));
     return chosen;
 }
 
@@ -274,7 +256,10 @@ void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
         for (const Loaded& loaded : chunk)
             environments.push_back(&loaded.environment);
         std::vector<BakeResult> results = bake(batch.options, chosen->backend, environments);
-        ++batch.submissions;
+        // One submission per kind of map in the chunk on the GPU (bakeOnGpu).
+        auto equirect = [](const Loaded& loaded) { return loaded.environment.keptEquirect(); };
+        batch.submissions += size_t(std::any_of(chunk.begin(), chunk.end(), equirect)) +
+                             size_t(!std::all_of(chunk.begin(), chunk.end(), equirect));
         for (size_t i = 0; i < chunk.size(); ++i)
             writeItem(batch, chosen->backend, chunk[i], results[i]);
         chunk.clear();
@@ -285,6 +270,7 @@ void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
         std::optional<Loaded> loaded = loadItem(batch, item);
         if (!loaded) continue;
         if (!chosen) chosen = chooseBatchBackend(batch, loaded->environment, items.size());
+        fitBackend(chosen->backend, loaded->environment);
         VkDeviceSize itemBytes = environmentBytes(loaded->environment);
         if (!chunk.empty() && bytes + itemBytes > chosen->chunkBytes) flush();
         bytes += itemBytes;

@@ -140,7 +140,8 @@ double projectionWork(const BakeOptions& options, const Environment& environment
 }
 
 bool requestsVulkan(const BakeOptions& options) {
-    return options.backend == "gpu" || (options.backend == "auto" && !options.device.empty());
+    return options.backend == "gpu" ||
+           (options.backend == "auto" && (!options.device.empty() || options.validation));
 }
 
 Backend gpuBackend(std::unique_ptr<GpuSession> session) {
@@ -161,7 +162,7 @@ Backend chooseBackend(const BakeOptions& options, double work) {
         backend.session = std::make_unique<GpuSession>(options);
     } catch (const Error& error) {
         if (error.kind() != ErrorKind::Device) throw;
-        backend.reason = std::string("no Vulkan device could be used: ") + error.what();
+        backend.reason = "no usable Vulkan device"; // `--backend gpu` says why in full
         return backend;
     }
     const DeviceInfo& device = backend.session->context().info;
@@ -178,6 +179,28 @@ Backend chooseBackend(const BakeOptions& options, double work) {
 
 VkDeviceSize environmentBytes(const Environment& environment) {
     return VkDeviceSize(environment.texelCount()) * sizeof(glm::vec4);
+}
+
+void fitBackend(const Backend& backend, Environment& environment) {
+    if (!backend.session || !environment.keptEquirect()) return;
+    const uint32_t largest = backend.session->context().info.limits.maxImageDimension2D;
+    const Image& equirect = environment.equirect;
+    if (uint32_t(equirect.width) <= largest && uint32_t(equirect.height) <= largest) return;
+    environment.cubemap = equirectToCubemap(equirect, std::max(1, equirect.width / 4));
+    environment.equirect = Image{};
+}
+
+std::string inputSize(const Environment& environment) {
+    if (environment.keptEquirect())
+        return std::to_string(environment.equirect.width) + " x " +
+               std::to_string(environment.equirect.height) + " pixels";
+    std::string n = std::to_string(environment.cubemap.faceSize);
+    return "6 x " + n + " x " + n + " texels";
+}
+
+std::string backendLine(const Backend& backend, const std::string& device) {
+    std::string line = "  backend  " + backend.name + ": " + device;
+    return backend.reason.empty() ? line : line + " (auto: " + backend.reason + ")";
 }
 
 std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, GpuSession& session,

@@ -1,5 +1,6 @@
 // The steps of `shprobe bake` that a single bake (bake.cpp) and a batch (bake_batch.cpp) share:
-// loading an input, baking cube maps on the GPU or the CPU, finishing and writing a probe.
+// loading an input, choosing the backend, baking cube maps and equirect maps on the GPU or the CPU,
+// finishing and writing a probe.
 #pragma once
 #include "app/commands.h"
 #include "shprobe/gpu/host_bake.h"
@@ -23,7 +24,7 @@ namespace shprobe {
 struct BakeResult {
     ShCoefficients radiance;
     ShCoefficients irradiance;
-    std::string device; // "cpu reference" or the GPU's name
+    std::string device; // cpuBackendName or the GPU's name
     double deviceMilliseconds = 0.0;
 };
 
@@ -70,10 +71,10 @@ struct Backend {
 // the fast CPU path when the job's projection (work: texels x coefficients, all inputs) takes less
 // on the CPU than a Vulkan start-up alone (then no Vulkan instance is created), when the device is a
 // CPU (lavapipe: the fast CPU path projects faster than llvmpipe runs the shaders), or when no
-// Vulkan device can be used; Vulkan on a GPU. --device names a device to bake on: auto then means
-// gpu.
+// Vulkan device can be used; Vulkan on a GPU. With --device or --validation auto means gpu.
 Backend chooseBackend(const BakeOptions& options, double work);
-// Whether the options ask for Vulkan whatever the job: --backend gpu, or a --device named.
+// Whether the options ask for Vulkan whatever the job: --backend gpu, a --device named, or
+// --validation (which checks Vulkan's use).
 bool requestsVulkan(const BakeOptions& options);
 // The gpu backend on a session started beforehand (while the input decoded).
 Backend gpuBackend(std::unique_ptr<GpuSession> session);
@@ -101,6 +102,15 @@ std::vector<BakeResult> bake(const BakeOptions& options, Backend& backend,
 
 // The bytes one environment's texels take in a GPU submission (the chunks of a batch).
 VkDeviceSize environmentBytes(const Environment& environment);
+
+// On the GPU, an equirect map with a side beyond the device's image limit is resampled to a cube map
+// (of width / 4), as every equirect was before direct projection; elsewhere nothing changes.
+void fitBackend(const Backend& backend, Environment& environment);
+
+// "6 x 256 x 256 texels" of a cube map, "1024 x 512 pixels" of an equirect map projected directly.
+std::string inputSize(const Environment& environment);
+// "  backend  cpu: cpu (float, all cores) (auto: ...)", without the line's end.
+std::string backendLine(const Backend& backend, const std::string& device);
 
 // Takes the sun out of the environment when asked; the probe is then of the rest.
 std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& environment);
