@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 
 namespace shprobe {
@@ -116,6 +117,6 @@ glm::dvec3 skyRadiance(const SkyParameters& sky, const glm::dvec3& direction);
 Cubemap makeDefaultSky(int faceSize, const SkyParameters& sky = {});
 
 // Counts texels that are NaN or infinite and applies the policy. Returns the number replaced.
-size_t applyNonFinitePolicy(std::vector<glm::vec4>& texels, NonFinitePolicy policy, const std::string& what);
+size_t applyNonFinitePolicy(std::span<glm::vec4> texels, NonFinitePolicy policy, const std::string& what);
 
 } // namespace shprobe

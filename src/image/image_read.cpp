@@ -91,37 +91,18 @@ void checkHeader(const std::string& path, const ImageHeader& header, int64_t max
 // Reads the planned channels only, straight into the RGBA texels: in one read when they lie
 // within four channels of each other (the usual R, G, B, or Y, BY, RY), else one read each.
 // Returns the texel component each planned channel landed in.
-std::array<int, 3> readPlannedChannels(ImageDecoder& decoder, const ChannelPlan& plan, Image& image) {
+std::array<int, 3> readPlannedChannels(ImageDecoder& decoder, const ChannelPlan& plan,
+                                       std::span<glm::vec4> texels) {
     const auto planned = std::span(plan.channels).first(size_t(plan.count()));
     const auto [low, high] = std::minmax_element(planned.begin(), planned.end());
     const int begin = *low, end = *high + 1;
     if (end - begin <= 4) {
-        decoder.readChannels(begin, end, &image.texels[0].x);
+        decoder.readChannels(begin, end, &texels[0].x);
         return {plan.channels[0] - begin, plan.channels[1] - begin, plan.channels[2] - begin};
     }
     for (size_t i = 0; i < planned.size(); ++i)
-        decoder.readChannels(planned[i], planned[i] + 1, &image.texels[0][int(i)]);
+        decoder.readChannels(planned[i], planned[i] + 1, &texels[0][int(i)]);
     return {0, 1, 2};
-}
-
-// Reads the channels the plan names and makes them RGB. The unused alpha is set to 1, as in every
-// cube map the library makes.
-Image readPixels(const std::string& path, ImageDecoder& decoder, const ChannelPlan& plan) {
-    const ImageHeader& header = decoder.header();
-    Image image = makeImage(header.width, header.height);
-    const std::array<int, 3> at = readPlannedChannels(decoder, plan, image);
-    const glm::vec3 weights = plan.meaning == ChannelMeaning::LuminanceChroma
-                                  ? luminanceWeights(header.chromaticities.value_or(Chromaticities{}), path)
-                                  : glm::vec3(0.0f);
-    for (glm::vec4& texel : image.texels) {
-        glm::vec3 stored(texel[at[0]], texel[at[1]], texel[at[2]]);
-        glm::vec3 rgb = plan.meaning == ChannelMeaning::Grey ? glm::vec3(stored[0])
-                        : plan.meaning == ChannelMeaning::Rgb
-                            ? stored
-                            : luminanceChromaToRgb(stored[0], stored[1], stored[2], weights);
-        texel = glm::vec4(rgb, 1.0f);
-    }
-    return image;
 }
 
 // The exact sRGB EOTF (IEC 61966-2-1), evaluated in double.
@@ -130,9 +111,48 @@ float srgbToLinear(float encoded) {
     return float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
 }
 
-void decodeSrgb(Image& image) {
-    for (glm::vec4& texel : image.texels)
+void decodeSrgb(std::span<glm::vec4> texels) {
+    for (glm::vec4& texel : texels)
         texel = glm::vec4(srgbToLinear(texel.r), srgbToLinear(texel.g), srgbToLinear(texel.b), texel.a);
+}
+
+// An image file whose header has been read and checked, and the channels to read from it.
+struct OpenedImage {
+    std::string path;
+    std::unique_ptr<ImageDecoder> decoder;
+    ChannelPlan plan;
+
+    const ImageHeader& header() const { return decoder->header(); }
+};
+
+OpenedImage openImage(const std::string& path, int64_t maxPixels) {
+    checkInputFile(path, "an image file");
+    OpenedImage opened{path, openDecoder(path, checkHeaderAndFormat(path)), {}};
+    checkHeader(path, opened.header(), maxPixels);
+    opened.plan = planChannels(opened.header().channels, path);
+    return opened;
+}
+
+// Reads the channels the plan names into `texels` (width x height of them) and makes them RGB,
+// decoded to linear if the file is sRGB. The unused alpha is set to 1, as in every cube map the
+// library makes.
+void readPixels(const OpenedImage& opened, std::span<glm::vec4> texels) {
+    const ImageHeader& header = opened.header();
+    const ChannelPlan& plan = opened.plan;
+    const std::string& path = opened.path;
+    const std::array<int, 3> at = readPlannedChannels(*opened.decoder, plan, texels);
+    const glm::vec3 weights = plan.meaning == ChannelMeaning::LuminanceChroma
+                                  ? luminanceWeights(header.chromaticities.value_or(Chromaticities{}), path)
+                                  : glm::vec3(0.0f);
+    for (glm::vec4& texel : texels) {
+        glm::vec3 stored(texel[at[0]], texel[at[1]], texel[at[2]]);
+        glm::vec3 rgb = plan.meaning == ChannelMeaning::Grey ? glm::vec3(stored[0])
+                        : plan.meaning == ChannelMeaning::Rgb
+                            ? stored
+                            : luminanceChromaToRgb(stored[0], stored[1], stored[2], weights);
+        texel = glm::vec4(rgb, 1.0f);
+    }
+    if (header.srgb) decodeSrgb(texels);
 }
 
 std::string replaceAll(std::string text, std::string_view from, std::string_view to) {
@@ -179,48 +199,45 @@ std::string faceFileInFolder(const std::string& folder, std::string_view name) {
     return matches[0];
 }
 
-// Every face square and of the first face's size.
-void checkFaceSizes(const std::array<std::string, kFaceCount>& paths,
-                    const std::array<Image, kFaceCount>& faces) {
-    for (int face = 0; face < kFaceCount; ++face) {
-        const Image& image = faces[size_t(face)];
-        std::string size = sizeText(image.width, image.height);
-        if (image.width != image.height)
-            throw Error(ErrorKind::Input,
-                        paths[size_t(face)] + ": the face is " + size + "; faces must be square");
-        if (image.width != faces[0].width)
-            throw Error(ErrorKind::Input, paths[size_t(face)] + " is " + size + " but " + paths[0] + " is " +
-                                              sizeText(faces[0].width, faces[0].height) +
+// Every face square and of the first face's size, from the headers: before any pixel is read.
+void checkFaceSizes(const std::array<OpenedImage, kFaceCount>& faces) {
+    const ImageHeader& first = faces[0].header();
+    for (const OpenedImage& face : faces) {
+        const ImageHeader& header = face.header();
+        std::string size = sizeText(header.width, header.height);
+        if (header.width != header.height)
+            throw Error(ErrorKind::Input, face.path + ": the face is " + size + "; faces must be square");
+        if (header.width != first.width)
+            throw Error(ErrorKind::Input, face.path + " is " + size + " but " + faces[0].path + " is " +
+                                              sizeText(first.width, first.height) +
                                               "; the six faces must be the same size");
     }
-}
-
-Cubemap assembleFaces(const std::array<Image, kFaceCount>& faces) {
-    Cubemap cubemap = makeCubemap(faces[0].width);
-    size_t faceTexels = size_t(cubemap.faceSize) * cubemap.faceSize;
-    for (int face = 0; face < kFaceCount; ++face)
-        std::copy(faces[size_t(face)].texels.begin(), faces[size_t(face)].texels.end(),
-                  cubemap.texels.begin() + std::ptrdiff_t(face * faceTexels));
-    return cubemap;
 }
 
 Cubemap resizedTo(Cubemap cubemap, int faceSize) {
     return faceSize == 0 ? cubemap : resizeCubemap(cubemap, faceSize);
 }
 
+// Each face file is decoded straight into its face of the cube map: no image of its own to copy.
 Environment loadFaces(const std::string& source, const LoadOptions& options) {
     std::array<std::string, kFaceCount> paths = resolveFaceFiles(source);
-    std::array<Image, kFaceCount> faces;
+    std::array<OpenedImage, kFaceCount> faces;
+    for (int face = 0; face < kFaceCount; ++face)
+        faces[size_t(face)] = openImage(paths[size_t(face)], options.maxPixels);
+    checkFaceSizes(faces);
+    const int size = faces[0].header().width;
+    Cubemap cubemap = makeCubemap(size);
+    const size_t faceTexels = size_t(size) * size;
     size_t replaced = 0;
     for (int face = 0; face < kFaceCount; ++face) {
-        faces[size_t(face)] = readImage(paths[size_t(face)], options.maxPixels);
-        replaced += applyNonFinitePolicy(faces[size_t(face)].texels, options.nonFinite, paths[size_t(face)]);
+        std::span<glm::vec4> texels(cubemap.texels.data() + face * faceTexels, faceTexels);
+        readPixels(faces[size_t(face)], texels);
+        replaced += applyNonFinitePolicy(texels, options.nonFinite, paths[size_t(face)]);
     }
-    checkFaceSizes(paths, faces);
     Environment environment;
-    environment.cubemap = resizedTo(assembleFaces(faces), options.faceSize);
+    environment.cubemap = resizedTo(std::move(cubemap), options.faceSize);
     environment.layout = Layout::Faces;
-    environment.description = source + " (faces " + sizeText(faces[0].width, faces[0].height) + ")";
+    environment.description = source + " (faces " + sizeText(size, size) + ")";
     environment.replacedTexels = replaced;
     return environment;
 }
@@ -267,12 +284,9 @@ void checkEquirectShape(int width, int height) {
 }
 
 Image readImage(const std::string& path, int64_t maxPixels) {
-    checkInputFile(path, "an image file");
-    std::unique_ptr<ImageDecoder> decoder = openDecoder(path, checkHeaderAndFormat(path));
-    const ImageHeader& header = decoder->header();
-    checkHeader(path, header, maxPixels);
-    Image image = readPixels(path, *decoder, planChannels(header.channels, path));
-    if (header.srgb) decodeSrgb(image);
+    OpenedImage opened = openImage(path, maxPixels);
+    Image image = makeImage(opened.header().width, opened.header().height);
+    readPixels(opened, image.texels);
     return image;
 }
 
@@ -303,7 +317,7 @@ Environment loadEnvironment(const std::string& path, const LoadOptions& options)
     return faces ? loadFaces(path, options) : loadSingleImage(path, options);
 }
 
-size_t applyNonFinitePolicy(std::vector<glm::vec4>& texels, NonFinitePolicy policy, const std::string& what) {
+size_t applyNonFinitePolicy(std::span<glm::vec4> texels, NonFinitePolicy policy, const std::string& what) {
     auto nonFinite = [](const glm::vec4& t) {
         return !std::isfinite(t.r) || !std::isfinite(t.g) || !std::isfinite(t.b);
     };
