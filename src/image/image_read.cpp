@@ -277,12 +277,6 @@ Environment loadSingleImage(const std::string& path, const LoadOptions& options)
 
 } // namespace
 
-void checkEquirectShape(int width, int height) {
-    if (width != 2 * height)
-        throw Error(ErrorKind::Input,
-                    "image is " + sizeText(width, height) + ", but an equirect image must be 2:1");
-}
-
 Image readImage(const std::string& path, int64_t maxPixels) {
     OpenedImage opened = openImage(path, maxPixels);
     Image image = makeImage(opened.header().width, opened.header().height);

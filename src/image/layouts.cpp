@@ -236,6 +236,12 @@ Cubemap crossToCubemap(const Image& cross, Layout layout) {
     return cubemap;
 }
 
+void checkEquirectShape(int width, int height) {
+    if (width != 2 * height)
+        throw Error(ErrorKind::Input,
+                    "image is " + sizeText(width, height) + ", but an equirect image must be 2:1");
+}
+
 Cubemap equirectToCubemap(const Image& equirect, int faceSize) {
     if (equirect.texels.empty()) throw Error(ErrorKind::Input, "the equirect image is empty");
     checkEquirectShape(equirect.width, equirect.height);
