@@ -230,6 +230,7 @@ foreach(folder sh io image vk gpu render)
     install(DIRECTORY ${PROJECT_SOURCE_DIR}/src/${folder}/
         DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR}/${folder}
         FILES_MATCHING PATTERN "*.h"
+        PATTERN "scene_capture.h" EXCLUDE # part of shprobe_scene, which is not installed
         PATTERN "swapchain.h" EXCLUDE
         PATTERN "viewer.h" EXCLUDE
         PATTERN "viewer_frames.h" EXCLUDE)

@@ -11,10 +11,12 @@ packages=(
   libopenimageio-dev openimageio-tools
   libopenexr-dev libstb-dev  # EXR, HDR, PNG, JPEG read and written directly (src/image/codec.h)
   libgtest-dev libcli11-dev nlohmann-json3-dev
+  libtinygltf-dev libembree-dev  # glTF scenes; the scene probes' ray-traced reference
   clang-format  # scripts/check-format.sh
   hyperfine time python3  # scripts/bench-job.sh (whole processes, peak memory, its report)
   xvfb xauth
   blender-data  # real HDR environments for the tests (eight equirect EXRs)
+  assimp-testmodels  # real and broken glTF scenes for the tests
 )
 
 missing=()

@@ -2,7 +2,7 @@
 # Targets used by the rest of the build:
 #   Vulkan::Vulkan, Vulkan::glslangValidator, SPIRV_VAL (program path), glm::glm,
 #   OpenImageIO::OpenImageIO, OpenEXR::OpenEXR, stb::stb, nlohmann_json::nlohmann_json,
-#   CLI11::CLI11, GTest::gtest_main.
+#   CLI11::CLI11, GTest::gtest_main, tinygltf::headers, embree.
 find_package(Vulkan 1.3 REQUIRED COMPONENTS glslangValidator)
 find_program(SPIRV_VAL spirv-val REQUIRED)
 find_package(glm CONFIG REQUIRED)
@@ -22,6 +22,19 @@ if(NOT TARGET stb::stb)
     set_target_properties(stb::stb PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "${STB_INCLUDE_DIR}")
 endif()
 find_package(nlohmann_json CONFIG REQUIRED)
+# tinygltf (libtinygltf-dev) reads glTF scenes. Debian ships it as libtinygltf.so too; shprobe
+# compiles the header's implementation once (src/scene/tinygltf.cpp) without its image and JSON
+# copies: images are decoded by shprobe's readers, JSON by nlohmann-json, and no library is added
+# to the program's start. tinygltf::headers carries the include folders, as system folders.
+find_path(TINYGLTF_INCLUDE_DIR tiny_gltf.h REQUIRED)
+find_path(NLOHMANN_INCLUDE_DIR json.hpp PATH_SUFFIXES nlohmann REQUIRED)
+if(NOT TARGET tinygltf::headers)
+    add_library(tinygltf::headers INTERFACE IMPORTED)
+    set_target_properties(tinygltf::headers PROPERTIES
+        INTERFACE_INCLUDE_DIRECTORIES "${TINYGLTF_INCLUDE_DIR};${NLOHMANN_INCLUDE_DIR}")
+endif()
+# Embree 3 (libembree-dev) casts the rays of the scene probes' reference (target `embree`).
+find_package(embree 3 CONFIG REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)
 if(SHPROBE_BUILD_TESTS)
     find_package(GTest REQUIRED)

@@ -89,6 +89,31 @@ struct ViewOptions {
     bool validation = false;
 };
 
+// `shprobe scene SCENE --grid NX,NY,NZ -o VOLUME`: probes baked inside a glTF scene (scene.cpp).
+struct SceneOptions {
+    std::string scene;                  // .gltf or .glb
+    std::string output = "volume.shpv"; // probe volume (docs/probe-volume.md)
+    std::string grid;                   // NX,NY,NZ
+    std::string bounds;                 // X0,Y0,Z0,X1,Y1,Z1; empty: the scene's box, inset by half a cell
+    int order = 3;
+    int faceSize = 32;
+    int bounces = 1;
+    std::string sky;      // any input bake takes; empty: the built-in sky
+    int skyFaceSize = 0;  // 0: the sky's own (128 for the built-in sky)
+    std::string brick;    // I/N: one brick of the grid, one bounce
+    std::string previous; // the previous bounce's whole volume
+    uint32_t probesPerBatch = 32;
+    std::string device;
+    bool validation = false;
+    bool quiet = false;
+};
+
+// `shprobe merge BRICKS... -o VOLUME` (scene.cpp).
+struct MergeOptions {
+    std::vector<std::string> bricks;
+    std::string output;
+};
+
 // Every number option is checked at parse time: finite (CLI11 reads "nan" and "inf" as numbers)
 // and within [min, max] (infinite bounds: none). The error says what is allowed: "--yaw: nan is not a number
 // from -360 to 360".
@@ -151,6 +176,11 @@ void addConvertCommand(CLI::App& app, ConvertOptions& options);
 void runConvert(const ConvertOptions& options);
 
 void addInfoCommand(CLI::App& app, InfoOptions& options);
+void addSceneCommand(CLI::App& app, SceneOptions& options);
+// bouncesGiven: --bounces was on the command line (it cannot go with --brick or --previous).
+void runScene(const SceneOptions& options, bool bouncesGiven);
+void addMergeCommand(CLI::App& app, MergeOptions& options);
+void runMerge(const MergeOptions& options);
 void runInfo(const InfoOptions& options);
 
 // "N" (N x N) or "WxH", each 1..16384; throws Error(Input) naming the option otherwise.

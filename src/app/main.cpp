@@ -69,6 +69,8 @@ int main(int argc, char** argv) {
     shprobe::RenderOptions render;
     shprobe::RotateOptions rotate;
     shprobe::LightCommandOptions light;
+    shprobe::SceneOptions scene;
+    shprobe::MergeOptions merge;
     shprobe::BenchOptions bench;
     shprobe::BenchJobOptions benchJob;
     shprobe::addBakeCommand(app, bake);
@@ -81,6 +83,8 @@ int main(int argc, char** argv) {
                            "--help`; exit 4 where it is not, as in a build with SHPROBE_BUILD_VIEWER=OFF)");
     shprobe::addRotateCommand(app, rotate);
     shprobe::addLightCommand(app, light);
+    shprobe::addSceneCommand(app, scene);
+    shprobe::addMergeCommand(app, merge);
     addBench(app, bench, benchJob);
 
     // Everything after `view` is the viewer's, --help included, and goes to it untouched: only
@@ -94,6 +98,9 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("render")) shprobe::runRender(render);
         if (app.got_subcommand("rotate")) shprobe::runRotate(rotate);
         if (app.got_subcommand("light")) shprobe::runLight(light);
+        if (app.got_subcommand("scene"))
+            shprobe::runScene(scene, app.get_subcommand("scene")->count("--bounces") > 0);
+        if (app.got_subcommand("merge")) shprobe::runMerge(merge);
         if (app.got_subcommand("bench")) runBench(bench, benchJob);
     });
 }

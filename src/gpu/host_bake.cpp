@@ -81,12 +81,6 @@ ShCoefficients readCoefficients(const Buffer& output, VkDeviceSize offset, int o
     return coefficients;
 }
 
-// Probe k of a bake whose output starts at `offset` (probe_baker.h's layout).
-GpuBake readProbe(const Buffer& output, VkDeviceSize offset, int order, uint32_t probes, uint32_t k) {
-    return {readCoefficients(output, offset, order, probes, k, Quantity::Radiance),
-            readCoefficients(output, offset, order, probes, k, Quantity::Irradiance)};
-}
-
 std::optional<size_t> firstNonFinite(const ShCoefficients& coefficients) {
     for (size_t i = 0; i < coefficients.rgb.size(); ++i)
         if (glm::any(glm::isnan(coefficients.rgb[i])) || glm::any(glm::isinf(coefficients.rgb[i]))) return i;
@@ -259,7 +253,8 @@ std::vector<GpuBake> bakeBatch(const Context& context, const ProbeBaker& baker,
     for (const BakeGroup<Source>& group : groups)
         for (size_t k = 0; k < group.members.size(); ++k) {
             GpuBake& bake = bakes[group.members[k]];
-            bake = readProbe(output, group.outputOffset, order, uint32_t(group.members.size()), uint32_t(k));
+            bake = readBakeOutput(output, group.outputOffset, order, uint32_t(group.members.size()),
+                                  uint32_t(k));
             bake.deviceMilliseconds = deviceMs;
             bake.workgroups = group.set.groupsPerProbe;
         }
@@ -267,6 +262,11 @@ std::vector<GpuBake> bakeBatch(const Context& context, const ProbeBaker& baker,
 }
 
 } // namespace
+
+GpuBake readBakeOutput(const Buffer& output, VkDeviceSize offset, int order, uint32_t probes, uint32_t k) {
+    return {readCoefficients(output, offset, order, probes, k, Quantity::Radiance),
+            readCoefficients(output, offset, order, probes, k, Quantity::Irradiance)};
+}
 
 CubemapBinding uploadBinding(const Device& device, TexelFormat format) {
     // Vulkan requires storage-image support with optimal tiling for both formats; checked anyway.
@@ -404,7 +404,7 @@ GpuBake convolveOnGpu(const Context& context, const ProbeBaker& baker, const ShC
         computeWriteBarrier(commands);
     });
     invalidateBuffer(context, output);
-    GpuBake bake = readProbe(output, 0, order, 1, 0);
+    GpuBake bake = readBakeOutput(output, 0, order, 1, 0);
     requireFinite(bake, "the convolved radiance");
     return bake;
 }

@@ -68,6 +68,10 @@ struct GpuBake {
     uint32_t workgroups = 0;         // projection workgroups of this probe
 };
 
+// Probe k of the `probes` probes of a bake whose output (probe_baker.h's layout) starts at `offset`
+// of a mapped buffer, after invalidateBuffer.
+GpuBake readBakeOutput(const Buffer& output, VkDeviceSize offset, int order, uint32_t probes, uint32_t k);
+
 // Largest face the GPU path accepts: texel indices are 32-bit (6 N^2 < 2^32).
 constexpr int kMaxGpuFaceSize = 16384;
 

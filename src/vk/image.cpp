@@ -77,12 +77,12 @@ GpuImage createImage(const Device& device, const GpuImageDesc& desc) {
 }
 
 VkImageView createImageView(const Device& device, VkImage image, VkImageViewType type, VkFormat format,
-                            uint32_t layers) {
+                            uint32_t layers, uint32_t firstLayer) {
     VkImageViewCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     info.image = image;
     info.viewType = type;
     info.format = format;
-    info.subresourceRange = {aspectOf(format), 0, 1, 0, layers};
+    info.subresourceRange = {aspectOf(format), 0, 1, firstLayer, layers};
     VkImageView view = VK_NULL_HANDLE;
     VK_CHECK(vkCreateImageView(device.device, &info, nullptr, &view));
     return view;

@@ -28,10 +28,10 @@ struct GpuImageDesc {
 GpuImage createImage(const Device& device, const GpuImageDesc& desc);
 void destroyImage(const Device& device, GpuImage& image);
 
-// A view of the first `layers` layers of mip 0 of an image of `format` (depth formats: the depth
-// aspect, others colour), for images created elsewhere too (a swapchain's).
+// A view of `layers` layers of mip 0, from firstLayer on, of an image of `format` (depth formats:
+// the depth aspect, others colour), for images created elsewhere too (a swapchain's).
 VkImageView createImageView(const Device& device, VkImage image, VkImageViewType type, VkFormat format,
-                            uint32_t layers = 1);
+                            uint32_t layers = 1, uint32_t firstLayer = 0);
 
 // A layout transition of all layers and mips of the image, with its memory dependency.
 struct LayoutChange {

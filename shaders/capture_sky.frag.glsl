@@ -1,0 +1,19 @@
+// What a probe sees where no geometry is: the sky texel along the texel's direction. Drawn first,
+// over the whole face; capture.frag draws the world over it.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+#include "capture_common.glsl"
+
+layout(location = 0) out vec4 radiance;
+
+// The unit direction through the centre of this fragment's texel of the probe's face: the ray the
+// reference casts for it (sh/cubemap.h texelDirection).
+vec3 fragmentDirection() {
+    uint n = c.face.y;
+    vec2 ab = vec2(texelCenterCoord(uint(gl_FragCoord.x), n), texelCenterCoord(uint(gl_FragCoord.y), n));
+    return normalize(orientToFace(c.face.x, vec3(ab, 1.0)));
+}
+
+void main() {
+    radiance = vec4(skyRadiance(fragmentDirection()), 0.0);
+}

@@ -1,0 +1,226 @@
+// `shprobe scene`: a grid of light probes baked inside a glTF scene on the GPU (capture, bake and
+// bounces: gpu/scene_capture.h) into a probe volume (io/probe_volume.h); `shprobe merge` joins the
+// bricks of one bake (docs/scene-probes.md).
+#include "app/commands.h"
+
+#include "app/stopwatch.h"
+#include "shprobe/gpu/scene_capture.h"
+#include "shprobe/image/environment.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/io/probe_volume.h"
+#include "shprobe/scene/gltf_scene.h"
+#include "shprobe/scene/probe_grid.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
+#include "shprobe/vk/context.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+namespace shprobe {
+
+void addSceneCommand(CLI::App& app, SceneOptions& options) {
+    CLI::App* command =
+        app.add_subcommand("scene", "Bake a grid of light probes inside a glTF scene on the GPU "
+                                    "into a probe volume (docs/scene-probes.md)");
+    command->add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
+    command->add_option("-o,--output", options.output, "Probe volume to write (docs/probe-volume.md)")
+        ->capture_default_str();
+    command->add_option("--grid", options.grid, "Probes per axis, NX,NY,NZ")->required();
+    command->add_option("--bounds", options.bounds,
+                        "Grid box X0,Y0,Z0,X1,Y1,Z1, probes on its corners (default: the scene's box, "
+                        "inset by half a cell)");
+    command->add_option("--order", options.order, "SH order, 1..8")
+        ->check(CLI::Range(1, 8))
+        ->capture_default_str();
+    command->add_option("--face-size", options.faceSize, "Each probe's cube-map face size")
+        ->check(CLI::Range(1, 4096))
+        ->capture_default_str();
+    command
+        ->add_option("--bounces", options.bounces,
+                     "Indirect bounces: 0 is what the probes see directly (sky, emission); each "
+                     "bounce adds the light the surfaces reflect from the one before")
+        ->check(CLI::Range(0, 64))
+        ->capture_default_str();
+    command->add_option("--sky", options.sky,
+                        "Environment seen where no geometry is (any input `bake` "
+                        "takes; default: the built-in sky)");
+    command
+        ->add_option("--sky-face-size", options.skyFaceSize,
+                     "Face size the sky is resampled to (0: its own; 128 for the built-in sky)")
+        ->check(CLI::Range(0, 4096));
+    command->add_option("--brick", options.brick,
+                        "Bake only brick I of N (0 <= I < N) of the grid, one bounce: with --previous the "
+                        "bounce after that volume's, else bounce 0; `shprobe merge` joins the bricks");
+    command->add_option("--previous", options.previous,
+                        "The whole volume of the previous bounce: bake the one bounce after it");
+    command->add_option("--probes-per-batch", options.probesPerBatch, "Probes captured per command buffer")
+        ->check(CLI::Range(1, 4096))
+        ->capture_default_str();
+    addDeviceOptions(*command, options.device, options.validation);
+    command->add_flag("-q,--quiet", options.quiet, "No report");
+}
+
+void addMergeCommand(CLI::App& app, MergeOptions& options) {
+    CLI::App* command =
+        app.add_subcommand("merge", "Join the bricks of one `shprobe scene` bake into its whole volume");
+    command->add_option("bricks", options.bricks, "Probe volumes of the bricks, in any order")->required();
+    command->add_option("-o,--output", options.output, "Whole volume to write")->required();
+}
+
+namespace {
+
+// A probe sees mostly back faces when more than half of its texels do: it is inside something.
+bool insideGeometry(uint32_t backFaceTexels, int faceSize) {
+    return 2 * uint64_t(backFaceTexels) > 6 * uint64_t(faceSize) * uint64_t(faceSize);
+}
+
+Environment loadSky(const SceneOptions& options) {
+    if (options.sky.empty()) {
+        const int faceSize = options.skyFaceSize > 0 ? options.skyFaceSize : 128;
+        return Environment{makeDefaultSky(faceSize),
+                           {},
+                           Layout::Auto,
+                           "built-in sky (" + std::to_string(faceSize) + "^2 faces)"};
+    }
+    return loadEnvironment(options.sky, {.faceSize = options.skyFaceSize});
+}
+
+ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
+    const glm::ivec3 counts = parseGridCounts(options.grid);
+    return options.bounds.empty() ? probeGridInWorld(counts, world)
+                                  : makeProbeGrid(counts, parseGridBounds(options.bounds));
+}
+
+// What decides the probes' values besides the grid, order and bounces: bricks merge only when it
+// is the same.
+std::string bakeSettings(const SceneOptions& options, const Environment& sky) {
+    return nlohmann::json{{"face_size", options.faceSize}, {"sky", sky.description}}.dump();
+}
+
+// The previous bounce as the capture reads it: the whole grid, the same grid and order.
+ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& grid) {
+    ProbeVolume previous = readProbeVolume(options.previous);
+    if (previous.begin != 0 || previous.end != grid.probeCount())
+        throw Error(ErrorKind::Input,
+                    options.previous + ": --previous needs the whole volume (merge the bricks first)");
+    if (previous.grid.counts != grid.counts || previous.grid.boundsMin != grid.boundsMin ||
+        previous.grid.boundsMax != grid.boundsMax || previous.order != options.order)
+        throw Error(ErrorKind::Input, options.previous + ": its grid or order is not this bake's");
+    if (previous.irradiance.empty())
+        throw Error(ErrorKind::Input, options.previous + ": the volume holds no irradiance");
+    return previous;
+}
+
+BounceSource bounceSourceOf(const ProbeVolume& volume, std::vector<glm::dvec3>& irradiance) {
+    irradiance.assign(volume.irradiance.begin(), volume.irradiance.end());
+    return {volume.grid.boundsMin, volume.grid.boundsMax, volume.grid.counts, volume.order, irradiance,
+            volume.valid};
+}
+
+// One bounce of probes [range.begin, range.end) into a volume: coefficients of valid probes,
+// zeros for those inside geometry.
+ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, const SceneOptions& options,
+                       const ProbeGrid& grid, ProbeRange range) {
+    std::vector<glm::dvec3> positions;
+    for (uint32_t p = range.begin; p < range.end; ++p)
+        positions.push_back(probePosition(grid, probeCell(grid, p)));
+    const std::vector<SceneProbe> probes = bakeSceneProbes(
+        context, capture, positions, {.order = options.order, .probesPerBatch = options.probesPerBatch});
+    ProbeVolume volume;
+    volume.grid = grid;
+    volume.order = options.order;
+    volume.begin = range.begin;
+    volume.end = range.end;
+    const size_t perProbe = size_t(options.order) * options.order;
+    volume.radiance.assign(probes.size() * perProbe, glm::vec3(0.0f));
+    volume.irradiance.assign(probes.size() * perProbe, glm::vec3(0.0f));
+    volume.valid.assign(probes.size(), 0);
+    for (size_t p = 0; p < probes.size(); ++p) {
+        if (insideGeometry(probes[p].backFaceTexels, options.faceSize)) continue;
+        volume.valid[p] = 1;
+        for (size_t i = 0; i < perProbe; ++i) {
+            volume.radiance[p * perProbe + i] = glm::vec3(probes[p].radiance.rgb[i]);
+            volume.irradiance[p * perProbe + i] = glm::vec3(probes[p].irradiance.rgb[i]);
+        }
+    }
+    return volume;
+}
+
+void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
+    if (bouncesGiven && (!options.brick.empty() || !options.previous.empty()))
+        throw Error(ErrorKind::Input,
+                    "scene: --brick and --previous bake one bounce; --bounces is for whole bakes");
+    checkOutputPath(options.output, OutputContent::Binary);
+    checkOutputsAreNotInputs({&options.output, 1}, std::vector<std::string>{options.scene});
+}
+
+} // namespace
+
+void runScene(const SceneOptions& options, bool bouncesGiven) {
+    checkSceneOptions(options, bouncesGiven);
+    const Clock::time_point start = Clock::now();
+    const World world = loadGltfScene(options.scene);
+    const ProbeGrid grid = chosenGrid(options, world);
+    const ProbeRange range = options.brick.empty() ? ProbeRange{0, grid.probeCount()}
+                                                   : brickRange(grid, parseBrick(options.brick));
+    const std::optional<ProbeVolume> previous =
+        options.previous.empty() ? std::nullopt : std::optional(readPreviousBounce(options, grid));
+    const Environment sky = loadSky(options);
+
+    ContextOptions contextOptions;
+    contextOptions.device = options.device;
+    contextOptions.validation = options.validation;
+    contextOptions.graphics = true;
+    Context context = createContext(contextOptions);
+    ScopeExit releaseContext([&] { destroyContext(context); });
+    SceneCapture capture = createSceneCapture(context, world, sky.cubemap,
+                                              {.faceSize = options.faceSize, .order = options.order});
+    ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });
+
+    std::vector<glm::dvec3> irradiance;
+    const int first = previous ? previous->bounces + 1 : 0;
+    const int last = options.brick.empty() && !previous ? options.bounces : first;
+    if (previous) setBounceSource(context, capture, bounceSourceOf(*previous, irradiance));
+    ProbeVolume volume;
+    for (int bounce = first; bounce <= last; ++bounce) {
+        const bool whole = bounce < last; // an earlier bounce of a whole bake lights the next one
+        volume =
+            bakeBounce(context, capture, options, grid, whole ? ProbeRange{0, grid.probeCount()} : range);
+        volume.bounces = bounce;
+        if (bounce < last) setBounceSource(context, capture, bounceSourceOf(volume, irradiance));
+    }
+    if (context.validationMessages() > 0)
+        throw Error(ErrorKind::Device, "scene: the Vulkan validation layer reported " +
+                                           std::to_string(context.validationMessages()) + " messages");
+    volume.source = world.description;
+    volume.settings = bakeSettings(options, sky);
+    writeProbeVolume(options.output, volume);
+    if (options.quiet) return;
+    const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0));
+    std::printf("scene    %s\n", world.description.c_str());
+    std::printf("sky      %s\n", sky.description.c_str());
+    std::printf("probes   %u of a %dx%dx%d grid (%s), order %d, faces %d^2, bounce %d\n", volume.probeCount(),
+                grid.counts.x, grid.counts.y, grid.counts.z,
+                options.brick.empty() ? "whole" : ("brick " + options.brick).c_str(), options.order,
+                options.faceSize, volume.bounces);
+    std::printf("invalid  %zu inside geometry (more than half of their view is back faces)\n", inside);
+    std::printf("device   %s\n", context.info.name.c_str());
+    std::printf("wrote    %s in %.2f s\n", options.output.c_str(), millisecondsSince(start) / 1000.0);
+}
+
+void runMerge(const MergeOptions& options) {
+    checkOutputPath(options.output, OutputContent::Binary);
+    checkOutputsAreNotInputs({&options.output, 1}, options.bricks);
+    std::vector<ProbeVolume> bricks;
+    for (const std::string& path : options.bricks)
+        bricks.push_back(readProbeVolume(path));
+    const ProbeVolume whole = mergeProbeVolumes(bricks, options.bricks);
+    writeProbeVolume(options.output, whole);
+    std::printf("merged   %zu bricks into %s (%u probes)\n", bricks.size(), options.output.c_str(),
+                whole.probeCount());
+}
+
+} // namespace shprobe

@@ -1,0 +1,466 @@
+#include "shprobe/gpu/scene_capture.h"
+
+#include "shprobe/glsl/capture_interface.h"
+#include "shprobe/glsl/gpu_interface.h"
+#include "shprobe/glsl/texel_geometry.h"
+#include "shprobe/gpu/host_bake.h"
+#include "shprobe/render/gpu_image.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
+#include "shprobe/shprobe_render_spirv.h"
+#include "shprobe/shprobe_scene_spirv.h"
+#include "shprobe/vk/check.h"
+#include "shprobe/vk/graphics.h"
+#include "shprobe/vk/pipeline.h"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <glm/geometric.hpp>
+#include <string>
+
+namespace shprobe {
+
+namespace {
+
+constexpr VkFormat kCaptureFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkBufferUsageFlags kStorageUpload =
+    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+constexpr uint32_t kCountWidth = 64; // count_back_faces.comp's workgroup width
+
+VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
+    return (value + alignment - 1) / alignment * alignment;
+}
+
+// A storage buffer holding `bytes` of data; at least 16 bytes, since a binding may not be empty.
+Buffer createStorage(const Context& context, const void* data, size_t bytes, const char* what) {
+    const VkDeviceSize size = std::max<VkDeviceSize>(bytes, 16);
+    Buffer buffer = createBuffer(context, size, kStorageUpload, MemoryUse::Device, what);
+    OnFailure undo([&] { destroyBuffer(context, buffer); });
+    if (bytes > 0) uploadBuffer(context, buffer, data, bytes);
+    return buffer;
+}
+
+template <typename T>
+Buffer createStorage(const Context& context, const std::vector<T>& values, const char* what) {
+    return createStorage(context, values.data(), values.size() * sizeof(T), what);
+}
+
+void checkWorld(const World& world) {
+    if (world.indices.size() % 3 != 0 || world.triangleMaterials.size() != world.triangleCount())
+        throw Error(ErrorKind::Input, "scene capture: the triangle lists of " + world.description +
+                                          " do not match their materials");
+    for (uint32_t index : world.indices)
+        if (index >= world.positions.size())
+            throw Error(ErrorKind::Input,
+                        "scene capture: an index of " + world.description + " is beyond its vertices");
+    for (uint32_t material : world.triangleMaterials)
+        if (material >= world.materials.size())
+            throw Error(ErrorKind::Input, "scene capture: a triangle of " + world.description +
+                                              " names a material it does not have");
+}
+
+std::vector<gpu::CaptureVertex> packVertices(const World& world) {
+    std::vector<gpu::CaptureVertex> vertices(world.positions.size());
+    for (size_t i = 0; i < vertices.size(); ++i) {
+        const glm::vec2 uv = i < world.uvs.size() ? world.uvs[i] : glm::vec2(0.0f);
+        const glm::vec3 normal = i < world.normals.size() ? world.normals[i] : glm::vec3(0.0f, 1.0f, 0.0f);
+        vertices[i] = {glm::vec4(world.positions[i], uv.x), glm::vec4(normal, uv.y)};
+    }
+    return vertices;
+}
+
+std::vector<gpu::CaptureMaterial> packMaterials(const World& world) {
+    std::vector<gpu::CaptureMaterial> materials;
+    for (const SceneMaterial& m : world.materials)
+        materials.push_back({glm::vec4(m.albedo, float(m.albedoTexture)),
+                             glm::vec4(m.emission, float(m.emissionTexture)),
+                             glm::vec4(m.doubleSided ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f)});
+    return materials;
+}
+
+struct PackedTextures {
+    std::vector<gpu::CaptureTexture> extents;
+    std::vector<glm::vec4> texels;
+};
+
+PackedTextures packTextures(const World& world) {
+    PackedTextures packed;
+    for (const SceneTexture& texture : world.textures) {
+        packed.extents.push_back({glm::uvec4(uint32_t(packed.texels.size()), uint32_t(texture.width),
+                                             uint32_t(texture.height), 0u)});
+        packed.texels.insert(packed.texels.end(), texture.texels.begin(), texture.texels.end());
+    }
+    return packed;
+}
+
+// Probes and their bounce volume header, with no previous bounce: counts.w = 0.
+std::vector<glm::vec4> packBounce(const BounceSource& bounce) {
+    const size_t probes = size_t(bounce.counts.x) * bounce.counts.y * bounce.counts.z;
+    const size_t perProbe = size_t(bounce.order) * bounce.order;
+    std::vector<glm::vec4> packed(3 + probes * perProbe, glm::vec4(0.0f));
+    if (probes == 0) return packed;
+    if (bounce.irradiance.size() != probes * perProbe || bounce.valid.size() != probes)
+        throw Error(ErrorKind::Input, "scene capture: the previous bounce's volume holds " +
+                                          std::to_string(bounce.irradiance.size()) + " coefficients for " +
+                                          std::to_string(probes) + " probes of order " +
+                                          std::to_string(bounce.order));
+    packed[0] = glm::vec4(glm::vec3(bounce.boundsMin), 0.0f);
+    packed[1] = glm::vec4(glm::vec3(bounce.boundsMax), 0.0f);
+    std::memcpy(&packed[2], &bounce.counts, sizeof(glm::ivec3));
+    reinterpret_cast<uint32_t*>(&packed[2])[3] = 1u;
+    for (size_t p = 0; p < probes; ++p)
+        for (size_t i = 0; i < perProbe; ++i)
+            packed[3 + p * perProbe + i] =
+                glm::vec4(glm::vec3(bounce.irradiance[p * perProbe + i]), bounce.valid[p] ? 1.0f : 0.0f);
+    return packed;
+}
+
+// One colour attachment (the capture layer, left in GENERAL for the bake's storage reads) and
+// depth, both cleared.
+VkRenderPass createCaptureRenderPass(const Context& context, VkFormat depthFormat) {
+    const std::array<VkAttachmentDescription, 2> attachments{
+        attachmentDescription(kCaptureFormat, VK_ATTACHMENT_LOAD_OP_DONT_CARE, VK_ATTACHMENT_STORE_OP_STORE,
+                              VK_IMAGE_LAYOUT_GENERAL),
+        attachmentDescription(depthFormat, VK_ATTACHMENT_LOAD_OP_CLEAR, VK_ATTACHMENT_STORE_OP_DONT_CARE,
+                              VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL)};
+    const VkAttachmentReference color{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+    const VkAttachmentReference depth{1, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+    const VkPipelineStageFlags attachmentStages = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT |
+                                                  VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                                                  VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
+    const VkAccessFlags attachmentWrites =
+        VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+    std::array<VkSubpassDependency, 2> dependencies{};
+    // The previous batch's bake and count read the layers before they are drawn again, and the
+    // previous face's depth is written before this one clears it.
+    dependencies[0] = {VK_SUBPASS_EXTERNAL,
+                       0,
+                       attachmentStages | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                       attachmentStages,
+                       attachmentWrites,
+                       attachmentWrites | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
+                       0};
+    // The layer reaches the bake (compute) and copies.
+    dependencies[1] = {0,
+                       VK_SUBPASS_EXTERNAL,
+                       VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+                       VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT,
+                       0};
+    return createRenderPass(context, {attachments, {&color, 1}, &depth, dependencies});
+}
+
+// The sky over the whole face first (no depth), then the surfaces, nearest first: reversed depth
+// (near plane at 1, infinitely far at 0) keeps float depth precise from the near plane out.
+VkPipeline createCapturePipeline(const Context& context, const SceneCapture& capture, bool surfaces) {
+    const uint32_t order = uint32_t(capture.options.order);
+    const VkSpecializationMapEntry entry{SHPROBE_SPEC_ORDER, 0, 4};
+    const VkSpecializationInfo specialization{1, &entry, sizeof(order), &order};
+    GraphicsPipelineDesc desc;
+    desc.vertex = surfaces ? capture.surfaceVertex : capture.skyVertex;
+    desc.fragment = surfaces ? capture.surfaceFragment : capture.skyFragment;
+    desc.fragmentSpecialization = &specialization;
+    desc.depthTest = true; // the subpass has depth; the sky neither tests nor writes it
+    desc.depthWrite = surfaces;
+    desc.depthCompare = surfaces ? VK_COMPARE_OP_GREATER : VK_COMPARE_OP_ALWAYS;
+    desc.layout = capture.layout;
+    desc.renderPass = capture.renderPass;
+    return createGraphicsPipeline(context, desc);
+}
+
+void createCaptureBuffers(const Context& context, SceneCapture& capture, const World& world,
+                          const Cubemap& sky) {
+    const PackedTextures textures = packTextures(world);
+    capture.buffers.resize(SHPROBE_CAPTURE_BINDINGS);
+    capture.buffers[SHPROBE_CAPTURE_VERTICES] = createStorage(context, packVertices(world), "scene vertices");
+    capture.buffers[SHPROBE_CAPTURE_INDICES] = createStorage(context, world.indices, "scene indices");
+    capture.buffers[SHPROBE_CAPTURE_TRIANGLES] =
+        createStorage(context, world.triangleMaterials, "scene triangle materials");
+    capture.buffers[SHPROBE_CAPTURE_MATERIALS] =
+        createStorage(context, packMaterials(world), "scene materials");
+    capture.buffers[SHPROBE_CAPTURE_TEXTURES] = createStorage(context, textures.extents, "scene textures");
+    capture.buffers[SHPROBE_CAPTURE_TEXELS] = createStorage(context, textures.texels, "scene texels");
+    capture.buffers[SHPROBE_CAPTURE_SKY] = createStorage(context, sky.texels, "sky texels");
+    capture.buffers[SHPROBE_CAPTURE_VOLUME] = createStorage(context, packBounce({}), "previous bounce");
+}
+
+void writeCaptureDescriptors(const Context& context, const SceneCapture& capture) {
+    std::array<VkDescriptorType, SHPROBE_CAPTURE_BINDINGS> types;
+    std::array<BindingTarget, SHPROBE_CAPTURE_BINDINGS> targets;
+    for (size_t b = 0; b < types.size(); ++b) {
+        types[b] = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        targets[b] = {.buffer = capture.buffers[b].buffer};
+    }
+    writeDescriptors(context, capture.set, types, targets);
+}
+
+// World -> clip for one face: clip (x, y, w) are the face-local (a, b) and the depth along the
+// face's axis of the direction from the probe (texel_geometry.h's face table, inverted), and
+// z = near, so that depth = near / distance along the axis.
+glm::mat4 faceProjection(uint32_t face, const glm::dvec3& probe, float nearPlane) {
+    const glm::vec3 a = gpu::orientToFace(face, glm::vec3(1.0f, 0.0f, 0.0f));
+    const glm::vec3 b = gpu::orientToFace(face, glm::vec3(0.0f, 1.0f, 0.0f));
+    const glm::vec3 axis = gpu::orientToFace(face, glm::vec3(0.0f, 0.0f, 1.0f));
+    const glm::vec3 p(probe);
+    glm::mat4 m(0.0f); // column-major: m[column][row]
+    const std::array<glm::vec3, 3> rows{a, b, axis};
+    const std::array<int, 3> rowOf{0, 1, 3};
+    for (int r = 0; r < 3; ++r) {
+        for (int column = 0; column < 3; ++column)
+            m[column][rowOf[r]] = rows[r][column];
+        m[3][rowOf[r]] = -glm::dot(rows[r], p);
+    }
+    m[3][2] = nearPlane;
+    return m;
+}
+
+GpuImage createDepthImage(const Context& context, const SceneCapture& capture) {
+    GpuImageDesc desc;
+    desc.format = capture.depthFormat;
+    desc.extent = {uint32_t(capture.options.faceSize), uint32_t(capture.options.faceSize)};
+    desc.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+    desc.what = "capture depth";
+    return createImage(context, desc);
+}
+
+// count_back_faces.comp with its set, reading the target's image and writing `counts`.
+struct BackFaceCount {
+    ComputeProgram program;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+};
+
+BackFaceCount createBackFaceCount(const Context& context, const CaptureTarget& target,
+                                  const BindingTarget& counts) {
+    BackFaceCount count;
+    OnFailure undo([&] {
+        if (count.pool) vkDestroyDescriptorPool(context.device, count.pool, nullptr);
+        destroyComputeProgram(context, count.program);
+    });
+    const std::array<VkDescriptorType, 2> bindings{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+                                                   VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    count.program = createComputeProgram(context, {.name = "count_back_faces",
+                                                   .spirv = spirv::count_back_faces_comp,
+                                                   .bindings = bindings,
+                                                   .pushConstantSize = sizeof(uint32_t),
+                                                   .localSize = kCountWidth});
+    count.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 1, .storageImages = 1});
+    const std::array<BindingTarget, 2> targets{BindingTarget{.imageView = target.cubemaps.view}, counts};
+    count.set = createDescriptorSet(context, count.pool, count.program, targets);
+    return count;
+}
+
+void destroyBackFaceCount(const Context& context, BackFaceCount& count) {
+    if (count.pool) vkDestroyDescriptorPool(context.device, count.pool, nullptr);
+    destroyComputeProgram(context, count.program);
+    count = BackFaceCount{};
+}
+
+} // namespace
+
+SceneCapture createSceneCapture(const Context& context, const World& world, const Cubemap& sky,
+                                const SceneCaptureOptions& options) {
+    if (options.faceSize < 1 || options.faceSize > kMaxGpuFaceSize)
+        throw Error(ErrorKind::Input, "scene capture: face size " + std::to_string(options.faceSize) +
+                                          " is outside 1.." + std::to_string(kMaxGpuFaceSize));
+    if (options.order < 1 || options.order > SHPROBE_MAX_ORDER)
+        throw Error(ErrorKind::Input, "scene capture: order " + std::to_string(options.order) +
+                                          " is outside 1.." + std::to_string(SHPROBE_MAX_ORDER));
+    if (sky.faceSize < 1) throw Error(ErrorKind::Input, "scene capture: the sky has no texels");
+    // Sunlight needs shadows, which the capture does not draw yet: a lit surface in a shadow would
+    // be wrong without a word.
+    if (!world.suns.empty())
+        throw Error(ErrorKind::Input, world.description +
+                                          ": directional lights (KHR_lights_punctual) are not "
+                                          "captured yet; remove them, or give the sun in --sky");
+    checkWorld(world);
+
+    SceneCapture capture;
+    OnFailure undo([&] { destroySceneCapture(context, capture); });
+    capture.options = options;
+    capture.triangleCount = uint32_t(world.triangleCount());
+    capture.skyFaceSize = uint32_t(sky.faceSize);
+    // A millionth of the world's size: closer than any probe sits to a wall it should see.
+    const float size = glm::length(world.boundsMax - world.boundsMin);
+    capture.nearPlane = std::max(size, 1.0f) * 1e-6f;
+    capture.depthFormat = pickDepthFormat(context);
+    capture.renderPass = createCaptureRenderPass(context, capture.depthFormat);
+    std::array<LayoutBinding, SHPROBE_CAPTURE_BINDINGS> bindings;
+    bindings.fill(
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT});
+    capture.setLayout = createSetLayout(context, bindings);
+    capture.layout = createPipelineLayout(context, capture.setLayout,
+                                          VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+                                          sizeof(gpu::CaptureConstants));
+    capture.surfaceVertex = createShaderModule(context, spirv::capture_vert);
+    capture.surfaceFragment = createShaderModule(context, spirv::capture_frag);
+    capture.skyVertex = createShaderModule(context, spirv::fullscreen_vert);
+    capture.skyFragment = createShaderModule(context, spirv::capture_sky_frag);
+    capture.surfaces = createCapturePipeline(context, capture, true);
+    capture.sky = createCapturePipeline(context, capture, false);
+    createCaptureBuffers(context, capture, world, sky);
+    capture.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = SHPROBE_CAPTURE_BINDINGS});
+    capture.set = allocateDescriptorSet(context, capture.pool, capture.setLayout);
+    writeCaptureDescriptors(context, capture);
+    return capture;
+}
+
+void destroySceneCapture(const Context& context, SceneCapture& capture) {
+    if (capture.pool) vkDestroyDescriptorPool(context.device, capture.pool, nullptr);
+    for (Buffer& buffer : capture.buffers)
+        destroyBuffer(context, buffer);
+    for (VkPipeline pipeline : {capture.surfaces, capture.sky})
+        if (pipeline) vkDestroyPipeline(context.device, pipeline, nullptr);
+    for (VkShaderModule module :
+         {capture.surfaceVertex, capture.surfaceFragment, capture.skyVertex, capture.skyFragment})
+        if (module) vkDestroyShaderModule(context.device, module, nullptr);
+    if (capture.layout) vkDestroyPipelineLayout(context.device, capture.layout, nullptr);
+    if (capture.setLayout) vkDestroyDescriptorSetLayout(context.device, capture.setLayout, nullptr);
+    if (capture.renderPass) vkDestroyRenderPass(context.device, capture.renderPass, nullptr);
+    capture = SceneCapture{};
+}
+
+void setBounceSource(const Context& context, SceneCapture& capture, const BounceSource& bounce) {
+    if (bounce.counts != glm::ivec3(0) && bounce.order != capture.options.order)
+        throw Error(ErrorKind::Input, "scene capture: the previous bounce is of order " +
+                                          std::to_string(bounce.order) + ", the capture of order " +
+                                          std::to_string(capture.options.order));
+    Buffer next = createStorage(context, packBounce(bounce), "previous bounce");
+    destroyBuffer(context, capture.buffers[SHPROBE_CAPTURE_VOLUME]);
+    capture.buffers[SHPROBE_CAPTURE_VOLUME] = next;
+    writeDescriptor(context, capture.set, SHPROBE_CAPTURE_VOLUME, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                    {.buffer = next.buffer});
+}
+
+CaptureTarget createCaptureTarget(const Context& context, const SceneCapture& capture, uint32_t probeCount) {
+    CaptureTarget target;
+    OnFailure undo([&] { destroyCaptureTarget(context, target); });
+    target.probeCount = probeCount;
+    const VkExtent2D extent{uint32_t(capture.options.faceSize), uint32_t(capture.options.faceSize)};
+    GpuImageDesc desc;
+    desc.format = kCaptureFormat;
+    desc.extent = extent;
+    desc.usage =
+        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    desc.layers = 6 * probeCount;
+    desc.what = "probe captures";
+    target.cubemaps = createImage(context, desc);
+    target.depth = createDepthImage(context, capture);
+    for (uint32_t layer = 0; layer < desc.layers; ++layer) {
+        target.layerViews.push_back(
+            createImageView(context, target.cubemaps.image, VK_IMAGE_VIEW_TYPE_2D, kCaptureFormat, 1, layer));
+        const std::array<VkImageView, 2> views{target.layerViews.back(), target.depth.view};
+        target.framebuffers.push_back(createFramebuffer(context, capture.renderPass, views, extent));
+    }
+    return target;
+}
+
+void destroyCaptureTarget(const Context& context, CaptureTarget& target) {
+    for (VkFramebuffer framebuffer : target.framebuffers)
+        vkDestroyFramebuffer(context.device, framebuffer, nullptr);
+    for (VkImageView view : target.layerViews)
+        vkDestroyImageView(context.device, view, nullptr);
+    destroyImage(context, target.depth);
+    destroyImage(context, target.cubemaps);
+    target = CaptureTarget{};
+}
+
+void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, const CaptureTarget& target,
+                        std::span<const glm::dvec3> positions) {
+    if (positions.size() > target.probeCount)
+        throw Error(ErrorKind::Input, "scene capture: " + std::to_string(positions.size()) +
+                                          " probes for a target of " + std::to_string(target.probeCount));
+    const uint32_t n = uint32_t(capture.options.faceSize);
+    const VkClearValue clears[2] = {{}, {.depthStencil = {0.0f, 0}}}; // depth 0: infinitely far
+    vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.layout, 0, 1, &capture.set, 0,
+                            nullptr);
+    for (size_t p = 0; p < positions.size(); ++p)
+        for (uint32_t face = 0; face < 6; ++face) {
+            const gpu::CaptureConstants constants{faceProjection(face, positions[p], capture.nearPlane),
+                                                  glm::vec4(glm::vec3(positions[p]), 1.0f),
+                                                  glm::uvec4(face, n, capture.skyFaceSize, 0u)};
+            beginRenderPass(commands, capture.renderPass, target.framebuffers[6 * p + face], {n, n}, clears);
+            vkCmdPushConstants(commands, capture.layout,
+                               VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                               sizeof(constants), &constants);
+            vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.sky);
+            vkCmdDraw(commands, 3, 1, 0, 0);
+            vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.surfaces);
+            if (capture.triangleCount > 0) vkCmdDraw(commands, 3 * capture.triangleCount, 1, 0, 0);
+            vkCmdEndRenderPass(commands);
+        }
+}
+
+std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCapture& capture,
+                                        std::span<const glm::dvec3> positions,
+                                        const SceneBakeOptions& options) {
+    const uint32_t batch =
+        std::max<uint32_t>(1, std::min<uint32_t>(options.probesPerBatch, uint32_t(positions.size())));
+    CaptureTarget target = createCaptureTarget(context, capture, batch);
+    ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
+    ProbeBaker baker =
+        createProbeBaker(context, {.order = options.order, .cubemaps = CubemapBinding::StorageRgba32F});
+    ScopeExit releaseBaker([&] { destroyProbeBaker(context, baker); });
+    const VkDeviceSize coefficientBytes = alignUp(probeBakeOutputBytes(options.order, batch),
+                                                  context.info.limits.minStorageBufferOffsetAlignment);
+    Buffer output = createBuffer(context, coefficientBytes + batch * sizeof(uint32_t),
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "scene probes");
+    ScopeExit releaseOutput([&] { destroyBuffer(context, output); });
+    ProbeBakeSet set = createProbeBakeSet(
+        context, baker, {target.cubemaps.view, uint32_t(capture.options.faceSize), batch, output.buffer, 0});
+    ScopeExit releaseSet([&] { destroyProbeBakeSet(context, set); });
+    BackFaceCount count =
+        createBackFaceCount(context, target, {.buffer = output.buffer, .offset = coefficientBytes});
+    ScopeExit releaseCount([&] { destroyBackFaceCount(context, count); });
+
+    std::vector<SceneProbe> probes;
+    for (size_t first = 0; first < positions.size(); first += batch) {
+        const std::span<const glm::dvec3> members =
+            positions.subspan(first, std::min<size_t>(batch, positions.size() - first));
+        submitAndWait(context, [&](VkCommandBuffer commands) {
+            recordSceneCapture(commands, capture, target, members);
+            recordProbeBake(commands, baker, set);
+            const uint32_t faceSize = uint32_t(capture.options.faceSize);
+            dispatch(commands, count.program, count.set, faceSize, {uint32_t(members.size()), 1});
+            computeWriteBarrier(commands);
+        });
+        invalidateBuffer(context, output);
+        const auto* counts =
+            reinterpret_cast<const uint32_t*>(static_cast<const char*>(output.mapped) + coefficientBytes);
+        for (size_t k = 0; k < members.size(); ++k) {
+            GpuBake bake = readBakeOutput(output, 0, options.order, batch, uint32_t(k));
+            probes.push_back({std::move(bake.radiance), std::move(bake.irradiance), counts[k]});
+        }
+    }
+    return probes;
+}
+
+Cubemap captureProbeCubemap(const Context& context, const SceneCapture& capture, const glm::dvec3& position) {
+    CaptureTarget target = createCaptureTarget(context, capture, 1);
+    ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
+    Cubemap cubemap = makeCubemap(capture.options.faceSize);
+    const VkDeviceSize bytes = cubemap.texels.size() * sizeof(glm::vec4);
+    Buffer readback = createBuffer(context, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback,
+                                   "captured cube map");
+    ScopeExit releaseReadback([&] { destroyBuffer(context, readback); });
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        recordSceneCapture(commands, capture, target, {&position, 1});
+        changeLayout(commands, target.cubemaps,
+                     {VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                      VK_ACCESS_TRANSFER_READ_BIT});
+        VkBufferImageCopy region{};
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 6};
+        region.imageExtent = {target.cubemaps.extent.width, target.cubemaps.extent.height, 1};
+        vkCmdCopyImageToBuffer(commands, target.cubemaps.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                               readback.buffer, 1, &region);
+        computeWriteBarrier(commands);
+    });
+    invalidateBuffer(context, readback);
+    std::memcpy(cubemap.texels.data(), readback.mapped, bytes);
+    return cubemap;
+}
+
+} // namespace shprobe

@@ -1,0 +1,118 @@
+// Light probes inside a scene, on the GPU: each probe's cube map is drawn from the world (sky,
+// emission, and the previous bounce's irradiance reflected by the surfaces; scene/scene.h), into
+// the six layers per probe that recordProbeBake reads, and baked by it in the same command buffer.
+//
+//   SceneCapture capture = createSceneCapture(context, world, sky, {.faceSize = 32});
+//   CaptureTarget target = createCaptureTarget(context, capture, 32);        // 32 probes at a time
+//   recordSceneCapture(commands, capture, target, positions);                // <= 32 positions
+//   recordProbeBake(commands, baker, bakeSetOf(target.cubemaps.view), ...);  // probe_baker.h
+//
+// bakeSceneProbes does all of it for a list of positions: batches, bakes, reads back.
+#pragma once
+#include "shprobe/gpu/probe_baker.h"
+#include "shprobe/scene/scene.h"
+#include "shprobe/sh/coefficients.h"
+#include "shprobe/sh/cubemap.h"
+#include "shprobe/vk/context.h"
+#include "shprobe/vk/image.h"
+#include "shprobe/vk/resources.h"
+
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <span>
+#include <vector>
+
+namespace shprobe {
+
+// The irradiance of the previous bounce: a regular grid of probes (scene/probe_grid.h's
+// placement), order^2 coefficients each, and whether each is valid (not inside geometry).
+struct BounceSource {
+    glm::dvec3 boundsMin{0.0};
+    glm::dvec3 boundsMax{0.0};
+    glm::ivec3 counts{0};
+    int order = 0;
+    std::span<const glm::dvec3> irradiance; // probe p's coefficient i at p * order^2 + i
+    std::span<const uint8_t> valid;         // one per probe
+};
+
+struct SceneCaptureOptions {
+    int faceSize = 32; // N: each probe's cube map is 6 x N x N
+    int order = 3;     // of the previous bounce's volume (the bake's order)
+};
+
+// The world, the sky and the previous bounce in storage buffers, with the capture's render pass
+// and pipelines. The world's triangles are drawn as they are: no culling, so that back faces are
+// seen and counted.
+struct SceneCapture {
+    SceneCaptureOptions options;
+    uint32_t triangleCount = 0;
+    uint32_t skyFaceSize = 0;
+    float nearPlane = 0.0f; // scaled to the world, so that no wall a probe can touch is clipped
+    VkFormat depthFormat = VK_FORMAT_UNDEFINED;
+    VkRenderPass renderPass = VK_NULL_HANDLE;
+    VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
+    VkPipelineLayout layout = VK_NULL_HANDLE;
+    VkShaderModule surfaceVertex = VK_NULL_HANDLE;
+    VkShaderModule surfaceFragment = VK_NULL_HANDLE;
+    VkShaderModule skyVertex = VK_NULL_HANDLE;
+    VkShaderModule skyFragment = VK_NULL_HANDLE;
+    VkPipeline surfaces = VK_NULL_HANDLE;
+    VkPipeline sky = VK_NULL_HANDLE;
+    std::vector<Buffer> buffers; // one per binding of capture_interface.h
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+};
+
+// Throws Error(Input) for a world or sky the capture cannot hold (index beyond the vertices, a
+// face size of 0), and for a world with suns, whose shadows the capture does not draw yet;
+// Error(Device) when the device lacks what it needs.
+SceneCapture createSceneCapture(const Context& context, const World& world, const Cubemap& sky,
+                                const SceneCaptureOptions& options);
+void destroySceneCapture(const Context& context, SceneCapture& capture);
+
+// Makes the next captures reflect `bounce` off the surfaces (none: an empty BounceSource).
+// Not while a command buffer using the capture may run.
+void setBounceSource(const Context& context, SceneCapture& capture, const BounceSource& bounce);
+
+// Where the captures of up to probeCount probes go: the RGBA32F 2D-array image of 6 layers per
+// probe (probe_baker.h's layout, for CubemapBinding::StorageRgba32F), a framebuffer per layer and
+// the depth buffer they share.
+struct CaptureTarget {
+    uint32_t probeCount = 0;
+    GpuImage cubemaps;
+    GpuImage depth;
+    std::vector<VkImageView> layerViews;
+    std::vector<VkFramebuffer> framebuffers;
+};
+CaptureTarget createCaptureTarget(const Context& context, const SceneCapture& capture, uint32_t probeCount);
+void destroyCaptureTarget(const Context& context, CaptureTarget& target);
+
+// Records the capture of each position (at most target.probeCount) into layers 6p..6p+5 and
+// leaves the image in VK_IMAGE_LAYOUT_GENERAL, visible to compute-shader reads. Alpha holds
+// SHPROBE_CAPTURE_BACK_FACE where a texel sees the back of a one-sided surface.
+void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, const CaptureTarget& target,
+                        std::span<const glm::dvec3> positions);
+
+// What bakeSceneProbes gives for each probe.
+struct SceneProbe {
+    ShCoefficients radiance;
+    ShCoefficients irradiance;
+    uint32_t backFaceTexels = 0; // of the 6 N^2 texels of its cube map
+};
+
+struct SceneBakeOptions {
+    int order = 3;
+    uint32_t probesPerBatch = 32; // captured and baked per command buffer
+};
+
+// Captures and bakes every position, probesPerBatch per command buffer (capture, bake, back-face
+// count, then one wait); results in input order.
+std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCapture& capture,
+                                        std::span<const glm::dvec3> positions,
+                                        const SceneBakeOptions& options);
+
+// A cube map captured for one probe, read back (for tests and pictures): radiance in rgb, alpha
+// as recordSceneCapture leaves it.
+Cubemap captureProbeCubemap(const Context& context, const SceneCapture& capture, const glm::dvec3& position);
+
+} // namespace shprobe

@@ -1,0 +1,493 @@
+// glTF scenes read with tinygltf (scene/gltf_scene.h): the file and its layout checked first, then
+// the node hierarchy walked, each mesh instance, material, texture and sun added to the World.
+#include "shprobe/scene/gltf_scene.h"
+
+#include "shprobe/image/codec.h"
+#include "shprobe/io/input_file.h"
+#include "shprobe/scene/gltf_geometry.h"
+#include "shprobe/scene/gltf_schema.h"
+#include "shprobe/scene/scene_images.h"
+#include "shprobe/sh/error.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <map>
+#include <span>
+#include <string_view>
+#include <tiny_gltf.h>
+
+namespace shprobe {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& problem) {
+    throw Error(ErrorKind::Input, path + ": " + problem);
+}
+
+std::string counted(size_t count, const std::string& noun) {
+    return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
+}
+
+// ---- The file: .glb layout, JSON, tinygltf ------------------------------------------------------
+
+uint32_t littleEndian32(std::string_view bytes, size_t at) {
+    uint32_t value;
+    std::memcpy(&value, bytes.data() + at, 4);
+    return value;
+}
+
+bool isGlb(std::string_view bytes) {
+    return bytes.substr(0, 4) == "glTF";
+}
+
+// The bytes of a .glb that its header counts, with the JSON chunk's, after the layout is checked
+// (the specification's 4.4, "Binary glTF Layout"): a 12-byte header (magic, version 2, length),
+// then chunks of an 8-byte header (length, type) and their data: JSON, then optionally BIN.
+// tinygltf checks less: it reads the BIN chunk's data past the length it was given.
+std::pair<std::string_view, std::string_view> glbParts(std::string_view bytes, const std::string& path) {
+    const std::string cut = "the file is cut short (" + counted(bytes.size(), "byte") + "): ";
+    if (bytes.size() < 20) fail(path, cut + "a .glb has a 12-byte header and an 8-byte chunk header");
+    if (const uint32_t version = littleEndian32(bytes, 4); version != 2)
+        fail(path, "a binary glTF of version " + std::to_string(version) + "; only version 2 is read");
+    const uint64_t length = littleEndian32(bytes, 8);
+    if (length > bytes.size()) fail(path, cut + "its header says " + counted(length, "byte"));
+    const std::string_view file = bytes.substr(0, size_t(length));
+    const uint64_t jsonLength = littleEndian32(file, 12);
+    if (littleEndian32(file, 16) != 0x4E4F534A) fail(path, "the first chunk of the .glb is not its JSON");
+    if (20 + jsonLength > length) fail(path, cut + "its JSON chunk has " + counted(jsonLength, "byte"));
+    const uint64_t binAt = 20 + jsonLength;
+    if (binAt < length) {
+        if (binAt + 8 > length) fail(path, cut + "it ends in the header of its second chunk");
+        const uint64_t binLength = littleEndian32(file, size_t(binAt));
+        if (binAt + 8 + binLength > length)
+            fail(path, cut + "its BIN chunk has " + counted(binLength, "byte"));
+    }
+    return {file, file.substr(20, size_t(jsonLength))};
+}
+
+// Reads buffer files through io/input_file.h, so that a buffer file that is missing, a folder or
+// too large is said in the project's words, and only files beside the scene (or below, or above
+// through "..") are looked for: tinygltf also tries the process's working folder.
+struct FileAccess {
+    std::string prefix;  // the scene's folder, with a final '/'
+    std::string failure; // the first file that could not be read: "PATH: REASON"
+};
+
+bool fileExists(const std::string& path, void* user) {
+    const auto& access = *static_cast<FileAccess*>(user);
+    return path.compare(0, access.prefix.size(), access.prefix) == 0; // whether it exists is said on reading
+}
+
+std::string expandFilePath(const std::string& path, void*) {
+    return path;
+}
+
+bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+    auto& access = *static_cast<FileAccess*>(user);
+    try {
+        const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF buffer file");
+        out->assign(bytes.begin(), bytes.end());
+        return true;
+    } catch (const Error& error) {
+        if (access.failure.empty()) access.failure = error.what();
+        *err = error.what();
+        return false;
+    }
+}
+
+// Images are kept as the file stores them (PNG or JPEG bytes), decoded when a material uses them.
+bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                    const unsigned char* bytes, int size, void*) {
+    image->image.assign(bytes, bytes + std::max(size, 0));
+    image->as_is = true;
+    return true;
+}
+
+std::string folderOf(const std::string& path) {
+    const std::string folder = std::filesystem::path(path).parent_path().string();
+    return folder.empty() ? "." : folder;
+}
+
+// JSON starts with an object or an array after white space, and perhaps a UTF-8 byte order mark
+// (which nlohmann-json skips).
+bool looksLikeJson(std::string_view text) {
+    if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);
+    const size_t start = text.find_first_not_of(" \t\r\n");
+    return start != std::string_view::npos && (text[start] == '{' || text[start] == '[');
+}
+
+tinygltf::Model parseModel(const std::string& path, std::string_view bytes) {
+    const bool binary = isGlb(bytes);
+    const auto [data, json] = binary ? glbParts(bytes, path) : std::pair{bytes, bytes};
+    if (!binary && !looksLikeJson(json))
+        fail(path,
+             "not a glTF file: neither JSON (a .gltf) nor binary glTF (a .glb, which starts with \"glTF\")");
+    checkGltfJson(json, path);
+    const std::string folder = folderOf(path);
+    FileAccess access{folder.back() == '/' ? folder : folder + "/", {}};
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(&keepImageBytes, nullptr);
+    loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, nullptr, &access});
+    tinygltf::Model model;
+    std::string err, warn;
+    const bool loaded =
+        binary ? loader.LoadBinaryFromMemory(&model, &err, &warn,
+                                             reinterpret_cast<const unsigned char*>(data.data()),
+                                             unsigned(data.size()), folder)
+               : loader.LoadASCIIFromString(&model, &err, &warn, data.data(), unsigned(data.size()), folder);
+    if (!access.failure.empty()) fail(path, "cannot read " + access.failure);
+    // tinygltf also reports some faults in `err` while it goes on (a texture info without index).
+    if (!loaded || !err.empty()) {
+        const std::string message = oneLine(err + warn);
+        fail(path, message.empty() ? "tinygltf cannot read the file" : message);
+    }
+    return model;
+}
+
+bool usesExtension(const tinygltf::Model& model, std::string_view name) {
+    auto has = [&](const std::vector<std::string>& list) {
+        return std::find(list.begin(), list.end(), name) != list.end();
+    };
+    return has(model.extensionsUsed) || has(model.extensionsRequired);
+}
+
+// ---- The node hierarchy -------------------------------------------------------------------------
+
+std::string nodeName(int node) {
+    return "nodes[" + std::to_string(node) + "]";
+}
+
+// Each node's parent (-1: none), after checking that the nodes form trees (the specification's
+// 3.5.3): children that exist, no node with two parents, no cycle. tinygltf checks none of it, and a
+// cycle would make the walk below endless.
+std::vector<int> checkedParents(const tinygltf::Model& model, const std::string& path) {
+    const size_t count = model.nodes.size();
+    std::vector<int> parents(count, -1);
+    for (size_t n = 0; n < count; ++n)
+        for (int child : model.nodes[n].children) {
+            if (child < 0 || size_t(child) >= count)
+                fail(path, nodeName(int(n)) + ".children names node " + std::to_string(child) +
+                               ", but the file has " + counted(count, "node"));
+            if (parents[size_t(child)] >= 0)
+                fail(path, "node " + std::to_string(child) + " is a child of node " +
+                               std::to_string(parents[size_t(child)]) + " and of node " + std::to_string(n) +
+                               "; glTF nodes form trees, with one parent each");
+            parents[size_t(child)] = int(n);
+        }
+    // With one parent each, the nodes no root leads to are those on a cycle or below one.
+    std::vector<bool> reached(count, false);
+    std::vector<int> stack;
+    for (size_t n = 0; n < count; ++n)
+        if (parents[n] < 0) stack.push_back(int(n));
+    while (!stack.empty()) {
+        const int node = stack.back();
+        stack.pop_back();
+        reached[size_t(node)] = true;
+        stack.insert(stack.end(), model.nodes[size_t(node)].children.begin(),
+                     model.nodes[size_t(node)].children.end());
+    }
+    const auto unreached = std::find(reached.begin(), reached.end(), false);
+    if (unreached == reached.end()) return parents;
+    // Up the parents from there until a node repeats: that node is on the cycle.
+    std::vector<bool> seen(count, false);
+    int node = int(unreached - reached.begin());
+    for (; !seen[size_t(node)]; node = parents[size_t(node)])
+        seen[size_t(node)] = true;
+    std::string cycle = std::to_string(node);
+    for (int at = parents[size_t(node)]; at != node; at = parents[size_t(at)])
+        cycle = std::to_string(at) + " -> " + cycle;
+    fail(path, "the node hierarchy has a cycle: nodes " + std::to_string(node) + " -> " + cycle +
+                   " (each the parent of the next)");
+}
+
+// The root nodes to draw: the default scene's, else scene 0's, else every node without a parent.
+std::vector<int> sceneRoots(const tinygltf::Model& model, const std::vector<int>& parents,
+                            const std::string& path) {
+    if (model.scenes.empty()) {
+        std::vector<int> roots;
+        for (size_t n = 0; n < parents.size(); ++n)
+            if (parents[n] < 0) roots.push_back(int(n));
+        return roots;
+    }
+    const int scene = std::max(model.defaultScene, 0);
+    if (size_t(scene) >= model.scenes.size())
+        fail(path, "the default scene is " + std::to_string(scene) + ", but the file has " +
+                       counted(model.scenes.size(), "scene"));
+    const std::string where = "scenes[" + std::to_string(scene) + "].nodes";
+    std::vector<int> roots = model.scenes[size_t(scene)].nodes;
+    std::vector<bool> listed(parents.size(), false);
+    for (int root : roots) {
+        if (root < 0 || size_t(root) >= parents.size())
+            fail(path, where + " names node " + std::to_string(root) + ", but the file has " +
+                           counted(parents.size(), "node"));
+        if (parents[size_t(root)] >= 0)
+            fail(path, where + " names node " + std::to_string(root) + ", a child of node " +
+                           std::to_string(parents[size_t(root)]) + "; a scene lists root nodes only");
+        if (listed[size_t(root)]) fail(path, where + " names node " + std::to_string(root) + " twice");
+        listed[size_t(root)] = true;
+    }
+    return roots;
+}
+
+// The node's transform relative to its parent: its matrix, or T * R * S (3.5.2).
+glm::dmat4 localTransform(const tinygltf::Node& node, int index, const std::string& path) {
+    if (node.matrix.size() == 16) return glm::make_mat4(node.matrix.data()); // column-major, as glm
+    glm::dmat4 transform(1.0);
+    if (node.translation.size() == 3)
+        transform = glm::translate(transform, glm::make_vec3(node.translation.data()));
+    if (node.rotation.size() == 4) {
+        // glTF's [x, y, z, w]; a quaternion not of unit length is normalized.
+        const glm::dquat rotation(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
+        if (!(glm::length(rotation) > 0.0))
+            fail(path, nodeName(index) + ".rotation is [0, 0, 0, 0], not a rotation");
+        transform *= glm::mat4_cast(glm::normalize(rotation));
+    }
+    if (node.scale.size() == 3) transform = glm::scale(transform, glm::make_vec3(node.scale.data()));
+    return transform;
+}
+
+struct PlacedNode {
+    int node;
+    glm::dmat4 world;
+};
+
+// Every node under the roots with its world transform, parents before children.
+std::vector<PlacedNode> placeNodes(const tinygltf::Model& model, const std::vector<int>& roots,
+                                   const std::string& path) {
+    std::vector<PlacedNode> placed;
+    std::vector<PlacedNode> stack;
+    for (auto root = roots.rbegin(); root != roots.rend(); ++root)
+        stack.push_back({*root, glm::dmat4(1.0)}); // taken in the file's order
+    while (!stack.empty()) {
+        const PlacedNode parent = stack.back();
+        stack.pop_back();
+        const tinygltf::Node& node = model.nodes[size_t(parent.node)];
+        const PlacedNode here{parent.node, parent.world * localTransform(node, parent.node, path)};
+        placed.push_back(here);
+        for (auto child = node.children.rbegin(); child != node.children.rend(); ++child)
+            stack.push_back({*child, here.world}); // taken in the file's order
+    }
+    return placed;
+}
+
+// ---- The World ----------------------------------------------------------------------------------
+
+class SceneBuilder {
+  public:
+    SceneBuilder(const tinygltf::Model& model, const std::string& path, const GltfLoadOptions& options)
+        : model_(model), path_(path),
+          options_(options), source_{model, path, usesExtension(model, "KHR_mesh_quantization")},
+          maxVertices_(options.maxTriangles > UINT32_MAX / 3 ? UINT32_MAX
+                                                             : 3 * uint64_t(options.maxTriangles)) {}
+
+    void addNode(const PlacedNode& placed) {
+        const tinygltf::Node& node = model_.nodes[size_t(placed.node)];
+        if (node.mesh >= 0) addMesh(placed, node.mesh);
+        auto light = node.extensions.find("KHR_lights_punctual");
+        if (light != node.extensions.end() && light->second.Has("light"))
+            addLight(placed, light->second.Get("light").GetNumberAsInt());
+    }
+
+    World finish() {
+        if (world_.indices.empty())
+            fail(path_, "the scene has no triangles" + (notes_.empty() ? "" : " (" + notesText() + ")"));
+        world_.boundsMin = world_.boundsMax = world_.positions[0];
+        for (const glm::vec3& p : world_.positions) {
+            world_.boundsMin = glm::min(world_.boundsMin, p);
+            world_.boundsMax = glm::max(world_.boundsMax, p);
+        }
+        world_.description = path_ + " (" + counted(world_.triangleCount(), "triangle") + ", " +
+                             counted(world_.materials.size(), "material") + ", " +
+                             counted(world_.suns.size(), "sun") + (notes_.empty() ? "" : "; " + notesText()) +
+                             ")";
+        return std::move(world_);
+    }
+
+  private:
+    void addMesh(const PlacedNode& placed, int mesh) {
+        const std::string where = nodeName(placed.node) + ".mesh";
+        if (size_t(mesh) >= model_.meshes.size())
+            fail(path_, where + " is " + std::to_string(mesh) + ", but the file has " +
+                            counted(model_.meshes.size(), "mesh"));
+        const auto& primitives = model_.meshes[size_t(mesh)].primitives;
+        for (size_t p = 0; p < primitives.size(); ++p) {
+            const PrimitiveShape shape = primitiveShape(source_, mesh, int(p));
+            if (shape.pointsOrLines) ++notes_["line or point primitive"];
+            if (shape.triangles == 0) continue;
+            checkBudget(shape, primitives[p].attributes.count("NORMAL") == 0);
+            const uint32_t material = materialSlot(primitives[p].material, mesh, int(p));
+            const SceneMaterial& scene = world_.materials[material];
+            if ((scene.albedoTexture >= 0 || scene.emissionTexture >= 0) &&
+                !primitives[p].attributes.count("TEXCOORD_0"))
+                fail(path_, "meshes[" + std::to_string(mesh) + "].primitives[" + std::to_string(p) +
+                                "] has a textured material but no TEXCOORD_0");
+            appendPrimitive(world_, readPrimitive(source_, mesh, int(p)), placed.world, material,
+                            path_ + ": " + nodeName(placed.node) + " (meshes[" + std::to_string(mesh) +
+                                "].primitives[" + std::to_string(p) + "])");
+        }
+    }
+
+    // Before anything is read: a small file can instance a large mesh many times.
+    void checkBudget(const PrimitiveShape& shape, bool flat) const {
+        if (world_.triangleCount() + shape.triangles > options_.maxTriangles)
+            fail(path_, "the scene has more than the limit of " + counted(options_.maxTriangles, "triangle") +
+                            " (every instance counted)");
+        if (world_.positions.size() + (flat ? 3 * shape.triangles : shape.vertices) > maxVertices_)
+            fail(path_, "the scene has more than the limit of " + std::to_string(maxVertices_) +
+                            " vertices (3 per triangle of the triangle limit)");
+    }
+
+    // The World material of a glTF material (-1: glTF's default), added on first use.
+    uint32_t materialSlot(int material, int mesh, int primitive) {
+        if (auto found = materialSlots_.find(material); found != materialSlots_.end()) return found->second;
+        if (material >= 0 && size_t(material) >= model_.materials.size())
+            fail(path_, "meshes[" + std::to_string(mesh) + "].primitives[" + std::to_string(primitive) +
+                            "].material is " + std::to_string(material) + ", but the file has " +
+                            counted(model_.materials.size(), "material"));
+        SceneMaterial scene;
+        if (material >= 0) scene = sceneMaterial(material);
+        world_.materials.push_back(scene);
+        return materialSlots_[material] = uint32_t(world_.materials.size() - 1);
+    }
+
+    SceneMaterial sceneMaterial(int index) {
+        const tinygltf::Material& material = model_.materials[size_t(index)];
+        const std::string where = "materials[" + std::to_string(index) + "]";
+        SceneMaterial scene;
+        const std::vector<double>& base = material.pbrMetallicRoughness.baseColorFactor;
+        if (base.size() >= 3) scene.albedo = glm::vec3(float(base[0]), float(base[1]), float(base[2]));
+        if (material.emissiveFactor.size() == 3)
+            scene.emission = glm::vec3(glm::make_vec3(material.emissiveFactor.data()));
+        scene.emission *= float(emissiveStrength(material, where));
+        scene.doubleSided = material.doubleSided;
+        scene.albedoTexture = textureSlot(material.pbrMetallicRoughness.baseColorTexture,
+                                          where + ".pbrMetallicRoughness.baseColorTexture");
+        scene.emissionTexture = textureSlot(material.emissiveTexture, where + ".emissiveTexture");
+        return scene;
+    }
+
+    double emissiveStrength(const tinygltf::Material& material, const std::string& where) const {
+        auto extension = material.extensions.find("KHR_materials_emissive_strength");
+        if (extension == material.extensions.end() || !extension->second.Has("emissiveStrength")) return 1.0;
+        const double strength = extension->second.Get("emissiveStrength").GetNumberAsDouble();
+        if (strength < 0.0)
+            fail(path_, where + ".extensions.KHR_materials_emissive_strength.emissiveStrength is " +
+                            std::to_string(strength) + "; it must be at least 0");
+        return strength;
+    }
+
+    // The World texture of a texture reference (-1: none), decoded on first use.
+    int textureSlot(const tinygltf::TextureInfo& info, const std::string& where) {
+        if (info.index < 0) return -1;
+        if (size_t(info.index) >= model_.textures.size())
+            fail(path_, where + ".index is " + std::to_string(info.index) + ", but the file has " +
+                            counted(model_.textures.size(), "texture"));
+        if (info.texCoord != 0)
+            fail(path_,
+                 where + " uses TEXCOORD_" + std::to_string(info.texCoord) + "; only TEXCOORD_0 is read");
+        const int image = model_.textures[size_t(info.index)].source;
+        if (image < 0 || size_t(image) >= model_.images.size())
+            fail(path_, "textures[" + std::to_string(info.index) + "] has no image of the file's " +
+                            counted(model_.images.size(), "image") +
+                            " (the images of extensions, such as KHR_texture_basisu, are not read)");
+        if (auto found = textureSlots_.find(image); found != textureSlots_.end()) return found->second;
+        world_.textures.push_back(decodeImage(image));
+        return textureSlots_[image] = int(world_.textures.size() - 1);
+    }
+
+    SceneTexture decodeImage(int index) {
+        const tinygltf::Image& image = model_.images[size_t(index)];
+        const std::string what = path_ + ": images[" + std::to_string(index) + "]";
+        if (!image.image.empty()) return decodeColourTexture(image.image, options_.maxTexturePixels, what);
+        if (image.uri.empty()) fail(what, "has no image data");
+        std::string file;
+        try {
+            file = readInputFile(folderOf(path_) + "/" + percentDecoded(image.uri), kMaxGltfFileBytes,
+                                 "an image file");
+        } catch (const Error& error) {
+            fail(what, error.what());
+        }
+        return decodeColourTexture(
+            std::span(reinterpret_cast<const unsigned char*>(file.data()), file.size()),
+            options_.maxTexturePixels, what);
+    }
+
+    // A URI's %XX escapes (RFC 3986, 2.1) decoded: the file name the URI means.
+    static std::string percentDecoded(const std::string& uri) {
+        std::string name;
+        for (size_t i = 0; i < uri.size(); ++i) {
+            if (uri[i] == '%' && i + 2 < uri.size() &&
+                std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+                std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+                name += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+                i += 2;
+            } else {
+                name += uri[i];
+            }
+        }
+        return name;
+    }
+
+    // KHR_lights_punctual: a directional light shines along its node's -Z, so the direction
+    // towards it is the node's world +Z. Point and spot lights are counted and left out.
+    void addLight(const PlacedNode& placed, int index) {
+        const std::string where = nodeName(placed.node) + ".extensions.KHR_lights_punctual.light";
+        if (index < 0 || size_t(index) >= model_.lights.size())
+            fail(path_, where + " is " + std::to_string(index) + ", but the file has " +
+                            counted(model_.lights.size(), "light"));
+        const tinygltf::Light& light = model_.lights[size_t(index)];
+        if (light.type != "directional") {
+            ++notes_[light.type + " light"];
+            return;
+        }
+        const glm::dvec3 axis = glm::dmat3(placed.world) * glm::dvec3(0.0, 0.0, 1.0);
+        if (!(glm::length(axis) > 0.0))
+            fail(path_,
+                 nodeName(placed.node) + ": the directional light has no direction (the node's scale is 0)");
+        if (light.intensity < 0.0)
+            fail(path_, "lights[" + std::to_string(index) + "].intensity is " +
+                            std::to_string(light.intensity) + "; it must be at least 0");
+        const glm::dvec3 colour =
+            light.color.size() == 3 ? glm::make_vec3(light.color.data()) : glm::dvec3(1.0);
+        world_.suns.push_back({glm::vec3(glm::normalize(axis)), glm::vec3(colour * light.intensity)});
+    }
+
+    // "2 point lights ignored, 1 line or point primitive ignored"
+    std::string notesText() const {
+        std::string text;
+        for (const auto& [what, count] : notes_)
+            text += (text.empty() ? "" : ", ") + counted(count, what) + " ignored";
+        return text;
+    }
+
+    const tinygltf::Model& model_;
+    const std::string& path_;
+    const GltfLoadOptions& options_;
+    GltfGeometrySource source_;
+    uint64_t maxVertices_;
+    World world_;
+    std::map<int, uint32_t> materialSlots_; // glTF material (-1: the default) -> World::materials
+    std::map<int, int> textureSlots_;       // glTF image -> World::textures
+    std::map<std::string, size_t> notes_;   // what was left out, and how many
+};
+
+} // namespace
+
+World loadGltfScene(const std::string& path, const GltfLoadOptions& options) {
+    const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF file");
+    const tinygltf::Model model = parseModel(path, bytes);
+    const std::vector<int> parents = checkedParents(model, path);
+    SceneBuilder builder(model, path, options);
+    for (const PlacedNode& placed : placeNodes(model, sceneRoots(model, parents, path), path))
+        builder.addNode(placed);
+    return builder.finish();
+}
+
+} // namespace shprobe

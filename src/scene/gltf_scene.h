@@ -1,0 +1,64 @@
+// Reading a glTF 2.0 scene (docs/scene-probes.md, "Scene input") into a World: a .gltf (JSON, its
+// buffers and images in files beside it or in data URIs) or a .glb (binary, the file's BIN chunk).
+//
+// What is read, from the default scene (else scene 0; else every node that has no parent):
+//   - every mesh primitive drawn as triangles (mode 4, or absent), triangle strips and fans
+//     (converted to triangle lists), placed by its node's transform (matrix, or translation,
+//     rotation and scale) composed down the hierarchy; a transform that mirrors (determinant < 0)
+//     flips the winding, as glTF says, so that every World triangle is counter-clockwise seen
+//     from its front;
+//   - POSITION, NORMAL (transformed by the inverse transpose, normalized; a primitive without
+//     normals gets flat face normals, its vertices unshared; a zero normal is replaced by the mean
+//     of its triangles' face normals) and TEXCOORD_0, from accessors of any byte stride, sparse
+//     accessors and accessors without a buffer view (zeros) included, integer components
+//     normalized where the accessor says so; KHR_mesh_quantization's integer positions, normals
+//     and texture coordinates;
+//   - materials as diffuse surfaces: baseColorFactor.rgb and baseColorTexture as albedo,
+//     emissiveFactor times KHR_materials_emissive_strength and emissiveTexture as emission,
+//     doubleSided; colour textures (PNG or JPEG, in a buffer view, a data URI or a file) decoded
+//     from sRGB to linear, alpha ignored. A primitive without a material gets glTF's default
+//     material (albedo 1, no emission, one-sided);
+//   - KHR_lights_punctual's directional lights as suns (towards the light: the node's world +Z).
+//
+// What is ignored, and said in World::description ("; 2 point lights ignored"): point and spot
+// lights, and primitives of points or lines (no surface to light). Ignored without a word (they do
+// not change what a diffuse surface reflects, or a scene without them is the one meant): cameras,
+// animations, skins (a skinned mesh is placed by its node, in its bind pose), morph targets (the
+// base shape), metallic, roughness, normal, occlusion and alpha (every surface is opaque),
+// samplers (textures repeat and are filtered bilinearly, World's rule) and KHR_texture_transform.
+//
+// What is refused, as one line "PATH: REASON" in Error(ErrorKind::Input): a path that is missing,
+// a folder, empty or unreadable (io/input_file.h); a file that is neither JSON nor a .glb, or a
+// .glb cut short; a property of the wrong JSON type (glTF 2.0's schema: "scenes[0].name must be a
+// string"); what tinygltf refuses (its messages joined into the line); a buffer or image file that
+// cannot be read; a buffer view or accessor reaching past its buffer; an index past the vertices;
+// a value that is NaN or infinite; an attribute of the wrong type or component type; a triangle
+// list whose count is not a multiple of 3; a node hierarchy with a cycle or a node with two
+// parents; an extension in extensionsRequired that is not read here (Draco, KHR_texture_basisu,
+// ...); a texture read through a TEXCOORD other than 0; a scene without triangles; and more
+// triangles or texture pixels than the limits below.
+#pragma once
+#include "shprobe/scene/scene.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace shprobe {
+
+struct GltfLoadOptions {
+    // Triangles in the World, every instance counted: a scene past it is refused before its
+    // vertices are read, since a small file may instance one large mesh many times.
+    size_t maxTriangles = 20'000'000;
+    // Pixels of one texture: a texel takes 16 bytes in World, so the default is 1 GiB.
+    int64_t maxTexturePixels = int64_t(8192) * 8192;
+};
+
+// The largest glTF, .glb, buffer or image file read: tinygltf counts bytes in int.
+constexpr uint64_t kMaxGltfFileBytes = (uint64_t(1) << 31) - 1;
+
+// Reads the scene at `path` into world-space triangles; see above for what is read, ignored and
+// refused. World::description is "NAME (T triangles, M materials, S suns)" with NAME the path.
+World loadGltfScene(const std::string& path, const GltfLoadOptions& options = {});
+
+} // namespace shprobe

@@ -1,0 +1,389 @@
+// glTF 2.0's JSON schema (the specification's "JSON Schema Reference"), as far as property types
+// go, as tables: one list of fields per kind of object, walked from the root.
+#include "shprobe/scene/gltf_schema.h"
+
+#include "shprobe/sh/error.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <span>
+
+namespace shprobe {
+
+namespace {
+
+using nlohmann::json;
+
+// glTF nests a handful of levels (root, meshes, a primitive, its attributes); extras may go
+// further. The parser stops here, before it builds the levels below.
+constexpr int kMaxJsonDepth = 64;
+struct TooDeep {};
+
+// tinygltf reads indices into int, and sizes (byteLength, byteOffset, count) into size_t from
+// JSON numbers, which hold integers exactly up to 2^53.
+constexpr int64_t kMaxIndex = INT_MAX;
+constexpr int64_t kMaxSize = int64_t(1) << 53;
+
+enum class Type {
+    String,
+    Number, // finite
+    Boolean,
+    Index,   // an integer from 0 to kMaxIndex (indices, enums such as componentType and mode)
+    Size,    // an integer from 0 to kMaxSize
+    Object,  // with `fields`
+    Objects, // an array of objects, each with `fields`
+    Numbers, // of `length` elements when it is not 0
+    Indices,
+    Strings,
+    IndexMap,  // an object whose members are indices (a primitive's attributes)
+    IndexMaps, // an array of them (morph targets)
+};
+
+struct Field {
+    std::string_view name;
+    Type type;
+    std::span<const Field> fields{};
+    size_t length = 0;
+};
+
+// Every object may also have "name" (a string), "extensions" (an object of objects) and "extras"
+// (anything): checked for every object, listed only where an extension read here is described.
+constexpr Field kTextureInfo[] = {{"index", Type::Index}, {"texCoord", Type::Index}};
+constexpr Field kNormalTextureInfo[] = {
+    {"index", Type::Index}, {"texCoord", Type::Index}, {"scale", Type::Number}};
+constexpr Field kOcclusionTextureInfo[] = {
+    {"index", Type::Index}, {"texCoord", Type::Index}, {"strength", Type::Number}};
+constexpr Field kPbr[] = {{"baseColorFactor", Type::Numbers, {}, 4},
+                          {"baseColorTexture", Type::Object, kTextureInfo},
+                          {"metallicFactor", Type::Number},
+                          {"roughnessFactor", Type::Number},
+                          {"metallicRoughnessTexture", Type::Object, kTextureInfo}};
+constexpr Field kEmissiveStrength[] = {{"emissiveStrength", Type::Number}};
+constexpr Field kMaterialExtensions[] = {
+    {"KHR_materials_emissive_strength", Type::Object, kEmissiveStrength}};
+constexpr Field kMaterial[] = {{"pbrMetallicRoughness", Type::Object, kPbr},
+                               {"normalTexture", Type::Object, kNormalTextureInfo},
+                               {"occlusionTexture", Type::Object, kOcclusionTextureInfo},
+                               {"emissiveTexture", Type::Object, kTextureInfo},
+                               {"emissiveFactor", Type::Numbers, {}, 3},
+                               {"alphaMode", Type::String},
+                               {"alphaCutoff", Type::Number},
+                               {"doubleSided", Type::Boolean},
+                               {"extensions", Type::Object, kMaterialExtensions}};
+
+constexpr Field kSparseIndices[] = {
+    {"bufferView", Type::Index}, {"byteOffset", Type::Index}, {"componentType", Type::Index}};
+constexpr Field kSparseValues[] = {{"bufferView", Type::Index}, {"byteOffset", Type::Index}};
+constexpr Field kSparse[] = {{"count", Type::Index},
+                             {"indices", Type::Object, kSparseIndices},
+                             {"values", Type::Object, kSparseValues}};
+constexpr Field kAccessor[] = {
+    {"bufferView", Type::Index},   {"byteOffset", Type::Size}, {"componentType", Type::Index},
+    {"normalized", Type::Boolean}, {"count", Type::Size},      {"type", Type::String},
+    {"max", Type::Numbers},        {"min", Type::Numbers},     {"sparse", Type::Object, kSparse}};
+
+constexpr Field kAnimationTarget[] = {{"node", Type::Index}, {"path", Type::String}};
+constexpr Field kAnimationChannel[] = {{"sampler", Type::Index}, {"target", Type::Object, kAnimationTarget}};
+constexpr Field kAnimationSampler[] = {
+    {"input", Type::Index}, {"interpolation", Type::String}, {"output", Type::Index}};
+constexpr Field kAnimation[] = {{"channels", Type::Objects, kAnimationChannel},
+                                {"samplers", Type::Objects, kAnimationSampler}};
+
+constexpr Field kAsset[] = {{"copyright", Type::String},
+                            {"generator", Type::String},
+                            {"version", Type::String},
+                            {"minVersion", Type::String}};
+constexpr Field kBuffer[] = {{"uri", Type::String}, {"byteLength", Type::Size}};
+constexpr Field kBufferView[] = {{"buffer", Type::Index},
+                                 {"byteOffset", Type::Size},
+                                 {"byteLength", Type::Size},
+                                 {"byteStride", Type::Index},
+                                 {"target", Type::Index}};
+
+constexpr Field kOrthographic[] = {
+    {"xmag", Type::Number}, {"ymag", Type::Number}, {"zfar", Type::Number}, {"znear", Type::Number}};
+constexpr Field kPerspective[] = {
+    {"aspectRatio", Type::Number}, {"yfov", Type::Number}, {"zfar", Type::Number}, {"znear", Type::Number}};
+constexpr Field kCamera[] = {{"orthographic", Type::Object, kOrthographic},
+                             {"perspective", Type::Object, kPerspective},
+                             {"type", Type::String}};
+
+constexpr Field kImage[] = {{"uri", Type::String}, {"mimeType", Type::String}, {"bufferView", Type::Index}};
+constexpr Field kPrimitive[] = {{"attributes", Type::IndexMap},
+                                {"indices", Type::Index},
+                                {"material", Type::Index},
+                                {"mode", Type::Index},
+                                {"targets", Type::IndexMaps}};
+constexpr Field kMesh[] = {{"primitives", Type::Objects, kPrimitive}, {"weights", Type::Numbers}};
+
+constexpr Field kNodeLight[] = {{"light", Type::Index}};
+constexpr Field kNodeExtensions[] = {{"KHR_lights_punctual", Type::Object, kNodeLight}};
+constexpr Field kNode[] = {{"camera", Type::Index},         {"children", Type::Indices},
+                           {"skin", Type::Index},           {"matrix", Type::Numbers, {}, 16},
+                           {"mesh", Type::Index},           {"rotation", Type::Numbers, {}, 4},
+                           {"scale", Type::Numbers, {}, 3}, {"translation", Type::Numbers, {}, 3},
+                           {"weights", Type::Numbers},      {"extensions", Type::Object, kNodeExtensions}};
+
+constexpr Field kSampler[] = {
+    {"magFilter", Type::Index}, {"minFilter", Type::Index}, {"wrapS", Type::Index}, {"wrapT", Type::Index}};
+constexpr Field kScene[] = {{"nodes", Type::Indices}};
+constexpr Field kSkin[] = {
+    {"inverseBindMatrices", Type::Index}, {"skeleton", Type::Index}, {"joints", Type::Indices}};
+constexpr Field kTexture[] = {{"sampler", Type::Index}, {"source", Type::Index}};
+
+constexpr Field kSpot[] = {{"innerConeAngle", Type::Number}, {"outerConeAngle", Type::Number}};
+constexpr Field kLight[] = {{"color", Type::Numbers, {}, 3},
+                            {"intensity", Type::Number},
+                            {"type", Type::String},
+                            {"range", Type::Number},
+                            {"spot", Type::Object, kSpot}};
+constexpr Field kLights[] = {{"lights", Type::Objects, kLight}};
+constexpr Field kRootExtensions[] = {{"KHR_lights_punctual", Type::Object, kLights}};
+
+constexpr Field kRoot[] = {{"extensionsUsed", Type::Strings},
+                           {"extensionsRequired", Type::Strings},
+                           {"accessors", Type::Objects, kAccessor},
+                           {"animations", Type::Objects, kAnimation},
+                           {"asset", Type::Object, kAsset},
+                           {"buffers", Type::Objects, kBuffer},
+                           {"bufferViews", Type::Objects, kBufferView},
+                           {"cameras", Type::Objects, kCamera},
+                           {"images", Type::Objects, kImage},
+                           {"materials", Type::Objects, kMaterial},
+                           {"meshes", Type::Objects, kMesh},
+                           {"nodes", Type::Objects, kNode},
+                           {"samplers", Type::Objects, kSampler},
+                           {"scene", Type::Index},
+                           {"scenes", Type::Objects, kScene},
+                           {"skins", Type::Objects, kSkin},
+                           {"textures", Type::Objects, kTexture},
+                           {"extensions", Type::Object, kRootExtensions}};
+
+// The extensions a file may require: those read here (gltf_scene.h). Checked before tinygltf reads
+// the file, which fails on some of the others (Draco's accessors have no buffer view) in its own words.
+constexpr std::string_view kSupportedExtensions[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
+                                                     "KHR_mesh_quantization"};
+
+const char* typeName(const json& value) {
+    switch (value.type()) {
+    case json::value_t::null:
+        return "null";
+    case json::value_t::boolean:
+        return "a boolean";
+    case json::value_t::string:
+        return "a string";
+    case json::value_t::array:
+        return "an array";
+    case json::value_t::object:
+        return "an object";
+    default:
+        return "a number";
+    }
+}
+
+class Checker {
+  public:
+    explicit Checker(const std::string& path) : path_(path) {}
+
+    void checkObject(const json& object, std::span<const Field> fields, const std::string& where) {
+        for (const Field& field : fields) {
+            auto member = object.find(field.name);
+            if (member != object.end()) checkValue(*member, field, child(where, field.name));
+        }
+        checkCommon(object, where);
+    }
+
+    [[noreturn]] void fail(const std::string& where, const std::string& problem) const {
+        throw Error(ErrorKind::Input, path_ + ": " + where + " " + problem);
+    }
+
+  private:
+    static std::string child(const std::string& where, std::string_view name) {
+        return where.empty() ? std::string(name) : where + "." + std::string(name);
+    }
+    static std::string element(const std::string& where, size_t i) {
+        return where + "[" + std::to_string(i) + "]";
+    }
+
+    // The members every glTF object may have.
+    void checkCommon(const json& object, const std::string& where) {
+        if (auto name = object.find("name"); name != object.end() && !name->is_string())
+            mustBe(*name, child(where, "name"), "a string");
+        auto extensions = object.find("extensions");
+        if (extensions == object.end()) return;
+        const std::string at = child(where, "extensions");
+        if (!extensions->is_object()) mustBe(*extensions, at, "an object");
+        for (auto extension = extensions->begin(); extension != extensions->end(); ++extension)
+            if (!extension->is_object()) mustBe(*extension, child(at, extension.key()), "an object");
+    }
+
+    [[noreturn]] void mustBe(const json& value, const std::string& where, const char* expected) const {
+        std::string found = typeName(value);
+        if (value.is_number()) found += " (" + value.dump() + ")";
+        fail(where, std::string("must be ") + expected + ", not " + found);
+    }
+
+    void checkInteger(const json& value, int64_t largest, const std::string& where) const {
+        const char* expected =
+            largest == kMaxIndex ? "an integer from 0 to 2147483647" : "an integer from 0 to 2^53";
+        if (value.is_number_unsigned() && value.get<uint64_t>() <= uint64_t(largest)) return;
+        if (value.is_number_integer() && !value.is_number_unsigned() && value.get<int64_t>() >= 0 &&
+            value.get<int64_t>() <= largest)
+            return;
+        mustBe(value, where, expected);
+    }
+
+    void checkNumber(const json& value, const std::string& where) const {
+        if (!value.is_number()) mustBe(value, where, "a number");
+        if (!std::isfinite(value.get<double>())) mustBe(value, where, "a finite number");
+    }
+
+    void checkArray(const json& value, const Field& field, const std::string& where) {
+        if (!value.is_array()) mustBe(value, where, "an array");
+        if (field.length != 0 && value.size() != field.length)
+            fail(where, "must have " + std::to_string(field.length) + " elements, not " +
+                            std::to_string(value.size()));
+        for (size_t i = 0; i < value.size(); ++i) {
+            const json& item = value[i];
+            const std::string at = element(where, i);
+            switch (field.type) {
+            case Type::Objects:
+                if (!item.is_object()) mustBe(item, at, "an object");
+                checkObject(item, field.fields, at);
+                break;
+            case Type::Numbers:
+                checkNumber(item, at);
+                break;
+            case Type::Indices:
+                checkInteger(item, kMaxIndex, at);
+                break;
+            case Type::Strings:
+                if (!item.is_string()) mustBe(item, at, "a string");
+                break;
+            default: // IndexMaps
+                checkIndexMap(item, at);
+                break;
+            }
+        }
+    }
+
+    void checkIndexMap(const json& value, const std::string& where) const {
+        if (!value.is_object()) mustBe(value, where, "an object");
+        for (auto member = value.begin(); member != value.end(); ++member)
+            checkInteger(*member, kMaxIndex, child(where, member.key()));
+    }
+
+    void checkValue(const json& value, const Field& field, const std::string& where) {
+        switch (field.type) {
+        case Type::String:
+            if (!value.is_string()) mustBe(value, where, "a string");
+            return;
+        case Type::Number:
+            return checkNumber(value, where);
+        case Type::Boolean:
+            if (!value.is_boolean()) mustBe(value, where, "a boolean");
+            return;
+        case Type::Index:
+            return checkInteger(value, kMaxIndex, where);
+        case Type::Size:
+            return checkInteger(value, kMaxSize, where);
+        case Type::Object:
+            if (!value.is_object()) mustBe(value, where, "an object");
+            return checkObject(value, field.fields, where);
+        case Type::IndexMap:
+            return checkIndexMap(value, where);
+        default:
+            return checkArray(value, field, where);
+        }
+    }
+
+    const std::string& path_;
+};
+
+// A JSON array member of the root, or an empty one.
+const json& arrayOf(const json& root, const char* name) {
+    static const json empty = json::array();
+    auto member = root.find(name);
+    return member == root.end() ? empty : *member;
+}
+
+uint64_t sizeOr(const json& object, const char* name, uint64_t fallback) {
+    auto member = object.find(name);
+    return member == object.end() ? fallback : member->get<uint64_t>();
+}
+
+// Buffers and views of at least a byte (the schema's minimum), each view within its buffer.
+// Missing required members are left to tinygltf, which names them.
+void checkBufferViews(const json& root, const Checker& checker) {
+    const json& buffers = arrayOf(root, "buffers");
+    for (size_t i = 0; i < buffers.size(); ++i)
+        if (sizeOr(buffers[i], "byteLength", 1) < 1)
+            checker.fail("buffers[" + std::to_string(i) + "].byteLength", "must be at least 1");
+    const json& views = arrayOf(root, "bufferViews");
+    for (size_t i = 0; i < views.size(); ++i) {
+        const std::string where = "bufferViews[" + std::to_string(i) + "]";
+        const json& view = views[i];
+        if (!view.contains("buffer") || !view.contains("byteLength")) continue;
+        const uint64_t length = sizeOr(view, "byteLength", 0);
+        if (length < 1) checker.fail(where + ".byteLength", "must be at least 1");
+        const uint64_t buffer = view["buffer"].get<uint64_t>();
+        if (buffer >= buffers.size())
+            checker.fail(where + ".buffer", "is " + std::to_string(buffer) + ", but the file has " +
+                                                std::to_string(buffers.size()) + " buffers");
+        const uint64_t end = sizeOr(view, "byteOffset", 0) + length; // both below 2^53: no overflow
+        const uint64_t bufferLength = sizeOr(buffers[buffer], "byteLength", 0);
+        if (end > bufferLength)
+            checker.fail(where, "ends at byte " + std::to_string(end) + ", past the end of buffer " +
+                                    std::to_string(buffer) + " (" + std::to_string(bufferLength) + " bytes)");
+    }
+}
+
+void checkRequiredExtensions(const json& root, const std::string& path) {
+    for (const json& name : arrayOf(root, "extensionsRequired"))
+        if (std::find(std::begin(kSupportedExtensions), std::end(kSupportedExtensions),
+                      name.get<std::string>()) == std::end(kSupportedExtensions))
+            throw Error(ErrorKind::Input,
+                        path + ": the file requires extension " + name.get<std::string>() +
+                            ", which is not read (only KHR_lights_punctual, "
+                            "KHR_materials_emissive_strength and KHR_mesh_quantization are)");
+}
+
+// nlohmann's "[json.exception.parse_error.101] parse error at line 3, column 1: ..." without the
+// bracketed prefix, and with the bytes it quotes kept printable: a binary file is not text.
+std::string parseProblem(const json::exception& error) {
+    std::string text = error.what();
+    const size_t end = text.find("] ");
+    if (end != std::string::npos) text = text.substr(end + 2);
+    for (char& c : text)
+        if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+    return text;
+}
+
+} // namespace
+
+void checkGltfJson(std::string_view text, const std::string& path) {
+    json root;
+    try {
+        root = json::parse(text, [](int depth, json::parse_event_t, json&) {
+            if (depth > kMaxJsonDepth) throw TooDeep{};
+            return true;
+        });
+    } catch (const json::exception& error) { // parse errors, and numbers beyond double's range
+        throw Error(ErrorKind::Input, path + ": not valid JSON (" + parseProblem(error) + ")");
+    } catch (const TooDeep&) {
+        throw Error(ErrorKind::Input, path + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+                                          " levels; not a glTF file");
+    }
+    if (!root.is_object())
+        throw Error(ErrorKind::Input, path + ": the top level must be a JSON object, not " +
+                                          std::string(typeName(root)) + "; not a glTF file");
+    Checker checker(path);
+    checker.checkObject(root, kRoot, "");
+    checkRequiredExtensions(root, path);
+    checkBufferViews(root, checker);
+}
+
+} // namespace shprobe

@@ -1,0 +1,34 @@
+// Trilinear sampling of a probe volume on the CPU: the reference for the shaders that sample one.
+//
+// A point between probes takes the 8 probes of the grid cell around it (the nearest probes, once
+// clamped to the grid, outside it) with trilinear weights. A probe the bake found unusable
+// (ProbeVolume::valid 0) gets weight 0 and the others are scaled to sum to 1, so that a probe
+// inside a wall darkens nothing near it; where every probe of non-zero weight is invalid, the
+// sample is 0 (black), which a renderer sees and may fill with another light.
+#pragma once
+#include "shprobe/io/probe_volume.h"
+
+#include <array>
+#include <cstdint>
+#include <glm/vec3.hpp>
+
+namespace shprobe {
+
+struct ProbeWeights {
+    std::array<uint32_t, 8>
+        probes{}; // flat indices; corner n is (i0 + (n & 1), j0 + (n >> 1 & 1), k0 + (n >> 2))
+    std::array<double, 8> weights{}; // sum to 1, or all 0 (see above)
+};
+
+// The probes around `position` and their weights, validity included. The volume must hold the whole
+// grid (a brick does not: merge first); throws Error(Input) otherwise or for a non-finite position.
+ProbeWeights volumeProbeWeights(const ProbeVolume& volume, const glm::dvec3& position);
+
+// E(n) at `position` for a surface of normal `normal` (normalized here): the irradiance
+// coefficients blended with volumeProbeWeights and evaluated at n. Probes of weight 0 are not
+// read, so what an invalid probe holds (NaN included) has no effect. Throws Error(Input) when the
+// volume holds no irradiance or the normal has no length.
+glm::dvec3 sampleVolumeIrradiance(const ProbeVolume& volume, const glm::dvec3& position,
+                                  const glm::dvec3& normal);
+
+} // namespace shprobe
