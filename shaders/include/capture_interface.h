@@ -16,7 +16,9 @@
 #define SHPROBE_CAPTURE_TEXELS 5    // vec4[]: every texture's linear RGBA, rows top to bottom
 #define SHPROBE_CAPTURE_SKY 6       // vec4[]: the sky cube map, 6 faces of N x N (sh/cubemap.h order)
 #define SHPROBE_CAPTURE_VOLUME 7    // CaptureVolumeHeader, then vec4 coefficients
-#define SHPROBE_CAPTURE_BINDINGS 8
+#define SHPROBE_CAPTURE_SUNS 8      // CaptureSun[]
+#define SHPROBE_CAPTURE_SHADOWS 9   // float[]: each sun's shadow map, rows top to bottom
+#define SHPROBE_CAPTURE_BINDINGS 10
 
 // What the capture writes in alpha: 1 where the texel sees the back of a one-sided surface (the
 // probe is inside something), 0 elsewhere. The bake ignores alpha; the validity count reads it.
@@ -49,11 +51,22 @@ struct CaptureVolumeHeader {
     uvec4 counts;   // xyz: probes per axis; w: 0 when there is no previous bounce
 };
 
+// A sun (scene/scene.h) and its shadow map: the depth, seen from the sun (orthographic, over the
+// world's box), of the surface nearest to the sun, larger nearer to it.
+struct CaptureSun {
+    mat4 worldToShadow; // x, y: map coordinates in [0, 1]; z: depth in [0, 1]
+    vec4 direction;     // xyz: unit, towards the sun
+    vec4 irradiance;    // rgb: on a surface facing the sun
+    vec4 scale;         // x: the world size of a map texel; y: depth per world unit
+    uvec4 map;          // x: first depth in SHPROBE_CAPTURE_SHADOWS, y: the map's size (square)
+};
+
 // Push constants: one face of one probe.
 struct CaptureConstants {
     mat4 worldToClip; // the face's projection, with reversed depth (near plane at depth 1)
     vec4 probe;       // xyz: the probe's position
-    uvec4 face;       // x: face 0..5 (sh/cubemap.h order), y: capture face size, z: sky face size
+    uvec4 face;       // x: face 0..5 (sh/cubemap.h order), y: capture face size, z: sky face size,
+                      // w: sun count
 };
 
 SHPROBE_END
@@ -64,6 +77,7 @@ static_assert(sizeof(shprobe::gpu::CaptureMaterial) == 48);
 static_assert(sizeof(shprobe::gpu::CaptureTexture) == 16);
 static_assert(sizeof(shprobe::gpu::CaptureVolumeHeader) == 48);
 static_assert(sizeof(shprobe::gpu::CaptureConstants) == 96);
+static_assert(sizeof(shprobe::gpu::CaptureSun) == 128);
 #endif
 
 #endif

@@ -24,6 +24,7 @@ namespace shprobe {
 namespace {
 
 constexpr VkFormat kCaptureFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkFormat kShadowFormat = VK_FORMAT_D32_SFLOAT; // read back as floats
 constexpr VkBufferUsageFlags kStorageUpload =
     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
 constexpr uint32_t kCountWidth = 64; // count_back_faces.comp's workgroup width
@@ -116,6 +117,61 @@ std::vector<glm::vec4> packBounce(const BounceSource& bounce) {
     return packed;
 }
 
+// The orthographic view of the world's box from a sun: map coordinates from the two axes across
+// the sun's direction (square texels over the larger extent), depth along it, larger nearer the
+// sun, the box's ends 1% inside (0, 1) so that no surface ties with the cleared depth 0.
+gpu::CaptureSun sunView(const SceneSun& sun, const World& world, uint32_t mapSize) {
+    const glm::vec3 l = glm::normalize(sun.direction);
+    const glm::vec3 helper = std::abs(l.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
+    const glm::vec3 u = glm::normalize(glm::cross(helper, l));
+    const glm::vec3 v = glm::cross(l, u);
+    const std::array<glm::vec3, 3> axes{u, v, l};
+    glm::vec3 low(INFINITY), high(-INFINITY);
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec3 p((corner & 1) ? world.boundsMax.x : world.boundsMin.x,
+                          (corner & 2) ? world.boundsMax.y : world.boundsMin.y,
+                          (corner & 4) ? world.boundsMax.z : world.boundsMin.z);
+        for (int a = 0; a < 3; ++a) {
+            low[a] = std::min(low[a], glm::dot(axes[a], p));
+            high[a] = std::max(high[a], glm::dot(axes[a], p));
+        }
+    }
+    const float worldSize = std::max(glm::length(world.boundsMax - world.boundsMin), 1e-6f);
+    const float extent = std::max({high.x - low.x, high.y - low.y, 1e-6f * worldSize}) * 1.01f;
+    const float depthRange = std::max(high.z - low.z, 1e-6f * worldSize) * 1.02f;
+    const glm::vec3 centre = 0.5f * (low + high);
+    const std::array<float, 3> scale{1.0f / extent, 1.0f / extent, 1.0f / depthRange};
+    const std::array<float, 3> origin{0.5f, 0.5f, 0.5f};
+    glm::mat4 m(0.0f); // world -> (map x, map y, depth) in [0, 1], m[column][row]
+    for (int r = 0; r < 3; ++r) {
+        for (int column = 0; column < 3; ++column)
+            m[column][r] = axes[r][column] * scale[r];
+        m[3][r] = origin[r] - centre[r] * scale[r];
+    }
+    m[3][3] = 1.0f;
+    return {m, glm::vec4(l, 0.0f), glm::vec4(sun.irradiance, 0.0f),
+            glm::vec4(extent / float(mapSize), 1.0f / depthRange, 0.0f, 0.0f),
+            glm::uvec4(0u, mapSize, 0u, 0u)};
+}
+
+std::vector<gpu::CaptureSun> packSuns(const World& world, uint32_t mapSize) {
+    std::vector<gpu::CaptureSun> suns;
+    for (const SceneSun& sun : world.suns) {
+        suns.push_back(sunView(sun, world, mapSize));
+        suns.back().map.x = uint32_t(suns.size() - 1) * mapSize * mapSize;
+    }
+    return suns;
+}
+
+// The shadow maps' clip space: the map coordinates from [0, 1] to [-1, 1] (row 0 at y = -1, as
+// framebuffer rows are), depth as it is.
+glm::mat4 shadowClip(const gpu::CaptureSun& sun) {
+    glm::mat4 toClip(1.0f);
+    toClip[0][0] = toClip[1][1] = 2.0f;
+    toClip[3][0] = toClip[3][1] = -1.0f;
+    return toClip * sun.worldToShadow;
+}
+
 // One colour attachment (the capture layer, left in GENERAL for the bake's storage reads) and
 // depth, both cleared.
 VkRenderPass createCaptureRenderPass(const Context& context, VkFormat depthFormat) {
@@ -184,6 +240,14 @@ void createCaptureBuffers(const Context& context, SceneCapture& capture, const W
     capture.buffers[SHPROBE_CAPTURE_TEXELS] = createStorage(context, textures.texels, "scene texels");
     capture.buffers[SHPROBE_CAPTURE_SKY] = createStorage(context, sky.texels, "sky texels");
     capture.buffers[SHPROBE_CAPTURE_VOLUME] = createStorage(context, packBounce({}), "previous bounce");
+    capture.sunCount = uint32_t(world.suns.size());
+    capture.suns = packSuns(world, uint32_t(capture.options.shadowMapSize));
+    const std::vector<gpu::CaptureSun>& suns = capture.suns;
+    capture.buffers[SHPROBE_CAPTURE_SUNS] = createStorage(context, suns, "suns");
+    const VkDeviceSize shadowBytes = VkDeviceSize(suns.size()) * capture.options.shadowMapSize *
+                                     capture.options.shadowMapSize * sizeof(float);
+    capture.buffers[SHPROBE_CAPTURE_SHADOWS] = createBuffer(context, std::max<VkDeviceSize>(shadowBytes, 16),
+                                                            kStorageUpload, MemoryUse::Device, "shadow maps");
 }
 
 void writeCaptureDescriptors(const Context& context, const SceneCapture& capture) {
@@ -258,6 +322,92 @@ void destroyBackFaceCount(const Context& context, BackFaceCount& count) {
     count = BackFaceCount{};
 }
 
+// Depth only, kept for the copy into the shadow-map buffer.
+VkRenderPass createShadowRenderPass(const Context& context) {
+    const VkAttachmentDescription depth =
+        attachmentDescription(kShadowFormat, VK_ATTACHMENT_LOAD_OP_CLEAR, VK_ATTACHMENT_STORE_OP_STORE,
+                              VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+    const VkAttachmentReference reference{0, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+    const VkSubpassDependency toCopy{0,
+                                     VK_SUBPASS_EXTERNAL,
+                                     VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT,
+                                     VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                     VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+                                     VK_ACCESS_TRANSFER_READ_BIT,
+                                     0};
+    return createRenderPass(context, {{&depth, 1}, {}, &reference, {&toCopy, 1}});
+}
+
+// Each sun's depth map, drawn with the capture's vertex stage and copied into the shadow-map
+// buffer, which the capture's fragments then read: one submission, its objects released after.
+void drawShadowMaps(const Context& context, const SceneCapture& capture) {
+    VkFormatProperties properties;
+    vkGetPhysicalDeviceFormatProperties(context.physicalDevice, kShadowFormat, &properties);
+    const VkFormatFeatureFlags needed =
+        VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_TRANSFER_SRC_BIT;
+    if ((properties.optimalTilingFeatures & needed) != needed)
+        throw Error(ErrorKind::Device,
+                    "scene capture: the device cannot draw shadow maps of VK_FORMAT_D32_SFLOAT");
+    const uint32_t size = uint32_t(capture.options.shadowMapSize);
+    VkRenderPass renderPass = createShadowRenderPass(context);
+    ScopeExit releasePass([&] { vkDestroyRenderPass(context.device, renderPass, nullptr); });
+    GraphicsPipelineDesc desc;
+    desc.vertex = capture.surfaceVertex;
+    desc.depthTest = true;
+    desc.depthWrite = true;
+    desc.depthCompare = VK_COMPARE_OP_GREATER;
+    desc.colorAttachments = 0;
+    desc.layout = capture.layout;
+    desc.renderPass = renderPass;
+    VkPipeline pipeline = createGraphicsPipeline(context, desc);
+    ScopeExit releasePipeline([&] { vkDestroyPipeline(context.device, pipeline, nullptr); });
+    GpuImage maps = createImage(
+        context, {.format = kShadowFormat,
+                  .extent = {size, size},
+                  .usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                  .what = "shadow maps",
+                  .layers = capture.sunCount});
+    std::vector<VkImageView> views;
+    std::vector<VkFramebuffer> framebuffers;
+    ScopeExit releaseMaps([&] {
+        for (VkFramebuffer framebuffer : framebuffers)
+            vkDestroyFramebuffer(context.device, framebuffer, nullptr);
+        for (VkImageView view : views)
+            vkDestroyImageView(context.device, view, nullptr);
+        destroyImage(context, maps);
+    });
+    for (uint32_t s = 0; s < capture.sunCount; ++s) {
+        views.push_back(createImageView(context, maps.image, VK_IMAGE_VIEW_TYPE_2D, kShadowFormat, 1, s));
+        framebuffers.push_back(createFramebuffer(context, renderPass, {&views.back(), 1}, {size, size}));
+    }
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.layout, 0, 1, &capture.set,
+                                0, nullptr);
+        const VkClearValue clear{.depthStencil = {0.0f, 0}};
+        for (uint32_t s = 0; s < capture.sunCount; ++s) {
+            const gpu::CaptureConstants constants{shadowClip(capture.suns[s]), glm::vec4(0.0f),
+                                                  glm::uvec4(0u)};
+            beginRenderPass(commands, renderPass, framebuffers[s], {size, size}, {&clear, 1});
+            vkCmdPushConstants(commands, capture.layout,
+                               VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                               sizeof(constants), &constants);
+            vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+            if (capture.triangleCount > 0) vkCmdDraw(commands, 3 * capture.triangleCount, 1, 0, 0);
+            vkCmdEndRenderPass(commands);
+        }
+        VkBufferImageCopy region{};
+        region.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, capture.sunCount};
+        region.imageExtent = {size, size, 1};
+        vkCmdCopyImageToBuffer(commands, maps.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                               capture.buffers[SHPROBE_CAPTURE_SHADOWS].buffer, 1, &region);
+        VkMemoryBarrier toFragments{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+        toFragments.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        toFragments.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+        vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+                             0, 1, &toFragments, 0, nullptr, 0, nullptr);
+    });
+}
+
 } // namespace
 
 SceneCapture createSceneCapture(const Context& context, const World& world, const Cubemap& sky,
@@ -269,12 +419,9 @@ SceneCapture createSceneCapture(const Context& context, const World& world, cons
         throw Error(ErrorKind::Input, "scene capture: order " + std::to_string(options.order) +
                                           " is outside 1.." + std::to_string(SHPROBE_MAX_ORDER));
     if (sky.faceSize < 1) throw Error(ErrorKind::Input, "scene capture: the sky has no texels");
-    // Sunlight needs shadows, which the capture does not draw yet: a lit surface in a shadow would
-    // be wrong without a word.
-    if (!world.suns.empty())
-        throw Error(ErrorKind::Input, world.description +
-                                          ": directional lights (KHR_lights_punctual) are not "
-                                          "captured yet; remove them, or give the sun in --sky");
+    if (options.shadowMapSize < 1 || options.shadowMapSize > 16384)
+        throw Error(ErrorKind::Input, "scene capture: shadow map size " +
+                                          std::to_string(options.shadowMapSize) + " is outside 1..16384");
     checkWorld(world);
 
     SceneCapture capture;
@@ -304,6 +451,7 @@ SceneCapture createSceneCapture(const Context& context, const World& world, cons
     capture.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = SHPROBE_CAPTURE_BINDINGS});
     capture.set = allocateDescriptorSet(context, capture.pool, capture.setLayout);
     writeCaptureDescriptors(context, capture);
+    if (capture.sunCount > 0) drawShadowMaps(context, capture);
     return capture;
 }
 
@@ -380,7 +528,7 @@ void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, c
         for (uint32_t face = 0; face < 6; ++face) {
             const gpu::CaptureConstants constants{faceProjection(face, positions[p], capture.nearPlane),
                                                   glm::vec4(glm::vec3(positions[p]), 1.0f),
-                                                  glm::uvec4(face, n, capture.skyFaceSize, 0u)};
+                                                  glm::uvec4(face, n, capture.skyFaceSize, capture.sunCount)};
             beginRenderPass(commands, capture.renderPass, target.framebuffers[6 * p + face], {n, n}, clears);
             vkCmdPushConstants(commands, capture.layout,
                                VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,

@@ -9,6 +9,7 @@
 //
 // bakeSceneProbes does all of it for a list of positions: batches, bakes, reads back.
 #pragma once
+#include "shprobe/glsl/capture_interface.h"
 #include "shprobe/gpu/probe_baker.h"
 #include "shprobe/scene/scene.h"
 #include "shprobe/sh/coefficients.h"
@@ -36,8 +37,9 @@ struct BounceSource {
 };
 
 struct SceneCaptureOptions {
-    int faceSize = 32; // N: each probe's cube map is 6 x N x N
-    int order = 3;     // of the previous bounce's volume (the bake's order)
+    int faceSize = 32;        // N: each probe's cube map is 6 x N x N
+    int order = 3;            // of the previous bounce's volume (the bake's order)
+    int shadowMapSize = 2048; // each sun's shadow map, over the world's box
 };
 
 // The world, the sky and the previous bounce in storage buffers, with the capture's render pass
@@ -58,14 +60,16 @@ struct SceneCapture {
     VkShaderModule skyFragment = VK_NULL_HANDLE;
     VkPipeline surfaces = VK_NULL_HANDLE;
     VkPipeline sky = VK_NULL_HANDLE;
-    std::vector<Buffer> buffers; // one per binding of capture_interface.h
+    uint32_t sunCount = 0;
+    std::vector<gpu::CaptureSun> suns; // as the shaders read them, with their shadow-map views
+    std::vector<Buffer> buffers;       // one per binding of capture_interface.h
     VkDescriptorPool pool = VK_NULL_HANDLE;
     VkDescriptorSet set = VK_NULL_HANDLE;
 };
 
-// Throws Error(Input) for a world or sky the capture cannot hold (index beyond the vertices, a
-// face size of 0), and for a world with suns, whose shadows the capture does not draw yet;
-// Error(Device) when the device lacks what it needs.
+// Draws each sun's shadow map (one submission) when the world has suns. Throws Error(Input) for a
+// world or sky the capture cannot hold (an index beyond the vertices, a face size of 0),
+// Error(Device) when the device lacks what it needs (32-bit float depth, for the shadow maps).
 SceneCapture createSceneCapture(const Context& context, const World& world, const Cubemap& sky,
                                 const SceneCaptureOptions& options);
 void destroySceneCapture(const Context& context, SceneCapture& capture);

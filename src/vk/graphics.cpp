@@ -101,7 +101,7 @@ VkPipeline createGraphicsPipeline(const Device& device, const GraphicsPipelineDe
     dynamic.pDynamicStates = dynamicStates.data();
 
     VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    info.stageCount = uint32_t(stages.size());
+    info.stageCount = desc.fragment ? 2u : 1u;
     info.pStages = stages.data();
     info.pVertexInputState = &vertexInput;
     info.pInputAssemblyState = &assembly;

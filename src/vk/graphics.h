@@ -31,7 +31,7 @@ VkFramebuffer createFramebuffer(const Device& device, VkRenderPass renderPass,
 // dynamic viewport and scissor (beginRenderPass sets them).
 struct GraphicsPipelineDesc {
     VkShaderModule vertex = VK_NULL_HANDLE;
-    VkShaderModule fragment = VK_NULL_HANDLE;
+    VkShaderModule fragment = VK_NULL_HANDLE; // none: depth only (colorAttachments = 0)
     const VkSpecializationInfo* vertexSpecialization = nullptr;
     const VkSpecializationInfo* fragmentSpecialization = nullptr;
     std::span<const VkVertexInputBindingDescription> vertexBindings; // none: the shader makes its vertices
