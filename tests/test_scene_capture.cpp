@@ -8,10 +8,16 @@
 #include "shprobe/scene/gltf_scene.h"
 #include "shprobe/scene/probe_grid.h"
 #include "shprobe/scene/reference_tracer.h"
+#include "shprobe/scene/volume_sampling.h"
+#include "shprobe/shprobe_test_spirv.h"
+#include "shprobe/vk/pipeline.h"
+
 #include "shprobe/sh/projection.h"
+#include <random>
 
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 #include <numbers>
@@ -243,6 +249,101 @@ TEST_F(SceneCaptureTest, SunlightMatchesTheReferenceRays) {
     std::printf("sunlight, bounce 0: %zu of %zu texels differ from the reference rays (%zu not black)\n",
                 differing, compared, lit);
     EXPECT_LE(differing, 3 * compared / 100);
+}
+
+// glsl/probe_volume.glsl as an engine uses it (tests/shaders/sample_volume.comp: the coefficients
+// in a 2D-array texture) against the CPU reference scene/volume_sampling.h, on a 3x2x4 volume of
+// random order-3 irradiance with a quarter of its probes invalid (holding NaN, which must not leak
+// in), at 500 points inside and around the grid with random normals. Both evaluate the same
+// formula; the GPU in float: 1e-5 of the largest |E| (coefficients below 1, 8 x 9 products).
+TEST_F(SceneCaptureTest, VolumeIncludeMatchesTheCpuSampling) {
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    ProbeVolume volume;
+    volume.grid = {glm::ivec3(3, 2, 4), glm::dvec3(-1.0, 0.0, -2.0), glm::dvec3(2.0, 1.0, 2.0)};
+    volume.order = 3;
+    volume.end = volume.grid.probeCount();
+    for (uint32_t p = 0; p < volume.end; ++p) {
+        volume.valid.push_back(p % 4 != 1);
+        for (int c = 0; c < 9; ++c)
+            volume.irradiance.push_back(
+                volume.valid.back() ? glm::vec3(unit(random), unit(random), unit(random)) : glm::vec3(NAN));
+    }
+    std::vector<glm::vec4> points;
+    for (int k = 0; k < 500; ++k) {
+        points.push_back(
+            glm::vec4(1.5f * unit(random) + 0.5f, 0.75f * unit(random) + 0.5f, 2.5f * unit(random), 0.0f));
+        points.push_back(
+            glm::vec4(glm::normalize(glm::vec3(unit(random), unit(random), unit(random))), 0.0f));
+    }
+    const uint32_t width = 3 * 9, layers = 4;
+    GpuImage texture =
+        createImage(context(), {.format = VK_FORMAT_R32G32B32A32_SFLOAT,
+                                .extent = {width, 2},
+                                .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                .what = "volume texture",
+                                .layers = layers});
+    std::vector<glm::vec4> texels(size_t(width) * 2 * layers);
+    for (uint32_t p = 0; p < volume.end; ++p) {
+        const glm::ivec3 cell(p % 3, (p / 3) % 2, p / 6);
+        for (int c = 0; c < 9; ++c)
+            texels[(size_t(cell.z) * 2 + cell.y) * width + cell.x * 9 + c] =
+                glm::vec4(volume.irradiance[p * 9 + c], float(volume.valid[p]));
+    }
+    const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+    Buffer staging = createBuffer(context(), texels.size() * 16, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                  MemoryUse::Upload, "texels");
+    std::memcpy(staging.mapped, texels.data(), texels.size() * 16);
+    Buffer input = createBuffer(context(), points.size() * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                MemoryUse::Device, "points");
+    uploadBuffer(context(), input, points.data(), points.size() * 16);
+    Buffer output = createBuffer(context(), points.size() / 2 * 16, storage, MemoryUse::Readback, "results");
+    VkSampler sampler = createSampler(context(), VK_FILTER_NEAREST);
+    const VkDescriptorType bindings[] = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                                         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    struct Push {
+        glm::vec4 boundsMin, boundsMax;
+        glm::uvec4 counts;
+    } push{glm::vec4(glm::vec3(volume.grid.boundsMin), 0.0f),
+           glm::vec4(glm::vec3(volume.grid.boundsMax), 0.0f),
+           glm::uvec4(3, 2, 4, uint32_t(points.size() / 2))};
+    ComputeProgram program = createComputeProgram(context(), {.name = "sample_volume.comp",
+                                                              .spirv = spirv::sample_volume_comp,
+                                                              .bindings = bindings,
+                                                              .immutableSampler = sampler,
+                                                              .pushConstantSize = sizeof(Push),
+                                                              .localSize = 64,
+                                                              .order = 3});
+    VkDescriptorPool pool =
+        createDescriptorPool(context(), {.sets = 1, .storageBuffers = 2, .imageSamplers = 1});
+    const BindingTarget targets[] = {
+        {.imageView = texture.view}, {.buffer = input.buffer}, {.buffer = output.buffer}};
+    VkDescriptorSet set = createDescriptorSet(context(), pool, program, targets);
+    submitAndWait(context(), [&](VkCommandBuffer commands) {
+        recordImageUpload(commands, staging.buffer, texture, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                          VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+        dispatch(commands, program, set, push, {uint32_t(points.size() / 2 + 63) / 64, 1});
+        computeWriteBarrier(commands);
+    });
+    invalidateBuffer(context(), output);
+    const auto* results = static_cast<const glm::vec4*>(output.mapped);
+    double worst = 0.0, largest = 0.0;
+    for (size_t k = 0; k < points.size() / 2; ++k) {
+        const glm::dvec3 cpu = sampleVolumeIrradiance(volume, glm::dvec3(glm::vec3(points[2 * k])),
+                                                      glm::dvec3(glm::vec3(points[2 * k + 1])));
+        worst = std::max(worst, glm::length(cpu - glm::dvec3(glm::vec3(results[k]))));
+        largest = std::max(largest, glm::length(cpu));
+    }
+    vkDestroyDescriptorPool(context().device, pool, nullptr);
+    destroyComputeProgram(context(), program);
+    vkDestroySampler(context().device, sampler, nullptr);
+    for (Buffer* buffer : {&staging, &input, &output})
+        destroyBuffer(context(), *buffer);
+    destroyImage(context(), texture);
+    std::printf("probe_volume.glsl against the CPU: worst %.3g of the largest |E| %.3g\n", worst, largest);
+    EXPECT_GT(largest, 0.1);
+    EXPECT_LT(worst, 1e-5 * largest);
 }
 
 // Bakes the grid bounce after bounce, as `shprobe scene` does: bounce k + 1 reflects bounce k's

@@ -1,0 +1,31 @@
+#version 450
+// Test module: glsl/probe_volume.glsl as an engine uses it, its coefficients in a 2D-array texture
+// (docs/probe-volume.md, "On the GPU"): probe (i, j, k)'s coefficient c at texel
+// (i * SH_ORDER^2 + c, j) of layer k, rgb and validity in w. Writes E(n) at each point, for the
+// CPU reference of scene/volume_sampling.h to check.
+#extension GL_GOOGLE_include_directive : require
+#include "gpu_interface.h"
+
+layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
+layout(constant_id = SHPROBE_SPEC_ORDER) const uint SH_ORDER = 3u;
+layout(set = 0, binding = 0) uniform sampler2DArray volumeTexture;
+layout(set = 0, binding = 1, std430) readonly buffer Points { vec4 points[]; }; // position, normal, ...
+layout(set = 0, binding = 2, std430) writeonly buffer Results { vec4 results[]; };
+layout(push_constant, std430) uniform Push {
+    vec4 boundsMin;
+    vec4 boundsMax;
+    uvec4 counts; // xyz: probes per axis; w: points
+};
+
+vec4 probeVolumeCoefficient(uint probe, uint index) {
+    uint i = probe % counts.x, j = (probe / counts.x) % counts.y, k = probe / (counts.x * counts.y);
+    return texelFetch(volumeTexture, ivec3(i * SH_ORDER * SH_ORDER + index, j, k), 0);
+}
+#include "probe_volume.glsl"
+
+void main() {
+    uint point = gl_GlobalInvocationID.x;
+    if (point >= counts.w) return;
+    ProbeVolumeGrid grid = ProbeVolumeGrid(boundsMin.xyz, boundsMax.xyz, counts.xyz);
+    results[point] = vec4(probeVolumeIrradiance(grid, points[2u * point].xyz, points[2u * point + 1u].xyz), 0.0);
+}
