@@ -7,14 +7,7 @@
 #include "gpu_interface.h"
 layout(constant_id = SHPROBE_SPEC_ORDER) const uint SH_ORDER = 3u; // the previous volume's order
 #include "capture_common.glsl"
-layout(std430, set = 0, binding = SHPROBE_CAPTURE_VOLUME) readonly buffer Volume {
-    CaptureVolumeHeader volume;
-    vec4 volumeCoefficients[];
-};
-
-vec4 probeVolumeCoefficient(uint probe, uint index) {
-    return volumeCoefficients[probe * SH_ORDER * SH_ORDER + index];
-}
+#include "capture_volume.glsl"
 #include "probe_volume.glsl"
 
 layout(std430, set = 0, binding = SHPROBE_CAPTURE_SUNS) readonly buffer Suns {

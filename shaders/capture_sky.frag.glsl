@@ -1,5 +1,5 @@
-// What a probe sees where no geometry is: the sky texel along the texel's direction. Drawn first,
-// over the whole face; capture.frag draws the world over it.
+// What a probe (or a camera) sees where no geometry is: the sky texel along the texel's direction.
+// Drawn first, over the whole face; capture.frag draws the world over it.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #include "capture_common.glsl"
@@ -7,8 +7,14 @@
 layout(location = 0) out vec4 radiance;
 
 // The unit direction through the centre of this fragment's texel of the probe's face: the ray the
-// reference casts for it (sh/cubemap.h texelDirection).
+// reference casts for it (sh/cubemap.h texelDirection). A camera's view: through the pixel, from
+// the inverse of its projection.
 vec3 fragmentDirection() {
+    if (c.face.x == SHPROBE_CAPTURE_CAMERA) {
+        vec2 ndc = 2.0 * gl_FragCoord.xy / c.view.xy - 1.0;
+        vec4 p = inverse(c.worldToClip) * vec4(ndc, 0.5, 1.0);
+        return normalize(p.xyz / p.w - c.probe.xyz);
+    }
     uint n = c.face.y;
     vec2 ab = vec2(texelCenterCoord(uint(gl_FragCoord.x), n), texelCenterCoord(uint(gl_FragCoord.y), n));
     return normalize(orientToFace(c.face.x, vec3(ab, 1.0)));

@@ -5,7 +5,10 @@
 #include "child_program.h"
 #include "scene_fixtures.h"
 
+#include "shprobe/image/environment.h"
 #include "shprobe/io/probe_volume.h"
+
+#include <glm/geometric.hpp>
 
 #include <gtest/gtest.h>
 
@@ -81,6 +84,34 @@ TEST_F(SceneCommand, RealSceneBakes) {
     EXPECT_CONTAINS(result.out, "121496 triangles");
     const ProbeVolume volume = readProbeVolume(file("engine.shpv"));
     EXPECT_EQ(volume.probeCount(), 8u);
+}
+
+// `shprobe render --scene` draws the scene lit by its volume: the surfaces reflect the volume's
+// irradiance (the Cornell box's walls are lit, so the picture is not black), and --show-probes adds
+// the probes' spheres (the picture changes). A brick is refused, and so is --scene without --volume.
+TEST_F(SceneCommand, RenderDrawsTheSceneLitByItsVolume) {
+    const std::string scene = file("open.glb");
+    testing::writeCornellBoxGltf(scene, {.innerBoxes = true});
+    runOk({"scene", scene, "--grid", "3,3,3", "--face-size", "16", "--bounces", "1", "-q", "-o",
+           file("v.shpv")});
+    runOk({"scene", scene, "--grid", "3,3,3", "--face-size", "16", "--brick", "0/2", "-q", "-o",
+           file("brick.shpv")});
+    runOk(
+        {"render", "--scene", scene, "--volume", file("v.shpv"), "--size", "64x48", "-o", file("plain.exr")});
+    runOk({"render", "--scene", scene, "--volume", file("v.shpv"), "--size", "64x48", "--show-probes", "-o",
+           file("probes.exr")});
+    const Image plain = readImage(file("plain.exr")), probes = readImage(file("probes.exr"));
+    ASSERT_EQ(plain.width, 64);
+    size_t lit = 0, changed = 0;
+    for (size_t t = 0; t < plain.texels.size(); ++t) {
+        lit += glm::length(glm::vec3(plain.texels[t])) > 0.0f;
+        changed += glm::vec3(plain.texels[t]) != glm::vec3(probes.texels[t]);
+    }
+    EXPECT_GT(lit, plain.texels.size() / 2);
+    EXPECT_GT(changed, 0u);
+    expectFailure({{"render", "--scene", scene, "-o", "OUT"}, 2, {"--volume"}, "out.png"});
+    expectFailure(
+        {{"render", "--scene", scene, "--volume", file("brick.shpv"), "-o", "OUT"}, 2, {"brick"}, "out.png"});
 }
 
 // Each broken glTF of assimp-testmodels: one line naming the file, exit 2, nothing written.

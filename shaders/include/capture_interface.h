@@ -61,12 +61,16 @@ struct CaptureSun {
     uvec4 map;          // x: first depth in SHPROBE_CAPTURE_SHADOWS, y: the map's size (square)
 };
 
-// Push constants: one face of one probe.
+// CaptureConstants.face.x of a camera's view (renderSceneView) rather than a probe's face.
+#define SHPROBE_CAPTURE_CAMERA 6u
+
+// Push constants: one face of one probe, or a camera's view.
 struct CaptureConstants {
     mat4 worldToClip; // the face's projection, with reversed depth (near plane at depth 1)
-    vec4 probe;       // xyz: the probe's position
+    vec4 probe;       // xyz: the probe's (or camera's) position; w: the probes' sphere radius
     uvec4 face;       // x: face 0..5 (sh/cubemap.h order), y: capture face size, z: sky face size,
                       // w: sun count
+    vec4 view;        // a camera's view: xy its size in pixels
 };
 
 SHPROBE_END
@@ -76,7 +80,7 @@ static_assert(sizeof(shprobe::gpu::CaptureVertex) == 32);
 static_assert(sizeof(shprobe::gpu::CaptureMaterial) == 48);
 static_assert(sizeof(shprobe::gpu::CaptureTexture) == 16);
 static_assert(sizeof(shprobe::gpu::CaptureVolumeHeader) == 48);
-static_assert(sizeof(shprobe::gpu::CaptureConstants) == 96);
+static_assert(sizeof(shprobe::gpu::CaptureConstants) == 112); // within the 128 bytes every device has
 static_assert(sizeof(shprobe::gpu::CaptureSun) == 128);
 #endif
 

@@ -71,6 +71,10 @@ struct RenderOptions {
     int64_t maxPixels = kDefaultMaxImagePixels;
     std::string device;
     bool validation = false;
+    std::string scene;       // a glTF scene, drawn lit by `volume` (render_scene.cpp)
+    std::string volume;      // its probe volume (shprobe scene)
+    std::string sky;         // the scene's sky; empty: the built-in sky
+    bool showProbes = false; // the volume's probes as spheres
 };
 
 struct ViewOptions {
@@ -181,6 +185,9 @@ void addSceneCommand(CLI::App& app, SceneOptions& options);
 void runScene(const SceneOptions& options, bool bouncesGiven);
 void addMergeCommand(CLI::App& app, MergeOptions& options);
 void runMerge(const MergeOptions& options);
+// The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize
+// (0: its own), or the built-in sky (128^2 faces by default).
+Environment loadSceneSky(const std::string& path, int faceSize);
 void runInfo(const InfoOptions& options);
 
 // "N" (N x N) or "WxH", each 1..16384; throws Error(Input) naming the option otherwise.
@@ -194,6 +201,8 @@ ImageSize parseImageSize(const std::string& text, const char* option);
 void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels);
 
 void addRenderCommand(CLI::App& app, RenderOptions& options);
+// `shprobe render --scene SCENE --volume VOLUME`: the scene lit by its probe volume.
+void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height);
 void runRender(const RenderOptions& options);
 
 // The viewer, shprobe-view (view.cpp, view_main.cpp): a program of its own, the only one that links

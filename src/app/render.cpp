@@ -160,6 +160,12 @@ void addRenderCommand(CLI::App& app, RenderOptions& options) {
         ->capture_default_str();
     addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(*command, options.device, options.validation);
+    command->add_option("--scene", options.scene,
+                        "Draw this glTF scene lit by --volume instead of a sphere (docs/scene-probes.md)");
+    command->add_option("--volume", options.volume, "The scene's probe volume (`shprobe scene`)");
+    command->add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)");
+    command->add_flag("--show-probes", options.showProbes,
+                      "With --scene: the volume's probes as small spheres shaded by their own SH");
 }
 
 void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels) {
@@ -174,6 +180,8 @@ void runRender(const RenderOptions& options) {
         options.size.empty() ? std::to_string(options.grid ? kDefaultGridCell : kDefaultSize) : options.size,
         "--size");
     checkRenderOutputPath(options.output); // before any work
+    if (!options.scene.empty() || !options.volume.empty())
+        return runSceneRender(options, size.width, size.height);
     checkOutputsAreNotInputs({&options.output, 1}, filesReadBy(options.input));
     RenderResult result = renderOnDevice(options, size);
     writeRenderedImage(options.output, result.image);

@@ -70,22 +70,20 @@ void addMergeCommand(CLI::App& app, MergeOptions& options) {
     command->add_option("-o,--output", options.output, "Whole volume to write")->required();
 }
 
+Environment loadSceneSky(const std::string& path, int faceSize) {
+    if (path.empty()) {
+        const int size = faceSize > 0 ? faceSize : 128;
+        return Environment{
+            makeDefaultSky(size), {}, Layout::Auto, "built-in sky (" + std::to_string(size) + "^2 faces)"};
+    }
+    return loadEnvironment(path, {.faceSize = faceSize});
+}
+
 namespace {
 
 // A probe sees mostly back faces when more than half of its texels do: it is inside something.
 bool insideGeometry(uint32_t backFaceTexels, int faceSize) {
     return 2 * uint64_t(backFaceTexels) > 6 * uint64_t(faceSize) * uint64_t(faceSize);
-}
-
-Environment loadSky(const SceneOptions& options) {
-    if (options.sky.empty()) {
-        const int faceSize = options.skyFaceSize > 0 ? options.skyFaceSize : 128;
-        return Environment{makeDefaultSky(faceSize),
-                           {},
-                           Layout::Auto,
-                           "built-in sky (" + std::to_string(faceSize) + "^2 faces)"};
-    }
-    return loadEnvironment(options.sky, {.faceSize = options.skyFaceSize});
 }
 
 ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
@@ -168,7 +166,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                                                    : brickRange(grid, parseBrick(options.brick));
     const std::optional<ProbeVolume> previous =
         options.previous.empty() ? std::nullopt : std::optional(readPreviousBounce(options, grid));
-    const Environment sky = loadSky(options);
+    const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
 
     ContextOptions contextOptions;
     contextOptions.device = options.device;

@@ -36,6 +36,13 @@ struct BounceSource {
     std::span<const uint8_t> valid;         // one per probe
 };
 
+// Where the probes of a bounce source are (its grid, without the coefficients).
+struct BounceGrid {
+    glm::dvec3 boundsMin{0.0};
+    glm::dvec3 boundsMax{0.0};
+    glm::ivec3 counts{0};
+};
+
 struct SceneCaptureOptions {
     int faceSize = 32;        // N: each probe's cube map is 6 x N x N
     int order = 3;            // of the previous bounce's volume (the bake's order)
@@ -62,6 +69,7 @@ struct SceneCapture {
     VkPipeline sky = VK_NULL_HANDLE;
     uint32_t sunCount = 0;
     std::vector<gpu::CaptureSun> suns; // as the shaders read them, with their shadow-map views
+    BounceGrid bounceGrid;             // of setBounceSource's volume; counts 0: none
     std::vector<Buffer> buffers;       // one per binding of capture_interface.h
     VkDescriptorPool pool = VK_NULL_HANDLE;
     VkDescriptorSet set = VK_NULL_HANDLE;
@@ -96,6 +104,43 @@ void destroyCaptureTarget(const Context& context, CaptureTarget& target);
 // SHPROBE_CAPTURE_BACK_FACE where a texel sees the back of a one-sided surface.
 void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, const CaptureTarget& target,
                         std::span<const glm::dvec3> positions);
+
+// A picture of the world lit by the capture's bounce source: what a probe there would see, through
+// a camera (reversed depth, infinitely far), with the probes as small spheres if asked.
+struct SceneCamera {
+    glm::dvec3 eye{0.0, 0.0, 3.0};
+    glm::dvec3 target{0.0};
+    glm::dvec3 up{0.0, 1.0, 0.0};
+    double verticalFovDegrees = 45.0;
+};
+
+struct SceneViewOptions {
+    bool showProbes = false;  // each probe of the bounce source, shaded by its own SH (red: invalid)
+    double probeRadius = 0.0; // 0: a tenth of the grid's smallest cell
+};
+
+// The view's colour (RGBA32F, left in GENERAL) and depth, its framebuffer, and the pipeline and
+// sphere mesh of the probes.
+struct SceneViewTarget {
+    VkExtent2D extent{};
+    GpuImage color;
+    GpuImage depth;
+    VkFramebuffer framebuffer = VK_NULL_HANDLE;
+    VkShaderModule probeVertex = VK_NULL_HANDLE;
+    VkShaderModule probeFragment = VK_NULL_HANDLE;
+    VkPipeline probes = VK_NULL_HANDLE;
+    Buffer sphereVertices;
+    Buffer sphereIndices;
+    uint32_t sphereIndexCount = 0;
+};
+// `colorUsage` is added to the colour image's (e.g. SAMPLED for a tonemap pass, TRANSFER_SRC).
+SceneViewTarget createSceneViewTarget(const Context& context, const SceneCapture& capture, VkExtent2D extent,
+                                      VkImageUsageFlags colorUsage);
+void destroySceneViewTarget(const Context& context, SceneViewTarget& target);
+// Records the view into target.color, left in GENERAL, visible to fragment-shader reads and
+// transfers.
+void recordSceneView(VkCommandBuffer commands, const SceneCapture& capture, const SceneViewTarget& target,
+                     const SceneCamera& camera, const SceneViewOptions& options);
 
 // What bakeSceneProbes gives for each probe.
 struct SceneProbe {

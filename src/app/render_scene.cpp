@@ -1,0 +1,180 @@
+// `shprobe render --scene SCENE --volume VOLUME`: a glTF scene lit by its probe volume, as its
+// probes see it (gpu/scene_capture.h recordSceneView), tonemapped like every render.
+#include "app/commands.h"
+#include "app/stopwatch.h"
+
+#include "shprobe/gpu/scene_capture.h"
+#include "shprobe/io/output_file.h"
+#include "shprobe/io/probe_volume.h"
+#include "shprobe/render/gpu_image.h"
+#include "shprobe/render/image_output.h"
+#include "shprobe/render/offscreen.h"
+#include "shprobe/render/scene.h"
+#include "shprobe/scene/gltf_scene.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/scope_exit.h"
+#include "shprobe/vk/context.h"
+#include "shprobe/vk/graphics.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <glm/geometric.hpp>
+
+namespace shprobe {
+
+namespace {
+
+constexpr double kFovDegrees = 45.0;
+
+// The orbit camera of `render` (--yaw, --pitch) around the scene's box, far enough to see all of it.
+SceneCamera sceneCamera(const RenderOptions& options, const World& world) {
+    const glm::dvec3 centre = 0.5 * glm::dvec3(world.boundsMin + world.boundsMax);
+    const double radius = 0.5 * glm::length(glm::dvec3(world.boundsMax - world.boundsMin));
+    const double distance = std::max(radius, 1e-6) / std::sin(kFovDegrees * 0.5 * M_PI / 180.0);
+    const Camera orbit = orbitCamera(options.yaw, options.pitch, float(distance), float(kFovDegrees));
+    return {centre + glm::dvec3(orbit.position), centre, glm::dvec3(0.0, 1.0, 0.0), kFovDegrees};
+}
+
+// The exposure that puts the volume's mean radiance (its valid probes' L00 / sqrt(4 pi)) at mid grey.
+float volumeExposure(const ProbeVolume& volume) {
+    const size_t perProbe = size_t(volume.order) * volume.order;
+    double sum = 0.0;
+    size_t valid = 0;
+    for (size_t p = 0; p < volume.valid.size(); ++p) {
+        if (!volume.valid[p]) continue;
+        const glm::vec3 l00 = volume.radiance.empty() ? volume.irradiance[p * perProbe] / float(M_PI)
+                                                      : volume.radiance[p * perProbe];
+        sum += glm::dot(glm::dvec3(l00), glm::dvec3(0.2126, 0.7152, 0.0722)) / std::sqrt(4.0 * M_PI);
+        ++valid;
+    }
+    const double mean = valid > 0 ? sum / double(valid) : 0.0;
+    return mean > 0.0 ? float(0.18 / mean) : 1.0f;
+}
+
+ProbeVolume readWholeVolume(const RenderOptions& options) {
+    if (options.scene.empty() || options.volume.empty())
+        throw Error(ErrorKind::Input, "render: --scene and --volume go together");
+    ProbeVolume volume = readProbeVolume(options.volume);
+    if (volume.begin != 0 || volume.end != volume.grid.probeCount())
+        throw Error(ErrorKind::Input,
+                    options.volume + ": a brick of a volume; merge the bricks first (shprobe merge)");
+    if (volume.irradiance.empty())
+        throw Error(ErrorKind::Input, options.volume + ": the volume holds no irradiance");
+    return volume;
+}
+
+// Everything one picture allocates beside the capture.
+struct SceneFrame {
+    SceneViewTarget view;
+    Tonemapper tonemapper;
+    VkDescriptorSet tonemapInput = VK_NULL_HANDLE;
+    GpuImage display;
+    VkFramebuffer displayFramebuffer = VK_NULL_HANDLE;
+    Buffer colorReadback;
+    Buffer displayReadback;
+};
+
+void destroyFrame(const Context& context, SceneFrame& frame) {
+    destroyBuffer(context, frame.displayReadback);
+    destroyBuffer(context, frame.colorReadback);
+    if (frame.displayFramebuffer) vkDestroyFramebuffer(context.device, frame.displayFramebuffer, nullptr);
+    destroyImage(context, frame.display);
+    if (frame.tonemapInput) freeTonemapInput(context, frame.tonemapper, frame.tonemapInput);
+    destroyTonemapper(context, frame.tonemapper);
+    destroySceneViewTarget(context, frame.view);
+}
+
+SceneFrame createFrame(const Context& context, const SceneCapture& capture, VkExtent2D extent) {
+    SceneFrame frame;
+    OnFailure undo([&] { destroyFrame(context, frame); });
+    frame.view = createSceneViewTarget(context, capture, extent,
+                                       VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
+    frame.tonemapper = createTonemapper(context, kDisplayFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+    frame.tonemapInput = createTonemapInput(context, frame.tonemapper, frame.view.color.view);
+    frame.display =
+        createImage(context, {.format = kDisplayFormat,
+                              .extent = extent,
+                              .usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                              .what = "display image"});
+    frame.displayFramebuffer =
+        createFramebuffer(context, frame.tonemapper.renderPass, {&frame.display.view, 1}, extent);
+    const VkDeviceSize pixels = VkDeviceSize(extent.width) * extent.height;
+    frame.colorReadback = createBuffer(context, pixels * 16, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                       MemoryUse::Readback, "colour readback");
+    frame.displayReadback = createBuffer(context, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                         MemoryUse::Readback, "display readback");
+    return frame;
+}
+
+RenderedImage renderFrame(const Context& context, const SceneCapture& capture, const SceneCamera& camera,
+                          const SceneViewOptions& viewOptions, VkExtent2D extent, float exposure) {
+    SceneFrame frame = createFrame(context, capture, extent);
+    ScopeExit releaseFrame([&] { destroyFrame(context, frame); });
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        recordSceneView(commands, capture, frame.view, camera, viewOptions);
+        changeLayout(commands, frame.view.color,
+                     {VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                      VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+                      VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+        recordTonemap(commands, frame.tonemapper, frame.tonemapInput, frame.displayFramebuffer, extent,
+                      exposure);
+        changeLayout(commands, frame.view.color,
+                     {VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT});
+        copyImageToBuffer(commands, frame.view.color, frame.colorReadback);
+        copyImageToBuffer(commands, frame.display, frame.displayReadback);
+    });
+    RenderedImage image;
+    invalidateBuffer(context, frame.colorReadback);
+    image.linear = makeImage(int(extent.width), int(extent.height));
+    std::memcpy(image.linear.texels.data(), frame.colorReadback.mapped,
+                image.linear.texels.size() * sizeof(glm::vec4));
+    invalidateBuffer(context, frame.displayReadback);
+    const auto* bytes = static_cast<const uint8_t*>(frame.displayReadback.mapped);
+    image.display.assign(bytes, bytes + frame.displayReadback.size);
+    return image;
+}
+
+} // namespace
+
+void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height) {
+    if (!options.input.empty() || options.grid)
+        throw Error(ErrorKind::Input,
+                    "render: --scene draws the scene and its volume; it takes no probe input or --grid");
+    const std::vector<std::string> inputs{options.scene, options.volume};
+    checkOutputsAreNotInputs({&options.output, 1}, inputs);
+    const ProbeVolume volume = readWholeVolume(options);
+    const World world = loadGltfScene(options.scene);
+    const Environment sky = loadSceneSky(options.sky, 0);
+
+    ContextOptions contextOptions;
+    contextOptions.device = options.device;
+    contextOptions.validation = options.validation;
+    contextOptions.graphics = true;
+    Context context = createContext(contextOptions);
+    ScopeExit releaseContext([&] { destroyContext(context); });
+    SceneCapture capture = createSceneCapture(context, world, sky.cubemap, {.order = volume.order});
+    ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });
+    const std::vector<glm::dvec3> irradiance(volume.irradiance.begin(), volume.irradiance.end());
+    setBounceSource(context, capture,
+                    {volume.grid.boundsMin, volume.grid.boundsMax, volume.grid.counts, volume.order,
+                     irradiance, volume.valid});
+    const Clock::time_point start = Clock::now();
+    const RenderedImage image =
+        renderFrame(context, capture, sceneCamera(options, world), {.showProbes = options.showProbes},
+                    {width, height}, volumeExposure(volume) * std::exp2(options.exposure));
+    const double milliseconds = millisecondsSince(start);
+    if (uint32_t messages = context.validationMessages(); messages > 0)
+        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
+    writeRenderedImage(options.output, image);
+    std::printf("shprobe render: %s lit by %s -> %s (%ux%u)\n", world.description.c_str(),
+                options.volume.c_str(), options.output.c_str(), width, height);
+    std::printf("  volume   %dx%dx%d probes, order %d, bounce %d%s\n", volume.grid.counts.x,
+                volume.grid.counts.y, volume.grid.counts.z, volume.order, volume.bounces,
+                options.showProbes ? ", probes shown" : "");
+    std::printf("  time     render %.1f ms\n", milliseconds);
+}
+
+} // namespace shprobe
