@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# Scene probes per second and memory per probe: `shprobe scene` (GPU capture and bake) and
+# `shprobe-reference` (Embree path tracing, as many directions per probe as a capture has texels)
+# on 1,000 and 10,000 probes at faces 32^2, bounce 0, in a Cornell box (36 triangles, written here)
+# and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels).
+# Whole processes, timed by GNU time with their peak memory; memory per probe is the difference of
+# the 10,000- and 1,000-probe runs' peaks over the 9,000 probes between them.
+#   bash scripts/bench-scene.sh [BUILD_DIR] [OUT.json]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build="${1:-build}"
+json="${2:-}"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# The Cornell box as docs/scene-probes.md's tests write it: a 2 m room standing on y = 0, walls
+# facing inward (white floor, ceiling and back, red left, green right), a 1 m ceiling light, open
+# at the front, with the short and the tall block.
+python3 - "$work/cornell.gltf" <<'PY'
+import base64, json, struct, sys
+quads, materials = [], [([0.73] * 3, [0] * 3), ([0.65, 0.05, 0.05], [0] * 3), ([0.12, 0.45, 0.15], [0] * 3),
+                        ([0.73] * 3, [1, 1, 1])]
+def quad(c, u, v, m):
+    quads.append((c, u, v, m))
+def box(c, s, m):  # outward faces of an axis-aligned box
+    for a in range(3):
+        for sign in (-1, 1):
+            n = [0, 0, 0]; n[a] = sign
+            u = [0, 0, 0]; u[(a + 1) % 3] = s[(a + 1) % 3] / 2
+            v = [0, 0, 0]; v[(a + 2) % 3] = s[(a + 2) % 3] / 2
+            if sign < 0: u, v = v, u
+            quad([c[i] + n[i] * s[i] / 2 for i in range(3)], u, v, m)
+quad([0, 0, 0], [0, 0, 1], [1, 0, 0], 0)          # floor, facing +y
+quad([0, 2, 0], [1, 0, 0], [0, 0, 1], 0)          # ceiling, facing -y
+quad([0, 1, -1], [1, 0, 0], [0, 1, 0], 0)         # back, facing +z
+quad([-1, 1, 0], [0, 1, 0], [0, 0, 1], 1)         # left, facing +x
+quad([1, 1, 0], [0, 0, 1], [0, 1, 0], 2)          # right, facing -x
+quad([0, 1.998, 0], [0.5, 0, 0], [0, 0, 0.5], 3)  # light, facing -y
+box([0.35, 0.3, 0.3], [0.6, 0.6, 0.6], 0)
+box([-0.35, 0.6, -0.3], [0.6, 1.2, 0.6], 0)
+meshes, data, views, accessors = [], b"", [], []
+for m in range(len(materials)):
+    pos = []
+    for c, u, v, mm in quads:
+        if mm != m: continue
+        for s, t in ((-1, -1), (1, -1), (1, 1), (-1, -1), (1, 1), (-1, 1)):
+            pos.append([c[i] + s * u[i] + t * v[i] for i in range(3)])
+    blob = b"".join(struct.pack("<3f", *p) for p in pos)
+    views.append({"buffer": 0, "byteOffset": len(data), "byteLength": len(blob)})
+    accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(pos), "type": "VEC3",
+                      "min": [min(p[i] for p in pos) for i in range(3)], "max": [max(p[i] for p in pos) for i in range(3)]})
+    meshes.append({"primitives": [{"attributes": {"POSITION": len(accessors) - 1}, "material": m}]})
+    data += blob
+doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": list(range(len(meshes)))}],
+       "nodes": [{"mesh": i} for i in range(len(meshes))], "meshes": meshes, "accessors": accessors, "bufferViews": views,
+       "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+       "materials": [{"pbrMetallicRoughness": {"baseColorFactor": a + [1]}, "emissiveFactor": e,
+                      "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 10}} if any(e) else {}}
+                     for a, e in materials], "extensionsUsed": ["KHR_materials_emissive_strength"]}
+json.dump(doc, open(sys.argv[1], "w"))
+PY
+engine=/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb
+
+rows=()
+# run NAME PROBES COMMAND...: seconds and peak KiB of the whole process.
+run() {
+    local name=$1 probes=$2
+    shift 2
+    /usr/bin/time -f "%e %M" -o "$work/time" "$@" >/dev/null
+    read -r seconds kib <"$work/time"
+    rows+=("$name $probes $seconds $kib")
+    awk -v name="$name" -v p="$probes" -v s="$seconds" -v k="$kib" \
+        'BEGIN { printf "%-28s %6d probes %8.2f s %9.0f probes/s  peak %7.1f MiB\n", name, p, s, p / s, k / 1024 }'
+}
+for grid in 10,10,10 25,20,20; do
+    probes=$(( ${grid//,/*} ))
+    run "gpu: cornell box" "$probes" "$build/shprobe" scene "$work/cornell.gltf" --grid "$grid" --face-size 32 \
+        --bounces 0 -q -o "$work/gpu.shpv"
+    run "reference: cornell box" "$probes" "$build/shprobe-reference" "$work/cornell.gltf" --grid "$grid" \
+        --bounces 0 -q -o "$work/reference.shpv"
+done
+run "gpu: 2CylinderEngine" 1000 "$build/shprobe" scene "$engine" --grid 10,10,10 --face-size 32 --bounces 0 -q \
+    -o "$work/gpu.shpv"
+run "reference: 2CylinderEngine" 1000 "$build/shprobe-reference" "$engine" --grid 10,10,10 --bounces 0 -q \
+    -o "$work/reference.shpv"
+
+# Memory per probe: (peak at 10,000 - peak at 1,000) / 9,000, per program.
+perProbe() {
+    local small big
+    small=$(printf '%s\n' "${rows[@]}" | awk -v n="$1" '$0 ~ n && $(NF-2) == 1000 {print $NF}' | head -1)
+    big=$(printf '%s\n' "${rows[@]}" | awk -v n="$1" '$0 ~ n && $(NF-2) == 10000 {print $NF}' | head -1)
+    awk -v b="$big" -v s="$small" 'BEGIN { print (b - s) * 1024 / 9000 }'
+}
+printf 'memory per probe: gpu %.0f bytes, reference %.0f bytes\n' "$(perProbe 'gpu: cornell')" \
+    "$(perProbe 'reference: cornell')"
+if [ -n "$json" ]; then
+    printf '%s\n' "${rows[@]}" | python3 -c '
+import json, sys
+rows = []
+for line in sys.stdin:
+    *name, probes, seconds, kib = line.split()
+    rows.append({"name": " ".join(name), "probes": int(probes), "seconds": float(seconds),
+                 "probes_per_second": int(probes) / float(seconds), "peak_kib": int(kib)})
+json.dump({"face_size": 32, "bounces": 0, "rows": rows}, open(sys.argv[1], "w"), indent=1)' "$json"
+fi

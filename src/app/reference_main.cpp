@@ -1,0 +1,117 @@
+// shprobe-reference: the probe volume of a glTF scene by the ray-traced reference (Embree, double
+// precision; scene/reference_tracer.h) instead of the GPU capture, in the same file format, for
+// comparisons and the scene benchmark (scripts/bench-scene.sh). Built beside shprobe, not
+// installed: it is the only program that links Embree.
+#include "app/commands.h"
+#include "app/program.h"
+#include "app/stopwatch.h"
+
+#include "shprobe/io/output_file.h"
+#include "shprobe/io/probe_volume.h"
+#include "shprobe/scene/gltf_scene.h"
+#include "shprobe/scene/probe_grid.h"
+#include "shprobe/scene/reference_tracer.h"
+#include "shprobe/sh/error.h"
+#include "shprobe/sh/irradiance.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+namespace shprobe {
+namespace {
+
+struct ReferenceOptions {
+    std::string scene;
+    std::string output = "reference.shpv";
+    std::string grid;
+    std::string bounds;
+    int order = 3;
+    int bounces = 1;
+    int samples = 6144;     // 6 x 32^2: as many directions as a capture at faces 32^2 has texels
+    int validityFaces = 16; // the texel rays that decide which probes are inside geometry
+    std::string sky;
+    bool quiet = false;
+};
+
+void addOptions(CLI::App& app, ReferenceOptions& options) {
+    app.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
+    app.add_option("-o,--output", options.output, "Probe volume to write")->capture_default_str();
+    app.add_option("--grid", options.grid, "Probes per axis, NX,NY,NZ")->required();
+    app.add_option("--bounds", options.bounds, "Grid box X0,Y0,Z0,X1,Y1,Z1 (default: as shprobe scene)");
+    app.add_option("--order", options.order, "SH order")->check(CLI::Range(1, 8))->capture_default_str();
+    app.add_option("--bounces", options.bounces, "Diffuse bounces")->check(CLI::Range(0, 64))->capture_default_str();
+    app.add_option("--samples", options.samples, "Path-traced directions per probe")
+        ->check(CLI::Range(16, 1 << 24))
+        ->capture_default_str();
+    app.add_option("--validity-faces", options.validityFaces,
+                   "Face size of the texel rays that find the probes inside geometry (as shprobe scene: more "
+                   "than half of them on back faces)")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
+    app.add_option("--sky", options.sky, "Environment seen where no geometry is (default: the built-in sky)");
+    app.add_flag("-q,--quiet", options.quiet, "No report");
+}
+
+ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, const ProbeGrid& grid,
+                        const Environment& sky) {
+    const ReferenceTracer tracer(world, sky.cubemap);
+    std::vector<glm::dvec3> positions;
+    for (uint32_t p = 0; p < grid.probeCount(); ++p)
+        positions.push_back(probePosition(grid, probeCell(grid, p)));
+    const std::vector<PathTracedProbe> traced =
+        pathTraceProbes(tracer, positions, {.order = options.order, .bounces = options.bounces, .samples = options.samples});
+    ProbeVolume volume;
+    volume.grid = grid;
+    volume.order = options.order;
+    volume.end = grid.probeCount();
+    volume.bounces = options.bounces;
+    const size_t perProbe = size_t(options.order) * options.order;
+    volume.radiance.assign(positions.size() * perProbe, glm::vec3(0.0f));
+    volume.irradiance.assign(positions.size() * perProbe, glm::vec3(0.0f));
+    volume.valid.assign(positions.size(), 0);
+    const size_t texels = 6 * size_t(options.validityFaces) * options.validityFaces;
+    for (size_t p = 0; p < positions.size(); ++p) {
+        if (2 * traceProbeTexels(tracer, positions[p], options.validityFaces).backFaceTexels > texels) continue;
+        volume.valid[p] = 1;
+        const ShCoefficients irradiance = convolveIrradiance(traced[p].radiance);
+        for (size_t i = 0; i < perProbe; ++i) {
+            volume.radiance[p * perProbe + i] = glm::vec3(traced[p].radiance.rgb[i]);
+            volume.irradiance[p * perProbe + i] = glm::vec3(irradiance.rgb[i]);
+        }
+    }
+    volume.source = world.description;
+    volume.settings =
+        nlohmann::json{{"reference", "path traced"}, {"samples", options.samples}, {"sky", sky.description}}.dump();
+    return volume;
+}
+
+void run(const ReferenceOptions& options) {
+    checkOutputPath(options.output, OutputContent::Binary);
+    checkOutputsAreNotInputs({&options.output, 1}, std::vector<std::string>{options.scene});
+    const Clock::time_point start = Clock::now();
+    const World world = loadGltfScene(options.scene);
+    const glm::ivec3 counts = parseGridCounts(options.grid);
+    const ProbeGrid grid = options.bounds.empty() ? probeGridInWorld(counts, world)
+                                                  : makeProbeGrid(counts, parseGridBounds(options.bounds));
+    const Environment sky = loadSceneSky(options.sky, 0);
+    const ProbeVolume volume = traceVolume(options, world, grid, sky);
+    writeProbeVolume(options.output, volume);
+    if (options.quiet) return;
+    const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0));
+    std::printf("reference %s: %u probes, %zu inside geometry, %d bounces, %d samples each -> %s in %.2f s\n",
+                world.description.c_str(), volume.probeCount(), inside, options.bounces, options.samples,
+                options.output.c_str(), millisecondsSince(start) / 1000.0);
+}
+
+} // namespace
+} // namespace shprobe
+
+int main(int argc, char** argv) {
+    CLI::App app{"shprobe-reference: a scene's probe volume by the ray-traced reference (Embree), in the file "
+                 "format of `shprobe scene` (docs/scene-probes.md)"};
+    shprobe::addVersionFlag(app, "shprobe-reference");
+    shprobe::ReferenceOptions options;
+    addOptions(app, options);
+    return shprobe::runProgram(app, "shprobe-reference", argc, argv, [&] { run(options); });
+}
