@@ -74,6 +74,17 @@ Cubemap directionalSky(int faceSize) {
     return sky;
 }
 
+// Texels of a capture whose radiance differs from the reference's rays through the same texel
+// centres by more than `tolerance` of max(1, |reference|).
+size_t differingTexels(const Cubemap& seen, const Cubemap& traced, double tolerance) {
+    size_t differing = 0;
+    for (size_t t = 0; t < seen.texels.size(); ++t) {
+        const glm::dvec3 gpu(glm::vec3(seen.texels[t])), reference(glm::vec3(traced.texels[t]));
+        differing += glm::length(gpu - reference) > tolerance * std::max(1.0, glm::length(reference));
+    }
+    return differing;
+}
+
 class SceneCaptureTest : public GpuTest {};
 
 // In a world of no triangles a probe sees the sky itself: every texel of its capture holds the sky texel of
@@ -216,11 +227,7 @@ TEST_F(SceneCaptureTest, DirectLightMatchesTheReferenceRays) {
     destroySceneCapture(context(), capture);
     const ReferenceTracer tracer(world, sky);
     const ProbeTexels traced = traceProbeTexels(tracer, probe, n);
-    size_t differing = 0;
-    for (size_t t = 0; t < seen.texels.size(); ++t) {
-        const glm::dvec3 gpu(glm::vec3(seen.texels[t])), reference(glm::vec3(traced.radiance.texels[t]));
-        differing += glm::length(gpu - reference) > 1e-6 * glm::length(reference);
-    }
+    const size_t differing = differingTexels(seen, traced.radiance, 1e-6);
     EXPECT_LE(differing, seen.texels.size() / 100)
         << differing << " of " << seen.texels.size() << " texels differ";
     EXPECT_EQ(traced.backFaceTexels, 0u);
@@ -248,11 +255,9 @@ TEST_F(SceneCaptureTest, SunlightMatchesTheReferenceRays) {
     for (const glm::dvec3 position : {glm::dvec3(0.0, 1.0, 0.0), glm::dvec3(-0.5, 0.4, 0.6)}) {
         const Cubemap seen = captureProbeCubemap(context(), capture, position);
         const ProbeTexels traced = traceProbeTexels(tracer, position, n);
-        for (size_t t = 0; t < seen.texels.size(); ++t) {
-            const glm::dvec3 gpu(glm::vec3(seen.texels[t])), reference(glm::vec3(traced.radiance.texels[t]));
-            differing += glm::length(gpu - reference) > 1e-5 * std::max(1.0, glm::length(reference));
-            lit += glm::length(reference) > 0.0;
-        }
+        differing += differingTexels(seen, traced.radiance, 1e-5);
+        for (const glm::vec4& texel : traced.radiance.texels)
+            lit += glm::length(glm::vec3(texel)) > 0.0f;
         compared += seen.texels.size();
     }
     destroySceneCapture(context(), capture);
@@ -493,10 +498,7 @@ TEST_F(SceneCaptureTest, EngineMatchesTheReferenceRays) {
         const Cubemap seen = captureProbeCubemap(context(), capture, position);
         const ProbeTexels traced = traceProbeTexels(tracer, position, n);
         if (2 * traced.backFaceTexels > seen.texels.size()) continue; // inside a part
-        for (size_t t = 0; t < seen.texels.size(); ++t) {
-            const glm::dvec3 gpu(glm::vec3(seen.texels[t])), reference(glm::vec3(traced.radiance.texels[t]));
-            differing += glm::length(gpu - reference) > 1e-6 * std::max(1.0, glm::length(reference));
-        }
+        differing += differingTexels(seen, traced.radiance, 1e-6);
         compared += seen.texels.size();
     }
     destroySceneCapture(context(), capture);

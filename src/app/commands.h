@@ -4,6 +4,7 @@
 #include "app/toolkit.h"
 #include "shprobe/glsl/dispatch_plan.h"
 #include "shprobe/image/environment.h"
+#include "shprobe/vk/context.h"
 
 #include <CLI/CLI.hpp>
 #include <cmath>
@@ -145,6 +146,15 @@ inline CLI::Validator numberFrom(double min, double max) {
 inline void addDeviceOptions(CLI::App& command, std::string& device, bool& validation) {
     command.add_option("--device", device, "Vulkan device index or name part (see `shprobe info`)");
     command.add_flag("--validation", validation, "Enable the Khronos validation layer; fail on messages");
+}
+
+// The Vulkan context of the commands that draw (render, scene): a queue that does graphics too.
+inline Context createGraphicsContext(const std::string& device, bool validation) {
+    ContextOptions options;
+    options.device = device;
+    options.validation = validation;
+    options.graphics = true;
+    return createContext(options);
 }
 
 // --exposure of render and view: stops relative to the automatic exposure (2^64 either way

@@ -40,7 +40,9 @@ void addOptions(CLI::App& app, ReferenceOptions& options) {
     app.add_option("--grid", options.grid, "Probes per axis, NX,NY,NZ")->required();
     app.add_option("--bounds", options.bounds, "Grid box X0,Y0,Z0,X1,Y1,Z1 (default: as shprobe scene)");
     app.add_option("--order", options.order, "SH order")->check(CLI::Range(1, 8))->capture_default_str();
-    app.add_option("--bounces", options.bounces, "Diffuse bounces")->check(CLI::Range(0, 64))->capture_default_str();
+    app.add_option("--bounces", options.bounces, "Diffuse bounces")
+        ->check(CLI::Range(0, 64))
+        ->capture_default_str();
     app.add_option("--samples", options.samples, "Path-traced directions per probe")
         ->check(CLI::Range(16, 1 << 24))
         ->capture_default_str();
@@ -59,8 +61,8 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
     std::vector<glm::dvec3> positions;
     for (uint32_t p = 0; p < grid.probeCount(); ++p)
         positions.push_back(probePosition(grid, probeCell(grid, p)));
-    const std::vector<PathTracedProbe> traced =
-        pathTraceProbes(tracer, positions, {.order = options.order, .bounces = options.bounces, .samples = options.samples});
+    const std::vector<PathTracedProbe> traced = pathTraceProbes(
+        tracer, positions, {.order = options.order, .bounces = options.bounces, .samples = options.samples});
     ProbeVolume volume;
     volume.grid = grid;
     volume.order = options.order;
@@ -72,7 +74,8 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
     volume.valid.assign(positions.size(), 0);
     const size_t texels = 6 * size_t(options.validityFaces) * options.validityFaces;
     for (size_t p = 0; p < positions.size(); ++p) {
-        if (2 * traceProbeTexels(tracer, positions[p], options.validityFaces).backFaceTexels > texels) continue;
+        if (2 * traceProbeTexels(tracer, positions[p], options.validityFaces).backFaceTexels > texels)
+            continue;
         volume.valid[p] = 1;
         const ShCoefficients irradiance = convolveIrradiance(traced[p].radiance);
         for (size_t i = 0; i < perProbe; ++i) {
@@ -82,7 +85,8 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
     }
     volume.source = world.description;
     volume.settings =
-        nlohmann::json{{"reference", "path traced"}, {"samples", options.samples}, {"sky", sky.description}}.dump();
+        nlohmann::json{{"reference", "path traced"}, {"samples", options.samples}, {"sky", sky.description}}
+            .dump();
     return volume;
 }
 
@@ -108,8 +112,9 @@ void run(const ReferenceOptions& options) {
 } // namespace shprobe
 
 int main(int argc, char** argv) {
-    CLI::App app{"shprobe-reference: a scene's probe volume by the ray-traced reference (Embree), in the file "
-                 "format of `shprobe scene` (docs/scene-probes.md)"};
+    CLI::App app{
+        "shprobe-reference: a scene's probe volume by the ray-traced reference (Embree), in the file "
+        "format of `shprobe scene` (docs/scene-probes.md)"};
     shprobe::addVersionFlag(app, "shprobe-reference");
     shprobe::ReferenceOptions options;
     addOptions(app, options);

@@ -74,11 +74,7 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
         foldProbe(result.input.probe, foldOrder(options, result.input.probe), result.input.name,
                   result.input.sun); // throws early
     }
-    ContextOptions contextOptions;
-    contextOptions.device = options.device;
-    contextOptions.validation = options.validation;
-    contextOptions.graphics = true;
-    Context context = createContext(contextOptions);
+    Context context = createGraphicsContext(options.device, options.validation);
     ScopeExit releaseContext([&] { destroyContext(context); });
     if (!isProbeFile(options.input)) {
         DeviceStep step("baking " +

@@ -149,11 +149,7 @@ void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t heigh
     const World world = loadGltfScene(options.scene);
     const Environment sky = loadSceneSky(options.sky, 0);
 
-    ContextOptions contextOptions;
-    contextOptions.device = options.device;
-    contextOptions.validation = options.validation;
-    contextOptions.graphics = true;
-    Context context = createContext(contextOptions);
+    Context context = createGraphicsContext(options.device, options.validation);
     ScopeExit releaseContext([&] { destroyContext(context); });
     SceneCapture capture = createSceneCapture(context, world, sky.cubemap, {.order = volume.order});
     ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });

@@ -168,11 +168,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         options.previous.empty() ? std::nullopt : std::optional(readPreviousBounce(options, grid));
     const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
 
-    ContextOptions contextOptions;
-    contextOptions.device = options.device;
-    contextOptions.validation = options.validation;
-    contextOptions.graphics = true;
-    Context context = createContext(contextOptions);
+    Context context = createGraphicsContext(options.device, options.validation);
     ScopeExit releaseContext([&] { destroyContext(context); });
     SceneCapture capture = createSceneCapture(context, world, sky.cubemap,
                                               {.faceSize = options.faceSize, .order = options.order});
