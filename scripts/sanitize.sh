@@ -62,7 +62,7 @@ trap 'rm -rf "$work"' EXIT
 artifacts=${FUZZ_ARTIFACTS:-$(mktemp -d /tmp/shprobe-fuzz-artifacts.XXXXXX)}
 mkdir -p "$artifacts"
 failed=()
-for target in probe_json probe_stdin layout cross channels exr_header; do
+for target in probe_json probe_stdin probe_volume layout cross channels exr_header; do
   corpus="$work/$target"
   mkdir -p "$corpus"
   cp fuzz/corpus/"$target"/* "$corpus"/
