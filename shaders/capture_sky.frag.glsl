@@ -12,8 +12,9 @@ layout(location = 0) out vec4 radiance;
 vec3 fragmentDirection() {
     if (c.face.x == SHPROBE_CAPTURE_CAMERA) {
         vec2 ndc = 2.0 * gl_FragCoord.xy / c.view.xy - 1.0;
-        vec4 p = inverse(c.worldToClip) * vec4(ndc, 0.5, 1.0);
-        return normalize(p.xyz / p.w - c.probe.xyz);
+        // Clip depth 0 is infinitely far: the inverse maps it to a point at infinity, w = 0, whose
+        // xyz is the direction itself (no difference of nearby points to lose precision in).
+        return normalize((inverse(c.worldToClip) * vec4(ndc, 0.0, 1.0)).xyz);
     }
     uint n = c.face.y;
     vec2 ab = vec2(texelCenterCoord(uint(gl_FragCoord.x), n), texelCenterCoord(uint(gl_FragCoord.y), n));

@@ -2,7 +2,6 @@
 // surfaces as scene/scene.h describes them.
 #ifndef SHPROBE_CAPTURE_COMMON_GLSL
 #define SHPROBE_CAPTURE_COMMON_GLSL
-#extension GL_EXT_scalar_block_layout : require
 #include "capture_interface.h"
 #include "texel_geometry.h"
 

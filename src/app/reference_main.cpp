@@ -92,10 +92,13 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
 
 void run(const ReferenceOptions& options) {
     checkOutputPath(options.output, OutputContent::Binary);
-    checkOutputsAreNotInputs({&options.output, 1}, std::vector<std::string>{options.scene});
+    std::vector<std::string> inputs{options.scene};
+    if (!options.sky.empty()) inputs.push_back(options.sky);
+    checkOutputsAreNotInputs({&options.output, 1}, inputs);
     const Clock::time_point start = Clock::now();
-    const World world = loadGltfScene(options.scene);
     const glm::ivec3 counts = parseGridCounts(options.grid);
+    if (!options.bounds.empty()) parseGridBounds(options.bounds);
+    const World world = loadGltfScene(options.scene);
     const ProbeGrid grid = options.bounds.empty() ? probeGridInWorld(counts, world)
                                                   : makeProbeGrid(counts, parseGridBounds(options.bounds));
     const Environment sky = loadSceneSky(options.sky, 0);

@@ -143,10 +143,14 @@ void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t heigh
     if (!options.input.empty() || options.grid)
         throw Error(ErrorKind::Input,
                     "render: --scene draws the scene and its volume; it takes no probe input or --grid");
-    const std::vector<std::string> inputs{options.scene, options.volume};
+    std::vector<std::string> inputs{options.scene, options.volume};
+    if (!options.sky.empty()) inputs.push_back(options.sky);
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
     const ProbeVolume volume = readWholeVolume(options);
     const World world = loadGltfScene(options.scene);
+    if (volume.source != world.description)
+        throw Error(ErrorKind::Input,
+                    options.volume + ": baked in " + volume.source + ", not " + world.description);
     const Environment sky = loadSceneSky(options.sky, 0);
 
     Context context = createGraphicsContext(options.device, options.validation);

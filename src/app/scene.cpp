@@ -99,16 +99,27 @@ std::string bakeSettings(const SceneOptions& options, const Environment& sky) {
 }
 
 // The previous bounce as the capture reads it: the whole grid, the same grid and order.
-ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& grid) {
+// The previous bounce as the capture reads it: the whole volume of this very bake (the same scene,
+// grid, order and settings), with irradiance.
+ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& grid, const World& world,
+                               const std::string& settings) {
     ProbeVolume previous = readProbeVolume(options.previous);
-    if (previous.begin != 0 || previous.end != grid.probeCount())
-        throw Error(ErrorKind::Input,
-                    options.previous + ": --previous needs the whole volume (merge the bricks first)");
+    auto refuse = [&](const std::string& what) {
+        throw Error(ErrorKind::Input, options.previous + ": " + what);
+    };
+    if (previous.begin != 0 || previous.end != previous.grid.probeCount())
+        refuse("--previous needs the whole volume (merge the bricks first)");
     if (previous.grid.counts != grid.counts || previous.grid.boundsMin != grid.boundsMin ||
-        previous.grid.boundsMax != grid.boundsMax || previous.order != options.order)
-        throw Error(ErrorKind::Input, options.previous + ": its grid or order is not this bake's");
-    if (previous.irradiance.empty())
-        throw Error(ErrorKind::Input, options.previous + ": the volume holds no irradiance");
+        previous.grid.boundsMax != grid.boundsMax)
+        refuse("its grid of " + std::to_string(previous.grid.probeCount()) + " probes is not this bake's");
+    if (previous.order != options.order)
+        refuse("order " + std::to_string(previous.order) + ", this bake's is " +
+               std::to_string(options.order));
+    if (previous.source != world.description)
+        refuse("baked in " + previous.source + ", not " + world.description);
+    if (nlohmann::json::parse(previous.settings) != nlohmann::json::parse(settings))
+        refuse("baked with " + previous.settings + ", this bake is " + settings);
+    if (previous.irradiance.empty()) refuse("the volume holds no irradiance");
     return previous;
 }
 
@@ -152,7 +163,14 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
         throw Error(ErrorKind::Input,
                     "scene: --brick and --previous bake one bounce; --bounces is for whole bakes");
     checkOutputPath(options.output, OutputContent::Binary);
-    checkOutputsAreNotInputs({&options.output, 1}, std::vector<std::string>{options.scene});
+    std::vector<std::string> inputs{options.scene};
+    for (const std::string& input : {options.previous, options.sky})
+        if (!input.empty()) inputs.push_back(input);
+    checkOutputsAreNotInputs({&options.output, 1}, inputs);
+    // The options' own syntax, before the scene is read.
+    parseGridCounts(options.grid);
+    if (!options.bounds.empty()) parseGridBounds(options.bounds);
+    if (!options.brick.empty()) parseBrick(options.brick);
 }
 
 } // namespace
@@ -164,9 +182,11 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     const ProbeGrid grid = chosenGrid(options, world);
     const ProbeRange range = options.brick.empty() ? ProbeRange{0, grid.probeCount()}
                                                    : brickRange(grid, parseBrick(options.brick));
-    const std::optional<ProbeVolume> previous =
-        options.previous.empty() ? std::nullopt : std::optional(readPreviousBounce(options, grid));
     const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
+    const std::string settings = bakeSettings(options, sky);
+    const std::optional<ProbeVolume> previous =
+        options.previous.empty() ? std::nullopt
+                                 : std::optional(readPreviousBounce(options, grid, world, settings));
 
     Context context = createGraphicsContext(options.device, options.validation);
     ScopeExit releaseContext([&] { destroyContext(context); });
@@ -190,7 +210,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         throw Error(ErrorKind::Device, "scene: the Vulkan validation layer reported " +
                                            std::to_string(context.validationMessages()) + " messages");
     volume.source = world.description;
-    volume.settings = bakeSettings(options, sky);
+    volume.settings = settings;
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;
     const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0));

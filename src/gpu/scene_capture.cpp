@@ -4,7 +4,6 @@
 #include "shprobe/glsl/gpu_interface.h"
 #include "shprobe/glsl/texel_geometry.h"
 #include "shprobe/gpu/host_bake.h"
-#include "shprobe/render/gpu_image.h"
 #include "shprobe/render/meshes.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/scope_exit.h"
@@ -27,7 +26,7 @@ namespace shprobe {
 namespace {
 
 constexpr VkFormat kCaptureFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
-constexpr VkFormat kShadowFormat = VK_FORMAT_D32_SFLOAT; // read back as floats
+constexpr VkFormat kShadowFormat = VK_FORMAT_D32_SFLOAT; // depth of captures, views and shadow maps
 constexpr VkBufferUsageFlags kStorageUpload =
     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
 constexpr uint32_t kCountWidth = 64; // count_back_faces.comp's workgroup width
@@ -36,8 +35,20 @@ VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
     return (value + alignment - 1) / alignment * alignment;
 }
 
+// Throws Error(Input) when `bytes` exceed what one storage-buffer binding may span on the device:
+// the shaders bind each buffer whole.
+void checkStorageRange(const Context& context, VkDeviceSize bytes, const char* what) {
+    const VkDeviceSize limit = context.info.limits.maxStorageBufferRange;
+    if (bytes <= limit) return;
+    throw Error(ErrorKind::Input, std::string("scene capture: the ") + what + " take " +
+                                      std::to_string(bytes >> 20) + " MiB, more than the " +
+                                      std::to_string(limit >> 20) +
+                                      " MiB a storage buffer of the device may hold");
+}
+
 // A storage buffer holding `bytes` of data; at least 16 bytes, since a binding may not be empty.
 Buffer createStorage(const Context& context, const void* data, size_t bytes, const char* what) {
+    checkStorageRange(context, bytes, what);
     const VkDeviceSize size = std::max<VkDeviceSize>(bytes, 16);
     Buffer buffer = createBuffer(context, size, kStorageUpload, MemoryUse::Device, what);
     OnFailure undo([&] { destroyBuffer(context, buffer); });
@@ -62,14 +73,27 @@ void checkWorld(const World& world) {
         if (material >= world.materials.size())
             throw Error(ErrorKind::Input, "scene capture: a triangle of " + world.description +
                                               " names a material it does not have");
+    if (world.normals.size() != world.positions.size() ||
+        (!world.uvs.empty() && world.uvs.size() != world.positions.size()))
+        throw Error(ErrorKind::Input, "scene capture: the vertices of " + world.description +
+                                          " lack normals or texture coordinates");
+    for (const SceneTexture& texture : world.textures)
+        if (texture.width < 1 || texture.height < 1 ||
+            texture.texels.size() != size_t(texture.width) * texture.height)
+            throw Error(ErrorKind::Input,
+                        "scene capture: a texture of " + world.description + " is empty or cut short");
+    for (const SceneMaterial& m : world.materials)
+        for (int texture : {m.albedoTexture, m.emissionTexture})
+            if (texture < -1 || texture >= int(world.textures.size()))
+                throw Error(ErrorKind::Input, "scene capture: a material of " + world.description +
+                                                  " names a texture it does not have");
 }
 
 std::vector<gpu::CaptureVertex> packVertices(const World& world) {
     std::vector<gpu::CaptureVertex> vertices(world.positions.size());
     for (size_t i = 0; i < vertices.size(); ++i) {
         const glm::vec2 uv = i < world.uvs.size() ? world.uvs[i] : glm::vec2(0.0f);
-        const glm::vec3 normal = i < world.normals.size() ? world.normals[i] : glm::vec3(0.0f, 1.0f, 0.0f);
-        vertices[i] = {glm::vec4(world.positions[i], uv.x), glm::vec4(normal, uv.y)};
+        vertices[i] = {glm::vec4(world.positions[i], uv.x), glm::vec4(world.normals[i], uv.y)};
     }
     return vertices;
 }
@@ -109,10 +133,11 @@ std::vector<glm::vec4> packBounce(const BounceSource& bounce) {
                                           std::to_string(bounce.irradiance.size()) + " coefficients for " +
                                           std::to_string(probes) + " probes of order " +
                                           std::to_string(bounce.order));
-    packed[0] = glm::vec4(glm::vec3(bounce.boundsMin), 0.0f);
-    packed[1] = glm::vec4(glm::vec3(bounce.boundsMax), 0.0f);
-    std::memcpy(&packed[2], &bounce.counts, sizeof(glm::ivec3));
-    reinterpret_cast<uint32_t*>(&packed[2])[3] = 1u;
+    const gpu::CaptureVolumeHeader header{glm::vec4(glm::vec3(bounce.boundsMin), 0.0f),
+                                          glm::vec4(glm::vec3(bounce.boundsMax), 0.0f),
+                                          glm::uvec4(glm::uvec3(bounce.counts), 1u)};
+    static_assert(sizeof(header) == 3 * sizeof(glm::vec4));
+    std::memcpy(packed.data(), &header, sizeof(header));
     for (size_t p = 0; p < probes; ++p)
         for (size_t i = 0; i < perProbe; ++i)
             packed[3 + p * perProbe + i] =
@@ -175,8 +200,8 @@ glm::mat4 shadowClip(const gpu::CaptureSun& sun) {
     return toClip * sun.worldToShadow;
 }
 
-// One colour attachment (the capture layer, left in GENERAL for the bake's storage reads) and
-// depth, both cleared.
+// One colour attachment (the capture layer, left in GENERAL for the bake's storage reads; not
+// cleared, as the sky covers every texel) and depth, cleared.
 VkRenderPass createCaptureRenderPass(const Context& context, VkFormat depthFormat) {
     const std::array<VkAttachmentDescription, 2> attachments{
         attachmentDescription(kCaptureFormat, VK_ATTACHMENT_LOAD_OP_DONT_CARE, VK_ATTACHMENT_STORE_OP_STORE,
@@ -200,11 +225,12 @@ VkRenderPass createCaptureRenderPass(const Context& context, VkFormat depthForma
                        attachmentWrites,
                        attachmentWrites | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
                        0};
-    // The layer reaches the bake (compute) and copies.
+    // The layer reaches the bake (compute), copies and a view's tonemap pass (fragment).
     dependencies[1] = {0,
                        VK_SUBPASS_EXTERNAL,
                        VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT |
+                           VK_PIPELINE_STAGE_TRANSFER_BIT,
                        VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
                        VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT,
                        0};
@@ -249,6 +275,7 @@ void createCaptureBuffers(const Context& context, SceneCapture& capture, const W
     capture.buffers[SHPROBE_CAPTURE_SUNS] = createStorage(context, suns, "suns");
     const VkDeviceSize shadowBytes = VkDeviceSize(suns.size()) * capture.options.shadowMapSize *
                                      capture.options.shadowMapSize * sizeof(float);
+    checkStorageRange(context, shadowBytes, "shadow maps");
     capture.buffers[SHPROBE_CAPTURE_SHADOWS] = createBuffer(context, std::max<VkDeviceSize>(shadowBytes, 16),
                                                             kStorageUpload, MemoryUse::Device, "shadow maps");
 }
@@ -411,6 +438,18 @@ void drawShadowMaps(const Context& context, const SceneCapture& capture) {
     });
 }
 
+// probesPerBatch, within the device's image layers (6 per probe) and 256 MiB of capture images.
+// Every batch is baked at this size, a partial last one too: the bake's workgroup split depends on
+// the probe count, and a probe's sums must not depend on how many probes share its batch (a brick
+// equals the same probes of the whole bake, bit for bit).
+uint32_t capturesPerBatch(const Context& context, const SceneCapture& capture, uint32_t probesPerBatch) {
+    const uint64_t probeBytes =
+        6 * uint64_t(capture.options.faceSize) * uint64_t(capture.options.faceSize) * 16;
+    const uint64_t byMemory = std::max<uint64_t>(1, (uint64_t(256) << 20) / probeBytes);
+    const uint64_t byLayers = std::max<uint64_t>(1, context.info.limits.maxImageArrayLayers / 6);
+    return uint32_t(std::max<uint64_t>(1, std::min({uint64_t(probesPerBatch), byMemory, byLayers})));
+}
+
 } // namespace
 
 SceneCapture createSceneCapture(const Context& context, const World& world, const Cubemap& sky,
@@ -435,7 +474,14 @@ SceneCapture createSceneCapture(const Context& context, const World& world, cons
     // A millionth of the world's size: closer than any probe sits to a wall it should see.
     const float size = glm::length(world.boundsMax - world.boundsMin);
     capture.nearPlane = std::max(size, 1.0f) * 1e-6f;
-    capture.depthFormat = pickDepthFormat(context);
+    // 32-bit float depth: with the near plane at a millionth of the world, 16-bit depth would round
+    // everything past a tenth of it to the cleared far value and lose it.
+    VkFormatProperties depthProperties;
+    vkGetPhysicalDeviceFormatProperties(context.physicalDevice, kShadowFormat, &depthProperties);
+    if (!(depthProperties.optimalTilingFeatures & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT))
+        throw Error(ErrorKind::Device,
+                    "scene capture: the device has no VK_FORMAT_D32_SFLOAT depth attachments");
+    capture.depthFormat = kShadowFormat;
     capture.renderPass = createCaptureRenderPass(context, capture.depthFormat);
     std::array<LayoutBinding, SHPROBE_CAPTURE_BINDINGS> bindings;
     bindings.fill(
@@ -548,8 +594,7 @@ void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, c
 std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCapture& capture,
                                         std::span<const glm::dvec3> positions,
                                         const SceneBakeOptions& options) {
-    const uint32_t batch =
-        std::max<uint32_t>(1, std::min<uint32_t>(options.probesPerBatch, uint32_t(positions.size())));
+    const uint32_t batch = capturesPerBatch(context, capture, options.probesPerBatch);
     CaptureTarget target = createCaptureTarget(context, capture, batch);
     ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
     ProbeBaker baker =
@@ -572,6 +617,14 @@ std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCaptu
         const std::span<const glm::dvec3> members =
             positions.subspan(first, std::min<size_t>(batch, positions.size() - first));
         submitAndWait(context, [&](VkCommandBuffer commands) {
+            // The layers no capture of a partial batch draws are baked too (see capturesPerBatch):
+            // in GENERAL from the start, whatever they hold.
+            if (first == 0)
+                changeLayout(
+                    commands, target.cubemaps,
+                    {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                     VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                     0});
             recordSceneCapture(commands, capture, target, members);
             recordProbeBake(commands, baker, set);
             const uint32_t faceSize = uint32_t(capture.options.faceSize);

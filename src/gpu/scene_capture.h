@@ -5,7 +5,7 @@
 //   SceneCapture capture = createSceneCapture(context, world, sky, {.faceSize = 32});
 //   CaptureTarget target = createCaptureTarget(context, capture, 32);        // 32 probes at a time
 //   recordSceneCapture(commands, capture, target, positions);                // <= 32 positions
-//   recordProbeBake(commands, baker, bakeSetOf(target.cubemaps.view), ...);  // probe_baker.h
+//   recordProbeBake(commands, baker, set);  // a ProbeBakeSet of target.cubemaps.view (probe_baker.h)
 //
 // bakeSceneProbes does all of it for a list of positions: batches, bakes, reads back.
 #pragma once
@@ -68,7 +68,7 @@ struct SceneCapture {
     VkPipeline surfaces = VK_NULL_HANDLE;
     VkPipeline sky = VK_NULL_HANDLE;
     uint32_t sunCount = 0;
-    std::vector<gpu::CaptureSun> suns; // as the shaders read them, with their shadow-map views
+    std::vector<gpu::CaptureSun> suns; // as the shaders read them, with their shadow maps' projections
     BounceGrid bounceGrid;             // of setBounceSource's volume; counts 0: none
     std::vector<Buffer> buffers;       // one per binding of capture_interface.h
     VkDescriptorPool pool = VK_NULL_HANDLE;
