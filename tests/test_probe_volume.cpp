@@ -46,7 +46,9 @@ std::string expectInputError(const std::function<void()>& call, const std::strin
 
 // Same bits, not merely equal values: -0 and 0 differ, as they would in the files.
 bool sameBits(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::vec3)) == 0;
+    // An empty vector's data() may be null, which memcmp may not be given even for 0 bytes.
+    return a.size() == b.size() &&
+           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::vec3)) == 0);
 }
 
 void expectSameVolume(const ProbeVolume& a, const ProbeVolume& b) {

@@ -287,7 +287,8 @@ std::vector<Vector> readVectors(const AccessorReader& reader, const AllowedForma
         reader.fail("holds a value that is not finite (" + std::to_string(values[bad]) + " in element " +
                     std::to_string(bad / Vector::length()) + ")");
     std::vector<Vector> vectors(values.size() / Vector::length());
-    std::memcpy(vectors.data(), values.data(), values.size() * sizeof(float));
+    if (!values.empty()) // an empty vector's data() may be null, which memcpy may not be given
+        std::memcpy(vectors.data(), values.data(), values.size() * sizeof(float));
     return vectors;
 }
 
