@@ -88,7 +88,8 @@ TEST_F(SceneCommand, RealSceneBakes) {
 
 // `shprobe render --scene` draws the scene lit by its volume: the surfaces reflect the volume's
 // irradiance (the Cornell box's walls are lit, so the picture is not black), and --show-probes adds
-// the probes' spheres (the picture changes). A brick is refused, and so is --scene without --volume.
+// the probes' spheres (the picture changes). A brick is refused, and so are --scene without
+// --volume and the sphere's options (--order, --grid, --face-size) with it.
 TEST_F(SceneCommand, RenderDrawsTheSceneLitByItsVolume) {
     const std::string scene = file("open.glb");
     testing::writeCornellBoxGltf(scene, {.innerBoxes = true});
@@ -110,6 +111,12 @@ TEST_F(SceneCommand, RenderDrawsTheSceneLitByItsVolume) {
     EXPECT_GT(lit, plain.texels.size() / 2);
     EXPECT_GT(changed, 0u);
     expectFailure({{"render", "--scene", scene, "-o", "OUT"}, 2, {"--volume"}, "out.png"});
+    for (const std::vector<std::string>& sphereOnly :
+         std::vector<std::vector<std::string>>{{"--order", "5"}, {"--grid"}, {"--face-size", "16"}}) {
+        std::vector<std::string> args{"render", "--scene", scene, "--volume", file("v.shpv"), "-o", "OUT"};
+        args.insert(args.end(), sphereOnly.begin(), sphereOnly.end());
+        expectFailure({args, 2, {sphereOnly[0]}, "out.png"});
+    }
     expectFailure(
         {{"render", "--scene", scene, "--volume", file("brick.shpv"), "-o", "OUT"}, 2, {"brick"}, "out.png"});
 }

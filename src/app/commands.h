@@ -4,6 +4,7 @@
 #include "app/toolkit.h"
 #include "shprobe/glsl/dispatch_plan.h"
 #include "shprobe/image/environment.h"
+#include "shprobe/scene/lit_scene.h"
 #include "shprobe/vk/context.h"
 
 #include <CLI/CLI.hpp>
@@ -92,6 +93,10 @@ struct ViewOptions {
     int64_t maxPixels = kDefaultMaxImagePixels;
     std::string device;
     bool validation = false;
+    std::string scene; // a glTF scene, shown lit by `volume` (like RenderOptions::scene)
+    std::string volume;
+    std::string sky;
+    bool showProbes = false; // initially; key P toggles them
 };
 
 // `shprobe scene SCENE --grid NX,NY,NZ -o VOLUME`: probes baked inside a glTF scene (scene.cpp).
@@ -213,6 +218,9 @@ void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize
 void addRenderCommand(CLI::App& app, RenderOptions& options);
 // `shprobe render --scene SCENE --volume VOLUME`: the scene lit by its probe volume.
 void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height);
+// The scene, its whole volume (baked in that scene) and its sky, for render and view --scene; throws
+// Error(Input) for a missing half, a brick, or a volume of another scene.
+LitScene loadLitScene(const std::string& scene, const std::string& volume, const std::string& sky);
 void runRender(const RenderOptions& options);
 
 // The viewer, shprobe-view (view.cpp, view_main.cpp): a program of its own, the only one that links

@@ -156,8 +156,13 @@ void addRenderCommand(CLI::App& app, RenderOptions& options) {
         ->capture_default_str();
     addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(*command, options.device, options.validation);
-    command->add_option("--scene", options.scene,
-                        "Draw this glTF scene lit by --volume instead of a sphere (docs/scene-probes.md)");
+    // The scene's own picture: none of the sphere's settings apply to it.
+    CLI::Option* scene = command->add_option(
+        "--scene", options.scene,
+        "Draw this glTF scene lit by --volume instead of a sphere (docs/scene-probes.md)");
+    for (const char* sphereOnly :
+         {"input", "--order", "--mode", "--grid", "--background", "--face-size", "--sanitize"})
+        scene->excludes(command->get_option(sphereOnly));
     command->add_option("--volume", options.volume, "The scene's probe volume (`shprobe scene`)");
     command->add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)");
     command->add_flag("--show-probes", options.showProbes,

@@ -11,6 +11,7 @@
 #include "shprobe/render/offscreen.h"
 #include "shprobe/render/scene.h"
 #include "shprobe/scene/gltf_scene.h"
+#include "shprobe/scene/lit_scene.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/context.h"
@@ -25,42 +26,11 @@ namespace shprobe {
 
 namespace {
 
-constexpr double kFovDegrees = 45.0;
-
-// The orbit camera of `render` (--yaw, --pitch) around the scene's box, far enough to see all of it.
-SceneCamera sceneCamera(const RenderOptions& options, const World& world) {
-    const glm::dvec3 centre = 0.5 * glm::dvec3(world.boundsMin + world.boundsMax);
-    const double radius = 0.5 * glm::length(glm::dvec3(world.boundsMax - world.boundsMin));
-    const double distance = std::max(radius, 1e-6) / std::sin(kFovDegrees * 0.5 * M_PI / 180.0);
-    const Camera orbit = orbitCamera(options.yaw, options.pitch, float(distance), float(kFovDegrees));
-    return {centre + glm::dvec3(orbit.position), centre, glm::dvec3(0.0, 1.0, 0.0), kFovDegrees};
-}
-
-// The exposure that puts the volume's mean radiance (its valid probes' L00 / sqrt(4 pi)) at mid grey.
-float volumeExposure(const ProbeVolume& volume) {
-    const size_t perProbe = size_t(volume.order) * volume.order;
-    double sum = 0.0;
-    size_t valid = 0;
-    for (size_t p = 0; p < volume.valid.size(); ++p) {
-        if (!volume.valid[p]) continue;
-        const glm::vec3 l00 = volume.radiance.empty() ? volume.irradiance[p * perProbe] / float(M_PI)
-                                                      : volume.radiance[p * perProbe];
-        sum += glm::dot(glm::dvec3(l00), glm::dvec3(0.2126, 0.7152, 0.0722)) / std::sqrt(4.0 * M_PI);
-        ++valid;
-    }
-    const double mean = valid > 0 ? sum / double(valid) : 0.0;
-    return mean > 0.0 ? float(0.18 / mean) : 1.0f;
-}
-
-ProbeVolume readWholeVolume(const RenderOptions& options) {
-    if (options.scene.empty() || options.volume.empty())
-        throw Error(ErrorKind::Input, "render: --scene and --volume go together");
-    ProbeVolume volume = readProbeVolume(options.volume);
+ProbeVolume readWholeVolume(const std::string& path) {
+    ProbeVolume volume = readProbeVolume(path);
     if (volume.begin != 0 || volume.end != volume.grid.probeCount())
-        throw Error(ErrorKind::Input,
-                    options.volume + ": a brick of a volume; merge the bricks first (shprobe merge)");
-    if (volume.irradiance.empty())
-        throw Error(ErrorKind::Input, options.volume + ": the volume holds no irradiance");
+        throw Error(ErrorKind::Input, path + ": a brick of a volume; merge the bricks first (shprobe merge)");
+    if (volume.irradiance.empty()) throw Error(ErrorKind::Input, path + ": the volume holds no irradiance");
     return volume;
 }
 
@@ -112,11 +82,7 @@ RenderedImage renderFrame(const Context& context, const SceneCapture& capture, c
     SceneFrame frame = createFrame(context, capture, extent);
     ScopeExit releaseFrame([&] { destroyFrame(context, frame); });
     submitAndWait(context, [&](VkCommandBuffer commands) {
-        recordSceneView(commands, capture, frame.view, camera, viewOptions);
-        changeLayout(commands, frame.view.color,
-                     {VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                      VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-                      VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+        recordLitSceneView(commands, capture, frame.view, camera, viewOptions);
         recordTonemap(commands, frame.tonemapper, frame.tonemapInput, frame.displayFramebuffer, extent,
                       exposure);
         changeLayout(commands, frame.view.color,
@@ -139,37 +105,38 @@ RenderedImage renderFrame(const Context& context, const SceneCapture& capture, c
 
 } // namespace
 
-void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height) {
-    if (!options.input.empty() || options.grid)
+LitScene loadLitScene(const std::string& scene, const std::string& volume, const std::string& sky) {
+    if (scene.empty() || volume.empty()) throw Error(ErrorKind::Input, "--scene and --volume go together");
+    LitScene lit{.volume = readWholeVolume(volume)};
+    lit.world = loadGltfScene(scene);
+    if (lit.volume.source != lit.world.description)
         throw Error(ErrorKind::Input,
-                    "render: --scene draws the scene and its volume; it takes no probe input or --grid");
+                    volume + ": baked in " + lit.volume.source + ", not " + lit.world.description);
+    lit.sky = loadSceneSky(sky, 0).cubemap;
+    return lit;
+}
+
+void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height) {
     std::vector<std::string> inputs{options.scene, options.volume};
     if (!options.sky.empty()) inputs.push_back(options.sky);
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
-    const ProbeVolume volume = readWholeVolume(options);
-    const World world = loadGltfScene(options.scene);
-    if (volume.source != world.description)
-        throw Error(ErrorKind::Input,
-                    options.volume + ": baked in " + volume.source + ", not " + world.description);
-    const Environment sky = loadSceneSky(options.sky, 0);
+    const LitScene scene = loadLitScene(options.scene, options.volume, options.sky);
+    const ProbeVolume& volume = scene.volume;
 
     Context context = createGraphicsContext(options.device, options.validation);
     ScopeExit releaseContext([&] { destroyContext(context); });
-    SceneCapture capture = createSceneCapture(context, world, sky.cubemap, {.order = volume.order});
+    SceneCapture capture = createLitSceneCapture(context, scene);
     ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });
-    const std::vector<glm::dvec3> irradiance(volume.irradiance.begin(), volume.irradiance.end());
-    setBounceSource(context, capture,
-                    {volume.grid.boundsMin, volume.grid.boundsMax, volume.grid.counts, volume.order,
-                     irradiance, volume.valid});
     const Clock::time_point start = Clock::now();
     const RenderedImage image =
-        renderFrame(context, capture, sceneCamera(options, world), {.showProbes = options.showProbes},
-                    {width, height}, volumeExposure(volume) * std::exp2(options.exposure));
+        renderFrame(context, capture, orbitSceneCamera(scene.world, options.yaw, options.pitch),
+                    {.showProbes = options.showProbes}, {width, height},
+                    volumeExposure(volume) * std::exp2(options.exposure));
     const double milliseconds = millisecondsSince(start);
     if (uint32_t messages = context.validationMessages(); messages > 0)
         throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
     writeRenderedImage(options.output, image);
-    std::printf("shprobe render: %s lit by %s -> %s (%ux%u)\n", world.description.c_str(),
+    std::printf("shprobe render: %s lit by %s -> %s (%ux%u)\n", scene.world.description.c_str(),
                 options.volume.c_str(), options.output.c_str(), width, height);
     std::printf("  volume   %dx%dx%d probes, order %d, bounce %d%s\n", volume.grid.counts.x,
                 volume.grid.counts.y, volume.grid.counts.z, volume.order, volume.bounces,

@@ -25,21 +25,38 @@ void addViewOptions(CLI::App& command, ViewOptions& options) {
         ->check(CLI::Range(1, 1 << 30));
     command
         .add_option("--keys", options.keys,
-                    "Key presses to replay, one before each frame: 3 5 m b left right + - r q")
+                    "Key presses to replay, one before each frame: 3 5 m b left right + - r q p")
         ->delimiter(',');
     addExposureOption(command, options.exposure);
     addEnvironmentInputOptions(command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(command, options.device, options.validation);
+    // The scene's own view: none of the sphere's settings apply to it.
+    CLI::Option* scene =
+        command.add_option("--scene", options.scene,
+                           "Show this glTF scene lit by --volume instead of a sphere (docs/scene-probes.md)");
+    for (const char* sphereOnly : {"input", "--order", "--mode", "--face-size", "--sanitize"})
+        scene->excludes(command.get_option(sphereOnly));
+    command.add_option("--volume", options.volume, "The scene's probe volume (`shprobe scene`)");
+    command.add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)");
+    command.add_flag("--show-probes", options.showProbes,
+                     "With --scene: start with the probes shown as spheres shaded by their SH (key P)");
 }
 
 void runView(const ViewOptions& options) {
     ImageSize size = parseImageSize(options.size, "--size");
-    if (!options.screenshot.empty())
-        checkOutputsAreNotInputs({&options.screenshot, 1}, filesReadBy(options.input));
+    const bool showsScene = !options.scene.empty() || !options.volume.empty();
+    std::vector<std::string> inputs = filesReadBy(options.input);
+    if (showsScene) inputs = {options.scene, options.volume};
+    if (showsScene && !options.sky.empty()) inputs.push_back(options.sky);
+    if (!options.screenshot.empty()) checkOutputsAreNotInputs({&options.screenshot, 1}, inputs);
     ViewerOptions viewer;
     viewer.input = options.input;
-    // A bad probe file is refused before a window opens (and where there is no display).
-    if (isProbeFile(options.input)) viewer.probe = readProbeInput(options.input);
+    // Bad inputs are refused before a window opens (and where there is no display).
+    if (showsScene)
+        viewer.scene = loadLitScene(options.scene, options.volume, options.sky);
+    else if (isProbeFile(options.input))
+        viewer.probe = readProbeInput(options.input);
+    viewer.showProbes = options.showProbes;
     viewer.inputOptions = {options.faceSize, options.sanitize, options.maxPixels};
     viewer.width = size.width;
     viewer.height = size.height;
@@ -51,7 +68,10 @@ void runView(const ViewOptions& options) {
     viewer.keys = options.keys;
     viewer.device = options.device;
     viewer.validation = options.validation;
-    DeviceStep step("showing " + (options.input.empty() ? std::string("the built-in sky") : options.input));
+    const std::string shown = showsScene              ? options.scene
+                              : options.input.empty() ? std::string("the built-in sky")
+                                                      : options.input;
+    DeviceStep step("showing " + shown);
     runViewer(viewer);
 }
 

@@ -139,13 +139,14 @@ std::vector<int> scriptedKeys(const std::vector<std::string>& names) {
     static const std::pair<const char*, int> kKeys[] = {
         {"3", GLFW_KEY_3},       {"5", GLFW_KEY_5},         {"m", GLFW_KEY_M},     {"b", GLFW_KEY_B},
         {"left", GLFW_KEY_LEFT}, {"right", GLFW_KEY_RIGHT}, {"+", GLFW_KEY_EQUAL}, {"-", GLFW_KEY_MINUS},
-        {"r", GLFW_KEY_R},       {"q", GLFW_KEY_Q}};
+        {"r", GLFW_KEY_R},       {"q", GLFW_KEY_Q},         {"p", GLFW_KEY_P}};
     std::vector<int> keys;
     for (const std::string& name : names) {
         auto found = std::find_if(std::begin(kKeys), std::end(kKeys),
                                   [&](const auto& key) { return name == key.first; });
         if (found == std::end(kKeys))
-            throw Error(ErrorKind::Input, "unknown key '" + name + "' (3, 5, m, b, left, right, +, -, r, q)");
+            throw Error(ErrorKind::Input,
+                        "unknown key '" + name + "' (3, 5, m, b, left, right, +, -, r, q, p)");
         keys.push_back(found->second);
     }
     return keys;
@@ -153,35 +154,52 @@ std::vector<int> scriptedKeys(const std::vector<std::string>& names) {
 
 // ---- The session: what is shown and how it changes -------------------------------------------
 
+// A glTF scene lit by its volume, drawn by the capture's view pass into an HDR image of the
+// swapchain's size.
+struct ScenePicture {
+    LitScene lit;
+    SceneCapture capture;
+    SceneViewTarget target;
+    VkDescriptorSet tonemapInput = VK_NULL_HANDLE;
+    bool showProbes = false;
+};
+
 struct Session {
+    // The probe's sphere and torus (unless a scene is shown).
     RenderInput input;
     std::optional<ProbeBaker> baker; // re-bakes a rotated environment
-    SceneRenderer renderer;
+    std::optional<SceneRenderer> renderer;
+    SceneTargets targets;
+    int foldOrder = 3;
+    // Or the scene.
+    std::optional<ScenePicture> scene;
+
     ViewerFrames frames;
     ViewState initial;
     ViewState view;
-    int foldOrder = 3;
+    bool initialShowProbes = false;
     float autoExposure = 1.0f;
     std::string device;
 };
 
 bool backgroundAvailable(const Session& session, Background background) {
     if (background == Background::Environment) return session.input.environment.has_value();
-    if (background == Background::Radiance) return session.renderer.probe.hasRadiance;
+    if (background == Background::Radiance) return session.renderer->probe.hasRadiance;
     return true;
 }
 
 bool shadingAvailable(const Session& session, ShadingMode mode) {
-    return mode != ShadingMode::Radiance || session.renderer.probe.hasRadiance;
+    return mode != ShadingMode::Radiance || session.renderer->probe.hasRadiance;
 }
 
 // A starting view the input can show.
 ViewState usableView(const Session& session, ViewState view) {
+    clampView(view);
+    if (session.scene) return view;
     if (!backgroundAvailable(session, view.background))
         view.background =
             backgroundAvailable(session, Background::Radiance) ? Background::Radiance : Background::Shading;
     if (!shadingAvailable(session, view.shading)) view.shading = ShadingMode::Irradiance;
-    clampView(view);
     return view;
 }
 
@@ -209,16 +227,40 @@ void rotateEnvironment(const Context& context, Session& session, float degrees) 
             rotate(makeShRotation(rotation, session.input.probe.order), session.input.probe);
         std::optional<SphericalLight> sun = session.input.sun;
         if (sun) sun->direction = rotation * sun->direction; // the light from d comes from R d
-        setProbe(session.renderer, foldProbe(rotated, session.foldOrder, session.input.name, sun));
+        setProbe(*session.renderer, foldProbe(rotated, session.foldOrder, session.input.name, sun));
         return;
     }
     Cubemap rotated = rotateCubemap(*session.input.environment, rotation);
     ShCoefficients probe = bakeRadiance(context, *session.baker, rotated, session.input.bakeMilliseconds);
-    setEnvironment(context, session.renderer, rotated);
-    setProbe(session.renderer, foldProbe(probe, session.foldOrder, session.input.name));
+    setEnvironment(context, *session.renderer, rotated);
+    setProbe(*session.renderer, foldProbe(probe, session.foldOrder, session.input.name));
 }
 
-void applyKey(const Context& context, GLFWwindow* window, Session& session, int key) {
+// Keys of every view: exposure, reset, quit. False for others.
+bool applyViewKey(GLFWwindow* window, Session& session, int key) {
+    switch (key) {
+    case GLFW_KEY_EQUAL:
+    case GLFW_KEY_KP_ADD:
+        session.view.exposureStops += kExposureStep;
+        return true;
+    case GLFW_KEY_MINUS:
+    case GLFW_KEY_KP_SUBTRACT:
+        session.view.exposureStops -= kExposureStep;
+        return true;
+    case GLFW_KEY_R:
+        session.view = usableView(session, session.initial);
+        if (session.scene) session.scene->showProbes = session.initialShowProbes;
+        return true;
+    case GLFW_KEY_ESCAPE:
+    case GLFW_KEY_Q:
+        glfwSetWindowShouldClose(window, GLFW_TRUE);
+        return true;
+    default:
+        return false;
+    }
+}
+
+void applyProbeKey(const Context& context, Session& session, int key) {
     switch (key) {
     case GLFW_KEY_3:
         session.view.order = 3;
@@ -238,24 +280,15 @@ void applyKey(const Context& context, GLFWwindow* window, Session& session, int 
     case GLFW_KEY_RIGHT:
         rotateEnvironment(context, session, kRotationStep);
         break;
-    case GLFW_KEY_EQUAL:
-    case GLFW_KEY_KP_ADD:
-        session.view.exposureStops += kExposureStep;
-        break;
-    case GLFW_KEY_MINUS:
-    case GLFW_KEY_KP_SUBTRACT:
-        session.view.exposureStops -= kExposureStep;
-        break;
-    case GLFW_KEY_R:
-        session.view = usableView(session, session.initial);
-        break;
-    case GLFW_KEY_ESCAPE:
-    case GLFW_KEY_Q:
-        glfwSetWindowShouldClose(window, GLFW_TRUE);
-        break;
     default:
         break;
     }
+}
+
+void applyKey(const Context& context, GLFWwindow* window, Session& session, int key) {
+    if (applyViewKey(window, session, key)) return;
+    if (!session.scene) return applyProbeKey(context, session, key);
+    if (key == GLFW_KEY_P) session.scene->showProbes = !session.scene->showProbes;
 }
 
 void applyInput(const Context& context, GLFWwindow* window, Session& session, InputEvents& events) {
@@ -269,38 +302,116 @@ void applyInput(const Context& context, GLFWwindow* window, Session& session, In
     clampView(session.view);
 }
 
+std::string sceneSummary(const Session& session) {
+    const ProbeVolume& volume = session.scene->lit.volume;
+    char text[512];
+    std::snprintf(text, sizeof(text),
+                  "shprobe view: %s | %dx%dx%d probes, order %d, bounce %d%s | %+.1f EV | ",
+                  session.scene->lit.world.description.c_str(), volume.grid.counts.x, volume.grid.counts.y,
+                  volume.grid.counts.z, volume.order, volume.bounces,
+                  session.scene->showProbes ? " | probes shown" : "", double(session.view.exposureStops));
+    return text + session.device;
+}
+
+std::string sessionSummary(const Session& session) {
+    if (session.scene) return sceneSummary(session);
+    return viewSummary(session.view, session.input.name, session.input.bakeMilliseconds, session.device);
+}
+
 void updateTitle(GLFWwindow* window, const Session& session, std::string& shown) {
-    std::string title =
-        viewSummary(session.view, session.input.name, session.input.bakeMilliseconds, session.device);
+    std::string title = sessionSummary(session);
     if (title == shown) return;
     glfwSetWindowTitle(window, title.c_str());
     shown = title;
 }
 
-void startSession(const Context& context, const ViewerOptions& options, GLFWwindow* window,
-                  Session& session) {
+// The HDR image the picture is drawn into, at the swapchain's size.
+void destroyPictureTargets(const Context& context, Session& session) {
+    const Tonemapper& tonemapper = session.frames.tonemapper;
+    if (!session.scene) return destroySceneTargets(context, tonemapper, session.targets);
+    freeTonemapInput(context, tonemapper, session.scene->tonemapInput);
+    destroySceneViewTarget(context, session.scene->target);
+}
+
+void sizePictureTargets(const Context& context, Session& session) {
+    destroyPictureTargets(context, session);
+    const VkExtent2D extent = session.frames.swapchain.extent;
+    const Tonemapper& tonemapper = session.frames.tonemapper;
+    if (!session.scene) {
+        session.targets = createSceneTargets(context, *session.renderer, tonemapper, extent);
+        return;
+    }
+    ScenePicture& scene = *session.scene;
+    scene.target = createSceneViewTarget(context, scene.capture, extent, VK_IMAGE_USAGE_SAMPLED_BIT);
+    scene.tonemapInput = createTonemapInput(context, tonemapper, scene.target.color.view);
+}
+
+void startProbe(const Context& context, const ViewerOptions& options, Session& session) {
     session.input =
         options.probe ? *options.probe : loadRenderInput(context, options.input, options.inputOptions);
     session.foldOrder = std::min(session.input.probe.order, kMaxRenderOrder);
     ProbeShading probe = foldProbe(session.input.probe, std::max(options.view.order, session.foldOrder),
                                    session.input.name, session.input.sun);
     session.renderer = createSceneRenderer(context);
-    setProbe(session.renderer, probe);
+    setProbe(*session.renderer, probe);
     if (session.input.environment) {
-        setEnvironment(context, session.renderer, *session.input.environment);
+        setEnvironment(context, *session.renderer, *session.input.environment);
         session.baker = createRenderBaker(context);
     }
     session.autoExposure = autoExposure(session.input.probe, session.input.sun);
+}
+
+void startScene(const Context& context, const ViewerOptions& options, Session& session) {
+    session.scene.emplace();
+    session.scene->lit = *options.scene;
+    session.scene->capture = createLitSceneCapture(context, session.scene->lit);
+    session.scene->showProbes = session.initialShowProbes = options.showProbes;
+    session.autoExposure = volumeExposure(session.scene->lit.volume);
+}
+
+void startSession(const Context& context, const ViewerOptions& options, GLFWwindow* window,
+                  Session& session) {
+    if (options.scene)
+        startScene(context, options, session);
+    else
+        startProbe(context, options, session);
     session.initial = usableView(session, options.view);
     session.view = session.initial;
     session.device = context.info.name;
-    session.frames = createViewerFrames(context, session.renderer, framebufferExtent(window));
+    session.frames = createViewerFrames(context, framebufferExtent(window));
+    sizePictureTargets(context, session);
 }
 
 void endSession(const Context& context, Session& session) {
+    if (context.device) vkDeviceWaitIdle(context.device);
+    destroyPictureTargets(context, session);
     destroyViewerFrames(context, session.frames);
-    destroySceneRenderer(context, session.renderer);
+    if (session.scene) destroySceneCapture(context, session.scene->capture);
+    if (session.renderer) destroySceneRenderer(context, *session.renderer);
     if (session.baker) destroyProbeBaker(context, *session.baker);
+}
+
+// Records the current view into the picture's HDR image.
+void recordPicture(const Context& context, VkCommandBuffer commands, Session& session) {
+    if (!session.scene) {
+        Scene scene = viewScene(session.view);
+        return recordScene(context, commands, *session.renderer, session.targets, scene);
+    }
+    const ScenePicture& scene = *session.scene;
+    // The view's distance relative to its default: 1 keeps the whole scene in view.
+    const float zoom = session.view.distance / ViewState{}.distance;
+    const SceneCamera camera =
+        orbitSceneCamera(scene.lit.world, session.view.yawDegrees, session.view.pitchDegrees, zoom);
+    recordLitSceneView(commands, scene.capture, scene.target, camera, {.showProbes = scene.showProbes});
+}
+
+VkDescriptorSet tonemapInput(const Session& session) {
+    return session.scene ? session.scene->tonemapInput : session.targets.tonemapInput;
+}
+
+void recreateFrames(const Context& context, Session& session, VkExtent2D extent) {
+    recreateSwapchain(context, session.frames, extent);
+    sizePictureTargets(context, session);
 }
 
 // Draws until the window closes or the requested frames are shown; returns the frames shown.
@@ -321,15 +432,16 @@ int runFrames(const Context& context, const ViewerOptions& options, GLFWwindow* 
         }
         if (extent.width != session.frames.swapchain.extent.width ||
             extent.height != session.frames.swapchain.extent.height)
-            recreateSwapchain(context, session.renderer, session.frames, extent);
-        Scene scene = viewScene(session.view);
+            recreateFrames(context, session, extent);
         bool last = options.frames > 0 && shown + 1 == options.frames;
-        float exposure = session.autoExposure * std::exp2(session.view.exposureStops);
-        FrameResult result = drawFrame(context, session.renderer, session.frames,
-                                       {&scene, exposure, last && !options.screenshot.empty()});
+        FrameRequest request;
+        request.recordPicture = [&](VkCommandBuffer commands) { recordPicture(context, commands, session); };
+        request.tonemapInput = tonemapInput(session);
+        request.exposure = session.autoExposure * std::exp2(session.view.exposureStops);
+        request.capture = last && !options.screenshot.empty();
+        FrameResult result = drawFrame(context, session.frames, request);
         if (result != FrameResult::NotDrawn) ++shown;
-        if (result != FrameResult::Presented)
-            recreateSwapchain(context, session.renderer, session.frames, extent);
+        if (result != FrameResult::Presented) recreateFrames(context, session, extent);
     }
     return shown;
 }
@@ -348,11 +460,12 @@ void runSession(const Context& context, const ViewerOptions& options, GLFWwindow
     Session session;
     ScopeExit end([&] { endSession(context, session); });
     startSession(context, options, window, session);
-    std::printf("%s\n",
-                viewSummary(session.view, session.input.name, session.input.bakeMilliseconds, session.device)
-                    .c_str());
-    std::printf("keys: 3/5 order, M mode, B background, Left/Right rotate environment, +/- exposure, "
-                "R reset, Esc quit; drag to orbit, scroll to zoom\n");
+    std::printf("%s\n", sessionSummary(session).c_str());
+    if (session.scene)
+        std::printf("keys: P probes, +/- exposure, R reset, Esc quit; drag to orbit, scroll to zoom\n");
+    else
+        std::printf("keys: 3/5 order, M mode, B background, Left/Right rotate environment, +/- exposure, "
+                    "R reset, Esc quit; drag to orbit, scroll to zoom\n");
     int shown = runFrames(context, options, window, session, events);
     saveScreenshot(context, options, session, shown);
 }

@@ -3,11 +3,15 @@
 //   3, 5      SH order                 M   next shading mode (radiance, irradiance, l1-nonlinear)
 //   B         next background          Left/Right  rotate the environment by 15 degrees (re-baked)
 //   +, -      exposure by half a stop  R   reset the view        Esc, Q  quit
+// or, instead, a glTF scene lit by its probe volume (the view of `shprobe render --scene`), with
+// the same camera, exposure, reset and quit keys and
+//   P         show or hide the probes (spheres shaded by their own SH)
 // The title shows the settings and the last bake time. The only file that includes GLFW is
 // viewer.cpp; the library's core never links it.
 #pragma once
 #include "shprobe/render/render_input.h"
 #include "shprobe/render/view_state.h"
+#include "shprobe/scene/lit_scene.h"
 
 #include <optional>
 #include <string>
@@ -21,13 +25,15 @@ struct ViewerOptions {
     // otherwise input is loaded.
     std::optional<RenderInput> probe;
     RenderInputOptions inputOptions;
-    uint32_t width = 960; // window size (screen coordinates)
+    std::optional<LitScene> scene; // shown instead of the probe's sphere and torus
+    bool showProbes = false;       // the scene's probes, initially
+    uint32_t width = 960;          // window size (screen coordinates)
     uint32_t height = 600;
     ViewState view;         // the initial view (order, mode, exposure...)
     std::string screenshot; // save the last frame (--frames) to this PNG
     int frames = 0;         // > 0: exit after this many frames
     // Key presses to replay, one before each of the first frames (scripts and tests): names as in
-    // the key list above, lower case ("3", "5", "m", "b", "left", "right", "+", "-", "r").
+    // the key list above, lower case ("3", "5", "m", "b", "left", "right", "+", "-", "r", "p").
     std::vector<std::string> keys;
     std::string device;
     bool validation = false;

@@ -12,13 +12,6 @@ namespace shprobe {
 
 namespace {
 
-void createSizedResources(const Context& context, const SceneRenderer& renderer, ViewerFrames& frames,
-                          VkExtent2D windowExtent, VkSwapchainKHR oldSwapchain) {
-    frames.swapchain = createSwapchain(context, windowExtent, frames.tonemapper.format,
-                                       frames.tonemapper.renderPass, oldSwapchain);
-    frames.targets = createSceneTargets(context, renderer, frames.tonemapper, frames.swapchain.extent);
-}
-
 // The presented image goes PRESENT_SRC -> TRANSFER_SRC, is copied, and goes back.
 void recordCapture(VkCommandBuffer commands, ViewerFrames& frames, uint32_t imageIndex) {
     GpuImage image;
@@ -68,13 +61,13 @@ bool present(const Context& context, const ViewerFrames& frames, uint32_t imageI
 
 } // namespace
 
-ViewerFrames createViewerFrames(const Context& context, const SceneRenderer& renderer,
-                                VkExtent2D windowExtent) {
+ViewerFrames createViewerFrames(const Context& context, VkExtent2D windowExtent) {
     ViewerFrames frames;
     OnFailure undo([&] { destroyViewerFrames(context, frames); });
     frames.tonemapper =
         createTonemapper(context, pickSwapchainFormat(context), VK_IMAGE_LAYOUT_PRESENT_SRC_KHR);
-    createSizedResources(context, renderer, frames, windowExtent, VK_NULL_HANDLE);
+    frames.swapchain = createSwapchain(context, windowExtent, frames.tonemapper.format,
+                                       frames.tonemapper.renderPass, VK_NULL_HANDLE);
     frames.commands = allocateCommandBuffer(context);
     frames.acquired = createSemaphore(context);
     frames.frameDone = createFence(context, true); // the first frame has nothing to wait for
@@ -87,28 +80,25 @@ void destroyViewerFrames(const Context& context, ViewerFrames& frames) {
     if (frames.frameDone) vkDestroyFence(context.device, frames.frameDone, nullptr);
     if (frames.acquired) vkDestroySemaphore(context.device, frames.acquired, nullptr);
     if (frames.commands) vkFreeCommandBuffers(context.device, context.commandPool, 1, &frames.commands);
-    destroySceneTargets(context, frames.tonemapper, frames.targets);
     destroySwapchain(context, frames.swapchain);
     destroyTonemapper(context, frames.tonemapper);
     frames = ViewerFrames{};
 }
 
-void recreateSwapchain(const Context& context, const SceneRenderer& renderer, ViewerFrames& frames,
-                       VkExtent2D windowExtent) {
+void recreateSwapchain(const Context& context, ViewerFrames& frames, VkExtent2D windowExtent) {
     VK_CHECK(vkDeviceWaitIdle(context.device));
-    destroySceneTargets(context, frames.tonemapper, frames.targets);
     Swapchain old = frames.swapchain;
     frames.swapchain = Swapchain{};
     ScopeExit releaseOld([&] { destroySwapchain(context, old); }); // once the new one replaced it
-    createSizedResources(context, renderer, frames, windowExtent, old.swapchain);
+    frames.swapchain = createSwapchain(context, windowExtent, frames.tonemapper.format,
+                                       frames.tonemapper.renderPass, old.swapchain);
 }
 
 void waitForFrame(const Context& context, const ViewerFrames& frames) {
     VK_CHECK(vkWaitForFences(context.device, 1, &frames.frameDone, VK_TRUE, UINT64_MAX));
 }
 
-FrameResult drawFrame(const Context& context, SceneRenderer& renderer, ViewerFrames& frames,
-                      const FrameRequest& request) {
+FrameResult drawFrame(const Context& context, ViewerFrames& frames, const FrameRequest& request) {
     waitForFrame(context, frames);
     uint32_t imageIndex = 0;
     VkResult acquired = vkAcquireNextImageKHR(context.device, frames.swapchain.swapchain, UINT64_MAX,
@@ -119,8 +109,8 @@ FrameResult drawFrame(const Context& context, SceneRenderer& renderer, ViewerFra
 
     VK_CHECK(vkResetCommandBuffer(frames.commands, 0));
     beginCommands(frames.commands);
-    recordScene(context, frames.commands, renderer, frames.targets, *request.scene);
-    recordTonemap(frames.commands, frames.tonemapper, frames.targets.tonemapInput,
+    request.recordPicture(frames.commands);
+    recordTonemap(frames.commands, frames.tonemapper, request.tonemapInput,
                   frames.swapchain.framebuffers[imageIndex], frames.swapchain.extent, request.exposure);
     if (request.capture) recordCapture(frames.commands, frames, imageIndex);
     VK_CHECK(vkEndCommandBuffer(frames.commands));

@@ -5,6 +5,7 @@
 // scene pass and tonemap shader; only the target differs, BGRA swapchain vs RGBA image).
 #include "render_test.h"
 #include "run_program.h"
+#include "scene_fixtures.h"
 #include "test_inputs.h"
 
 #include "shprobe/render/render_input.h"
@@ -43,9 +44,22 @@ int largestDifference(const Screenshot& shot, const RenderedImage& image) {
     return worst;
 }
 
+// Largest difference of any channel of any pixel of two pictures of one size.
+int largestDifference(const Screenshot& a, const Screenshot& b) {
+    int worst = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i)
+        worst = std::max(worst, std::abs(int(a.rgb[i]) - int(b.rgb[i])));
+    return worst;
+}
+
 class Viewer : public RenderTest {
   protected:
     TemporaryFolder folder{"shprobe_render_viewer"};
+
+    void runOk(const std::vector<std::string>& args) {
+        RunResult result = runProgram(args, folder.path() / "logs");
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+    }
 
     Screenshot runViewer(const std::vector<std::string>& args) {
         if (!std::getenv("DISPLAY")) {
@@ -122,6 +136,49 @@ TEST_F(Viewer, ProbeFilesRotateTheirCoefficients) {
     ShCoefficients rotated = rotate(makeShRotation(environmentRotation(-15.0f), 5), probe);
     RenderedImage image = renderView(rotated, probe, nullptr, view, shot);
     EXPECT_EQ(largestDifference(shot, image), 0);
+}
+
+// A scene lit by its volume: the viewer's frame, after P (probes shown) and + (half a stop up), is
+// `shprobe render --scene` of the same view (the viewer starts at yaw 35, pitch 15) byte for byte:
+// the same capture view pass and tonemap. The picture without the probes differs, so P took effect.
+TEST_F(Viewer, SceneScreenshotIsTheSceneRenderOfTheSameView) {
+    const std::string scene = folder / "cornell.glb", volume = folder / "v.shpv";
+    writeCornellBoxGltf(scene, {.innerBoxes = true});
+    runOk({"scene", scene, "--grid", "2,2,2", "--face-size", "16", "--bounces", "1", "-q", "-o", volume});
+    Screenshot shot = runViewer({"--scene", scene, "--volume", volume, "--keys", "p,+", "--frames", "3"});
+    ASSERT_EQ(shot.width, 160);
+
+    const std::vector<std::string> render{"render", "--scene",    scene,   "--volume", volume,
+                                          "--size", "160x120",    "--yaw", "35",       "--pitch",
+                                          "15",     "--exposure", "0.5"};
+    std::vector<std::string> withProbes = render, withoutProbes = render;
+    withProbes.insert(withProbes.end(), {"--show-probes", "-o", folder / "probes.png"});
+    withoutProbes.insert(withoutProbes.end(), {"-o", folder / "plain.png"});
+    runOk(withProbes);
+    runOk(withoutProbes);
+    const Screenshot probes = readScreenshot(folder / "probes.png"),
+                     plain = readScreenshot(folder / "plain.png");
+    ASSERT_EQ(probes.width, 160);
+    ASSERT_EQ(plain.width, 160);
+    EXPECT_EQ(largestDifference(shot, probes), 0);
+    EXPECT_GT(largestDifference(shot, plain), 10) << "the probes show";
+}
+
+// Scene inputs are checked before a window opens: a scene without its volume, a sphere option
+// with a scene, each one line and exit 2.
+TEST_F(Viewer, BadSceneInputsAreRefusedBeforeAWindowOpens) {
+    const std::string scene = folder / "cornell.glb";
+    writeCornellBoxGltf(scene);
+    const std::pair<std::vector<std::string>, std::string> cases[] = {
+        {{"view", "--scene", scene}, "--volume"},
+        {{"view", "--scene", scene, "--volume", scene, "--order", "5"}, "--order"},
+        {{"view", "--volume", scene}, "--scene"},
+    };
+    for (const auto& [args, named] : cases) {
+        RunResult result = runProgram(args, folder.path() / "logs", {{"DISPLAY", std::nullopt}});
+        EXPECT_EQ(result.exitCode, 2) << describe(result);
+        EXPECT_NE(result.err.find(named), std::string::npos) << describe(result);
+    }
 }
 
 } // namespace
