@@ -237,12 +237,21 @@ VkRenderPass createCaptureRenderPass(const Context& context, VkFormat depthForma
     return createRenderPass(context, {attachments, {&color, 1}, &depth, dependencies});
 }
 
+uint32_t sunCount(const SceneCapture& capture) {
+    return uint32_t(capture.suns.size());
+}
+
+// The SH order as the capture shaders' specialization constant; `order` must outlive the info.
+constexpr VkSpecializationMapEntry kOrderEntry{SHPROBE_SPEC_ORDER, 0, sizeof(uint32_t)};
+VkSpecializationInfo orderSpecialization(const uint32_t& order) {
+    return {1, &kOrderEntry, sizeof(order), &order};
+}
+
 // The sky over the whole face first (no depth), then the surfaces, nearest first: reversed depth
 // (near plane at 1, infinitely far at 0) keeps float depth precise from the near plane out.
 VkPipeline createCapturePipeline(const Context& context, const SceneCapture& capture, bool surfaces) {
     const uint32_t order = uint32_t(capture.options.order);
-    const VkSpecializationMapEntry entry{SHPROBE_SPEC_ORDER, 0, 4};
-    const VkSpecializationInfo specialization{1, &entry, sizeof(order), &order};
+    const VkSpecializationInfo specialization = orderSpecialization(order);
     GraphicsPipelineDesc desc;
     desc.vertex = surfaces ? capture.surfaceVertex : capture.skyVertex;
     desc.fragment = surfaces ? capture.surfaceFragment : capture.skyFragment;
@@ -269,7 +278,6 @@ void createCaptureBuffers(const Context& context, SceneCapture& capture, const W
     capture.buffers[SHPROBE_CAPTURE_TEXELS] = createStorage(context, textures.texels, "scene texels");
     capture.buffers[SHPROBE_CAPTURE_SKY] = createStorage(context, sky.texels, "sky texels");
     capture.buffers[SHPROBE_CAPTURE_VOLUME] = createStorage(context, packBounce({}), "previous bounce");
-    capture.sunCount = uint32_t(world.suns.size());
     capture.suns = packSuns(world, uint32_t(capture.options.shadowMapSize));
     const std::vector<gpu::CaptureSun>& suns = capture.suns;
     capture.buffers[SHPROBE_CAPTURE_SUNS] = createStorage(context, suns, "suns");
@@ -290,24 +298,36 @@ void writeCaptureDescriptors(const Context& context, const SceneCapture& capture
     writeDescriptors(context, capture.set, types, targets);
 }
 
+// World -> clip with clip x, y and w the dot products of (position - origin) with the three rows
+// and z = near: depth = near / w, reversed (1 at the near plane, 0 infinitely far).
+glm::mat4 clipFromRows(const std::array<glm::vec3, 3>& rows, const glm::dvec3& origin, float nearPlane) {
+    const std::array<int, 3> rowOf{0, 1, 3};
+    const glm::vec3 o(origin);
+    glm::mat4 m(0.0f); // column-major: m[column][row]
+    for (int r = 0; r < 3; ++r) {
+        for (int column = 0; column < 3; ++column)
+            m[column][rowOf[r]] = rows[r][column];
+        m[3][rowOf[r]] = -glm::dot(rows[r], o);
+    }
+    m[3][2] = nearPlane;
+    return m;
+}
+
 // World -> clip for one face: clip (x, y, w) are the face-local (a, b) and the depth along the
-// face's axis of the direction from the probe (texel_geometry.h's face table, inverted), and
-// z = near, so that depth = near / distance along the axis.
+// face's axis of the direction from the probe (texel_geometry.h's face table, inverted).
 glm::mat4 faceProjection(uint32_t face, const glm::dvec3& probe, float nearPlane) {
     const glm::vec3 a = gpu::orientToFace(face, glm::vec3(1.0f, 0.0f, 0.0f));
     const glm::vec3 b = gpu::orientToFace(face, glm::vec3(0.0f, 1.0f, 0.0f));
     const glm::vec3 axis = gpu::orientToFace(face, glm::vec3(0.0f, 0.0f, 1.0f));
-    const glm::vec3 p(probe);
-    glm::mat4 m(0.0f); // column-major: m[column][row]
-    const std::array<glm::vec3, 3> rows{a, b, axis};
-    const std::array<int, 3> rowOf{0, 1, 3};
-    for (int r = 0; r < 3; ++r) {
-        for (int column = 0; column < 3; ++column)
-            m[column][rowOf[r]] = rows[r][column];
-        m[3][rowOf[r]] = -glm::dot(rows[r], p);
-    }
-    m[3][2] = nearPlane;
-    return m;
+    return clipFromRows({a, b, axis}, probe, nearPlane);
+}
+
+// The sky, then the surfaces, into the render pass begun, with the push constants set.
+void recordSkyAndSurfaces(VkCommandBuffer commands, const SceneCapture& capture) {
+    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.sky);
+    vkCmdDraw(commands, 3, 1, 0, 0);
+    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.surfaces);
+    if (capture.triangleCount > 0) vkCmdDraw(commands, 3 * capture.triangleCount, 1, 0, 0);
 }
 
 GpuImage createDepthImage(const Context& context, const SceneCapture& capture) {
@@ -396,7 +416,7 @@ void drawShadowMaps(const Context& context, const SceneCapture& capture) {
                   .extent = {size, size},
                   .usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                   .what = "shadow maps",
-                  .layers = capture.sunCount});
+                  .layers = sunCount(capture)});
     std::vector<VkImageView> views;
     std::vector<VkFramebuffer> framebuffers;
     ScopeExit releaseMaps([&] {
@@ -406,7 +426,7 @@ void drawShadowMaps(const Context& context, const SceneCapture& capture) {
             vkDestroyImageView(context.device, view, nullptr);
         destroyImage(context, maps);
     });
-    for (uint32_t s = 0; s < capture.sunCount; ++s) {
+    for (uint32_t s = 0; s < sunCount(capture); ++s) {
         views.push_back(createImageView(context, maps.image, VK_IMAGE_VIEW_TYPE_2D, kShadowFormat, 1, s));
         framebuffers.push_back(createFramebuffer(context, renderPass, {&views.back(), 1}, {size, size}));
     }
@@ -414,7 +434,7 @@ void drawShadowMaps(const Context& context, const SceneCapture& capture) {
         vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.layout, 0, 1, &capture.set,
                                 0, nullptr);
         const VkClearValue clear{.depthStencil = {0.0f, 0}};
-        for (uint32_t s = 0; s < capture.sunCount; ++s) {
+        for (uint32_t s = 0; s < sunCount(capture); ++s) {
             const gpu::CaptureConstants constants{shadowClip(capture.suns[s]), glm::vec4(0.0f),
                                                   glm::uvec4(0u)};
             beginRenderPass(commands, renderPass, framebuffers[s], {size, size}, {&clear, 1});
@@ -426,7 +446,7 @@ void drawShadowMaps(const Context& context, const SceneCapture& capture) {
             vkCmdEndRenderPass(commands);
         }
         VkBufferImageCopy region{};
-        region.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, capture.sunCount};
+        region.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, sunCount(capture)};
         region.imageExtent = {size, size, 1};
         vkCmdCopyImageToBuffer(commands, maps.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                                capture.buffers[SHPROBE_CAPTURE_SHADOWS].buffer, 1, &region);
@@ -500,7 +520,7 @@ SceneCapture createSceneCapture(const Context& context, const World& world, cons
     capture.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = SHPROBE_CAPTURE_BINDINGS});
     capture.set = allocateDescriptorSet(context, capture.pool, capture.setLayout);
     writeCaptureDescriptors(context, capture);
-    if (capture.sunCount > 0) drawShadowMaps(context, capture);
+    if (!capture.suns.empty()) drawShadowMaps(context, capture);
     return capture;
 }
 
@@ -576,17 +596,15 @@ void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, c
                             nullptr);
     for (size_t p = 0; p < positions.size(); ++p)
         for (uint32_t face = 0; face < 6; ++face) {
-            const gpu::CaptureConstants constants{faceProjection(face, positions[p], capture.nearPlane),
-                                                  glm::vec4(glm::vec3(positions[p]), 1.0f),
-                                                  glm::uvec4(face, n, capture.skyFaceSize, capture.sunCount)};
+            const gpu::CaptureConstants constants{
+                faceProjection(face, positions[p], capture.nearPlane),
+                glm::vec4(glm::vec3(positions[p]), 1.0f),
+                glm::uvec4(face, n, capture.skyFaceSize, sunCount(capture))};
             beginRenderPass(commands, capture.renderPass, target.framebuffers[6 * p + face], {n, n}, clears);
             vkCmdPushConstants(commands, capture.layout,
                                VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                                sizeof(constants), &constants);
-            vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.sky);
-            vkCmdDraw(commands, 3, 1, 0, 0);
-            vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.surfaces);
-            if (capture.triangleCount > 0) vkCmdDraw(commands, 3 * capture.triangleCount, 1, 0, 0);
+            recordSkyAndSurfaces(commands, capture);
             vkCmdEndRenderPass(commands);
         }
 }
@@ -652,24 +670,13 @@ glm::mat4 cameraProjection(const SceneCamera& camera, VkExtent2D extent, float n
     const glm::vec3 down = glm::cross(forward, right);
     const float f = 1.0f / std::tan(float(camera.verticalFovDegrees) * 0.5f * 3.14159265f / 180.0f);
     const float aspect = float(extent.width) / float(extent.height);
-    const std::array<glm::vec3, 3> rows{right * (f / aspect), down * f, forward};
-    const std::array<int, 3> rowOf{0, 1, 3};
-    const glm::vec3 eye(camera.eye);
-    glm::mat4 m(0.0f);
-    for (int r = 0; r < 3; ++r) {
-        for (int column = 0; column < 3; ++column)
-            m[column][rowOf[r]] = rows[r][column];
-        m[3][rowOf[r]] = -glm::dot(rows[r], eye);
-    }
-    m[3][2] = nearPlane;
-    return m;
+    return clipFromRows({right * (f / aspect), down * f, forward}, camera.eye, nearPlane);
 }
 
 VkPipeline createProbePipeline(const Context& context, const SceneCapture& capture,
                                const SceneViewTarget& target) {
     const uint32_t order = uint32_t(capture.options.order);
-    const VkSpecializationMapEntry entry{SHPROBE_SPEC_ORDER, 0, 4};
-    const VkSpecializationInfo specialization{1, &entry, sizeof(order), &order};
+    const VkSpecializationInfo specialization = orderSpecialization(order);
     const VkVertexInputBindingDescription binding{0, sizeof(MeshVertex), VK_VERTEX_INPUT_RATE_VERTEX};
     const std::array<VkVertexInputAttributeDescription, 2> attributes{
         {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(MeshVertex, position)},
@@ -749,7 +756,7 @@ void recordSceneView(VkCommandBuffer commands, const SceneCapture& capture, cons
     const float radius = float(options.probeRadius > 0.0 ? options.probeRadius : defaultProbeRadius(grid));
     const gpu::CaptureConstants constants{
         cameraProjection(camera, target.extent, capture.nearPlane), glm::vec4(glm::vec3(camera.eye), radius),
-        glm::uvec4(SHPROBE_CAPTURE_CAMERA, 0u, capture.skyFaceSize, capture.sunCount),
+        glm::uvec4(SHPROBE_CAPTURE_CAMERA, 0u, capture.skyFaceSize, sunCount(capture)),
         glm::vec4(float(target.extent.width), float(target.extent.height), 0.0f, 0.0f)};
     const VkClearValue clears[2] = {{}, {.depthStencil = {0.0f, 0}}};
     beginRenderPass(commands, capture.renderPass, target.framebuffer, target.extent, clears);
@@ -757,10 +764,7 @@ void recordSceneView(VkCommandBuffer commands, const SceneCapture& capture, cons
                             nullptr);
     vkCmdPushConstants(commands, capture.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                        sizeof(constants), &constants);
-    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.sky);
-    vkCmdDraw(commands, 3, 1, 0, 0);
-    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.surfaces);
-    if (capture.triangleCount > 0) vkCmdDraw(commands, 3 * capture.triangleCount, 1, 0, 0);
+    recordSkyAndSurfaces(commands, capture);
     const uint32_t probes = uint32_t(grid.counts.x) * uint32_t(grid.counts.y) * uint32_t(grid.counts.z);
     if (options.showProbes && probes > 0) {
         const VkDeviceSize offset = 0;
@@ -781,7 +785,8 @@ Cubemap captureProbeCubemap(const Context& context, const SceneCapture& capture,
                                    "captured cube map");
     ScopeExit releaseReadback([&] { destroyBuffer(context, readback); });
     submitAndWait(context, [&](VkCommandBuffer commands) {
-        recordSceneCapture(commands, capture, target, {&position, 1});
+        recordSceneCapture(commands, capture, target, {&position, 1}); // visible to transfers
+        // GENERAL would do, but the validation layer reports a copy from it (a performance warning).
         changeLayout(commands, target.cubemaps,
                      {VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                       VK_PIPELINE_STAGE_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,

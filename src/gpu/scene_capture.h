@@ -67,7 +67,6 @@ struct SceneCapture {
     VkShaderModule skyFragment = VK_NULL_HANDLE;
     VkPipeline surfaces = VK_NULL_HANDLE;
     VkPipeline sky = VK_NULL_HANDLE;
-    uint32_t sunCount = 0;
     std::vector<gpu::CaptureSun> suns; // as the shaders read them, with their shadow maps' projections
     BounceGrid bounceGrid;             // of setBounceSource's volume; counts 0: none
     std::vector<Buffer> buffers;       // one per binding of capture_interface.h
