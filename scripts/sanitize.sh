@@ -7,7 +7,8 @@
 #     process; under ASan they take several times their normal ~4 minutes and only check
 #     uninstrumented Mesa code. scripts/test.sh runs them without sanitizers.
 #  2. build-fuzz: the libFuzzer targets of fuzz/ (clang), each run for FUZZ_SECONDS (default 20) on
-#     a temporary copy of its seed corpus in fuzz/corpus/, so CI never writes into the repository.
+#     a temporary copy of its seed corpus in fuzz/corpus/, so CI never writes into the repository;
+#     fuzz_gltf_scene's also takes the small real glTFs of assimp-testmodels, broken ones included.
 #     A crash, sanitizer report or foreign exception fails the run; the input is kept in
 #     $FUZZ_ARTIFACTS (default: a temporary folder, printed) to reproduce with
 #     ./build-fuzz/fuzz/fuzz_<name> <file>.
@@ -62,10 +63,19 @@ trap 'rm -rf "$work"' EXIT
 artifacts=${FUZZ_ARTIFACTS:-$(mktemp -d /tmp/shprobe-fuzz-artifacts.XXXXXX)}
 mkdir -p "$artifacts"
 failed=()
-for target in probe_json probe_stdin probe_volume layout cross channels exr_header; do
+gltf_models=/usr/share/assimp/models/glTF2
+for target in probe_json probe_stdin probe_volume gltf_scene layout cross channels exr_header; do
   corpus="$work/$target"
   mkdir -p "$corpus"
   cp fuzz/corpus/"$target"/* "$corpus"/
+  if [ "$target" = gltf_scene ] && [ -d "$gltf_models" ]; then
+    # Numbered copies: several models share a file name.
+    n=0
+    while IFS= read -r -d '' model; do
+      n=$((n + 1))
+      cp "$model" "$corpus/assimp-$n-$(basename "$model")"
+    done < <(find "$gltf_models" -size -64k \( -name '*.gltf' -o -name '*.glb' \) -print0)
+  fi
   echo "-- fuzz_$target"
   if ! ./build-fuzz/fuzz/fuzz_"$target" "$corpus" -max_total_time="$fuzz_seconds" -rss_limit_mb=2048 \
        -timeout=25 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" 2>"$work/$target.log"; then

@@ -1,0 +1,67 @@
+// loadGltfScene on arbitrary bytes (written to a file of a private folder, since a .gltf names its
+// buffers and images by path): it must return a consistent World or throw shprobe::Error, never
+// crash, hang or throw anything else. A World it returns must hold what the capture and the
+// reference index blindly: whole triangles, indices within the vertices, one material per triangle
+// that exists, textures that exist with their texels, finite positions inside the bounds.
+#include "fuzz_support.h"
+#include "shprobe/scene/gltf_scene.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+using namespace shprobe;
+
+namespace {
+
+bool validTexture(const World& world, int index) {
+    return index == -1 || (index >= 0 && size_t(index) < world.textures.size());
+}
+
+void checkWorld(const World& world) {
+    const size_t vertices = world.positions.size();
+    if (world.indices.size() % 3 != 0) fuzz::finding("indices are not whole triangles");
+    if (world.normals.size() != vertices || world.uvs.size() != vertices)
+        fuzz::finding("normals or uvs do not match the positions");
+    for (uint32_t index : world.indices)
+        if (index >= vertices) fuzz::finding("an index past the vertices");
+    if (world.triangleMaterials.size() != world.triangleCount()) fuzz::finding("one material per triangle");
+    for (uint32_t material : world.triangleMaterials)
+        if (material >= world.materials.size()) fuzz::finding("a triangle's material does not exist");
+    for (const SceneMaterial& material : world.materials)
+        if (!validTexture(world, material.albedoTexture) || !validTexture(world, material.emissionTexture))
+            fuzz::finding("a material's texture does not exist");
+    for (const SceneTexture& texture : world.textures)
+        if (texture.width <= 0 || texture.height <= 0 ||
+            texture.texels.size() != size_t(texture.width) * size_t(texture.height))
+            fuzz::finding("a texture's texels do not match its size");
+    for (const glm::vec3& p : world.positions)
+        for (int a = 0; a < 3; ++a)
+            if (!std::isfinite(p[a]) || p[a] < world.boundsMin[a] || p[a] > world.boundsMax[a])
+                fuzz::finding("a position is not finite or outside the bounds");
+}
+
+const std::filesystem::path& folder() {
+    static const std::filesystem::path path = [] {
+        std::filesystem::path p = "/tmp/fuzz_gltf_scene_" + std::to_string(getpid());
+        std::filesystem::create_directories(p);
+        return p;
+    }();
+    return path;
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    const std::string path = (folder() / "scene.gltf").string();
+    {
+        std::ofstream out(path, std::ios::binary | std::ios::trunc);
+        out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+    }
+    // Limits small enough that no input costs more than a few MiB to accept.
+    const GltfLoadOptions options{.maxTriangles = 100'000, .maxTexturePixels = 256 * 256};
+    fuzz::expectOnlyShprobeErrors("loadGltfScene", [&] { checkWorld(loadGltfScene(path, options)); });
+    return 0;
+}
