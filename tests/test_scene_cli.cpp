@@ -89,7 +89,8 @@ TEST_F(SceneCommand, RealSceneBakes) {
 // `shprobe render --scene` draws the scene lit by its volume: the surfaces reflect the volume's
 // irradiance (the Cornell box's walls are lit, so the picture is not black), and --show-probes adds
 // the probes' spheres (the picture changes). A brick is refused, and so are --scene without
-// --volume and the sphere's options (--order, --grid, --face-size) with it.
+// --volume, the sphere's options (--order, --grid, --face-size) with it, and the scene's options
+// (--volume, --sky, --show-probes) without it.
 TEST_F(SceneCommand, RenderDrawsTheSceneLitByItsVolume) {
     const std::string scene = file("open.glb");
     testing::writeCornellBoxGltf(scene, {.innerBoxes = true});
@@ -116,6 +117,13 @@ TEST_F(SceneCommand, RenderDrawsTheSceneLitByItsVolume) {
         std::vector<std::string> args{"render", "--scene", scene, "--volume", file("v.shpv"), "-o", "OUT"};
         args.insert(args.end(), sphereOnly.begin(), sphereOnly.end());
         expectFailure({args, 2, {sphereOnly[0]}, "out.png"});
+    }
+    // The scene's options without a scene would be ignored: they are refused.
+    for (const std::vector<std::string>& sceneOnly : std::vector<std::vector<std::string>>{
+             {"--sky", scene}, {"--show-probes"}, {"--volume", file("v.shpv")}}) {
+        std::vector<std::string> args{"render", "-o", "OUT"};
+        args.insert(args.end(), sceneOnly.begin(), sceneOnly.end());
+        expectFailure({args, 2, {sceneOnly[0], "--scene"}, "out.png"});
     }
     expectFailure(
         {{"render", "--scene", scene, "--volume", file("brick.shpv"), "-o", "OUT"}, 2, {"brick"}, "out.png"});

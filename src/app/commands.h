@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -57,6 +58,16 @@ struct InfoOptions {
     bool validation = false;
 };
 
+// The glTF scene that render and view draw instead of a sphere, lit by its probe volume
+// (render_scene.cpp).
+struct LitSceneOptions {
+    std::string scene;       // .gltf or .glb
+    std::string volume;      // its probe volume (shprobe scene)
+    std::string sky;         // the scene's sky; empty: the built-in sky
+    bool showProbes = false; // the volume's probes as spheres (the viewer: initially; key P)
+    bool drawn() const { return !scene.empty() || !volume.empty(); }
+};
+
 struct RenderOptions {
     std::string input;                 // probe (.json), environment image, or empty: the built-in sky
     std::string output = "render.png"; // .png/.jpg tonemapped sRGB, .exr/.hdr linear
@@ -73,10 +84,7 @@ struct RenderOptions {
     int64_t maxPixels = kDefaultMaxImagePixels;
     std::string device;
     bool validation = false;
-    std::string scene;       // a glTF scene, drawn lit by `volume` (render_scene.cpp)
-    std::string volume;      // its probe volume (shprobe scene)
-    std::string sky;         // the scene's sky; empty: the built-in sky
-    bool showProbes = false; // the volume's probes as spheres
+    LitSceneOptions scene;
 };
 
 struct ViewOptions {
@@ -93,10 +101,7 @@ struct ViewOptions {
     int64_t maxPixels = kDefaultMaxImagePixels;
     std::string device;
     bool validation = false;
-    std::string scene; // a glTF scene, shown lit by `volume` (like RenderOptions::scene)
-    std::string volume;
-    std::string sky;
-    bool showProbes = false; // initially; key P toggles them
+    LitSceneOptions scene;
 };
 
 // `shprobe scene SCENE --grid NX,NY,NZ -o VOLUME`: probes baked inside a glTF scene (scene.cpp).
@@ -218,9 +223,15 @@ void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize
 void addRenderCommand(CLI::App& app, RenderOptions& options);
 // `shprobe render --scene SCENE --volume VOLUME`: the scene lit by its probe volume.
 void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height);
+// --scene, --volume, --sky and --show-probes of render and view; --scene excludes the options of the
+// sphere named in sphereOnly, and the others need --scene.
+void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
+                        std::initializer_list<const char*> sphereOnly);
+// The files a lit scene reads: the scene, the volume and the sky if one is given.
+std::vector<std::string> litSceneInputs(const LitSceneOptions& options);
 // The scene, its whole volume (baked in that scene) and its sky, for render and view --scene; throws
 // Error(Input) for a missing half, a brick, or a volume of another scene.
-LitScene loadLitScene(const std::string& scene, const std::string& volume, const std::string& sky);
+LitScene loadLitScene(const LitSceneOptions& options);
 void runRender(const RenderOptions& options);
 
 // The viewer, shprobe-view (view.cpp, view_main.cpp): a program of its own, the only one that links

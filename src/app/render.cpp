@@ -157,16 +157,8 @@ void addRenderCommand(CLI::App& app, RenderOptions& options) {
     addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(*command, options.device, options.validation);
     // The scene's own picture: none of the sphere's settings apply to it.
-    CLI::Option* scene = command->add_option(
-        "--scene", options.scene,
-        "Draw this glTF scene lit by --volume instead of a sphere (docs/scene-probes.md)");
-    for (const char* sphereOnly :
-         {"input", "--order", "--mode", "--grid", "--background", "--face-size", "--sanitize"})
-        scene->excludes(command->get_option(sphereOnly));
-    command->add_option("--volume", options.volume, "The scene's probe volume (`shprobe scene`)");
-    command->add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)");
-    command->add_flag("--show-probes", options.showProbes,
-                      "With --scene: the volume's probes as small spheres shaded by their own SH");
+    addLitSceneOptions(*command, options.scene,
+                       {"input", "--order", "--mode", "--grid", "--background", "--face-size", "--sanitize"});
 }
 
 void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels) {
@@ -181,8 +173,7 @@ void runRender(const RenderOptions& options) {
         options.size.empty() ? std::to_string(options.grid ? kDefaultGridCell : kDefaultSize) : options.size,
         "--size");
     checkRenderOutputPath(options.output); // before any work
-    if (!options.scene.empty() || !options.volume.empty())
-        return runSceneRender(options, size.width, size.height);
+    if (options.scene.drawn()) return runSceneRender(options, size.width, size.height);
     checkOutputsAreNotInputs({&options.output, 1}, filesReadBy(options.input));
     RenderResult result = renderOnDevice(options, size);
     writeRenderedImage(options.output, result.image);

@@ -105,22 +105,42 @@ RenderedImage renderFrame(const Context& context, const SceneCapture& capture, c
 
 } // namespace
 
-LitScene loadLitScene(const std::string& scene, const std::string& volume, const std::string& sky) {
-    if (scene.empty() || volume.empty()) throw Error(ErrorKind::Input, "--scene and --volume go together");
-    LitScene lit{.volume = readWholeVolume(volume)};
-    lit.world = loadGltfScene(scene);
+void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
+                        std::initializer_list<const char*> sphereOnly) {
+    CLI::Option* scene = command.add_option(
+        "--scene", options.scene, "A glTF scene lit by --volume instead of a sphere (docs/scene-probes.md)");
+    for (const char* name : sphereOnly)
+        scene->excludes(command.get_option(name));
+    command.add_option("--volume", options.volume, "The scene's probe volume (`shprobe scene`)")
+        ->needs(scene);
+    command.add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)")->needs(scene);
+    command
+        .add_flag("--show-probes", options.showProbes,
+                  "The volume's probes as spheres shaded by their own SH")
+        ->needs(scene);
+}
+
+std::vector<std::string> litSceneInputs(const LitSceneOptions& options) {
+    std::vector<std::string> inputs{options.scene, options.volume};
+    if (!options.sky.empty()) inputs.push_back(options.sky);
+    return inputs;
+}
+
+LitScene loadLitScene(const LitSceneOptions& options) {
+    if (options.scene.empty() || options.volume.empty())
+        throw Error(ErrorKind::Input, "--scene and --volume go together");
+    LitScene lit{.volume = readWholeVolume(options.volume)};
+    lit.world = loadGltfScene(options.scene);
     if (lit.volume.source != lit.world.description)
         throw Error(ErrorKind::Input,
-                    volume + ": baked in " + lit.volume.source + ", not " + lit.world.description);
-    lit.sky = loadSceneSky(sky, 0).cubemap;
+                    options.volume + ": baked in " + lit.volume.source + ", not " + lit.world.description);
+    lit.sky = loadSceneSky(options.sky, 0).cubemap;
     return lit;
 }
 
 void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height) {
-    std::vector<std::string> inputs{options.scene, options.volume};
-    if (!options.sky.empty()) inputs.push_back(options.sky);
-    checkOutputsAreNotInputs({&options.output, 1}, inputs);
-    const LitScene scene = loadLitScene(options.scene, options.volume, options.sky);
+    checkOutputsAreNotInputs({&options.output, 1}, litSceneInputs(options.scene));
+    const LitScene scene = loadLitScene(options.scene);
     const ProbeVolume& volume = scene.volume;
 
     Context context = createGraphicsContext(options.device, options.validation);
@@ -130,17 +150,17 @@ void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t heigh
     const Clock::time_point start = Clock::now();
     const RenderedImage image =
         renderFrame(context, capture, orbitSceneCamera(scene.world, options.yaw, options.pitch),
-                    {.showProbes = options.showProbes}, {width, height},
+                    {.showProbes = options.scene.showProbes}, {width, height},
                     volumeExposure(volume) * std::exp2(options.exposure));
     const double milliseconds = millisecondsSince(start);
     if (uint32_t messages = context.validationMessages(); messages > 0)
         throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
     writeRenderedImage(options.output, image);
     std::printf("shprobe render: %s lit by %s -> %s (%ux%u)\n", scene.world.description.c_str(),
-                options.volume.c_str(), options.output.c_str(), width, height);
+                options.scene.volume.c_str(), options.output.c_str(), width, height);
     std::printf("  volume   %dx%dx%d probes, order %d, bounce %d%s\n", volume.grid.counts.x,
                 volume.grid.counts.y, volume.grid.counts.z, volume.order, volume.bounces,
-                options.showProbes ? ", probes shown" : "");
+                options.scene.showProbes ? ", probes shown" : "");
     std::printf("  time     render %.1f ms\n", milliseconds);
 }
 

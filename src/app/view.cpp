@@ -30,33 +30,24 @@ void addViewOptions(CLI::App& command, ViewOptions& options) {
     addExposureOption(command, options.exposure);
     addEnvironmentInputOptions(command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(command, options.device, options.validation);
-    // The scene's own view: none of the sphere's settings apply to it.
-    CLI::Option* scene =
-        command.add_option("--scene", options.scene,
-                           "Show this glTF scene lit by --volume instead of a sphere (docs/scene-probes.md)");
-    for (const char* sphereOnly : {"input", "--order", "--mode", "--face-size", "--sanitize"})
-        scene->excludes(command.get_option(sphereOnly));
-    command.add_option("--volume", options.volume, "The scene's probe volume (`shprobe scene`)");
-    command.add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)");
-    command.add_flag("--show-probes", options.showProbes,
-                     "With --scene: start with the probes shown as spheres shaded by their SH (key P)");
+    // The scene's own view: none of the sphere's settings apply to it. Key P shows or hides the probes.
+    addLitSceneOptions(command, options.scene, {"input", "--order", "--mode", "--face-size", "--sanitize"});
 }
 
 void runView(const ViewOptions& options) {
     ImageSize size = parseImageSize(options.size, "--size");
-    const bool showsScene = !options.scene.empty() || !options.volume.empty();
-    std::vector<std::string> inputs = filesReadBy(options.input);
-    if (showsScene) inputs = {options.scene, options.volume};
-    if (showsScene && !options.sky.empty()) inputs.push_back(options.sky);
-    if (!options.screenshot.empty()) checkOutputsAreNotInputs({&options.screenshot, 1}, inputs);
+    const bool showsScene = options.scene.drawn();
+    if (!options.screenshot.empty())
+        checkOutputsAreNotInputs({&options.screenshot, 1},
+                                 showsScene ? litSceneInputs(options.scene) : filesReadBy(options.input));
     ViewerOptions viewer;
     viewer.input = options.input;
     // Bad inputs are refused before a window opens (and where there is no display).
     if (showsScene)
-        viewer.scene = loadLitScene(options.scene, options.volume, options.sky);
+        viewer.scene = loadLitScene(options.scene);
     else if (isProbeFile(options.input))
         viewer.probe = readProbeInput(options.input);
-    viewer.showProbes = options.showProbes;
+    viewer.showProbes = options.scene.showProbes;
     viewer.inputOptions = {options.faceSize, options.sanitize, options.maxPixels};
     viewer.width = size.width;
     viewer.height = size.height;
@@ -68,7 +59,7 @@ void runView(const ViewOptions& options) {
     viewer.keys = options.keys;
     viewer.device = options.device;
     viewer.validation = options.validation;
-    const std::string shown = showsScene              ? options.scene
+    const std::string shown = showsScene              ? options.scene.scene
                               : options.input.empty() ? std::string("the built-in sky")
                                                       : options.input;
     DeviceStep step("showing " + shown);

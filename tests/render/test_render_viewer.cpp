@@ -173,6 +173,8 @@ TEST_F(Viewer, BadSceneInputsAreRefusedBeforeAWindowOpens) {
         {{"view", "--scene", scene}, "--volume"},
         {{"view", "--scene", scene, "--volume", scene, "--order", "5"}, "--order"},
         {{"view", "--volume", scene}, "--scene"},
+        {{"view", "--show-probes"}, "--scene"},
+        {{"view", "--sky", scene}, "--scene"},
     };
     for (const auto& [args, named] : cases) {
         RunResult result = runProgram(args, folder.path() / "logs", {{"DISPLAY", std::nullopt}});
