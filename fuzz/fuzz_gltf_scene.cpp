@@ -7,10 +7,11 @@
 #include "shprobe/scene/gltf_scene.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
+#include <system_error>
 
 using namespace shprobe;
 
@@ -43,19 +44,23 @@ void checkWorld(const World& world) {
                 fuzz::finding("a position is not finite or outside the bounds");
 }
 
-const std::filesystem::path& folder() {
-    static const std::filesystem::path path = [] {
-        std::filesystem::path p = "/tmp/fuzz_gltf_scene_" + std::to_string(getpid());
-        std::filesystem::create_directories(p);
-        return p;
-    }();
-    return path;
-}
+// A private folder under $TMPDIR for the input file, removed when the fuzzer exits.
+struct TemporaryFolder {
+    std::string path;
+    TemporaryFolder() : path((std::filesystem::temp_directory_path() / "fuzz_gltf_scene.XXXXXX").string()) {
+        if (!mkdtemp(path.data())) fuzz::finding("cannot create a temporary folder in " + path);
+    }
+    ~TemporaryFolder() {
+        std::error_code ignored;
+        std::filesystem::remove_all(path, ignored);
+    }
+};
 
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-    const std::string path = (folder() / "scene.gltf").string();
+    static const TemporaryFolder folder;
+    const std::string path = folder.path + "/scene.gltf";
     {
         std::ofstream out(path, std::ios::binary | std::ios::trunc);
         out.write(reinterpret_cast<const char*>(data), std::streamsize(size));

@@ -939,7 +939,8 @@ TEST_F(EnvironmentFiles, UnreadableFilesSayPermissionDenied) {
         {file("faces"), file("faces/px.exr")},
     };
     for (const auto& [input, named] : cases) {
-        std::optional<std::string> message = inputErrorAsNobody([&] { loadEnvironment(input, {}); });
+        std::optional<std::string> message =
+            inputErrorAsNobody([path = input] { loadEnvironment(path, {}); });
         if (!message) GTEST_SKIP() << "this system does not let root switch to user nobody";
         EXPECT_EQ(*message, named + ": " + denied) << input;
     }
