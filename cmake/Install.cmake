@@ -35,7 +35,9 @@
 #                                              major.minor: 0.x may break the interface), the targets
 #   lib/pkgconfig/shprobe.pc                   Cflags -I<prefix>/include; Libs render, shprobe, sh;
 #                                              Requires vulkan glm; static builds add Libs.private
-#                                              (the spirv archives) and Requires.private OpenEXR
+#                                              (the spirv archives)
+#   lib/shprobe/libshprobe_exr.so              the OpenEXR plugin (image/exr_plugin.h), loaded when
+#                                              the first EXR file is read or written
 #   lib/shprobe/libshprobe_oiio.so             the OpenImageIO plugin (image/oiio_plugin.h), loaded
 #                                              only for formats shprobe does not read itself
 #   share/doc/shprobe/LICENSE                  the license
@@ -43,7 +45,7 @@
 #
 # The config file sets shprobe_SPIRV_DIR, shprobe_INTERFACE_DOC, shprobe_GLSL_DIR and shprobe_MODULES,
 # and finds only what the installed headers include (Vulkan, glm): no installed header includes
-# OpenEXR, OpenImageIO or nlohmann/json, which the libraries link privately or the plugin alone
+# OpenEXR, OpenImageIO or nlohmann/json, which the plugins alone link or the libraries use inside
 # (see "what a static build's consumers link" below for the static case). The GLFW viewer (shprobe_viewer) stays private: the
 # installed libraries and bin/shprobe never need a window system; only bin/shprobe-view links it.
 #
@@ -105,100 +107,20 @@ endif()
 
 # --- what a static build's consumers link --------------------------------------------------------
 # A static library's PRIVATE dependencies are still link items of whatever links it, so CMake exports
-# them as $<LINK_ONLY:...>. Exported as the target OpenEXR::OpenEXR, that would make the package
-# config find_dependency(OpenEXR), and on Debian OpenEXR's config loads Imath's, which prints, at
-# every configure of every consumer, that the imported target Imath::PyImath_Python3_11 names a
-# file that does not exist (PyImath is packaged apart). Hiding that message (CMAKE_MESSAGE_LOG_LEVEL
-# around the call) would hide whatever else those configs or the consumer report too. Instead the
-# exported targets name the shared library files that the static libraries' objects call into
-# (OpenEXR's, and those its target links: Iex, IlmThread, Imath), as found here: all that
-# OpenEXR.pc gives pkg-config users. A consumer links the same libraries with no config to load.
-# The price: the package names the files it was built against, as the static libraries are tied
-# to that ABI anyway. A static OpenEXR has dependencies of its own, so then the package finds its
-# config. nlohmann_json is header-only and no installed header includes it: consumers need nothing
-# of it. OpenImageIO is the plugin's alone (libshprobe_oiio.so), never linked by the libraries.
-# A shared build exports no private dependency at all.
-set(SHPROBE_CONFIG_FIND_PRIVATE "") # spliced into shprobeConfig.cmake
-
-# The file an imported library target links: its location for this build type, else for the first
-# of its imported configurations, else its plain location.
-function(shprobe_imported_location out target)
-    string(TOUPPER "${CMAKE_BUILD_TYPE}" build_type)
-    set(properties IMPORTED_LOCATION_${build_type})
-    get_target_property(configurations ${target} IMPORTED_CONFIGURATIONS)
-    foreach(configuration IN LISTS configurations)
-        list(APPEND properties IMPORTED_LOCATION_${configuration})
-    endforeach()
-    foreach(property IN LISTS properties ITEMS IMPORTED_LOCATION)
-        get_target_property(location ${target} ${property})
-        if(location)
-            set(${out} "${location}" PARENT_SCOPE)
-            return()
+# them as $<LINK_ONLY:...>, and the package config would have to find them. The libraries have none
+# that a consumer needs: nlohmann_json and stb are header-only, included by no installed header, and
+# linked as $<BUILD_INTERFACE:...>; OpenEXR and OpenImageIO are the plugins' alone
+# (libshprobe_exr.so, libshprobe_oiio.so), loaded at run time, never linked by the libraries. This
+# check keeps it so.
+foreach(target IN LISTS shprobe_export_targets)
+    get_target_property(links ${target} INTERFACE_LINK_LIBRARIES)
+    foreach(item IN LISTS links)
+        if(item MATCHES "^\\$<LINK_ONLY:(OpenEXR|Imath|OpenImageIO|nlohmann_json|stb)::")
+            message(FATAL_ERROR "cmake/Install.cmake: ${target} links ${item}, which the package would "
+                                "have to find for its consumers; link it as $<BUILD_INTERFACE:...>")
         endif()
     endforeach()
-    message(FATAL_ERROR "cmake/Install.cmake: no file to link for ${target}")
-endfunction()
-
-# The shared library files of an imported target and of the imported targets it links, in the
-# order met; empty when one of them is a static library (its own config must be found then).
-function(shprobe_shared_files out target)
-    set(files "")
-    set(pending ${target})
-    set(seen "")
-    while(pending)
-        list(POP_FRONT pending item)
-        if(item IN_LIST seen OR NOT TARGET ${item})
-            continue()
-        endif()
-        list(APPEND seen ${item})
-        get_target_property(type ${item} TYPE)
-        if(type MATCHES "^(SHARED|UNKNOWN)_LIBRARY$") # UNKNOWN: found by a find module (ZLIB::ZLIB)
-            shprobe_imported_location(file ${item})
-            list(APPEND files ${file})
-        elseif(NOT type STREQUAL "INTERFACE_LIBRARY")
-            set(${out} "" PARENT_SCOPE)
-            return()
-        endif()
-        get_target_property(links ${item} INTERFACE_LINK_LIBRARIES)
-        if(links)
-            list(APPEND pending ${links})
-        endif()
-    endwhile()
-    set(${out} "${files}" PARENT_SCOPE)
-endfunction()
-
-if(shprobe_library_type STREQUAL "STATIC_LIBRARY")
-    shprobe_shared_files(openexr_files OpenEXR::OpenEXR)
-    if(openexr_files)
-        set(openexr_installed "")
-        foreach(file IN LISTS openexr_files)
-            list(APPEND openexr_installed "$<INSTALL_INTERFACE:$<LINK_ONLY:${file}>>")
-        endforeach()
-    else()
-        set(openexr_installed "$<INSTALL_INTERFACE:$<LINK_ONLY:OpenEXR::OpenEXR>>")
-        set(SHPROBE_CONFIG_FIND_PRIVATE "find_dependency(OpenEXR CONFIG) # a static OpenEXR")
-    endif()
-    foreach(target IN LISTS shprobe_export_targets)
-        get_target_property(links ${target} INTERFACE_LINK_LIBRARIES)
-        if(NOT links)
-            continue()
-        endif()
-        set(exported "")
-        foreach(item IN LISTS links)
-            if(item STREQUAL "$<LINK_ONLY:OpenEXR::OpenEXR>")
-                list(APPEND exported "$<BUILD_INTERFACE:${item}>" ${openexr_installed})
-            elseif(item STREQUAL "$<LINK_ONLY:nlohmann_json::nlohmann_json>")
-                list(APPEND exported "$<BUILD_INTERFACE:${item}>")
-            elseif(item MATCHES "OpenEXR::|Imath::|OpenImageIO::|nlohmann_json::")
-                message(FATAL_ERROR "cmake/Install.cmake: ${target} links ${item}, which the package "
-                                    "cannot export without finding that dependency; export it as above")
-            else()
-                list(APPEND exported "${item}")
-            endif()
-        endforeach()
-        set_target_properties(${target} PROPERTIES INTERFACE_LINK_LIBRARIES "${exported}")
-    endforeach()
-endif()
+endforeach()
 
 # --- shared libraries: sonames and run paths -----------------------------------------------------
 # The soname carries major.minor, the compatibility shprobeConfigVersion.cmake promises (0.x: a minor
@@ -222,7 +144,7 @@ install(TARGETS ${shprobe_export_targets}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS ${shprobe_programs} shprobe_bench_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(TARGETS shprobe_oiio LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/shprobe) # image/oiio_plugin.h
+install(TARGETS shprobe_exr shprobe_oiio LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/shprobe) # image/*_plugin.h
 
 # --- headers -------------------------------------------------------------------------------------
 # The public API: everything under these folders of src/ except the viewer's window-system headers.
@@ -291,15 +213,14 @@ set_and_check(shprobe_INTERFACE_DOC "@PACKAGE_SHPROBE_INSTALL_SPIRVDIR@/INTERFAC
 set_and_check(shprobe_GLSL_DIR "@PACKAGE_SHPROBE_INSTALL_GLSLDIR@")
 set(shprobe_MODULES "@shprobe_modules@")
 
-# What the installed headers include and the libraries link publicly. OpenEXR and nlohmann_json
-# are private to the libraries (cmake/Install.cmake, "what a static build's consumers link").
+# What the installed headers include and the libraries link publicly; nothing else is needed
+# (cmake/Install.cmake, "what a static build's consumers link").
 include(CMakeFindDependencyMacro)
 find_dependency(Vulkan)
 find_dependency(glm CONFIG)
 if(NOT TARGET glm::glm AND TARGET glm) # some of Debian's glm configs define only `glm`
     add_library(glm::glm ALIAS glm)
 endif()
-@SHPROBE_CONFIG_FIND_PRIVATE@
 
 include("${CMAKE_CURRENT_LIST_DIR}/shprobeTargets.cmake")
 
@@ -325,11 +246,10 @@ foreach(dir LIBDIR INCLUDEDIR DATADIR)
         set(SHPROBE_PC_${dir} "\${prefix}/${CMAKE_INSTALL_${dir}}")
     endif()
 endforeach()
-# Libraries every link needs come in Libs. A static build's links also need the embedded modules and
-# OpenEXR (pkg-config --static); a shared build's libraries carry both.
+# Libraries every link needs come in Libs. A static build's links also need the embedded modules
+# (pkg-config --static); a shared build's libraries carry them.
 if(shprobe_library_type STREQUAL "STATIC_LIBRARY")
-    set(SHPROBE_PC_PRIVATE
-        "Requires.private: OpenEXR\nLibs.private: -lshprobe_render_spirv -lshprobe_spirv")
+    set(SHPROBE_PC_PRIVATE "Libs.private: -lshprobe_render_spirv -lshprobe_spirv")
 else()
     set(SHPROBE_PC_PRIVATE "")
 endif()

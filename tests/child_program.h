@@ -167,10 +167,11 @@ std::vector<std::string> entriesOf(const fs::path& folder) {
 // ---- Fixture ----------------------------------------------------------------------------------
 
 struct Failure {
-    std::vector<std::string> args;     // "OUT" is replaced by the output path
-    int exitCode;                      // README: 2 input or usage, 3 output, 4 device
-    std::vector<std::string> mentions; // parts the one error line must contain
-    std::string output = "out.json";   // the output's file name (the extension picks the format)
+    std::vector<std::string> args;       // "OUT" is replaced by the output path
+    int exitCode;                        // README: 2 input or usage, 3 output, 4 device
+    std::vector<std::string> mentions;   // parts the one error line must contain
+    std::string output = "out.json";     // the output's file name (the extension picks the format)
+    EnvironmentChanges environment = {}; // for the runs
 };
 
 class ProgramTest : public ::testing::Test {
@@ -212,7 +213,8 @@ class ProgramTest : public ::testing::Test {
         const std::string before = "an earlier good output\n";
         writeText(existing / failure.output, before);
         for (const fs::path& output : {fresh / failure.output, existing / failure.output})
-            expectMessage(failure, run(withOutput(failure.args, output.string())));
+            expectMessage(failure, run(withOutput(failure.args, output.string()),
+                                       {.environment = failure.environment}));
         EXPECT_EQ(entriesOf(fresh), std::vector<std::string>{}) << "a failed run left files behind";
         EXPECT_EQ(entriesOf(existing), std::vector<std::string>{failure.output});
         EXPECT_EQ(readText(existing / failure.output), before) << "a failed run changed the existing output";

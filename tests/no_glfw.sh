@@ -5,9 +5,11 @@
 #   1. no NEEDED entry (readelf -d) of shprobe, nor of the project's shared libraries it loads (a
 #      -DBUILD_SHARED_LIBS=ON build), names GLFW, X11 (libX*), xcb, Wayland, xkbcommon or GLX; and
 #      nothing the dynamic loader loads for shprobe at all (ldd: every library, however deep) is a
-#      window-system library or OpenImageIO (whose Debian build needs X11 through OpenCV and
-#      others): OpenImageIO is a plugin, loaded only for the formats shprobe does not read itself;
-#   2. a GPU bake of the built-in sky succeeds;
+#      window-system library, OpenImageIO (whose Debian build needs X11 through OpenCV and
+#      others) or OpenEXR: they are plugins, loaded only for the files that need them;
+#   2. a GPU bake of the built-in sky succeeds; it, `--help`, `info` and `convert` load no image library at
+#      all (LD_DEBUG=files: nothing through dlopen either), and writing an EXR does load OpenEXR
+#      (so that the check sees a plugin when one is loaded);
 #   3. `shprobe view` with no shprobe-view beside it (shprobe copied alone into a folder) exits 4 with
 #      one line, "shprobe: error: the viewer is not installed ...", naming the file it looked for;
 #   4. where the viewer is built: it does need GLFW (so that check 1 would see it), `shprobe view
@@ -29,13 +31,32 @@ for file in "${files[@]}"; do
   if needed "$file" | grep -E "$window_system"; then fail "$file needs a window-system library (above)"; fi
   echo "no window-system library needed by $file"
 done
-loaded='lib(glfw|X[A-Za-z0-9_-]*|xcb|wayland-|xkbcommon|GLX|OpenImageIO)[^ ]*'
-if ldd "$shprobe" | grep -E "$loaded"; then fail "$shprobe loads a window-system library or OpenImageIO (above)"; fi
-echo "no window-system library or OpenImageIO among the $(ldd "$shprobe" | wc -l) libraries $shprobe loads"
+image_libraries='lib(OpenImageIO|OpenEXR|Imath|Iex|IlmThread)[^ ]*'
+loaded="lib(glfw|X[A-Za-z0-9_-]*|xcb|wayland-|xkbcommon|GLX)[^ ]*|$image_libraries"
+if ldd "$shprobe" | grep -E "$loaded"; then fail "$shprobe loads a window-system or image library (above)"; fi
+echo "no window-system or image library among the $(ldd "$shprobe" | wc -l) libraries $shprobe loads"
 
-"$shprobe" bake --face-size 8 -q -o "$work/probe.json" || fail "shprobe bake failed"
+# The shared libraries a run of shprobe loads, at start and through dlopen, one file name a line.
+loads() {
+  rm -f "$work"/ld.*
+  LD_DEBUG=files LD_DEBUG_OUTPUT="$work/ld" "$shprobe" "$@" > /dev/null || fail "shprobe $* failed"
+  cat "$work"/ld.* | sed -n 's/.*file=\([^ ]*\).*/\1/p' | sort -u
+}
+without_image_libraries() {
+  local libraries
+  libraries=$(loads "$@") || exit 1
+  if grep -E "$image_libraries" <<< "$libraries"; then fail "shprobe $* loads an image library (above)"; fi
+  echo "shprobe $*: no image library loaded"
+}
+without_image_libraries bake --backend gpu --face-size 8 -q -o "$work/probe.json"
 [ -s "$work/probe.json" ] || fail "shprobe bake wrote no probe"
-echo "shprobe bake: OK"
+without_image_libraries --help
+without_image_libraries info
+without_image_libraries convert "$work/probe.json" -o "$work/probe.three.json"
+libraries=$(loads bake --face-size 8 -q --format irradiance-equirect -o "$work/irradiance.exr") || exit 1
+grep -q '^libOpenEXR' <<< "$libraries" || fail "writing an EXR did not load OpenEXR"
+[ -s "$work/irradiance.exr" ] || fail "shprobe bake wrote no EXR"
+echo "shprobe bake: OK; writing an EXR loads OpenEXR"
 
 # shellcheck source=tests/run_capture.sh
 source "$(dirname "$0")/run_capture.sh"

@@ -142,6 +142,39 @@ TEST_F(BadInputs, TruncatedExr) {
         {{"render", file("short.exr"), "-o", "OUT"}, 2, {file("short.exr"), "truncated"}, "out.png"});
 }
 
+// EXR files and OpenImageIO's formats are read and written by plugins loaded on first use
+// (image/exr_plugin.h, image/oiio_plugin.h). One that cannot be loaded fails the run like any bad
+// input, naming the file, the library it needs and where it looked: reading (exit 2) and writing
+// (exit 3, before any output is made), with nothing written.
+TEST_F(BadInputs, CodecPluginsThatCannotBeLoadedAreNamed) {
+    writeImage(file("sky.exr"), constantImage(16, 8, glm::vec3(1.0f)));
+    writeImage(file("sky.hdr"), constantImage(16, 8, glm::vec3(1.0f)));
+    writeChannels(file("sky.tif"), 16, 8, 3, OIIO::TypeDesc::FLOAT, std::vector<float>(16 * 8 * 3, 1.0f));
+    const std::string missing = file("no-such-plugin.so");
+    const EnvironmentChanges noExr{{"SHPROBE_EXR_PLUGIN", missing}};
+    expectFailure({{"bake", file("sky.exr"), "-o", "OUT"},
+                   2,
+                   {file("sky.exr") + ": this format needs OpenEXR, and its plugin libshprobe_exr.so",
+                    "(looked in " + missing + ")"},
+                   "out.json",
+                   noExr});
+    expectFailure({{"bake", file("sky.hdr"), "--format", "irradiance-equirect", "-o", "OUT"},
+                   3,
+                   {"cannot write", "out.exr: this format needs OpenEXR", missing},
+                   "out.exr",
+                   noExr});
+    expectFailure(
+        {{"bake", file("sky.tif"), "-o", "OUT"},
+         2,
+         {file("sky.tif") + ": this format needs OpenImageIO, and its plugin libshprobe_oiio.so", missing},
+         "out.json",
+         {{"SHPROBE_OIIO_PLUGIN", missing}}});
+    // The same runs without the variables read and write these files.
+    runOk({"bake", file("sky.exr"), "-o", file("sky.json")});
+    runOk({"bake", file("sky.tif"), "-o", file("tif.json")});
+    runOk({"bake", file("sky.hdr"), "--format", "irradiance-equirect", "-o", file("irradiance.exr")});
+}
+
 // libpng prints "libpng error: ..." itself before OpenImageIO reports the same: the program's
 // stderr holds only its own line, which carries the library's text.
 TEST_F(BadInputs, TruncatedPng) {

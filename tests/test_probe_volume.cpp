@@ -243,7 +243,7 @@ TEST(ProbeGrid, MalformedOptionsAreRefusedWithTheirReason) {
         {"", "needs 3 counts"},
     };
     for (const auto& [text, message] : grids)
-        expectInputError([&] { parseGridCounts(text); }, message);
+        expectInputError([text = text] { parseGridCounts(text); }, message);
 
     const std::pair<const char*, const char*> bounds[] = {
         {"0,0,0,1,1", "--bounds: '0,0,0,1,1' needs 6 numbers X0,Y0,Z0,X1,Y1,Z1"},
@@ -255,7 +255,7 @@ TEST(ProbeGrid, MalformedOptionsAreRefusedWithTheirReason) {
         {"0,2,0,1,1,1", "the minimum corner comes first, but Y0 > Y1"},
     };
     for (const auto& [text, message] : bounds)
-        expectInputError([&] { parseGridBounds(text); }, message);
+        expectInputError([text = text] { parseGridBounds(text); }, message);
 
     expectInputError(
         [] {
@@ -319,7 +319,7 @@ TEST(Bricks, ParseIAndNFromZero) {
         {"", "is not I/N"},
     };
     for (const auto& [text, message] : cases)
-        expectInputError([&] { parseBrick(text); }, message);
+        expectInputError([text = text] { parseBrick(text); }, message);
 }
 
 // For every grid of 1 to 60 probes and every brick count up to the probe count, the bricks follow
@@ -599,7 +599,7 @@ TEST(ProbeVolumeFile, EveryHeaderFieldIsChecked) {
         {[](ordered_json& h) { h["settings"] = "face_size=32"; }, "field \"settings\" must be an object"},
     };
     for (const auto& [edit, message] : cases)
-        expectInputError([&] { parseProbeVolume(withHeader(bytes, edit), "v.shpv"); },
+        expectInputError([&, edit = edit] { parseProbeVolume(withHeader(bytes, edit), "v.shpv"); },
                          std::string("v.shpv: ") + message);
     // Fields a reader does not know are ignored, and the test's own writer makes a readable file.
     const ProbeVolume read =

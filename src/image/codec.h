@@ -1,8 +1,9 @@
 // Image codecs behind readImage and the image writers (image/environment.h, image/image_write.h).
-// EXR (OpenEXR), Radiance HDR, PNG and JPEG (stb_image, stb_image_write) are read and written by
-// small libraries linked into shprobe; any other format goes through OpenImageIO, which is loaded
-// only when such a file is met (image/oiio_plugin.h): a command that reads or writes none of them
-// does not pay for OpenImageIO's start-up and its hundreds of shared libraries.
+// Radiance HDR, PNG and JPEG are read and written by stb_image and stb_image_write, compiled into
+// shprobe; EXR by OpenEXR, behind a plugin loaded when the first EXR file is met
+// (image/exr_plugin.h); any other format goes through OpenImageIO, also a plugin loaded only when
+// such a file is met (image/oiio_plugin.h): a command that reads or writes none of them does not
+// pay for their libraries' loading (OpenImageIO's: hundreds of shared libraries).
 #pragma once
 #include "shprobe/image/channels.h"
 
@@ -59,8 +60,9 @@ ImageFormat sniffImageFormat(const unsigned char* bytes, size_t count);
 // From an output name's extension (case-insensitive): .exr, .hdr, .png, .jpg/.jpeg; else Other.
 ImageFormat imageFormatOfName(const std::string& path);
 
-// Native decoders (exr_codec.cpp, stb_codec.cpp). `path` names a regular file already checked
-// by readImage (checkInputFile, checkImageHeader).
+// Native decoders: EXR through the OpenEXR plugin (image/exr_plugin.h, loaded by this call the first
+// time), stb_image's (stb_codec.cpp). `path` names a regular file already checked by readImage
+// (checkInputFile, checkImageHeader).
 std::unique_ptr<ImageDecoder> openExrDecoder(const std::string& path);
 std::unique_ptr<ImageDecoder> openStbDecoder(const std::string& path, ImageFormat format); // Hdr, Png, Jpeg
 
@@ -81,8 +83,9 @@ struct BytePixels {
     const uint8_t* data = nullptr; // already sRGB-encoded (or data, for RGBA)
 };
 
-// The file's bytes. EXR: 32-bit floats, ZIP compression, scanlines; HDR: RGBE; PNG and JPEG
-// (quality 95): 8 bits per channel. Errors: Error(Output) "cannot write WHAT: REASON".
+// The file's bytes. EXR (the OpenEXR plugin's): 32-bit floats, ZIP compression, scanlines; HDR:
+// RGBE; PNG and JPEG (quality 95): 8 bits per channel. Errors: Error(Output) "cannot write WHAT:
+// REASON".
 std::string encodeExr(const FloatPixels& pixels, const std::string& what);
 std::string encodeHdr(const FloatPixels& pixels, const std::string& what);
 std::string encodePng(const BytePixels& pixels, const std::string& what);

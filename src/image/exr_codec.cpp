@@ -1,9 +1,8 @@
-// OpenEXR files read and written with the OpenEXR library itself (image/codec.h): the first part
-// of a file, scanline or tiled (its base level), as OpenImageIO read it, and 32-bit float RGB
-// files written into memory.
-#include "shprobe/image/codec.h"
-
-#include "shprobe/sh/error.h"
+// The OpenEXR plugin (image/exr_plugin.h): EXR files read and written with the OpenEXR library
+// itself, built as libshprobe_exr.so. Like the OpenImageIO plugin it uses nothing of the shprobe
+// libraries but their headers, so that it loads into a program that links them statically as well
+// as shared.
+#include "shprobe/image/exr_plugin.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfChromaticitiesAttribute.h>
@@ -226,13 +225,11 @@ void checkPixels(const FloatPixels& pixels, const std::string& what) {
     if (!pixels.data) fail("no pixels given");
 }
 
-} // namespace
-
-std::unique_ptr<ImageDecoder> openExrDecoder(const std::string& path) {
+std::unique_ptr<ImageDecoder> openDecoder(const std::string& path) {
     return std::make_unique<ExrDecoder>(path);
 }
 
-std::string encodeExr(const FloatPixels& pixels, const std::string& what) {
+std::string encode(const FloatPixels& pixels, const std::string& what) {
     checkPixels(pixels, what);
     startThreadPool();
     // The channel names OpenImageIO gave 1 to 4 channels: Y; Y, A; R, G, B; R, G, B, A.
@@ -261,4 +258,11 @@ std::string encodeExr(const FloatPixels& pixels, const std::string& what) {
     return bytes;
 }
 
+constexpr ExrPlugin kPlugin{openDecoder, encode};
+
+} // namespace
 } // namespace shprobe
+
+extern "C" __attribute__((visibility("default"))) const shprobe::ExrPlugin* shprobe_exr_plugin_v1() {
+    return &shprobe::kPlugin;
+}
