@@ -128,6 +128,33 @@ ShCoefficients testProbe(int order) {
 
 constexpr double kY00 = 0.28209479177387814; // 1 / (2 sqrt(pi))
 
+// ---- The command line ---------------------------------------------------------------------------
+
+// The program builds only the parser of the command a line names (main.cpp): the top-level help
+// still lists every command, each command's help lists its own options, and an option of another
+// command is refused as unknown, wherever the command stands after the program's own flags.
+TEST_F(BadInputs, EachCommandTakesItsOwnOptionsAndOnlyThose) {
+    const std::pair<const char*, const char*> commands[] = {
+        {"bake", "--face-size"},  {"convert", "--map-size"}, {"info", "--validation"},
+        {"render", "--exposure"}, {"rotate", "--euler"},     {"light", "--directional"},
+        {"scene", "--bounces"},   {"merge", "bricks"},       {"bench", "--sizes"},
+    };
+    const std::string help = runOk({"--help"}).out;
+    for (const auto& [name, option] : commands) {
+        EXPECT_NE(help.find("\n  " + std::string(name) + " "), std::string::npos) << name << " in\n" << help;
+        const std::string own = runOk({name, "--help"}).out;
+        EXPECT_NE(own.find(option), std::string::npos) << name << " --help:\n" << own;
+    }
+    EXPECT_NE(help.find("\n  view "), std::string::npos) << help;
+    EXPECT_NE(runOk({"--help", "bake"}).out.find("--face-size"), std::string::npos)
+        << "a command named after the program's --help gets its options, and the help is its own";
+    expectFailure({{"rotate", "--grid", "1,1,1", "-o", "OUT"}, 2, {"--grid"}});
+    expectFailure({{"bake", "--euler", "0,0,0", "-o", "OUT"}, 2, {"--euler"}});
+    expectFailure({{"nonsense", "-o", "OUT"},
+                   2,
+                   {"there is no command \"nonsense\"; the commands are bake, convert,"}});
+}
+
 // ---- Truncated and oversized images -----------------------------------------------------------
 
 // An EXR cut short loses pixels (the reader says so) or, cut to a few hundred bytes, its header

@@ -105,52 +105,50 @@ void runSingleBake(const BakeOptions& options) {
 
 } // namespace
 
-void addBakeCommand(CLI::App& app, BakeOptions& options) {
-    CLI::App* command = app.add_subcommand("bake", "Project environments onto SH and write the coefficients");
-    command->add_option(
+void addBakeOptions(CLI::App& command, BakeOptions& options) {
+    command.add_option(
         "input", options.inputs,
         "Environment: an equirect (2:1) or cross (4:3, 3:4) image, a folder holding px nx py ny "
         "pz nz images, or a pattern with {face}; default: the built-in sky. Several inputs "
         "are a batch and need --out-dir");
-    CLI::Option* output = command->add_option(
+    CLI::Option* output = command.add_option(
         "-o,--output", options.output,
         "Output file of a single input (default: probe and the format's extension, probe.json); "
         "- writes to standard output. A link is followed and its target replaced; a device or "
         "FIFO is written through");
     command
-        ->add_option("--out-dir", options.outDir,
-                     "Batch: write each input's probe into this folder, named after the input (its stem and "
-                     "the format's extension: sky.exr -> DIR/sky.json); the folder is created if its parent "
-                     "exists. Bad inputs are reported and skipped, the others written (exit code 2)")
+        .add_option("--out-dir", options.outDir,
+                    "Batch: write each input's probe into this folder, named after the input (its stem and "
+                    "the format's extension: sky.exr -> DIR/sky.json); the folder is created if its parent "
+                    "exists. Bad inputs are reported and skipped, the others written (exit code 2)")
         ->type_name("DIR")
         ->excludes(output);
     command
-        ->add_option("--list", options.listFile,
-                     "Batch: more inputs from this file, one path a line (blank lines and # comments "
-                     "ignored); needs --out-dir")
+        .add_option("--list", options.listFile,
+                    "Batch: more inputs from this file, one path a line (blank lines and # comments "
+                    "ignored); needs --out-dir")
         ->type_name("FILE");
     command
-        ->add_option(
+        .add_option(
             "--batch-bytes", options.batchBytes,
             "Batch: most texel bytes (16 a texel: 6 x N^2 x 16 per cube map, W x H x 16 per equirect) "
             "one GPU submission bakes; default and upper bound: the device's limit")
         ->type_name("N")
         ->check(numberFrom(1.0, HUGE_VAL));
-    command->add_option("--order", options.order, "SH order = number of bands (3: 9 coefficients)")
+    command.add_option("--order", options.order, "SH order = number of bands (3: 9 coefficients)")
         ->check(CLI::Range(1, kMaxOrder))
         ->capture_default_str();
-    command->add_option("--layout", options.layout, "Input layout")
+    command.add_option("--layout", options.layout, "Input layout")
         ->check(CLI::IsMember({"auto", "equirect", "hcross", "vcross", "faces"}))
         ->capture_default_str();
     command
-        ->add_option(
-            "--face-size", options.faceSize,
-            "Cube-map face size: crosses and face files are resized to it, equirect inputs resampled "
-            "to a cube map of it (default: the cross's or the faces' own size; equirect inputs are "
-            "projected directly, each pixel weighted by its solid angle)")
+        .add_option("--face-size", options.faceSize,
+                    "Cube-map face size: crosses and face files are resized to it, equirect inputs resampled "
+                    "to a cube map of it (default: the cross's or the faces' own size; equirect inputs are "
+                    "projected directly, each pixel weighted by its solid angle)")
         ->check(CLI::Range(1, kMaxGpuFaceSize));
     command
-        ->add_option(
+        .add_option(
             "--backend", options.backend,
             "auto (the default: the fast CPU path for a job done sooner than Vulkan starts, or where the "
             "only Vulkan device is a CPU, such as lavapipe; else Vulkan; --device and --validation ask for "
@@ -158,24 +156,24 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
             "(Vulkan compute), cpu (float, all cores) or reference (the double-precision reference)")
         ->check(CLI::IsMember({"auto", "gpu", "cpu", "reference"}))
         ->capture_default_str();
-    command->add_flag("--irradiance", options.irradiance,
-                      "Write irradiance E_lm = A_l L_lm instead of radiance");
-    command->add_flag("--sanitize", options.sanitize,
-                      "Replace NaN and infinite texels with 0 instead of failing");
-    addImageLimitOption(*command, options.maxPixels);
-    addDeviceOptions(*command, options.device, options.validation);
-    command->add_option("--workgroup-size", options.workgroupSize, "GPU projection workgroup width")
+    command.add_flag("--irradiance", options.irradiance,
+                     "Write irradiance E_lm = A_l L_lm instead of radiance");
+    command.add_flag("--sanitize", options.sanitize,
+                     "Replace NaN and infinite texels with 0 instead of failing");
+    addImageLimitOption(command, options.maxPixels);
+    addDeviceOptions(command, options.device, options.validation);
+    command.add_option("--workgroup-size", options.workgroupSize, "GPU projection workgroup width")
         ->check(CLI::Range(1, 1024))
         ->capture_default_str();
     command
-        ->add_option("--texels-per-invocation", options.texelsPerInvocation,
-                     "GPU projection texels per invocation (sets the workgroup count)")
+        .add_option("--texels-per-invocation", options.texelsPerInvocation,
+                    "GPU projection texels per invocation (sets the workgroup count)")
         ->check(CLI::Range(1, 1 << 20))
         ->capture_default_str();
-    command->add_flag("-q,--quiet", options.quiet,
-                      "Print the summary only, not the coefficients (batch: not the line per probe)");
-    addFormatOptions(*command, options.format, options.mapSize, options.mirror);
-    command->add_flag(
+    command.add_flag("-q,--quiet", options.quiet,
+                     "Print the summary only, not the coefficients (batch: not the line per probe)");
+    addFormatOptions(command, options.format, options.mapSize, options.mirror);
+    command.add_flag(
         "--extract-sun", options.extractSun,
         "Take the sun out of the environment and write it beside the probe of the rest, as \"sun\" "
         "(direction, radiance, angular radius). Only a compact light that clearly dominates is a sun: "
@@ -183,8 +181,8 @@ void addBakeCommand(CLI::App& app, BakeOptions& options) {
         "brightest, must lie within 5 degrees of their centre, hold at least 80% of the light of all "
         "such texels and 1% of the whole map's, and peak at least 1000 times the median; otherwise "
         "\"no sun found\" and the environment stays whole");
-    addLightOptions(*command, options.lights);
-    addWindowOption(*command, options.window);
+    addLightOptions(command, options.lights);
+    addWindowOption(command, options.window);
 }
 
 void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool& mirror) {

@@ -190,20 +190,20 @@ inline void addImageLimitOption(CLI::App& command, int64_t& maxPixels) {
 // input itself (none for the built-in sky); an output must be none of them.
 std::vector<std::string> filesReadBy(const std::string& input);
 
-void addBakeCommand(CLI::App& app, BakeOptions& options);
+void addBakeOptions(CLI::App& command, BakeOptions& options);
 void runBake(const BakeOptions& options);
 
 // --format (the formats of io/engine_export.h), --map-size and --mirror, as bake and convert take them.
 void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool& mirror);
 
-void addConvertCommand(CLI::App& app, ConvertOptions& options);
+void addConvertOptions(CLI::App& command, ConvertOptions& options);
 void runConvert(const ConvertOptions& options);
 
-void addInfoCommand(CLI::App& app, InfoOptions& options);
-void addSceneCommand(CLI::App& app, SceneOptions& options);
+void addInfoOptions(CLI::App& command, InfoOptions& options);
+void addSceneOptions(CLI::App& command, SceneOptions& options);
 // bouncesGiven: --bounces was on the command line (it cannot go with --brick or --previous).
 void runScene(const SceneOptions& options, bool bouncesGiven);
-void addMergeCommand(CLI::App& app, MergeOptions& options);
+void addMergeOptions(CLI::App& command, MergeOptions& options);
 void runMerge(const MergeOptions& options);
 // The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize
 // (0: its own), or the built-in sky (128^2 faces by default).
@@ -220,7 +220,7 @@ ImageSize parseImageSize(const std::string& text, const char* option);
 // --face-size and --sanitize for an environment given to render or view (baked before showing it).
 void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels);
 
-void addRenderCommand(CLI::App& app, RenderOptions& options);
+void addRenderOptions(CLI::App& command, RenderOptions& options);
 // `shprobe render --scene SCENE --volume VOLUME`: the scene lit by its probe volume.
 void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height);
 // --scene, --volume, --sky and --show-probes of render and view; --scene excludes the options of the

@@ -39,17 +39,14 @@ void checkProbeFits(const Probe& probe, const ExportFormat& format, const std::s
 
 } // namespace
 
-void addConvertCommand(CLI::App& app, ConvertOptions& options) {
-    CLI::App* command = app.add_subcommand(
-        "convert",
-        "Write a probe file in another format: the engine exports of docs/exports.md and bake's formats");
+void addConvertOptions(CLI::App& command, ConvertOptions& options) {
     command
-        ->add_option("probe", options.input, "Probe file: JSON (readProbe) or .bin; - reads standard input")
+        .add_option("probe", options.input, "Probe file: JSON (readProbe) or .bin; - reads standard input")
         ->required();
-    command->add_option(
+    command.add_option(
         "-o,--output", options.output,
         "Output file (default: probe and the format's extension); - writes to standard output");
-    addFormatOptions(*command, options.format, options.mapSize, options.mirror);
+    addFormatOptions(command, options.format, options.mapSize, options.mirror);
 }
 
 void runConvert(const ConvertOptions& given) {

@@ -7,9 +7,8 @@
 
 namespace shprobe {
 
-void addInfoCommand(CLI::App& app, InfoOptions& options) {
-    CLI::App* command = app.add_subcommand("info", "List Vulkan devices and the features shprobe uses");
-    command->add_flag("--validation", options.validation, "Enable the Khronos validation layer");
+void addInfoOptions(CLI::App& command, InfoOptions& options) {
+    command.add_flag("--validation", options.validation, "Enable the Khronos validation layer");
 }
 
 namespace {

@@ -125,39 +125,36 @@ ImageSize parseImageSize(const std::string& text, const char* option) {
     return size;
 }
 
-void addRenderCommand(CLI::App& app, RenderOptions& options) {
-    CLI::App* command =
-        app.add_subcommand("render", "Render a sphere lit by a probe to an image (no window)");
-    command->add_option("input", options.input,
-                        "Probe file (.json) or environment image (baked first); default: the built-in sky");
+void addRenderOptions(CLI::App& command, RenderOptions& options) {
+    command.add_option("input", options.input,
+                       "Probe file (.json) or environment image (baked first); default: the built-in sky");
     command
-        ->add_option("-o,--output", options.output,
-                     "Image: .png/.jpg (tonemapped sRGB) or .exr/.hdr (linear)")
+        .add_option("-o,--output", options.output, "Image: .png/.jpg (tonemapped sRGB) or .exr/.hdr (linear)")
         ->capture_default_str();
-    command->add_option("--order", options.order, "SH order: 3 (9 coefficients) or 5 (25)")
+    command.add_option("--order", options.order, "SH order: 3 (9 coefficients) or 5 (25)")
         ->check(CLI::IsMember({3, 5}))
         ->capture_default_str();
-    command->add_option("--mode", options.mode, "What the sphere shows")
+    command.add_option("--mode", options.mode, "What the sphere shows")
         ->check(CLI::IsMember({"radiance", "irradiance", "l1-nonlinear"}))
         ->capture_default_str();
-    command->add_option("--size", options.size,
-                        "Image size N or WxH (default 512; with --grid the cell width, 384)");
-    command->add_flag("--grid", options.grid,
-                      "Environment, order-3 and order-5 reconstructions and lit spheres in one image");
-    command->add_option("--background", options.background, "Background behind the sphere")
+    command.add_option("--size", options.size,
+                       "Image size N or WxH (default 512; with --grid the cell width, 384)");
+    command.add_flag("--grid", options.grid,
+                     "Environment, order-3 and order-5 reconstructions and lit spheres in one image");
+    command.add_option("--background", options.background, "Background behind the sphere")
         ->check(CLI::IsMember({"auto", "environment", "radiance", "sh", "shading", "color"}))
         ->capture_default_str();
-    addExposureOption(*command, options.exposure);
-    command->add_option("--yaw", options.yaw, "Camera yaw around +Y, degrees (0 looks along -Z)")
+    addExposureOption(command, options.exposure);
+    command.add_option("--yaw", options.yaw, "Camera yaw around +Y, degrees (0 looks along -Z)")
         ->check(numberFrom(-360.0, 360.0))
         ->capture_default_str();
-    command->add_option("--pitch", options.pitch, "Camera pitch, degrees")
+    command.add_option("--pitch", options.pitch, "Camera pitch, degrees")
         ->check(numberFrom(-85.0, 85.0))
         ->capture_default_str();
-    addEnvironmentInputOptions(*command, options.faceSize, options.sanitize, options.maxPixels);
-    addDeviceOptions(*command, options.device, options.validation);
+    addEnvironmentInputOptions(command, options.faceSize, options.sanitize, options.maxPixels);
+    addDeviceOptions(command, options.device, options.validation);
     // The scene's own picture: none of the sphere's settings apply to it.
-    addLitSceneOptions(*command, options.scene,
+    addLitSceneOptions(command, options.scene,
                        {"input", "--order", "--mode", "--grid", "--background", "--face-size", "--sanitize"});
 }
 

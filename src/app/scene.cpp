@@ -21,53 +21,48 @@
 
 namespace shprobe {
 
-void addSceneCommand(CLI::App& app, SceneOptions& options) {
-    CLI::App* command =
-        app.add_subcommand("scene", "Bake a grid of light probes inside a glTF scene on the GPU "
-                                    "into a probe volume (docs/scene-probes.md)");
-    command->add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
-    command->add_option("-o,--output", options.output, "Probe volume to write (docs/probe-volume.md)")
+void addSceneOptions(CLI::App& command, SceneOptions& options) {
+    command.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
+    command.add_option("-o,--output", options.output, "Probe volume to write (docs/probe-volume.md)")
         ->capture_default_str();
-    command->add_option("--grid", options.grid, "Probes per axis, NX,NY,NZ")->required();
-    command->add_option("--bounds", options.bounds,
-                        "Grid box X0,Y0,Z0,X1,Y1,Z1, probes on its corners (default: the scene's box, "
-                        "inset by half a cell)");
-    command->add_option("--order", options.order, "SH order, 1..8")
+    command.add_option("--grid", options.grid, "Probes per axis, NX,NY,NZ")->required();
+    command.add_option("--bounds", options.bounds,
+                       "Grid box X0,Y0,Z0,X1,Y1,Z1, probes on its corners (default: the scene's box, "
+                       "inset by half a cell)");
+    command.add_option("--order", options.order, "SH order, 1..8")
         ->check(CLI::Range(1, 8))
         ->capture_default_str();
-    command->add_option("--face-size", options.faceSize, "Each probe's cube-map face size")
+    command.add_option("--face-size", options.faceSize, "Each probe's cube-map face size")
         ->check(CLI::Range(1, 4096))
         ->capture_default_str();
     command
-        ->add_option("--bounces", options.bounces,
-                     "Indirect bounces: 0 is what the probes see directly (sky, emission); each "
-                     "bounce adds the light the surfaces reflect from the one before")
+        .add_option("--bounces", options.bounces,
+                    "Indirect bounces: 0 is what the probes see directly (sky, emission); each "
+                    "bounce adds the light the surfaces reflect from the one before")
         ->check(CLI::Range(0, 64))
         ->capture_default_str();
-    command->add_option("--sky", options.sky,
-                        "Environment seen where no geometry is (any input `bake` "
-                        "takes; default: the built-in sky)");
+    command.add_option("--sky", options.sky,
+                       "Environment seen where no geometry is (any input `bake` "
+                       "takes; default: the built-in sky)");
     command
-        ->add_option("--sky-face-size", options.skyFaceSize,
-                     "Face size the sky is resampled to (0: its own; 128 for the built-in sky)")
+        .add_option("--sky-face-size", options.skyFaceSize,
+                    "Face size the sky is resampled to (0: its own; 128 for the built-in sky)")
         ->check(CLI::Range(0, 4096));
-    command->add_option("--brick", options.brick,
-                        "Bake only brick I of N (0 <= I < N) of the grid, one bounce: with --previous the "
-                        "bounce after that volume's, else bounce 0; `shprobe merge` joins the bricks");
-    command->add_option("--previous", options.previous,
-                        "The whole volume of the previous bounce: bake the one bounce after it");
-    command->add_option("--probes-per-batch", options.probesPerBatch, "Probes captured per command buffer")
+    command.add_option("--brick", options.brick,
+                       "Bake only brick I of N (0 <= I < N) of the grid, one bounce: with --previous the "
+                       "bounce after that volume's, else bounce 0; `shprobe merge` joins the bricks");
+    command.add_option("--previous", options.previous,
+                       "The whole volume of the previous bounce: bake the one bounce after it");
+    command.add_option("--probes-per-batch", options.probesPerBatch, "Probes captured per command buffer")
         ->check(CLI::Range(1, 4096))
         ->capture_default_str();
-    addDeviceOptions(*command, options.device, options.validation);
-    command->add_flag("-q,--quiet", options.quiet, "No report");
+    addDeviceOptions(command, options.device, options.validation);
+    command.add_flag("-q,--quiet", options.quiet, "No report");
 }
 
-void addMergeCommand(CLI::App& app, MergeOptions& options) {
-    CLI::App* command =
-        app.add_subcommand("merge", "Join the bricks of one `shprobe scene` bake into its whole volume");
-    command->add_option("bricks", options.bricks, "Probe volumes of the bricks, in any order")->required();
-    command->add_option("-o,--output", options.output, "Whole volume to write")->required();
+void addMergeOptions(CLI::App& command, MergeOptions& options) {
+    command.add_option("bricks", options.bricks, "Probe volumes of the bricks, in any order")->required();
+    command.add_option("-o,--output", options.output, "Whole volume to write")->required();
 }
 
 Environment loadSceneSky(const std::string& path, int faceSize) {

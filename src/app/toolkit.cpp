@@ -152,23 +152,22 @@ std::optional<std::vector<double>> windowFactorsFor(const std::string& window,
     return windowFactors(kind, width, radiance.order);
 }
 
-void addRotateCommand(CLI::App& app, RotateOptions& options) {
-    CLI::App* command = app.add_subcommand("rotate", "Rotate a probe: a light from d then comes from R d");
-    command->add_option("probe", options.input, "Coefficient file (JSON)")->required();
-    command->add_option("-o,--output", options.output, "Rotated coefficient file")->required();
+void addRotateOptions(CLI::App& command, RotateOptions& options) {
+    command.add_option("probe", options.input, "Coefficient file (JSON)")->required();
+    command.add_option("-o,--output", options.output, "Rotated coefficient file")->required();
     command
-        ->add_option("--euler", options.euler, "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)")
+        .add_option("--euler", options.euler, "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)")
         ->expected(3)
         ->delimiter(',')
         ->check(numberFrom(-360.0, 360.0));
-    command->add_option("--quat", options.quaternion, "W,X,Y,Z unit quaternion")
+    command.add_option("--quat", options.quaternion, "W,X,Y,Z unit quaternion")
         ->expected(4)
         ->delimiter(',')
         ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // rotationFromQuaternion says when it is not unit
     command
-        ->add_option("--matrix", options.matrix,
-                     "R00,R01,...,R22 orthogonal matrix, row-major: a rotation, or a reflection (det -1) "
-                     "for a change of handedness")
+        .add_option("--matrix", options.matrix,
+                    "R00,R01,...,R22 orthogonal matrix, row-major: a rotation, or a reflection (det -1) "
+                    "for a change of handedness")
         ->expected(9)
         ->delimiter(',')
         ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // orthogonalFromRowMajor says when it is not orthogonal
@@ -191,14 +190,13 @@ void runRotate(const RotateOptions& options) {
                  options.output.c_str(), rotationDescription(options).c_str());
 }
 
-void addLightCommand(CLI::App& app, LightCommandOptions& options) {
-    CLI::App* command = app.add_subcommand("light", "Write the probe of analytic lights");
-    command->add_option("-o,--output", options.output, "Coefficient file (JSON)")->required();
-    command->add_option("--order", options.order, "SH order")
+void addLightOptions(CLI::App& command, LightCommandOptions& options) {
+    command.add_option("-o,--output", options.output, "Coefficient file (JSON)")->required();
+    command.add_option("--order", options.order, "SH order")
         ->check(CLI::Range(1, kMaxOrder))
         ->capture_default_str();
-    command->add_flag("--irradiance", options.irradiance, "Write irradiance instead of radiance");
-    addLightOptions(*command, options.lights);
+    command.add_flag("--irradiance", options.irradiance, "Write irradiance instead of radiance");
+    addLightOptions(command, options.lights);
 }
 
 void runLight(const LightCommandOptions& options) {

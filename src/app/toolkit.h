@@ -35,7 +35,7 @@ struct RotateOptions {
     std::vector<double> quaternion; // w, x, y, z
     std::vector<double> matrix;     // 9 numbers, row-major
 };
-void addRotateCommand(CLI::App& app, RotateOptions& options);
+void addRotateOptions(CLI::App& command, RotateOptions& options);
 void runRotate(const RotateOptions& options);
 
 struct LightCommandOptions {
@@ -44,7 +44,7 @@ struct LightCommandOptions {
     bool irradiance = false;
     LightOptions lights;
 };
-void addLightCommand(CLI::App& app, LightCommandOptions& options);
+void addLightOptions(CLI::App& command, LightCommandOptions& options);
 void runLight(const LightCommandOptions& options);
 
 } // namespace shprobe
