@@ -28,6 +28,8 @@
 #   arithmetic (measured: 6e-10 and 4e-10). Any slip of convention (pi, sqrt(4 pi), a band factor,
 #   a rotation's sense) is off by far more.
 #
+# The installed program reads an EXR and a PFM through the installed codec plugins (lib/shprobe),
+# not the build tree's.
 # Last, INTERFACE.md's "Sources": every installed module's source is installed, and glslang, with the
 # options the document gives, compiles it into the installed module, byte for byte.
 # SHPROBE_BUILD_DIR picks the build to install (default ./build, built here if needed); the same
@@ -137,6 +139,30 @@ version=$(sed -n 's/^project(shprobe VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)
 if [ "$(pkg-config --modversion shprobe)" != "$version" ]; then
   echo "FAIL: shprobe.pc is not version $version"; exit 1
 fi
+
+echo "== codec plugins: the installed program reads EXR and PFM through the installed plugins"
+# The build tree's plugins are also on the program's search path (the last place it looks), so the
+# loader's own log says which file each bake loaded. The program runs through PATH, as a user runs
+# it, where its own name is no path to its folder.
+"$prefix/bin/shprobe" bake --format irradiance-equirect --map-size 32 -q -o "$work/sky.exr" > /dev/null
+{ printf 'PF\n32 16\n-1.0\n'; head -c $((32 * 16 * 3 * 4)) /dev/zero; } > "$work/sky.pfm" # OpenImageIO's alone
+plugins=$(dirname "$(find "$(realpath "$prefix")" -name libshprobe_exr.so)")
+for input in sky.exr:exr sky.pfm:oiio; do
+  file=$work/${input%%:*}
+  plugin=libshprobe_${input##*:}.so
+  if ! (cd "$work" && PATH="$prefix/bin:$PATH" LD_DEBUG=files shprobe bake "$file" -q -o plugin.json \
+    > /dev/null 2> loader.log); then
+    grep -v '^ *[0-9]*:' "$work/loader.log"
+    echo "FAIL: the installed shprobe could not bake $file"
+    exit 1
+  fi
+  if ! grep -q "file=$plugins/$plugin .*dynamically loaded" "$work/loader.log"; then
+    echo "FAIL: the installed shprobe did not load $plugins/$plugin for $file:"
+    grep "$plugin .*dynamically loaded" "$work/loader.log" || echo "(no $plugin loaded)"
+    exit 1
+  fi
+  echo "${input%%:*}: $plugins/$plugin"
+done
 
 "$prefix/bin/shprobe" light --order 3 --irradiance --ambient 0.25,0.5,2 -o "$work/ambient.json" > /dev/null
 "$prefix/bin/shprobe" light --order 5 --directional 1,0,0 1,2,4 -o "$work/directional.json" > /dev/null

@@ -21,7 +21,7 @@ viewer=$(dirname "$shprobe")/shprobe-view
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 window_system='\[lib(glfw|X[A-Za-z0-9_-]*|xcb|wayland-|xkbcommon|GLX)'
-fail() { echo "FAIL: $*"; exit 1; }
+fail() { echo "FAIL: $*" >&2; exit 1; } # stderr: also seen from inside $(...)
 
 needed() { readelf -d "$1" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/[\1]/p'; }
 files=("$shprobe")

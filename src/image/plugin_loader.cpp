@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <dlfcn.h>
 #include <filesystem>
+#include <link.h>
 #include <mutex>
 #include <vector>
 
@@ -27,13 +28,19 @@ constexpr PluginName kExr{"libshprobe_exr.so", SHPROBE_EXR_PLUGIN_ENTRY, "SHPROB
 constexpr PluginName kOiio{"libshprobe_oiio.so", SHPROBE_OIIO_PLUGIN_ENTRY, "SHPROBE_OIIO_PLUGIN",
                            "OpenImageIO"};
 
-// The folder of the file holding this code: the program when the library is linked statically,
-// libshprobe.so when shared.
+// The folder of the file holding this code: libshprobe.so when the library is shared, else the
+// program. For the program the loader's name is its argv[0] ("shprobe" when run through PATH),
+// so the program's own file is taken from /proc/self/exe.
 fs::path folderOfThisCode() {
     Dl_info info{};
-    if (dladdr(reinterpret_cast<void*>(&folderOfThisCode), &info) == 0 || !info.dli_fname) return {};
+    link_map* module = nullptr;
+    if (dladdr1(reinterpret_cast<void*>(&folderOfThisCode), &info, reinterpret_cast<void**>(&module),
+                RTLD_DL_LINKMAP) == 0 ||
+        !module)
+        return {};
+    const bool program = module->l_name == nullptr || module->l_name[0] == '\0';
     std::error_code error;
-    fs::path file = fs::canonical(info.dli_fname, error);
+    fs::path file = fs::canonical(program ? "/proc/self/exe" : module->l_name, error);
     return error ? fs::path() : file.parent_path();
 }
 
