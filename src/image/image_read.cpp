@@ -133,14 +133,31 @@ OpenedImage openImage(const std::string& path, int64_t maxPixels) {
     return opened;
 }
 
-// Reads the channels the plan names into `texels` (width x height of them) and makes them RGB,
-// decoded to linear if the file is sRGB. The unused alpha is set to 1, as in every cube map the
-// library makes.
-void readPixels(const OpenedImage& opened, std::span<glm::vec4> texels) {
+// Whether a texel's colour is NaN or infinite (the unused alpha is not looked at). Bitwise, so
+// that a loop counting them vectorizes.
+bool isNonFinite(const glm::vec4& texel) {
+    return !(std::isfinite(texel.r) & std::isfinite(texel.g) & std::isfinite(texel.b));
+}
+
+// Texels to read an image into: black, with the unused alpha 1 as in every cube map the library
+// makes, so that the decoder's R, G, B land in texels that are already whole.
+constexpr glm::vec4 kBlankTexel(0.0f, 0.0f, 0.0f, 1.0f);
+
+// Reads the channels the plan names into `texels` (width x height of them, each kBlankTexel) and
+// makes them RGB, decoded to linear if the file is sRGB. Returns how many texels are NaN or
+// infinite, for applyNonFinitePolicy. The usual R, G, B in place need no pass of their own: only
+// the count reads them again (a pass writing alpha after the decoder took a third as long as the
+// decode of courtyard.exr itself, the image no longer in the caches).
+size_t readPixels(const OpenedImage& opened, std::span<glm::vec4> texels) {
     const ImageHeader& header = opened.header();
     const ChannelPlan& plan = opened.plan;
     const std::string& path = opened.path;
     const std::array<int, 3> at = readPlannedChannels(*opened.decoder, plan, texels);
+    const auto countNonFinite = [&] {
+        return size_t(std::count_if(texels.begin(), texels.end(), isNonFinite));
+    };
+    if (plan.meaning == ChannelMeaning::Rgb && at == std::array<int, 3>{0, 1, 2} && !header.srgb)
+        return countNonFinite();
     const glm::vec3 weights = plan.meaning == ChannelMeaning::LuminanceChroma
                                   ? luminanceWeights(header.chromaticities.value_or(Chromaticities{}), path)
                                   : glm::vec3(0.0f);
@@ -153,6 +170,13 @@ void readPixels(const OpenedImage& opened, std::span<glm::vec4> texels) {
         texel = glm::vec4(rgb, 1.0f);
     }
     if (header.srgb) decodeSrgb(texels);
+    return countNonFinite();
+}
+
+// The policy for the texels readPixels found NaN or infinite, if it found any.
+size_t applyPolicyToFound(std::span<glm::vec4> texels, size_t found, NonFinitePolicy policy,
+                          const std::string& what) {
+    return found == 0 ? 0 : applyNonFinitePolicy(texels, policy, what);
 }
 
 std::string replaceAll(std::string text, std::string_view from, std::string_view to) {
@@ -226,13 +250,13 @@ Environment loadFaces(const std::string& source, const LoadOptions& options) {
         faces[size_t(face)] = openImage(paths[size_t(face)], options.maxPixels);
     checkFaceSizes(faces);
     const int size = faces[0].header().width;
-    Cubemap cubemap = makeCubemap(size);
     const size_t faceTexels = size_t(size) * size;
+    Cubemap cubemap{size, std::vector<glm::vec4>(kFaceCount * faceTexels, kBlankTexel)};
     size_t replaced = 0;
     for (int face = 0; face < kFaceCount; ++face) {
         std::span<glm::vec4> texels(cubemap.texels.data() + face * faceTexels, faceTexels);
-        readPixels(faces[size_t(face)], texels);
-        replaced += applyNonFinitePolicy(texels, options.nonFinite, paths[size_t(face)]);
+        const size_t found = readPixels(faces[size_t(face)], texels);
+        replaced += applyPolicyToFound(texels, found, options.nonFinite, paths[size_t(face)]);
     }
     Environment environment;
     environment.cubemap = resizedTo(std::move(cubemap), options.faceSize);
@@ -256,10 +280,26 @@ Cubemap imageToCubemap(const Image& image, Layout layout, int faceSize) {
     return resizedTo(crossToCubemap(image, layout), faceSize);
 }
 
+// An image and how many of its texels readPixels found NaN or infinite.
+struct DecodedImage {
+    Image image;
+    size_t nonFinite = 0;
+};
+
+DecodedImage decodeImage(const std::string& path, int64_t maxPixels) {
+    OpenedImage opened = openImage(path, maxPixels);
+    const ImageHeader& header = opened.header();
+    DecodedImage decoded{Image{header.width, header.height,
+                               std::vector<glm::vec4>(size_t(header.width) * header.height, kBlankTexel)},
+                         0};
+    decoded.nonFinite = readPixels(opened, decoded.image.texels);
+    return decoded;
+}
+
 Environment loadSingleImage(const std::string& path, const LoadOptions& options) {
-    Image image = readImage(path, options.maxPixels);
+    auto [image, nonFinite] = decodeImage(path, options.maxPixels);
     Environment environment;
-    environment.replacedTexels = applyNonFinitePolicy(image.texels, options.nonFinite, path);
+    environment.replacedTexels = applyPolicyToFound(image.texels, nonFinite, options.nonFinite, path);
     try {
         environment.layout = chooseLayout(image, options.layout);
         if (environment.layout == Layout::Equirect && options.keepEquirect && options.faceSize == 0)
@@ -278,10 +318,7 @@ Environment loadSingleImage(const std::string& path, const LoadOptions& options)
 } // namespace
 
 Image readImage(const std::string& path, int64_t maxPixels) {
-    OpenedImage opened = openImage(path, maxPixels);
-    Image image = makeImage(opened.header().width, opened.header().height);
-    readPixels(opened, image.texels);
-    return image;
+    return decodeImage(path, maxPixels).image;
 }
 
 bool isFacesSource(const std::string& path) {
@@ -312,17 +349,14 @@ Environment loadEnvironment(const std::string& path, const LoadOptions& options)
 }
 
 size_t applyNonFinitePolicy(std::span<glm::vec4> texels, NonFinitePolicy policy, const std::string& what) {
-    auto nonFinite = [](const glm::vec4& t) {
-        return !std::isfinite(t.r) || !std::isfinite(t.g) || !std::isfinite(t.b);
-    };
-    size_t count = size_t(std::count_if(texels.begin(), texels.end(), nonFinite));
+    size_t count = size_t(std::count_if(texels.begin(), texels.end(), isNonFinite));
     if (count == 0) return 0;
     if (policy == NonFinitePolicy::Refuse)
         throw Error(ErrorKind::Input,
                     what + ": " + std::to_string(count) +
                         " texels are NaN or infinite; use --sanitize to replace them with 0");
     for (glm::vec4& texel : texels)
-        if (nonFinite(texel)) texel = glm::vec4(0.0f, 0.0f, 0.0f, texel.a);
+        if (isNonFinite(texel)) texel = glm::vec4(0.0f, 0.0f, 0.0f, texel.a);
     return count;
 }
 
