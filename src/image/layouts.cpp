@@ -73,13 +73,9 @@ void copyCrossFace(const Image& cross, CrossSlot slot, int face, Cubemap& cubema
     }
 }
 
-int wrapIndex(int i, int count) {
-    int r = i % count;
-    return r < 0 ? r + count : r;
-}
-
-// Bilinear sample at continuous pixel coordinates whose pixel centers are at (i + 0.5, j + 0.5):
-// wraps in x (longitude is periodic) and clamps in y (rows stop at the poles).
+// Bilinear sample at continuous pixel coordinates whose pixel centers are at (i + 0.5, j + 0.5),
+// x in [0, width) as directionToEquirect gives it: wraps in x (longitude is periodic) and clamps
+// in y (rows stop at the poles).
 glm::dvec3 sampleEquirect(const Image& image, double x, double y) {
     double sx = x - 0.5;
     double sy = y - 0.5;
@@ -87,8 +83,9 @@ glm::dvec3 sampleEquirect(const Image& image, double x, double y) {
     double floorY = std::floor(sy);
     double tx = sx - floorX;
     double ty = sy - floorY;
-    int x0 = wrapIndex(int(floorX), image.width);
-    int x1 = wrapIndex(int(floorX) + 1, image.width);
+    // x lies in [0, width), so floorX in [-1, width - 1]: one wrap each way, no division.
+    int x0 = int(floorX) < 0 ? image.width - 1 : int(floorX);
+    int x1 = x0 + 1 == image.width ? 0 : x0 + 1;
     int y0 = std::clamp(int(floorY), 0, image.height - 1);
     int y1 = std::clamp(int(floorY) + 1, 0, image.height - 1);
     auto texel = [&](int px, int py) { return glm::dvec3(glm::vec3(image.at(px, py))); };
@@ -105,7 +102,8 @@ glm::vec4 equirectTexel(const Image& equirect, int face, int i, int j, int faceS
         for (int si = 0; si < k; ++si) {
             double a = -1.0 + (i * k + si + 0.5) * step;
             double b = -1.0 + (j * k + sj + 0.5) * step;
-            PixelPoint p = directionToEquirect(faceDirection(face, a, b), equirect.width, equirect.height);
+            PixelPoint p =
+                unitDirectionToEquirect(faceDirection(face, a, b), equirect.width, equirect.height);
             sum += sampleEquirect(equirect, p.x, p.y);
         }
     }

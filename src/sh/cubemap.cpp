@@ -133,7 +133,10 @@ glm::dvec3 equirectDirection(int i, int j, int width, int height) {
 // theta = acos(y), phi = atan2(x, -z) in [-pi, pi]; x = u W wraps W to 0, y = v H reaches H only
 // at the -Y pole.
 PixelPoint directionToEquirect(const glm::dvec3& d, int width, int height) {
-    const glm::dvec3 n = glm::normalize(d);
+    return unitDirectionToEquirect(glm::normalize(d), width, height);
+}
+
+PixelPoint unitDirectionToEquirect(const glm::dvec3& n, int width, int height) {
     const double theta = std::acos(glm::clamp(n.y, -1.0, 1.0));
     const double phi = std::atan2(n.x, -n.z);
     double x = (phi + kPi) / (2.0 * kPi) * width;

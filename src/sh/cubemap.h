@@ -70,6 +70,8 @@ struct PixelPoint {
     double y;
 };
 PixelPoint directionToEquirect(const glm::dvec3& d, int width, int height);
+// The same for a direction already of unit length (faceDirection's), without normalizing it again.
+PixelPoint unitDirectionToEquirect(const glm::dvec3& n, int width, int height);
 // Exact solid angle of any pixel of row j: (2 pi / W)(cos theta0 - cos theta1).
 double equirectRowSolidAngle(int j, int width, int height);
 
