@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <map>
 #include <sstream>
 #include <sys/stat.h>
@@ -175,18 +176,51 @@ struct Loaded {
     std::optional<ProbeSun> sun;
 };
 
-// A bad input is reported and skipped; any other failure ends the batch.
-std::optional<Loaded> loadItem(Batch& batch, const BatchItem& item) {
-    try {
-        Loaded loaded{&item, loadInput(batch.options, item.input), std::nullopt};
-        loaded.sun = takeOutSun(batch.options, loaded.environment);
-        return loaded;
-    } catch (const Error& error) {
-        if (error.kind() != ErrorKind::Input) throw;
-        reportFailure(batch, item, error);
-        return std::nullopt;
+// Loads the inputs in order, one ahead: when an input is taken, the next starts loading on a thread
+// of its own, so that decoding it overlaps baking and writing this one (the batch of the eight
+// blender-data HDRs took 1.2-1.25x as long loading one input at a time, on 2 cores). Where no
+// thread can be started, std::async loads on the calling thread when the input is taken.
+class InputLoader {
+  public:
+    InputLoader(const BakeOptions& options, const std::vector<BatchItem>& items)
+        : options_(options), items_(items) {
+        start();
     }
-}
+    InputLoader(const InputLoader&) = delete;
+    InputLoader& operator=(const InputLoader&) = delete;
+
+    bool done() const { return !pending_.valid(); }
+
+    // The next input; a bad input is reported and skipped (nullopt); any other failure ends the batch.
+    std::optional<Loaded> next(Batch& batch) {
+        std::future<Loaded> loading = std::move(pending_);
+        const BatchItem& item = items_[next_ - 1];
+        start();
+        try {
+            return loading.get();
+        } catch (const Error& error) {
+            if (error.kind() != ErrorKind::Input) throw;
+            reportFailure(batch, item, error);
+            return std::nullopt;
+        }
+    }
+
+  private:
+    void start() {
+        if (next_ == items_.size()) return;
+        const BatchItem& item = items_[next_++];
+        pending_ = std::async(std::launch::async | std::launch::deferred, [this, &item] {
+            Loaded loaded{&item, loadInput(options_, item.input), std::nullopt};
+            loaded.sun = takeOutSun(options_, loaded.environment);
+            return loaded;
+        });
+    }
+
+    const BakeOptions& options_;
+    const std::vector<BatchItem>& items_;
+    size_t next_ = 0;
+    std::future<Loaded> pending_;
+};
 
 void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const BakeResult& result) {
     const BakeOptions& options = batch.options;
@@ -244,8 +278,8 @@ BatchBackend chooseBatchBackend(Batch& batch, const Environment& first, size_t c
 }
 
 // Loads the inputs in order and bakes them in chunks of at most chunkBytes texel bytes (a larger
-// input alone), one bake call each, writing each chunk's outputs before loading further: at most
-// one chunk and the input that opens the next are in memory.
+// input alone), one bake call each, writing each chunk's outputs before taking more: at most one
+// chunk, the input that opens the next and the one loading after it are in memory.
 void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
     std::optional<BatchBackend> chosen;
     std::vector<Loaded> chunk;
@@ -266,8 +300,8 @@ void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
         bytes = 0;
     };
     batch.progress.draw();
-    for (const BatchItem& item : items) {
-        std::optional<Loaded> loaded = loadItem(batch, item);
+    for (InputLoader loader(batch.options, items); !loader.done();) {
+        std::optional<Loaded> loaded = loader.next(batch);
         if (!loaded) continue;
         if (!chosen) chosen = chooseBatchBackend(batch, loaded->environment, items.size());
         fitBackend(chosen->backend, loaded->environment);
