@@ -14,8 +14,9 @@
 #                                              folder; the only file that needs GLFW (same RUNPATH; not
 #                                              built with -DSHPROBE_BUILD_VIEWER=OFF)
 #   bin/shprobe-bench                          `shprobe bench`'s measurements alone: links no project
-#                                              library (no RUNPATH) and needs only the Vulkan loader,
-#                                              so the file can be copied alone to a GPU machine
+#                                              library (no RUNPATH) and needs only the Vulkan loader
+#                                              (loaded at run, as shprobe does), so the file can be
+#                                              copied alone to a GPU machine
 #   lib/libshprobe{_sh,,_render}.a             shprobe_sh, shprobe, shprobe_render (exported as
 #     or .so -> .so.0.1 -> .so.0.1.0           shprobe::sh, shprobe::shprobe, shprobe::render): static
 #                                              by default, shared with -DBUILD_SHARED_LIBS=ON (soname
@@ -153,6 +154,7 @@ foreach(folder sh io image vk gpu render)
         DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR}/${folder}
         FILES_MATCHING PATTERN "*.h"
         PATTERN "scene_capture.h" EXCLUDE # part of shprobe_scene, which is not installed
+        PATTERN "vulkan_commands.h" EXCLUDE # the libraries' own Vulkan commands, named as the loader's
         PATTERN "swapchain.h" EXCLUDE
         PATTERN "viewer.h" EXCLUDE
         PATTERN "viewer_frames.h" EXCLUDE)

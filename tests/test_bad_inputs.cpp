@@ -18,6 +18,7 @@
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/context.h"
 #include "shprobe/vk/resources.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

@@ -18,6 +18,7 @@
 #include "shprobe/vk/image.h"
 #include "shprobe/vk/pipeline.h"
 #include "shprobe/vk/resources.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cmath>

@@ -13,6 +13,7 @@
 #include "shprobe/vk/pipeline.h"
 
 #include "shprobe/sh/projection.h"
+#include "shprobe/vk/vulkan_commands.h"
 #include <random>
 
 #include <array>

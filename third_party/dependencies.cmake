@@ -1,6 +1,6 @@
 # Dependency glue: every external package comes from Debian and is found here, once.
 # Targets used by the rest of the build:
-#   Vulkan::Vulkan, Vulkan::glslangValidator, SPIRV_VAL (program path), glm::glm,
+#   Vulkan::Headers, Vulkan::glslangValidator, SPIRV_VAL (program path), glm::glm,
 #   OpenImageIO::OpenImageIO, OpenEXR::OpenEXR, stb::stb, nlohmann_json::nlohmann_json,
 #   CLI11::CLI11, GTest::gtest_main, tinygltf::headers, embree.
 find_package(Vulkan 1.3 REQUIRED COMPONENTS glslangValidator)

@@ -11,6 +11,7 @@
 #include "shprobe/sh/projection.h"
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/sh/windowing.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cctype>

@@ -8,6 +8,7 @@
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/pipeline.h"
 #include "shprobe/vk/pipeline_cache.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <cmath>
 #include <cstdio>

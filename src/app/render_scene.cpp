@@ -16,6 +16,7 @@
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/context.h"
 #include "shprobe/vk/graphics.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <cmath>
 #include <cstdio>

@@ -7,6 +7,7 @@
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/image.h"
 #include "shprobe/vk/resources.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cmath>

@@ -10,6 +10,7 @@
 #include "shprobe/shprobe_spirv.h"
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/image.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <string>
@@ -191,6 +192,7 @@ VkImageLayout cubemapLayout(CubemapBinding binding) {
 }
 
 Device borrowDevice(const ExternalDevice& external) {
+    loadVulkanCommands(); // the engine's loader: already in the process, so only its commands are looked up
     Device device;
     device.physicalDevice = external.physicalDevice;
     device.device = external.device;

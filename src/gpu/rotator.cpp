@@ -6,6 +6,7 @@
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/shprobe_spirv.h"
 #include "shprobe/vk/resources.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <glm/vec4.hpp>
 

@@ -12,6 +12,7 @@
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/graphics.h"
 #include "shprobe/vk/pipeline.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <array>

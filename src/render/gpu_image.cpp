@@ -2,6 +2,7 @@
 
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/scope_exit.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cstring>

@@ -3,6 +3,7 @@
 #include "shprobe/sh/error.h"
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/graphics.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <cstring>
 

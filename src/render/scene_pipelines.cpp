@@ -8,6 +8,7 @@
 #include "shprobe/shprobe_render_spirv.h"
 #include "shprobe/vk/graphics.h"
 #include "shprobe/vk/pipeline.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <array>
 #include <cstddef>

@@ -6,6 +6,7 @@
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/graphics.h"
 #include "shprobe/vk/pipeline.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <array>

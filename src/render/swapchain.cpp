@@ -6,6 +6,7 @@
 #include "shprobe/vk/graphics.h"
 #include "shprobe/vk/image.h"
 #include "shprobe/vk/resources.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 

@@ -7,6 +7,7 @@
 #include "shprobe/vk/graphics.h"
 #include "shprobe/vk/image.h"
 #include "shprobe/vk/pipeline.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <array>
 

@@ -10,6 +10,7 @@
 #include "shprobe/sh/rotation.h"
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #define GLFW_INCLUDE_VULKAN
 #include <GLFW/glfw3.h>

@@ -2,6 +2,7 @@
 
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cctype>
@@ -92,6 +93,7 @@ VkInstance createLoaderInstance(const VkInstanceCreateInfo& info) {
 
 VkInstance createInstance(bool validation, ValidationLog* log,
                           const std::vector<std::string>& extraExtensions = {}) {
+    loadVulkanCommands();
     uint32_t loaderVersion = 0;
     if (vkEnumerateInstanceVersion(&loaderVersion) != VK_SUCCESS || loaderVersion < VK_API_VERSION_1_1)
         throw Error(ErrorKind::Device, "no Vulkan 1.1 loader: install libvulkan1 1.1 or newer, or bake with "

@@ -1,6 +1,7 @@
 #include "shprobe/vk/graphics.h"
 
 #include "shprobe/vk/check.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <array>
 #include <vector>

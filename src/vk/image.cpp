@@ -4,6 +4,7 @@
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
 #include "shprobe/vk/resources.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <string>
 

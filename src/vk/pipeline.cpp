@@ -3,6 +3,7 @@
 #include "shprobe/glsl/gpu_interface.h"
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <array>
 #include <vector>

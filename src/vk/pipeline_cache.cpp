@@ -4,6 +4,7 @@
 #include "shprobe/io/output_file.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/vk/check.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <cerrno>
 #include <cstdio>

@@ -2,6 +2,7 @@
 
 #include "shprobe/sh/scope_exit.h"
 #include "shprobe/vk/check.h"
+#include "shprobe/vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <atomic>
