@@ -35,7 +35,8 @@
 #   lib/cmake/shprobe/                         shprobeConfig.cmake, shprobeConfigVersion.cmake (same
 #                                              major.minor: 0.x may break the interface), the targets
 #   lib/pkgconfig/shprobe.pc                   Cflags -I<prefix>/include; Libs render, shprobe, sh;
-#                                              Requires vulkan glm; static builds add Libs.private
+#                                              Requires glm, Requires.private vulkan (its
+#                                              headers); static builds add Libs.private
 #                                              (the spirv archives)
 #   lib/shprobe/libshprobe_exr.so              the OpenEXR plugin (image/exr_plugin.h), loaded when
 #                                              the first EXR file is read or written

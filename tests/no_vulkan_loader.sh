@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # test_no_vulkan_loader: shprobe does what needs no device where no Vulkan loader is installed, and
 # says in one line what is missing where a device is needed. Vulkan's commands are loaded from
-# libvulkan.so.1 at the first instance (src/vk/vulkan_commands.h), not linked. Checked, on the
+# libvulkan.so.1 at the first call of any (src/vk/vulkan_commands.h), not linked. Checked, on the
 # program given as $1:
 #   1. neither shprobe nor shprobe-bench beside it has libvulkan among its NEEDED entries;
 #   2. `--help`, `convert`, `rotate`, `light` and bakes on the CPU (--backend cpu, and auto's small job) do not load

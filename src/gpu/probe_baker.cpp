@@ -192,7 +192,6 @@ VkImageLayout cubemapLayout(CubemapBinding binding) {
 }
 
 Device borrowDevice(const ExternalDevice& external) {
-    loadVulkanCommands(); // the engine's loader: already in the process, so only its commands are looked up
     Device device;
     device.physicalDevice = external.physicalDevice;
     device.device = external.device;

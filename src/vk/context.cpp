@@ -93,7 +93,6 @@ VkInstance createLoaderInstance(const VkInstanceCreateInfo& info) {
 
 VkInstance createInstance(bool validation, ValidationLog* log,
                           const std::vector<std::string>& extraExtensions = {}) {
-    loadVulkanCommands();
     uint32_t loaderVersion = 0;
     if (vkEnumerateInstanceVersion(&loaderVersion) != VK_SUCCESS || loaderVersion < VK_API_VERSION_1_1)
         throw Error(ErrorKind::Device, "no Vulkan 1.1 loader: install libvulkan1 1.1 or newer, or bake with "

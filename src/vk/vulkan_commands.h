@@ -1,7 +1,7 @@
-// The Vulkan commands shprobe calls, as pointers taken from the Vulkan loader (libvulkan.so.1) when
-// the first instance is created or a device borrowed (loadVulkanCommands), not as symbols that the
-// program links: a run that makes no device (`shprobe --help`, a bake on the CPU, `convert`)
-// neither loads the loader nor needs one installed. The project compiles with VK_NO_PROTOTYPES, so
+// The Vulkan commands shprobe calls, as pointers taken from the Vulkan loader (libvulkan.so.1) at
+// the first call of any of them (loadVulkanCommands), not as symbols that the program links: a run
+// that makes no device (`shprobe --help`, a bake on the CPU, `convert`) neither loads the loader
+// nor needs one installed. The project compiles with VK_NO_PROTOTYPES, so
 // that a command missing from the list below is a compile error, not a silent link to the loader.
 //
 // Private to the libraries and their tests (not installed): the names are the commands' own, in
@@ -127,8 +127,8 @@ SHPROBE_VULKAN_COMMANDS(SHPROBE_DECLARE_VULKAN_COMMAND)
 // Loads libvulkan.so.1 and every command above, once per process (thread-safe; a failed load is
 // tried again at the next call). Throws Error(Device) when there is no loader ("no Vulkan loader:
 // ...; install libvulkan1, or bake with `--backend cpu`") or it lacks a command (a loader older
-// than Vulkan 1.1). Every instance and borrowed device calls it first (createContext,
-// listDevices, borrowDevice), so every Vulkan call made on them finds its command loaded.
+// than Vulkan 1.1). The first call of any command calls it: creating an instance, borrowing a
+// device, or any other.
 void loadVulkanCommands();
 
 } // namespace shprobe
