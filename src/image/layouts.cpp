@@ -94,20 +94,47 @@ glm::dvec3 sampleEquirect(const Image& image, double x, double y) {
     return (1.0 - ty) * top + ty * bottom;
 }
 
-// Mean of a k x k grid of equirect samples spread evenly over texel (i, j) of a face.
-glm::vec4 equirectTexel(const Image& equirect, int face, int i, int j, int faceSize, int k) {
-    double step = 2.0 / (double(faceSize) * k); // supersample spacing in face coordinates
-    glm::dvec3 sum(0.0);
-    for (int sj = 0; sj < k; ++sj) {
-        for (int si = 0; si < k; ++si) {
-            double a = -1.0 + (i * k + si + 0.5) * step;
-            double b = -1.0 + (j * k + sj + 0.5) * step;
-            PixelPoint p =
-                unitDirectionToEquirect(faceDirection(face, a, b), equirect.width, equirect.height);
-            sum += sampleEquirect(equirect, p.x, p.y);
+// The side faces in quarter turns about the vertical axis: a direction of +X turned t times is +Z,
+// -X, -Z's direction at the same face coordinates, and its longitude t quarter turns further.
+constexpr std::array<Face, 4> kSideFacesByTurn{Face::PositiveX, Face::PositiveZ, Face::NegativeX,
+                                               Face::NegativeZ};
+
+// Row j of every face, each texel the mean of a k x k grid of equirect samples spread evenly over
+// it. The acos and atan2 of a sample's position (two fifths of the resampling) are worked out for
+// +X and +Y alone: the three other side faces share +X's row coordinate and lie W/4 further per
+// quarter turn (kSideFacesByTurn), and -Y at (a, b) is +Y at (a, -b) mirrored in the horizon, the
+// same column and the row H - y, so it takes +Y's samples for its row faceSize - 1 - j.
+void resampleRow(const Image& equirect, int j, int k, Cubemap& cubemap) {
+    const int n = cubemap.faceSize;
+    const double step = 2.0 / (double(n) * k); // supersample spacing in face coordinates
+    const double quarterTurn = 0.25 * equirect.width;
+    const double height = equirect.height;
+    auto wrapped = [&](double x) { return x >= equirect.width ? x - equirect.width : x; };
+    for (int i = 0; i < n; ++i) {
+        std::array<glm::dvec3, 4> sides{};
+        glm::dvec3 top(0.0), bottom(0.0);
+        for (int sj = 0; sj < k; ++sj) {
+            for (int si = 0; si < k; ++si) {
+                double a = -1.0 + (i * k + si + 0.5) * step;
+                double b = -1.0 + (j * k + sj + 0.5) * step;
+                PixelPoint side = unitDirectionToEquirect(faceDirection(int(Face::PositiveX), a, b),
+                                                          equirect.width, equirect.height);
+                for (size_t turn = 0; turn < sides.size(); ++turn)
+                    sides[turn] +=
+                        sampleEquirect(equirect, wrapped(side.x + double(turn) * quarterTurn), side.y);
+                PixelPoint cap = unitDirectionToEquirect(faceDirection(int(Face::PositiveY), a, b),
+                                                         equirect.width, equirect.height);
+                top += sampleEquirect(equirect, cap.x, cap.y);
+                bottom += sampleEquirect(equirect, cap.x, height - cap.y);
+            }
         }
+        const double samples = double(k * k);
+        auto texel = [&](const glm::dvec3& sum) { return glm::vec4(glm::vec3(sum / samples), 1.0f); };
+        for (size_t turn = 0; turn < sides.size(); ++turn)
+            cubemap.at(int(kSideFacesByTurn[turn]), i, j) = texel(sides[turn]);
+        cubemap.at(int(Face::PositiveY), i, j) = texel(top);
+        cubemap.at(int(Face::NegativeY), i, n - 1 - j) = texel(bottom);
     }
-    return glm::vec4(glm::vec3(sum / double(k * k)), 1.0f);
 }
 
 // One output texel of a 1-D resampling: the source texels it reads and their weights.
@@ -248,13 +275,8 @@ Cubemap equirectToCubemap(const Image& equirect, int faceSize) {
     // equirect pixels; k supersamples per side are at least that dense.
     int k = std::max(1, int(std::ceil(double(equirect.width) / (4.0 * faceSize))));
     const size_t samples = cubemap.texels.size() * size_t(k) * size_t(k);
-    // Item r is row r % faceSize of face r / faceSize.
-    forEachItem(kFaceCount * faceSize, threadCount(samples, kSamplesPerThread), [&](int row) {
-        int face = row / faceSize;
-        int j = row % faceSize;
-        for (int i = 0; i < faceSize; ++i)
-            cubemap.at(face, i, j) = equirectTexel(equirect, face, i, j, faceSize, k);
-    });
+    forEachItem(faceSize, threadCount(samples, kSamplesPerThread),
+                [&](int j) { resampleRow(equirect, j, k, cubemap); });
     return cubemap;
 }
 
