@@ -19,7 +19,7 @@ bool loaderInProcess() {
 TEST(VulkanCommands, TheFirstCallOfAnyCommandLoadsThemAll) {
     ASSERT_FALSE(loaderInProcess()) << "the program links the Vulkan loader, or something loaded it";
     uint32_t version = 0;
-    ASSERT_EQ(vkEnumerateInstanceVersion(&version), VK_SUCCESS); // through its loading stub
+    ASSERT_EQ(vkEnumerateInstanceVersion(&version), VK_SUCCESS); // through its first-call loader
     EXPECT_GE(version, VK_API_VERSION_1_1);
     ASSERT_TRUE(loaderInProcess());
     void* loader = dlopen("libvulkan.so.1", RTLD_LAZY | RTLD_NOLOAD);

@@ -110,6 +110,9 @@ void resampleRow(const Image& equirect, int j, int k, Cubemap& cubemap) {
     const double quarterTurn = 0.25 * equirect.width;
     const double height = equirect.height;
     auto wrapped = [&](double x) { return x >= equirect.width ? x - equirect.width : x; };
+    auto position = [&](Face face, double a, double b) {
+        return unitDirectionToEquirect(faceDirection(int(face), a, b), equirect.width, equirect.height);
+    };
     for (int i = 0; i < n; ++i) {
         std::array<glm::dvec3, 4> sides{};
         glm::dvec3 top(0.0), bottom(0.0);
@@ -117,13 +120,11 @@ void resampleRow(const Image& equirect, int j, int k, Cubemap& cubemap) {
             for (int si = 0; si < k; ++si) {
                 double a = -1.0 + (i * k + si + 0.5) * step;
                 double b = -1.0 + (j * k + sj + 0.5) * step;
-                PixelPoint side = unitDirectionToEquirect(faceDirection(int(Face::PositiveX), a, b),
-                                                          equirect.width, equirect.height);
+                PixelPoint side = position(Face::PositiveX, a, b);
                 for (size_t turn = 0; turn < sides.size(); ++turn)
                     sides[turn] +=
                         sampleEquirect(equirect, wrapped(side.x + double(turn) * quarterTurn), side.y);
-                PixelPoint cap = unitDirectionToEquirect(faceDirection(int(Face::PositiveY), a, b),
-                                                         equirect.width, equirect.height);
+                PixelPoint cap = position(Face::PositiveY, a, b);
                 top += sampleEquirect(equirect, cap.x, cap.y);
                 bottom += sampleEquirect(equirect, cap.x, height - cap.y);
             }

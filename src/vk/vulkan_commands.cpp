@@ -9,7 +9,7 @@
 
 namespace shprobe {
 
-// Until the commands are loaded each pointer holds a stub that loads them and then makes its call,
+// Until the commands are loaded each pointer holds a function that loads them and then makes its call,
 // so that a command called first, on handles made elsewhere (an engine's own Device, a helper of
 // vk/image.h on its command buffer), finds the loader as a linked program would.
 #define SHPROBE_DEFINE_VULKAN_COMMAND(name)                                                                  \
