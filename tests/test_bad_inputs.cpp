@@ -599,6 +599,24 @@ TEST(DeviceRequirements, DevicesLackingAFeatureAreRefusedByName) {
     EXPECT_CONTAINS(none, "--backend cpu");
 }
 
+// --backend auto starts no Vulkan where no GPU's device file exists (any device there would be a
+// CPU): the files a GPU's driver opens are found by name, in a made-up /dev, and only they.
+using GpuDeviceFiles = ProgramTest;
+TEST_F(GpuDeviceFiles, AreFoundByName) {
+    EXPECT_EQ(findGpuDeviceFile(file("missing")), "");
+    const fs::path dev = folder() / "dev";
+    fs::create_directories(dev / "dri" / "by-path");
+    for (const char* other : {"null", "zero", "tty0", "fb0", "kfd", "dri/by-path/platform-card"})
+        writeText(dev / other, "");
+    EXPECT_EQ(findGpuDeviceFile(dev.string()), "") << "no GPU: only other files and an empty dri";
+    for (const char* gpu : {"dri/renderD128", "dri/card0", "nvidia0", "nvidiactl", "dxg", "mali0", "kgsl-3d0",
+                            "galcore", "pvrsrvkm"}) {
+        writeText(dev / gpu, "");
+        EXPECT_EQ(findGpuDeviceFile(dev.string()), (dev / gpu).string());
+        fs::remove(dev / gpu);
+    }
+}
+
 // A lost device and a lack of memory are reported with the call, the result's name, what the
 // program was doing (the nested DeviceSteps, outer to inner) and what to try; once the steps end,
 // they are no longer named.

@@ -151,8 +151,8 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
         .add_option(
             "--backend", options.backend,
             "auto (the default: the fast CPU path for a job done sooner than Vulkan starts, or where the "
-            "only Vulkan device is a CPU, such as lavapipe; else Vulkan; --device and --validation ask for "
-            "Vulkan), gpu "
+            "only Vulkan device is a CPU, such as lavapipe, as on a machine without a GPU device file in "
+            "/dev; else Vulkan; --device and --validation ask for Vulkan), gpu "
             "(Vulkan compute), cpu (float, all cores) or reference (the double-precision reference)")
         ->check(CLI::IsMember({"auto", "gpu", "cpu", "reference"}))
         ->capture_default_str();

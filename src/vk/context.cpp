@@ -10,7 +10,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <optional>
+#include <span>
+#include <string_view>
 #include <tuple>
 
 namespace shprobe {
@@ -320,6 +323,24 @@ void applyRenderingRequirements(std::vector<DeviceInfo>& devices,
 }
 
 } // namespace
+
+std::string findGpuDeviceFile(const std::string& devFolder) {
+    namespace fs = std::filesystem;
+    constexpr std::string_view kDrmNodes[] = {"card", "renderD"};
+    constexpr std::string_view kVendorNodes[] = {"nvidia", "dxg", "mali", "kgsl", "galcore", "pvrsrvkm"};
+    const auto startsWithAny = [](const std::string& name, std::span<const std::string_view> prefixes) {
+        return std::any_of(prefixes.begin(), prefixes.end(),
+                           [&](std::string_view prefix) { return name.starts_with(prefix); });
+    };
+    // A folder that cannot be listed holds nothing found: the iterators end at once.
+    std::error_code error;
+    for (fs::directory_iterator it(fs::path(devFolder) / "dri", error), end; !error && it != end;
+         it.increment(error))
+        if (startsWithAny(it->path().filename().string(), kDrmNodes)) return it->path().string();
+    for (fs::directory_iterator it(devFolder, error), end; !error && it != end; it.increment(error))
+        if (startsWithAny(it->path().filename().string(), kVendorNodes)) return it->path().string();
+    return "";
+}
 
 const char* deviceTypeName(VkPhysicalDeviceType type) {
     switch (type) {

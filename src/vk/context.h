@@ -109,6 +109,13 @@ std::vector<DeviceInfo> listDevices(const ContextOptions& options);
 // message points to `bake --backend cpu`.
 const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::string& request);
 
+// The first file in `devFolder` through which a GPU's Vulkan driver on Linux reaches its GPU: a DRM
+// node (dri/card*, dri/renderD*: Mesa's drivers, AMD's, virtio-gpu's), NVIDIA's nvidia*, WSL's dxg,
+// or the vendor nodes of Arm's, Qualcomm's, Vivante's and Imagination's drivers (mali*, kgsl*,
+// galcore, pvrsrvkm); "" where there is none, and so no Vulkan device but a CPU one (lavapipe,
+// SwiftShader), which needs no device file. Reads the folder only: no Vulkan.
+std::string findGpuDeviceFile(const std::string& devFolder = "/dev");
+
 const char* deviceTypeName(VkPhysicalDeviceType type);
 std::string versionString(uint32_t version);
 
