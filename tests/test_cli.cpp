@@ -777,7 +777,8 @@ TEST_F(Cli, InfoNamesTheDeviceAndItsSubgroupSize) {
 
 // ---- 6. Layouts -------------------------------------------------------------------------------
 
-// A 64x48 PNG (4:3) is detected as a horizontal cross and baked at its face size 16. +Y (top of
+// A 64x48 PNG (4:3) is detected as a horizontal cross and baked at its face size 16, its faces
+// read where they lie in the image (the same probe as their copy into a cube map). +Y (top of
 // the cross) is white, the five other faces grey sRGB 0x80, the unused corners red (never read):
 // L00 = Y00 (4 pi / 6) (sum of the six faces' linear values) exactly, since each face subtends
 // 4 pi / 6, and the only first-band term is along -y_1,-1 = 0.488603 y: L1,-1 < 0, L1,0 = L1,1 = 0.
@@ -799,7 +800,10 @@ TEST_F(Cli, HorizontalCrossIsDetectedAndBaked) {
 
     RunResult baked = runOk({"bake", file("cross.png"), "-q", "-o", file("cross.json")});
     EXPECT_CONTAINS(baked.out, "(hcross 64x48)");
-    EXPECT_CONTAINS(baked.out, "6 x 16 x 16 texels");
+    EXPECT_CONTAINS(baked.out, "6 x 16 x 16 texels projected where they lie in the cross");
+    // Read where they lie, the faces give the probe of their copy into a cube map (--face-size 16).
+    runOk({"bake", file("cross.png"), "--face-size", "16", "-q", "-o", file("copied.json")});
+    EXPECT_EQ(readText(file("copied.json")), readText(file("cross.json")));
     ShCoefficients c = readProbeFile(file("cross.json"));
     ASSERT_EQ(c.rgb.size(), 9u);
     double grey = srgbDecoded(128.0 / 255.0);

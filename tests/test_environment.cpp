@@ -7,6 +7,7 @@
 #include "shprobe/image/image_write.h"
 #include "shprobe/io/input_file.h"
 #include "shprobe/sh/error.h"
+#include "shprobe/sh/fast_projection.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -28,6 +29,7 @@
 #include <random>
 #include <sys/resource.h>
 #include <sys/wait.h>
+#include <tuple>
 #include <unistd.h>
 
 namespace shprobe {
@@ -212,6 +214,52 @@ TEST_F(EnvironmentFiles, CrossResizedOnRequest) {
     Environment environment = loadEnvironment(file("cross.exr"), {.faceSize = 5});
     ASSERT_EQ(environment.cubemap.faceSize, 5);
     EXPECT_EQ(environment.cubemap.at(3, 4, 2), glm::vec4(0.5f, 1.5f, 2.5f, 1.0f));
+}
+
+// A cross kept as decoded (LoadOptions::keepCross) is projected where its faces lie in it
+// (crossFaceRows; a vertical cross's -Z, stored turned, from a copy turned back): the same float
+// sums, in the same order, as the projection of the cube map the cross is copied into, so the
+// coefficients are equal to the last bit, for both crosses, an odd and an even face size and the
+// orders 1, 3 and 8. Every texel differs from its mirror images in the face, so that a face read
+// from the wrong place, turned or flipped shows. copyCrossToCubemap gives that cube map too.
+TEST_F(EnvironmentFiles, KeptCrossIsProjectedWhereItsFacesLie) {
+    for (auto [columns, rows, layout] :
+         {std::tuple{4, 3, Layout::HorizontalCross}, std::tuple{3, 4, Layout::VerticalCross}}) {
+        for (int n : {7, 8}) {
+            SCOPED_TRACE(::testing::Message() << layoutName(layout) << ", faces " << n);
+            writeImage(file("cross.exr"), filledImage(columns * n, rows * n, [](int x, int y) {
+                           return glm::vec3(1.0f + 0.01f * x, 2.0f + 0.03f * y + 0.001f * x * y,
+                                            0.5f + float(x % 5) * 0.2f);
+                       }));
+            const Environment copied = loadEnvironment(file("cross.exr"), {});
+            Environment kept = loadEnvironment(file("cross.exr"), {.keepCross = true});
+            ASSERT_TRUE(kept.keptCross());
+            EXPECT_EQ(kept.layout, layout);
+            EXPECT_EQ(kept.faceSize(), n);
+            EXPECT_EQ(kept.texelCount(), copied.cubemap.texels.size());
+            EXPECT_TRUE(kept.cubemap.texels.empty());
+            EXPECT_EQ(kept.description, copied.description);
+            for (int order : {1, 3, 8}) {
+                std::vector<glm::vec4> turned;
+                const ShCoefficients inPlace = projectFacesFast(
+                    crossFaceRows(kept.cross, kept.layout, turned), TexelFormat::Rgba32F, n, order);
+                const ShCoefficients fromCopy = projectCubemapFast(copied.cubemap, order);
+                for (size_t k = 0; k < fromCopy.rgb.size(); ++k)
+                    EXPECT_EQ(inPlace.rgb[k], fromCopy.rgb[k]) << "order " << order << ", coefficient " << k;
+            }
+            copyCrossToCubemap(kept);
+            EXPECT_FALSE(kept.keptCross());
+            EXPECT_EQ(kept.cubemap.texels, copied.cubemap.texels);
+        }
+    }
+    // A face size asked for makes a cube map; a cross's shape is checked as when it is copied.
+    EXPECT_FALSE(loadEnvironment(file("cross.exr"), {.faceSize = 5, .keepCross = true}).keptCross());
+    writeImage(file("sky.exr"), filledImage(64, 32, [](int, int) { return glm::vec3(1.0f); }));
+    EXPECT_CONTAINS(inputErrorOf([&] {
+                        loadEnvironment(file("sky.exr"),
+                                        {.layout = Layout::HorizontalCross, .keepCross = true});
+                    }),
+                    "64x32, but a hcross image must be 4:3");
 }
 
 // ---- Six face files ---------------------------------------------------------------------------

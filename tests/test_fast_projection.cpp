@@ -249,6 +249,33 @@ template <class Project> int errorKind(Project&& project) {
     return -1;
 }
 
+// Checks: faces where they lie (FaceRows), here each in a wider image of its own, in reverse face
+// order and with rows padded to an odd stride, give the cube map's result to the last bit; a stride
+// below the face size and a missing face are refused.
+TEST(FastProjection, FacesWhereTheyLieEqualTheCubemap) {
+    const int n = 33;
+    const Cubemap cube = noiseCubemap(n, 7);
+    const size_t stride = 2 * n + 3;
+    std::vector<glm::vec4> wide(kFaceCount * n * stride, glm::vec4(1e30f)); // padding: never read
+    FaceRows faces;
+    for (int face = 0; face < kFaceCount; ++face) {
+        glm::vec4* first = wide.data() + size_t(kFaceCount - 1 - face) * n * stride + 2;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                first[size_t(j) * stride + size_t(i)] = cube.at(face, i, j);
+        faces.faces[size_t(face)] = first;
+        faces.rowStrides[size_t(face)] = stride;
+    }
+    for (int order : {1, 4, 8})
+        expectIdentical(projectFacesFast(faces, TexelFormat::Rgba32F, n, order),
+                        projectCubemapFast(cube, order), "faces where they lie");
+    faces.rowStrides[3] = n - 1;
+    EXPECT_EQ(errorKind([&] { projectFacesFast(faces, TexelFormat::Rgba32F, n, 3); }), int(ErrorKind::Input));
+    faces.rowStrides[3] = stride;
+    faces.faces[5] = nullptr;
+    EXPECT_EQ(errorKind([&] { projectFacesFast(faces, TexelFormat::Rgba32F, n, 3); }), int(ErrorKind::Input));
+}
+
 // ------------------------------------------------------------------------------------------------
 // Equirect maps (projectEquirectFast): Fourier sums along each row in float, then the rows in double
 // (fast_projection.cpp, top of the file).

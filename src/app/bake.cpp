@@ -46,8 +46,10 @@ void printSummary(FILE* report, const BakeOptions& options, const Environment& e
     std::fprintf(report, "shprobe bake: %s -> %s\n", environment.description.c_str(), options.output.c_str());
     std::fprintf(report, "%s\n", backendLine(backend, result.device).c_str());
     std::fprintf(report, "  input    %s%s, order %d (%d coefficients)\n", inputSize(environment).c_str(),
-                 environment.keptEquirect() ? " projected directly" : "", options.order,
-                 coefficientCount(options.order));
+                 environment.keptEquirect() ? " projected directly"
+                 : environment.keptCross()  ? " projected where they lie in the cross"
+                                            : "",
+                 options.order, coefficientCount(options.order));
     if (environment.replacedTexels > 0)
         std::fprintf(report, "  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
     if (hasLights(options.lights)) std::fprintf(report, "  lights   added to the environment's radiance\n");

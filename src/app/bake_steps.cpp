@@ -96,6 +96,7 @@ Environment loadInput(const BakeOptions& options, const std::string& input) {
         load.nonFinite = options.sanitize ? NonFinitePolicy::Replace : NonFinitePolicy::Refuse;
         load.maxPixels = options.maxPixels;
         load.keepEquirect = !options.extractSun; // the sun is found on a cube map
+        load.keepCross = !options.extractSun;
         return loadEnvironment(input, load);
     }
     Environment sky;
@@ -200,6 +201,8 @@ VkDeviceSize environmentBytes(const Environment& environment) {
 }
 
 void fitBackend(const Backend& backend, Environment& environment) {
+    // The fast CPU path alone reads a cross's faces where they lie.
+    if (backend.session || backend.name == "reference") copyCrossToCubemap(environment);
     if (!backend.session || !environment.keptEquirect()) return;
     const uint32_t largest = backend.session->context().info.limits.maxImageDimension2D;
     const Image& equirect = environment.equirect;
@@ -212,7 +215,7 @@ std::string inputSize(const Environment& environment) {
     if (environment.keptEquirect())
         return std::to_string(environment.equirect.width) + " x " +
                std::to_string(environment.equirect.height) + " pixels";
-    std::string n = std::to_string(environment.cubemap.faceSize);
+    std::string n = std::to_string(environment.faceSize());
     return "6 x " + n + " x " + n + " texels";
 }
 
@@ -274,6 +277,11 @@ ShCoefficients projectOnCpu(const std::string& backend, const Environment& envir
     if (environment.keptEquirect())
         return reference ? projectEquirect(environment.equirect, order)
                          : projectEquirectFast(environment.equirect, order);
+    if (environment.keptCross() && !reference) {
+        std::vector<glm::vec4> turned;
+        const FaceRows faces = crossFaceRows(environment.cross, environment.layout, turned);
+        return projectFacesFast(faces, TexelFormat::Rgba32F, environment.faceSize(), order);
+    }
     return reference ? projectCubemap(environment.cubemap, order)
                      : projectCubemapFast(environment.cubemap, order);
 }
@@ -371,7 +379,7 @@ ProbeMetadata metadataFor(const Backend& backend, const BakeOptions& options, co
                           const BakeResult& result, const std::optional<ProbeSun>& sun) {
     ProbeMetadata metadata;
     metadata.source = environment.description;
-    metadata.faceSize = environment.cubemap.faceSize; // 0 (not written) for an equirect map kept as it is
+    metadata.faceSize = environment.faceSize(); // 0 (not written) for an equirect map kept as it is
     metadata.backend = backend.name;
     metadata.device = result.device;
     metadata.window = options.window == "none" ? "" : options.window;

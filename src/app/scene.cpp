@@ -68,8 +68,10 @@ void addMergeOptions(CLI::App& command, MergeOptions& options) {
 Environment loadSceneSky(const std::string& path, int faceSize) {
     if (path.empty()) {
         const int size = faceSize > 0 ? faceSize : 128;
-        return Environment{
-            makeDefaultSky(size), {}, Layout::Auto, "built-in sky (" + std::to_string(size) + "^2 faces)"};
+        Environment sky;
+        sky.cubemap = makeDefaultSky(size);
+        sky.description = "built-in sky (" + std::to_string(size) + "^2 faces)";
+        return sky;
     }
     return loadEnvironment(path, {.faceSize = faceSize});
 }

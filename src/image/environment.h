@@ -2,6 +2,7 @@
 // files, and the built-in procedural sky. Layouts and orientations follow docs/conventions.md.
 #pragma once
 #include "shprobe/sh/cubemap.h"
+#include "shprobe/sh/fast_projection.h"
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -44,19 +45,29 @@ struct LoadOptions {
     // With faceSize 0, an equirect image is kept as it was decoded (Environment::equirect), for a
     // projection that integrates it directly, instead of being resampled to a cube map.
     bool keepEquirect = false;
+    // With faceSize 0, a cross image is kept as it was decoded (Environment::cross), for a
+    // projection that reads the faces where they lie (crossFaceRows), instead of being copied into a
+    // cube map.
+    bool keepCross = false;
 };
 
-// A cube map, or an equirect map kept as it was decoded (LoadOptions::keepEquirect): exactly one
-// of the two holds texels.
+// A cube map, an equirect map kept as it was decoded (LoadOptions::keepEquirect) or a cross kept
+// as it was decoded (LoadOptions::keepCross, `layout` saying which cross): exactly one of the three
+// holds texels.
 struct Environment {
     Cubemap cubemap;
     Image equirect;
+    Image cross;
     Layout layout = Layout::Auto; // the layout actually used
     std::string description;      // e.g. "sky.exr (equirect 1024x512)"
     size_t replacedTexels = 0;    // non-finite texels replaced under NonFinitePolicy::Replace
 
     bool keptEquirect() const { return equirect.width > 0; }
-    size_t texelCount() const { return keptEquirect() ? equirect.texels.size() : cubemap.texels.size(); }
+    bool keptCross() const { return cross.width > 0; }
+    // The cube map's, or the kept cross's; 0 for a kept equirect map.
+    int faceSize() const;
+    // The texels a projection reads: the cross's six faces, not its empty slots.
+    size_t texelCount() const;
 };
 
 // Reads an image file: EXR, Radiance HDR, PNG and JPEG by shprobe's own readers, any other format
@@ -95,8 +106,19 @@ void checkEquirectShape(int width, int height);
 // Cube map of an equirect map: each texel averages a grid of supersamples (enough to cover the
 // equirect pixels under it), each bilinearly interpolated, wrapping in longitude.
 Cubemap equirectToCubemap(const Image& equirect, int faceSize);
+// The face size of a cross of that size (HorizontalCross or VerticalCross). Throws Error(Input)
+// unless the size has the cross's aspect ratio, 4:3 or 3:4 (since 3 and 4 are coprime, the ratio
+// alone makes the width a multiple of the columns).
+int crossFaceSize(int width, int height, Layout layout);
 // Cube map of a cross image (HorizontalCross or VerticalCross), at the cross's own face size.
 Cubemap crossToCubemap(const Image& cross, Layout layout);
+// The six faces of a cross image where they lie in it, for projectFacesFast: nothing is copied but
+// a vertical cross's -Z, which the cross holds turned 180 degrees and which is turned back into
+// `turned` (faceSize^2 texels; it must outlive the FaceRows).
+FaceRows crossFaceRows(const Image& cross, Layout layout, std::vector<glm::vec4>& turned);
+// A kept cross (Environment::keptCross) made a cube map, for what needs one (the GPU, the
+// reference projection); anything else is left as it is.
+void copyCrossToCubemap(Environment& environment);
 // Resamples every face to a new size (area average when shrinking, bilinear when growing).
 Cubemap resizeCubemap(const Cubemap& cubemap, int faceSize);
 

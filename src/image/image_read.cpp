@@ -302,14 +302,20 @@ Environment loadSingleImage(const std::string& path, const LoadOptions& options)
     environment.replacedTexels = applyPolicyToFound(image.texels, nonFinite, options.nonFinite, path);
     try {
         environment.layout = chooseLayout(image, options.layout);
-        if (environment.layout == Layout::Equirect && options.keepEquirect && options.faceSize == 0)
-            environment.equirect = std::move(image);
-        else
+        const bool equirect = environment.layout == Layout::Equirect;
+        const bool kept = options.faceSize == 0 && (equirect ? options.keepEquirect : options.keepCross);
+        if (kept) {
+            if (!equirect) crossFaceSize(image.width, image.height, environment.layout); // or throws
+            (equirect ? environment.equirect : environment.cross) = std::move(image);
+        } else {
             environment.cubemap = imageToCubemap(image, environment.layout, options.faceSize);
+        }
     } catch (const Error& error) {
         throw Error(error.kind(), path + ": " + error.what());
     }
-    const Image& decoded = environment.keptEquirect() ? environment.equirect : image;
+    const Image& decoded = environment.keptEquirect() ? environment.equirect
+                           : environment.keptCross()  ? environment.cross
+                                                      : image;
     environment.description =
         path + " (" + layoutName(environment.layout) + " " + sizeText(decoded.width, decoded.height) + ")";
     return environment;

@@ -47,21 +47,6 @@ std::string sizeText(int width, int height) {
     return std::to_string(width) + "x" + std::to_string(height);
 }
 
-// The face size of a cross, checking that the image has the cross's aspect ratio (4 x 3 or 3 x 4
-// faces; since 3 and 4 are coprime, the ratio alone makes the width a multiple of the columns).
-int crossFaceSize(int width, int height, Layout layout) {
-    bool horizontal = layout == Layout::HorizontalCross;
-    if (!horizontal && layout != Layout::VerticalCross)
-        throw Error(ErrorKind::Input, std::string("layout ") + layoutName(layout) + " is not a cross");
-    int columns = horizontal ? 4 : 3;
-    int rows = horizontal ? 3 : 4;
-    if (width < 1 || int64_t(width) * rows != int64_t(height) * columns)
-        throw Error(ErrorKind::Input, "image is " + sizeText(width, height) + ", but a " +
-                                          layoutName(layout) + " image must be " + std::to_string(columns) +
-                                          ":" + std::to_string(rows));
-    return width / columns;
-}
-
 void copyCrossFace(const Image& cross, CrossSlot slot, int face, Cubemap& cubemap) {
     int n = cubemap.faceSize;
     for (int j = 0; j < n; ++j) {
@@ -253,6 +238,19 @@ Layout detectLayout(int width, int height) {
                                       "(hcross) or 3:4 (vcross); or give --layout");
 }
 
+int crossFaceSize(int width, int height, Layout layout) {
+    bool horizontal = layout == Layout::HorizontalCross;
+    if (!horizontal && layout != Layout::VerticalCross)
+        throw Error(ErrorKind::Input, std::string("layout ") + layoutName(layout) + " is not a cross");
+    int columns = horizontal ? 4 : 3;
+    int rows = horizontal ? 3 : 4;
+    if (width < 1 || int64_t(width) * rows != int64_t(height) * columns)
+        throw Error(ErrorKind::Input, "image is " + sizeText(width, height) + ", but a " +
+                                          layoutName(layout) + " image must be " + std::to_string(columns) +
+                                          ":" + std::to_string(rows));
+    return width / columns;
+}
+
 Cubemap crossToCubemap(const Image& cross, Layout layout) {
     int faceSize = crossFaceSize(cross.width, cross.height, layout);
     const auto& slots = layout == Layout::HorizontalCross ? kHorizontalCross : kVerticalCross;
@@ -260,6 +258,44 @@ Cubemap crossToCubemap(const Image& cross, Layout layout) {
     for (int face = 0; face < kFaceCount; ++face)
         copyCrossFace(cross, slots[size_t(face)], face, cubemap);
     return cubemap;
+}
+
+FaceRows crossFaceRows(const Image& cross, Layout layout, std::vector<glm::vec4>& turned) {
+    const int n = crossFaceSize(cross.width, cross.height, layout);
+    if (cross.texels.size() != size_t(cross.width) * size_t(cross.height))
+        throw Error(ErrorKind::Input, "the cross image holds " + std::to_string(cross.texels.size()) +
+                                          " texels, not " + sizeText(cross.width, cross.height));
+    const auto& slots = layout == Layout::HorizontalCross ? kHorizontalCross : kVerticalCross;
+    FaceRows faces;
+    for (int face = 0; face < kFaceCount; ++face) {
+        const CrossSlot slot = slots[size_t(face)];
+        faces.faces[size_t(face)] = &cross.at(slot.column * n, slot.row * n);
+        faces.rowStrides[size_t(face)] = size_t(cross.width);
+        if (!slot.rotated) continue;
+        // Turned 180 degrees, its rows run right to left: they are read in a copy turned back.
+        Cubemap one{n, std::vector<glm::vec4>(size_t(n) * size_t(n))};
+        copyCrossFace(cross, slot, 0, one);
+        turned = std::move(one.texels);
+        faces.faces[size_t(face)] = turned.data();
+        faces.rowStrides[size_t(face)] = size_t(n);
+    }
+    return faces;
+}
+
+void copyCrossToCubemap(Environment& environment) {
+    if (!environment.keptCross()) return;
+    environment.cubemap = crossToCubemap(environment.cross, environment.layout);
+    environment.cross = Image{};
+}
+
+int Environment::faceSize() const {
+    return keptCross() ? crossFaceSize(cross.width, cross.height, layout) : cubemap.faceSize;
+}
+
+size_t Environment::texelCount() const {
+    if (keptEquirect()) return equirect.texels.size();
+    const size_t n = size_t(faceSize());
+    return keptCross() ? size_t(kFaceCount) * n * n : cubemap.texels.size();
 }
 
 void checkEquirectShape(int width, int height) {

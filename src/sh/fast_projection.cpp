@@ -255,7 +255,7 @@ constexpr int tableLanesPerPair(int coefficients) {
 constexpr int kMaxBlocks = 64;
 
 struct Plan {
-    const std::byte* texels;
+    FaceRows faceRows; // an equirect map: its one "face" as faces[0]
     size_t texelBytes;
     int width;  // texels per row: N for cube maps, whose faces are square
     int height; // rows per face
@@ -273,7 +273,8 @@ struct Plan {
     const Lanes* sharedTable = nullptr; // equirect maps: the table, the same for every row
 
     const std::byte* rowTexels(int face, int row) const {
-        return texels + (size_t(face) * size_t(height) + size_t(row)) * size_t(width) * texelBytes;
+        return static_cast<const std::byte*>(faceRows.faces[size_t(face)]) +
+               size_t(row) * faceRows.rowStrides[size_t(face)] * texelBytes;
     }
 
     // Weight factor of column i of the positions: 1/2 where it is its own mirror image (the middle
@@ -301,10 +302,10 @@ std::array<float, coefficientCount(kMaxOrder)> floatRecurrenceNormalization(int 
 constexpr int kStagePairs = 64;
 
 // rowSums: lanes of float sums per face along a row (the Terms' kCount for this order).
-Plan makePlan(const void* texels, TexelFormat format, int width, int height, int faces, int order,
+Plan makePlan(const FaceRows& faceRows, TexelFormat format, int width, int height, int faces, int order,
               int rowSums) {
     Plan plan{};
-    plan.texels = static_cast<const std::byte*>(texels);
+    plan.faceRows = faceRows;
     plan.texelBytes =
         format == TexelFormat::Rgba32F ? Rgba32FTexels::kTexelBytes : Rgba16FTexels::kTexelBytes;
     plan.width = width;
@@ -790,12 +791,13 @@ ShCoefficients combineBlocks(const Plan& plan, const std::vector<double>& blockS
     return world;
 }
 
-void requireProjectable(const void* texels, int order) {
+void requireProjectable(std::span<const void* const> faces, int order) {
     if (order < 1 || order > kMaxOrder) {
         throw Error(ErrorKind::Input,
                     "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
     }
-    if (texels == nullptr) throw Error(ErrorKind::Input, "no texels to project");
+    if (std::find(faces.begin(), faces.end(), nullptr) != faces.end())
+        throw Error(ErrorKind::Input, "no texels to project");
 }
 
 // Texels worth a thread: about 0.1 ms of work, more than starting a thread costs.
@@ -826,12 +828,16 @@ void requireTexelCount(size_t actual, size_t expected, const char* what) {
 
 } // namespace
 
-ShCoefficients projectFacesFast(const void* texels, TexelFormat format, int faceSize, int order,
+ShCoefficients projectFacesFast(const FaceRows& faces, TexelFormat format, int faceSize, int order,
                                 const FastProjectionOptions& options) {
     if (faceSize < 1)
         throw Error(ErrorKind::Input, "cube-map face size must be positive, got " + std::to_string(faceSize));
-    requireProjectable(texels, order);
-    const Plan plan = makePlan(texels, format, faceSize, faceSize, kFaceCount, order,
+    requireProjectable(faces.faces, order);
+    for (size_t stride : faces.rowStrides)
+        if (stride < size_t(faceSize))
+            throw Error(ErrorKind::Input, "a face's rows are " + std::to_string(stride) +
+                                              " texels apart, fewer than its " + std::to_string(faceSize));
+    const Plan plan = makePlan(faces, format, faceSize, faceSize, kFaceCount, order,
                                termCount<CubeTerms>(order, std::make_integer_sequence<int, kMaxOrder>{}));
     std::array<glm::dmat3, kFaceCount> orientations;
     for (int face = 0; face < kFaceCount; ++face)
@@ -839,6 +845,19 @@ ShCoefficients projectFacesFast(const void* texels, TexelFormat format, int face
     return combineBlocks(
         plan, projectBlocks(plan, blockKernel<CubeRows>(format, order), threadCount(options, plan)),
         orientations);
+}
+
+ShCoefficients projectFacesFast(const void* texels, TexelFormat format, int faceSize, int order,
+                                const FastProjectionOptions& options) {
+    const size_t side = size_t(std::max(faceSize, 0));
+    FaceRows faces;
+    for (int face = 0; face < kFaceCount; ++face) {
+        faces.faces[size_t(face)] =
+            texels ? static_cast<const std::byte*>(texels) + size_t(face) * side * side * texelBytes(format)
+                   : nullptr;
+        faces.rowStrides[size_t(face)] = side;
+    }
+    return projectFacesFast(faces, format, faceSize, order, options);
 }
 
 ShCoefficients projectCubemapFast(const Cubemap& cubemap, int order, const FastProjectionOptions& options) {
@@ -855,8 +874,11 @@ ShCoefficients projectEquirectFast(const void* texels, TexelFormat format, int w
         throw Error(ErrorKind::Input, "equirect map size must be positive, got " + std::to_string(width) +
                                           "x" + std::to_string(height));
     }
-    requireProjectable(texels, order);
-    Plan plan = makePlan(texels, format, width, height, 1, order,
+    requireProjectable(std::span(&texels, 1), order);
+    FaceRows rows;
+    rows.faces[0] = texels;
+    rows.rowStrides[0] = size_t(width);
+    Plan plan = makePlan(rows, format, width, height, 1, order,
                          termCount<EquirectTerms>(order, std::make_integer_sequence<int, kMaxOrder>{}));
     const LaneArray table = makeEquirectTable(plan);
     plan.sharedTable = table.get();
