@@ -599,22 +599,31 @@ TEST(DeviceRequirements, DevicesLackingAFeatureAreRefusedByName) {
     EXPECT_CONTAINS(none, "--backend cpu");
 }
 
-// --backend auto starts no Vulkan where no GPU's device file exists (any device there would be a
-// CPU): the files a GPU's driver opens are found by name, in a made-up /dev, and only they.
-using GpuDeviceFiles = ProgramTest;
-TEST_F(GpuDeviceFiles, AreFoundByName) {
-    EXPECT_EQ(findGpuDeviceFile(file("missing")), "");
-    const fs::path dev = folder() / "dev";
-    fs::create_directories(dev / "dri" / "by-path");
-    for (const char* other : {"null", "zero", "tty0", "fb0", "kfd", "dri/by-path/platform-card"})
-        writeText(dev / other, "");
-    EXPECT_EQ(findGpuDeviceFile(dev.string()), "") << "no GPU: only other files and an empty dri";
-    for (const char* gpu : {"dri/renderD128", "dri/card0", "nvidia0", "nvidiactl", "dxg", "mali0", "kgsl-3d0",
-                            "galcore", "pvrsrvkm"}) {
-        writeText(dev / gpu, "");
-        EXPECT_EQ(findGpuDeviceFile(dev.string()), (dev / gpu).string());
-        fs::remove(dev / gpu);
+// --backend auto starts no Vulkan where nothing shows a GPU (any device there would be a CPU): the
+// files by which a GPU's driver reaches it, and NVIDIA's kernel module, are found by name under a
+// made-up root, and only they: not a card node alone (a display), nor other devices.
+using GpuFiles = ProgramTest;
+TEST_F(GpuFiles, AreFoundByName) {
+    EXPECT_EQ(findGpuFile(file("missing")), "");
+    const fs::path root = folder() / "root";
+    fs::create_directories(root / "dev" / "dri" / "by-path");
+    fs::create_directories(root / "proc" / "driver");
+    for (const char* other : {"dev/null", "dev/zero", "dev/tty0", "dev/fb0", "dev/nvme0", "dev/dri/card0",
+                              "dev/dri/by-path/pci-0000:00:02.0-card", "proc/driver/rtc"})
+        writeText(root / other, "");
+    EXPECT_EQ(findGpuFile(root.string()), "") << "no GPU: a display's card node and other files";
+    for (const char* gpu :
+         {"dev/dri/renderD128", "dev/nvidia0", "dev/nvidiactl", "dev/nvhost-ctrl", "dev/nvmap", "dev/nvgpu",
+          "dev/dxg", "dev/mali0", "dev/kgsl-3d0", "dev/galcore", "dev/pvrsrvkm", "proc/driver/nvidia"}) {
+        writeText(root / gpu, "");
+        EXPECT_EQ(findGpuFile(root.string()), (root / gpu).string());
+        fs::remove(root / gpu);
     }
+    // Without a dri folder (whose listing fails) the other places are still listed.
+    const fs::path plain = folder() / "plain";
+    fs::create_directories(plain / "dev");
+    writeText(plain / "dev" / "nvidia0", "");
+    EXPECT_EQ(findGpuFile(plain.string()), (plain / "dev" / "nvidia0").string());
 }
 
 // A lost device and a lack of memory are reported with the call, the result's name, what the

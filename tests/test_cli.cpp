@@ -383,9 +383,10 @@ TEST_F(Cli, AutoBackendChoosesByJobAndDevice) {
     writeImage(file("large.exr"), smoothEquirect(2 * height, height));
     const std::vector<std::string> large = {"bake", file("large.exr"), "--order", "8", "-q",
                                             "-o",   file("large.json")};
-    const bool gpuFile = !findGpuDeviceFile().empty();
-    const std::string noGpu = "(auto: no GPU device file in /dev: any Vulkan device here is a CPU, where "
-                              "this path is faster)";
+    const bool gpuFile = !findGpuFile().empty();
+    const std::string noGpu =
+        "(auto: no GPU device file: any Vulkan device here is a CPU, where this path is "
+        "faster)";
     EXPECT_CONTAINS(runOk(large).out, "backend  cpu: cpu (float, all cores) " +
                                           (gpuFile ? "(auto: the Vulkan device is a CPU (llvmpipe" : noGpu));
     RunResult largeWithoutDriver = run(large, noDriver);

@@ -39,13 +39,13 @@ struct Finished {
     std::vector<double> window; // empty: none
 };
 
-// Whether a Vulkan device here may be a GPU. On Linux a GPU's driver needs its device file, and the
-// answer without one (a CPU, where the fast CPU path is faster) is known without the Vulkan
-// start-up (vkCreateInstance alone loads every installed driver: 16-33 ms on a 2-core VM). Elsewhere
-// only the device itself tells.
+// Whether a Vulkan device here may be a GPU. On Linux a GPU's driver needs its device file (or
+// makes it from its kernel module), and the answer without one (a CPU, where the fast CPU path is
+// faster) is known without the Vulkan start-up (vkCreateInstance alone loads every installed
+// driver: 16-33 ms on a 2-core VM). Elsewhere only the device itself tells.
 bool mayHaveGpu() {
 #if defined(__linux__)
-    return !findGpuDeviceFile().empty();
+    return !findGpuFile().empty();
 #else
     return true;
 #endif
@@ -173,8 +173,7 @@ Backend chooseBackend(const BakeOptions& options, double work) {
         return backend;
     }
     if (!mayHaveGpu()) {
-        backend.reason =
-            "no GPU device file in /dev: any Vulkan device here is a CPU, where this path is faster";
+        backend.reason = "no GPU device file: any Vulkan device here is a CPU, where this path is faster";
         return backend;
     }
     try {
@@ -202,7 +201,7 @@ VkDeviceSize environmentBytes(const Environment& environment) {
 
 void fitBackend(const Backend& backend, Environment& environment) {
     // The fast CPU path alone reads a cross's faces where they lie.
-    if (backend.session || backend.name == "reference") copyCrossToCubemap(environment);
+    if (backend.name != "cpu") copyCrossToCubemap(environment);
     if (!backend.session || !environment.keptEquirect()) return;
     const uint32_t largest = backend.session->context().info.limits.maxImageDimension2D;
     const Image& equirect = environment.equirect;

@@ -2,7 +2,6 @@
 // files, and the built-in procedural sky. Layouts and orientations follow docs/conventions.md.
 #pragma once
 #include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/fast_projection.h"
 #include <array>
 #include <cstddef>
 #include <cstdint>

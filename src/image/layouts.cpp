@@ -42,6 +42,9 @@ constexpr std::array<CrossSlot, kFaceCount> kHorizontalCross{
 // own bottom edge (b = 1, where y = -1) goes to the top of its slot, against -Y's bottom edge.
 constexpr std::array<CrossSlot, kFaceCount> kVerticalCross{
     {{2, 1, false}, {0, 1, false}, {1, 0, false}, {1, 2, false}, {1, 1, false}, {1, 3, true}}};
+// crossFaceRows turns the one turned face back into a buffer of its own.
+static_assert(std::count_if(kVerticalCross.begin(), kVerticalCross.end(),
+                            [](CrossSlot s) { return s.rotated; }) == 1);
 
 std::string sizeText(int width, int height) {
     return std::to_string(width) + "x" + std::to_string(height);

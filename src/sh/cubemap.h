@@ -2,6 +2,7 @@
 // Cube-map face order and orientation are Vulkan's; see shaders/include/texel_geometry.h for the
 // diagram and the face direction table shared with the shaders.
 #pragma once
+#include <array>
 #include <cstddef>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -20,6 +21,14 @@ constexpr size_t texelBytes(TexelFormat format) {
 }
 // The largest finite half float (IEEE 754 binary16): RGBA16F holds values within +-kHalfMax.
 constexpr float kHalfMax = 65504.0f;
+
+// Where six faces' texels lie when they are not one after another, as in a horizontal cross: face
+// f's row j (top to bottom, as in a Cubemap) starts rowStrides[f] * j texels after faces[f], its
+// faceSize texels consecutive.
+struct FaceRows {
+    std::array<const void*, kFaceCount> faces{};
+    std::array<size_t, kFaceCount> rowStrides{}; // in texels, at least faceSize
+};
 
 // Six N x N faces, face after face in Face order, rows top to bottom, RGBA32F (alpha unused).
 // This is also the layout the GPU projection reads.

@@ -7,8 +7,6 @@
 #include "coefficients.h"
 #include "cubemap.h"
 
-#include <array>
-
 namespace shprobe {
 
 struct FastProjectionOptions {
@@ -21,15 +19,8 @@ struct FastProjectionOptions {
 ShCoefficients projectFacesFast(const void* texels, TexelFormat format, int faceSize, int order,
                                 const FastProjectionOptions& options = {});
 
-// Where six faces' texels lie when they are not one after another, as in a horizontal cross: face
-// f's row j (top to bottom, as in a Cubemap) starts rowStrides[f] * j texels after faces[f], its
-// faceSize texels consecutive.
-struct FaceRows {
-    std::array<const void*, kFaceCount> faces{};
-    std::array<size_t, kFaceCount> rowStrides{}; // in texels, at least faceSize
-};
-// The same for faces where they lie: the same sums, in the same order, as for a copy of them into a
-// Cubemap. Also throws Error(Input) for a row stride below the face size.
+// The same for faces where they lie (FaceRows, cubemap.h): the same sums, in the same order, as for
+// a copy of them into a Cubemap. Also throws Error(Input) for a row stride below the face size.
 ShCoefficients projectFacesFast(const FaceRows& faces, TexelFormat format, int faceSize, int order,
                                 const FastProjectionOptions& options = {});
 // The same for a Cubemap; also throws Error(Input) if its texel count disagrees with its face size.

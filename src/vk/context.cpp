@@ -324,21 +324,25 @@ void applyRenderingRequirements(std::vector<DeviceInfo>& devices,
 
 } // namespace
 
-std::string findGpuDeviceFile(const std::string& devFolder) {
+std::string findGpuFile(const std::string& root) {
     namespace fs = std::filesystem;
-    constexpr std::string_view kDrmNodes[] = {"card", "renderD"};
-    constexpr std::string_view kVendorNodes[] = {"nvidia", "dxg", "mali", "kgsl", "galcore", "pvrsrvkm"};
-    const auto startsWithAny = [](const std::string& name, std::span<const std::string_view> prefixes) {
-        return std::any_of(prefixes.begin(), prefixes.end(),
-                           [&](std::string_view prefix) { return name.starts_with(prefix); });
-    };
-    // A folder that cannot be listed holds nothing found: the iterators end at once.
-    std::error_code error;
-    for (fs::directory_iterator it(fs::path(devFolder) / "dri", error), end; !error && it != end;
-         it.increment(error))
-        if (startsWithAny(it->path().filename().string(), kDrmNodes)) return it->path().string();
-    for (fs::directory_iterator it(devFolder, error), end; !error && it != end; it.increment(error))
-        if (startsWithAny(it->path().filename().string(), kVendorNodes)) return it->path().string();
+    constexpr std::string_view kRenderNodes[] = {"renderD"};
+    constexpr std::string_view kVendorNodes[] = {"nvidia", "nvhost", "nvmap",   "nvgpu",   "dxg",
+                                                 "mali",   "kgsl",   "galcore", "pvrsrvkm"};
+    constexpr std::string_view kNvidiaModule[] = {"nvidia"};
+    const std::pair<const char*, std::span<const std::string_view>> kPlaces[] = {
+        {"dev/dri", kRenderNodes}, {"dev", kVendorNodes}, {"proc/driver", kNvidiaModule}};
+    for (const auto& [folder, prefixes] : kPlaces) {
+        // A folder that cannot be listed holds nothing found: the iterator ends at once.
+        std::error_code error;
+        for (fs::directory_iterator it(fs::path(root) / folder, error), end; !error && it != end;
+             it.increment(error)) {
+            const std::string name = it->path().filename().string();
+            if (std::any_of(prefixes.begin(), prefixes.end(),
+                            [&](std::string_view prefix) { return name.starts_with(prefix); }))
+                return it->path().string();
+        }
+    }
     return "";
 }
 

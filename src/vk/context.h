@@ -109,12 +109,15 @@ std::vector<DeviceInfo> listDevices(const ContextOptions& options);
 // message points to `bake --backend cpu`.
 const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::string& request);
 
-// The first file in `devFolder` through which a GPU's Vulkan driver on Linux reaches its GPU: a DRM
-// node (dri/card*, dri/renderD*: Mesa's drivers, AMD's, virtio-gpu's), NVIDIA's nvidia*, WSL's dxg,
-// or the vendor nodes of Arm's, Qualcomm's, Vivante's and Imagination's drivers (mali*, kgsl*,
-// galcore, pvrsrvkm); "" where there is none, and so no Vulkan device but a CPU one (lavapipe,
-// SwiftShader), which needs no device file. Reads the folder only: no Vulkan.
-std::string findGpuDeviceFile(const std::string& devFolder = "/dev");
+// The first file under `root` that shows a GPU a Vulkan driver on Linux could use: a device file by
+// which a driver reaches its GPU (a DRM render node, dev/dri/renderD*: Mesa's drivers, AMD's,
+// virtio-gpu's; a card node alone may be a display without a GPU; NVIDIA's dev/nvidia*, its Tegra
+// ones dev/nvhost*, nvmap, nvgpu; WSL's dev/dxg; Arm's, Qualcomm's, Vivante's and Imagination's
+// dev/mali*, kgsl*, galcore, pvrsrvkm), or NVIDIA's kernel module (proc/driver/nvidia), whose
+// device files its Vulkan driver makes at its first use where none exist yet. "" where there is
+// none: then any Vulkan device is a CPU one (lavapipe, SwiftShader), which needs no such file.
+// Lists three folders: no Vulkan.
+std::string findGpuFile(const std::string& root = "/");
 
 const char* deviceTypeName(VkPhysicalDeviceType type);
 std::string versionString(uint32_t version);
