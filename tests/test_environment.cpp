@@ -24,6 +24,7 @@
 #include <glm/geometric.hpp>
 #include <grp.h>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -315,6 +316,37 @@ TEST_F(EnvironmentFiles, FacesMustExistBeSquareAndMatch) {
     message = inputErrorOf([&] { loadEnvironment(file("sky_{face}.exr"), {}); });
     EXPECT_CONTAINS(message, "sky_nz.exr");
     EXPECT_CONTAINS(message, "square");
+}
+
+// Faces large enough to decode side by side (on all cores) land each in its own face; the NaN
+// texels of two faces are counted together; and of two faces that fail, the error is the first
+// one's in face order (+X, -X, +Y, -Y, +Z, -Z), as when they are decoded one after another.
+TEST_F(EnvironmentFiles, LargeFacesDecodeSideBySide) {
+    const int n = 128;
+    const auto writeFaces = [&](const std::map<int, int>& nanTexels) {
+        for (int face = 0; face < kFaceCount; ++face) {
+            Image image = faceImage(face, n);
+            const auto nans = nanTexels.find(face);
+            for (int t = 0; nans != nanTexels.end() && t < nans->second; ++t)
+                image.texels[size_t(t) * 97].g = std::numeric_limits<float>::quiet_NaN();
+            writeImage(file("sky_" + std::string(kFaceNames[face]) + ".exr"), image);
+        }
+    };
+    writeFaces({});
+    expectFacesInOrder(loadEnvironment(file("sky_{face}.exr"), {}).cubemap, n);
+
+    writeFaces({{2, 3}, {5, 2}}); // +Y, -Z
+    EXPECT_EQ(loadEnvironment(file("sky_{face}.exr"), {.nonFinite = NonFinitePolicy::Replace}).replacedTexels,
+              5u);
+    std::string message = inputErrorOf([&] { loadEnvironment(file("sky_{face}.exr"), {}); });
+    EXPECT_CONTAINS(message, "sky_py.exr: 3 texels are NaN or infinite");
+
+    writeFaces({});
+    for (const char* name : {"sky_nx.exr", "sky_nz.exr"})
+        fs::resize_file(file(name), fs::file_size(file(name)) * 2 / 3);
+    message = inputErrorOf([&] { loadEnvironment(file("sky_{face}.exr"), {}); });
+    EXPECT_CONTAINS(message, "sky_nx.exr");
+    EXPECT_EQ(message.find("sky_nz.exr"), std::string::npos) << message;
 }
 
 // ---- Equirect ---------------------------------------------------------------------------------
