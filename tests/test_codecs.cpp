@@ -5,6 +5,7 @@
 // the encoders write. Tolerances, where there are any, are said where they are used. Also: the
 // eight EXRs of Debian's blender-data (DWAB), compared exactly and timed against OpenImageIO.
 #include "shprobe/image/codec.h"
+#include "shprobe/image/exr_plugin.h"
 #include "shprobe/sh/error.h"
 
 #include <OpenEXR/ImfChannelList.h>
@@ -502,6 +503,43 @@ TEST_F(Codecs, ExrCutShortSaysWhere) {
     writeBytes(file("notes.exr"), "These are not pixels.\n");
     EXPECT_CONTAINS(inputErrorOf([&] { openExrDecoder(file("notes.exr")); }),
                     "not an image OpenEXR can read");
+}
+
+// A file up to kExrBytesReadWhole is read whole and decoded where its chunks lie; a larger one as a
+// stream. The same pixels stored both ways (ZIP: a few MiB; uncompressed: 18 MiB) decode to the same
+// bits, and each, cut short, says so in the same words: OpenEXR's own for a file that ends early.
+TEST_F(Codecs, ExrReadWholeOrAsAStreamDecodesAlike) {
+    const int w = 2048, h = 768;
+    // Rows of every kind of float, each row the one before moved by one texel: ZIP finds it again.
+    const std::vector<float> row = mixedFloats(size_t(w + h) * 3, 12);
+    std::vector<float> data;
+    for (int y = 0; y < h; ++y)
+        data.insert(data.end(), row.begin() + 3 * y, row.begin() + 3 * (y + w));
+    auto compression = [](const char* name) {
+        return [name](OIIO::ImageSpec& spec) { spec.attribute("compression", name); };
+    };
+    writeOiio(file("whole.exr"), w, h, {}, 3, OIIO::TypeDesc::FLOAT, data, compression("zip"));
+    writeOiio(file("stream.exr"), w, h, {}, 3, OIIO::TypeDesc::FLOAT, data, compression("none"));
+    ASSERT_LE(fs::file_size(file("whole.exr")), uintmax_t(kExrBytesReadWhole));
+    ASSERT_GT(fs::file_size(file("stream.exr")), uintmax_t(kExrBytesReadWhole));
+    std::vector<std::vector<float>> decoded;
+    for (const char* name : {"whole.exr", "stream.exr"}) {
+        std::vector<float> texels(size_t(w) * h * 4);
+        openExrDecoder(file(name))->readChannels(0, 3, texels.data());
+        decoded.push_back(std::move(texels));
+    }
+    EXPECT_EQ(std::memcmp(decoded[0].data(), decoded[1].data(), decoded[0].size() * sizeof(float)), 0);
+    for (size_t t : {size_t(0), size_t(w) * h / 2 + 17, size_t(w) * h - 1})
+        EXPECT_EQ(std::memcmp(&decoded[1][4 * t], &data[3 * t], 3 * sizeof(float)), 0) << "texel " << t;
+    for (const char* name : {"whole.exr", "stream.exr"}) {
+        cutFile(file(name), file("cut.exr"), fs::file_size(file(name)) * 3 / 4);
+        std::vector<float> texels(size_t(w) * h * 4);
+        std::unique_ptr<ImageDecoder> decoder = openExrDecoder(file("cut.exr"));
+        const std::string message = inputErrorOf([&] { decoder->readChannels(0, 3, texels.data()); });
+        EXPECT_CONTAINS(message,
+                        file("cut.exr") + ": cannot read the pixels; the file may be truncated or corrupt (");
+        EXPECT_CONTAINS(message, "Early end of file: read ");
+    }
 }
 
 // ---- Radiance HDR ----------------------------------------------------------------------------------

@@ -1,22 +1,17 @@
 #include "app/program.h"
 
+#include "app/heap.h"
+
 #include "shprobe/io/output_file.h"
 #include "shprobe/sh/error.h"
 #include "shprobe/version.h"
 
 #include <csignal>
-#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <fcntl.h>
 #include <string>
-
-#if defined(__GLIBC__)
-#include <malloc.h>
-#include <sys/mman.h>
-#include <unistd.h>
-#endif
 
 namespace shprobe {
 
@@ -51,37 +46,6 @@ void prepareStandardStreams() {
     for (int fd = 0; fd <= 2; ++fd)
         if (fcntl(fd, F_GETFD) < 0) open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
     std::signal(SIGPIPE, SIG_IGN);
-}
-
-// A bake allocates its large buffers (the decoded image, OpenEXR's chunk buffers) once per input
-// and touches every page of them, and each first touch of a fresh 4 KiB page is a fault: about
-// 3.4 us on the 2-core CI VM, and a bake of courtyard.exr took 4,220 of them (14 ms of its 41).
-// glibc's defaults also give such buffers back to the kernel when freed (mmap and munmap above a
-// threshold that a same-size request then still exceeds), so a batch faults on every input again.
-// Here the program keeps freed memory for reuse, all threads allocate from the main heap, and the
-// first 64 MiB of that heap are advised as transparent huge pages (where the kernel offers them
-// on request, as Debian's does), so that a first touch costs one fault per 2 MiB: what glibc's
-// tunable glibc.malloc.hugetlb=1 does, which only the environment can set. docs/benchmark.md,
-// "Memory faults", has the counts and times. Other C libraries keep their defaults.
-void prepareHeap() {
-#if defined(__GLIBC__)
-    constexpr size_t kMiB = size_t(1) << 20;
-    constexpr uintptr_t kHugePage = 2 * kMiB;
-    constexpr size_t kAdvised = 64 * kMiB;
-    mallopt(M_MMAP_THRESHOLD, int(32 * kMiB)); // the largest glibc accepts: larger images stay mmap'ed
-    mallopt(M_TRIM_THRESHOLD, int(512 * kMiB));
-    mallopt(M_ARENA_MAX, 1);
-    mallopt(M_TOP_PAD, int(kAdvised));
-    // The heap grows by the request and the pad: madvise that part of it, if it is where the break
-    // says (not, for one, under a sanitizer's allocator, or where the break could not move).
-    void* grown = std::malloc(kHugePage);
-    const uintptr_t end = reinterpret_cast<uintptr_t>(sbrk(0)) & ~(kHugePage - 1);
-    const uintptr_t begin = (reinterpret_cast<uintptr_t>(grown) + kHugePage - 1) & ~(kHugePage - 1);
-    if (grown && begin < end && end - begin <= kAdvised + 2 * kHugePage)
-        madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
-    std::free(grown);
-    mallopt(M_TOP_PAD, int(kMiB));
-#endif
 }
 
 } // namespace

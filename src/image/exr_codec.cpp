@@ -4,6 +4,7 @@
 // as shared.
 #include "shprobe/image/exr_plugin.h"
 
+#include <OpenEXR/IexBaseExc.h>
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfChromaticitiesAttribute.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -18,12 +19,18 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
 #include <cstring>
 #include <exception>
+#include <memory>
 #include <mutex>
 #include <string_view>
 #include <thread>
 #include <vector>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace shprobe {
 
@@ -115,12 +122,71 @@ glm::dvec2 xy(const Imath::V2f& v) {
     return {double(v.x), double(v.y)};
 }
 
+// A file read whole into memory, which OpenEXR reads as if it were mapped: it decodes each chunk
+// where it lies, instead of copying it first into a buffer of its own for each chunk in flight
+// (twice as many as threads, each as large as the chunk uncompressed: 4 of 3 MiB for a 1024 x 512
+// DWAB file on 2 cores, whose first touches each cost a fresh page).
+class FileInMemory final : public Imf::IStream {
+  public:
+    FileInMemory(const std::string& path, std::unique_ptr<char[]> bytes, uint64_t size)
+        : Imf::IStream(path.c_str()), bytes_(std::move(bytes)), size_(size) {}
+    bool isMemoryMapped() const override { return true; }
+    bool read(char c[], int n) override {
+        std::memcpy(c, take(n), size_t(n));
+        return position_ < size_;
+    }
+    char* readMemoryMapped(int n) override { return take(n); }
+    uint64_t tellg() override { return position_; }
+    void seekg(uint64_t position) override { position_ = position; }
+
+  private:
+    // The words of OpenEXR's own file stream for a file that ends early.
+    char* take(int n) {
+        const uint64_t left = position_ < size_ ? size_ - position_ : 0;
+        if (n < 0 || uint64_t(n) > left)
+            throw Iex::InputExc("Early end of file: read " + std::to_string(left) + " out of " +
+                                std::to_string(n) + " requested bytes.");
+        char* at = bytes_.get() + position_;
+        position_ += uint64_t(n);
+        return at;
+    }
+
+    std::unique_ptr<char[]> bytes_;
+    uint64_t size_ = 0;
+    uint64_t position_ = 0;
+};
+
+// The file read whole, if it is a regular file of at most kExrBytesReadWhole bytes; else none. A
+// file that ends early or cannot be read to its end gives what was read, which OpenEXR finds short.
+std::unique_ptr<Imf::IStream> readSmallFile(const std::string& path) {
+    const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return nullptr;
+    struct stat status {};
+    if (fstat(fd, &status) != 0 || !S_ISREG(status.st_mode) || status.st_size > kExrBytesReadWhole) {
+        close(fd);
+        return nullptr;
+    }
+    auto bytes = std::make_unique_for_overwrite<char[]>(size_t(status.st_size));
+    size_t done = 0;
+    while (done < size_t(status.st_size)) {
+        const ssize_t got = ::read(fd, bytes.get() + done, size_t(status.st_size) - done);
+        if (got < 0 && errno == EINTR) continue;
+        if (got <= 0) break;
+        done += size_t(got);
+    }
+    close(fd);
+    return std::make_unique<FileInMemory>(path, std::move(bytes), done);
+}
+
 class ExrDecoder final : public ImageDecoder {
   public:
     explicit ExrDecoder(const std::string& path) : path_(path) {
         startThreadPool();
         try {
-            file_ = std::make_unique<Imf::MultiPartInputFile>(path.c_str(), Imf::globalThreadCount());
+            stream_ = readSmallFile(path);
+            file_ = stream_
+                        ? std::make_unique<Imf::MultiPartInputFile>(*stream_, Imf::globalThreadCount())
+                        : std::make_unique<Imf::MultiPartInputFile>(path.c_str(), Imf::globalThreadCount());
             const Imf::Header& header = file_->header(0);
             const Imath::Box2i window = header.dataWindow();
             dataWindow_ = window;
@@ -189,6 +255,7 @@ class ExrDecoder final : public ImageDecoder {
 
   private:
     std::string path_;
+    std::unique_ptr<Imf::IStream> stream_; // the file in memory, which file_ reads; or none
     std::unique_ptr<Imf::MultiPartInputFile> file_;
     std::unique_ptr<Imf::InputPart> part_;
     Imath::Box2i dataWindow_;

@@ -7,6 +7,7 @@
 #include "shprobe/image/codec.h"
 #include "shprobe/sh/error.h"
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -19,6 +20,11 @@ struct ExrPlugin {
     std::unique_ptr<ImageDecoder> (*openDecoder)(const std::string& path);
     std::string (*encode)(const FloatPixels& pixels, const std::string& what);
 };
+
+// Files up to this size are read whole into memory and decoded where each chunk lies; a larger one
+// is read as a stream, chunk by chunk, so that a bake's peak memory stays the decoded image's and a
+// few chunks'. Either way the pixels and the messages are the same.
+constexpr int64_t kExrBytesReadWhole = int64_t(16) << 20;
 
 // The name of the function the plugin exports: const ExrPlugin* shprobe_exr_plugin_v1().
 #define SHPROBE_EXR_PLUGIN_ENTRY "shprobe_exr_plugin_v1"

@@ -1,0 +1,66 @@
+// prepareHeap (src/app/heap.h): the first large buffer after it lies where the heap is advised as
+// transparent huge pages, and not one of its 4 KiB pages is in memory before it is touched. The
+// kernel makes a huge page only of 2 MiB none of whose pages is mapped yet, so a buffer over a page
+// touched earlier (as the header glibc writes when the heap grows was, before) faults 4 KiB at a
+// time: 512 faults in place of one. Whether the kernel then has a huge page to give depends on the
+// machine, so that is not checked here; docs/benchmark.md ("Memory faults") counts the faults.
+#include "app/heap.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <sys/mman.h>
+#include <unistd.h>
+
+namespace shprobe {
+namespace {
+
+// The VmFlags of the mapping of /proc/self/smaps that holds `address` ("" if none does).
+std::string mappingFlags(uintptr_t address) {
+    std::ifstream smaps("/proc/self/smaps");
+    bool holds = false;
+    for (std::string line; std::getline(smaps, line);) {
+        uintptr_t from = 0, to = 0;
+        char dash = 0;
+        std::istringstream range(line);
+        if (range >> std::hex >> from >> dash >> to && dash == '-') holds = from <= address && address < to;
+        if (holds && line.rfind("VmFlags:", 0) == 0) return line;
+    }
+    return "";
+}
+
+TEST(Heap, LargeBuffersStartOnUntouchedHugePages) {
+    const HugePageHeap heap = prepareHeap();
+#if !defined(__GLIBC__)
+    GTEST_SKIP() << "the heap is set up with glibc only";
+#endif
+    if (heap.begin == heap.end) GTEST_SKIP() << "no heap was advised (a sanitizer's allocator)";
+    EXPECT_EQ(heap.begin % (2 << 20), 0u);
+    EXPECT_GE(heap.end - heap.begin, size_t(62) << 20);
+
+    // An image's worth: where it lies, no page of it in memory yet but those holding glibc's
+    // headers, its first and last.
+    const size_t size = size_t(8) << 20, page = size_t(sysconf(_SC_PAGESIZE));
+    char* buffer = static_cast<char*>(std::malloc(size));
+    ASSERT_NE(buffer, nullptr);
+    const uintptr_t first = reinterpret_cast<uintptr_t>(buffer);
+    EXPECT_GE(first, heap.begin);
+    EXPECT_LE(first + size, heap.end);
+    EXPECT_NE(mappingFlags(first).find(" hg"), std::string::npos) << mappingFlags(first);
+    const uintptr_t from = (first / page + 1) * page, to = (first + size) / page * page;
+    std::vector<unsigned char> resident((to - from) / page);
+    ASSERT_EQ(mincore(reinterpret_cast<void*>(from), to - from, resident.data()), 0);
+    size_t touched = 0;
+    for (unsigned char flags : resident)
+        touched += flags & 1;
+    EXPECT_EQ(touched, 0u) << "of " << resident.size() << " pages";
+    std::free(buffer);
+}
+
+} // namespace
+} // namespace shprobe
