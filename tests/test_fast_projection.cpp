@@ -436,6 +436,40 @@ TEST(FastEquirectProjection, IdenticalForEveryThreadCount) {
         expectIdentical(projectEquirectFast(image, 5, {.threads = threads}), single, "threads");
 }
 
+// Checks: the kernels of every instruction set this processor runs (on x86-64: x86-64-v4, v3 and
+// the baseline, as many as it has), not only the widest that a bake takes, project cube maps and
+// equirect maps as the reference does, within the same bounds, and halves exactly as their floats
+// (the baseline without F16C). An older processor would run the narrower kernels in bakes.
+TEST(FastProjection, EveryKernelLevelMatchesTheReference) {
+    const Cubemap cube = noiseCubemap(65, 65);
+    const Image image = noiseEquirect(130, 65, 130);
+    std::vector<uint16_t> halfBits(size_t(kFaceCount) * 65 * 65 * 3);
+    std::mt19937 random(18);
+    for (uint16_t& bits : halfBits)
+        bits = uint16_t(random() % 0x7c00); // finite, positive
+    const HalfCubemap halves = halfCubemap(65, halfBits);
+    const std::array levels{KernelLevel::Widest, KernelLevel::X86_64_V3, KernelLevel::Baseline};
+    int ran = 0;
+    for (KernelLevel level : levels) {
+        if (level < widestKernelLevel()) continue; // wider than the processor runs
+        ++ran;
+        const FastProjectionOptions options{.widest = level};
+        SCOPED_TRACE("level " + std::to_string(int(level)));
+        for (int order : {3, 8}) {
+            EXPECT_LT(
+                errorRelativeToL00(projectCubemapFast(cube, order, options), projectCubemap(cube, order)),
+                floatRoundingBound(65));
+            EXPECT_LT(
+                errorRelativeToL00(projectEquirectFast(image, order, options), projectEquirect(image, order)),
+                equirectRoundingBound(130));
+            expectIdentical(projectFacesFast(halves.halves.data(), TexelFormat::Rgba16F, 65, order, options),
+                            projectCubemapFast(halves.floats, order, options), "halves");
+        }
+    }
+    std::printf("kernel levels run: %d of %zu\n", ran, levels.size());
+    EXPECT_GE(ran, 1);
+}
+
 // Checks: the accuracy target at a common equirect size, 2048 x 1024 at orders 3, 5 and 8,
 // within 1e-6 of |L_00| of the reference (one reference projection at order 8: lower orders are its
 // first coefficients, the same sums). The bound above allows 7e-5; the rows' rounding errors are

@@ -71,23 +71,22 @@
 #include <vector>
 
 // The kernels are compiled for x86-64-v4 (AVX-512), x86-64-v3 (AVX2, FMA, F16C) and the baseline,
-// and the best one the processor runs is chosen at load time (GCC's target_clones, ELF x86-64
-// only); elsewhere they are compiled for the target alone. flatten inlines the lane functions into
-// each clone, so that they too are compiled for its instruction set. ThreadSanitizer instruments
-// the clones' resolver, which runs before it is set up, so its builds go without clones.
-#if defined(__x86_64__) && defined(__ELF__) && defined(__GNUC__) && !defined(__clang__) &&                   \
-    !defined(__SANITIZE_THREAD__)
-#define SHPROBE_X86_CLONES 1
-#define SHPROBE_KERNEL [[gnu::target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"), gnu::flatten]]
+// and the best one the processor runs is chosen at the first projection (x86-64 with GCC);
+// elsewhere they are compiled for the target alone. flatten inlines the lane functions into each
+// copy, so that they too are compiled for its instruction set. GCC's target_clones would choose at
+// load time instead, by resolvers that run libgcc's processor detection as every process starts
+// (cpuid traps to the hypervisor on a VM: a tenth of `shprobe --help` on the CI machine).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define SHPROBE_X86_LEVELS 1
 #else
-#define SHPROBE_X86_CLONES 0
-#define SHPROBE_KERNEL [[gnu::flatten]]
+#define SHPROBE_X86_LEVELS 0
 #endif
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if SHPROBE_X86_CLONES
+#if SHPROBE_X86_LEVELS
+#include <cpuid.h>
 #include <immintrin.h>
 #endif
 
@@ -205,10 +204,10 @@ struct Rgba16FTexels {
     }
 };
 
-#if SHPROBE_X86_CLONES
+#if SHPROBE_X86_LEVELS
 // Eight halves to floats by F16C's one instruction (exact, like halfToFloat). Compiled for F16C
-// alone: the clones that have it (x86-64-v3 and v4) inline it, the baseline clone calls it, which
-// it may only do where the processor has F16C. The floats go through memory (untyped, as Lanes are
+// alone: the kernels that have it (x86-64-v3 and v4) inline it, the baseline ones call it, which
+// they may only do where the processor has F16C. The floats go through memory (untyped, as Lanes are
 // aligned differently there), as the passing of 32-byte vectors differs between code with and
 // without AVX.
 [[gnu::target("f16c")]] void convertHalvesF16c(const std::byte* halves, void* floats) {
@@ -233,8 +232,45 @@ struct Rgba16FTexelsF16c {
     }
 };
 
-bool processorHasF16c() {
-    return __builtin_cpu_supports("f16c");
+// What the processor runs of the kernels' instruction sets, by the x86-64 psABI's levels: each
+// level's features in cpuid, and the AVX (and AVX-512) registers saved by the operating system
+// (xgetbv), without which the instructions fault.
+struct X86Features {
+    enum Level { Baseline, V3, V4 } level = Baseline;
+    bool f16c = false;
+};
+
+X86Features detectX86Features() {
+    unsigned a = 0, b = 0, c = 0, d = 0;
+    if (!__get_cpuid(1, &a, &b, &c, &d)) return {};
+    const unsigned leaf1 = c;
+    const bool avxSaved = [&] {
+        if (!(leaf1 & bit_OSXSAVE)) return false;
+        unsigned low = 0, high = 0;
+        asm("xgetbv" : "=a"(low), "=d"(high) : "c"(0));
+        return (low & 0x6u) == 0x6u; // SSE and AVX state
+    }();
+    X86Features features;
+    features.f16c = avxSaved && (leaf1 & bit_AVX) && (leaf1 & bit_F16C);
+    const unsigned v2 = bit_SSE3 | bit_SSSE3 | bit_SSE4_1 | bit_SSE4_2 | bit_POPCNT | bit_CMPXCHG16B;
+    const unsigned v3 = bit_FMA | bit_MOVBE | bit_AVX | bit_F16C;
+    if (!avxSaved || (leaf1 & (v2 | v3)) != (v2 | v3) || __get_cpuid_max(0, nullptr) < 7) return features;
+    unsigned extended = 0;
+    if (!__get_cpuid(0x80000001, &a, &b, &extended, &d)) return features;
+    __cpuid_count(7, 0, a, b, c, d);
+    const unsigned v3Leaf7 = bit_AVX2 | bit_BMI | bit_BMI2;
+    if ((b & v3Leaf7) != v3Leaf7 || !(extended & bit_LAHF_LM) || !(extended & bit_LZCNT)) return features;
+    features.level = X86Features::V3;
+    const unsigned v4Leaf7 = bit_AVX512F | bit_AVX512BW | bit_AVX512CD | bit_AVX512DQ | bit_AVX512VL;
+    unsigned low = 0, high = 0;
+    asm("xgetbv" : "=a"(low), "=d"(high) : "c"(0));
+    if ((b & v4Leaf7) == v4Leaf7 && (low & 0xe0u) == 0xe0u) features.level = X86Features::V4; // opmask, ZMM
+    return features;
+}
+
+const X86Features& x86Features() {
+    static const X86Features features = detectX86Features();
+    return features;
 }
 #endif
 
@@ -683,7 +719,7 @@ struct EquirectRows {
 // The rows of a block, in order (the texels of each row are asked for while the one before is
 // multiplied).
 template <class Rows, int Order, class Texels>
-SHPROBE_KERNEL void projectBlock(const Plan& plan, int block, Scratch& scratch, double* blockSums) {
+[[gnu::flatten]] void projectBlock(const Plan& plan, int block, Scratch& scratch, double* blockSums) {
     const int lastRow = std::min(plan.rows, (block + 1) * plan.blockRows);
     for (int row = block * plan.blockRows; row < lastRow; ++row)
         Rows::template project<Order, Texels>(plan, row, lastRow, scratch, blockSums);
@@ -691,19 +727,48 @@ SHPROBE_KERNEL void projectBlock(const Plan& plan, int block, Scratch& scratch, 
 
 using BlockKernel = void (*)(const Plan&, int, Scratch&, double*);
 
+#if SHPROBE_X86_LEVELS
+// The same kernel for x86-64-v3 and v4: flatten inlines projectBlock and all it calls, compiled
+// anew for the level.
+template <class Rows, int Order, class Texels>
+[[gnu::target("arch=x86-64-v3"), gnu::flatten]] void projectBlockV3(const Plan& plan, int block,
+                                                                    Scratch& scratch, double* blockSums) {
+    projectBlock<Rows, Order, Texels>(plan, block, scratch, blockSums);
+}
+template <class Rows, int Order, class Texels>
+[[gnu::target("arch=x86-64-v4"), gnu::flatten]] void projectBlockV4(const Plan& plan, int block,
+                                                                    Scratch& scratch, double* blockSums) {
+    projectBlock<Rows, Order, Texels>(plan, block, scratch, blockSums);
+}
+#endif
+
 template <class Rows, class Texels, int... orderMinusOne>
-BlockKernel blockKernelOf(int order, std::integer_sequence<int, orderMinusOne...>) {
+BlockKernel blockKernelOf(int order, KernelLevel level, std::integer_sequence<int, orderMinusOne...>) {
+#if SHPROBE_X86_LEVELS
+    if (level == KernelLevel::Widest) {
+        const BlockKernel kernels[] = {&projectBlockV4<Rows, orderMinusOne + 1, Texels>...};
+        return kernels[order - 1];
+    }
+    if (level == KernelLevel::X86_64_V3) {
+        const BlockKernel kernels[] = {&projectBlockV3<Rows, orderMinusOne + 1, Texels>...};
+        return kernels[order - 1];
+    }
+#endif
     const BlockKernel kernels[] = {&projectBlock<Rows, orderMinusOne + 1, Texels>...};
     return kernels[order - 1];
 }
 
-template <class Rows> BlockKernel blockKernel(TexelFormat format, int order) {
+// The kernel for the format and order, of the widest level both the processor and the options allow.
+template <class Rows>
+BlockKernel blockKernel(TexelFormat format, int order, const FastProjectionOptions& options) {
     const auto orders = std::make_integer_sequence<int, kMaxOrder>{};
-    if (format == TexelFormat::Rgba32F) return blockKernelOf<Rows, Rgba32FTexels>(order, orders);
-#if SHPROBE_X86_CLONES
-    if (processorHasF16c()) return blockKernelOf<Rows, Rgba16FTexelsF16c>(order, orders);
+    const KernelLevel level = std::max(widestKernelLevel(), options.widest); // the enum runs widest first
+    if (format == TexelFormat::Rgba32F) return blockKernelOf<Rows, Rgba32FTexels>(order, level, orders);
+#if SHPROBE_X86_LEVELS
+    if (x86Features().f16c && options.widest != KernelLevel::Baseline)
+        return blockKernelOf<Rows, Rgba16FTexelsF16c>(order, level, orders);
 #endif
-    return blockKernelOf<Rows, Rgba16FTexels>(order, orders);
+    return blockKernelOf<Rows, Rgba16FTexels>(order, level, orders);
 }
 
 // Runs every block on `threads` threads, the caller's among them; each takes the next block not yet
@@ -828,6 +893,14 @@ void requireTexelCount(size_t actual, size_t expected, const char* what) {
 
 } // namespace
 
+KernelLevel widestKernelLevel() {
+#if SHPROBE_X86_LEVELS
+    if (x86Features().level == X86Features::V4) return KernelLevel::Widest;
+    if (x86Features().level == X86Features::V3) return KernelLevel::X86_64_V3;
+#endif
+    return KernelLevel::Baseline;
+}
+
 ShCoefficients projectFacesFast(const FaceRows& faces, TexelFormat format, int faceSize, int order,
                                 const FastProjectionOptions& options) {
     if (faceSize < 1)
@@ -843,7 +916,7 @@ ShCoefficients projectFacesFast(const FaceRows& faces, TexelFormat format, int f
     for (int face = 0; face < kFaceCount; ++face)
         orientations[size_t(face)] = faceOrientation(face);
     return combineBlocks(
-        plan, projectBlocks(plan, blockKernel<CubeRows>(format, order), threadCount(options, plan)),
+        plan, projectBlocks(plan, blockKernel<CubeRows>(format, order, options), threadCount(options, plan)),
         orientations);
 }
 
@@ -883,7 +956,8 @@ ShCoefficients projectEquirectFast(const void* texels, TexelFormat format, int w
     const LaneArray table = makeEquirectTable(plan);
     plan.sharedTable = table.get();
     return combineBlocks(
-        plan, projectBlocks(plan, blockKernel<EquirectRows>(format, order), threadCount(options, plan)),
+        plan,
+        projectBlocks(plan, blockKernel<EquirectRows>(format, order, options), threadCount(options, plan)),
         std::span(&kEquirectOrientation, 1));
 }
 
