@@ -32,8 +32,8 @@ HugePageHeap prepareHeap() {
     mallopt(M_ARENA_MAX, 1);
     // The heap grows by the request and the pad, and the new top's header is written at the end of
     // the request: every byte written so far lies below `begin`. The kernel makes a huge page only
-    // where none of its 4 KiB pages has been touched, so the advice starts above all of them (not,
-    // as before, at the first 2 MiB boundary, whose huge page that header had already spoiled).
+    // of 2 MiB none of whose 4 KiB pages is mapped, so the advice starts above all of them; the
+    // first 2 MiB boundary above the block would lie below that header.
     mallopt(M_TOP_PAD, int(kAdvised));
     void* block = std::malloc(kHugePage);
     mallopt(M_TOP_PAD, int(kMiB));
@@ -45,13 +45,16 @@ HugePageHeap prepareHeap() {
         std::free(block);
         return {};
     }
-    if (madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE) != 0) {
+    if (madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE) != 0) { // no huge pages here
         std::free(block);
         return {};
     }
-    // The block grows in place up to `begin` and is kept for the process (none of its pages touched
-    // but its first), so that the next large buffers start there, on a huge page, and not below it.
-    if (!std::realloc(block, begin - at - kChunkHeader)) std::free(block);
+    // The block grows up to `begin` (in place: the heap's top follows it) and is kept for the
+    // process, none of its pages touched but its first, so that the next large buffers start there,
+    // on a huge page, and not below it.
+    static void* kept = nullptr;
+    kept = std::realloc(block, begin - at - kChunkHeader);
+    if (!kept) kept = block;
     return {begin, end};
 #else
     return {};

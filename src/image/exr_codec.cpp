@@ -156,26 +156,56 @@ class FileInMemory final : public Imf::IStream {
     uint64_t position_ = 0;
 };
 
-// The file read whole, if it is a regular file of at most kExrBytesReadWhole bytes; else none. A
-// file that ends early or cannot be read to its end gives what was read, which OpenEXR finds short.
+// Compressions of 32 or more scanlines a chunk, whose chunk buffers reading whole saves; each has
+// a decompressor, which writes a chunk into a buffer of its full size whatever the file says. (An
+// uncompressed chunk is used where it lies: one that says it is shorter than its lines would be
+// read past the end of the file's bytes, so such files are read as a stream.)
+bool hasLargeCompressedChunks(const Imf::Header& header) {
+    switch (header.compression()) {
+    case Imf::PIZ_COMPRESSION:
+    case Imf::B44_COMPRESSION:
+    case Imf::B44A_COMPRESSION:
+    case Imf::DWAA_COMPRESSION:
+    case Imf::DWAB_COMPRESSION:
+        return true;
+    default:
+        return false;
+    }
+}
+
+// The file read whole, if it is a regular file of at most kExrBytesReadWhole bytes that can be read
+// to its end; else none, and it is read as a stream, which says what went wrong.
 std::unique_ptr<Imf::IStream> readSmallFile(const std::string& path) {
-    const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) return nullptr;
     struct stat status {};
-    if (fstat(fd, &status) != 0 || !S_ISREG(status.st_mode) || status.st_size > kExrBytesReadWhole) {
-        close(fd);
-        return nullptr;
-    }
-    auto bytes = std::make_unique_for_overwrite<char[]>(size_t(status.st_size));
+    std::unique_ptr<char[]> bytes;
     size_t done = 0;
-    while (done < size_t(status.st_size)) {
-        const ssize_t got = ::read(fd, bytes.get() + done, size_t(status.st_size) - done);
-        if (got < 0 && errno == EINTR) continue;
-        if (got <= 0) break;
-        done += size_t(got);
+    if (fstat(fd, &status) == 0 && S_ISREG(status.st_mode) && status.st_size <= kExrBytesReadWhole) {
+        bytes = std::make_unique_for_overwrite<char[]>(size_t(status.st_size));
+        while (bytes && done < size_t(status.st_size)) {
+            const ssize_t got = ::read(fd, bytes.get() + done, size_t(status.st_size) - done);
+            if (got < 0 && errno == EINTR) continue;
+            if (got < 0) bytes.reset();
+            if (got <= 0) break; // an error, or a file that shrank: what was there is read
+            done += size_t(got);
+        }
     }
     close(fd);
-    return std::make_unique<FileInMemory>(path, std::move(bytes), done);
+    return bytes ? std::make_unique<FileInMemory>(path, std::move(bytes), done) : nullptr;
+}
+
+// The file as a stream, then, if its first part is scanlines or tiles in large compressed chunks
+// and it is small, read whole.
+std::unique_ptr<Imf::MultiPartInputFile> openFile(const std::string& path,
+                                                  std::unique_ptr<Imf::IStream>& stream) {
+    auto file = std::make_unique<Imf::MultiPartInputFile>(path.c_str(), Imf::globalThreadCount());
+    const Imf::Header& header = file->header(0);
+    if ((header.hasType() && Imf::isDeepData(header.type())) || !hasLargeCompressedChunks(header))
+        return file;
+    stream = readSmallFile(path);
+    return stream ? std::make_unique<Imf::MultiPartInputFile>(*stream, Imf::globalThreadCount())
+                  : std::move(file);
 }
 
 class ExrDecoder final : public ImageDecoder {
@@ -183,10 +213,7 @@ class ExrDecoder final : public ImageDecoder {
     explicit ExrDecoder(const std::string& path) : path_(path) {
         startThreadPool();
         try {
-            stream_ = readSmallFile(path);
-            file_ = stream_
-                        ? std::make_unique<Imf::MultiPartInputFile>(*stream_, Imf::globalThreadCount())
-                        : std::make_unique<Imf::MultiPartInputFile>(path.c_str(), Imf::globalThreadCount());
+            file_ = openFile(path, stream_);
             const Imf::Header& header = file_->header(0);
             const Imath::Box2i window = header.dataWindow();
             dataWindow_ = window;

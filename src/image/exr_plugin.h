@@ -21,9 +21,10 @@ struct ExrPlugin {
     std::string (*encode)(const FloatPixels& pixels, const std::string& what);
 };
 
-// Files up to this size are read whole into memory and decoded where each chunk lies; a larger one
-// is read as a stream, chunk by chunk, so that a bake's peak memory stays the decoded image's and a
-// few chunks'. Either way the pixels and the messages are the same.
+// Files up to this size whose chunks are large (PIZ, B44, B44A, DWAA, DWAB: 32 or more scanlines)
+// are read whole into memory and decoded where each chunk lies; others are read as a stream, chunk
+// by chunk, so that a bake's peak memory stays the decoded image's and a few chunks'. Either way
+// the pixels and the messages for a short file are the same.
 constexpr int64_t kExrBytesReadWhole = int64_t(16) << 20;
 
 // The name of the function the plugin exports: const ExrPlugin* shprobe_exr_plugin_v1().

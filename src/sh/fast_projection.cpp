@@ -75,7 +75,7 @@
 // elsewhere they are compiled for the target alone. flatten inlines the lane functions into each
 // copy, so that they too are compiled for its instruction set. GCC's target_clones would choose at
 // load time instead, by resolvers that run libgcc's processor detection as every process starts
-// (cpuid traps to the hypervisor on a VM: a tenth of `shprobe --help` on the CI machine).
+// (cpuid traps to the hypervisor on a VM: there, a tenth of `shprobe --help`).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define SHPROBE_X86_LEVELS 1
 #else
@@ -206,10 +206,8 @@ struct Rgba16FTexels {
 
 #if SHPROBE_X86_LEVELS
 // Eight halves to floats by F16C's one instruction (exact, like halfToFloat). Compiled for F16C
-// alone: the kernels that have it (x86-64-v3 and v4) inline it, the baseline ones call it, which
-// they may only do where the processor has F16C. The floats go through memory (untyped, as Lanes are
-// aligned differently there), as the passing of 32-byte vectors differs between code with and
-// without AVX.
+// alone, and inlined into the kernels that have it (x86-64-v3 and v4); the baseline ones convert
+// without it. The floats go through memory, untyped, as Lanes are aligned differently there.
 [[gnu::target("f16c")]] void convertHalvesF16c(const std::byte* halves, void* floats) {
     __m128i bits;
     std::memcpy(&bits, halves, sizeof bits);
@@ -232,40 +230,36 @@ struct Rgba16FTexelsF16c {
     }
 };
 
-// What the processor runs of the kernels' instruction sets, by the x86-64 psABI's levels: each
-// level's features in cpuid, and the AVX (and AVX-512) registers saved by the operating system
-// (xgetbv), without which the instructions fault.
+// The widest of the kernels' instruction sets the processor runs, by the x86-64 psABI's levels:
+// each level's features in cpuid, and the AVX (and AVX-512) registers saved by the operating
+// system (xgetbv, read only where OSXSAVE says it may be), without which the instructions fault.
 struct X86Features {
     enum Level { Baseline, V3, V4 } level = Baseline;
-    bool f16c = false;
 };
+
+uint64_t savedRegisterState() {
+    unsigned low = 0, high = 0;
+    asm("xgetbv" : "=a"(low), "=d"(high) : "c"(0));
+    return uint64_t(high) << 32 | low;
+}
 
 X86Features detectX86Features() {
     unsigned a = 0, b = 0, c = 0, d = 0;
     if (!__get_cpuid(1, &a, &b, &c, &d)) return {};
-    const unsigned leaf1 = c;
-    const bool avxSaved = [&] {
-        if (!(leaf1 & bit_OSXSAVE)) return false;
-        unsigned low = 0, high = 0;
-        asm("xgetbv" : "=a"(low), "=d"(high) : "c"(0));
-        return (low & 0x6u) == 0x6u; // SSE and AVX state
-    }();
-    X86Features features;
-    features.f16c = avxSaved && (leaf1 & bit_AVX) && (leaf1 & bit_F16C);
     const unsigned v2 = bit_SSE3 | bit_SSSE3 | bit_SSE4_1 | bit_SSE4_2 | bit_POPCNT | bit_CMPXCHG16B;
-    const unsigned v3 = bit_FMA | bit_MOVBE | bit_AVX | bit_F16C;
-    if (!avxSaved || (leaf1 & (v2 | v3)) != (v2 | v3) || __get_cpuid_max(0, nullptr) < 7) return features;
+    const unsigned v3 = bit_FMA | bit_MOVBE | bit_AVX | bit_F16C | bit_OSXSAVE;
+    if ((c & (v2 | v3)) != (v2 | v3) || __get_cpuid_max(0, nullptr) < 7) return {};
+    const uint64_t saved = savedRegisterState();
+    if ((saved & 0x6u) != 0x6u) return {}; // SSE and AVX state
     unsigned extended = 0;
-    if (!__get_cpuid(0x80000001, &a, &b, &extended, &d)) return features;
+    if (!__get_cpuid(0x80000001, &a, &b, &extended, &d)) return {};
+    if (!(extended & bit_LAHF_LM) || !(extended & bit_LZCNT)) return {};
     __cpuid_count(7, 0, a, b, c, d);
     const unsigned v3Leaf7 = bit_AVX2 | bit_BMI | bit_BMI2;
-    if ((b & v3Leaf7) != v3Leaf7 || !(extended & bit_LAHF_LM) || !(extended & bit_LZCNT)) return features;
-    features.level = X86Features::V3;
+    if ((b & v3Leaf7) != v3Leaf7) return {};
     const unsigned v4Leaf7 = bit_AVX512F | bit_AVX512BW | bit_AVX512CD | bit_AVX512DQ | bit_AVX512VL;
-    unsigned low = 0, high = 0;
-    asm("xgetbv" : "=a"(low), "=d"(high) : "c"(0));
-    if ((b & v4Leaf7) == v4Leaf7 && (low & 0xe0u) == 0xe0u) features.level = X86Features::V4; // opmask, ZMM
-    return features;
+    const bool v4 = (b & v4Leaf7) == v4Leaf7 && (saved & 0xe0u) == 0xe0u; // opmask and ZMM state
+    return {v4 ? X86Features::V4 : X86Features::V3};
 }
 
 const X86Features& x86Features() {
@@ -745,7 +739,7 @@ template <class Rows, int Order, class Texels>
 template <class Rows, class Texels, int... orderMinusOne>
 BlockKernel blockKernelOf(int order, KernelLevel level, std::integer_sequence<int, orderMinusOne...>) {
 #if SHPROBE_X86_LEVELS
-    if (level == KernelLevel::Widest) {
+    if (level == KernelLevel::X86_64_V4) {
         const BlockKernel kernels[] = {&projectBlockV4<Rows, orderMinusOne + 1, Texels>...};
         return kernels[order - 1];
     }
@@ -765,8 +759,7 @@ BlockKernel blockKernel(TexelFormat format, int order, const FastProjectionOptio
     const KernelLevel level = std::max(widestKernelLevel(), options.widest); // the enum runs widest first
     if (format == TexelFormat::Rgba32F) return blockKernelOf<Rows, Rgba32FTexels>(order, level, orders);
 #if SHPROBE_X86_LEVELS
-    if (x86Features().f16c && options.widest != KernelLevel::Baseline)
-        return blockKernelOf<Rows, Rgba16FTexelsF16c>(order, level, orders);
+    if (level != KernelLevel::Baseline) return blockKernelOf<Rows, Rgba16FTexelsF16c>(order, level, orders);
 #endif
     return blockKernelOf<Rows, Rgba16FTexels>(order, level, orders);
 }
@@ -895,7 +888,7 @@ void requireTexelCount(size_t actual, size_t expected, const char* what) {
 
 KernelLevel widestKernelLevel() {
 #if SHPROBE_X86_LEVELS
-    if (x86Features().level == X86Features::V4) return KernelLevel::Widest;
+    if (x86Features().level == X86Features::V4) return KernelLevel::X86_64_V4;
     if (x86Features().level == X86Features::V3) return KernelLevel::X86_64_V3;
 #endif
     return KernelLevel::Baseline;

@@ -9,18 +9,18 @@
 
 namespace shprobe {
 
-// The instruction sets the kernels may use, widest first: on x86-64 (GCC builds) the kernels are
-// compiled for x86-64-v4 (AVX-512: Widest), x86-64-v3 (AVX2, FMA, F16C) and the baseline, and run
-// the widest the processor has, up to the one asked; elsewhere there is one kernel, for the target.
-// Baseline also converts halves without F16C.
-enum class KernelLevel { Widest, X86_64_V3, Baseline };
+// The instruction sets the kernels may use, widest first. On x86-64 (GCC builds) the kernels are
+// compiled for x86-64-v4 (AVX-512), x86-64-v3 (AVX2, FMA, F16C) and the baseline (halves converted
+// without F16C), and run the widest the processor has, up to the one asked; elsewhere there is one
+// kernel, for the target, whatever is asked.
+enum class KernelLevel { X86_64_V4, X86_64_V3, Baseline };
 
 struct FastProjectionOptions {
     unsigned threads = 0; // 0: all cores (fewer for small inputs, where starting threads costs more)
-    KernelLevel widest = KernelLevel::Widest; // narrower: to check the narrower kernels
+    KernelLevel widest = KernelLevel::X86_64_V4; // narrower: to check the narrower kernels
 };
 
-// The widest kernels this processor runs (KernelLevel::Baseline where there are no others).
+// The widest kernels this processor runs (Baseline where there are no others).
 KernelLevel widestKernelLevel();
 
 // Radiance coefficients of orders 1..kMaxOrder. texels: 6 faces of faceSize^2 texels, face-major in
