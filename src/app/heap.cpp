@@ -41,11 +41,9 @@ HugePageHeap prepareHeap() {
     const uintptr_t begin = (at + kHugePage + kChunkHeader + kHugePage - 1) & ~(kHugePage - 1);
     const uintptr_t end = reinterpret_cast<uintptr_t>(sbrk(0)) & ~(kHugePage - 1);
     // Only where the heap grew where the break says (not under a sanitizer's allocator, say).
-    if (!block || begin >= end || end - begin > kAdvised + 2 * kHugePage) {
-        std::free(block);
-        return {};
-    }
-    if (madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE) != 0) { // no huge pages here
+    // And only where the kernel takes the advice (it may have no huge pages).
+    if (!block || begin >= end || end - begin > kAdvised + 2 * kHugePage ||
+        madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE) != 0) {
         std::free(block);
         return {};
     }

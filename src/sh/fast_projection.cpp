@@ -233,39 +233,31 @@ struct Rgba16FTexelsF16c {
 // The widest of the kernels' instruction sets the processor runs, by the x86-64 psABI's levels:
 // each level's features in cpuid, and the AVX (and AVX-512) registers saved by the operating
 // system (xgetbv, read only where OSXSAVE says it may be), without which the instructions fault.
-struct X86Features {
-    enum Level { Baseline, V3, V4 } level = Baseline;
-};
-
 uint64_t savedRegisterState() {
     unsigned low = 0, high = 0;
     asm("xgetbv" : "=a"(low), "=d"(high) : "c"(0));
     return uint64_t(high) << 32 | low;
 }
 
-X86Features detectX86Features() {
+KernelLevel detectWidestKernelLevel() {
     unsigned a = 0, b = 0, c = 0, d = 0;
-    if (!__get_cpuid(1, &a, &b, &c, &d)) return {};
+    if (!__get_cpuid(1, &a, &b, &c, &d)) return KernelLevel::Baseline;
     const unsigned v2 = bit_SSE3 | bit_SSSE3 | bit_SSE4_1 | bit_SSE4_2 | bit_POPCNT | bit_CMPXCHG16B;
     const unsigned v3 = bit_FMA | bit_MOVBE | bit_AVX | bit_F16C | bit_OSXSAVE;
-    if ((c & (v2 | v3)) != (v2 | v3) || __get_cpuid_max(0, nullptr) < 7) return {};
+    if ((c & (v2 | v3)) != (v2 | v3) || __get_cpuid_max(0, nullptr) < 7) return KernelLevel::Baseline;
     const uint64_t saved = savedRegisterState();
-    if ((saved & 0x6u) != 0x6u) return {}; // SSE and AVX state
+    if ((saved & 0x6u) != 0x6u) return KernelLevel::Baseline; // SSE and AVX state
     unsigned extended = 0;
-    if (!__get_cpuid(0x80000001, &a, &b, &extended, &d)) return {};
-    if (!(extended & bit_LAHF_LM) || !(extended & bit_LZCNT)) return {};
+    if (!__get_cpuid(0x80000001, &a, &b, &extended, &d)) return KernelLevel::Baseline;
+    if (!(extended & bit_LAHF_LM) || !(extended & bit_LZCNT)) return KernelLevel::Baseline;
     __cpuid_count(7, 0, a, b, c, d);
     const unsigned v3Leaf7 = bit_AVX2 | bit_BMI | bit_BMI2;
-    if ((b & v3Leaf7) != v3Leaf7) return {};
+    if ((b & v3Leaf7) != v3Leaf7) return KernelLevel::Baseline;
     const unsigned v4Leaf7 = bit_AVX512F | bit_AVX512BW | bit_AVX512CD | bit_AVX512DQ | bit_AVX512VL;
     const bool v4 = (b & v4Leaf7) == v4Leaf7 && (saved & 0xe0u) == 0xe0u; // opmask and ZMM state
-    return {v4 ? X86Features::V4 : X86Features::V3};
+    return v4 ? KernelLevel::X86_64_V4 : KernelLevel::X86_64_V3;
 }
 
-const X86Features& x86Features() {
-    static const X86Features features = detectX86Features();
-    return features;
-}
 #endif
 
 // ------------------------------------------------------------------------------------------------
@@ -888,10 +880,11 @@ void requireTexelCount(size_t actual, size_t expected, const char* what) {
 
 KernelLevel widestKernelLevel() {
 #if SHPROBE_X86_LEVELS
-    if (x86Features().level == X86Features::V4) return KernelLevel::X86_64_V4;
-    if (x86Features().level == X86Features::V3) return KernelLevel::X86_64_V3;
-#endif
+    static const KernelLevel widest = detectWidestKernelLevel();
+    return widest;
+#else
     return KernelLevel::Baseline;
+#endif
 }
 
 ShCoefficients projectFacesFast(const FaceRows& faces, TexelFormat format, int faceSize, int order,
