@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -136,10 +137,22 @@ OpenedImage openImage(const std::string& path, int64_t maxPixels) {
     return opened;
 }
 
-// Whether a texel's colour is NaN or infinite (the unused alpha is not looked at). Bitwise, so
-// that a loop counting them vectorizes.
+// Whether a texel's colour is NaN or infinite (the unused alpha is not looked at).
 bool isNonFinite(const glm::vec4& texel) {
     return !(std::isfinite(texel.r) & std::isfinite(texel.g) & std::isfinite(texel.b));
+}
+
+// Whether any texel readPixels leaves is NaN or infinite: a float whose exponent bits are all
+// ones. Its alpha is the blank texel's 1, so all four floats are looked at, one after another: a
+// loop of integer compares that vectorizes on any x86-64 (std::count_if with isNonFinite does not,
+// and took twice as long as a read of the texels, 0.5 ms for courtyard.exr's 8 MiB).
+bool anyNonFinite(std::span<const glm::vec4> texels) {
+    constexpr uint32_t kExponentBits = 0x7f800000u;
+    const float* values = &texels.data()->x;
+    uint32_t found = 0;
+    for (size_t i = 0; i < 4 * texels.size(); ++i)
+        found |= uint32_t((std::bit_cast<uint32_t>(values[i]) & kExponentBits) == kExponentBits);
+    return found != 0;
 }
 
 // Texels to read an image into: black, with the unused alpha 1 as in every cube map the library
@@ -147,20 +160,17 @@ bool isNonFinite(const glm::vec4& texel) {
 constexpr glm::vec4 kBlankTexel(0.0f, 0.0f, 0.0f, 1.0f);
 
 // Reads the channels the plan names into `texels` (width x height of them, each kBlankTexel) and
-// makes them RGB, decoded to linear if the file is sRGB. Returns how many texels are NaN or
+// makes them RGB, decoded to linear if the file is sRGB. Returns whether any texel is NaN or
 // infinite, for applyNonFinitePolicy. The usual R, G, B in place need no pass of their own: only
-// the count reads them again (a pass writing alpha after the decoder took a third as long as the
+// that check reads them again (a pass writing alpha after the decoder took a third as long as the
 // decode of courtyard.exr itself, the image no longer in the caches).
-size_t readPixels(const OpenedImage& opened, std::span<glm::vec4> texels) {
+bool readPixels(const OpenedImage& opened, std::span<glm::vec4> texels) {
     const ImageHeader& header = opened.header();
     const ChannelPlan& plan = opened.plan;
     const std::string& path = opened.path;
     const std::array<int, 3> at = readPlannedChannels(*opened.decoder, plan, texels);
-    const auto countNonFinite = [&] {
-        return size_t(std::count_if(texels.begin(), texels.end(), isNonFinite));
-    };
     if (plan.meaning == ChannelMeaning::Rgb && at == std::array<int, 3>{0, 1, 2} && !header.srgb)
-        return countNonFinite();
+        return anyNonFinite(texels);
     const glm::vec3 weights = plan.meaning == ChannelMeaning::LuminanceChroma
                                   ? luminanceWeights(header.chromaticities.value_or(Chromaticities{}), path)
                                   : glm::vec3(0.0f);
@@ -173,13 +183,13 @@ size_t readPixels(const OpenedImage& opened, std::span<glm::vec4> texels) {
         texel = glm::vec4(rgb, 1.0f);
     }
     if (header.srgb) decodeSrgb(texels);
-    return countNonFinite();
+    return anyNonFinite(texels);
 }
 
 // The policy for the texels readPixels found NaN or infinite, if it found any.
-size_t applyPolicyToFound(std::span<glm::vec4> texels, size_t found, NonFinitePolicy policy,
+size_t applyPolicyToFound(std::span<glm::vec4> texels, bool found, NonFinitePolicy policy,
                           const std::string& what) {
-    return found == 0 ? 0 : applyNonFinitePolicy(texels, policy, what);
+    return found ? applyNonFinitePolicy(texels, policy, what) : 0;
 }
 
 std::string replaceAll(std::string text, std::string_view from, std::string_view to) {
@@ -267,7 +277,7 @@ Environment loadFaces(const std::string& source, const LoadOptions& options) {
     forEachItem(kFaceCount, threadCount(kFaceCount * faceTexels, kFaceTexelsPerThread), [&](int face) {
         try {
             std::span<glm::vec4> texels(cubemap.texels.data() + face * faceTexels, faceTexels);
-            const size_t found = readPixels(faces[size_t(face)], texels);
+            const bool found = readPixels(faces[size_t(face)], texels);
             replaced[size_t(face)] =
                 applyPolicyToFound(texels, found, options.nonFinite, paths[size_t(face)]);
         } catch (...) {
@@ -298,10 +308,10 @@ Cubemap imageToCubemap(const Image& image, Layout layout, int faceSize) {
     return resizedTo(crossToCubemap(image, layout), faceSize);
 }
 
-// An image and how many of its texels readPixels found NaN or infinite.
+// An image and whether readPixels found any of its texels NaN or infinite.
 struct DecodedImage {
     Image image;
-    size_t nonFinite = 0;
+    bool nonFinite = false;
 };
 
 DecodedImage decodeImage(const std::string& path, int64_t maxPixels) {
@@ -309,7 +319,7 @@ DecodedImage decodeImage(const std::string& path, int64_t maxPixels) {
     const ImageHeader& header = opened.header();
     DecodedImage decoded{Image{header.width, header.height,
                                std::vector<glm::vec4>(size_t(header.width) * header.height, kBlankTexel)},
-                         0};
+                         false};
     decoded.nonFinite = readPixels(opened, decoded.image.texels);
     return decoded;
 }
