@@ -1294,6 +1294,33 @@ TEST(DefaultSky, SunIsBrightAndGroundIsDark) {
     EXPECT_LT(groundSum / groundCount, 0.5 * skySum / skyCount);
 }
 
+// Clear of the sun a texel holds the sky at its center, whatever the face size: 1 and 7 texels are
+// fewer than the rows' blocks of 64 directions, 100 ends in a part of one. makeDefaultSky finds
+// the directions row by row and skyRadiance normalizes texelDirection's again, which may move it
+// by an ulp of a double: the float texels agree to a few float ulps.
+TEST(DefaultSky, TexelsClearOfTheSunHoldTheSkyAtTheirCenters) {
+    SkyParameters sky;
+    glm::dvec3 sun = glm::normalize(sky.sunDirection);
+    for (int n : {1, 7, 64, 100}) {
+        Cubemap cubemap = makeDefaultSky(n, sky);
+        int compared = 0;
+        for (int face = 0; face < kFaceCount; ++face)
+            for (int j = 0; j < n; ++j)
+                for (int i = 0; i < n; ++i) {
+                    glm::dvec3 d = texelDirection(face, i, j, n);
+                    if (angleBetween(d, sun) < sky.sunAngularRadius + 1.5 / n) continue; // past sqrt(2) / n
+                    glm::dvec3 expected = skyRadiance(sky, d);
+                    glm::vec4 texel = cubemap.at(face, i, j);
+                    for (int c = 0; c < 3; ++c)
+                        ASSERT_NEAR(texel[c], expected[c], 1e-6 * expected[c])
+                            << n << " " << face << " " << i << " " << j;
+                    ASSERT_EQ(texel.a, 1.0f);
+                    ++compared;
+                }
+        EXPECT_GE(compared, kFaceCount * n * n / 2) << n;
+    }
+}
+
 // The sun's power is sunRadiance times its cone's solid angle 2 pi (1 - cos r), whatever the face
 // size, even when the disc is smaller than a texel. The coverage grid (8 samples per sun radius,
 // about 200 inside the disc) miscounts the disc's edge by a few tenths of a percent (0.2% measured).

@@ -4,6 +4,7 @@
 #include "shprobe/sh/parallel.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <glm/geometric.hpp>
 
@@ -39,12 +40,17 @@ Sun sunOf(const SkyParameters& sky, int faceSize) {
     return {glm::normalize(sky.sunDirection), std::cos(sky.sunAngularRadius), std::cos(reach)};
 }
 
+// The radiance toward a unit direction whose cosine to the sun is cosToSun and whose y is up.
+glm::dvec3 radianceAt(const SkyParameters& sky, const Sun& sun, double cosToSun, double up) {
+    if (cosToSun >= sun.cosRadius) return sky.sunRadiance;
+    if (up < 0.0) return sky.ground;
+    // The square root keeps the horizon's colour in a thin band and the zenith's over most of the sky.
+    return glm::mix(sky.horizon, sky.zenith, std::sqrt(up));
+}
+
 // The radiance toward a unit direction d.
 glm::dvec3 radianceToward(const SkyParameters& sky, const Sun& sun, const glm::dvec3& d) {
-    if (glm::dot(d, sun.direction) >= sun.cosRadius) return sky.sunRadiance;
-    if (d.y < 0.0) return sky.ground;
-    // The square root keeps the horizon's colour in a thin band and the zenith's over most of the sky.
-    return glm::mix(sky.horizon, sky.zenith, std::sqrt(d.y));
+    return radianceAt(sky, sun, glm::dot(d, sun.direction), d.y);
 }
 
 // Texels worth a thread: a few hundred microseconds of work.
@@ -68,6 +74,36 @@ glm::dvec3 texelMean(const SkyParameters& sky, const Sun& sun, int face, int i, 
     return sum / weights;
 }
 
+// Row j of a face of the sky. Along a row the face table is start + a * along, with no rounding
+// (each component is 0, +-1, +-a or +-b): texelDirection's directions, bit for bit, without its
+// lookup per texel. The directions of a block of texels come first, in a loop of their own that
+// vectorizes (their square roots and divisions were most of the time of making the default sky),
+// then their radiance.
+void makeSkyRow(Cubemap& cubemap, const SkyParameters& sky, const Sun& sun, int sunSamples, int face, int j) {
+    const int faceSize = cubemap.faceSize;
+    const glm::dvec3 start = unnormalizedFaceDirection(face, 0.0, texelCenterCoord(j, faceSize));
+    const glm::dvec3 along = unnormalizedFaceDirection(face, 1.0, texelCenterCoord(j, faceSize)) - start;
+    constexpr int kBlock = 64;
+    std::array<double, kBlock> cosToSun;
+    std::array<double, kBlock> up;
+    for (int first = 0; first < faceSize; first += kBlock) {
+        const int count = std::min(kBlock, faceSize - first);
+        for (int k = 0; k < count; ++k) {
+            const glm::dvec3 center = glm::normalize(start + texelCenterCoord(first + k, faceSize) * along);
+            cosToSun[size_t(k)] = glm::dot(center, sun.direction);
+            up[size_t(k)] = center.y;
+        }
+        for (int k = 0; k < count; ++k) {
+            const int i = first + k;
+            const bool mayTouchSun = sunSamples > 1 && cosToSun[size_t(k)] > sun.cosReach;
+            const glm::dvec3 radiance = mayTouchSun
+                                            ? texelMean(sky, sun, face, i, j, faceSize, sunSamples)
+                                            : radianceAt(sky, sun, cosToSun[size_t(k)], up[size_t(k)]);
+            cubemap.at(face, i, j) = glm::vec4(glm::vec3(radiance), 1.0f);
+        }
+    }
+}
+
 } // namespace
 
 glm::dvec3 skyRadiance(const SkyParameters& sky, const glm::dvec3& direction) {
@@ -79,17 +115,8 @@ Cubemap makeDefaultSky(int faceSize, const SkyParameters& sky) {
     const int sunSamples = sunSamplesPerSide(faceSize, sky);
     const Sun sun = sunOf(sky, faceSize);
     // Item r is row r % faceSize of face r / faceSize.
-    forEachItem(kFaceCount * faceSize, threadCount(cubemap.texels.size(), kTexelsPerThread), [&](int row) {
-        int face = row / faceSize;
-        int j = row % faceSize;
-        for (int i = 0; i < faceSize; ++i) {
-            glm::dvec3 center = texelDirection(face, i, j, faceSize);
-            bool mayTouchSun = sunSamples > 1 && glm::dot(center, sun.direction) > sun.cosReach;
-            glm::dvec3 radiance = mayTouchSun ? texelMean(sky, sun, face, i, j, faceSize, sunSamples)
-                                              : radianceToward(sky, sun, center); // one sample: no weights
-            cubemap.at(face, i, j) = glm::vec4(glm::vec3(radiance), 1.0f);
-        }
-    });
+    forEachItem(kFaceCount * faceSize, threadCount(cubemap.texels.size(), kTexelsPerThread),
+                [&](int row) { makeSkyRow(cubemap, sky, sun, sunSamples, row / faceSize, row % faceSize); });
     return cubemap;
 }
 

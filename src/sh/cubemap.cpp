@@ -23,17 +23,9 @@ void requirePositiveSize(int size, const char* what) {
     }
 }
 
-// Face-local coordinate of the center of texel i on an N-wide face: 2(i + 0.5)/N - 1.
-double texelCenterCoord(int i, int faceSize) {
-    return 2.0 * (i + 0.5) / faceSize - 1.0;
-}
+} // namespace
 
-// Face-local coordinate of the left (or top) edge of texel i: 2i/N - 1.
-double texelEdgeCoord(int i, int faceSize) {
-    return 2.0 * i / faceSize - 1.0;
-}
-
-// Unnormalized direction of face-local (a, b): the table of docs/conventions.md (Vulkan face order).
+// The table of docs/conventions.md, in Vulkan's face order.
 glm::dvec3 unnormalizedFaceDirection(int face, double a, double b) {
     switch (Face(face)) {
     case Face::PositiveX:
@@ -50,6 +42,13 @@ glm::dvec3 unnormalizedFaceDirection(int face, double a, double b) {
         return {-a, -b, -1.0};
     }
     throw Error(ErrorKind::Input, "cube-map face index out of range: " + std::to_string(face));
+}
+
+namespace {
+
+// Face-local coordinate of the left (or top) edge of texel i: 2i/N - 1.
+double texelEdgeCoord(int i, int faceSize) {
+    return 2.0 * i / faceSize - 1.0;
 }
 
 // The face whose axis is the direction's major axis (Vulkan "Cube Map Face Selection");

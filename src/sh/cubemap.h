@@ -54,6 +54,13 @@ struct Image {
 };
 Image makeImage(int width, int height);
 
+// Face-local coordinate of the center of texel i on an N-wide face: 2(i + 0.5)/N - 1.
+inline double texelCenterCoord(int i, int faceSize) {
+    return 2.0 * (i + 0.5) / faceSize - 1.0;
+}
+// Direction of face-local point (a, b) by the face table of docs/conventions.md, not normalized:
+// each component is 0, +-1, +-a or +-b, so it is linear in a and in b.
+glm::dvec3 unnormalizedFaceDirection(int face, double a, double b);
 // Unit direction through the center of texel (i, j) of a face (docs/conventions.md), in double.
 glm::dvec3 texelDirection(int face, int i, int j, int faceSize);
 // Unit direction of face-local point (a, b) in [-1, 1]^2.
