@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
-#include <deque>
 #include <filesystem>
 #include <future>
 #include <map>
@@ -177,30 +176,26 @@ struct Loaded {
     std::optional<ProbeSun> sun;
 };
 
-// Loads the inputs in order, two ahead, each on a thread of its own: decoding overlaps baking and
-// writing, and one input's steps on its own thread (reading the file, checking its texels) overlap
-// the other's decode on OpenEXR's threads. On 2 cores the batch of the eight blender-data HDRs took
-// 1.15-1.25x as long loading one input at a time, and 1.08x as long loading one ahead (1.5 CPUs
-// busy, 1.6 two ahead). Where no thread can be started, std::async loads on the calling thread when
-// the input is taken. A failure that ends the batch waits for the loads in flight (their futures'
-// destructors) before it is reported.
+// Loads the inputs in order, one ahead: when an input is taken, the next starts loading on a thread
+// of its own, so that decoding it overlaps baking and writing this one (the batch of the eight
+// blender-data HDRs took 1.15-1.25x as long loading one input at a time, on 2 cores). Where no
+// thread can be started, std::async loads on the calling thread when the input is taken. A failure
+// that ends the batch waits for the load in flight (its future's destructor) before it is reported.
 class InputLoader {
   public:
     InputLoader(const BakeOptions& options, const std::vector<BatchItem>& items)
         : options_(options), items_(items) {
-        while (pending_.size() < kLoadsInFlight && start()) {
-        }
+        start();
     }
     InputLoader(const InputLoader&) = delete;
     InputLoader& operator=(const InputLoader&) = delete;
 
-    bool done() const { return pending_.empty(); }
+    bool done() const { return !pending_.valid(); }
 
     // The next input; a bad input is reported and skipped (nullopt); any other failure ends the batch.
     std::optional<Loaded> next(Batch& batch) {
-        std::future<Loaded> loading = std::move(pending_.front());
-        pending_.pop_front();
-        const BatchItem& item = items_[next_ - 1 - pending_.size()];
+        std::future<Loaded> loading = std::move(pending_);
+        const BatchItem& item = items_[next_ - 1];
         start();
         try {
             return loading.get();
@@ -212,24 +207,20 @@ class InputLoader {
     }
 
   private:
-    static constexpr size_t kLoadsInFlight = 2;
-
-    // Starts loading the next input; false when none is left.
-    bool start() {
-        if (next_ == items_.size()) return false;
+    void start() {
+        if (next_ == items_.size()) return;
         const BatchItem& item = items_[next_++];
-        pending_.push_back(std::async(std::launch::async | std::launch::deferred, [this, &item] {
+        pending_ = std::async(std::launch::async | std::launch::deferred, [this, &item] {
             Loaded loaded{&item, loadInput(options_, item.input), std::nullopt};
             loaded.sun = takeOutSun(options_, loaded.environment);
             return loaded;
-        }));
-        return true;
+        });
     }
 
     const BakeOptions& options_;
     const std::vector<BatchItem>& items_;
     size_t next_ = 0;
-    std::deque<std::future<Loaded>> pending_;
+    std::future<Loaded> pending_;
 };
 
 void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const BakeResult& result) {
@@ -289,7 +280,7 @@ BatchBackend chooseBatchBackend(Batch& batch, const Environment& first, size_t c
 
 // Loads the inputs in order and bakes them in chunks of at most chunkBytes texel bytes (a larger
 // input alone), one bake call each, writing each chunk's outputs before taking more: at most one
-// chunk, the input that opens the next and the two loading after it are in memory.
+// chunk, the input that opens the next and the one loading after it are in memory.
 void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
     std::optional<BatchBackend> chosen;
     std::vector<Loaded> chunk;
