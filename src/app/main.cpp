@@ -146,8 +146,8 @@ int main(int argc, char** argv) {
 
     // `shprobe view ARGS`: only `shprobe view` itself is parsed here.
     const bool view = argc > 1 && std::string_view(argv[1]) == "view";
-    return shprobe::runProgram(app, "shprobe", view ? 2 : argc, argv, [&] {
+    return shprobe::endProgram(shprobe::runProgram(app, "shprobe", view ? 2 : argc, argv, [&] {
         for (const Command& command : commands)
             if (app.got_subcommand(command.name)) command.run(*app.get_subcommand(command.name));
-    });
+    }));
 }

@@ -12,6 +12,7 @@
 #include <exception>
 #include <fcntl.h>
 #include <string>
+#include <unistd.h>
 
 namespace shprobe {
 
@@ -87,6 +88,14 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
         return 1;
     }
     return 0;
+}
+
+int endProgram(int code) {
+#if !defined(SHPROBE_SANITIZE)
+    std::fflush(nullptr);
+    _exit(code);
+#endif
+    return code;
 }
 
 } // namespace shprobe

@@ -15,4 +15,14 @@ void addVersionFlag(CLI::App& app, const char* program);
 // display or viewer. Every error is printed as one line, "NAME: error: ...".
 int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std::function<void()>& run);
 
+// Ends the process with exit code `code` once the C streams are flushed, without the static
+// destructors and exit handlers after main: a command has closed what it wrote (outputs are
+// written, synced and renamed before it returns), and what is left is freeing memory the process
+// gives back whole and the libraries' own clean-up, OpenEXR's global thread pool joining its
+// threads: interleaved, `shprobe --help` 1.91 -> 1.61 ms (300 rounds), a bake of courtyard.exr
+// 16.8 -> 15.9 ms (400), the eight blender-data HDRs with --out-dir 73.6 -> 67.1 ms (60). A
+// sanitized build (SHPROBE_SANITIZE) returns `code` instead, for main to return, so that
+// LeakSanitizer's check at exit runs.
+int endProgram(int code);
+
 } // namespace shprobe
