@@ -90,8 +90,17 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
     return 0;
 }
 
+// AddressSanitizer's leak check runs at exit; GCC and Clang each say in their own way that it is on.
+#if defined(__SANITIZE_ADDRESS__)
+#define SHPROBE_LEAK_CHECK_AT_EXIT 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SHPROBE_LEAK_CHECK_AT_EXIT 1
+#endif
+#endif
+
 int endProgram(int code) {
-#if !defined(SHPROBE_SANITIZE)
+#if !defined(SHPROBE_LEAK_CHECK_AT_EXIT)
     std::fflush(nullptr);
     _exit(code);
 #endif

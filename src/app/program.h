@@ -20,9 +20,9 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
 // written, synced and renamed before it returns), and what is left is freeing memory the process
 // gives back whole and the libraries' own clean-up, OpenEXR's global thread pool joining its
 // threads: interleaved, `shprobe --help` 1.91 -> 1.61 ms (300 rounds), a bake of courtyard.exr
-// 16.8 -> 15.9 ms (400), the eight blender-data HDRs with --out-dir 73.6 -> 67.1 ms (60). A
-// sanitized build (SHPROBE_SANITIZE) returns `code` instead, for main to return, so that
-// LeakSanitizer's check at exit runs.
+// 16.8 -> 15.9 ms (400), the eight blender-data HDRs with --out-dir 73.6 -> 67.1 ms (60). Under
+// AddressSanitizer it returns `code` instead, for main to return, so that its leak check at exit
+// runs.
 int endProgram(int code);
 
 } // namespace shprobe

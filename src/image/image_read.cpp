@@ -147,8 +147,9 @@ bool isNonFinite(const glm::vec4& texel) {
 // loop of integer compares that vectorizes on any x86-64 (std::count_if with isNonFinite does not,
 // and took twice as long as a read of the texels, 0.5 ms for courtyard.exr's 8 MiB).
 bool anyNonFinite(std::span<const glm::vec4> texels) {
+    static_assert(sizeof(glm::vec4) == 4 * sizeof(float), "texels are four packed floats");
     constexpr uint32_t kExponentBits = 0x7f800000u;
-    const float* values = &texels.data()->x;
+    const float* values = reinterpret_cast<const float*>(texels.data());
     uint32_t found = 0;
     for (size_t i = 0; i < 4 * texels.size(); ++i)
         found |= uint32_t((std::bit_cast<uint32_t>(values[i]) & kExponentBits) == kExponentBits);

@@ -75,7 +75,8 @@ glm::dvec3 texelMean(const SkyParameters& sky, const Sun& sun, int face, int i, 
 }
 
 // Row j of a face of the sky. Along a row the face table is start + a * along, with no rounding
-// (each component is 0, +-1, +-a or +-b): texelDirection's directions, bit for bit, without its
+// (each component is 0, +-1, +-a or +-b): texelDirection's directions (bit for bit where the
+// compiler fuses no multiply-adds, as for x86-64's baseline; the signs of zeros aside), without its
 // lookup per texel. The directions of a block of texels come first, in a loop of their own that
 // vectorizes (their square roots and divisions were most of the time of making the default sky),
 // then their radiance.
