@@ -319,8 +319,7 @@ DecodedImage decodeImage(const std::string& path, int64_t maxPixels) {
     OpenedImage opened = openImage(path, maxPixels);
     const ImageHeader& header = opened.header();
     DecodedImage decoded{Image{header.width, header.height,
-                               std::vector<glm::vec4>(size_t(header.width) * header.height, kBlankTexel)},
-                         false};
+                               std::vector<glm::vec4>(size_t(header.width) * header.height, kBlankTexel)}};
     decoded.nonFinite = readPixels(opened, decoded.image.texels);
     return decoded;
 }

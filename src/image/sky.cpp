@@ -82,8 +82,9 @@ glm::dvec3 texelMean(const SkyParameters& sky, const Sun& sun, int face, int i, 
 // then their radiance.
 void makeSkyRow(Cubemap& cubemap, const SkyParameters& sky, const Sun& sun, int sunSamples, int face, int j) {
     const int faceSize = cubemap.faceSize;
-    const glm::dvec3 start = unnormalizedFaceDirection(face, 0.0, texelCenterCoord(j, faceSize));
-    const glm::dvec3 along = unnormalizedFaceDirection(face, 1.0, texelCenterCoord(j, faceSize)) - start;
+    const double b = texelCenterCoord(j, faceSize);
+    const glm::dvec3 start = unnormalizedFaceDirection(face, 0.0, b);
+    const glm::dvec3 along = unnormalizedFaceDirection(face, 1.0, b) - start;
     constexpr int kBlock = 64;
     std::array<double, kBlock> cosToSun;
     std::array<double, kBlock> up;
