@@ -5,7 +5,7 @@
 #   target_link_libraries(app PRIVATE shprobe::shprobe)   # or only read ${shprobe_SPIRV_DIR}/*.spv
 #
 # or `c++ -std=c++20 app.cpp $(pkg-config --cflags --libs shprobe)` (add --static after a static
-# build), and include <shprobe/io/probe_file.h>, <shprobe/version.h>, ...
+# build), and include <shprobe/formats/probe_file.h>, <shprobe/version.h>, ...
 #
 # Installed layout (GNUInstallDirs; <prefix> is CMAKE_INSTALL_PREFIX or `--prefix`):
 #   bin/shprobe                                the command-line program (RUNPATH $ORIGIN/../lib when
@@ -21,20 +21,23 @@
 #     or .so -> .so.0.1 -> .so.0.1.0           shprobe::sh, shprobe::shprobe, shprobe::render): static
 #                                              by default, shared with -DBUILD_SHARED_LIBS=ON (soname
 #                                              major.minor, RUNPATH $ORIGIN)
-#   lib/libshprobe{,_render}_spirv.a           the embedded modules, static and position-independent in
-#                                              both builds (exported as shprobe::spirv and
-#                                              shprobe::render_spirv; inside the .so files when shared)
-#   include/shprobe/{sh,io,image,vk,gpu,render}/*.h   C++ headers, included as <shprobe/sh/basis.h>
-#                                              (include dir: include), as in the build tree
+#   lib/libshprobe{,_scene,_render}_spirv.a    the embedded modules, static and position-independent in
+#                                              both builds (exported as shprobe::spirv,
+#                                              shprobe::scene_spirv and shprobe::render_spirv; inside
+#                                              the .so files when shared)
+#   include/shprobe/<floor>/*.h                C++ headers of src/'s floors, included as
+#                                              <shprobe/sh/basis.h> (include dir: include); they
+#                                              include each other as "sh/coefficients.h", as in src/
+#                                              (include dir: include/shprobe)
 #   include/shprobe/version.h                  SHPROBE_VERSION_MAJOR/MINOR/PATCH/STRING (generated)
-#   include/shprobe/shprobe{,_render}_spirv.h  the embedded-module declarations (generated)
-#   include/shprobe/glsl/                      shaders/include: the C++/GLSL shared headers
+#   include/shprobe/shprobe{,_scene,_render}_spirv.h  the embedded-module declarations (generated)
+#   include/shprobe/glsl/                      src/glsl: the C++/GLSL shared headers
 #                                              (<shprobe/glsl/gpu_interface.h>) and the GLSL includes
 #   share/shprobe/spirv/*.spv, INTERFACE.md    every module built into the libraries, and its contract
 #   share/shprobe/shaders/*.glsl               the modules' sources (compile with -I include/shprobe/glsl)
 #   lib/cmake/shprobe/                         shprobeConfig.cmake, shprobeConfigVersion.cmake (same
 #                                              major.minor: 0.x may break the interface), the targets
-#   lib/pkgconfig/shprobe.pc                   Cflags -I<prefix>/include; Libs render, shprobe, sh;
+#   lib/pkgconfig/shprobe.pc                   Cflags -I<prefix>/include{,/shprobe}; Libs render, shprobe, sh;
 #                                              Requires glm, Requires.private vulkan (its
 #                                              headers); static builds add Libs.private
 #                                              (the spirv archives)
@@ -70,11 +73,13 @@ set(shprobe_installed_libraries
     shprobe_sh sh
     shprobe shprobe
     shprobe_spirv spirv
+    shprobe_scene_spirv scene_spirv
     shprobe_render render
     shprobe_render_spirv render_spirv)
 
 # The targets name source- and build-tree include directories, which an export may not carry.
-# Keep each for the build tree only; install(TARGETS ... INCLUDES DESTINATION) below adds include/.
+# Keep each for the build tree only; install(TARGETS ... INCLUDES DESTINATION) below adds include/
+# and include/shprobe/.
 function(shprobe_relocate_includes target)
     get_target_property(includes ${target} INTERFACE_INCLUDE_DIRECTORIES)
     if(NOT includes)
@@ -144,35 +149,40 @@ install(TARGETS ${shprobe_export_targets}
     EXPORT shprobeTargets
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-    INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+    INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} ${SHPROBE_INSTALL_INCLUDEDIR})
 install(TARGETS ${shprobe_programs} shprobe_bench_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(TARGETS shprobe_exr shprobe_oiio LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/shprobe) # image/*_plugin.h
 
 # --- headers -------------------------------------------------------------------------------------
-# The public API: everything under these folders of src/ except the viewer's window-system headers.
-foreach(folder sh io image vk gpu render)
+# The public API: the headers of the floors the installed libraries hold, laid out as in src/ under
+# include/shprobe/, less those of the libraries' insides (their Vulkan commands, the glTF reader's
+# tinygltf side), the Embree reference and the viewer's window-system headers. glsl/ holds the
+# C++/GLSL shared headers and the GLSL includes.
+foreach(folder common glsl sh vk image formats scene gpu render)
     install(DIRECTORY ${PROJECT_SOURCE_DIR}/src/${folder}/
         DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR}/${folder}
-        FILES_MATCHING PATTERN "*.h"
-        PATTERN "scene_capture.h" EXCLUDE # part of shprobe_scene, which is not installed
+        FILES_MATCHING PATTERN "*.h" PATTERN "*.glsl"
         PATTERN "vulkan_commands.h" EXCLUDE # the libraries' own Vulkan commands, named as the loader's
+        PATTERN "gltf_geometry.h" EXCLUDE
+        PATTERN "gltf_schema.h" EXCLUDE
+        PATTERN "reference_tracer.h" EXCLUDE
         PATTERN "swapchain.h" EXCLUDE
         PATTERN "viewer.h" EXCLUDE
         PATTERN "viewer_frames.h" EXCLUDE)
 endforeach()
 install(FILES
-        ${SHPROBE_INCLUDE_DIR}/shprobe/version.h
-        ${PROJECT_BINARY_DIR}/generated/shprobe/shprobe_spirv.h
-        ${PROJECT_BINARY_DIR}/generated/shprobe/shprobe_render_spirv.h
+        ${SHPROBE_GENERATED_DIR}/shprobe/version.h
+        ${SHPROBE_GENERATED_DIR}/shprobe/shprobe_spirv.h
+        ${SHPROBE_GENERATED_DIR}/shprobe/shprobe_scene_spirv.h
+        ${SHPROBE_GENERATED_DIR}/shprobe/shprobe_render_spirv.h
     DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR})
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/shaders/include/ DESTINATION ${SHPROBE_INSTALL_GLSLDIR})
 
 # --- SPIR-V modules ------------------------------------------------------------------------------
 # Exactly the modules embedded in the installed libraries (test-only modules that share the build's
 # spirv/ folder stay out), found from the generated headers shprobe_compile_shaders adds to each
 # library: <embed_dir>/project_comp.spv.h is spirv/project.comp.spv.
 set(shprobe_modules "")
-foreach(target shprobe_spirv shprobe_render_spirv)
+foreach(target shprobe_spirv shprobe_render_spirv) # the scene capture's modules are its own
     get_target_property(sources ${target} SOURCES)
     foreach(source IN LISTS sources)
         if(source MATCHES "/([a-z0-9_]+)_([a-z]+)\\.spv\\.h$")
@@ -252,7 +262,7 @@ endforeach()
 # Libraries every link needs come in Libs. A static build's links also need the embedded modules
 # (pkg-config --static); a shared build's libraries carry them.
 if(shprobe_library_type STREQUAL "STATIC_LIBRARY")
-    set(SHPROBE_PC_PRIVATE "Libs.private: -lshprobe_render_spirv -lshprobe_spirv")
+    set(SHPROBE_PC_PRIVATE "Libs.private: -lshprobe_render_spirv -lshprobe_scene_spirv -lshprobe_spirv")
 else()
     set(SHPROBE_PC_PRIVATE "")
 endif()

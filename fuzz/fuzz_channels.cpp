@@ -6,7 +6,7 @@
 // Input: one byte of flags; with bit 0, 8 chromaticity floats and 3 texel floats (little-endian);
 // then the channel names, separated by 0 bytes.
 #include "fuzz_support.h"
-#include "shprobe/image/channels.h"
+#include "image/channels.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 // Input: shape, forced layout, a size n, a perturbation, a face size (1 byte each), then texels as
 // little-endian floats (RGB; missing ones are 0).
 #include "fuzz_support.h"
-#include "shprobe/image/environment.h"
+#include "image/environment.h"
 
 #include <array>
 #include <cstdint>

@@ -3,7 +3,7 @@
 // are what it is for (the seeds are EXR files and hand-made headers); a PNG signature sends the
 // bytes to the PNG chunk scan instead, which is covered the same way.
 #include "fuzz_support.h"
-#include "shprobe/image/channels.h"
+#include "image/channels.h"
 
 #include <sys/mman.h>
 #include <unistd.h>

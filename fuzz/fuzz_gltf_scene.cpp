@@ -4,7 +4,7 @@
 // reference index blindly: whole triangles, indices within the vertices, one material per triangle
 // that exists, textures that exist with their texels, finite positions inside the bounds.
 #include "fuzz_support.h"
-#include "shprobe/scene/gltf_scene.h"
+#include "scene/gltf_scene.h"
 
 #include <cmath>
 #include <cstdlib>

@@ -3,7 +3,7 @@
 //
 // Input: width and height (4 bytes each, little-endian, signed), then the layout name (the rest).
 #include "fuzz_support.h"
-#include "shprobe/image/environment.h"
+#include "image/environment.h"
 
 #include <cstdint>
 #include <string>

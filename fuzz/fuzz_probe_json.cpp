@@ -1,8 +1,8 @@
 // parseProbeJson on arbitrary bytes: it must return a valid probe or throw shprobe::Error, never
 // crash or throw anything else. A probe it accepts must also survive probeToJson and read back the same.
+#include "formats/probe_file.h"
 #include "fuzz_support.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/basis.h"
+#include "sh/basis.h"
 
 #include <cmath>
 #include <string_view>

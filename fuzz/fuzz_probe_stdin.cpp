@@ -1,9 +1,9 @@
 // readProbe("-") with the bytes as standard input (an in-memory file put on fd 0): it must return
 // a valid probe or throw shprobe::Error, and a probe it accepts, sun included, must read back the
 // same once written by probeToJson.
+#include "formats/probe_file.h"
 #include "fuzz_support.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/basis.h"
+#include "sh/basis.h"
 
 #include <cmath>
 #include <sys/mman.h>

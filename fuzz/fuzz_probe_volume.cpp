@@ -2,8 +2,8 @@
 // never crash, allocate what the bytes only claim, or throw anything else. A volume it accepts
 // must also write and read back: the same probes, the valid ones with the same coefficients (the
 // writer zeroes an invalid probe's, whatever the file held for it).
+#include "formats/probe_volume.h"
 #include "fuzz_support.h"
-#include "shprobe/io/probe_volume.h"
 
 #include <cstdio>
 #include <fstream>

@@ -2,7 +2,7 @@
 // either succeeds or throws shprobe::Error. Any other exception, like a crash or a sanitizer report,
 // is a finding: it aborts, so libFuzzer saves the input as crash-<hash>.
 #pragma once
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <algorithm>
 #include <cstdint>

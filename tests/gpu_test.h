@@ -2,7 +2,7 @@
 // VK_ICD_FILENAMES) with the Khronos validation layer on. Any validation message fails the test
 // that caused it; a missing device or layer fails the suite, never skips it.
 #pragma once
-#include "shprobe/vk/context.h"
+#include "vk/context.h"
 
 #include <gtest/gtest.h>
 #include <memory>

@@ -10,15 +10,15 @@
 // inherit: a validation message fails their run. Test files are written by each test into its own
 // temporary folder; no binary file is checked in.
 #include "child_program.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/image/image_write.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/context.h"
-#include "shprobe/vk/resources.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "formats/probe_file.h"
+#include "image/environment.h"
+#include "image/image_write.h"
+#include "sh/basis.h"
+#include "vk/check.h"
+#include "vk/context.h"
+#include "vk/resources.h"
+#include "vk/vulkan_commands.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

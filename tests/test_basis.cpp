@@ -1,8 +1,8 @@
 // The SH basis: golden values, recurrence against closed forms, orthonormality, normalization.
 // The closed forms are written out here, apart from the library's one C++ basis (the recurrence of
 // basis.h), as an independent check of it.
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "sh/basis.h"
 #include "test_support.h"
 
 #include <glm/geometric.hpp>

@@ -11,19 +11,19 @@
 // ctest runs this with VK_ICD_FILENAMES = lavapipe and SHPROBE_VALIDATION=1, which the children
 // inherit: any validation message fails their bake. Each GPU bake costs a process start with the
 // validation layer (~0.3-1 s), so images are tiny and the runs a few dozen.
+#include "common/error.h"
+#include "formats/probe_export.h"
+#include "formats/probe_file.h"
+#include "image/environment.h"
+#include "image/image_write.h"
 #include "render/run_program.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/image/image_write.h"
-#include "shprobe/io/probe_export.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/folding.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/lights.h"
-#include "shprobe/sh/rotation.h"
-#include "shprobe/sh/windowing.h"
-#include "shprobe/vk/context.h"
+#include "sh/basis.h"
+#include "sh/folding.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
+#include "sh/rotation.h"
+#include "sh/windowing.h"
+#include "vk/context.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

@@ -4,9 +4,9 @@
 // chromaticities, deep) and pixels must be what OpenImageIO reads; OpenImageIO must read back what
 // the encoders write. Tolerances, where there are any, are said where they are used. Also: the
 // eight EXRs of Debian's blender-data (DWAB), compared exactly and timed against OpenImageIO.
-#include "shprobe/image/codec.h"
-#include "shprobe/image/exr_plugin.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "image/codec.h"
+#include "image/exr_plugin.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>

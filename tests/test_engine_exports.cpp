@@ -1,17 +1,17 @@
-// The engine exports (io/engine_export.h, docs/exports.md) checked by the engines' own code where
+// The engine exports (formats/engine_export.h, docs/exports.md) checked by the engines' own code where
 // it runs here (three.js, Babylon.js, the Khronos glTF validator: tests/engines/*.mjs under node,
 // with the npm packages scripts/test.sh installs into BUILD/npm) and by the engines' published
 // shader formulas, transcribed below with their source, where it does not (Filament, Unity, Godot).
 // Each evaluates the exported file at 1,000 directions mapped through the documented frame
 // (F d, engineFrame) and must equal shprobe's own evaluation at d. Without node or the packages the
 // JS checks are skipped with a message (ctest shows them as skipped), never passed.
+#include "formats/engine_export.h"
+#include "formats/probe_file.h"
 #include "render/run_program.h"
-#include "shprobe/io/engine_export.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/lights.h"
-#include "shprobe/sh/rotation.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
+#include "sh/rotation.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

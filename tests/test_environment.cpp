@@ -2,12 +2,12 @@
 // texels, error messages (file system, bounded headers), cube-map resizing, the default sky and
 // the EXR writer. Test images are written to a temporary folder by each test; no binary file is
 // checked in.
-#include "shprobe/image/channels.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/image/image_write.h"
-#include "shprobe/io/input_file.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/fast_projection.h"
+#include "common/error.h"
+#include "common/input_file.h"
+#include "image/channels.h"
+#include "image/environment.h"
+#include "image/image_write.h"
+#include "sh/fast_projection.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

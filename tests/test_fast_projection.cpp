@@ -1,9 +1,9 @@
 // The fast float projection of cube maps and equirect maps against the double reference and closed
 // forms, its half-float input, its independence of the thread count, and its refusals.
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/fast_projection.h"
-#include "shprobe/sh/projection.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/fast_projection.h"
+#include "sh/projection.h"
 
 #include <glm/common.hpp>
 #include <gtest/gtest.h>

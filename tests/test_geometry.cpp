@@ -1,8 +1,8 @@
 // Texel geometry: cube-map face table, solid angles (double reference and the fp32 shader form),
 // the inverse maps, and equirect directions and solid angles.
-#include "shprobe/glsl/texel_geometry.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "glsl/texel_geometry.h"
+#include "sh/cubemap.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -57,14 +57,14 @@ TEST(Geometry, CubeSolidAngleCheckValues) {
     }
 }
 
-// Worst relative error of shprobe::gpu::texelSolidAngleFp32 against the double formula over the
+// Worst relative error of shprobe::glsl::texelSolidAngleFp32 against the double formula over the
 // texels (i, j) of one face with i, j multiples of stride (the six faces share their solid angles).
 double worstFp32SolidAngleError(int n, int stride) {
     double worst = 0.0;
     for (int j = 0; j < n; j += stride) {
         for (int i = 0; i < n; i += stride) {
             const double reference = texelSolidAngle(i, j, n);
-            const double fp32 = gpu::texelSolidAngleFp32(gpu::uint(i), gpu::uint(j), gpu::uint(n));
+            const double fp32 = glsl::texelSolidAngleFp32(glsl::uint(i), glsl::uint(j), glsl::uint(n));
             worst = std::max(worst, std::abs(fp32 - reference) / reference);
         }
     }
@@ -98,10 +98,10 @@ TEST(Geometry, TexelDirectionMatchesShaderTable) {
         for (int face = 0; face < kFaceCount; ++face) {
             for (int j = 0; j < n; ++j) {
                 for (int i = 0; i < n; ++i) {
-                    const float a = gpu::texelCenterCoord(gpu::uint(i), gpu::uint(n));
-                    const float b = gpu::texelCenterCoord(gpu::uint(j), gpu::uint(n));
+                    const float a = glsl::texelCenterCoord(glsl::uint(i), glsl::uint(n));
+                    const float b = glsl::texelCenterCoord(glsl::uint(j), glsl::uint(n));
                     const glm::dvec3 shader =
-                        glm::normalize(gpu::unnormalizedFaceDirection(gpu::uint(face), a, b));
+                        glm::normalize(glsl::unnormalizedFaceDirection(glsl::uint(face), a, b));
                     const glm::dvec3 reference = texelDirection(face, i, j, n);
                     ASSERT_LT(glm::length(shader - reference), kFp32DirectionError)
                         << "face " << face << ", texel (" << i << ", " << j << "), N = " << n;

@@ -3,22 +3,22 @@
 // run once per subgroup size 4, 8, 16, 32).
 #include "gpu_test.h"
 
-#include "shprobe/gpu/host_bake.h"
-#include "shprobe/gpu/probe_baker.h"
-#include "shprobe/gpu/rotator.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/fast_projection.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/projection.h"
-#include "shprobe/sh/rotation.h"
-#include "shprobe/sh/windowing.h"
-#include "shprobe/shprobe_test_spirv.h"
-#include "shprobe/vk/image.h"
-#include "shprobe/vk/pipeline.h"
-#include "shprobe/vk/resources.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "gpu/host_bake.h"
+#include "gpu/probe_baker.h"
+#include "gpu/rotator.h"
+#include "image/environment.h"
+#include "sh/basis.h"
+#include "sh/fast_projection.h"
+#include "sh/irradiance.h"
+#include "sh/projection.h"
+#include "sh/rotation.h"
+#include "sh/windowing.h"
+#include "vk/image.h"
+#include "vk/pipeline.h"
+#include "vk/resources.h"
+#include "vk/vulkan_commands.h"
+#include <shprobe/shprobe_test_spirv.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // Lambertian convolution (A_l) and evaluation of probes, against analytic results.
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
 #include "test_support.h"
 
 #include <glm/geometric.hpp>

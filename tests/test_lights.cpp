@@ -1,11 +1,11 @@
 // Analytic lights against their definitions (closed forms, recurrences, quadrature) and against the
 // projection of the same light drawn into cube maps; sun extraction on a synthetic sky.
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/lights.h"
-#include "shprobe/sh/projection.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
+#include "sh/projection.h"
 #include "test_support.h"
 
 #include <glm/geometric.hpp>

@@ -13,11 +13,11 @@
 // Also here: the equirect map projected directly agrees with the same map converted to a cube map
 // and projected (docs/conventions.md, "Equirectangular maps"), on a synthetic map and, where installed,
 // on a real HDR environment.
-#include "shprobe/image/environment.h"
-#include "shprobe/image/image_write.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/projection.h"
+#include "image/environment.h"
+#include "image/image_write.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
+#include "sh/projection.h"
 
 #include <gtest/gtest.h>
 

@@ -1,16 +1,16 @@
-// Export formats (src/io/probe_export.h): the packed binary file round-trips and refuses malformed
+// Export formats (src/formats/probe_export.h): the packed binary file round-trips and refuses malformed
 // files naming the problem; the GLSL and C/C++ headers hold exactly the folded coefficients
 // (sh/folding.h), evaluate to the probe's radiance or E(n) / pi, and compile (glslangValidator, and
 // the system's C and C++ compilers); the irradiance maps hold E(n) / pi at their pixels'
 // directions, and a cross map loaded and projected back gives the probe's irradiance again.
-#include "shprobe/io/probe_export.h"
+#include "formats/probe_export.h"
 
-#include "shprobe/image/environment.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/folding.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/projection.h"
+#include "common/error.h"
+#include "image/environment.h"
+#include "sh/basis.h"
+#include "sh/folding.h"
+#include "sh/irradiance.h"
+#include "sh/projection.h"
 #include "test_support.h"
 
 #include <cerrno>
@@ -302,7 +302,7 @@ TEST_F(ExportFiles, GlslHeadersCompile) {
            "    color = vec4(shIrradianceOverPi(sky_sh, n, sky_sh_order) +\n"
            "                 shRadiance(studio_sh, n, studio_sh_order), 1.0);\n"
            "}\n";
-    fs::path includes = fs::path(SHPROBE_TEST_DATA_DIR).parent_path().parent_path() / "shaders" / "include";
+    fs::path includes = fs::path(SHPROBE_TEST_DATA_DIR).parent_path().parent_path() / "src" / "glsl";
     std::vector<std::string> command = {
         "glslangValidator",       "--target-env",        "vulkan1.1", "-S",           "frag",
         "-I" + includes.string(), file("use.frag.glsl"), "-o",        file("use.spv")};

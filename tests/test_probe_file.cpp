@@ -1,9 +1,9 @@
 // Coefficient files (docs/conventions.md, "Coefficient files"): what is written reads back the
 // same, and every malformed or wrong-schema file is refused with a message naming the file and the
 // offending field.
-#include "shprobe/io/output_file.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "formats/probe_file.h"
 
 #include <algorithm>
 #include <csignal>

@@ -2,11 +2,11 @@
 // (docs/probe-volume.md): where the probes are, that every malformed option and file is refused
 // with its own message, that bricks cover a grid exactly once and merge to the whole bake bit for
 // bit, and that sampling reproduces what trilinear interpolation must reproduce exactly.
-#include "shprobe/io/probe_volume.h"
-#include "shprobe/scene/probe_grid.h"
-#include "shprobe/scene/volume_sampling.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "formats/probe_volume.h"
+#include "scene/probe_grid.h"
+#include "scene/volume_sampling.h"
+#include "sh/basis.h"
 
 #include <algorithm>
 #include <cmath>

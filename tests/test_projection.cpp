@@ -1,8 +1,8 @@
 // The double-precision reference projection of cube maps and equirect maps.
-#include "shprobe/glsl/equirect_geometry.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/projection.h"
+#include "common/error.h"
+#include "glsl/equirect_geometry.h"
+#include "sh/basis.h"
+#include "sh/projection.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -258,17 +258,17 @@ struct Fp32GeometryError {
 };
 
 void addFp32GeometryError(int i, int j, int width, int height, Fp32GeometryError& worst) {
-    const glm::vec2 row = gpu::equirectRowSinCos(gpu::uint(j), gpu::uint(height));
+    const glm::vec2 row = glsl::equirectRowSinCos(glsl::uint(j), glsl::uint(height));
     const glm::vec3 direction =
-        gpu::equirectDirectionOf(row, gpu::equirectColumnSinCos(gpu::uint(i), gpu::uint(width)));
+        glsl::equirectDirectionOf(row, glsl::equirectColumnSinCos(glsl::uint(i), glsl::uint(width)));
     const glm::dvec3 deviation = glm::abs(glm::dvec3(direction) - equirectDirection(i, j, width, height));
     worst.direction = std::max({worst.direction, deviation.x, deviation.y, deviation.z});
-    const double solidAngle = gpu::equirectSolidAngleScale(gpu::uint(width), gpu::uint(height)) * row.x;
+    const double solidAngle = glsl::equirectSolidAngleScale(glsl::uint(width), glsl::uint(height)) * row.x;
     const double exact = equirectRowSolidAngle(j, width, height);
     worst.solidAngle = std::max(worst.solidAngle, std::abs(solidAngle - exact) / exact);
 }
 
-// Checks: the fp32 equirect geometry of project_equirect.comp (shaders/include/equirect_geometry.h,
+// Checks: the fp32 equirect geometry of project_equirect.comp (src/glsl/equirect_geometry.h,
 // the same arithmetic compiled as C++) against the double geometry of the reference, for every pixel
 // of every map up to 64 x 33 and for the pole, equator and other rows of large maps (up to 16384 x
 // 8192, odd heights too): directions within 4e-7 (a few fp32 ulps of components up to 1) and row

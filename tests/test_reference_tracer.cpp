@@ -3,9 +3,9 @@
 // floor, and determinism. Scenes are built here from quads (two triangles each).
 #include "test_support.h"
 
-#include "shprobe/scene/reference_tracer.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/projection.h"
+#include "scene/reference_tracer.h"
+#include "sh/basis.h"
+#include "sh/projection.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

@@ -9,10 +9,10 @@
 // inherit. Some cases need root (mounting a small tmpfs to fill it) or another user (permission
 // bits): they are skipped with a message where this process cannot have them.
 #include "child_program.h"
-#include "shprobe/image/image_write.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/rotation.h"
+#include "formats/probe_file.h"
+#include "image/image_write.h"
+#include "sh/basis.h"
+#include "sh/rotation.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

@@ -1,10 +1,10 @@
 // SH rotation: against exact projections of rotated environments, group properties, known signed
 // permutations, the three ways of giving a rotation, and invalid input.
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/projection.h"
-#include "shprobe/sh/rotation.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
+#include "sh/projection.h"
+#include "sh/rotation.h"
 #include "test_support.h"
 
 #include <glm/geometric.hpp>

@@ -2,12 +2,12 @@
 // model, textured boxes in the three containers, and the broken files of its glTF2 folder) and on
 // scenes written by scene_fixtures.h: transforms, normals, materials, lights, and every way a file
 // can be refused, each as one line naming the file and the problem.
+#include "common/error.h"
+#include "image/codec.h"
+#include "image/environment.h"
+#include "scene/gltf_scene.h"
+#include "scene/scene_images.h"
 #include "scene_fixtures.h"
-#include "shprobe/image/codec.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/scene/gltf_scene.h"
-#include "shprobe/scene/scene_images.h"
-#include "shprobe/sh/error.h"
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>

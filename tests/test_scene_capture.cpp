@@ -3,17 +3,17 @@
 // series of bounces. The capture and bake run on lavapipe with the validation layer on.
 #include "gpu_test.h"
 
+#include "gpu/scene_capture.h"
+#include "scene/gltf_scene.h"
+#include "scene/probe_grid.h"
+#include "scene/reference_tracer.h"
+#include "scene/volume_sampling.h"
 #include "scene_fixtures.h"
-#include "shprobe/gpu/scene_capture.h"
-#include "shprobe/scene/gltf_scene.h"
-#include "shprobe/scene/probe_grid.h"
-#include "shprobe/scene/reference_tracer.h"
-#include "shprobe/scene/volume_sampling.h"
-#include "shprobe/shprobe_test_spirv.h"
-#include "shprobe/vk/pipeline.h"
+#include "vk/pipeline.h"
+#include <shprobe/shprobe_test_spirv.h>
 
-#include "shprobe/sh/projection.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "sh/projection.h"
+#include "vk/vulkan_commands.h"
 #include <random>
 
 #include <array>

@@ -5,8 +5,8 @@
 #include "child_program.h"
 #include "scene_fixtures.h"
 
-#include "shprobe/image/environment.h"
-#include "shprobe/io/probe_volume.h"
+#include "formats/probe_volume.h"
+#include "image/environment.h"
 
 #include <glm/geometric.hpp>
 

@@ -6,10 +6,10 @@
 // kWorlds), it is physically valid (radiance finite and >= 0 per channel, radius in (0, 90]
 // degrees, above the horizon, where the image's own brightest pixel is), every reader accepts it,
 // and the residual map holds no value below what the original held or below 0 where it was not.
-#include "shprobe/image/environment.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/lights.h"
-#include "shprobe/sh/projection.h"
+#include "formats/probe_file.h"
+#include "image/environment.h"
+#include "sh/lights.h"
+#include "sh/projection.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // Helpers shared by the unit tests: Gauss-Legendre quadrature, random directions, coefficient
 // differences and the check that a call fails with an input error.
 #pragma once
-#include "shprobe/sh/coefficients.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "sh/coefficients.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

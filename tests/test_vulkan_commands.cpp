@@ -2,7 +2,7 @@
 // command is called, and then any command, called first, loads them all (as an engine calling a
 // helper of vk/image.h on its own command buffer does, before any context or borrowed device).
 // One test, in a process of its own: the first call must be this test's.
-#include "shprobe/vk/vulkan_commands.h"
+#include "vk/vulkan_commands.h"
 
 #include <dlfcn.h>
 #include <gtest/gtest.h>

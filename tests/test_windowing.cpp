@@ -2,13 +2,13 @@
 // order-5 lobes ("Stupid SH Tricks"), Lisle-Huang's H_2n recurrence for A_l ("Algorithms for
 // Spherical Harmonic Lighting"), and the L1 antipodal identity of Geomerics' notes ("Odd terms in
 // the SH irradiance expansion").
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/lights.h"
-#include "shprobe/sh/projection.h"
-#include "shprobe/sh/windowing.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
+#include "sh/projection.h"
+#include "sh/windowing.h"
 #include "test_support.h"
 
 #include <glm/geometric.hpp>

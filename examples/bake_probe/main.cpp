@@ -47,7 +47,7 @@ namespace {
 
 // --- the interface: INTERFACE.md and the shared headers ------------------------------------------
 
-namespace glsl = shprobe::gpu; // the shared headers' C++ namespace
+namespace glsl = shprobe::glsl; // the shared headers' C++ namespace
 
 constexpr uint32_t kWidth = glsl::kDefaultWorkgroupWidth; // workgroup width of all three modules here
 constexpr uint32_t kFaces = 6;  // layers per probe: probe p's face f is layer 6p + f

@@ -9,7 +9,7 @@
 //   shprobe 0.1.0, order 3
 //   irradiance R G B
 // A sun taken out of the probe (its "sun" field) is not added back: E is the probe's own part.
-#include <shprobe/io/probe_file.h>
+#include <shprobe/formats/probe_file.h>
 #include <shprobe/sh/irradiance.h>
 #include <shprobe/sh/rotation.h>
 #include <shprobe/version.h>

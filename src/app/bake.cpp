@@ -4,10 +4,10 @@
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
 #include "app/toolkit.h"
-#include "shprobe/io/engine_export.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/irradiance.h"
+#include "common/output_file.h"
+#include "formats/engine_export.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
 
 #include <cmath>
 #include <cstdio>

@@ -2,8 +2,8 @@
 // GPU submission takes (or one by one on the CPU); bad inputs are reported and skipped.
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
-#include "shprobe/io/input_file.h"
-#include "shprobe/io/output_file.h"
+#include "common/input_file.h"
+#include "common/output_file.h"
 
 #include <algorithm>
 #include <cerrno>

@@ -1,17 +1,17 @@
 #include "app/bake_steps.h"
 
 #include "app/toolkit.h"
-#include "shprobe/io/engine_export.h"
-#include "shprobe/io/probe_export.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/fast_projection.h"
-#include "shprobe/sh/folding.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/lights.h"
-#include "shprobe/sh/projection.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/sh/windowing.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/scope_exit.h"
+#include "formats/engine_export.h"
+#include "formats/probe_export.h"
+#include "sh/basis.h"
+#include "sh/fast_projection.h"
+#include "sh/folding.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
+#include "sh/projection.h"
+#include "sh/windowing.h"
+#include "vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cctype>
@@ -59,31 +59,6 @@ Finished finish(const BakeOptions& options, ShCoefficients radiance) {
     addLights(radiance, options.lights);
     std::optional<std::vector<double>> window = windowFactorsFor(options.window, radiance);
     return {std::move(radiance), window.value_or(std::vector<double>{})};
-}
-
-bool isHeaderFormat(const std::string& format) {
-    return format == "glsl" || format == "cpp";
-}
-
-const ExportFormat& formatNamed(const std::string& name) {
-    const ExportFormat* format = findExportFormat(name);
-    if (!format) throw Error(ErrorKind::Input, "--format " + name + " is not one of " + exportFormatNames());
-    return *format;
-}
-
-// The format an output name's extension names; empty when it names none (".txt", "/dev/null").
-std::string formatOfExtension(const std::string& path) {
-    const ExportFormat* format = formatOfOutputName(path);
-    return format ? format->name : "";
-}
-
-// The extension names no format, the format itself, the other irradiance map, or the last part of
-// the format's extension (-o x.json --format threejs: ".three.json" ends in ".json").
-bool extensionAgrees(const std::string& output, const std::string& named, const std::string& format) {
-    const std::string extension = std::filesystem::path(output).extension().string();
-    return named.empty() || named == format ||
-           (named == "irradiance-equirect" && format == "irradiance-cross") ||
-           (!extension.empty() && std::string_view(formatNamed(format).extension).ends_with(extension));
 }
 
 } // namespace
@@ -317,27 +292,9 @@ std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& envi
     return ProbeSun{light.direction, light.radiance, light.angularRadius};
 }
 
-const char* formatExtension(const std::string& format) {
-    return formatNamed(format).extension;
-}
-
-void settleFormatAndOutput(std::string& format, std::string& output) {
-    const std::string named = output.empty() ? "" : formatOfExtension(output);
-    if (format.empty()) format = named.empty() ? "json" : named;
-    if (!extensionAgrees(output, named, format))
-        throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
-                                          format + "; use the extension " + formatExtension(format) +
-                                          " or leave out --format");
-    if (output.empty()) output = std::string("probe") + formatExtension(format);
-}
-
 BakeOptions withFormatAndOutput(BakeOptions options) {
     settleFormatAndOutput(options.format, options.output);
     return options;
-}
-
-OutputContent formatContent(const std::string& format) {
-    return formatNamed(format).content;
 }
 
 std::vector<std::string> filesReadBy(const std::string& input) {

@@ -3,14 +3,15 @@
 // finishing and writing a probe.
 #pragma once
 #include "app/commands.h"
-#include "shprobe/gpu/host_bake.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/context.h"
-#include "shprobe/vk/pipeline_cache.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "formats/output_format.h"
+#include "formats/probe_file.h"
+#include "gpu/host_bake.h"
+#include "image/environment.h"
+#include "vk/check.h"
+#include "vk/context.h"
+#include "vk/pipeline_cache.h"
 
 #include <memory>
 #include <optional>
@@ -115,19 +116,8 @@ std::string backendLine(const Backend& backend, const std::string& device);
 // Takes the sun out of the environment when asked; the probe is then of the rest.
 std::optional<ProbeSun> takeOutSun(const BakeOptions& options, Environment& environment);
 
-// The extension a format's files get: ".json", ".bin", ".glsl", ".h", ".exr".
-const char* formatExtension(const std::string& format);
-
-// The options with --format and -o settled: without --format, -o's extension chooses it (json
-// when the extension names none); without -o, the output is "probe" and the format's extension.
-// An -o extension that names another format than --format is refused (Error(Input)).
+// The options with --format and -o settled (settleFormatAndOutput, formats/output_format.h).
 BakeOptions withFormatAndOutput(BakeOptions options);
-// The same rule on a format and an output name (convert).
-void settleFormatAndOutput(std::string& format, std::string& output);
-
-// Whether the format's files are text (json, glsl, cpp) or binary (standard output takes both;
-// a terminal only text).
-OutputContent formatContent(const std::string& format);
 
 // Option combinations the writers would refuse, checked before any work.
 void checkFormatOptions(const BakeOptions& options);

@@ -6,14 +6,14 @@
 #include "app/bench.h"
 #include "app/bench_device.h"
 #include "app/stopwatch.h"
-#include "shprobe/gpu/host_bake.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/fast_projection.h"
-#include "shprobe/sh/projection.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/context.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "common/scope_exit.h"
+#include "gpu/host_bake.h"
+#include "sh/basis.h"
+#include "sh/fast_projection.h"
+#include "sh/projection.h"
+#include "vk/context.h"
 
 #include <glm/gtc/packing.hpp>
 

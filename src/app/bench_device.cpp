@@ -1,14 +1,14 @@
 #include "app/bench_device.h"
 #include "app/stopwatch.h"
 
-#include "shprobe/glsl/gpu_interface.h"
-#include "shprobe/gpu/probe_baker.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/shprobe_bench_spirv.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/pipeline.h"
-#include "shprobe/vk/pipeline_cache.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/scope_exit.h"
+#include "glsl/gpu_interface.h"
+#include "gpu/probe_baker.h"
+#include "vk/check.h"
+#include "vk/pipeline.h"
+#include "vk/pipeline_cache.h"
+#include "vk/vulkan_commands.h"
+#include <shprobe/shprobe_bench_spirv.h>
 
 #include <cmath>
 #include <cstdio>
@@ -51,7 +51,7 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
         context, {.name = half ? "read_texels_rgba16f.comp" : "read_texels_rgba32f.comp",
                   .spirv = half ? spirv::read_texels_rgba16f_comp : spirv::read_texels_rgba32f_comp,
                   .bindings = kBindings,
-                  .pushConstantSize = sizeof(gpu::ProjectParams),
+                  .pushConstantSize = sizeof(glsl::ProjectParams),
                   .localSize = plan.workgroupSize});
     ScopeExit destroyRead([&] { destroyComputeProgram(context, read); });
     VkDescriptorPool pool =
@@ -68,7 +68,7 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
             if (run == 0) recordCubemapUpload(commands, upload);
             vkCmdResetQueryPool(commands, timestamps, 0, 2);
             vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);
-            dispatch(commands, read, set, gpu::ProjectParams{upload.faceSize}, {groups, 1});
+            dispatch(commands, read, set, glsl::ProjectParams{upload.faceSize}, {groups, 1});
             vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
         });
         if (run > 0) best = std::min(best, timestampMilliseconds(context, timestamps));

@@ -2,9 +2,9 @@
 // projection's access pattern, and the cost of creating the pipelines with and without a
 // pipeline cache.
 #pragma once
-#include "shprobe/gpu/host_bake.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/vk/context.h"
+#include "gpu/host_bake.h"
+#include "sh/cubemap.h"
+#include "vk/context.h"
 
 namespace shprobe {
 

@@ -2,11 +2,11 @@
 // face files made from an equirect with the library's own loader and writer.
 #include "app/bench_job.h"
 #include "app/stopwatch.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/image/image_write.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "image/environment.h"
+#include "image/image_write.h"
+#include "sh/cubemap.h"
 
 #include <algorithm>
 #include <array>

@@ -4,7 +4,7 @@
 // parts, read and write image files: given here, they are refused in one line that names them.
 #include "app/bench.h"
 #include "app/program.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <array>
 #include <string>

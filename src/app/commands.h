@@ -2,10 +2,9 @@
 // plain options struct; library errors (shprobe::Error) reach main, which prints them.
 #pragma once
 #include "app/toolkit.h"
-#include "shprobe/glsl/dispatch_plan.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/scene/lit_scene.h"
-#include "shprobe/vk/context.h"
+#include "glsl/dispatch_plan.h"
+#include "image/environment.h"
+#include "vk/context.h"
 
 #include <CLI/CLI.hpp>
 #include <cmath>
@@ -17,6 +16,8 @@
 #include <vector>
 
 namespace shprobe {
+
+struct LitScene; // render/lit_scene.h
 
 struct BakeOptions {
     std::vector<std::string> inputs; // files, folders or {face} patterns; none: the built-in sky
@@ -33,8 +34,8 @@ struct BakeOptions {
     int64_t maxPixels = kDefaultMaxImagePixels; // larger image files are refused from their header
     std::string device;
     bool validation = false;
-    uint32_t workgroupSize = gpu::kDefaultWorkgroupWidth;
-    uint32_t texelsPerInvocation = gpu::kDefaultTexelsPerInvocation;
+    uint32_t workgroupSize = glsl::kDefaultWorkgroupWidth;
+    uint32_t texelsPerInvocation = glsl::kDefaultTexelsPerInvocation;
     bool quiet = false;          // no coefficient table
     LightOptions lights;         // analytic lights added to the environment's radiance
     std::string window = "none"; // none | hanning:W | lanczos:W | dering | dering-lanczos
@@ -193,7 +194,7 @@ std::vector<std::string> filesReadBy(const std::string& input);
 void addBakeOptions(CLI::App& command, BakeOptions& options);
 void runBake(const BakeOptions& options);
 
-// --format (the formats of io/engine_export.h), --map-size and --mirror, as bake and convert take them.
+// --format (the formats of formats/engine_export.h), --map-size and --mirror, as bake and convert take them.
 void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool& mirror);
 
 void addConvertOptions(CLI::App& command, ConvertOptions& options);

@@ -1,12 +1,12 @@
-// `shprobe convert`: a probe file in, any format of io/engine_export.h out, so that baking and
+// `shprobe convert`: a probe file in, any format of formats/engine_export.h out, so that baking and
 // exporting are separate steps. The output name and format follow bake's rule (settleFormatAndOutput).
 #include "app/bake_steps.h"
 #include "app/commands.h"
-#include "shprobe/io/engine_export.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/io/probe_export.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "formats/engine_export.h"
+#include "formats/probe_export.h"
+#include "formats/probe_file.h"
 
 #include <cstdio>
 #include <filesystem>

@@ -1,7 +1,7 @@
 // `shprobe info`: the Vulkan devices, which one a bake would use, and the features it relies on.
 #include "app/commands.h"
-#include "shprobe/gpu/host_bake.h"
-#include "shprobe/vk/context.h"
+#include "gpu/host_bake.h"
+#include "vk/context.h"
 
 #include <cstdio>
 

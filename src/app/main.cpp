@@ -3,7 +3,7 @@
 #include "app/bench_job.h"
 #include "app/commands.h"
 #include "app/program.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <cerrno>
 #include <cstring>

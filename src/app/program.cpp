@@ -2,9 +2,9 @@
 
 #include "app/heap.h"
 
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/version.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include <shprobe/version.h>
 
 #include <csignal>
 #include <cstdio>

@@ -6,13 +6,13 @@
 #include "app/program.h"
 #include "app/stopwatch.h"
 
-#include "shprobe/io/output_file.h"
-#include "shprobe/io/probe_volume.h"
-#include "shprobe/scene/gltf_scene.h"
-#include "shprobe/scene/probe_grid.h"
-#include "shprobe/scene/reference_tracer.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "formats/probe_volume.h"
+#include "scene/gltf_scene.h"
+#include "scene/probe_grid.h"
+#include "scene/reference_tracer.h"
+#include "sh/irradiance.h"
 
 #include <algorithm>
 #include <cstdio>

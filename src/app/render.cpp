@@ -3,15 +3,15 @@
 // order-5 reconstructions and lit spheres side by side.
 #include "app/commands.h"
 #include "app/stopwatch.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/render/grid.h"
-#include "shprobe/render/image_output.h"
-#include "shprobe/render/offscreen.h"
-#include "shprobe/render/render_input.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/context.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "common/scope_exit.h"
+#include "render/grid.h"
+#include "render/image_output.h"
+#include "render/offscreen.h"
+#include "render/render_input.h"
+#include "vk/check.h"
+#include "vk/context.h"
 
 #include <cmath>
 #include <cstdio>

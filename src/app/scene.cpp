@@ -1,18 +1,18 @@
 // `shprobe scene`: a grid of light probes baked inside a glTF scene on the GPU (capture, bake and
-// bounces: gpu/scene_capture.h) into a probe volume (io/probe_volume.h); `shprobe merge` joins the
+// bounces: gpu/scene_capture.h) into a probe volume (formats/probe_volume.h); `shprobe merge` joins the
 // bricks of one bake (docs/scene-probes.md).
 #include "app/commands.h"
 
 #include "app/stopwatch.h"
-#include "shprobe/gpu/scene_capture.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/io/probe_volume.h"
-#include "shprobe/scene/gltf_scene.h"
-#include "shprobe/scene/probe_grid.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/context.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "common/scope_exit.h"
+#include "formats/probe_volume.h"
+#include "gpu/scene_capture.h"
+#include "image/environment.h"
+#include "scene/gltf_scene.h"
+#include "scene/probe_grid.h"
+#include "vk/context.h"
 
 #include <algorithm>
 #include <cstdio>

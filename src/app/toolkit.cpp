@@ -3,14 +3,14 @@
 
 #include "app/commands.h"
 
-#include "shprobe/io/output_file.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/lights.h"
-#include "shprobe/sh/rotation.h"
-#include "shprobe/sh/windowing.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "formats/probe_file.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
+#include "sh/rotation.h"
+#include "sh/windowing.h"
 
 #include <cmath>
 #include <numbers>

@@ -1,7 +1,7 @@
 // Commands and options for working on probes (toolkit.cpp): `shprobe rotate`, `shprobe light`, and
 // the light and window options that `shprobe bake` shares with them.
 #pragma once
-#include "shprobe/sh/coefficients.h"
+#include "sh/coefficients.h"
 
 #include <CLI/CLI.hpp>
 #include <optional>

@@ -2,11 +2,11 @@
 // GLFW viewer (src/render/viewer.h); `--screenshot FILE --frames N` saves frame N and exits, for tests
 // and scripts.
 #include "app/commands.h"
-#include "shprobe/gpu/host_bake.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/render/render_input.h"
-#include "shprobe/render/viewer.h"
-#include "shprobe/vk/check.h"
+#include "common/output_file.h"
+#include "gpu/host_bake.h"
+#include "render/render_input.h"
+#include "render/viewer.h"
+#include "vk/check.h"
 
 namespace shprobe {
 

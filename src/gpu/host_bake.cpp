@@ -1,13 +1,13 @@
-#include "shprobe/gpu/host_bake.h"
+#include "gpu/host_bake.h"
 
-#include "shprobe/glsl/gpu_interface.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/image.h"
-#include "shprobe/vk/resources.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "glsl/gpu_interface.h"
+#include "sh/basis.h"
+#include "vk/check.h"
+#include "vk/image.h"
+#include "vk/resources.h"
+#include "vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,12 +4,12 @@
 // uploadBinding(device, format) and whose source is the maps' (ProbeSource::Cubemaps or Equirect);
 // the texel format uploaded follows from that binding.
 #pragma once
-#include "shprobe/gpu/probe_baker.h"
-#include "shprobe/sh/coefficients.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/vk/context.h"
-#include "shprobe/vk/image.h"
-#include "shprobe/vk/resources.h"
+#include "gpu/probe_baker.h"
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
+#include "vk/context.h"
+#include "vk/image.h"
+#include "vk/resources.h"
 
 #include <span>
 #include <string>

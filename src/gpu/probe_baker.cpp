@@ -1,16 +1,16 @@
-#include "shprobe/gpu/probe_baker.h"
+#include "gpu/probe_baker.h"
 
-#include "shprobe/glsl/dispatch_plan.h"
-#include "shprobe/glsl/gpu_interface.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/shprobe_spirv.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/image.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "glsl/dispatch_plan.h"
+#include "glsl/gpu_interface.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
+#include "sh/irradiance.h"
+#include "vk/check.h"
+#include "vk/image.h"
+#include "vk/vulkan_commands.h"
+#include <shprobe/shprobe_spirv.h>
 
 #include <algorithm>
 #include <string>
@@ -34,13 +34,13 @@ struct ProjectionShape {
 };
 
 ProjectionShape cubemapShape(uint32_t order, uint32_t faceSize) {
-    return {gpu::projectionPositions(faceSize), gpu::kTexelsPerPosition,
-            gpu::maxPositionsPerInvocation(order), "probe(s) of face size " + std::to_string(faceSize)};
+    return {glsl::projectionPositions(faceSize), glsl::kTexelsPerPosition,
+            glsl::maxPositionsPerInvocation(order), "probe(s) of face size " + std::to_string(faceSize)};
 }
 
 ProjectionShape equirectShape(uint32_t order, uint32_t width, uint32_t height) {
-    return {gpu::equirectProjectionPositions(width, height), gpu::equirectTexelsPerPosition(width),
-            gpu::maxEquirectPositionsPerInvocation(order),
+    return {glsl::equirectProjectionPositions(width, height), glsl::equirectTexelsPerPosition(width),
+            glsl::maxEquirectPositionsPerInvocation(order),
             "equirect probe(s) of " + std::to_string(width) + "x" + std::to_string(height)};
 }
 
@@ -51,24 +51,24 @@ uint32_t groupsPerProbe(const Device& device, const ProbeBakerOptions& options, 
                         uint32_t probes) {
     const VkPhysicalDeviceLimits& limits = device.info.limits;
     const uint32_t maxGroups =
-        gpu::maxGroupsPerProbe(limits.maxComputeWorkGroupCount[0], limits.maxStorageBufferRange,
-                               uint32_t(coefficientSetBytes(options.order)), probes);
+        glsl::maxGroupsPerProbe(limits.maxComputeWorkGroupCount[0], limits.maxStorageBufferRange,
+                                uint32_t(coefficientSetBytes(options.order)), probes);
     const uint32_t perInvocation =
-        gpu::planPositionsOf(shape.positions, shape.texelsPerPosition, options.texelsPerInvocation,
-                             options.workgroupSize, maxGroups, shape.maxPositions);
+        glsl::planPositionsOf(shape.positions, shape.texelsPerPosition, options.texelsPerInvocation,
+                              options.workgroupSize, maxGroups, shape.maxPositions);
     if (perInvocation == 0)
         throw Error(ErrorKind::Input, "GPU bake: " + std::to_string(probes) + " " + shape.probes +
                                           " at order " + std::to_string(options.order) +
                                           " are more than one bake can hold on " + device.info.name +
                                           "; bake fewer probes at a time");
-    return gpu::planGroups(shape.positions, perInvocation, options.workgroupSize);
+    return glsl::planGroups(shape.positions, perInvocation, options.workgroupSize);
 }
 
 // Per-band scales for convolve.comp: the window alone (radiance) or A_l times the window
 // (irradiance, E_lm = A_l L_lm). An empty window is no window.
-gpu::ConvolveParams convolveParams(int order, std::span<const double> window, Quantity quantity,
-                                   uint32_t outputOffset) {
-    gpu::ConvolveParams params{};
+glsl::ConvolveParams convolveParams(int order, std::span<const double> window, Quantity quantity,
+                                    uint32_t outputOffset) {
+    glsl::ConvolveParams params{};
     for (int l = 0; l < order; ++l) {
         double scale = window.empty() ? 1.0 : window[size_t(l)];
         if (quantity == Quantity::Irradiance) scale *= irradianceBandFactor(l);
@@ -234,7 +234,7 @@ ProbeBaker createProbeBaker(const Device& device, const ProbeBakerOptions& optio
     if (options.texelsPerInvocation < 1)
         throw Error(ErrorKind::Input, "texels per invocation must be at least 1");
     if (options.workgroupSize < 1) throw Error(ErrorKind::Input, "the workgroup size must be at least 1");
-    if (gpu::projectionSharedBytes(options.workgroupSize) > device.info.limits.maxComputeSharedMemorySize)
+    if (glsl::projectionSharedBytes(options.workgroupSize) > device.info.limits.maxComputeSharedMemorySize)
         throw Error(ErrorKind::Input, "workgroup size " + std::to_string(options.workgroupSize) +
                                           " needs more shared memory than " + device.info.name + " has");
     const bool sampled = options.cubemaps == CubemapBinding::SampledImage;
@@ -256,8 +256,8 @@ ProbeBaker createProbeBaker(const Device& device, const ProbeBakerOptions& optio
          .spirv = module.spirv,
          .bindings = sampled ? std::span(kSampledBindings) : std::span(kStorageBindings),
          .immutableSampler = baker.sampler,
-         .pushConstantSize = options.source == ProbeSource::Equirect ? uint32_t(sizeof(gpu::EquirectParams))
-                                                                     : uint32_t(sizeof(gpu::ProjectParams)),
+         .pushConstantSize = options.source == ProbeSource::Equirect ? uint32_t(sizeof(glsl::EquirectParams))
+                                                                     : uint32_t(sizeof(glsl::ProjectParams)),
          .localSize = options.workgroupSize,
          .order = order});
     auto bufferProgram = [&](const char* name, std::span<const uint32_t> spirv, uint32_t pushConstantSize) {
@@ -265,11 +265,11 @@ ProbeBaker createProbeBaker(const Device& device, const ProbeBakerOptions& optio
                                              .spirv = spirv,
                                              .bindings = kBufferBindings,
                                              .pushConstantSize = pushConstantSize,
-                                             .localSize = gpu::kCoefficientWorkgroupWidth,
+                                             .localSize = glsl::kCoefficientWorkgroupWidth,
                                              .order = order});
     };
-    baker.reduce = bufferProgram("reduce.comp", spirv::reduce_comp, sizeof(gpu::ReduceParams));
-    baker.convolve = bufferProgram("convolve.comp", spirv::convolve_comp, sizeof(gpu::ConvolveParams));
+    baker.reduce = bufferProgram("reduce.comp", spirv::reduce_comp, sizeof(glsl::ReduceParams));
+    baker.convolve = bufferProgram("convolve.comp", spirv::convolve_comp, sizeof(glsl::ConvolveParams));
     return baker;
 }
 
@@ -352,13 +352,13 @@ void recordProbeBake(VkCommandBuffer commands, const ProbeBaker& baker, const Pr
     scratchReuseBarrier(commands);
     if (equirect) {
         dispatch(commands, baker.project, set.project,
-                 gpu::EquirectParams{set.equirect.width, set.equirect.height}, {set.groupsPerProbe, probes});
+                 glsl::EquirectParams{set.equirect.width, set.equirect.height}, {set.groupsPerProbe, probes});
     } else {
-        dispatch(commands, baker.project, set.project, gpu::ProjectParams{set.target.faceSize},
+        dispatch(commands, baker.project, set.project, glsl::ProjectParams{set.target.faceSize},
                  {set.groupsPerProbe, probes});
     }
     computeWriteBarrier(commands);
-    dispatch(commands, baker.reduce, set.reduce, gpu::ReduceParams{set.groupsPerProbe},
+    dispatch(commands, baker.reduce, set.reduce, glsl::ReduceParams{set.groupsPerProbe},
              {uint32_t(coefficientCount(baker.options.order)), probes});
     computeWriteBarrier(commands);
     recordConvolutions(commands, baker, set.convolve, probes, window);

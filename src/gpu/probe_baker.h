@@ -41,11 +41,11 @@
 //   buffer or on one queue, but must not run concurrently on different queues. Different sets
 //   are independent.
 #pragma once
-#include "shprobe/glsl/dispatch_plan.h"
-#include "shprobe/sh/coefficients.h"
-#include "shprobe/vk/context.h"
-#include "shprobe/vk/pipeline.h"
-#include "shprobe/vk/resources.h"
+#include "glsl/dispatch_plan.h"
+#include "sh/coefficients.h"
+#include "vk/context.h"
+#include "vk/pipeline.h"
+#include "vk/resources.h"
 
 #include <cstdint>
 #include <span>
@@ -81,8 +81,8 @@ VkImageLayout cubemapLayout(CubemapBinding binding);
 struct ProbeBakerOptions {
     int order = 3; // 1..kMaxOrder
     CubemapBinding cubemaps = CubemapBinding::SampledImage;
-    uint32_t workgroupSize = gpu::kDefaultWorkgroupWidth;            // invocations per projection workgroup
-    uint32_t texelsPerInvocation = gpu::kDefaultTexelsPerInvocation; // work per invocation (capped by order)
+    uint32_t workgroupSize = glsl::kDefaultWorkgroupWidth;            // invocations per projection workgroup
+    uint32_t texelsPerInvocation = glsl::kDefaultTexelsPerInvocation; // work per invocation (capped by order)
     ProbeSource source = ProbeSource::Cubemaps; // the projection pipeline built; `cubemaps` is its binding
 };
 

@@ -1,12 +1,12 @@
-#include "shprobe/gpu/rotator.h"
+#include "gpu/rotator.h"
 
-#include "shprobe/glsl/gpu_interface.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/shprobe_spirv.h"
-#include "shprobe/vk/resources.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "glsl/gpu_interface.h"
+#include "sh/basis.h"
+#include "vk/resources.h"
+#include "vk/vulkan_commands.h"
+#include <shprobe/shprobe_spirv.h>
 
 #include <glm/vec4.hpp>
 
@@ -68,7 +68,7 @@ Rotator createRotator(const Device& device, int order) {
     rotator.program = createComputeProgram(device, {.name = "rotate.comp",
                                                     .spirv = spirv::rotate_comp,
                                                     .bindings = kBindings,
-                                                    .pushConstantSize = sizeof(gpu::RotateParams),
+                                                    .pushConstantSize = sizeof(glsl::RotateParams),
                                                     .localSize = kWorkgroupSize,
                                                     .order = uint32_t(order)});
     return rotator;
@@ -106,7 +106,7 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
     VkDescriptorSet set = createDescriptorSet(context, pool, rotator.program, targets);
 
     uint32_t stride = rotations.size() == 1 ? 0u : uint32_t(matrixFloats(rotator.order));
-    gpu::RotateParams params{uint32_t(probes.size()), stride};
+    glsl::RotateParams params{uint32_t(probes.size()), stride};
     uint32_t groups = uint32_t((input.size() + kWorkgroupSize - 1) / kWorkgroupSize);
     if (groups > context.info.limits.maxComputeWorkGroupCount[0])
         throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(probes.size()) +

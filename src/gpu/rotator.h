@@ -1,9 +1,9 @@
 // GPU rotation of a batch of probes (rotate.comp) by band matrices built on the CPU.
 #pragma once
-#include "shprobe/sh/coefficients.h"
-#include "shprobe/sh/rotation.h"
-#include "shprobe/vk/context.h"
-#include "shprobe/vk/pipeline.h"
+#include "sh/coefficients.h"
+#include "sh/rotation.h"
+#include "vk/context.h"
+#include "vk/pipeline.h"
 
 #include <span>
 #include <vector>

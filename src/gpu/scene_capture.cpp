@@ -1,18 +1,17 @@
-#include "shprobe/gpu/scene_capture.h"
+#include "gpu/scene_capture.h"
 
-#include "shprobe/glsl/capture_interface.h"
-#include "shprobe/glsl/gpu_interface.h"
-#include "shprobe/glsl/texel_geometry.h"
-#include "shprobe/gpu/host_bake.h"
-#include "shprobe/render/meshes.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/shprobe_render_spirv.h"
-#include "shprobe/shprobe_scene_spirv.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/graphics.h"
-#include "shprobe/vk/pipeline.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "glsl/capture_interface.h"
+#include "glsl/gpu_interface.h"
+#include "glsl/texel_geometry.h"
+#include "gpu/host_bake.h"
+#include "vk/check.h"
+#include "vk/graphics.h"
+#include "vk/pipeline.h"
+#include "vk/vulkan_commands.h"
+#include <shprobe/shprobe_scene_spirv.h>
+#include <shprobe/shprobe_spirv.h>
 
 #include <algorithm>
 #include <array>
@@ -26,7 +25,6 @@ namespace shprobe {
 
 namespace {
 
-constexpr VkFormat kCaptureFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 constexpr VkFormat kShadowFormat = VK_FORMAT_D32_SFLOAT; // depth of captures, views and shadow maps
 constexpr VkBufferUsageFlags kStorageUpload =
     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
@@ -90,8 +88,8 @@ void checkWorld(const World& world) {
                                                   " names a texture it does not have");
 }
 
-std::vector<gpu::CaptureVertex> packVertices(const World& world) {
-    std::vector<gpu::CaptureVertex> vertices(world.positions.size());
+std::vector<glsl::CaptureVertex> packVertices(const World& world) {
+    std::vector<glsl::CaptureVertex> vertices(world.positions.size());
     for (size_t i = 0; i < vertices.size(); ++i) {
         const glm::vec2 uv = i < world.uvs.size() ? world.uvs[i] : glm::vec2(0.0f);
         vertices[i] = {glm::vec4(world.positions[i], uv.x), glm::vec4(world.normals[i], uv.y)};
@@ -99,8 +97,8 @@ std::vector<gpu::CaptureVertex> packVertices(const World& world) {
     return vertices;
 }
 
-std::vector<gpu::CaptureMaterial> packMaterials(const World& world) {
-    std::vector<gpu::CaptureMaterial> materials;
+std::vector<glsl::CaptureMaterial> packMaterials(const World& world) {
+    std::vector<glsl::CaptureMaterial> materials;
     for (const SceneMaterial& m : world.materials)
         materials.push_back({glm::vec4(m.albedo, float(m.albedoTexture)),
                              glm::vec4(m.emission, float(m.emissionTexture)),
@@ -109,7 +107,7 @@ std::vector<gpu::CaptureMaterial> packMaterials(const World& world) {
 }
 
 struct PackedTextures {
-    std::vector<gpu::CaptureTexture> extents;
+    std::vector<glsl::CaptureTexture> extents;
     std::vector<glm::vec4> texels;
 };
 
@@ -134,9 +132,9 @@ std::vector<glm::vec4> packBounce(const BounceSource& bounce) {
                                           std::to_string(bounce.irradiance.size()) + " coefficients for " +
                                           std::to_string(probes) + " probes of order " +
                                           std::to_string(bounce.order));
-    const gpu::CaptureVolumeHeader header{glm::vec4(glm::vec3(bounce.boundsMin), 0.0f),
-                                          glm::vec4(glm::vec3(bounce.boundsMax), 0.0f),
-                                          glm::uvec4(glm::uvec3(bounce.counts), 1u)};
+    const glsl::CaptureVolumeHeader header{glm::vec4(glm::vec3(bounce.boundsMin), 0.0f),
+                                           glm::vec4(glm::vec3(bounce.boundsMax), 0.0f),
+                                           glm::uvec4(glm::uvec3(bounce.counts), 1u)};
     static_assert(sizeof(header) == 3 * sizeof(glm::vec4));
     std::memcpy(packed.data(), &header, sizeof(header));
     for (size_t p = 0; p < probes; ++p)
@@ -149,7 +147,7 @@ std::vector<glm::vec4> packBounce(const BounceSource& bounce) {
 // The orthographic view of the world's box from a sun: map coordinates from the two axes across
 // the sun's direction (square texels over the larger extent), depth along it, larger nearer the
 // sun, the box's ends 1% inside (0, 1) so that no surface ties with the cleared depth 0.
-gpu::CaptureSun sunView(const SceneSun& sun, const World& world, uint32_t mapSize) {
+glsl::CaptureSun sunView(const SceneSun& sun, const World& world, uint32_t mapSize) {
     const glm::vec3 l = glm::normalize(sun.direction);
     const glm::vec3 helper = std::abs(l.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
     const glm::vec3 u = glm::normalize(glm::cross(helper, l));
@@ -183,8 +181,8 @@ gpu::CaptureSun sunView(const SceneSun& sun, const World& world, uint32_t mapSiz
             glm::uvec4(0u, mapSize, 0u, 0u)};
 }
 
-std::vector<gpu::CaptureSun> packSuns(const World& world, uint32_t mapSize) {
-    std::vector<gpu::CaptureSun> suns;
+std::vector<glsl::CaptureSun> packSuns(const World& world, uint32_t mapSize) {
+    std::vector<glsl::CaptureSun> suns;
     for (const SceneSun& sun : world.suns) {
         suns.push_back(sunView(sun, world, mapSize));
         suns.back().map.x = uint32_t(suns.size() - 1) * mapSize * mapSize;
@@ -194,7 +192,7 @@ std::vector<gpu::CaptureSun> packSuns(const World& world, uint32_t mapSize) {
 
 // The shadow maps' clip space: the map coordinates from [0, 1] to [-1, 1] (row 0 at y = -1, as
 // framebuffer rows are), depth as it is.
-glm::mat4 shadowClip(const gpu::CaptureSun& sun) {
+glm::mat4 shadowClip(const glsl::CaptureSun& sun) {
     glm::mat4 toClip(1.0f);
     toClip[0][0] = toClip[1][1] = 2.0f;
     toClip[3][0] = toClip[3][1] = -1.0f;
@@ -242,12 +240,6 @@ uint32_t sunCount(const SceneCapture& capture) {
     return uint32_t(capture.suns.size());
 }
 
-// The SH order as the capture shaders' specialization constant; `order` must outlive the info.
-constexpr VkSpecializationMapEntry kOrderEntry{SHPROBE_SPEC_ORDER, 0, sizeof(uint32_t)};
-VkSpecializationInfo orderSpecialization(const uint32_t& order) {
-    return {1, &kOrderEntry, sizeof(order), &order};
-}
-
 // The sky over the whole face first (no depth), then the surfaces, nearest first: reversed depth
 // (near plane at 1, infinitely far at 0) keeps float depth precise from the near plane out.
 VkPipeline createCapturePipeline(const Context& context, const SceneCapture& capture, bool surfaces) {
@@ -280,7 +272,7 @@ void createCaptureBuffers(const Context& context, SceneCapture& capture, const W
     capture.buffers[SHPROBE_CAPTURE_SKY] = createStorage(context, sky.texels, "sky texels");
     capture.buffers[SHPROBE_CAPTURE_VOLUME] = createStorage(context, packBounce({}), "previous bounce");
     capture.suns = packSuns(world, uint32_t(capture.options.shadowMapSize));
-    const std::vector<gpu::CaptureSun>& suns = capture.suns;
+    const std::vector<glsl::CaptureSun>& suns = capture.suns;
     capture.buffers[SHPROBE_CAPTURE_SUNS] = createStorage(context, suns, "suns");
     const VkDeviceSize shadowBytes = VkDeviceSize(suns.size()) * capture.options.shadowMapSize *
                                      capture.options.shadowMapSize * sizeof(float);
@@ -299,36 +291,13 @@ void writeCaptureDescriptors(const Context& context, const SceneCapture& capture
     writeDescriptors(context, capture.set, types, targets);
 }
 
-// World -> clip with clip x, y and w the dot products of (position - origin) with the three rows
-// and z = near: depth = near / w, reversed (1 at the near plane, 0 infinitely far).
-glm::mat4 clipFromRows(const std::array<glm::vec3, 3>& rows, const glm::dvec3& origin, float nearPlane) {
-    const std::array<int, 3> rowOf{0, 1, 3};
-    const glm::vec3 o(origin);
-    glm::mat4 m(0.0f); // column-major: m[column][row]
-    for (int r = 0; r < 3; ++r) {
-        for (int column = 0; column < 3; ++column)
-            m[column][rowOf[r]] = rows[r][column];
-        m[3][rowOf[r]] = -glm::dot(rows[r], o);
-    }
-    m[3][2] = nearPlane;
-    return m;
-}
-
 // World -> clip for one face: clip (x, y, w) are the face-local (a, b) and the depth along the
 // face's axis of the direction from the probe (texel_geometry.h's face table, inverted).
 glm::mat4 faceProjection(uint32_t face, const glm::dvec3& probe, float nearPlane) {
-    const glm::vec3 a = gpu::orientToFace(face, glm::vec3(1.0f, 0.0f, 0.0f));
-    const glm::vec3 b = gpu::orientToFace(face, glm::vec3(0.0f, 1.0f, 0.0f));
-    const glm::vec3 axis = gpu::orientToFace(face, glm::vec3(0.0f, 0.0f, 1.0f));
+    const glm::vec3 a = glsl::orientToFace(face, glm::vec3(1.0f, 0.0f, 0.0f));
+    const glm::vec3 b = glsl::orientToFace(face, glm::vec3(0.0f, 1.0f, 0.0f));
+    const glm::vec3 axis = glsl::orientToFace(face, glm::vec3(0.0f, 0.0f, 1.0f));
     return clipFromRows({a, b, axis}, probe, nearPlane);
-}
-
-// The sky, then the surfaces, into the render pass begun, with the push constants set.
-void recordSkyAndSurfaces(VkCommandBuffer commands, const SceneCapture& capture) {
-    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.sky);
-    vkCmdDraw(commands, 3, 1, 0, 0);
-    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.surfaces);
-    if (capture.triangleCount > 0) vkCmdDraw(commands, 3 * capture.triangleCount, 1, 0, 0);
 }
 
 GpuImage createDepthImage(const Context& context, const SceneCapture& capture) {
@@ -436,8 +405,8 @@ void drawShadowMaps(const Context& context, const SceneCapture& capture) {
                                 0, nullptr);
         const VkClearValue clear{.depthStencil = {0.0f, 0}};
         for (uint32_t s = 0; s < sunCount(capture); ++s) {
-            const gpu::CaptureConstants constants{shadowClip(capture.suns[s]), glm::vec4(0.0f),
-                                                  glm::uvec4(0u)};
+            const glsl::CaptureConstants constants{shadowClip(capture.suns[s]), glm::vec4(0.0f),
+                                                   glm::uvec4(0u)};
             beginRenderPass(commands, renderPass, framebuffers[s], {size, size}, {&clear, 1});
             vkCmdPushConstants(commands, capture.layout,
                                VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
@@ -472,6 +441,37 @@ uint32_t capturesPerBatch(const Context& context, const SceneCapture& capture, u
 }
 
 } // namespace
+
+namespace {
+constexpr VkSpecializationMapEntry kOrderEntry{SHPROBE_SPEC_ORDER, 0, sizeof(uint32_t)};
+} // namespace
+
+VkSpecializationInfo orderSpecialization(const uint32_t& order) {
+    return {1, &kOrderEntry, sizeof(order), &order};
+}
+
+// World -> clip with clip x, y and w the dot products of (position - origin) with the three rows
+// and z = near: depth = near / w, reversed (1 at the near plane, 0 infinitely far).
+glm::mat4 clipFromRows(const std::array<glm::vec3, 3>& rows, const glm::dvec3& origin, float nearPlane) {
+    const std::array<int, 3> rowOf{0, 1, 3};
+    const glm::vec3 o(origin);
+    glm::mat4 m(0.0f); // column-major: m[column][row]
+    for (int r = 0; r < 3; ++r) {
+        for (int column = 0; column < 3; ++column)
+            m[column][rowOf[r]] = rows[r][column];
+        m[3][rowOf[r]] = -glm::dot(rows[r], o);
+    }
+    m[3][2] = nearPlane;
+    return m;
+}
+
+// The sky, then the surfaces, into the render pass begun, with the push constants set.
+void recordSkyAndSurfaces(VkCommandBuffer commands, const SceneCapture& capture) {
+    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.sky);
+    vkCmdDraw(commands, 3, 1, 0, 0);
+    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.surfaces);
+    if (capture.triangleCount > 0) vkCmdDraw(commands, 3 * capture.triangleCount, 1, 0, 0);
+}
 
 SceneCapture createSceneCapture(const Context& context, const World& world, const Cubemap& sky,
                                 const SceneCaptureOptions& options) {
@@ -510,7 +510,7 @@ SceneCapture createSceneCapture(const Context& context, const World& world, cons
     capture.setLayout = createSetLayout(context, bindings);
     capture.layout = createPipelineLayout(context, capture.setLayout,
                                           VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
-                                          sizeof(gpu::CaptureConstants));
+                                          sizeof(glsl::CaptureConstants));
     capture.surfaceVertex = createShaderModule(context, spirv::capture_vert);
     capture.surfaceFragment = createShaderModule(context, spirv::capture_frag);
     capture.skyVertex = createShaderModule(context, spirv::fullscreen_vert);
@@ -597,7 +597,7 @@ void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, c
                             nullptr);
     for (size_t p = 0; p < positions.size(); ++p)
         for (uint32_t face = 0; face < 6; ++face) {
-            const gpu::CaptureConstants constants{
+            const glsl::CaptureConstants constants{
                 faceProjection(face, positions[p], capture.nearPlane),
                 glm::vec4(glm::vec3(positions[p]), 1.0f),
                 glm::uvec4(face, n, capture.skyFaceSize, sunCount(capture))};
@@ -659,122 +659,6 @@ std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCaptu
         }
     }
     return probes;
-}
-
-namespace {
-
-// World -> clip of a camera: as faceProjection, with the camera's axes (y down, as Vulkan's clip
-// space is) scaled by the field of view.
-glm::mat4 cameraProjection(const SceneCamera& camera, VkExtent2D extent, float nearPlane) {
-    const glm::vec3 forward = glm::normalize(glm::vec3(camera.target - camera.eye));
-    const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(camera.up)));
-    const glm::vec3 down = glm::cross(forward, right);
-    const float f = 1.0f / std::tan(float(camera.verticalFovDegrees) * 0.5f * 3.14159265f / 180.0f);
-    const float aspect = float(extent.width) / float(extent.height);
-    return clipFromRows({right * (f / aspect), down * f, forward}, camera.eye, nearPlane);
-}
-
-VkPipeline createProbePipeline(const Context& context, const SceneCapture& capture,
-                               const SceneViewTarget& target) {
-    const uint32_t order = uint32_t(capture.options.order);
-    const VkSpecializationInfo specialization = orderSpecialization(order);
-    const VkVertexInputBindingDescription binding{0, sizeof(MeshVertex), VK_VERTEX_INPUT_RATE_VERTEX};
-    const std::array<VkVertexInputAttributeDescription, 2> attributes{
-        {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(MeshVertex, position)},
-         {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(MeshVertex, normal)}}};
-    GraphicsPipelineDesc desc;
-    desc.vertex = target.probeVertex;
-    desc.fragment = target.probeFragment;
-    desc.vertexSpecialization = &specialization;
-    desc.fragmentSpecialization = &specialization;
-    desc.vertexBindings = {&binding, 1};
-    desc.vertexAttributes = attributes;
-    desc.depthTest = true;
-    desc.depthWrite = true;
-    desc.depthCompare = VK_COMPARE_OP_GREATER;
-    desc.layout = capture.layout;
-    desc.renderPass = capture.renderPass;
-    return createGraphicsPipeline(context, desc);
-}
-
-double defaultProbeRadius(const BounceGrid& grid) {
-    double cell = INFINITY;
-    for (int a = 0; a < 3; ++a)
-        if (grid.counts[a] > 1)
-            cell = std::min(cell, (grid.boundsMax[a] - grid.boundsMin[a]) / (grid.counts[a] - 1));
-    return std::isfinite(cell) ? 0.1 * cell : 0.05;
-}
-
-} // namespace
-
-SceneViewTarget createSceneViewTarget(const Context& context, const SceneCapture& capture, VkExtent2D extent,
-                                      VkImageUsageFlags colorUsage) {
-    SceneViewTarget target;
-    OnFailure undo([&] { destroySceneViewTarget(context, target); });
-    target.extent = extent;
-    target.color = createImage(context, {.format = kCaptureFormat,
-                                         .extent = extent,
-                                         .usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | colorUsage,
-                                         .what = "scene view"});
-    target.depth = createImage(context, {.format = capture.depthFormat,
-                                         .extent = extent,
-                                         .usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                                         .what = "scene view depth"});
-    const std::array<VkImageView, 2> views{target.color.view, target.depth.view};
-    target.framebuffer = createFramebuffer(context, capture.renderPass, views, extent);
-    target.probeVertex = createShaderModule(context, spirv::capture_probe_vert);
-    target.probeFragment = createShaderModule(context, spirv::capture_probe_frag);
-    target.probes = createProbePipeline(context, capture, target);
-    const MeshData sphere = makeSphereMesh(24, 12);
-    const VkBufferUsageFlags upload = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    target.sphereVertices =
-        createBuffer(context, sphere.vertices.size() * sizeof(MeshVertex),
-                     VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | upload, MemoryUse::Device, "sphere vertices");
-    uploadBuffer(context, target.sphereVertices, sphere.vertices.data(), target.sphereVertices.size);
-    target.sphereIndices =
-        createBuffer(context, sphere.indices.size() * sizeof(uint32_t),
-                     VK_BUFFER_USAGE_INDEX_BUFFER_BIT | upload, MemoryUse::Device, "sphere indices");
-    uploadBuffer(context, target.sphereIndices, sphere.indices.data(), target.sphereIndices.size);
-    target.sphereIndexCount = uint32_t(sphere.indices.size());
-    return target;
-}
-
-void destroySceneViewTarget(const Context& context, SceneViewTarget& target) {
-    destroyBuffer(context, target.sphereIndices);
-    destroyBuffer(context, target.sphereVertices);
-    if (target.probes) vkDestroyPipeline(context.device, target.probes, nullptr);
-    for (VkShaderModule module : {target.probeVertex, target.probeFragment})
-        if (module) vkDestroyShaderModule(context.device, module, nullptr);
-    if (target.framebuffer) vkDestroyFramebuffer(context.device, target.framebuffer, nullptr);
-    destroyImage(context, target.depth);
-    destroyImage(context, target.color);
-    target = SceneViewTarget{};
-}
-
-void recordSceneView(VkCommandBuffer commands, const SceneCapture& capture, const SceneViewTarget& target,
-                     const SceneCamera& camera, const SceneViewOptions& options) {
-    const BounceGrid& grid = capture.bounceGrid;
-    const float radius = float(options.probeRadius > 0.0 ? options.probeRadius : defaultProbeRadius(grid));
-    const gpu::CaptureConstants constants{
-        cameraProjection(camera, target.extent, capture.nearPlane), glm::vec4(glm::vec3(camera.eye), radius),
-        glm::uvec4(SHPROBE_CAPTURE_CAMERA, 0u, capture.skyFaceSize, sunCount(capture)),
-        glm::vec4(float(target.extent.width), float(target.extent.height), 0.0f, 0.0f)};
-    const VkClearValue clears[2] = {{}, {.depthStencil = {0.0f, 0}}};
-    beginRenderPass(commands, capture.renderPass, target.framebuffer, target.extent, clears);
-    vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.layout, 0, 1, &capture.set, 0,
-                            nullptr);
-    vkCmdPushConstants(commands, capture.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-                       sizeof(constants), &constants);
-    recordSkyAndSurfaces(commands, capture);
-    const uint32_t probes = uint32_t(grid.counts.x) * uint32_t(grid.counts.y) * uint32_t(grid.counts.z);
-    if (options.showProbes && probes > 0) {
-        const VkDeviceSize offset = 0;
-        vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, target.probes);
-        vkCmdBindVertexBuffers(commands, 0, 1, &target.sphereVertices.buffer, &offset);
-        vkCmdBindIndexBuffer(commands, target.sphereIndices.buffer, 0, VK_INDEX_TYPE_UINT32);
-        vkCmdDrawIndexed(commands, target.sphereIndexCount, probes, 0, 0, 0);
-    }
-    vkCmdEndRenderPass(commands);
 }
 
 Cubemap captureProbeCubemap(const Context& context, const SceneCapture& capture, const glm::dvec3& position) {

@@ -9,16 +9,18 @@
 //
 // bakeSceneProbes does all of it for a list of positions: batches, bakes, reads back.
 #pragma once
-#include "shprobe/glsl/capture_interface.h"
-#include "shprobe/gpu/probe_baker.h"
-#include "shprobe/scene/scene.h"
-#include "shprobe/sh/coefficients.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/vk/context.h"
-#include "shprobe/vk/image.h"
-#include "shprobe/vk/resources.h"
+#include "glsl/capture_interface.h"
+#include "gpu/probe_baker.h"
+#include "scene/scene.h"
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
+#include "vk/context.h"
+#include "vk/image.h"
+#include "vk/resources.h"
 
+#include <array>
 #include <cstdint>
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 #include <span>
 #include <vector>
@@ -67,9 +69,9 @@ struct SceneCapture {
     VkShaderModule skyFragment = VK_NULL_HANDLE;
     VkPipeline surfaces = VK_NULL_HANDLE;
     VkPipeline sky = VK_NULL_HANDLE;
-    std::vector<gpu::CaptureSun> suns; // as the shaders read them, with their shadow maps' projections
-    BounceGrid bounceGrid;             // of setBounceSource's volume; counts 0: none
-    std::vector<Buffer> buffers;       // one per binding of capture_interface.h
+    std::vector<glsl::CaptureSun> suns; // as the shaders read them, with their shadow maps' projections
+    BounceGrid bounceGrid;              // of setBounceSource's volume; counts 0: none
+    std::vector<Buffer> buffers;        // one per binding of capture_interface.h
     VkDescriptorPool pool = VK_NULL_HANDLE;
     VkDescriptorSet set = VK_NULL_HANDLE;
 };
@@ -104,42 +106,14 @@ void destroyCaptureTarget(const Context& context, CaptureTarget& target);
 void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, const CaptureTarget& target,
                         std::span<const glm::dvec3> positions);
 
-// A picture of the world lit by the capture's bounce source: what a probe there would see, through
-// a camera (reversed depth, infinitely far), with the probes as small spheres if asked.
-struct SceneCamera {
-    glm::dvec3 eye{0.0, 0.0, 3.0};
-    glm::dvec3 target{0.0};
-    glm::dvec3 up{0.0, 1.0, 0.0};
-    double verticalFovDegrees = 45.0;
-};
-
-struct SceneViewOptions {
-    bool showProbes = false;  // each probe of the bounce source, shaded by its own SH (red: invalid)
-    double probeRadius = 0.0; // 0: a tenth of the grid's smallest cell
-};
-
-// The view's colour (RGBA32F, left in GENERAL) and depth, its framebuffer, and the pipeline and
-// sphere mesh of the probes.
-struct SceneViewTarget {
-    VkExtent2D extent{};
-    GpuImage color;
-    GpuImage depth;
-    VkFramebuffer framebuffer = VK_NULL_HANDLE;
-    VkShaderModule probeVertex = VK_NULL_HANDLE;
-    VkShaderModule probeFragment = VK_NULL_HANDLE;
-    VkPipeline probes = VK_NULL_HANDLE;
-    Buffer sphereVertices;
-    Buffer sphereIndices;
-    uint32_t sphereIndexCount = 0;
-};
-// `colorUsage` is added to the colour image's (e.g. SAMPLED for a tonemap pass, TRANSFER_SRC).
-SceneViewTarget createSceneViewTarget(const Context& context, const SceneCapture& capture, VkExtent2D extent,
-                                      VkImageUsageFlags colorUsage);
-void destroySceneViewTarget(const Context& context, SceneViewTarget& target);
-// Records the view into target.color, left in GENERAL, visible to fragment-shader reads and
-// transfers.
-void recordSceneView(VkCommandBuffer commands, const SceneCapture& capture, const SceneViewTarget& target,
-                     const SceneCamera& camera, const SceneViewOptions& options);
+// The parts of a capture that a view of the world (render/scene_view.h) draws with: the sky, then
+// the surfaces, into the capture's render pass begun with its push constants set; world -> clip with
+// clip x, y and w the dot products of (position - origin) with the rows, reversed depth; the SH
+// order as the shaders' specialization constant (`order` must outlive the info).
+constexpr VkFormat kCaptureFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+void recordSkyAndSurfaces(VkCommandBuffer commands, const SceneCapture& capture);
+glm::mat4 clipFromRows(const std::array<glm::vec3, 3>& rows, const glm::dvec3& origin, float nearPlane);
+VkSpecializationInfo orderSpecialization(const uint32_t& order);
 
 // What bakeSceneProbes gives for each probe.
 struct SceneProbe {

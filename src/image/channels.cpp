@@ -1,7 +1,7 @@
-#include "shprobe/image/channels.h"
+#include "image/channels.h"
 
-#include "shprobe/io/input_file.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/input_file.h"
 
 #include <algorithm>
 #include <array>

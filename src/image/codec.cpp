@@ -1,6 +1,6 @@
 // The formats shprobe reads and writes itself, told from a file's first bytes or an output's name
 // (image/codec.h).
-#include "shprobe/image/codec.h"
+#include "image/codec.h"
 
 #include <algorithm>
 #include <cctype>

@@ -5,7 +5,7 @@
 // such a file is met (image/oiio_plugin.h): a command that reads or writes none of them does not
 // pay for their libraries' loading (OpenImageIO's: hundreds of shared libraries).
 #pragma once
-#include "shprobe/image/channels.h"
+#include "image/channels.h"
 
 #include <cstdint>
 #include <memory>

@@ -1,7 +1,7 @@
 // Loading HDR environments into cube maps: equirect, horizontal and vertical crosses, six face
 // files, and the built-in procedural sky. Layouts and orientations follow docs/conventions.md.
 #pragma once
-#include "shprobe/sh/cubemap.h"
+#include "sh/cubemap.h"
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -79,7 +79,7 @@ struct Environment {
 // and alpha and any further channel are ignored, never multiplied in. Texel values are kept as
 // stored: NaN and infinities are left to applyNonFinitePolicy, negative and huge finite values
 // are kept. Throws Error(Input) naming the file on any failure: "PATH: REASON" in the system's
-// words when the file cannot be opened (io/input_file.h: "permission denied", "too many levels of
+// words when the file cannot be opened (common/input_file.h: "permission denied", "too many levels of
 // symbolic links", ...); from the header, before a reader opens the file, when an EXR or PNG
 // header claims more bytes than the file holds (checkImageHeader); and from the header, before any
 // pixel is read, when the image has more than maxPixels pixels or a side longer than

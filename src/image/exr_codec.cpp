@@ -2,7 +2,7 @@
 // itself, built as libshprobe_exr.so. Like the OpenImageIO plugin it uses nothing of the shprobe
 // libraries but their headers, so that it loads into a program that links them statically as well
 // as shared.
-#include "shprobe/image/exr_plugin.h"
+#include "image/exr_plugin.h"
 
 #include <OpenEXR/IexBaseExc.h>
 #include <OpenEXR/ImfChannelList.h>

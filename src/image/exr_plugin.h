@@ -4,8 +4,8 @@
 // commands that meet no EXR file start without them. Built with the library and installed beside
 // the OpenImageIO plugin.
 #pragma once
-#include "shprobe/image/codec.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "image/codec.h"
 
 #include <cstdint>
 #include <memory>

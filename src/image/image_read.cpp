@@ -1,14 +1,14 @@
 // Reading environment images (image/codec.h) and loading them as cube maps: single images
 // (equirect or cross) and six face files. Every failure is an Error(Input) naming the file.
-#include "shprobe/image/environment.h"
+#include "image/environment.h"
 
-#include "shprobe/image/channels.h"
-#include "shprobe/image/codec.h"
-#include "shprobe/image/oiio_plugin.h"
-#include "shprobe/io/input_file.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/parallel.h"
-#include "shprobe/sh/scope_exit.h"
+#include "common/error.h"
+#include "common/input_file.h"
+#include "common/parallel.h"
+#include "common/scope_exit.h"
+#include "image/channels.h"
+#include "image/codec.h"
+#include "image/oiio_plugin.h"
 
 #include <algorithm>
 #include <array>

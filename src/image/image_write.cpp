@@ -1,12 +1,12 @@
 // Writing images: EXR, HDR, PNG and JPEG by shprobe's own encoders (image/codec.h), other formats
 // through the OpenImageIO plugin, always into memory first, then to the destination through
 // OutputFile.
-#include "shprobe/image/image_write.h"
+#include "image/image_write.h"
 
-#include "shprobe/image/codec.h"
-#include "shprobe/image/oiio_plugin.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "image/codec.h"
+#include "image/oiio_plugin.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
 // Writing images: EXR, HDR, PNG and JPEG by shprobe's own encoders, other formats through the
 // OpenImageIO plugin (image/codec.h). The encoded file goes to the destination through OutputFile
-// (io/output_file.h): whole or not at all, every write checked.
+// (common/output_file.h): whole or not at all, every write checked.
 #pragma once
-#include "shprobe/sh/cubemap.h"
+#include "sh/cubemap.h"
 
 #include <cstdint>
 #include <string>

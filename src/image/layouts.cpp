@@ -2,10 +2,10 @@
 // resizing. Face order, orientation and the cross layouts are those of docs/conventions.md.
 // Resampling runs on all cores, a row of texels at a time; each texel is computed alone, so the
 // result is bit-identical for every thread count.
-#include "shprobe/image/environment.h"
+#include "image/environment.h"
 
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/parallel.h"
+#include "common/error.h"
+#include "common/parallel.h"
 
 #include <algorithm>
 #include <array>

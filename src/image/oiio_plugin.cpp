@@ -2,7 +2,7 @@
 // as libshprobe_oiio.so and loaded only for the formats shprobe does not handle itself. It uses
 // nothing of the shprobe libraries but their headers, so that it loads into a program that links
 // them statically as well as shared.
-#include "shprobe/image/oiio_plugin.h"
+#include "image/oiio_plugin.h"
 
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>

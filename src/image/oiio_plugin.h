@@ -4,8 +4,8 @@
 // libraries into the runs that need them. The plugin is built with the library and lives beside
 // it: in the build tree next to the program, installed in <libdir>/shprobe.
 #pragma once
-#include "shprobe/image/codec.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "image/codec.h"
 
 #include <functional>
 #include <memory>
@@ -17,7 +17,7 @@ namespace shprobe {
 struct OiioImageRequest {
     std::string destination; // for messages, and for the format when `format` is empty
     std::string format;      // OpenImageIO's format name ("tiff"), or empty: from the destination
-    std::string memoryPath;  // where OpenImageIO writes the file (a MemoryFile, io/output_file.h)
+    std::string memoryPath;  // where OpenImageIO writes the file (a MemoryFile, common/output_file.h)
     int width = 0;
     int height = 0;
     int channels = 3;

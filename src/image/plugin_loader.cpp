@@ -1,7 +1,7 @@
 // Finding and loading the codec plugins (image/exr_plugin.h, image/oiio_plugin.h) on first use, and
 // the EXR codec of image/codec.h through its plugin.
-#include "shprobe/image/exr_plugin.h"
-#include "shprobe/image/oiio_plugin.h"
+#include "image/exr_plugin.h"
+#include "image/oiio_plugin.h"
 
 #include <cstdlib>
 #include <dlfcn.h>

@@ -1,7 +1,7 @@
 // The built-in default environment: a procedural sky (gradient, ground, sun disc), +Y up.
-#include "shprobe/image/environment.h"
+#include "image/environment.h"
 
-#include "shprobe/sh/parallel.h"
+#include "common/parallel.h"
 
 #include <algorithm>
 #include <array>

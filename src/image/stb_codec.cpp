@@ -6,10 +6,10 @@
 // OpenImageIO told it; an HDR's scanlines are walked before stb_image decodes them (a file cut
 // short, a run of length 0 on which stb_image would never return); a JPEG that ends before its
 // pixels do is said to be truncated.
-#include "shprobe/image/codec.h"
+#include "image/codec.h"
 
-#include "shprobe/io/input_file.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/input_file.h"
 
 #include <algorithm>
 #include <cctype>

@@ -1,8 +1,8 @@
-#include "shprobe/render/gpu_image.h"
+#include "render/gpu_image.h"
 
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cstring>

@@ -1,9 +1,9 @@
 // Images for rendering: render targets, the environment cube map, host readback.
 #pragma once
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/vk/context.h"
-#include "shprobe/vk/image.h"
-#include "shprobe/vk/resources.h"
+#include "sh/cubemap.h"
+#include "vk/context.h"
+#include "vk/image.h"
+#include "vk/resources.h"
 
 #include <cstdint>
 

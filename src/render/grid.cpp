@@ -1,6 +1,6 @@
-#include "shprobe/render/grid.h"
+#include "render/grid.h"
 
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <algorithm>
 #include <cmath>

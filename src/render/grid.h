@@ -11,7 +11,7 @@
 // a white surface facing each direction shows) and the spheres stand in front of the order-5
 // radiance; irradiance probes, which lack radiance, show irradiance maps instead.
 #pragma once
-#include "shprobe/render/offscreen.h"
+#include "render/offscreen.h"
 
 namespace shprobe {
 

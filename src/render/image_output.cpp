@@ -1,8 +1,8 @@
-#include "shprobe/render/image_output.h"
+#include "render/image_output.h"
 
-#include "shprobe/image/image_write.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "image/image_write.h"
 
 #include <algorithm>
 #include <cctype>

@@ -1,7 +1,7 @@
 // Writing rendered images: EXR and HDR get the linear float colour, PNG and JPEG the tonemapped
 // sRGB bytes. Atomic, like every output of shprobe.
 #pragma once
-#include "shprobe/render/offscreen.h"
+#include "render/offscreen.h"
 
 #include <string>
 

@@ -1,7 +1,7 @@
 // Parametric meshes: a grid of (u, v) vertices wrapped around the shape, two triangles per cell.
-#include "shprobe/render/meshes.h"
+#include "render/meshes.h"
 
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <cmath>
 #include <functional>

@@ -1,9 +1,9 @@
-#include "shprobe/render/offscreen.h"
+#include "render/offscreen.h"
 
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/graphics.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "vk/graphics.h"
+#include "vk/vulkan_commands.h"
 
 #include <cstring>
 

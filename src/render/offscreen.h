@@ -1,9 +1,9 @@
 // Offscreen rendering: no window, no surface extension. A scene is drawn into float targets and
 // tonemapped into an 8-bit sRGB image on the device; all three are read back.
 #pragma once
-#include "shprobe/render/scene_renderer.h"
-#include "shprobe/render/tonemap.h"
-#include "shprobe/sh/cubemap.h"
+#include "render/scene_renderer.h"
+#include "render/tonemap.h"
+#include "sh/cubemap.h"
 
 #include <cstdint>
 #include <vector>

@@ -1,10 +1,10 @@
 // Folding SH probes for the render shaders (sh_irradiance.glsl; the fold itself is sh/folding.h)
 // and the double references of the shading modes.
-#include "shprobe/render/probe_shading.h"
+#include "render/probe_shading.h"
 
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
 
 #include <algorithm>
 #include <cmath>
@@ -52,9 +52,9 @@ ShadingMode parseShadingMode(const std::string& name) {
     throw Error(ErrorKind::Input, "unknown mode '" + name + "' (radiance, irradiance or l1-nonlinear)");
 }
 
-gpu::RenderSun foldSun(const SphericalLight& sun) {
+glsl::RenderSun foldSun(const SphericalLight& sun) {
     const double r = sun.angularRadius, s = std::sin(r), half = std::sin(0.5 * r);
-    gpu::RenderSun folded{};
+    glsl::RenderSun folded{};
     folded.direction = glm::vec4(glm::vec3(glm::normalize(sun.direction)), 1.0f);
     folded.radiance = glm::vec4(glm::vec3(sun.radiance), 0.0f);
     folded.shape = glm::vec4(float(s), float(std::cos(r)), float(s * s), float(4.0 * half * half));

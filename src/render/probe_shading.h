@@ -2,13 +2,13 @@
 // the basis constants and the per-band convolution folded in (sh_irradiance.glsl evaluates only
 // polynomials), the renormalized L1 terms of the non-linear model, and the sun a probe file may
 // carry beside its coefficients (bake --extract-sun), which the shaders add analytically
-// (shaders/include/sun_light.h). Also the double-precision references of the three shading modes
+// (src/glsl/sun_light.h). Also the double-precision references of the three shading modes
 // and of the sun, which the tests compare the shaders with.
 #pragma once
-#include "shprobe/glsl/render_interface.h"
-#include "shprobe/sh/coefficients.h"
-#include "shprobe/sh/folding.h"
-#include "shprobe/sh/lights.h"
+#include "glsl/render_interface.h"
+#include "sh/coefficients.h"
+#include "sh/folding.h"
+#include "sh/lights.h"
 
 #include <array>
 #include <optional>
@@ -32,7 +32,7 @@ constexpr int kMaxRenderOrder = SHPROBE_RENDER_MAX_ORDER;
 
 // basisPolynomialScale, basisPolynomial, truncateOrder and the fold itself: sh/folding.h.
 
-// Folded coefficients for the shaders (rgb; layout of gpu::RenderUniforms), from foldCoefficients.
+// Folded coefficients for the shaders (rgb; layout of glsl::RenderUniforms), from foldCoefficients.
 struct ProbeShading {
     int order = 0;            // bands 0..order-1 are set; the others are 0
     bool hasRadiance = false; // false for irradiance probes whose bands with A_l = 0 are needed
@@ -40,7 +40,7 @@ struct ProbeShading {
     std::array<glm::vec4, SHPROBE_FOLDED_COUNT> irradiance{}; // s_l = A_l / pi
     std::array<glm::vec4, 4> l1{};                            // R0, R1.x, R1.y, R1.z per channel
     std::optional<SphericalLight> sun;                        // not in the coefficients; added analytically
-    gpu::RenderSun foldedSun{};                               // direction.w = 0 without a sun
+    glsl::RenderSun foldedSun{};                              // direction.w = 0 without a sun
 };
 
 // Folds the first `order` bands (1..kMaxRenderOrder) of a radiance or irradiance probe. Radiance
@@ -52,7 +52,7 @@ ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string
 
 // The sun's uniforms: unit direction, radiance, and sin r, cos r, sin^2 r, 4 sin^2(r/2) from the
 // double radius (sin^2(r/2) rather than 1 - cos r, which cancels for small r).
-gpu::RenderSun foldSun(const SphericalLight& sun);
+glsl::RenderSun foldSun(const SphericalLight& sun);
 
 // Renormalized L0 and L1 of radiance (Geomerics' L1 notes), per channel:
 // R0 = (1/4pi) int L, R1 = (1/4pi) int L w.

@@ -1,9 +1,9 @@
-#include "shprobe/render/render_input.h"
+#include "render/render_input.h"
 
-#include "shprobe/image/environment.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "formats/probe_file.h"
+#include "image/environment.h"
 
 #include <algorithm>
 #include <chrono>

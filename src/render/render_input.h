@@ -2,12 +2,12 @@
 // environment image (or the built-in sky) baked on the GPU first, keeping the cube map for the
 // background.
 #pragma once
-#include "shprobe/gpu/host_bake.h"
-#include "shprobe/gpu/probe_baker.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/sh/coefficients.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/lights.h"
+#include "gpu/host_bake.h"
+#include "gpu/probe_baker.h"
+#include "image/environment.h"
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
+#include "sh/lights.h"
 
 #include <glm/mat3x3.hpp>
 #include <optional>

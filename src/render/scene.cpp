@@ -1,6 +1,6 @@
-#include "shprobe/render/scene.h"
+#include "render/scene.h"
 
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <cmath>
 #include <glm/ext/matrix_clip_space.hpp>

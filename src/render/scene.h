@@ -1,7 +1,7 @@
 // What to render: a camera, shapes lit by the probe, and what the background shows. Plain data;
 // the renderer (scene_renderer.h) draws it.
 #pragma once
-#include "shprobe/render/probe_shading.h"
+#include "render/probe_shading.h"
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>

@@ -1,14 +1,15 @@
-#include "shprobe/render/scene_pipelines.h"
+#include "render/scene_pipelines.h"
 
-#include "shprobe/glsl/render_interface.h"
-#include "shprobe/render/gpu_image.h"
-#include "shprobe/render/meshes.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/shprobe_render_spirv.h"
-#include "shprobe/vk/graphics.h"
-#include "shprobe/vk/pipeline.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "glsl/render_interface.h"
+#include "render/gpu_image.h"
+#include "render/meshes.h"
+#include "vk/graphics.h"
+#include "vk/pipeline.h"
+#include "vk/vulkan_commands.h"
+#include <shprobe/shprobe_render_spirv.h>
+#include <shprobe/shprobe_spirv.h>
 
 #include <array>
 #include <cstddef>
@@ -131,7 +132,7 @@ ScenePipelines createScenePipelines(const Context& context) {
     pipelines.setLayout = createSceneSetLayout(context);
     pipelines.layout = createPipelineLayout(context, pipelines.setLayout,
                                             VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
-                                            sizeof(gpu::ObjectConstants));
+                                            sizeof(glsl::ObjectConstants));
     pipelines.sceneVertex = createShaderModule(context, spirv::scene_vert);
     pipelines.sceneFragment = createShaderModule(context, spirv::scene_frag);
     pipelines.fullscreenVertex = createShaderModule(context, spirv::fullscreen_vert);

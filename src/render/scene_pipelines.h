@@ -2,8 +2,8 @@
 // depth), descriptor-set and pipeline layouts, and graphics pipelines for meshes and the background,
 // specialized by SH order, shading mode and background kind (created on first use).
 #pragma once
-#include "shprobe/render/scene.h"
-#include "shprobe/vk/context.h"
+#include "render/scene.h"
+#include "vk/context.h"
 
 #include <cstdint>
 #include <map>

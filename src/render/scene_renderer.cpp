@@ -1,12 +1,12 @@
-#include "shprobe/render/scene_renderer.h"
+#include "render/scene_renderer.h"
 
-#include "shprobe/glsl/render_interface.h"
-#include "shprobe/render/meshes.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/graphics.h"
-#include "shprobe/vk/pipeline.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "glsl/render_interface.h"
+#include "render/meshes.h"
+#include "vk/graphics.h"
+#include "vk/pipeline.h"
+#include "vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <array>
@@ -55,7 +55,7 @@ void writeEnvironmentDescriptor(const Context& context, const SceneRenderer& ren
 VkDescriptorSet createSceneSet(const Context& context, const SceneRenderer& renderer) {
     VkDescriptorSet set = allocateDescriptorSet(context, renderer.pool, renderer.pipelines.setLayout);
     writeDescriptor(context, set, 0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
-                    {renderer.uniforms.buffer, 0, sizeof(gpu::RenderUniforms)});
+                    {renderer.uniforms.buffer, 0, sizeof(glsl::RenderUniforms)});
     return set;
 }
 
@@ -80,8 +80,8 @@ void checkSceneFits(const SceneRenderer& renderer, const Scene& scene) {
                     "the environment background needs an environment image, not a probe file");
 }
 
-gpu::RenderUniforms makeUniforms(const SceneRenderer& renderer, const Scene& scene, VkExtent2D extent) {
-    gpu::RenderUniforms uniforms{};
+glsl::RenderUniforms makeUniforms(const SceneRenderer& renderer, const Scene& scene, VkExtent2D extent) {
+    glsl::RenderUniforms uniforms{};
     float aspect = float(extent.width) / float(extent.height);
     uniforms.viewProjection = viewProjection(scene.camera, aspect);
     uniforms.inverseViewProjection = glm::inverse(uniforms.viewProjection);
@@ -105,7 +105,7 @@ void drawObjects(const Context& context, VkCommandBuffer commands, SceneRenderer
                       meshPipeline(context, renderer.pipelines, scene));
     for (const SceneObject& object : scene.objects) {
         const GpuMesh& mesh = object.shape == Shape::Sphere ? renderer.sphere : renderer.torus;
-        gpu::ObjectConstants constants{object.model, glm::vec4(object.albedo, 1.0f)};
+        glsl::ObjectConstants constants{object.model, glm::vec4(object.albedo, 1.0f)};
         vkCmdPushConstants(commands, renderer.pipelines.layout,
                            VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(constants),
                            &constants);
@@ -124,8 +124,9 @@ SceneRenderer createSceneRenderer(const Context& context) {
     renderer.pipelines = createScenePipelines(context);
     renderer.sphere = createGpuMesh(context, makeSphereMesh(kSphereSegments, kSphereRings));
     renderer.torus = createGpuMesh(context, makeTorusMesh(kTorusMajorRadius, kTorusMinorRadius, 96, 32));
-    renderer.uniforms = createBuffer(context, sizeof(gpu::RenderUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
-                                     MemoryUse::Upload, "render uniforms");
+    renderer.uniforms =
+        createBuffer(context, sizeof(glsl::RenderUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                     MemoryUse::Upload, "render uniforms");
     renderer.sampler = createSampler(context, VK_FILTER_LINEAR);
     renderer.pool = createDescriptorPool(context, {.sets = 1, .imageSamplers = 1, .uniformBuffers = 1});
     renderer.set = createSceneSet(context, renderer);
@@ -191,7 +192,7 @@ void destroySceneTargets(const Context& context, const Tonemapper& tonemapper, S
 void recordScene(const Context& context, VkCommandBuffer commands, SceneRenderer& renderer,
                  const SceneTargets& targets, const Scene& scene) {
     checkSceneFits(renderer, scene);
-    gpu::RenderUniforms uniforms = makeUniforms(renderer, scene, targets.extent);
+    glsl::RenderUniforms uniforms = makeUniforms(renderer, scene, targets.extent);
     std::memcpy(renderer.uniforms.mapped, &uniforms, sizeof(uniforms)); // coherent memory
 
     std::array<VkClearValue, 3> clears{};

@@ -3,12 +3,12 @@
 // render_interface.h) and depth. The environment cube map and the folded probe are set once and
 // reused for any number of frames; pipelines are created on first use.
 #pragma once
-#include "shprobe/render/gpu_image.h"
-#include "shprobe/render/probe_shading.h"
-#include "shprobe/render/scene.h"
-#include "shprobe/render/scene_pipelines.h"
-#include "shprobe/render/tonemap.h"
-#include "shprobe/vk/resources.h"
+#include "render/gpu_image.h"
+#include "render/probe_shading.h"
+#include "render/scene.h"
+#include "render/scene_pipelines.h"
+#include "render/tonemap.h"
+#include "vk/resources.h"
 
 namespace shprobe {
 
@@ -22,7 +22,7 @@ struct SceneRenderer {
     ScenePipelines pipelines;
     GpuMesh sphere;
     GpuMesh torus;
-    Buffer uniforms;      // gpu::RenderUniforms, host-visible; written when a frame is recorded
+    Buffer uniforms;      // glsl::RenderUniforms, host-visible; written when a frame is recorded
     GpuImage environment; // a 1x1 black cube until setEnvironment
     bool hasEnvironment = false;
     VkSampler sampler = VK_NULL_HANDLE;

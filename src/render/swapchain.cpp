@@ -1,12 +1,12 @@
-#include "shprobe/render/swapchain.h"
+#include "render/swapchain.h"
 
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/graphics.h"
-#include "shprobe/vk/image.h"
-#include "shprobe/vk/resources.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "vk/check.h"
+#include "vk/graphics.h"
+#include "vk/image.h"
+#include "vk/resources.h"
+#include "vk/vulkan_commands.h"
 
 #include <algorithm>
 

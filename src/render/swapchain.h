@@ -1,7 +1,7 @@
 // The viewer's swapchain: images, views and framebuffers for the tonemap pass, and one
 // "rendering done" semaphore per image. No window-system code: the surface comes from the context.
 #pragma once
-#include "shprobe/vk/context.h"
+#include "vk/context.h"
 
 #include <vector>
 

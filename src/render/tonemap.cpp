@@ -1,13 +1,14 @@
-#include "shprobe/render/tonemap.h"
+#include "render/tonemap.h"
 
-#include "shprobe/glsl/render_interface.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/shprobe_render_spirv.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/graphics.h"
-#include "shprobe/vk/image.h"
-#include "shprobe/vk/pipeline.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/scope_exit.h"
+#include "glsl/render_interface.h"
+#include "vk/check.h"
+#include "vk/graphics.h"
+#include "vk/image.h"
+#include "vk/pipeline.h"
+#include "vk/vulkan_commands.h"
+#include <shprobe/shprobe_render_spirv.h>
+#include <shprobe/shprobe_spirv.h>
 
 #include <array>
 
@@ -69,7 +70,7 @@ Tonemapper createTonemapper(const Context& context, VkFormat format, VkImageLayo
     const LayoutBinding input{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_FRAGMENT_BIT};
     tonemapper.setLayout = createSetLayout(context, {&input, 1});
     tonemapper.layout = createPipelineLayout(context, tonemapper.setLayout, VK_SHADER_STAGE_FRAGMENT_BIT,
-                                             sizeof(gpu::TonemapConstants));
+                                             sizeof(glsl::TonemapConstants));
     tonemapper.sampler = createSampler(context, VK_FILTER_NEAREST);
     tonemapper.pool =
         createDescriptorPool(context, {.sets = kMaxInputs, .imageSamplers = kMaxInputs, .freeSets = true});
@@ -111,7 +112,7 @@ void recordTonemap(VkCommandBuffer commands, const Tonemapper& tonemapper, VkDes
     vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, tonemapper.pipeline);
     vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, tonemapper.layout, 0, 1, &input, 0,
                             nullptr);
-    gpu::TonemapConstants constants{glm::vec4(exposure, 0.0f, 0.0f, 0.0f)};
+    glsl::TonemapConstants constants{glm::vec4(exposure, 0.0f, 0.0f, 0.0f)};
     vkCmdPushConstants(commands, tonemapper.layout, VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(constants),
                        &constants);
     vkCmdDraw(commands, 3, 1, 0, 0);

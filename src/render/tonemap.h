@@ -2,7 +2,7 @@
 // target: an offscreen R8G8B8A8_SRGB image for PNG output, or a swapchain image in the viewer, so
 // both show the same bytes.
 #pragma once
-#include "shprobe/vk/context.h"
+#include "vk/context.h"
 
 namespace shprobe {
 

@@ -1,4 +1,4 @@
-#include "shprobe/render/view_state.h"
+#include "render/view_state.h"
 
 #include <algorithm>
 #include <cstdio>

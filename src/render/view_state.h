@@ -2,7 +2,7 @@
 // environment rotation and exposure. Kept out of the viewer so the offscreen renderer can draw
 // exactly the view a viewer screenshot shows (tests compare the two).
 #pragma once
-#include "shprobe/render/scene.h"
+#include "render/scene.h"
 
 #include <glm/mat3x3.hpp>
 #include <string>

@@ -1,16 +1,16 @@
 // The GLFW side of `shprobe view`: window, input and the frame loop. Rendering is the offscreen
 // renderer's scene pass plus the tonemap pass into the swapchain (viewer_frames.cpp).
-#include "shprobe/render/viewer.h"
+#include "render/viewer.h"
 
-#include "shprobe/image/image_write.h"
-#include "shprobe/render/image_output.h"
-#include "shprobe/render/scene_renderer.h"
-#include "shprobe/render/viewer_frames.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/rotation.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "image/image_write.h"
+#include "render/image_output.h"
+#include "render/scene_renderer.h"
+#include "render/viewer_frames.h"
+#include "sh/rotation.h"
+#include "vk/check.h"
+#include "vk/vulkan_commands.h"
 
 #define GLFW_INCLUDE_VULKAN
 #include <GLFW/glfw3.h>

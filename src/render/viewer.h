@@ -9,9 +9,9 @@
 // The title shows the settings and the last bake time. The only file that includes GLFW is
 // viewer.cpp; the library's core never links it.
 #pragma once
-#include "shprobe/render/render_input.h"
-#include "shprobe/render/view_state.h"
-#include "shprobe/scene/lit_scene.h"
+#include "render/lit_scene.h"
+#include "render/render_input.h"
+#include "render/view_state.h"
 
 #include <optional>
 #include <string>

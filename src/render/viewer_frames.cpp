@@ -1,10 +1,10 @@
-#include "shprobe/render/viewer_frames.h"
+#include "render/viewer_frames.h"
 
-#include "shprobe/render/gpu_image.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "render/gpu_image.h"
+#include "vk/check.h"
+#include "vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <cstring>

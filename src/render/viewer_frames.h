@@ -3,9 +3,9 @@
 // swapchain, and screenshots read back from the presented image. What is drawn, into an HDR image
 // of the swapchain's size, is the caller's.
 #pragma once
-#include "shprobe/render/swapchain.h"
-#include "shprobe/render/tonemap.h"
-#include "shprobe/vk/resources.h"
+#include "render/swapchain.h"
+#include "render/tonemap.h"
+#include "vk/resources.h"
 
 #include <cstdint>
 #include <functional>

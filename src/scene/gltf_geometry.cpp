@@ -1,8 +1,8 @@
 // Mesh primitives read from tinygltf's model: accessors (the glTF 2.0 specification, 3.6 "Binary
 // Data Storage"), primitive modes (3.7.2.1) and their placement by the node's transform.
-#include "shprobe/scene/gltf_geometry.h"
+#include "scene/gltf_geometry.h"
 
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <algorithm>
 #include <bit>

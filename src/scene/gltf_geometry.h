@@ -1,7 +1,7 @@
 // The triangles of glTF mesh primitives (part of the glTF reader, scene/gltf_scene.h): read from
 // tinygltf's model with every accessor checked against its buffer, then placed in world space.
 #pragma once
-#include "shprobe/scene/scene.h"
+#include "scene/scene.h"
 
 #include <cstddef>
 #include <glm/mat4x4.hpp>

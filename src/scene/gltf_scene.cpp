@@ -1,13 +1,13 @@
 // glTF scenes read with tinygltf (scene/gltf_scene.h): the file and its layout checked first, then
 // the node hierarchy walked, each mesh instance, material, texture and sun added to the World.
-#include "shprobe/scene/gltf_scene.h"
+#include "scene/gltf_scene.h"
 
-#include "shprobe/image/codec.h"
-#include "shprobe/io/input_file.h"
-#include "shprobe/scene/gltf_geometry.h"
-#include "shprobe/scene/gltf_schema.h"
-#include "shprobe/scene/scene_images.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/input_file.h"
+#include "image/codec.h"
+#include "scene/gltf_geometry.h"
+#include "scene/gltf_schema.h"
+#include "scene/scene_images.h"
 
 #include <algorithm>
 #include <cctype>
@@ -72,7 +72,7 @@ std::pair<std::string_view, std::string_view> glbParts(std::string_view bytes, c
     return {file, file.substr(20, size_t(jsonLength))};
 }
 
-// Reads buffer files through io/input_file.h, so that a buffer file that is missing, a folder or
+// Reads buffer files through common/input_file.h, so that a buffer file that is missing, a folder or
 // too large is said in the project's words, and only files beside the scene (or below, or above
 // through "..") are looked for: tinygltf also tries the process's working folder.
 struct FileAccess {

@@ -28,7 +28,7 @@
 // samplers (textures repeat and are filtered bilinearly, World's rule) and KHR_texture_transform.
 //
 // What is refused, as one line "PATH: REASON" in Error(ErrorKind::Input): a path that is missing,
-// a folder, empty or unreadable (io/input_file.h); a file that is neither JSON nor a .glb, or a
+// a folder, empty or unreadable (common/input_file.h); a file that is neither JSON nor a .glb, or a
 // .glb cut short; a property of the wrong JSON type (glTF 2.0's schema: "scenes[0].name must be a
 // string"); what tinygltf refuses (its messages joined into the line); a buffer or image file that
 // cannot be read; a buffer view or accessor reaching past its buffer; an index past the vertices;
@@ -38,7 +38,7 @@
 // ...); a texture read through a TEXCOORD other than 0; a scene without triangles; and more
 // triangles or texture pixels than the limits below.
 #pragma once
-#include "shprobe/scene/scene.h"
+#include "scene/scene.h"
 
 #include <cstddef>
 #include <cstdint>

@@ -1,8 +1,8 @@
 // glTF 2.0's JSON schema (the specification's "JSON Schema Reference"), as far as property types
 // go, as tables: one list of fields per kind of object, walked from the root.
-#include "shprobe/scene/gltf_schema.h"
+#include "scene/gltf_schema.h"
 
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <algorithm>
 #include <climits>

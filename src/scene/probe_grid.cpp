@@ -1,6 +1,6 @@
-#include "shprobe/scene/probe_grid.h"
+#include "scene/probe_grid.h"
 
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <algorithm>
 #include <charconv>

@@ -8,8 +8,8 @@
 // probe (i, j, k) is i + NX * (j + NY * k) (x fastest). Between probes a renderer interpolates
 // trilinearly (scene/volume_sampling.h), and no extrapolation is needed up to the bounds.
 #pragma once
-#include "shprobe/io/probe_volume.h"
-#include "shprobe/scene/scene.h"
+#include "formats/probe_volume.h"
+#include "scene/scene.h"
 
 #include <cstdint>
 #include <glm/vec3.hpp>

@@ -16,11 +16,11 @@
 // random rotation: every direction is then uniform on the sphere, so each replica is an unbiased
 // estimate, while the set keeps its even spread, whose error falls faster than m^(-1/2) for smooth
 // radiance. The replicas are independent, so their spread gives an honest standard error.
-#include "shprobe/scene/reference_tracer.h"
+#include "scene/reference_tracer.h"
 
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/parallel.h"
+#include "common/error.h"
+#include "common/parallel.h"
+#include "sh/basis.h"
 
 #include <embree3/rtcore.h>
 #include <glm/geometric.hpp>

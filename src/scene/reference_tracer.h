@@ -4,9 +4,9 @@
 // texel (traceProbeTexels) and its SH probes against a converged path-traced estimate
 // (pathTraceProbe). docs/scene-probes.md, "The ray-traced reference", says how it is built.
 #pragma once
-#include "shprobe/scene/scene.h"
-#include "shprobe/sh/coefficients.h"
-#include "shprobe/sh/cubemap.h"
+#include "scene/scene.h"
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
 
 #include <glm/vec3.hpp>
 

@@ -1,10 +1,10 @@
 // Texture images decoded with stb_image from memory. image/stb_codec.cpp compiles stb_image too,
 // but privately (STB_IMAGE_STATIC) and reading from files only, so this file compiles its own
 // private copy of the two decoders glTF allows, PNG and JPEG.
-#include "shprobe/scene/scene_images.h"
+#include "scene/scene_images.h"
 
-#include "shprobe/image/codec.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "image/codec.h"
 
 #include <climits>
 #include <cmath>

@@ -1,7 +1,7 @@
 // Decoding the images of a glTF scene's textures (part of the glTF reader, scene/gltf_scene.h):
 // PNG or JPEG bytes, wherever the file keeps them, into SceneTexture's linear RGBA.
 #pragma once
-#include "shprobe/scene/scene.h"
+#include "scene/scene.h"
 
 #include <cstdint>
 #include <span>

@@ -1,9 +1,9 @@
-#include "shprobe/scene/volume_sampling.h"
+#include "scene/volume_sampling.h"
 
-#include "shprobe/scene/probe_grid.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
+#include "common/error.h"
+#include "scene/probe_grid.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 // inside a wall darkens nothing near it; where every probe of non-zero weight is invalid, the
 // sample is 0 (black), which a renderer sees and may fill with another light.
 #pragma once
-#include "shprobe/io/probe_volume.h"
+#include "formats/probe_volume.h"
 
 #include <array>
 #include <cstdint>

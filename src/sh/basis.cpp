@@ -1,9 +1,9 @@
 // Real orthonormal SH with the Condon-Shortley phase (docs/conventions.md): the recurrence of Lisle &
 // Huang, "Algorithms for Spherical Harmonic Lighting", section 2.1 (basis.h), normalized.
-#include "basis.h"
+#include "sh/basis.h"
 
-#include "error.h"
-#include "shprobe/glsl/gpu_interface.h"
+#include "common/error.h"
+#include "glsl/gpu_interface.h"
 
 #include <array>
 #include <cmath>

@@ -32,7 +32,7 @@ double recurrenceNormalization(int l, int m);
 // fast_projection.cpp): the unnormalized Y_lm, l < order, at l(l+1)+m of out, for the unit
 // direction (x, y, z), by the algebraic recurrence of Lisle & Huang ("Algorithms for Spherical
 // Harmonic Lighting", section 2.1). Value is any type with +, -, * (double, or a vector of Scalar
-// lanes); Scalar is its element type. The shaders have their own evaluation (shaders/include/
+// lanes); Scalar is its element type. The shaders have their own evaluation (src/glsl/
 // sh_basis.glsl, which says why it differs).
 template <class Scalar, class Value>
 void evalBasisRecurrence(int order, const Value& x, const Value& y, const Value& z, Value* out) {

@@ -1,9 +1,9 @@
 // Double-precision texel geometry of cube maps and equirect maps (docs/conventions.md, "Cube-map
 // faces", "Texel weight" and "Equirectangular maps"). The float twin used by the shaders is
-// shaders/include/texel_geometry.h.
-#include "cubemap.h"
+// src/glsl/texel_geometry.h.
+#include "sh/cubemap.h"
 
-#include "error.h"
+#include "common/error.h"
 
 #include <glm/geometric.hpp>
 

@@ -1,5 +1,5 @@
 // Environment images held in memory, and the double-precision geometry of their texels.
-// Cube-map face order and orientation are Vulkan's; see shaders/include/texel_geometry.h for the
+// Cube-map face order and orientation are Vulkan's; see src/glsl/texel_geometry.h for the
 // diagram and the face direction table shared with the shaders.
 #pragma once
 #include <array>

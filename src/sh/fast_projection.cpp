@@ -45,12 +45,12 @@
 //    (-1)^(l+m) P_l^m(z)). The four parity sums of a position serve as for a face: each Fourier sum
 //    is taken twice, with the radiance even and odd under the row mirror, 2 (2n - 1) multiply-adds per
 //    four texels (30 at order 8, against 64 for a face's position).
-#include "fast_projection.h"
+#include "sh/fast_projection.h"
 
-#include "basis.h"
-#include "error.h"
-#include "rotation.h"
-#include "shprobe/glsl/texel_geometry.h"
+#include "common/error.h"
+#include "glsl/texel_geometry.h"
+#include "sh/basis.h"
+#include "sh/rotation.h"
 
 #include <algorithm>
 #include <array>
@@ -371,8 +371,8 @@ Lanes texelSolidAngles(const Plan& plan, int firstColumn, int row, const Lanes& 
     if (plan.width >= kMinExpandedFaceSize) return expandedSolidAngles(inverseLength, plan.width);
     Lanes solidAngles;
     for (int lane = 0; lane < kLaneCount; ++lane) {
-        solidAngles[lane] =
-            gpu::texelSolidAngleFp32(gpu::uint(firstColumn + lane), gpu::uint(row), gpu::uint(plan.width));
+        solidAngles[lane] = glsl::texelSolidAngleFp32(glsl::uint(firstColumn + lane), glsl::uint(row),
+                                                      glsl::uint(plan.width));
     }
     return solidAngles;
 }
@@ -429,7 +429,7 @@ void writeTableEntries(const Lanes& w0, const Lanes& w1, const Lanes& w2, const 
 // times instead, ready to multiply, makes a table four times as large, out of the L1 cache.)
 template <int Order> void fillBasisTable(const Plan& plan, int row, Lanes* table) {
     constexpr int count = Order * Order;
-    const float b = gpu::texelCenterCoord(gpu::uint(row), gpu::uint(plan.width));
+    const float b = glsl::texelCenterCoord(glsl::uint(row), glsl::uint(plan.width));
     const float rowFactor = plan.rowFactor(row);
     for (int group = 0; group < plan.pairs; group += kLaneCount / 2) {
         const int firstColumn = 2 * group;
@@ -801,7 +801,7 @@ LaneArray makeEquirectTable(const Plan& plan) {
 // P_f, the signed permutation taking face f's frame (a, b, 1) to the world (orientToFace).
 glm::dmat3 faceOrientation(int face) {
     const auto column = [face](glm::vec3 axis) {
-        return glm::dvec3(gpu::orientToFace(gpu::uint(face), axis));
+        return glm::dvec3(glsl::orientToFace(glsl::uint(face), axis));
     };
     return glm::dmat3(column({1.0f, 0.0f, 0.0f}), column({0.0f, 1.0f, 0.0f}), column({0.0f, 0.0f, 1.0f}));
 }

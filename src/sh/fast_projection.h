@@ -4,8 +4,8 @@
 // 6 x 2048^2 (float sums per row, double across rows), and so for equirect maps (measured in
 // docs/gpu-path.md). The result is bit-identical for every thread count.
 #pragma once
-#include "coefficients.h"
-#include "cubemap.h"
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
 
 namespace shprobe {
 

@@ -1,11 +1,11 @@
 // Folded SH coefficients. Basis polynomials: docs/conventions.md through l = 2, Sloan ("Stupid SH
 // Tricks", appendix A2) and Brown ("Spherical Harmonic Basis Functions") with Sloan's Condon-Shortley
 // signs for l = 3, 4.
-#include "shprobe/sh/folding.h"
+#include "sh/folding.h"
 
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// SH coefficients folded for evaluation as polynomials, the form shaders/include/sh_irradiance.glsl
+// SH coefficients folded for evaluation as polynomials, the form src/glsl/sh_irradiance.glsl
 // takes: with y_i = k_i p_i(x, y, z) (the basis of docs/conventions.md written as a constant k_i times
 // a polynomial p_i) and s_l a per-band scale, the folded coefficient is c_i = s_l k_i f_i, so that
 // sum_i c_i p_i(n) = sum_i s_l f_i y_i(n) costs one multiply-add per coefficient. As in Sloan's
@@ -6,9 +6,9 @@
 // p_6 = z^2 with c_6 = 3 s_2 k_6 f_6, and the constant -s_2 k_6 f_6 goes into c_0.
 //
 // Used by the render shaders' uniforms (src/render/probe_shading.h) and the header export formats
-// (src/io/probe_export.h), so that both hand the shader the same numbers.
+// (src/formats/probe_export.h), so that both hand the shader the same numbers.
 #pragma once
-#include "shprobe/sh/coefficients.h"
+#include "sh/coefficients.h"
 
 #include <array>
 #include <glm/vec3.hpp>

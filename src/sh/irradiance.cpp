@@ -1,10 +1,10 @@
 // Lambertian convolution E_lm = A_l L_lm (Ramamoorthi & Hanrahan, "An Efficient Representation for
 // Irradiance Environment Maps"; Brown, "Spherical Harmonic Basis Functions", for A_l) and evaluation
 // of a probe, E(n) = sum E_lm y_lm(n) (docs/conventions.md, "Radiance, irradiance").
-#include "irradiance.h"
+#include "sh/irradiance.h"
 
-#include "basis.h"
-#include "error.h"
+#include "common/error.h"
+#include "sh/basis.h"
 
 #include <array>
 #include <numbers>

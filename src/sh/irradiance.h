@@ -2,7 +2,7 @@
 // E_lm = A_l L_lm (Ramamoorthi & Hanrahan, "An Efficient Representation for Irradiance Environment
 // Maps"); the A_l closed form (Brown, "Spherical Harmonic Basis Functions") of docs/conventions.md.
 #pragma once
-#include "coefficients.h"
+#include "sh/coefficients.h"
 #include <glm/vec3.hpp>
 
 namespace shprobe {

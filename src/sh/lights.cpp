@@ -1,9 +1,9 @@
 // Analytic lights (see lights.h for the formulas and their sources) and sun extraction.
-#include "lights.h"
+#include "sh/lights.h"
 
-#include "basis.h"
-#include "error.h"
-#include "irradiance.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>

@@ -7,8 +7,8 @@
 // harmonics; Lisle & Huang, "Algorithms for Spherical Harmonic Lighting", Proposition 3.2). Directions point
 // from the probe towards the light and need not be unit length. Angles are in radians.
 #pragma once
-#include "coefficients.h"
-#include "cubemap.h"
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
 
 #include <glm/vec3.hpp>
 #include <numbers>

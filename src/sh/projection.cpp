@@ -1,10 +1,10 @@
 // Reference projection L_lm = sum_texels L(w) y_lm(w) Omega (Sloan, "Stupid Spherical Harmonics (SH)
 // Tricks", projection from cube maps), each texel weighted by its exact solid angle; accumulated in double.
 // Alpha is ignored.
-#include "projection.h"
+#include "sh/projection.h"
 
-#include "basis.h"
-#include "error.h"
+#include "common/error.h"
+#include "sh/basis.h"
 
 #include <array>
 #include <string>

@@ -2,8 +2,8 @@
 // each texel weighted by its exact solid angle (Sloan, "Stupid Spherical Harmonics (SH) Tricks",
 // projection from cube maps).
 #pragma once
-#include "coefficients.h"
-#include "cubemap.h"
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
 
 namespace shprobe {
 

@@ -3,10 +3,10 @@
 // D^l_mn = u U + v V + w W, where U, V, W combine band 1 with band l-1 through the helper P. It is
 // written for the real basis WITHOUT the Condon-Shortley phase (y_1,-1, y_10, y_11 proportional to
 // +y, +z, +x); our basis (docs/conventions.md) multiplies y_lm by (-1)^m, so D_ours = (-1)^(m+n) D_IR.
-#include "rotation.h"
+#include "sh/rotation.h"
 
-#include "basis.h"
-#include "error.h"
+#include "common/error.h"
+#include "sh/basis.h"
 
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>

@@ -15,7 +15,7 @@
 // column-major, so element (row r, column c) is R[c][r]. Use rotationFromRowMajor for the 9 numbers of
 // the command line and of files (r00, r01, r02, r10, ...).
 #pragma once
-#include "coefficients.h"
+#include "sh/coefficients.h"
 
 #include <glm/mat3x3.hpp>
 #include <span>

@@ -1,9 +1,9 @@
 // Hanning and Lanczos windows and Sloan's de-ringing by scan and bisection (see windowing.h).
-#include "windowing.h"
+#include "sh/windowing.h"
 
-#include "basis.h"
-#include "error.h"
-#include "irradiance.h"
+#include "common/error.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
 
 #include <glm/geometric.hpp>
 

@@ -7,7 +7,7 @@
 // Band 0 is never changed. Its strength is 1/w: strength 0 (w = +infinity) is the identity, and
 // strength 1 (w = 1) keeps band 0 alone, which is non-negative whenever the mean radiance is.
 #pragma once
-#include "coefficients.h"
+#include "sh/coefficients.h"
 
 #include <glm/vec3.hpp>
 #include <span>

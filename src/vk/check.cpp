@@ -1,4 +1,4 @@
-#include "shprobe/vk/check.h"
+#include "vk/check.h"
 
 #include <cstdlib>
 #include <string_view>

@@ -2,7 +2,7 @@
 // result, what the program was doing (DeviceStep) and where it happened; a lost device and a lack
 // of memory are said in words, with what to try where that depends on what was being done.
 #pragma once
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 #include <string>
 #include <vulkan/vulkan.h>
 

@@ -1,7 +1,7 @@
-#include "shprobe/vk/graphics.h"
+#include "vk/graphics.h"
 
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "vk/check.h"
+#include "vk/vulkan_commands.h"
 
 #include <array>
 #include <vector>

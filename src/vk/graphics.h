@@ -2,7 +2,7 @@
 // a pass. Plain handles, destroyed with the vkDestroy* of their type. Set layouts, pipeline layouts,
 // shader modules and descriptor sets come from vk/pipeline.h, as compute programs' do.
 #pragma once
-#include "shprobe/vk/context.h"
+#include "vk/context.h"
 
 #include <cstdint>
 #include <span>

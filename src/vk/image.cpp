@@ -1,10 +1,10 @@
-#include "shprobe/vk/image.h"
+#include "vk/image.h"
 
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/resources.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "vk/check.h"
+#include "vk/resources.h"
+#include "vk/vulkan_commands.h"
 
 #include <string>
 

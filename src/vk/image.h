@@ -1,7 +1,7 @@
 // Images: create, destroy, and change layouts with their memory dependencies. Plain handles;
 // createImage / destroyImage.
 #pragma once
-#include "shprobe/vk/context.h"
+#include "vk/context.h"
 
 #include <cstdint>
 

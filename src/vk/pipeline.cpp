@@ -1,9 +1,9 @@
-#include "shprobe/vk/pipeline.h"
+#include "vk/pipeline.h"
 
-#include "shprobe/glsl/gpu_interface.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/scope_exit.h"
+#include "glsl/gpu_interface.h"
+#include "vk/check.h"
+#include "vk/vulkan_commands.h"
 
 #include <array>
 #include <vector>

@@ -3,8 +3,8 @@
 // SH order. Also the pieces they are made of, which graphics pipelines share (vk/graphics.h): shader
 // modules, set and pipeline layouts, descriptor pools and sets.
 #pragma once
-#include "shprobe/vk/context.h"
-#include "shprobe/vk/resources.h"
+#include "vk/context.h"
+#include "vk/resources.h"
 #include <cstdint>
 #include <span>
 #include <vector>

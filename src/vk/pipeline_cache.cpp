@@ -1,10 +1,10 @@
-#include "shprobe/vk/pipeline_cache.h"
+#include "vk/pipeline_cache.h"
 
-#include "shprobe/io/input_file.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/error.h"
+#include "common/input_file.h"
+#include "common/output_file.h"
+#include "vk/check.h"
+#include "vk/vulkan_commands.h"
 
 #include <cerrno>
 #include <cstdio>

@@ -1,7 +1,7 @@
 // A VkPipelineCache kept on disk between runs, so that a second run does not compile the shaders
 // again (lavapipe JIT-compiles every compute pipeline with LLVM: 10-40 ms each).
 #pragma once
-#include "shprobe/vk/context.h"
+#include "vk/context.h"
 
 #include <string>
 

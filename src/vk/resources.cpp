@@ -1,8 +1,8 @@
-#include "shprobe/vk/resources.h"
+#include "vk/resources.h"
 
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/check.h"
-#include "shprobe/vk/vulkan_commands.h"
+#include "common/scope_exit.h"
+#include "vk/check.h"
+#include "vk/vulkan_commands.h"
 
 #include <algorithm>
 #include <atomic>

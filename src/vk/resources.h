@@ -1,6 +1,6 @@
 // Buffers, command buffers and their submission. Plain handles; createBuffer / destroyBuffer.
 #pragma once
-#include "shprobe/vk/context.h"
+#include "vk/context.h"
 #include <functional>
 
 namespace shprobe {

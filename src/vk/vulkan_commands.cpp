@@ -1,6 +1,6 @@
-#include "shprobe/vk/vulkan_commands.h"
+#include "vk/vulkan_commands.h"
 
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <atomic>
 #include <dlfcn.h>

@@ -1,4 +1,4 @@
-// The projections' dispatch plans (shaders/include/dispatch_plan.h: project.comp's and
+// The projections' dispatch plans (src/glsl/dispatch_plan.h: project.comp's and
 // project_equirect.comp's) against what shaders/INTERFACE.md states of them. The plan exists once, in the
 // header that the baker, the shader's walk and examples/bake_probe share; the document's numbers are the ones
 // a reader without the header goes by, so every row of its two tables (maxPositions by order, and the worked
@@ -7,7 +7,7 @@
 // document's rows: the positions per invocation stay within the loop cap, the groups within
 // maxGroups, the walk covers every position, and a bake is refused only when no plan fits.
 #undef NDEBUG
-#include "shprobe/glsl/dispatch_plan.h"
+#include "glsl/dispatch_plan.h"
 
 #include <gtest/gtest.h>
 
@@ -20,7 +20,7 @@
 
 namespace {
 
-namespace plan = shprobe::gpu;
+namespace plan = shprobe::glsl;
 
 std::string readFile(const std::string& path) {
     std::ifstream file(path, std::ios::binary);

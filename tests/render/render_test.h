@@ -2,8 +2,8 @@
 // the Khronos validation layer on, and one offscreen renderer for the whole suite. Any validation
 // message fails the test that caused it; a missing device or layer fails the suite.
 #pragma once
-#include "shprobe/render/offscreen.h"
-#include "shprobe/vk/context.h"
+#include "render/offscreen.h"
+#include "vk/context.h"
 
 #include <gtest/gtest.h>
 #include <memory>

@@ -1,10 +1,10 @@
 // Inputs the program tests write into their temporary folders: a small equirect environment and
 // probe files, good and bad. No binary file is checked in.
 #pragma once
-#include "shprobe/image/image_write.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
+#include "formats/probe_file.h"
+#include "image/image_write.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
 
 #include <cmath>
 #include <fstream>

@@ -4,8 +4,8 @@
 // left behind), the sun of `bake --extract-sun` added back by `render`, and the viewer without a
 // display. The viewer with a display: test_render_viewer.
 #include "run_program.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/lights.h"
+#include "sh/irradiance.h"
+#include "sh/lights.h"
 #include "test_inputs.h"
 
 #include <OpenImageIO/imageio.h>

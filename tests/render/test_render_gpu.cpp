@@ -5,16 +5,16 @@
 // analytically (E_probe(n) + E_sun(n) per pixel); the display bytes and EXR output.
 #include "render_test.h"
 
-#include "shprobe/glsl/render_interface.h"
-#include "shprobe/image/environment.h"
-#include "shprobe/render/image_output.h"
-#include "shprobe/render/probe_shading.h"
-#include "shprobe/render/scene.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/lights.h"
-#include "shprobe/sh/projection.h"
+#include "common/error.h"
+#include "glsl/render_interface.h"
+#include "image/environment.h"
+#include "render/image_output.h"
+#include "render/probe_shading.h"
+#include "render/scene.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
+#include "sh/lights.h"
+#include "sh/projection.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,12 +3,12 @@
 // double), the non-linear L1 model's properties (Geomerics), Sloan's "Stupid SH Tricks" facts for a delta
 // light on the references, the sun's exact irradiance (against quadrature, and the fp32 code the shaders run,
 // sun_light.h, against it), and the errors for probes the renderer cannot use.
-#include "shprobe/glsl/sun_light.h"
-#include "shprobe/render/probe_shading.h"
-#include "shprobe/render/scene.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/irradiance.h"
+#include "common/error.h"
+#include "glsl/sun_light.h"
+#include "render/probe_shading.h"
+#include "render/scene.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
 
 #include <gtest/gtest.h>
 
@@ -295,7 +295,7 @@ TEST(RenderShading, SunFp32CodeMatchesTheClosedForm) {
         double worst = 0.0;
         auto check = [&](double cosine) {
             float e = float(std::clamp(cosine, -1.0, 1.0));
-            double fp32 = gpu::sunCapIrradianceOverPi(e, shape);
+            double fp32 = glsl::sunCapIrradianceOverPi(e, shape);
             double reference = sphericalCapIrradiance(double(e), r) / kPi;
             ASSERT_TRUE(std::isfinite(fp32)) << "cos " << e << " radius " << radiusDegrees;
             double error = std::abs(fp32 - reference) / (s * s);
@@ -316,7 +316,7 @@ TEST(RenderShading, SunFoldsAndIsAddedByMode) {
     ProbeShading plain = foldProbe(probe, 3, "plain.json");
     EXPECT_FALSE(plain.sun.has_value());
     EXPECT_EQ(plain.foldedSun.direction.w, 0.0f) << "no sun: the shaders add nothing";
-    EXPECT_EQ(gpu::sunShading(plain.foldedSun, SHPROBE_SHADING_IRRADIANCE, glm::vec3(0, 0, 1), glm::vec3(1)),
+    EXPECT_EQ(glsl::sunShading(plain.foldedSun, SHPROBE_SHADING_IRRADIANCE, glm::vec3(0, 0, 1), glm::vec3(1)),
               glm::vec3(0.0f));
 
     ProbeShading sunny = foldProbe(probe, 3, "sunny.json", sun);
@@ -336,9 +336,9 @@ TEST(RenderShading, SunFoldsAndIsAddedByMode) {
     glm::dvec3 outside = glm::normalize(d + glm::dvec3(0.05, 0.0, 0.0)); // 2.9 degrees away
     EXPECT_EQ(sunShadeReference(*sunny.sun, ShadingMode::Radiance, outside), glm::dvec3(0.0));
     glm::vec3 albedo(0.5f);
-    EXPECT_EQ(gpu::sunShading(sunny.foldedSun, SHPROBE_SHADING_RADIANCE, glm::vec3(d), albedo),
+    EXPECT_EQ(glsl::sunShading(sunny.foldedSun, SHPROBE_SHADING_RADIANCE, glm::vec3(d), albedo),
               glm::vec3(100.0f, 50.0f, 0.0f));
-    EXPECT_NEAR(gpu::sunShading(sunny.foldedSun, SHPROBE_SHADING_L1_NONLINEAR, glm::vec3(d), albedo).r,
+    EXPECT_NEAR(glsl::sunShading(sunny.foldedSun, SHPROBE_SHADING_L1_NONLINEAR, glm::vec3(d), albedo).r,
                 0.5 * 100.0 * s * s, 1e-6 * 100.0 * s * s);
 
     // The sun's power counts in the automatic exposure: its mean over the sphere, L Omega / (4 pi).

@@ -8,9 +8,9 @@
 #include "scene_fixtures.h"
 #include "test_inputs.h"
 
-#include "shprobe/render/render_input.h"
-#include "shprobe/render/view_state.h"
-#include "shprobe/sh/rotation.h"
+#include "render/render_input.h"
+#include "render/view_state.h"
+#include "sh/rotation.h"
 
 #include <OpenImageIO/imageio.h>
 #include <cstdlib>

@@ -1,5 +1,5 @@
 #version 450
-// Test module: writes texelSolidAngleFp32 (shaders/include/texel_geometry.h) of every texel of one
+// Test module: writes texelSolidAngleFp32 (src/glsl/texel_geometry.h) of every texel of one
 // N x N face, so the GPU's own evaluation of the weight can be checked against the double formula.
 #extension GL_GOOGLE_include_directive : require
 

@@ -1,13 +1,13 @@
-#include "shprobe/io/probe_export.h"
+#include "formats/probe_export.h"
 
-#include "shprobe/image/image_write.h"
-#include "shprobe/io/input_file.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/folding.h"
-#include "shprobe/sh/irradiance.h"
+#include "common/error.h"
+#include "common/input_file.h"
+#include "common/output_file.h"
+#include "image/image_write.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
+#include "sh/folding.h"
+#include "sh/irradiance.h"
 
 #include <array>
 #include <cctype>
@@ -124,7 +124,7 @@ HeaderPlan headerPlan(const ShCoefficients& probe) {
 void appendHeaderComment(std::ostringstream& out, const ShCoefficients& probe, const HeaderPlan& plan,
                          const std::string& array, const std::string& source, HeaderLanguage language) {
     int count = coefficientCount(probe.order);
-    out << "// An SH light probe for shaders/include/sh_irradiance.glsl, written by shprobe bake.\n"
+    out << "// An SH light probe for src/glsl/sh_irradiance.glsl, written by shprobe bake.\n"
         << "//   source     " << commentText(source) << "\n"
         << "//   order      " << probe.order << ": bands l = 0.." << probe.order - 1 << ", " << count
         << " coefficients (real orthonormal SH with the Condon-Shortley phase)\n"

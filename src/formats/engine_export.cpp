@@ -1,17 +1,17 @@
 // The table of output formats and the engine formats' coefficients and files. Each engine's frame,
 // basis sign and scaling is taken from the engine function named beside it (docs/exports.md has
 // the derivations); the formulas are transcribed, no engine code is copied.
-#include "shprobe/io/engine_export.h"
+#include "formats/engine_export.h"
 
-#include "shprobe/image/image_write.h"
+#include "image/image_write.h"
 
-#include "shprobe/io/probe_export.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/cubemap.h"
-#include "shprobe/sh/error.h"
-#include "shprobe/sh/folding.h"
-#include "shprobe/sh/irradiance.h"
-#include "shprobe/sh/rotation.h"
+#include "common/error.h"
+#include "formats/probe_export.h"
+#include "sh/basis.h"
+#include "sh/cubemap.h"
+#include "sh/folding.h"
+#include "sh/irradiance.h"
+#include "sh/rotation.h"
 
 #include <algorithm>
 #include <cctype>

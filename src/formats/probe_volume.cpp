@@ -1,12 +1,12 @@
 // The probe-volume file of docs/probe-volume.md: a 16-byte preamble (magic, header length), a JSON
 // header padded to a multiple of 16 bytes, then the payload: radiance, irradiance (those held), one
 // validity byte per probe.
-#include "shprobe/io/probe_volume.h"
+#include "formats/probe_volume.h"
 
-#include "shprobe/io/input_file.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/input_file.h"
+#include "common/output_file.h"
+#include "sh/basis.h"
 
 #include <algorithm>
 #include <bit>

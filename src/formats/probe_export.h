@@ -2,7 +2,7 @@
 // a GLSL or C/C++ header of coefficients folded for the render shader, and the irradiance itself
 // drawn into an equirect map or a horizontal-cross cube map (EXR).
 #pragma once
-#include "shprobe/sh/coefficients.h"
+#include "sh/coefficients.h"
 
 #include <cstdint>
 #include <span>
@@ -30,7 +30,7 @@ void writeBinaryProbes(const std::string& path, std::span<const ShCoefficients> 
 std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std::string& name);
 std::vector<ShCoefficients> readBinaryProbes(const std::string& path);
 
-// Headers with the coefficients folded for shaders/include/sh_irradiance.glsl (sh/folding.h), as
+// Headers with the coefficients folded for src/glsl/sh_irradiance.glsl (sh/folding.h), as
 // Filament cmgen's --sh-shader writes them: the basis constants and, for irradiance, the
 // convolution A_l / pi are multiplied in, so the shader spends one multiply-add per coefficient.
 // A radiance probe folds with s_l = 1 for shRadiance (L(d)), an irradiance probe with A_l / pi for

@@ -76,12 +76,12 @@ struct CaptureConstants {
 SHPROBE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(shprobe::gpu::CaptureVertex) == 32);
-static_assert(sizeof(shprobe::gpu::CaptureMaterial) == 48);
-static_assert(sizeof(shprobe::gpu::CaptureTexture) == 16);
-static_assert(sizeof(shprobe::gpu::CaptureVolumeHeader) == 48);
-static_assert(sizeof(shprobe::gpu::CaptureConstants) == 112); // within the 128 bytes every device has
-static_assert(sizeof(shprobe::gpu::CaptureSun) == 128);
+static_assert(sizeof(shprobe::glsl::CaptureVertex) == 32);
+static_assert(sizeof(shprobe::glsl::CaptureMaterial) == 48);
+static_assert(sizeof(shprobe::glsl::CaptureTexture) == 16);
+static_assert(sizeof(shprobe::glsl::CaptureVolumeHeader) == 48);
+static_assert(sizeof(shprobe::glsl::CaptureConstants) == 112); // within the 128 bytes every device has
+static_assert(sizeof(shprobe::glsl::CaptureSun) == 128);
 #endif
 
 #endif

@@ -60,7 +60,7 @@ struct ProbeVolume {
     uint32_t probeCount() const { return end - begin; }
 };
 
-// Writes atomically (io/output_file.h). Throws Error(Input) "cannot write PATH: PROBLEM" for a
+// Writes atomically (common/output_file.h). Throws Error(Input) "cannot write PATH: PROBLEM" for a
 // volume that is not consistent (sizes, ranges, validity bytes other than 0 and 1, settings that
 // are not a JSON object, a non-finite coefficient of a valid probe), and Error(Output) as
 // OutputFile does.

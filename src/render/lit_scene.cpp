@@ -1,8 +1,8 @@
-#include "shprobe/scene/lit_scene.h"
+#include "render/lit_scene.h"
 
-#include "shprobe/render/scene.h"
-#include "shprobe/sh/scope_exit.h"
-#include "shprobe/vk/image.h"
+#include "common/scope_exit.h"
+#include "render/scene.h"
+#include "vk/image.h"
 
 #include <algorithm>
 #include <cmath>

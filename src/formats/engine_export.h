@@ -5,9 +5,9 @@
 // engine, the frame, the basis sign, the pre-scaling and the layout, and the engine source each
 // follows.
 #pragma once
-#include "shprobe/io/output_file.h"
-#include "shprobe/io/probe_file.h"
-#include "shprobe/sh/coefficients.h"
+#include "common/output_file.h"
+#include "formats/probe_file.h"
+#include "sh/coefficients.h"
 
 #include <array>
 #include <glm/mat3x3.hpp>

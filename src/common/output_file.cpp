@@ -1,7 +1,7 @@
-#include "shprobe/io/output_file.h"
+#include "common/output_file.h"
 
-#include "shprobe/io/input_file.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/input_file.h"
 
 #include <cerrno>
 #include <climits>

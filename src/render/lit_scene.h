@@ -1,12 +1,12 @@
 // A glTF scene lit by its baked probe volume, as `shprobe render --scene` and `shprobe view --scene`
-// draw it: the capture's view pass (gpu/scene_capture.h) with the volume as its bounce source, an
+// draw it: the view pass of its capture (render/scene_view.h) with the volume as its bounce source, an
 // orbit camera around the scene's box, and an exposure from the volume. Both commands share these,
 // so a viewer screenshot is the offscreen render of the same view, byte for byte.
 #pragma once
-#include "shprobe/gpu/scene_capture.h"
-#include "shprobe/io/probe_volume.h"
-#include "shprobe/scene/scene.h"
-#include "shprobe/sh/cubemap.h"
+#include "formats/probe_volume.h"
+#include "render/scene_view.h"
+#include "scene/scene.h"
+#include "sh/cubemap.h"
 
 namespace shprobe {
 

@@ -1,6 +1,6 @@
-#include "shprobe/io/input_file.h"
+#include "common/input_file.h"
 
-#include "shprobe/sh/error.h"
+#include "common/error.h"
 
 #include <cctype>
 #include <cerrno>

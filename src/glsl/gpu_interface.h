@@ -62,11 +62,11 @@ struct RotateParams {
 SHPROBE_END
 
 #ifdef __cplusplus
-static_assert(sizeof(shprobe::gpu::ProjectParams) == 4);
-static_assert(sizeof(shprobe::gpu::EquirectParams) == 8);
-static_assert(sizeof(shprobe::gpu::ReduceParams) == 4);
-static_assert(sizeof(shprobe::gpu::ConvolveParams) == 36);
-static_assert(sizeof(shprobe::gpu::RotateParams) == 8);
+static_assert(sizeof(shprobe::glsl::ProjectParams) == 4);
+static_assert(sizeof(shprobe::glsl::EquirectParams) == 8);
+static_assert(sizeof(shprobe::glsl::ReduceParams) == 4);
+static_assert(sizeof(shprobe::glsl::ConvolveParams) == 36);
+static_assert(sizeof(shprobe::glsl::RotateParams) == 8);
 #endif
 
 #endif

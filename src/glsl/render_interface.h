@@ -77,13 +77,13 @@ SHPROBE_END
 
 #ifdef __cplusplus
 #include <cstddef>
-static_assert(sizeof(shprobe::gpu::RenderSun) == 48);
-static_assert(sizeof(shprobe::gpu::RenderUniforms) ==
+static_assert(sizeof(shprobe::glsl::RenderSun) == 48);
+static_assert(sizeof(shprobe::glsl::RenderUniforms) ==
               64 * 2 + 16 * 3 + 16 * (2 * SHPROBE_FOLDED_COUNT + 4) + 48);
-static_assert(offsetof(shprobe::gpu::RenderUniforms, sun) ==
+static_assert(offsetof(shprobe::glsl::RenderUniforms, sun) ==
               64 * 2 + 16 * 3 + 16 * (2 * SHPROBE_FOLDED_COUNT + 4));
-static_assert(sizeof(shprobe::gpu::ObjectConstants) == 80);
-static_assert(sizeof(shprobe::gpu::TonemapConstants) == 16);
+static_assert(sizeof(shprobe::glsl::ObjectConstants) == 80);
+static_assert(sizeof(shprobe::glsl::TonemapConstants) == 16);
 #endif
 
 #endif

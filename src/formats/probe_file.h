@@ -1,7 +1,7 @@
 // Coefficient files (docs/conventions.md, "Coefficient files"): JSON with format "shprobe.sh",
 // version 1, the SH convention, order, quantity and order^2 rows of [r, g, b].
 #pragma once
-#include "shprobe/sh/coefficients.h"
+#include "sh/coefficients.h"
 #include <glm/vec3.hpp>
 #include <optional>
 #include <string>

@@ -1,9 +1,9 @@
-#include "shprobe/io/probe_file.h"
+#include "formats/probe_file.h"
 
-#include "shprobe/io/input_file.h"
-#include "shprobe/io/output_file.h"
-#include "shprobe/sh/basis.h"
-#include "shprobe/sh/error.h"
+#include "common/error.h"
+#include "common/input_file.h"
+#include "common/output_file.h"
+#include "sh/basis.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,57 @@
+#include "formats/output_format.h"
+
+#include "common/error.h"
+
+#include <filesystem>
+#include <string_view>
+
+namespace shprobe {
+
+namespace {
+
+// The format an output name's extension names; empty when it names none (".txt", "/dev/null").
+std::string formatOfExtension(const std::string& path) {
+    const ExportFormat* format = formatOfOutputName(path);
+    return format ? format->name : "";
+}
+
+// The extension names no format, the format itself, the other irradiance map, or the last part of
+// the format's extension (-o x.json --format threejs: ".three.json" ends in ".json").
+bool extensionAgrees(const std::string& output, const std::string& named, const std::string& format) {
+    const std::string extension = std::filesystem::path(output).extension().string();
+    return named.empty() || named == format ||
+           (named == "irradiance-equirect" && format == "irradiance-cross") ||
+           (!extension.empty() && std::string_view(formatNamed(format).extension).ends_with(extension));
+}
+
+} // namespace
+
+const ExportFormat& formatNamed(const std::string& name) {
+    const ExportFormat* format = findExportFormat(name);
+    if (!format) throw Error(ErrorKind::Input, "--format " + name + " is not one of " + exportFormatNames());
+    return *format;
+}
+
+bool isHeaderFormat(const std::string& format) {
+    return format == "glsl" || format == "cpp";
+}
+
+const char* formatExtension(const std::string& format) {
+    return formatNamed(format).extension;
+}
+
+void settleFormatAndOutput(std::string& format, std::string& output) {
+    const std::string named = output.empty() ? "" : formatOfExtension(output);
+    if (format.empty()) format = named.empty() ? "json" : named;
+    if (!extensionAgrees(output, named, format))
+        throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
+                                          format + "; use the extension " + formatExtension(format) +
+                                          " or leave out --format");
+    if (output.empty()) output = std::string("probe") + formatExtension(format);
+}
+
+OutputContent formatContent(const std::string& format) {
+    return formatNamed(format).content;
+}
+
+} // namespace shprobe
