@@ -1,5 +1,7 @@
-# shprobe_compile_shaders(<target> SOURCES <a.comp.glsl> ... INCLUDE_DIR <dir> DEPENDS <headers> ...)
+# shprobe_compile_shaders(<target> SOURCES <a.comp.glsl> ... [DEPENDS <more headers> ...])
 #
+# A source named without a folder is one of shaders/; every module includes from src/glsl
+# (SHADER_INCLUDE_DIR) and is rebuilt when any file there (SHADER_HEADERS) or in DEPENDS changes.
 # Compiles each GLSL file named <name>.<stage>.glsl with glslangValidator for Vulkan 1.1 into
 #   ${PROJECT_BINARY_DIR}/spirv/<name>.<stage>.spv        the reusable module (installed later),
 # validates it with spirv-val, and embeds it as a uint32_t array in a generated source file that
@@ -8,7 +10,8 @@
 # "shprobe/<target>.h". <target> is a static library holding them (position-independent code, in
 # every build), so the program needs no shader file at run time. Nothing is written into the source tree.
 function(shprobe_compile_shaders target)
-    cmake_parse_arguments(ARG "" "INCLUDE_DIR" "SOURCES;DEPENDS" ${ARGN})
+    cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS" ${ARGN})
+    list(TRANSFORM ARG_SOURCES PREPEND ${PROJECT_SOURCE_DIR}/shaders/ REGEX "^[^/]+$")
     set(spirv_dir ${PROJECT_BINARY_DIR}/spirv)
     set(embed_dir ${PROJECT_BINARY_DIR}/generated/shprobe)
     file(MAKE_DIRECTORY ${spirv_dir} ${embed_dir})
@@ -26,11 +29,11 @@ function(shprobe_compile_shaders target)
         add_custom_command(
             OUTPUT ${spv} ${header}
             COMMAND Vulkan::glslangValidator --target-env vulkan1.1 -S ${stage}
-                    -I${ARG_INCLUDE_DIR} -o ${spv} ${source}
+                    -I${SHADER_INCLUDE_DIR} -o ${spv} ${source}
             COMMAND ${SPIRV_VAL} --target-env vulkan1.1 ${spv}
             COMMAND Vulkan::glslangValidator --target-env vulkan1.1 -S ${stage}
-                    -I${ARG_INCLUDE_DIR} --vn ${symbol}_words -o ${header} ${source}
-            DEPENDS ${source} ${ARG_DEPENDS}
+                    -I${SHADER_INCLUDE_DIR} --vn ${symbol}_words -o ${header} ${source}
+            DEPENDS ${source} ${SHADER_HEADERS} ${ARG_DEPENDS}
             COMMENT "Compiling shader ${file_name}"
             VERBATIM)
         list(APPEND embedded_headers ${header})

@@ -156,13 +156,14 @@ install(TARGETS shprobe_exr shprobe_oiio LIBRARY DESTINATION ${CMAKE_INSTALL_LIB
 # --- headers -------------------------------------------------------------------------------------
 # The public API: the headers of the floors the installed libraries hold, laid out as in src/ under
 # include/shprobe/, less those of the libraries' insides (their Vulkan commands, the glTF reader's
-# tinygltf side), the Embree reference and the viewer's window-system headers. glsl/ holds the
+# tinygltf side, their JSON reading), the Embree reference and the viewer's window-system headers. glsl/ holds the
 # C++/GLSL shared headers and the GLSL includes.
 foreach(folder common glsl sh vk image formats scene gpu render)
     install(DIRECTORY ${PROJECT_SOURCE_DIR}/src/${folder}/
         DESTINATION ${SHPROBE_INSTALL_INCLUDEDIR}/${folder}
         FILES_MATCHING PATTERN "*.h" PATTERN "*.glsl"
         PATTERN "vulkan_commands.h" EXCLUDE # the libraries' own Vulkan commands, named as the loader's
+        PATTERN "json_reading.h" EXCLUDE
         PATTERN "gltf_geometry.h" EXCLUDE
         PATTERN "gltf_schema.h" EXCLUDE
         PATTERN "reference_tracer.h" EXCLUDE

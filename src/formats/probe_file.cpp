@@ -3,6 +3,7 @@
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
+#include "formats/json_reading.h"
 #include "sh/basis.h"
 
 #include <algorithm>
@@ -22,8 +23,6 @@ constexpr uint64_t kMaxProbeFileBytes = 1u << 20;
 // A coefficient file nests three levels (the object, "coefficients", a row). The parser stops
 // at this depth, before it builds the levels below: "[[[[..." is refused at once.
 constexpr int kMaxJsonDepth = 16;
-
-struct TooDeep {};
 
 const char* kFormat = "shprobe.sh";
 const int kVersion = 1;
@@ -115,14 +114,6 @@ ProbeSun parseSun(const json& sun, const std::string& name) {
     return result;
 }
 
-// nlohmann's "[json.exception.parse_error.101] parse error at line 3, column 1: syntax error
-// while parsing array - unexpected end of input; ..." without the bracketed prefix.
-std::string parseProblem(const json::exception& error) {
-    std::string text = error.what();
-    size_t end = text.find("] ");
-    return end == std::string::npos ? text : text.substr(end + 2);
-}
-
 std::string formatNumber(double value) {
     std::ostringstream out;
     out.precision(9); // float coefficients round-trip with 9 significant digits
@@ -194,13 +185,10 @@ Probe parseProbe(std::string_view text, const std::string& name) {
         fail(name, "not valid JSON (a NUL byte at offset " + std::to_string(nul) + ")");
     json root;
     try {
-        root = json::parse(text, [](int depth, json::parse_event_t, json&) {
-            if (depth > kMaxJsonDepth) throw TooDeep{};
-            return true;
-        });
-    } catch (const json::exception& error) { // parse errors, and numbers beyond double's range
-        fail(name, "not valid JSON (" + parseProblem(error) + ")");
-    } catch (const TooDeep&) {
+        root = parseBoundedJson(text, kMaxJsonDepth);
+    } catch (const json::exception& error) {
+        fail(name, "not valid JSON (" + jsonProblem(error) + ")");
+    } catch (const JsonTooDeep&) {
         fail(name, "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels; not a probe file");
     }
     if (!root.is_object()) fail(name, "the top level must be a JSON object");

@@ -6,6 +6,7 @@
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
+#include "formats/json_reading.h"
 #include "sh/basis.h"
 
 #include <algorithm>
@@ -43,8 +44,6 @@ constexpr uint64_t kMaxHeaderBytes = 1u << 20;
 // The header nests a few levels (the object, "grid", "settings" and what the baker puts in it);
 // the parser stops at this depth before it builds the levels below.
 constexpr int kMaxJsonDepth = 16;
-
-struct TooDeep {};
 
 const char* kFormat = "shprobe.volume";
 const int kVersion = 1;
@@ -88,13 +87,10 @@ std::string quantitiesText(const ProbeVolume& volume) {
 std::optional<json> settingsObject(const std::string& settings) {
     json value;
     try {
-        value = json::parse(settings, [](int depth, json::parse_event_t, json&) {
-            if (depth >= kMaxJsonDepth) throw TooDeep{};
-            return true;
-        });
+        value = parseBoundedJson(settings, kMaxJsonDepth - 1);
     } catch (const json::exception&) {
         return std::nullopt;
-    } catch (const TooDeep&) {
+    } catch (const JsonTooDeep&) {
         return std::nullopt;
     }
     if (!value.is_object()) return std::nullopt;
@@ -342,16 +338,10 @@ json parseJson(std::string_view header, const std::string& name) {
     if (size_t nul = header.find('\0'); nul != std::string_view::npos)
         fail(name, "the header is not valid JSON (a NUL byte at offset " + text(kPreambleBytes + nul) + ")");
     try {
-        return json::parse(header, [](int depth, json::parse_event_t, json&) {
-            if (depth > kMaxJsonDepth) throw TooDeep{};
-            return true;
-        });
+        return parseBoundedJson(header, kMaxJsonDepth);
     } catch (const json::exception& error) {
-        std::string problem = error.what();
-        size_t end = problem.find("] "); // nlohmann's "[json.exception.parse_error.101] " prefix
-        fail(name, "the header is not valid JSON (" +
-                       (end == std::string::npos ? problem : problem.substr(end + 2)) + ")");
-    } catch (const TooDeep&) {
+        fail(name, "the header is not valid JSON (" + jsonProblem(error) + ")");
+    } catch (const JsonTooDeep&) {
         fail(name, "the header nests JSON deeper than " + text(kMaxJsonDepth) + " levels");
     }
 }

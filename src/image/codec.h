@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,18 @@ ImageFormat imageFormatOfName(const std::string& path);
 // (checkInputFile, checkImageHeader).
 std::unique_ptr<ImageDecoder> openExrDecoder(const std::string& path);
 std::unique_ptr<ImageDecoder> openStbDecoder(const std::string& path, ImageFormat format); // Hdr, Png, Jpeg
+
+// A PNG or JPEG in memory (a glTF texture) as stb_image decodes it: RGB codes as stored, 8 or 16
+// bits, sRGB-encoded. readRgbCodesHeader gives the size and depth alone, so that a caller can refuse
+// a size before decoding; Error(Input) "WHAT: ..." for bytes stb_image cannot read.
+struct RgbCodes {
+    int width = 0;
+    int height = 0;
+    int bits = 8;
+    std::vector<uint16_t> codes; // width x height x 3, rows top down
+};
+RgbCodes readRgbCodesHeader(std::span<const unsigned char> bytes, const std::string& what);
+void decodeRgbCodes(std::span<const unsigned char> bytes, RgbCodes& image, const std::string& what);
 
 // Pixels to encode: rows top down, `channels` interleaved values per pixel, `pixelStride` values
 // from one pixel to the next (4 for RGBA texels of which 3 channels are written).

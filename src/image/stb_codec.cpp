@@ -10,6 +10,7 @@
 
 #include "common/error.h"
 #include "common/input_file.h"
+#include "common/scope_exit.h"
 
 #include <algorithm>
 #include <cctype>
@@ -686,25 +687,63 @@ std::string encodeHdr(const FloatPixels& pixels, const std::string& what) {
     return finish(ok, sink, what);
 }
 
-std::string encodePng(const BytePixels& pixels, const std::string& what) {
+namespace {
+
+// Packs the pixels and hands them to one of stb_image_write's encoders, which writes to `sink`.
+template <typename Encode>
+std::string encodeBytes(const BytePixels& pixels, const std::string& what, Encode encode) {
     checkSize(pixels.width, pixels.height, pixels.channels, pixels.pixelStride, pixels.data != nullptr, what);
     std::vector<uint8_t> values =
         packed(pixels.data, pixels.width, pixels.height, pixels.channels, pixels.pixelStride);
     Sink sink;
-    int ok = stbi_write_png_to_func(&Sink::write, &sink, pixels.width, pixels.height, pixels.channels,
-                                    values.data(), pixels.width * pixels.channels);
-    return finish(ok, sink, what);
+    return finish(encode(sink, values.data()), sink, what);
+}
+
+} // namespace
+
+std::string encodePng(const BytePixels& pixels, const std::string& what) {
+    return encodeBytes(pixels, what, [&](Sink& sink, const uint8_t* values) {
+        return stbi_write_png_to_func(&Sink::write, &sink, pixels.width, pixels.height, pixels.channels,
+                                      values, pixels.width * pixels.channels);
+    });
 }
 
 std::string encodeJpeg(const BytePixels& pixels, const std::string& what) {
-    checkSize(pixels.width, pixels.height, pixels.channels, pixels.pixelStride, pixels.data != nullptr, what);
-    std::vector<uint8_t> values =
-        packed(pixels.data, pixels.width, pixels.height, pixels.channels, pixels.pixelStride);
-    Sink sink;
     // Quality 95: stb_image_write then keeps chroma at full resolution (it subsamples at 90 and below).
-    int ok = stbi_write_jpg_to_func(&Sink::write, &sink, pixels.width, pixels.height, pixels.channels,
-                                    values.data(), 95);
-    return finish(ok, sink, what);
+    return encodeBytes(pixels, what, [&](Sink& sink, const uint8_t* values) {
+        return stbi_write_jpg_to_func(&Sink::write, &sink, pixels.width, pixels.height, pixels.channels,
+                                      values, 95);
+    });
+}
+
+RgbCodes readRgbCodesHeader(std::span<const unsigned char> bytes, const std::string& what) {
+    if (bytes.size() > size_t(INT_MAX))
+        throw Error(ErrorKind::Input, what + ": the image is larger than 2 GiB");
+    RgbCodes image;
+    int channels = 0;
+    if (!stbi_info_from_memory(bytes.data(), int(bytes.size()), &image.width, &image.height, &channels))
+        throw Error(ErrorKind::Input,
+                    what + ": not an image stb_image can read (" + stbi_failure_reason() + ")");
+    image.bits = stbi_is_16_bit_from_memory(bytes.data(), int(bytes.size())) ? 16 : 8;
+    return image;
+}
+
+void decodeRgbCodes(std::span<const unsigned char> bytes, RgbCodes& image, const std::string& what) {
+    const int size = int(bytes.size());
+    int channels = 0;
+    void* pixels = image.bits == 16
+                       ? static_cast<void*>(stbi_load_16_from_memory(bytes.data(), size, &image.width,
+                                                                     &image.height, &channels, 3))
+                       : static_cast<void*>(stbi_load_from_memory(bytes.data(), size, &image.width,
+                                                                  &image.height, &channels, 3));
+    if (!pixels)
+        throw Error(ErrorKind::Input, what + ": cannot decode the image (" + stbi_failure_reason() + ")");
+    ScopeExit release([&] { stbi_image_free(pixels); });
+    image.codes.resize(size_t(image.width) * size_t(image.height) * 3);
+    if (image.bits == 16)
+        std::copy_n(static_cast<const uint16_t*>(pixels), image.codes.size(), image.codes.begin());
+    else
+        std::copy_n(static_cast<const uint8_t*>(pixels), image.codes.size(), image.codes.begin());
 }
 
 } // namespace shprobe

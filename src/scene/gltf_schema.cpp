@@ -3,6 +3,7 @@
 #include "scene/gltf_schema.h"
 
 #include "common/error.h"
+#include "formats/json_reading.h"
 
 #include <algorithm>
 #include <climits>
@@ -20,7 +21,6 @@ using nlohmann::json;
 // glTF nests a handful of levels (root, meshes, a primitive, its attributes); extras may go
 // further. The parser stops here, before it builds the levels below.
 constexpr int kMaxJsonDepth = 64;
-struct TooDeep {};
 
 // tinygltf reads indices into int, and sizes (byteLength, byteOffset, count) into size_t from
 // JSON numbers, which hold integers exactly up to 2^53.
@@ -351,12 +351,9 @@ void checkRequiredExtensions(const json& root, const std::string& path) {
                             "KHR_materials_emissive_strength and KHR_mesh_quantization are)");
 }
 
-// nlohmann's "[json.exception.parse_error.101] parse error at line 3, column 1: ..." without the
-// bracketed prefix, and with the bytes it quotes kept printable: a binary file is not text.
+// The parser's problem with the bytes it quotes kept printable: a binary file is not text.
 std::string parseProblem(const json::exception& error) {
-    std::string text = error.what();
-    const size_t end = text.find("] ");
-    if (end != std::string::npos) text = text.substr(end + 2);
+    std::string text = jsonProblem(error);
     for (char& c : text)
         if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
     return text;
@@ -367,13 +364,10 @@ std::string parseProblem(const json::exception& error) {
 void checkGltfJson(std::string_view text, const std::string& path) {
     json root;
     try {
-        root = json::parse(text, [](int depth, json::parse_event_t, json&) {
-            if (depth > kMaxJsonDepth) throw TooDeep{};
-            return true;
-        });
-    } catch (const json::exception& error) { // parse errors, and numbers beyond double's range
+        root = parseBoundedJson(text, kMaxJsonDepth);
+    } catch (const json::exception& error) {
         throw Error(ErrorKind::Input, path + ": not valid JSON (" + parseProblem(error) + ")");
-    } catch (const TooDeep&) {
+    } catch (const JsonTooDeep&) {
         throw Error(ErrorKind::Input, path + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
                                           " levels; not a glTF file");
     }

@@ -1,0 +1,23 @@
+// JSON read with a bound on its nesting, for every reader of JSON files (probe files, probe
+// volumes, glTF): nlohmann's parser recurses once per level, so a hostile file could exhaust the
+// stack. Internal to the libraries (not installed: it includes nlohmann/json).
+#pragma once
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <string_view>
+
+namespace shprobe {
+
+// Thrown by parseBoundedJson for text nested deeper than it allows.
+struct JsonTooDeep {};
+
+// Parses `text`, throwing JsonTooDeep past `maxDepth` levels and nlohmann::json::exception for
+// anything else it refuses (syntax, numbers beyond double's range).
+nlohmann::json parseBoundedJson(std::string_view text, int maxDepth);
+
+// nlohmann's "[json.exception.parse_error.101] parse error at line 3, column 1: ..." without the
+// bracketed prefix.
+std::string jsonProblem(const nlohmann::json::exception& error);
+
+} // namespace shprobe
