@@ -252,15 +252,6 @@ uint32_t memoryType(const Gpu& gpu, uint32_t allowed,
     fail("no suitable memory type");
 }
 
-VkDeviceMemory allocate(const Gpu& gpu, const VkMemoryRequirements& requirements, uint32_t type) {
-    VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    info.allocationSize = requirements.size;
-    info.memoryTypeIndex = type;
-    VkDeviceMemory memory = VK_NULL_HANDLE;
-    VK_CHECK(vkAllocateMemory(gpu.device, &info, nullptr, &memory));
-    return memory;
-}
-
 // Host-visible, coherent buffers: simple, and fine for a probe's texels and few kilobytes of sums.
 struct Buffer {
     VkBuffer buffer = VK_NULL_HANDLE;
@@ -268,6 +259,15 @@ struct Buffer {
     VkDeviceSize size = 0;
     void* mapped = nullptr;
 };
+
+VkDeviceMemory allocate(const Gpu& gpu, const VkMemoryRequirements& requirements, uint32_t type) {
+    const VkMemoryAllocateInfo info{.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
+                                    .allocationSize = requirements.size,
+                                    .memoryTypeIndex = type};
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    VK_CHECK(vkAllocateMemory(gpu.device, &info, nullptr, &memory));
+    return memory;
+}
 
 Buffer createBuffer(const Gpu& gpu, VkDeviceSize size, VkBufferUsageFlags usage) {
     Buffer buffer;
@@ -337,13 +337,13 @@ void destroyImage(const Gpu& gpu, Image& image) {
 
 // project.comp reads with texelFetch, so filtering does not matter: nearest, clamped.
 VkSampler createNearestSampler(const Gpu& gpu) {
-    VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-    info.magFilter = VK_FILTER_NEAREST;
-    info.minFilter = VK_FILTER_NEAREST;
-    info.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
-    info.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    const VkSamplerCreateInfo info{.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
+                                   .magFilter = VK_FILTER_NEAREST,
+                                   .minFilter = VK_FILTER_NEAREST,
+                                   .mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST,
+                                   .addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                                   .addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                                   .addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE};
     VkSampler sampler = VK_NULL_HANDLE;
     VK_CHECK(vkCreateSampler(gpu.device, &info, nullptr, &sampler));
     return sampler;
@@ -385,9 +385,10 @@ VkDescriptorSetLayout createSetLayout(const Gpu& gpu, const ProgramInfo& info) {
         bindings.push_back({uint32_t(bindings.size()), type, 1, VK_SHADER_STAGE_COMPUTE_BIT,
                             sampled ? &info.sampler : nullptr});
     }
-    VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    setInfo.bindingCount = uint32_t(bindings.size());
-    setInfo.pBindings = bindings.data();
+    const VkDescriptorSetLayoutCreateInfo setInfo{.sType =
+                                                      VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+                                                  .bindingCount = uint32_t(bindings.size()),
+                                                  .pBindings = bindings.data()};
     VkDescriptorSetLayout layout = VK_NULL_HANDLE;
     VK_CHECK(vkCreateDescriptorSetLayout(gpu.device, &setInfo, nullptr, &layout));
     return layout;
@@ -503,15 +504,16 @@ struct LayoutChange {
 };
 
 void changeLayout(VkCommandBuffer commands, const Image& image, const LayoutChange& change) {
-    VkImageMemoryBarrier barrier{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-    barrier.srcAccessMask = change.sourceAccess;
-    barrier.dstAccessMask = change.destinationAccess;
-    barrier.oldLayout = change.from;
-    barrier.newLayout = change.to;
-    barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    barrier.image = image.image;
-    barrier.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, image.layers};
+    const VkImageMemoryBarrier barrier{
+        .sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER,
+        .srcAccessMask = change.sourceAccess,
+        .dstAccessMask = change.destinationAccess,
+        .oldLayout = change.from,
+        .newLayout = change.to,
+        .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+        .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+        .image = image.image,
+        .subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, image.layers}};
     vkCmdPipelineBarrier(commands, change.sourceStage, change.destinationStage, 0, 0, nullptr, 0, nullptr, 1,
                          &barrier);
 }
@@ -522,9 +524,8 @@ void recordUpload(VkCommandBuffer commands, const Buffer& staging, const Image& 
                  {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                   VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
                   VK_ACCESS_TRANSFER_WRITE_BIT});
-    VkBufferImageCopy region{};
-    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.layers};
-    region.imageExtent = {image.size, image.size, 1};
+    const VkBufferImageCopy region{.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.layers},
+                                   .imageExtent = {image.size, image.size, 1}};
     vkCmdCopyBufferToImage(commands, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
                            &region);
     changeLayout(commands, image,

@@ -12,7 +12,7 @@ namespace shprobe {
 
 // All cores, but no more threads than the work is worth: a thread should get at least
 // workPerThread units, so that starting it (tens of microseconds) stays a small part of its run.
-// Small work does not even ask for the core count, which reads /sys (10 to 17 us, measured).
+// Small work does not even ask for the core count, which reads /sys.
 inline unsigned threadCount(size_t work, size_t workPerThread) {
     const size_t worth = work / workPerThread;
     if (worth <= 1) return 1;

@@ -124,8 +124,8 @@ glm::dvec2 xy(const Imath::V2f& v) {
 
 // A file read whole into memory, which OpenEXR reads as if it were mapped: it decodes each chunk
 // where it lies, instead of copying it first into a buffer of its own for each chunk in flight
-// (twice as many as threads, each as large as the chunk uncompressed: 4 of 3 MiB for a 1024 x 512
-// DWAB file on 2 cores, whose first touches each cost a fresh page).
+// (twice as many as threads, each as large as the chunk uncompressed, each touched first as fresh
+// pages).
 class FileInMemory final : public Imf::IStream {
   public:
     FileInMemory(const std::string& path, std::unique_ptr<char[]> bytes, uint64_t size)

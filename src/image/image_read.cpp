@@ -144,8 +144,7 @@ bool isNonFinite(const glm::vec4& texel) {
 
 // Whether any texel readPixels leaves is NaN or infinite: a float whose exponent bits are all
 // ones. Its alpha is the blank texel's 1, so all four floats are looked at, one after another: a
-// loop of integer compares that vectorizes on any x86-64 (std::count_if with isNonFinite does not,
-// and took twice as long as a read of the texels, 0.5 ms for courtyard.exr's 8 MiB).
+// loop of integer compares that vectorizes on any x86-64 (std::count_if with isNonFinite does not).
 bool anyNonFinite(std::span<const glm::vec4> texels) {
     static_assert(sizeof(glm::vec4) == 4 * sizeof(float), "texels are four packed floats");
     constexpr uint32_t kExponentBits = 0x7f800000u;
@@ -163,8 +162,7 @@ constexpr glm::vec4 kBlankTexel(0.0f, 0.0f, 0.0f, 1.0f);
 // Reads the channels the plan names into `texels` (width x height of them, each kBlankTexel) and
 // makes them RGB, decoded to linear if the file is sRGB. Returns whether any texel is NaN or
 // infinite, for applyNonFinitePolicy. The usual R, G, B in place need no pass of their own: only
-// that check reads them again (a pass writing alpha after the decoder took a third as long as the
-// decode of courtyard.exr itself, the image no longer in the caches).
+// that check reads them again.
 bool readPixels(const OpenedImage& opened, std::span<glm::vec4> texels) {
     const ImageHeader& header = opened.header();
     const ChannelPlan& plan = opened.plan;
@@ -256,8 +254,7 @@ Cubemap resizedTo(Cubemap cubemap, int faceSize) {
     return faceSize == 0 ? cubemap : resizeCubemap(cubemap, faceSize);
 }
 
-// Face texels worth a thread: 128 x 128 of them (a 256 x 256 face file decodes in 2-3 ms here,
-// docs/benchmark.md), far more than starting the thread costs.
+// Face texels worth a thread: 128 x 128 of them, far more work than starting the thread costs.
 constexpr size_t kFaceTexelsPerThread = size_t(1) << 14;
 
 // Each face file is decoded straight into its face of the cube map: no image of its own to copy.

@@ -186,9 +186,8 @@ void resizeColumns(const std::vector<glm::dvec4>& rows, int face, const Taps& ta
     }
 }
 
-// Work worth a thread (threadCount): a quarter to half a millisecond, against about 20 us to start
-// and join one; measured at 60 to 120 ns an equirect sample and 5 to 10 ns a resampling tap (a tap
-// reads and adds one dvec4).
+// Work worth a thread (threadCount): a quarter to half a millisecond of equirect samples or
+// resampling taps, far more than starting and joining the thread costs.
 constexpr size_t kSamplesPerThread = size_t(1) << 12;
 constexpr size_t kTapsPerThread = size_t(1) << 16;
 
