@@ -1,9 +1,9 @@
 // The program's second round of reliability, one test per class of the README's "Reliability"
 // table that test_bad_inputs does not hold: a full file system, outputs that are links, devices,
 // FIFOs and standard output, file-system errors as one line, the pipeline cache, number options,
-// output names, outputs that are inputs, and memory bounded by what a file holds. Each failure
-// follows test_bad_inputs' rules (ProgramTest::expectFailure): its exit code, exactly one line
-// "shprobe: error: ...", no file left behind, an existing output unchanged.
+// output names, outputs that are inputs, memory bounded by what a file holds, and bad options refused
+// before any work. Each failure follows test_bad_inputs' rules (ProgramTest::expectFailure): its exit
+// code, exactly one line "shprobe: error: ...", no file left behind, an existing output unchanged.
 //
 // ctest runs this with VK_ICD_FILENAMES = lavapipe and SHPROBE_VALIDATION=1, which the children
 // inherit. Some cases need root (mounting a small tmpfs to fill it) or another user (permission
@@ -19,6 +19,7 @@
 
 #include <cmath>
 #include <functional>
+#include <map>
 #include <numbers>
 #include <sys/mount.h>
 #include <sys/stat.h>
@@ -525,6 +526,101 @@ TEST_F(Reliability, MemoryIsBoundedByWhatTheFileHolds) {
         EXPECT_LT(result.seconds, 1.0) << "refused at once";
         EXPECT_LT(result.peakKiB, baseline.peakKiB + 64 * 1024) << "baseline " << baseline.peakKiB << " KiB";
         RecordProperty(args[1].substr(args[1].rfind('/') + 1) + "_peak_kib", std::to_string(result.peakKiB));
+    }
+}
+
+// The file an output of each command is named, by its extension.
+std::string outputNameFor(const std::string& command) {
+    if (command == "scene") return "out.shpv";
+    if (command == "render" || command == "view") return "out.png";
+    if (command == "convert") return "out.exr";
+    return "out.json";
+}
+
+// Every option is checked as the command line is read or right after, so that a malformed value is
+// refused before an input is decoded, a device created or an output touched, however large the job:
+// each bad option below is refused (exit 2, one line) in less than `shprobe COMMAND --help` takes
+// plus 0.1 s. Neither reads anything; the margin is for the scheduling of a short process on a busy
+// machine, and far below what decoding forest.exr into 2048^2 faces or starting Vulkan takes. The
+// best of three runs of each counts, the one least disturbed by other work.
+TEST_F(Reliability, BadOptionsAreRefusedBeforeAnyWork) {
+    const std::string sky = "/usr/share/blender/datafiles/studiolights/world/forest.exr";
+    const std::string scene = SHPROBE_GLTF_MODELS_DIR "/BoxTextured-glTF/BoxTextured.gltf";
+    if (!fs::exists(sky) || !fs::exists(scene))
+        GTEST_SKIP() << "needs " << sky << " (blender-data) and " << scene << " (assimp-testmodels)";
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    const std::string probe = file("probe.json");
+    using Args = std::vector<std::string>;
+    auto with = [](Args args, const Args& more) {
+        args.insert(args.end(), more.begin(), more.end());
+        return args;
+    };
+    const Args bake = {"bake", sky, "--face-size", "2048", "--backend", "reference", "-q", "-o", "OUT"};
+    const Args render = {"render", sky, "--face-size", "2048", "-o", "OUT"};
+    const Args sceneBake = {"scene",           scene,  "--face-size", "4096", "--sky", sky,
+                            "--sky-face-size", "2048", "-o",          "OUT"};
+    std::vector<std::pair<Args, std::string>> cases = {
+        {with(bake, {"--window", "hanning:bogus"}), "--window: 'bogus' is not a list of numbers"},
+        {with(bake, {"--window", "gauss:3"}), "--window: 'gauss:3' is not none, hanning:WIDTH"},
+        {with(bake, {"--window", "lanczos:0"}), "--window: the width must be positive"},
+        {with(bake, {"--directional", "0,1", "1,1,1"}), "--directional: '0,1' needs 3 numbers"},
+        {with(bake, {"--directional", "0,0,0", "1,1,1"}), "--directional: the direction 0,0,0 has no length"},
+        {with(bake, {"--sphere", "0,1,0", "-5", "1,1,1"}), "--sphere: the radius -5 must be in (0, 180]"},
+        {with(bake, {"--sphere", "0,1,0", "5", "1,1"}), "--sphere: '1,1' needs 3 numbers"},
+        {with(bake, {"--ambient", "1,x,1"}), "--ambient: '1,x,1' is not a list of numbers"},
+        {{"light", "--sphere", "0,1,0", "200", "1,1,1", "-o", "OUT"}, "--sphere: the radius 200"},
+        {with(render, {"--size", "64x"}), "--size must be N or WxH with sides 1..16384, not '64x'"},
+        {with(render, {"--size", "0"}), "--size must be N or WxH with sides 1..16384, not '0'"},
+        {{"rotate", probe, "--euler", "0,400,0", "-o", "OUT"},
+         "--euler: 400 is not a number from -360 to 360"},
+        {{"rotate", probe, "--euler", "0,90", "-o", "OUT"}, "--euler"},
+        {{"rotate", probe, "--quat", "2,0,0,0", "-o", "OUT"}, "is not a unit quaternion"},
+        {{"rotate", probe, "--matrix", "1,0,0,0,1,0,0,0,2", "-o", "OUT"}, "is not orthonormal"},
+        {{"rotate", probe, "-o", "OUT"}, "give exactly one of --euler, --quat, --matrix"},
+        {with(sceneBake, {"--grid", "2,x,2"}), "--grid: '2,x,2' is not 3 whole numbers NX,NY,NZ"},
+        {with(sceneBake, {"--grid", "2,2"}), "--grid: '2,2' needs 3 counts NX,NY,NZ"},
+        {with(sceneBake, {"--grid", "2,2,2", "--bounds", "1,0,0,0,1,1"}), "the minimum corner comes first"},
+        {with(sceneBake, {"--grid", "2,2,2", "--bounds", "0,0,0,0,1,1"}),
+         "--grid/--bounds: the grid's bounds"},
+        {with(sceneBake, {"--grid", "2,2,2", "--brick", "2/2"}),
+         "--brick: '2/2': bricks are numbered from 0"},
+        {with(sceneBake, {"--grid", "2,2,2", "--brick", "0/9"}), "--brick 0/9: the grid has 8 probes"},
+        {{"convert", probe, "--format", "irradiance-equirect", "--map-size", "7", "-o", "OUT"},
+         "equirect width must be even and at least 2"},
+        {{"bench", "--sizes", "256", "0", "--json", "OUT"}, "cube-map face size must be positive, got 0"},
+    };
+    // shprobe view runs shprobe-view, which a build without GLFW lacks.
+    if (fs::exists(fs::path(SHPROBE_EXECUTABLE).parent_path() / "shprobe-view")) {
+        const Args view = {"view", sky, "--face-size", "2048", "--frames", "1", "--screenshot", "OUT"};
+        cases.push_back({with(view, {"--keys", "5,x"}), "unknown key 'x'"});
+        cases.push_back({with(view, {"--size", "960x"}), "--size must be N or WxH"});
+        cases.push_back(
+            {{"view", sky, "--face-size", "2048", "--screenshot", "OUT"}, "--screenshot needs --frames N"});
+    }
+
+    std::map<std::string, double> helpSeconds;
+    auto best = [&](const Args& args, int exitCode, const std::string& message) {
+        double seconds = HUGE_VAL;
+        for (int attempt = 0; attempt < 3; ++attempt) {
+            const RunResult result = this->run(args);
+            if (exitCode == 0)
+                EXPECT_EQ(result.exitCode, 0) << describe(result);
+            else
+                expectMessage({args, exitCode, {message}}, result);
+            seconds = std::min(seconds, result.seconds);
+        }
+        return seconds;
+    };
+    for (const auto& [args, message] : cases) {
+        SCOPED_TRACE(::testing::Message() << "shprobe " << joined(args));
+        const std::string& command = args[0];
+        if (!helpSeconds.count(command)) helpSeconds[command] = best({command, "--help"}, 0, "");
+        const std::string output = file(outputNameFor(command));
+        const double refused = best(withOutput(args, output), 2, message);
+        EXPECT_FALSE(fs::exists(output)) << "a refused run wrote its output";
+        EXPECT_LT(refused, helpSeconds[command] + 0.1) << "--help took " << helpSeconds[command] << " s";
+        std::printf("%.4f s (--help %.4f s): shprobe %s\n", refused, helpSeconds[command],
+                    joined(args).c_str());
     }
 }
 

@@ -53,7 +53,7 @@ void printSummary(FILE* report, const BakeOptions& options, const Environment& e
     if (environment.replacedTexels > 0)
         std::fprintf(report, "  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
     if (hasLights(options.lights)) std::fprintf(report, "  lights   added to the environment's radiance\n");
-    if (options.window != "none") std::fprintf(report, "  window   %s\n", options.window.c_str());
+    if (!options.window.none()) std::fprintf(report, "  window   %s\n", options.window.text.c_str());
     std::fprintf(report, "  time     load %.1f ms, bake %.1f ms", loadMs, bakeMs);
     if (result.deviceMilliseconds > 0.0) std::fprintf(report, " (GPU %.1f ms)", result.deviceMilliseconds);
     std::fprintf(report, "\n");

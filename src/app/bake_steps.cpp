@@ -52,7 +52,7 @@ bool mayHaveGpu() {
 }
 
 bool needsFinishing(const BakeOptions& options) {
-    return hasLights(options.lights) || options.window != "none";
+    return hasLights(options.lights) || !options.window.none();
 }
 
 Finished finish(const BakeOptions& options, ShCoefficients radiance) {
@@ -338,7 +338,7 @@ ProbeMetadata metadataFor(const Backend& backend, const BakeOptions& options, co
     metadata.faceSize = environment.faceSize(); // 0 (not written) for an equirect map kept as it is
     metadata.backend = backend.name;
     metadata.device = result.device;
-    metadata.window = options.window == "none" ? "" : options.window;
+    metadata.window = options.window.none() ? "" : options.window.text;
     metadata.sun = sun;
     return metadata;
 }

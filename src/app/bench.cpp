@@ -5,12 +5,14 @@
 // is the best of --repeat runs; ratios, not absolute times, are what compare across machines.
 #include "app/bench.h"
 #include "app/bench_device.h"
+#include "app/parsed_option.h"
 #include "app/stopwatch.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
 #include "gpu/host_bake.h"
 #include "sh/basis.h"
+#include "sh/cubemap.h"
 #include "sh/fast_projection.h"
 #include "sh/projection.h"
 #include "vk/context.h"
@@ -287,10 +289,18 @@ nlohmann::ordered_json reportJson(const Context& context, const std::vector<Meas
     return report;
 }
 
+// Sizes no cube map can have are refused before the device starts.
+std::vector<int> checkedFaceSizes(const std::vector<int>& faceSizes) {
+    for (int faceSize : faceSizes)
+        requireFaceSize(faceSize);
+    return faceSizes;
+}
+
 } // namespace
 
 void addBenchOptions(CLI::App& command, BenchOptions& options) {
-    command.add_option("--sizes", options.faceSizes, "Face sizes")->capture_default_str();
+    addParsedOption<std::vector<int>>(command, "--sizes", options.faceSizes, checkedFaceSizes, "Face sizes")
+        ->default_str("[" + CLI::detail::join(options.faceSizes) + "]");
     command.add_option("--orders", options.orders, "SH orders")
         ->check(CLI::Range(1, kMaxOrder))
         ->capture_default_str();

@@ -4,6 +4,7 @@
 #include "app/toolkit.h"
 #include "glsl/dispatch_plan.h"
 #include "image/environment.h"
+#include "scene/probe_grid.h"
 #include "vk/context.h"
 
 #include <CLI/CLI.hpp>
@@ -11,6 +12,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <initializer_list>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -36,14 +38,14 @@ struct BakeOptions {
     bool validation = false;
     uint32_t workgroupSize = glsl::kDefaultWorkgroupWidth;
     uint32_t texelsPerInvocation = glsl::kDefaultTexelsPerInvocation;
-    bool quiet = false;          // no coefficient table
-    LightOptions lights;         // analytic lights added to the environment's radiance
-    std::string window = "none"; // none | hanning:W | lanczos:W | dering | dering-lanczos
-    bool extractSun = false;     // take the sun out and write it beside the probe
-    std::string format;          // json | binary | glsl | cpp | irradiance-equirect | irradiance-cross;
-                                 // empty: from the output's extension, else json
-    int mapSize = 0;             // irradiance maps: equirect width or face size (0: 512 / 128)
-    bool mirror = true;          // filament: cmgen's default mirroring (off: cmgen --no-mirror)
+    bool quiet = false;      // no coefficient table
+    LightOptions lights;     // analytic lights added to the environment's radiance
+    Window window;           // none | hanning:W | lanczos:W | dering | dering-lanczos
+    bool extractSun = false; // take the sun out and write it beside the probe
+    std::string format;      // json | binary | glsl | cpp | irradiance-equirect | irradiance-cross;
+                             // empty: from the output's extension, else json
+    int mapSize = 0;         // irradiance maps: equirect width or face size (0: 512 / 128)
+    bool mirror = true;      // filament: cmgen's default mirroring (off: cmgen --no-mirror)
 };
 
 // `shprobe convert IN -o OUT [--format F]`: a probe file in, any output format out (convert.cpp).
@@ -69,12 +71,21 @@ struct LitSceneOptions {
     bool drawn() const { return !scene.empty() || !volume.empty(); }
 };
 
+// "N" (N x N) or "WxH", each 1..16384; throws Error(Input) naming the option otherwise.
+struct ImageSize {
+    uint32_t width = 0;
+    uint32_t height = 0;
+};
+ImageSize parseImageSize(const std::string& text, const char* option);
+// --size of render and view, parsed as CLI11 reads it.
+CLI::Option* addSizeOption(CLI::App& command, std::optional<ImageSize>& size, const std::string& help);
+
 struct RenderOptions {
     std::string input;                 // probe (.json), environment image, or empty: the built-in sky
     std::string output = "render.png"; // .png/.jpg tonemapped sRGB, .exr/.hdr linear
     int order = 3;                     // 3 or 5
     std::string mode = "irradiance";   // radiance | irradiance | l1-nonlinear
-    std::string size;                  // N or WxH; default 512 (with --grid: the cell width, 384)
+    std::optional<ImageSize> size;     // N or WxH; none: 512 (with --grid: the cell width, 384)
     bool grid = false;                 // environment, order-3 and order-5 side by side
     std::string background = "auto";   // auto | environment | radiance (sh) | shading | color
     float exposure = 0.0f;             // stops relative to the automatic exposure
@@ -89,13 +100,13 @@ struct RenderOptions {
 };
 
 struct ViewOptions {
-    std::string input;            // like RenderOptions::input
-    std::string size = "960x600"; // window size, N or WxH
+    std::string input;             // like RenderOptions::input
+    std::optional<ImageSize> size; // window size, N or WxH; none: 960x600
     int order = 3;
     std::string mode = "irradiance";
-    std::string screenshot;        // save frame --frames to this PNG and exit
-    int frames = 0;                // > 0: exit after this many frames
-    std::vector<std::string> keys; // key presses to replay, one per frame (tests, scripts)
+    std::string screenshot; // save frame --frames to this PNG and exit
+    int frames = 0;         // > 0: exit after this many frames
+    std::vector<int> keys;  // key presses to replay, one per frame (tests, scripts): GLFW key codes
     float exposure = 0.0f;
     int faceSize = 0;
     bool sanitize = false;
@@ -105,19 +116,25 @@ struct ViewOptions {
     LitSceneOptions scene;
 };
 
+// --brick I/N: the brick, and the option as typed for the report.
+struct BrickOption {
+    Brick brick;
+    std::string text;
+};
+
 // `shprobe scene SCENE --grid NX,NY,NZ -o VOLUME`: probes baked inside a glTF scene (scene.cpp).
 struct SceneOptions {
     std::string scene;                  // .gltf or .glb
     std::string output = "volume.shpv"; // probe volume (docs/probe-volume.md)
-    std::string grid;                   // NX,NY,NZ
-    std::string bounds;                 // X0,Y0,Z0,X1,Y1,Z1; empty: the scene's box, inset by half a cell
+    glm::ivec3 grid{1};                 // NX,NY,NZ
+    std::optional<GridBounds> bounds;   // X0,Y0,Z0,X1,Y1,Z1; none: the scene's box, inset by half a cell
     int order = 3;
     int faceSize = 32;
     int bounces = 1;
-    std::string sky;      // any input bake takes; empty: the built-in sky
-    int skyFaceSize = 0;  // 0: the sky's own (128 for the built-in sky)
-    std::string brick;    // I/N: one brick of the grid, one bounce
-    std::string previous; // the previous bounce's whole volume
+    std::string sky;                  // any input bake takes; empty: the built-in sky
+    int skyFaceSize = 0;              // 0: the sky's own (128 for the built-in sky)
+    std::optional<BrickOption> brick; // I/N: one brick of the grid, one bounce
+    std::string previous;             // the previous bounce's whole volume
     uint32_t probesPerBatch = 32;
     std::string device;
     bool validation = false;
@@ -210,13 +227,6 @@ void runMerge(const MergeOptions& options);
 // (0: its own), or the built-in sky (128^2 faces by default).
 Environment loadSceneSky(const std::string& path, int faceSize);
 void runInfo(const InfoOptions& options);
-
-// "N" (N x N) or "WxH", each 1..16384; throws Error(Input) naming the option otherwise.
-struct ImageSize {
-    uint32_t width = 0;
-    uint32_t height = 0;
-};
-ImageSize parseImageSize(const std::string& text, const char* option);
 
 // --face-size and --sanitize for an environment given to render or view (baked before showing it).
 void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels);

@@ -53,6 +53,8 @@ void runConvert(const ConvertOptions& given) {
     ConvertOptions options = given;
     settleFormatAndOutput(options.format, options.output);
     const ExportFormat& format = *findExportFormat(options.format);
+    // --map-size 0 is the writer's default, which fits.
+    if (options.format == "irradiance-equirect" && options.mapSize > 0) requireEquirectWidth(options.mapSize);
     checkOutputPath(options.output, format.content);
     if (options.input != "-") checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
     const Probe probe = readAnyProbe(options.input);

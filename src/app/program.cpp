@@ -39,6 +39,10 @@ std::string oneLine(std::string text) {
     return text;
 }
 
+void printError(const char* name, const Error& e) {
+    std::fprintf(stderr, "%s: error: %s\n", name, oneLine(e.what()).c_str());
+}
+
 // Descriptors 0-2 that the parent closed are opened on /dev/null, so that no file the program
 // opens takes their place (a probe file read as standard input, an output sent to standard
 // output). A reader that goes away makes a write fail with EPIPE ("cannot write -: broken pipe",
@@ -69,6 +73,9 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
         if (e.get_exit_code() == 0) return app.exit(e); // --help, --version
         std::fprintf(stderr, "%s: error: %s (see --help)\n", name, oneLine(e.what()).c_str());
         return 2;
+    } catch (const Error& e) { // a value that its option's parser refused (app/parsed_option.h)
+        printError(name, e);
+        return exitCode(e.kind());
     }
 
     // Only once a command runs: parsing writes no file, and the handler's thread is a tenth of
@@ -78,7 +85,7 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
     try {
         run();
     } catch (const Error& e) {
-        std::fprintf(stderr, "%s: error: %s\n", name, oneLine(e.what()).c_str());
+        printError(name, e);
         return exitCode(e.kind());
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "%s: error: out of memory\n", name);

@@ -12,7 +12,8 @@ void addVersionFlag(CLI::App& app, const char* program);
 
 // Parses the command line into `app`, then calls `run`. Returns the exit code: 0 success, 1 out of
 // memory or an internal error, 2 bad input or usage, 3 output not written, 4 no usable Vulkan device,
-// display or viewer. Every error is printed as one line, "NAME: error: ...".
+// display or viewer. Every error is printed as one line, "NAME: error: ...". An Error that an option's
+// parser throws while the line is parsed (app/parsed_option.h) is printed and exits as one from `run`.
 int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std::function<void()>& run);
 
 // Ends the process with exit code `code` once the C streams are flushed, without the static

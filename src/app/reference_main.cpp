@@ -3,6 +3,7 @@
 // comparisons and the scene benchmark (scripts/bench-scene.sh). Built beside shprobe, not
 // installed: it is the only program that links Embree.
 #include "app/commands.h"
+#include "app/parsed_option.h"
 #include "app/program.h"
 #include "app/stopwatch.h"
 
@@ -17,6 +18,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 namespace shprobe {
 namespace {
@@ -24,8 +26,8 @@ namespace {
 struct ReferenceOptions {
     std::string scene;
     std::string output = "reference.shpv";
-    std::string grid;
-    std::string bounds;
+    glm::ivec3 grid{1};
+    std::optional<GridBounds> bounds; // none: as shprobe scene
     int order = 3;
     int bounces = 1;
     int samples = 6144;     // 6 x 32^2: as many directions as a capture at faces 32^2 has texels
@@ -37,8 +39,9 @@ struct ReferenceOptions {
 void addOptions(CLI::App& app, ReferenceOptions& options) {
     app.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
     app.add_option("-o,--output", options.output, "Probe volume to write")->capture_default_str();
-    app.add_option("--grid", options.grid, "Probes per axis, NX,NY,NZ")->required();
-    app.add_option("--bounds", options.bounds, "Grid box X0,Y0,Z0,X1,Y1,Z1 (default: as shprobe scene)");
+    addParsedOption(app, "--grid", options.grid, parseGridCounts, "Probes per axis, NX,NY,NZ")->required();
+    addParsedOption(app, "--bounds", options.bounds, parseGridBounds,
+                    "Grid box X0,Y0,Z0,X1,Y1,Z1 (default: as shprobe scene)");
     app.add_option("--order", options.order, "SH order")->check(CLI::Range(1, 8))->capture_default_str();
     app.add_option("--bounces", options.bounces, "Diffuse bounces")
         ->check(CLI::Range(0, 64))
@@ -96,11 +99,9 @@ void run(const ReferenceOptions& options) {
     if (!options.sky.empty()) inputs.push_back(options.sky);
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
     const Clock::time_point start = Clock::now();
-    const glm::ivec3 counts = parseGridCounts(options.grid);
-    if (!options.bounds.empty()) parseGridBounds(options.bounds);
     const World world = loadGltfScene(options.scene);
-    const ProbeGrid grid = options.bounds.empty() ? probeGridInWorld(counts, world)
-                                                  : makeProbeGrid(counts, parseGridBounds(options.bounds));
+    const ProbeGrid grid =
+        options.bounds ? makeProbeGrid(options.grid, *options.bounds) : probeGridInWorld(options.grid, world);
     const Environment sky = loadSceneSky(options.sky, 0);
     const ProbeVolume volume = traceVolume(options, world, grid, sky);
     writeProbeVolume(options.output, volume);

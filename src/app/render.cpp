@@ -2,6 +2,7 @@
 // to EXR (linear) or PNG (tonemapped sRGB); `--grid` puts the environment and its order-3 and
 // order-5 reconstructions and lit spheres side by side.
 #include "app/commands.h"
+#include "app/parsed_option.h"
 #include "app/stopwatch.h"
 #include "common/error.h"
 #include "common/output_file.h"
@@ -137,8 +138,8 @@ void addRenderOptions(CLI::App& command, RenderOptions& options) {
     command.add_option("--mode", options.mode, "What the sphere shows")
         ->check(CLI::IsMember({"radiance", "irradiance", "l1-nonlinear"}))
         ->capture_default_str();
-    command.add_option("--size", options.size,
-                       "Image size N or WxH (default 512; with --grid the cell width, 384)");
+    addSizeOption(command, options.size,
+                  "Image size N or WxH (default 512; with --grid the cell width, 384)");
     command.add_flag("--grid", options.grid,
                      "Environment, order-3 and order-5 reconstructions and lit spheres in one image");
     command.add_option("--background", options.background, "Background behind the sphere")
@@ -158,6 +159,12 @@ void addRenderOptions(CLI::App& command, RenderOptions& options) {
                        {"input", "--order", "--mode", "--grid", "--background", "--face-size", "--sanitize"});
 }
 
+CLI::Option* addSizeOption(CLI::App& command, std::optional<ImageSize>& size, const std::string& help) {
+    return addParsedOption(
+        command, "--size", size, [](const std::string& text) { return parseImageSize(text, "--size"); },
+        help);
+}
+
 void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels) {
     command.add_option("--face-size", faceSize, "Cube-map face size of an environment input")
         ->check(CLI::Range(1, kMaxGpuFaceSize));
@@ -166,9 +173,8 @@ void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize
 }
 
 void runRender(const RenderOptions& options) {
-    ImageSize size = parseImageSize(
-        options.size.empty() ? std::to_string(options.grid ? kDefaultGridCell : kDefaultSize) : options.size,
-        "--size");
+    const uint32_t side = options.grid ? kDefaultGridCell : kDefaultSize;
+    const ImageSize size = options.size.value_or(ImageSize{side, side});
     checkRenderOutputPath(options.output); // before any work
     if (options.scene.drawn()) return runSceneRender(options, size.width, size.height);
     checkOutputsAreNotInputs({&options.output, 1}, filesReadBy(options.input));

@@ -2,6 +2,7 @@
 // bounces: gpu/scene_capture.h) into a probe volume (formats/probe_volume.h); `shprobe merge` joins the
 // bricks of one bake (docs/scene-probes.md).
 #include "app/commands.h"
+#include "app/parsed_option.h"
 
 #include "app/stopwatch.h"
 #include "common/error.h"
@@ -21,14 +22,23 @@
 
 namespace shprobe {
 
+namespace {
+
+BrickOption parseBrickOption(const std::string& text) {
+    return {parseBrick(text), text};
+}
+
+} // namespace
+
 void addSceneOptions(CLI::App& command, SceneOptions& options) {
     command.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
     command.add_option("-o,--output", options.output, "Probe volume to write (docs/probe-volume.md)")
         ->capture_default_str();
-    command.add_option("--grid", options.grid, "Probes per axis, NX,NY,NZ")->required();
-    command.add_option("--bounds", options.bounds,
-                       "Grid box X0,Y0,Z0,X1,Y1,Z1, probes on its corners (default: the scene's box, "
-                       "inset by half a cell)");
+    addParsedOption(command, "--grid", options.grid, parseGridCounts, "Probes per axis, NX,NY,NZ")
+        ->required();
+    addParsedOption(command, "--bounds", options.bounds, parseGridBounds,
+                    "Grid box X0,Y0,Z0,X1,Y1,Z1, probes on its corners (default: the scene's box, "
+                    "inset by half a cell)");
     command.add_option("--order", options.order, "SH order, 1..8")
         ->check(CLI::Range(1, 8))
         ->capture_default_str();
@@ -48,9 +58,9 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
         .add_option("--sky-face-size", options.skyFaceSize,
                     "Face size the sky is resampled to (0: its own; 128 for the built-in sky)")
         ->check(CLI::Range(0, 4096));
-    command.add_option("--brick", options.brick,
-                       "Bake only brick I of N (0 <= I < N) of the grid, one bounce: with --previous the "
-                       "bounce after that volume's, else bounce 0; `shprobe merge` joins the bricks");
+    addParsedOption(command, "--brick", options.brick, parseBrickOption,
+                    "Bake only brick I of N (0 <= I < N) of the grid, one bounce: with --previous the "
+                    "bounce after that volume's, else bounce 0; `shprobe merge` joins the bricks");
     command.add_option("--previous", options.previous,
                        "The whole volume of the previous bounce: bake the one bounce after it");
     command.add_option("--probes-per-batch", options.probesPerBatch, "Probes captured per command buffer")
@@ -84,9 +94,8 @@ bool insideGeometry(uint32_t backFaceTexels, int faceSize) {
 }
 
 ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
-    const glm::ivec3 counts = parseGridCounts(options.grid);
-    return options.bounds.empty() ? probeGridInWorld(counts, world)
-                                  : makeProbeGrid(counts, parseGridBounds(options.bounds));
+    return options.bounds ? makeProbeGrid(options.grid, *options.bounds)
+                          : probeGridInWorld(options.grid, world);
 }
 
 // What decides the probes' values besides the grid, order and bounces: bricks merge only when it
@@ -155,19 +164,19 @@ ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, cons
     return volume;
 }
 
+// What the options ask for that no scene can give, before the scene is read: a bounce count with
+// one bounce's options, bounds that make no grid of these counts, more bricks than probes.
 void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
-    if (bouncesGiven && (!options.brick.empty() || !options.previous.empty()))
+    if (bouncesGiven && (options.brick || !options.previous.empty()))
         throw Error(ErrorKind::Input,
                     "scene: --brick and --previous bake one bounce; --bounces is for whole bakes");
+    if (options.bounds) makeProbeGrid(options.grid, *options.bounds);
+    if (options.brick) brickRange(ProbeGrid{.counts = options.grid}, options.brick->brick);
     checkOutputPath(options.output, OutputContent::Binary);
     std::vector<std::string> inputs{options.scene};
     for (const std::string& input : {options.previous, options.sky})
         if (!input.empty()) inputs.push_back(input);
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
-    // The options' own syntax, before the scene is read.
-    parseGridCounts(options.grid);
-    if (!options.bounds.empty()) parseGridBounds(options.bounds);
-    if (!options.brick.empty()) parseBrick(options.brick);
 }
 
 } // namespace
@@ -177,8 +186,8 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     const Clock::time_point start = Clock::now();
     const World world = loadGltfScene(options.scene);
     const ProbeGrid grid = chosenGrid(options, world);
-    const ProbeRange range = options.brick.empty() ? ProbeRange{0, grid.probeCount()}
-                                                   : brickRange(grid, parseBrick(options.brick));
+    const ProbeRange range =
+        options.brick ? brickRange(grid, options.brick->brick) : ProbeRange{0, grid.probeCount()};
     const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
     const std::string settings = bakeSettings(options, sky);
     const std::optional<ProbeVolume> previous =
@@ -193,7 +202,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
 
     std::vector<glm::dvec3> irradiance;
     const int first = previous ? previous->bounces + 1 : 0;
-    const int last = options.brick.empty() && !previous ? options.bounces : first;
+    const int last = !options.brick && !previous ? options.bounces : first;
     if (previous) setBounceSource(context, capture, bounceSourceOf(*previous, irradiance));
     ProbeVolume volume;
     for (int bounce = first; bounce <= last; ++bounce) {
@@ -215,7 +224,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     std::printf("sky      %s\n", sky.description.c_str());
     std::printf("probes   %u of a %dx%dx%d grid (%s), order %d, faces %d^2, bounce %d\n", volume.probeCount(),
                 grid.counts.x, grid.counts.y, grid.counts.z,
-                options.brick.empty() ? "whole" : ("brick " + options.brick).c_str(), options.order,
+                options.brick ? ("brick " + options.brick->text).c_str() : "whole", options.order,
                 options.faceSize, volume.bounces);
     std::printf("invalid  %zu inside geometry (more than half of their view is back faces)\n", inside);
     std::printf("device   %s\n", context.info.name.c_str());

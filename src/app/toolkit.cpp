@@ -2,6 +2,7 @@
 #include "app/toolkit.h"
 
 #include "app/commands.h"
+#include "app/parsed_option.h"
 
 #include "common/error.h"
 #include "common/output_file.h"
@@ -59,19 +60,6 @@ double parseRadiusRadians(const std::string& text, const std::string& option) {
     return degrees * std::numbers::pi / 180.0;
 }
 
-glm::dmat3 chosenRotation(const RotateOptions& options) {
-    int given = !options.euler.empty() + !options.quaternion.empty() + !options.matrix.empty();
-    if (given != 1) throw Error(ErrorKind::Input, "rotate: give exactly one of --euler, --quat, --matrix");
-    if (!options.euler.empty())
-        return rotationFromEulerZYZ(options.euler[0], options.euler[1], options.euler[2]);
-    if (!options.quaternion.empty()) {
-        const std::vector<double>& q = options.quaternion;
-        return rotationFromQuaternion(q[0], q[1], q[2], q[3]);
-    }
-    // A reflection (det -1) is allowed: a change to a left-handed frame needs one.
-    return orthogonalFromRowMajor(std::span<const double, 9>(options.matrix.data(), 9));
-}
-
 std::string joined(const std::vector<double>& values) {
     std::ostringstream text;
     for (size_t i = 0; i < values.size(); ++i)
@@ -79,107 +67,167 @@ std::string joined(const std::vector<double>& values) {
     return text.str();
 }
 
-std::string rotationDescription(const RotateOptions& options) {
-    if (!options.euler.empty()) return "euler " + joined(options.euler);
-    if (!options.quaternion.empty()) return "quat " + joined(options.quaternion);
-    return "matrix " + joined(options.matrix);
+GivenRotation eulerRotation(const std::vector<double>& angles) {
+    return {rotationFromEulerZYZ(angles[0], angles[1], angles[2]), "euler " + joined(angles)};
+}
+
+GivenRotation quaternionRotation(const std::vector<double>& q) {
+    return {rotationFromQuaternion(q[0], q[1], q[2], q[3]), "quat " + joined(q)};
+}
+
+// A reflection (det -1) is allowed: a change to a left-handed frame needs one.
+GivenRotation matrixRotation(const std::vector<double>& rowMajor) {
+    return {orthogonalFromRowMajor(std::span<const double, 9>(rowMajor.data(), 9)),
+            "matrix " + joined(rowMajor)};
+}
+
+// --euler, --quat or --matrix: `count` numbers, each checked by CLI11, then made a rotation by
+// `rotation` (which refuses a quaternion that is not unit, a matrix that is not orthogonal).
+void addRotationOption(CLI::App& command, const char* name, RotateOptions& options, int count,
+                       GivenRotation (*rotation)(const std::vector<double>&), const std::string& help,
+                       const CLI::Validator& numbers) {
+    command
+        .add_option_function<std::vector<double>>(
+            name,
+            [&options, rotation](const std::vector<double>& values) {
+                options.rotations.push_back(rotation(values));
+            },
+            help)
+        ->expected(count)
+        ->delimiter(',')
+        ->check(numbers);
+}
+
+const GivenRotation& chosenRotation(const RotateOptions& options) {
+    if (options.rotations.size() != 1)
+        throw Error(ErrorKind::Input, "rotate: give exactly one of --euler, --quat, --matrix");
+    return options.rotations.front();
 }
 
 // "hanning:4" -> (Hanning, 4); throws Error(Input) for anything else.
-std::pair<WindowKind, double> parseFixedWindow(const std::string& window) {
-    size_t colon = window.find(':');
-    std::string kind = window.substr(0, colon);
+Window parseFixedWindow(const std::string& text) {
+    size_t colon = text.find(':');
+    std::string kind = text.substr(0, colon);
     if (colon == std::string::npos || (kind != "hanning" && kind != "lanczos"))
         throw Error(ErrorKind::Input,
-                    "--window: '" + window +
+                    "--window: '" + text +
                         "' is not none, hanning:WIDTH, lanczos:WIDTH, dering or dering-lanczos");
-    double width = parseNumbers(window.substr(colon + 1), 1, "--window")[0];
+    double width = parseNumbers(text.substr(colon + 1), 1, "--window")[0];
     if (width <= 0.0) throw Error(ErrorKind::Input, "--window: the width must be positive");
-    return {kind == "hanning" ? WindowKind::Hanning : WindowKind::Lanczos, width};
+    return {kind == "hanning" ? Window::Kind::Hanning : Window::Kind::Lanczos, width, text};
+}
+
+std::vector<glm::dvec3> parseAmbient(const std::vector<std::string>& texts) {
+    std::vector<glm::dvec3> lights;
+    for (const std::string& rgb : texts)
+        lights.push_back(parseVector(rgb, "--ambient"));
+    return lights;
+}
+
+// X,Y,Z R,G,B pairs.
+std::vector<DirectionalLight> parseDirectionalLights(const std::vector<std::string>& texts) {
+    std::vector<DirectionalLight> lights;
+    for (size_t i = 0; i + 1 < texts.size(); i += 2)
+        lights.push_back(
+            {parseDirection(texts[i], "--directional"), parseVector(texts[i + 1], "--directional")});
+    return lights;
+}
+
+// X,Y,Z RADIUS_DEGREES R,G,B triples.
+std::vector<SphericalLight> parseSphericalLights(const std::vector<std::string>& texts) {
+    std::vector<SphericalLight> lights;
+    for (size_t i = 0; i + 2 < texts.size(); i += 3)
+        lights.push_back({parseDirection(texts[i], "--sphere"), parseRadiusRadians(texts[i + 1], "--sphere"),
+                          parseVector(texts[i + 2], "--sphere")});
+    return lights;
 }
 
 } // namespace
 
 void addLightOptions(CLI::App& command, LightOptions& options) {
-    command.add_option("--ambient", options.ambient, "Uniform radiance R,G,B added to the probe");
-    command
-        .add_option(
-            "--directional", options.directional,
-            "Directional light X,Y,Z R,G,B (intensity I lights a facing white surface to I); repeatable")
+    using Texts = std::vector<std::string>;
+    addParsedOption<Texts>(command, "--ambient", options.ambient, parseAmbient,
+                           "Uniform radiance R,G,B added to the probe");
+    addParsedOption<Texts>(
+        command, "--directional", options.directional, parseDirectionalLights,
+        "Directional light X,Y,Z R,G,B (intensity I lights a facing white surface to I); repeatable")
         ->type_size(2)
         ->allow_extra_args(false);
-    command
-        .add_option("--sphere", options.sphere,
-                    "Spherical light X,Y,Z RADIUS_DEGREES R,G,B (uniform radiance over the disc); repeatable")
+    addParsedOption<Texts>(
+        command, "--sphere", options.spheres, parseSphericalLights,
+        "Spherical light X,Y,Z RADIUS_DEGREES R,G,B (uniform radiance over the disc); repeatable")
         ->type_size(3)
         ->allow_extra_args(false);
 }
 
 bool hasLights(const LightOptions& options) {
-    return !options.ambient.empty() || !options.directional.empty() || !options.sphere.empty();
+    return !options.ambient.empty() || !options.directional.empty() || !options.spheres.empty();
 }
 
 void addLights(ShCoefficients& radiance, const LightOptions& options) {
-    for (const std::string& rgb : options.ambient)
-        addAmbient(radiance, parseVector(rgb, "--ambient"));
-    for (size_t i = 0; i + 1 < options.directional.size(); i += 2)
-        addDirectionalLight(radiance, {parseDirection(options.directional[i], "--directional"),
-                                       parseVector(options.directional[i + 1], "--directional")});
-    for (size_t i = 0; i + 2 < options.sphere.size(); i += 3)
-        addSphericalLight(radiance, {parseDirection(options.sphere[i], "--sphere"),
-                                     parseRadiusRadians(options.sphere[i + 1], "--sphere"),
-                                     parseVector(options.sphere[i + 2], "--sphere")});
+    for (const glm::dvec3& ambient : options.ambient)
+        addAmbient(radiance, ambient);
+    for (const DirectionalLight& light : options.directional)
+        addDirectionalLight(radiance, light);
+    for (const SphericalLight& light : options.spheres)
+        addSphericalLight(radiance, light);
 }
 
-void addWindowOption(CLI::App& command, std::string& window) {
-    command
-        .add_option(
-            "--window", window,
-            "Windowing against ringing: none, hanning:WIDTH, lanczos:WIDTH, or dering / dering-lanczos "
-            "(the weakest Hanning / Lanczos window that keeps irradiance non-negative)")
-        ->capture_default_str();
+Window parseWindow(const std::string& text) {
+    if (text == "none") return {};
+    if (text == "dering") return {Window::Kind::Dering, 0.0, text};
+    if (text == "dering-lanczos") return {Window::Kind::DeringLanczos, 0.0, text};
+    return parseFixedWindow(text);
 }
 
-std::optional<std::vector<double>> windowFactorsFor(const std::string& window,
-                                                    const ShCoefficients& radiance) {
-    if (window == "none") return std::nullopt;
-    if (window == "dering" || window == "dering-lanczos") {
-        DeringOptions options;
-        options.window = window == "dering" ? WindowKind::Hanning : WindowKind::Lanczos;
-        return deringWindow(radiance, options).bandFactors;
+void addWindowOption(CLI::App& command, Window& window) {
+    addParsedOption(
+        command, "--window", window, parseWindow,
+        "Windowing against ringing: none, hanning:WIDTH, lanczos:WIDTH, or dering / dering-lanczos "
+        "(the weakest Hanning / Lanczos window that keeps irradiance non-negative)")
+        ->default_str(window.text);
+}
+
+std::optional<std::vector<double>> windowFactorsFor(const Window& window, const ShCoefficients& radiance) {
+    switch (window.kind) {
+    case Window::Kind::None:
+        return std::nullopt;
+    case Window::Kind::Hanning:
+        return windowFactors(WindowKind::Hanning, window.width, radiance.order);
+    case Window::Kind::Lanczos:
+        return windowFactors(WindowKind::Lanczos, window.width, radiance.order);
+    case Window::Kind::Dering:
+    case Window::Kind::DeringLanczos:
+        break;
     }
-    auto [kind, width] = parseFixedWindow(window);
-    return windowFactors(kind, width, radiance.order);
+    DeringOptions options;
+    options.window = window.kind == Window::Kind::Dering ? WindowKind::Hanning : WindowKind::Lanczos;
+    return deringWindow(radiance, options).bandFactors;
 }
 
 void addRotateOptions(CLI::App& command, RotateOptions& options) {
     command.add_option("probe", options.input, "Coefficient file (JSON)")->required();
     command.add_option("-o,--output", options.output, "Rotated coefficient file")->required();
-    command
-        .add_option("--euler", options.euler, "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)")
-        ->expected(3)
-        ->delimiter(',')
-        ->check(numberFrom(-360.0, 360.0));
-    command.add_option("--quat", options.quaternion, "W,X,Y,Z unit quaternion")
-        ->expected(4)
-        ->delimiter(',')
-        ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // rotationFromQuaternion says when it is not unit
-    command
-        .add_option("--matrix", options.matrix,
-                    "R00,R01,...,R22 orthogonal matrix, row-major: a rotation, or a reflection (det -1) "
-                    "for a change of handedness")
-        ->expected(9)
-        ->delimiter(',')
-        ->check(numberFrom(-HUGE_VAL, HUGE_VAL)); // orthogonalFromRowMajor says when it is not orthogonal
+    addRotationOption(command, "--euler", options, 3, eulerRotation,
+                      "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)",
+                      numberFrom(-360.0, 360.0));
+    // rotationFromQuaternion says when it is not unit, orthogonalFromRowMajor when it is not orthogonal.
+    addRotationOption(command, "--quat", options, 4, quaternionRotation, "W,X,Y,Z unit quaternion",
+                      numberFrom(-HUGE_VAL, HUGE_VAL));
+    addRotationOption(command, "--matrix", options, 9, matrixRotation,
+                      "R00,R01,...,R22 orthogonal matrix, row-major: a rotation, or a reflection (det -1) "
+                      "for a change of handedness",
+                      numberFrom(-HUGE_VAL, HUGE_VAL));
 }
 
 void runRotate(const RotateOptions& options) {
+    const GivenRotation& given = chosenRotation(options);
     checkOutputPath(options.output);
     checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
     Probe probe = readProbe(options.input);
-    const glm::dmat3 rotation = chosenRotation(options);
+    const glm::dmat3& rotation = given.matrix;
     ProbeMetadata metadata;
-    metadata.source = options.input + " rotated by " + rotationDescription(options);
+    metadata.source = options.input + " rotated by " + given.description;
     // The sun taken out of the coefficients turns with them: a light from d then comes from R d.
     metadata.sun = probe.sun;
     if (metadata.sun) metadata.sun->direction = glm::normalize(rotation * metadata.sun->direction);
@@ -187,7 +235,7 @@ void runRotate(const RotateOptions& options) {
     writeProbeFile(options.output, rotate(makeShRotation(rotation, coefficients.order), coefficients),
                    metadata);
     std::fprintf(reportStream(options.output), "shprobe rotate: %s -> %s (%s)\n", options.input.c_str(),
-                 options.output.c_str(), rotationDescription(options).c_str());
+                 options.output.c_str(), given.description.c_str());
 }
 
 void addLightOptions(CLI::App& command, LightCommandOptions& options) {
@@ -210,8 +258,8 @@ void runLight(const LightCommandOptions& options) {
     writeProbeFile(options.output, options.irradiance ? convolveIrradiance(radiance) : radiance, metadata);
     std::fprintf(reportStream(options.output),
                  "shprobe light: %zu ambient, %zu directional, %zu spherical -> %s\n",
-                 options.lights.ambient.size(), options.lights.directional.size() / 2,
-                 options.lights.sphere.size() / 3, options.output.c_str());
+                 options.lights.ambient.size(), options.lights.directional.size(),
+                 options.lights.spheres.size(), options.output.c_str());
 }
 
 } // namespace shprobe

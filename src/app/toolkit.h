@@ -2,38 +2,56 @@
 // the light and window options that `shprobe bake` shares with them.
 #pragma once
 #include "sh/coefficients.h"
+#include "sh/lights.h"
 
 #include <CLI/CLI.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/vec3.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace shprobe {
 
-// Analytic lights as typed on the command line (parsed when applied, so errors name the option).
+// Analytic lights from the command line, parsed as CLI11 reads them.
 struct LightOptions {
-    std::vector<std::string> ambient;     // R,G,B
-    std::vector<std::string> directional; // X,Y,Z R,G,B pairs
-    std::vector<std::string> sphere;      // X,Y,Z RADIUS_DEGREES R,G,B triples
+    std::vector<glm::dvec3> ambient;           // --ambient R,G,B
+    std::vector<DirectionalLight> directional; // --directional X,Y,Z R,G,B
+    std::vector<SphericalLight> spheres;       // --sphere X,Y,Z RADIUS_DEGREES R,G,B
 };
+// A malformed light is refused while the command line is parsed: Error(Input) naming the option.
 void addLightOptions(CLI::App& command, LightOptions& options);
 bool hasLights(const LightOptions& options);
-// Adds the lights to radiance coefficients; throws Error(Input) naming the malformed option.
 void addLights(ShCoefficients& radiance, const LightOptions& options);
 
 // --window none | hanning:WIDTH | lanczos:WIDTH | dering | dering-lanczos
-void addWindowOption(CLI::App& command, std::string& window);
+struct Window {
+    enum class Kind { None, Hanning, Lanczos, Dering, DeringLanczos };
+    Kind kind = Kind::None;
+    double width = 0.0;        // Hanning and Lanczos: their width
+    std::string text = "none"; // as typed: the report and the probe's metadata name the window so
+    bool none() const { return kind == Kind::None; }
+};
+// Throws Error(Input) naming --window for anything but the forms above.
+Window parseWindow(const std::string& text);
+void addWindowOption(CLI::App& command, Window& window);
 // Per-band factors for l < order: fixed windows from their width, de-ringing from the radiance
-// (the weakest window that keeps irradiance non-negative). std::nullopt for "none".
-std::optional<std::vector<double>> windowFactorsFor(const std::string& window,
-                                                    const ShCoefficients& radiance);
+// (the weakest window that keeps irradiance non-negative). std::nullopt for none.
+std::optional<std::vector<double>> windowFactorsFor(const Window& window, const ShCoefficients& radiance);
+
+// A rotation as --euler, --quat or --matrix gave it: its matrix, and the option and numbers for the
+// report and the probe's source.
+struct GivenRotation {
+    glm::dmat3 matrix{1.0};
+    std::string description; // "euler 0,90,0"
+};
 
 struct RotateOptions {
     std::string input;
     std::string output;
-    std::vector<double> euler;      // alpha, beta, gamma in degrees, R = Rz(gamma) Ry(beta) Rz(alpha)
-    std::vector<double> quaternion; // w, x, y, z
-    std::vector<double> matrix;     // 9 numbers, row-major
+    // One for each of --euler (alpha, beta, gamma in degrees, R = Rz(gamma) Ry(beta) Rz(alpha)),
+    // --quat (w, x, y, z) and --matrix (9 numbers, row-major) given; runRotate needs exactly one.
+    std::vector<GivenRotation> rotations;
 };
 void addRotateOptions(CLI::App& command, RotateOptions& options);
 void runRotate(const RotateOptions& options);

@@ -2,6 +2,7 @@
 // GLFW viewer (src/render/viewer.h); `--screenshot FILE --frames N` saves frame N and exits, for tests
 // and scripts.
 #include "app/commands.h"
+#include "app/parsed_option.h"
 #include "common/output_file.h"
 #include "gpu/host_bake.h"
 #include "render/render_input.h"
@@ -10,45 +11,17 @@
 
 namespace shprobe {
 
-void addViewOptions(CLI::App& command, ViewOptions& options) {
-    command.add_option("input", options.input,
-                       "Probe file (.json) or environment image (baked first); default: the built-in sky");
-    command.add_option("--size", options.size, "Window size, N or WxH")->capture_default_str();
-    command.add_option("--order", options.order, "Initial SH order: 3 or 5 (keys 3, 5)")
-        ->check(CLI::IsMember({3, 5}))
-        ->capture_default_str();
-    command.add_option("--mode", options.mode, "Initial shading mode (key M)")
-        ->check(CLI::IsMember({"radiance", "irradiance", "l1-nonlinear"}))
-        ->capture_default_str();
-    command.add_option("--screenshot", options.screenshot, "Save frame --frames to this PNG and exit");
-    command.add_option("--frames", options.frames, "Exit after this many frames")
-        ->check(CLI::Range(1, 1 << 30));
-    command
-        .add_option("--keys", options.keys,
-                    "Key presses to replay, one before each frame: 3 5 m b left right + - r q p")
-        ->delimiter(',');
-    addExposureOption(command, options.exposure);
-    addEnvironmentInputOptions(command, options.faceSize, options.sanitize, options.maxPixels);
-    addDeviceOptions(command, options.device, options.validation);
-    // The scene's own view: none of the sphere's settings apply to it. Key P shows or hides the probes.
-    addLitSceneOptions(command, options.scene, {"input", "--order", "--mode", "--face-size", "--sanitize"});
-}
+namespace {
 
-void runView(const ViewOptions& options) {
-    ImageSize size = parseImageSize(options.size, "--size");
-    const bool showsScene = options.scene.drawn();
-    if (!options.screenshot.empty())
-        checkOutputsAreNotInputs({&options.screenshot, 1},
-                                 showsScene ? litSceneInputs(options.scene) : filesReadBy(options.input));
+constexpr ImageSize kDefaultWindowSize{960, 600};
+
+// Everything the viewer is given but the input it shows, which is read once these are checked.
+ViewerOptions viewerSettings(const ViewOptions& options) {
     ViewerOptions viewer;
     viewer.input = options.input;
-    // Bad inputs are refused before a window opens (and where there is no display).
-    if (showsScene)
-        viewer.scene = loadLitScene(options.scene);
-    else if (isProbeFile(options.input))
-        viewer.probe = readProbeInput(options.input);
     viewer.showProbes = options.scene.showProbes;
     viewer.inputOptions = {options.faceSize, options.sanitize, options.maxPixels};
+    const ImageSize size = options.size.value_or(kDefaultWindowSize);
     viewer.width = size.width;
     viewer.height = size.height;
     viewer.view.order = options.order;
@@ -59,6 +32,49 @@ void runView(const ViewOptions& options) {
     viewer.keys = options.keys;
     viewer.device = options.device;
     viewer.validation = options.validation;
+    return viewer;
+}
+
+} // namespace
+
+void addViewOptions(CLI::App& command, ViewOptions& options) {
+    command.add_option("input", options.input,
+                       "Probe file (.json) or environment image (baked first); default: the built-in sky");
+    addSizeOption(command, options.size, "Window size, N or WxH")
+        ->default_str(std::to_string(kDefaultWindowSize.width) + "x" +
+                      std::to_string(kDefaultWindowSize.height));
+    command.add_option("--order", options.order, "Initial SH order: 3 or 5 (keys 3, 5)")
+        ->check(CLI::IsMember({3, 5}))
+        ->capture_default_str();
+    command.add_option("--mode", options.mode, "Initial shading mode (key M)")
+        ->check(CLI::IsMember({"radiance", "irradiance", "l1-nonlinear"}))
+        ->capture_default_str();
+    command.add_option("--screenshot", options.screenshot, "Save frame --frames to this PNG and exit");
+    command.add_option("--frames", options.frames, "Exit after this many frames")
+        ->check(CLI::Range(1, 1 << 30));
+    addParsedOption<std::vector<std::string>>(
+        command, "--keys", options.keys, scriptedKeys,
+        "Key presses to replay, one before each frame: 3 5 m b left right + - r q p")
+        ->delimiter(',');
+    addExposureOption(command, options.exposure);
+    addEnvironmentInputOptions(command, options.faceSize, options.sanitize, options.maxPixels);
+    addDeviceOptions(command, options.device, options.validation);
+    // The scene's own view: none of the sphere's settings apply to it. Key P shows or hides the probes.
+    addLitSceneOptions(command, options.scene, {"input", "--order", "--mode", "--face-size", "--sanitize"});
+}
+
+void runView(const ViewOptions& options) {
+    ViewerOptions viewer = viewerSettings(options);
+    checkViewerOptions(viewer); // before any input is read
+    const bool showsScene = options.scene.drawn();
+    if (!options.screenshot.empty())
+        checkOutputsAreNotInputs({&options.screenshot, 1},
+                                 showsScene ? litSceneInputs(options.scene) : filesReadBy(options.input));
+    // Bad inputs are refused before a window opens (and where there is no display).
+    if (showsScene)
+        viewer.scene = loadLitScene(options.scene);
+    else if (isProbeFile(options.input))
+        viewer.probe = readProbeInput(options.input);
     const std::string shown = showsScene              ? options.scene.scene
                               : options.input.empty() ? std::string("the built-in sky")
                                                       : options.input;

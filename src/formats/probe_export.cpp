@@ -269,9 +269,13 @@ std::vector<ShCoefficients> readBinaryProbes(const std::string& path) {
     return parseBinaryProbes(readInputFile(path, kMaxBinaryProbeFileBytes, "a binary probe file"), path);
 }
 
-void writeIrradianceEquirect(const std::string& path, const ShCoefficients& probe, int width) {
+void requireEquirectWidth(int width) {
     if (width < 2 || width % 2 != 0)
         throw Error(ErrorKind::Input, "equirect width must be even and at least 2");
+}
+
+void writeIrradianceEquirect(const std::string& path, const ShCoefficients& probe, int width) {
+    requireEquirectWidth(width);
     ShCoefficients irradiance = irradianceOf(probe);
     Image image = makeImage(width, width / 2);
     for (int j = 0; j < image.height; ++j)

@@ -62,5 +62,8 @@ void writeProbeHeader(const std::string& path, const ShCoefficients& probe, Head
 // float); written atomically.
 void writeIrradianceEquirect(const std::string& path, const ShCoefficients& probe, int width);
 void writeIrradianceCross(const std::string& path, const ShCoefficients& probe, int faceSize);
+// Throws Error(Input) for a width writeIrradianceEquirect refuses (odd, or below 2), so that an
+// option can be checked before any work.
+void requireEquirectWidth(int width);
 
 } // namespace shprobe

@@ -135,24 +135,6 @@ ContextOptions viewerContextOptions(const ViewerOptions& options, GLFWwindow* wi
     return contextOptions;
 }
 
-// The GLFW key of each scripted key name (ViewerOptions::keys).
-std::vector<int> scriptedKeys(const std::vector<std::string>& names) {
-    static const std::pair<const char*, int> kKeys[] = {
-        {"3", GLFW_KEY_3},       {"5", GLFW_KEY_5},         {"m", GLFW_KEY_M},     {"b", GLFW_KEY_B},
-        {"left", GLFW_KEY_LEFT}, {"right", GLFW_KEY_RIGHT}, {"+", GLFW_KEY_EQUAL}, {"-", GLFW_KEY_MINUS},
-        {"r", GLFW_KEY_R},       {"q", GLFW_KEY_Q},         {"p", GLFW_KEY_P}};
-    std::vector<int> keys;
-    for (const std::string& name : names) {
-        auto found = std::find_if(std::begin(kKeys), std::end(kKeys),
-                                  [&](const auto& key) { return name == key.first; });
-        if (found == std::end(kKeys))
-            throw Error(ErrorKind::Input,
-                        "unknown key '" + name + "' (3, 5, m, b, left, right, +, -, r, q, p)");
-        keys.push_back(found->second);
-    }
-    return keys;
-}
-
 // ---- The session: what is shown and how it changes -------------------------------------------
 
 // A glTF scene lit by its volume, drawn by the capture's view pass into an HDR image of the
@@ -418,7 +400,7 @@ void recreateFrames(const Context& context, Session& session, VkExtent2D extent)
 // Draws until the window closes or the requested frames are shown; returns the frames shown.
 int runFrames(const Context& context, const ViewerOptions& options, GLFWwindow* window, Session& session,
               InputEvents& events) {
-    const std::vector<int> script = scriptedKeys(options.keys);
+    const std::vector<int>& script = options.keys;
     int shown = 0;
     std::string title;
     while (!glfwWindowShouldClose(window) && (options.frames <= 0 || shown < options.frames)) {
@@ -473,11 +455,31 @@ void runSession(const Context& context, const ViewerOptions& options, GLFWwindow
 
 } // namespace
 
-void runViewer(const ViewerOptions& options) {
+std::vector<int> scriptedKeys(const std::vector<std::string>& names) {
+    static const std::pair<const char*, int> kKeys[] = {
+        {"3", GLFW_KEY_3},       {"5", GLFW_KEY_5},         {"m", GLFW_KEY_M},     {"b", GLFW_KEY_B},
+        {"left", GLFW_KEY_LEFT}, {"right", GLFW_KEY_RIGHT}, {"+", GLFW_KEY_EQUAL}, {"-", GLFW_KEY_MINUS},
+        {"r", GLFW_KEY_R},       {"q", GLFW_KEY_Q},         {"p", GLFW_KEY_P}};
+    std::vector<int> keys;
+    for (const std::string& name : names) {
+        auto found = std::find_if(std::begin(kKeys), std::end(kKeys),
+                                  [&](const auto& key) { return name == key.first; });
+        if (found == std::end(kKeys))
+            throw Error(ErrorKind::Input,
+                        "unknown key '" + name + "' (3, 5, m, b, left, right, +, -, r, q, p)");
+        keys.push_back(found->second);
+    }
+    return keys;
+}
+
+void checkViewerOptions(const ViewerOptions& options) {
     if (options.frames <= 0 && !options.screenshot.empty())
         throw Error(ErrorKind::Input, "--screenshot needs --frames N (the frame to save)");
     if (!options.screenshot.empty()) checkRenderOutputPath(options.screenshot);
-    scriptedKeys(options.keys); // unknown names fail before a window opens
+}
+
+void runViewer(const ViewerOptions& options) {
+    checkViewerOptions(options);
     InputEvents events;
     GLFWwindow* window = openWindow(options, events);
     ScopeExit close([&] { closeWindow(window); }); // after the context, whose surface is the window's

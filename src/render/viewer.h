@@ -32,15 +32,23 @@ struct ViewerOptions {
     ViewState view;         // the initial view (order, mode, exposure...)
     std::string screenshot; // save the last frame (--frames) to this PNG
     int frames = 0;         // > 0: exit after this many frames
-    // Key presses to replay, one before each of the first frames (scripts and tests): names as in
-    // the key list above, lower case ("3", "5", "m", "b", "left", "right", "+", "-", "r", "p").
-    std::vector<std::string> keys;
+    // Key presses to replay, one before each of the first frames (scripts and tests), as GLFW key
+    // codes (scriptedKeys).
+    std::vector<int> keys;
     std::string device;
     bool validation = false;
 };
 
-// Runs until the window is closed or `frames` frames were shown. Without a display, throws
-// Error(Device) saying so and pointing at `shprobe render`; unknown key names are Error(Input).
+// The GLFW key codes of key names as in the key list above, lower case ("3", "5", "m", "b", "left",
+// "right", "+", "-", "r", "q", "p"); throws Error(Input) for an unknown name.
+std::vector<int> scriptedKeys(const std::vector<std::string>& names);
+
+// What runViewer refuses before it opens a window: --screenshot without --frames, a screenshot that
+// cannot be written. Error(Input) or Error(Output).
+void checkViewerOptions(const ViewerOptions& options);
+
+// Runs until the window is closed or `frames` frames were shown, once checkViewerOptions accepts
+// the options. Without a display, throws Error(Device) saying so and pointing at `shprobe render`.
 void runViewer(const ViewerOptions& options);
 
 } // namespace shprobe

@@ -68,8 +68,12 @@ double cornerSolidAngle(double a, double b) {
 
 } // namespace
 
-Cubemap makeCubemap(int faceSize) {
+void requireFaceSize(int faceSize) {
     requirePositiveSize(faceSize, "cube-map face size");
+}
+
+Cubemap makeCubemap(int faceSize) {
+    requireFaceSize(faceSize);
     const size_t texelCount = size_t(kFaceCount) * size_t(faceSize) * size_t(faceSize);
     return Cubemap{faceSize, std::vector<glm::vec4>(texelCount)};
 }

@@ -42,6 +42,9 @@ struct Cubemap {
     }
 };
 Cubemap makeCubemap(int faceSize);
+// Throws Error(Input) for a face size makeCubemap refuses (not positive), so that an option can be
+// checked before any work.
+void requireFaceSize(int faceSize);
 
 // A W x H image, rows top to bottom, RGBA32F (alpha unused). Equirect maps use this type.
 struct Image {
