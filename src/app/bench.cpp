@@ -242,12 +242,12 @@ using PipelineCreations = std::vector<std::pair<int, PipelineCreation>>;
 
 // The pipelines of each order created with an empty cache, then from the first one's data read back
 // from a file: what a second run of the program saves, if the driver caches anything.
-PipelineCreations measurePipelines(const Context& context, const std::vector<int>& orders) {
+PipelineCreations measurePipelines(const Device& device, const std::vector<int>& orders) {
     std::printf("\npipeline creation (project, reduce, convolve)\n%5s %12s %14s %12s\n", "order", "first ms",
                 "from cache ms", "cache bytes");
     PipelineCreations creations;
     for (int order : orders) {
-        PipelineCreation creation = measurePipelineCreation(context, order);
+        PipelineCreation creation = measurePipelineCreation(device, order);
         std::printf("%5d %12.2f %14.2f %12zu\n", order, creation.firstMilliseconds,
                     creation.cachedMilliseconds, creation.cacheBytes);
         creations.emplace_back(order, creation);
@@ -255,13 +255,13 @@ PipelineCreations measurePipelines(const Context& context, const std::vector<int
     return creations;
 }
 
-nlohmann::ordered_json reportJson(const Context& context, const std::vector<Measurement>& measurements,
+nlohmann::ordered_json reportJson(const Device& device, const std::vector<Measurement>& measurements,
                                   const PipelineCreations& pipelineCreations) {
     nlohmann::ordered_json report;
-    report["device"] = context.info.name;
-    report["driver"] = context.info.driver;
-    report["device_type"] = deviceTypeName(context.info.type);
-    report["subgroup_size"] = context.info.subgroupSize;
+    report["device"] = device.info.name;
+    report["driver"] = device.info.driver;
+    report["device_type"] = deviceTypeName(device.info.type);
+    report["subgroup_size"] = device.info.subgroupSize;
     report["threads"] = std::thread::hardware_concurrency();
     report["input"] = "noise in [0, 1), half-representable, 6 faces; RGBA32F and RGBA16F";
     nlohmann::ordered_json rows = nlohmann::ordered_json::array();

@@ -76,34 +76,34 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
     return best;
 }
 
-PipelineCreation measurePipelineCreation(const Context& context, int order) {
+PipelineCreation measurePipelineCreation(const Device& device, int order) {
     std::error_code noTemporaryFolder; // TMPDIR naming no folder
     std::filesystem::path folder = std::filesystem::temp_directory_path(noTemporaryFolder);
     const std::string path = ((noTemporaryFolder ? "/tmp" : folder) /
                               ("shprobe-bench-pipelines-" + std::to_string(getpid()) + ".bin"))
                                  .string();
     PipelineCreation result;
-    // The bake's pipelines on the program's device, through `cache` in place of its own.
+    // The bake's pipelines on the device, through `cache` in place of its own.
     auto createWith = [&](VkPipelineCache cache) {
-        Device device = context;
-        device.pipelineCache = cache;
+        Device cached = device;
+        cached.pipelineCache = cache;
         Clock::time_point start = Clock::now();
         ProbeBaker baker = createProbeBaker(
-            device, {.order = order, .cubemaps = uploadBinding(device, TexelFormat::Rgba32F)});
+            cached, {.order = order, .cubemaps = uploadBinding(cached, TexelFormat::Rgba32F)});
         double ms = millisecondsSince(start);
-        destroyProbeBaker(device, baker);
+        destroyProbeBaker(cached, baker);
         return ms;
     };
     {
-        VkPipelineCache empty = loadPipelineCache(context, "");
-        ScopeExit destroyEmpty([&] { vkDestroyPipelineCache(context.device, empty, nullptr); });
+        VkPipelineCache empty = loadPipelineCache(device, "");
+        ScopeExit destroyEmpty([&] { vkDestroyPipelineCache(device.device, empty, nullptr); });
         result.firstMilliseconds = createWith(empty);
-        savePipelineCache(context, empty, path);
+        savePipelineCache(device, empty, path);
     }
     std::error_code ignored;
     result.cacheBytes = size_t(std::filesystem::file_size(path, ignored));
-    VkPipelineCache loaded = loadPipelineCache(context, path);
-    ScopeExit destroyLoaded([&] { vkDestroyPipelineCache(context.device, loaded, nullptr); });
+    VkPipelineCache loaded = loadPipelineCache(device, path);
+    ScopeExit destroyLoaded([&] { vkDestroyPipelineCache(device.device, loaded, nullptr); });
     result.cachedMilliseconds = createWith(loaded);
     std::filesystem::remove(path, ignored);
     return result;

@@ -21,6 +21,6 @@ struct PipelineCreation {
 
 // Creates and destroys the bake pipelines twice, the second time from a cache that went
 // through a file (as the next run of the program would see it).
-PipelineCreation measurePipelineCreation(const Context& context, int order);
+PipelineCreation measurePipelineCreation(const Device& device, int order);
 
 } // namespace shprobe

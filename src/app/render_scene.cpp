@@ -46,14 +46,14 @@ struct SceneFrame {
     Buffer displayReadback;
 };
 
-void destroyFrame(const Context& context, SceneFrame& frame) {
-    destroyBuffer(context, frame.displayReadback);
-    destroyBuffer(context, frame.colorReadback);
-    if (frame.displayFramebuffer) vkDestroyFramebuffer(context.device, frame.displayFramebuffer, nullptr);
-    destroyImage(context, frame.display);
-    if (frame.tonemapInput) freeTonemapInput(context, frame.tonemapper, frame.tonemapInput);
-    destroyTonemapper(context, frame.tonemapper);
-    destroySceneViewTarget(context, frame.view);
+void destroyFrame(const Device& device, SceneFrame& frame) {
+    destroyBuffer(device, frame.displayReadback);
+    destroyBuffer(device, frame.colorReadback);
+    if (frame.displayFramebuffer) vkDestroyFramebuffer(device.device, frame.displayFramebuffer, nullptr);
+    destroyImage(device, frame.display);
+    if (frame.tonemapInput) freeTonemapInput(device, frame.tonemapper, frame.tonemapInput);
+    destroyTonemapper(device, frame.tonemapper);
+    destroySceneViewTarget(device, frame.view);
 }
 
 SceneFrame createFrame(const Context& context, const SceneCapture& capture, VkExtent2D extent) {

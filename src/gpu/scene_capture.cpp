@@ -36,8 +36,8 @@ VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) {
 
 // Throws Error(Input) when `bytes` exceed what one storage-buffer binding may span on the device:
 // the shaders bind each buffer whole.
-void checkStorageRange(const Context& context, VkDeviceSize bytes, const char* what) {
-    const VkDeviceSize limit = context.info.limits.maxStorageBufferRange;
+void checkStorageRange(const Device& device, VkDeviceSize bytes, const char* what) {
+    const VkDeviceSize limit = device.info.limits.maxStorageBufferRange;
     if (bytes <= limit) return;
     throw Error(ErrorKind::Input, std::string("scene capture: the ") + what + " take " +
                                       std::to_string(bytes >> 20) + " MiB, more than the " +
@@ -201,7 +201,7 @@ glm::mat4 shadowClip(const glsl::CaptureSun& sun) {
 
 // One colour attachment (the capture layer, left in GENERAL for the bake's storage reads; not
 // cleared, as the sky covers every texel) and depth, cleared.
-VkRenderPass createCaptureRenderPass(const Context& context, VkFormat depthFormat) {
+VkRenderPass createCaptureRenderPass(const Device& device, VkFormat depthFormat) {
     const std::array<VkAttachmentDescription, 2> attachments{
         attachmentDescription(kCaptureFormat, VK_ATTACHMENT_LOAD_OP_DONT_CARE, VK_ATTACHMENT_STORE_OP_STORE,
                               VK_IMAGE_LAYOUT_GENERAL),
@@ -233,7 +233,7 @@ VkRenderPass createCaptureRenderPass(const Context& context, VkFormat depthForma
                        VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
                        VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT,
                        0};
-    return createRenderPass(context, {attachments, {&color, 1}, &depth, dependencies});
+    return createRenderPass(device, {attachments, {&color, 1}, &depth, dependencies});
 }
 
 uint32_t sunCount(const SceneCapture& capture) {
@@ -242,7 +242,7 @@ uint32_t sunCount(const SceneCapture& capture) {
 
 // The sky over the whole face first (no depth), then the surfaces, nearest first: reversed depth
 // (near plane at 1, infinitely far at 0) keeps float depth precise from the near plane out.
-VkPipeline createCapturePipeline(const Context& context, const SceneCapture& capture, bool surfaces) {
+VkPipeline createCapturePipeline(const Device& device, const SceneCapture& capture, bool surfaces) {
     const uint32_t order = uint32_t(capture.options.order);
     const VkSpecializationInfo specialization = orderSpecialization(order);
     GraphicsPipelineDesc desc;
@@ -254,7 +254,7 @@ VkPipeline createCapturePipeline(const Context& context, const SceneCapture& cap
     desc.depthCompare = surfaces ? VK_COMPARE_OP_GREATER : VK_COMPARE_OP_ALWAYS;
     desc.layout = capture.layout;
     desc.renderPass = capture.renderPass;
-    return createGraphicsPipeline(context, desc);
+    return createGraphicsPipeline(device, desc);
 }
 
 void createCaptureBuffers(const Context& context, SceneCapture& capture, const World& world,
@@ -281,14 +281,14 @@ void createCaptureBuffers(const Context& context, SceneCapture& capture, const W
                                                             kStorageUpload, MemoryUse::Device, "shadow maps");
 }
 
-void writeCaptureDescriptors(const Context& context, const SceneCapture& capture) {
+void writeCaptureDescriptors(const Device& device, const SceneCapture& capture) {
     std::array<VkDescriptorType, SHPROBE_CAPTURE_BINDINGS> types;
     std::array<BindingTarget, SHPROBE_CAPTURE_BINDINGS> targets;
     for (size_t b = 0; b < types.size(); ++b) {
         types[b] = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         targets[b] = {.buffer = capture.buffers[b].buffer};
     }
-    writeDescriptors(context, capture.set, types, targets);
+    writeDescriptors(device, capture.set, types, targets);
 }
 
 // World -> clip for one face: clip (x, y, w) are the face-local (a, b) and the depth along the
@@ -300,13 +300,13 @@ glm::mat4 faceProjection(uint32_t face, const glm::dvec3& probe, float nearPlane
     return clipFromRows({a, b, axis}, probe, nearPlane);
 }
 
-GpuImage createDepthImage(const Context& context, const SceneCapture& capture) {
+GpuImage createDepthImage(const Device& device, const SceneCapture& capture) {
     GpuImageDesc desc;
     desc.format = capture.depthFormat;
     desc.extent = {uint32_t(capture.options.faceSize), uint32_t(capture.options.faceSize)};
     desc.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
     desc.what = "capture depth";
-    return createImage(context, desc);
+    return createImage(device, desc);
 }
 
 // count_back_faces.comp with its set, reading the target's image and writing `counts`.
@@ -316,34 +316,34 @@ struct BackFaceCount {
     VkDescriptorSet set = VK_NULL_HANDLE;
 };
 
-BackFaceCount createBackFaceCount(const Context& context, const CaptureTarget& target,
+BackFaceCount createBackFaceCount(const Device& device, const CaptureTarget& target,
                                   const BindingTarget& counts) {
     BackFaceCount count;
     OnFailure undo([&] {
-        if (count.pool) vkDestroyDescriptorPool(context.device, count.pool, nullptr);
-        destroyComputeProgram(context, count.program);
+        if (count.pool) vkDestroyDescriptorPool(device.device, count.pool, nullptr);
+        destroyComputeProgram(device, count.program);
     });
     const std::array<VkDescriptorType, 2> bindings{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
                                                    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
-    count.program = createComputeProgram(context, {.name = "count_back_faces",
-                                                   .spirv = spirv::count_back_faces_comp,
-                                                   .bindings = bindings,
-                                                   .pushConstantSize = sizeof(uint32_t),
-                                                   .localSize = kCountWidth});
-    count.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 1, .storageImages = 1});
+    count.program = createComputeProgram(device, {.name = "count_back_faces",
+                                                  .spirv = spirv::count_back_faces_comp,
+                                                  .bindings = bindings,
+                                                  .pushConstantSize = sizeof(uint32_t),
+                                                  .localSize = kCountWidth});
+    count.pool = createDescriptorPool(device, {.sets = 1, .storageBuffers = 1, .storageImages = 1});
     const std::array<BindingTarget, 2> targets{BindingTarget{.imageView = target.cubemaps.view}, counts};
-    count.set = createDescriptorSet(context, count.pool, count.program, targets);
+    count.set = createDescriptorSet(device, count.pool, count.program, targets);
     return count;
 }
 
-void destroyBackFaceCount(const Context& context, BackFaceCount& count) {
-    if (count.pool) vkDestroyDescriptorPool(context.device, count.pool, nullptr);
-    destroyComputeProgram(context, count.program);
+void destroyBackFaceCount(const Device& device, BackFaceCount& count) {
+    if (count.pool) vkDestroyDescriptorPool(device.device, count.pool, nullptr);
+    destroyComputeProgram(device, count.program);
     count = BackFaceCount{};
 }
 
 // Depth only, kept for the copy into the shadow-map buffer.
-VkRenderPass createShadowRenderPass(const Context& context) {
+VkRenderPass createShadowRenderPass(const Device& device) {
     const VkAttachmentDescription depth =
         attachmentDescription(kShadowFormat, VK_ATTACHMENT_LOAD_OP_CLEAR, VK_ATTACHMENT_STORE_OP_STORE,
                               VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
@@ -355,7 +355,7 @@ VkRenderPass createShadowRenderPass(const Context& context) {
                                      VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
                                      VK_ACCESS_TRANSFER_READ_BIT,
                                      0};
-    return createRenderPass(context, {{&depth, 1}, {}, &reference, {&toCopy, 1}});
+    return createRenderPass(device, {{&depth, 1}, {}, &reference, {&toCopy, 1}});
 }
 
 // Each sun's depth map, drawn with the capture's vertex stage and copied into the shadow-map
@@ -432,11 +432,11 @@ void drawShadowMaps(const Context& context, const SceneCapture& capture) {
 // Every batch is baked at this size, a partial last one too: the bake's workgroup split depends on
 // the probe count, and a probe's sums must not depend on how many probes share its batch (a brick
 // equals the same probes of the whole bake, bit for bit).
-uint32_t capturesPerBatch(const Context& context, const SceneCapture& capture, uint32_t probesPerBatch) {
+uint32_t capturesPerBatch(const Device& device, const SceneCapture& capture, uint32_t probesPerBatch) {
     const uint64_t probeBytes =
         6 * uint64_t(capture.options.faceSize) * uint64_t(capture.options.faceSize) * 16;
     const uint64_t byMemory = std::max<uint64_t>(1, (uint64_t(256) << 20) / probeBytes);
-    const uint64_t byLayers = std::max<uint64_t>(1, context.info.limits.maxImageArrayLayers / 6);
+    const uint64_t byLayers = std::max<uint64_t>(1, device.info.limits.maxImageArrayLayers / 6);
     return uint32_t(std::max<uint64_t>(1, std::min({uint64_t(probesPerBatch), byMemory, byLayers})));
 }
 
@@ -525,18 +525,18 @@ SceneCapture createSceneCapture(const Context& context, const World& world, cons
     return capture;
 }
 
-void destroySceneCapture(const Context& context, SceneCapture& capture) {
-    if (capture.pool) vkDestroyDescriptorPool(context.device, capture.pool, nullptr);
+void destroySceneCapture(const Device& device, SceneCapture& capture) {
+    if (capture.pool) vkDestroyDescriptorPool(device.device, capture.pool, nullptr);
     for (Buffer& buffer : capture.buffers)
-        destroyBuffer(context, buffer);
+        destroyBuffer(device, buffer);
     for (VkPipeline pipeline : {capture.surfaces, capture.sky})
-        if (pipeline) vkDestroyPipeline(context.device, pipeline, nullptr);
+        if (pipeline) vkDestroyPipeline(device.device, pipeline, nullptr);
     for (VkShaderModule module :
          {capture.surfaceVertex, capture.surfaceFragment, capture.skyVertex, capture.skyFragment})
-        if (module) vkDestroyShaderModule(context.device, module, nullptr);
-    if (capture.layout) vkDestroyPipelineLayout(context.device, capture.layout, nullptr);
-    if (capture.setLayout) vkDestroyDescriptorSetLayout(context.device, capture.setLayout, nullptr);
-    if (capture.renderPass) vkDestroyRenderPass(context.device, capture.renderPass, nullptr);
+        if (module) vkDestroyShaderModule(device.device, module, nullptr);
+    if (capture.layout) vkDestroyPipelineLayout(device.device, capture.layout, nullptr);
+    if (capture.setLayout) vkDestroyDescriptorSetLayout(device.device, capture.setLayout, nullptr);
+    if (capture.renderPass) vkDestroyRenderPass(device.device, capture.renderPass, nullptr);
     capture = SceneCapture{};
 }
 
@@ -553,9 +553,9 @@ void setBounceSource(const Context& context, SceneCapture& capture, const Bounce
     capture.bounceGrid = {bounce.boundsMin, bounce.boundsMax, bounce.counts};
 }
 
-CaptureTarget createCaptureTarget(const Context& context, const SceneCapture& capture, uint32_t probeCount) {
+CaptureTarget createCaptureTarget(const Device& device, const SceneCapture& capture, uint32_t probeCount) {
     CaptureTarget target;
-    OnFailure undo([&] { destroyCaptureTarget(context, target); });
+    OnFailure undo([&] { destroyCaptureTarget(device, target); });
     target.probeCount = probeCount;
     const VkExtent2D extent{uint32_t(capture.options.faceSize), uint32_t(capture.options.faceSize)};
     GpuImageDesc desc;
@@ -565,24 +565,24 @@ CaptureTarget createCaptureTarget(const Context& context, const SceneCapture& ca
         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
     desc.layers = 6 * probeCount;
     desc.what = "probe captures";
-    target.cubemaps = createImage(context, desc);
-    target.depth = createDepthImage(context, capture);
+    target.cubemaps = createImage(device, desc);
+    target.depth = createDepthImage(device, capture);
     for (uint32_t layer = 0; layer < desc.layers; ++layer) {
         target.layerViews.push_back(
-            createImageView(context, target.cubemaps.image, VK_IMAGE_VIEW_TYPE_2D, kCaptureFormat, 1, layer));
+            createImageView(device, target.cubemaps.image, VK_IMAGE_VIEW_TYPE_2D, kCaptureFormat, 1, layer));
         const std::array<VkImageView, 2> views{target.layerViews.back(), target.depth.view};
-        target.framebuffers.push_back(createFramebuffer(context, capture.renderPass, views, extent));
+        target.framebuffers.push_back(createFramebuffer(device, capture.renderPass, views, extent));
     }
     return target;
 }
 
-void destroyCaptureTarget(const Context& context, CaptureTarget& target) {
+void destroyCaptureTarget(const Device& device, CaptureTarget& target) {
     for (VkFramebuffer framebuffer : target.framebuffers)
-        vkDestroyFramebuffer(context.device, framebuffer, nullptr);
+        vkDestroyFramebuffer(device.device, framebuffer, nullptr);
     for (VkImageView view : target.layerViews)
-        vkDestroyImageView(context.device, view, nullptr);
-    destroyImage(context, target.depth);
-    destroyImage(context, target.cubemaps);
+        vkDestroyImageView(device.device, view, nullptr);
+    destroyImage(device, target.depth);
+    destroyImage(device, target.cubemaps);
     target = CaptureTarget{};
 }
 

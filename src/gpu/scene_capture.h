@@ -81,7 +81,7 @@ struct SceneCapture {
 // Error(Device) when the device lacks what it needs (32-bit float depth, for the shadow maps).
 SceneCapture createSceneCapture(const Context& context, const World& world, const Cubemap& sky,
                                 const SceneCaptureOptions& options);
-void destroySceneCapture(const Context& context, SceneCapture& capture);
+void destroySceneCapture(const Device& device, SceneCapture& capture);
 
 // Makes the next captures reflect `bounce` off the surfaces (none: an empty BounceSource).
 // Not while a command buffer using the capture may run.
@@ -97,8 +97,8 @@ struct CaptureTarget {
     std::vector<VkImageView> layerViews;
     std::vector<VkFramebuffer> framebuffers;
 };
-CaptureTarget createCaptureTarget(const Context& context, const SceneCapture& capture, uint32_t probeCount);
-void destroyCaptureTarget(const Context& context, CaptureTarget& target);
+CaptureTarget createCaptureTarget(const Device& device, const SceneCapture& capture, uint32_t probeCount);
+void destroyCaptureTarget(const Device& device, CaptureTarget& target);
 
 // Records the capture of each position (at most target.probeCount) into layers 6p..6p+5 and
 // leaves the image in VK_IMAGE_LAYOUT_GENERAL, visible to compute-shader reads. Alpha holds

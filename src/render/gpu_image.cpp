@@ -13,9 +13,9 @@ namespace shprobe {
 
 namespace {
 
-bool filtersLinearly(const Context& context, VkFormat format) {
+bool filtersLinearly(const Device& device, VkFormat format) {
     VkFormatProperties properties;
-    vkGetPhysicalDeviceFormatProperties(context.physicalDevice, format, &properties);
+    vkGetPhysicalDeviceFormatProperties(device.physicalDevice, format, &properties);
     return properties.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
 }
 
@@ -61,9 +61,9 @@ GpuImage createCubeTexture(const Context& context, const Cubemap& cubemap) {
     return image;
 }
 
-VkFormat pickDepthFormat(const Context& context) {
+VkFormat pickDepthFormat(const Device& device) {
     VkFormatProperties properties;
-    vkGetPhysicalDeviceFormatProperties(context.physicalDevice, VK_FORMAT_D32_SFLOAT, &properties);
+    vkGetPhysicalDeviceFormatProperties(device.physicalDevice, VK_FORMAT_D32_SFLOAT, &properties);
     return properties.optimalTilingFeatures & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT
                ? VK_FORMAT_D32_SFLOAT
                : VK_FORMAT_D16_UNORM;

@@ -15,7 +15,7 @@ namespace shprobe {
 GpuImage createCubeTexture(const Context& context, const Cubemap& cubemap);
 
 // D32_SFLOAT where supported as a depth attachment, else D16_UNORM (always supported).
-VkFormat pickDepthFormat(const Context& context);
+VkFormat pickDepthFormat(const Device& device);
 
 // Records a copy of a 2D colour image (in TRANSFER_SRC_OPTIMAL) into a buffer, rows tightly packed,
 // and makes it visible to the host.

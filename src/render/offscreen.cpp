@@ -23,36 +23,36 @@ struct OffscreenFrame {
     Buffer displayReadback;
 };
 
-void destroyFrame(const Context& context, const OffscreenRenderer& renderer, OffscreenFrame& frame) {
-    destroyBuffer(context, frame.displayReadback);
-    destroyBuffer(context, frame.directionReadback);
-    destroyBuffer(context, frame.colorReadback);
-    if (frame.displayFramebuffer) vkDestroyFramebuffer(context.device, frame.displayFramebuffer, nullptr);
-    destroyImage(context, frame.display);
-    destroySceneTargets(context, renderer.tonemapper, frame.targets);
+void destroyFrame(const Device& device, const OffscreenRenderer& renderer, OffscreenFrame& frame) {
+    destroyBuffer(device, frame.displayReadback);
+    destroyBuffer(device, frame.directionReadback);
+    destroyBuffer(device, frame.colorReadback);
+    if (frame.displayFramebuffer) vkDestroyFramebuffer(device.device, frame.displayFramebuffer, nullptr);
+    destroyImage(device, frame.display);
+    destroySceneTargets(device, renderer.tonemapper, frame.targets);
 }
 
-OffscreenFrame createFrame(const Context& context, const OffscreenRenderer& renderer, VkExtent2D extent) {
+OffscreenFrame createFrame(const Device& device, const OffscreenRenderer& renderer, VkExtent2D extent) {
     OffscreenFrame frame;
-    OnFailure undo([&] { destroyFrame(context, renderer, frame); });
-    frame.targets = createSceneTargets(context, renderer.scene, renderer.tonemapper, extent);
+    OnFailure undo([&] { destroyFrame(device, renderer, frame); });
+    frame.targets = createSceneTargets(device, renderer.scene, renderer.tonemapper, extent);
     frame.display =
-        createImage(context, {kDisplayFormat, extent,
-                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, false,
-                              "display image"});
+        createImage(device, {kDisplayFormat, extent,
+                             VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, false,
+                             "display image"});
     frame.displayFramebuffer =
-        createFramebuffer(context, renderer.tonemapper.renderPass, {&frame.display.view, 1}, extent);
+        createFramebuffer(device, renderer.tonemapper.renderPass, {&frame.display.view, 1}, extent);
     const VkDeviceSize pixels = VkDeviceSize(extent.width) * extent.height;
     const VkBufferUsageFlags usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    frame.colorReadback = createBuffer(context, pixels * 16, usage, MemoryUse::Readback, "colour readback");
+    frame.colorReadback = createBuffer(device, pixels * 16, usage, MemoryUse::Readback, "colour readback");
     frame.directionReadback =
-        createBuffer(context, pixels * 16, usage, MemoryUse::Readback, "direction readback");
-    frame.displayReadback = createBuffer(context, pixels * 4, usage, MemoryUse::Readback, "display readback");
+        createBuffer(device, pixels * 16, usage, MemoryUse::Readback, "direction readback");
+    frame.displayReadback = createBuffer(device, pixels * 4, usage, MemoryUse::Readback, "display readback");
     return frame;
 }
 
-Image readFloatImage(const Context& context, const Buffer& buffer, VkExtent2D extent) {
-    invalidateBuffer(context, buffer);
+Image readFloatImage(const Device& device, const Buffer& buffer, VkExtent2D extent) {
+    invalidateBuffer(device, buffer);
     Image image = makeImage(int(extent.width), int(extent.height));
     std::memcpy(image.texels.data(), buffer.mapped, image.texels.size() * sizeof(glm::vec4));
     return image;
@@ -68,9 +68,9 @@ OffscreenRenderer createOffscreenRenderer(const Context& context) {
     return renderer;
 }
 
-void destroyOffscreenRenderer(const Context& context, OffscreenRenderer& renderer) {
-    destroyTonemapper(context, renderer.tonemapper);
-    destroySceneRenderer(context, renderer.scene);
+void destroyOffscreenRenderer(const Device& device, OffscreenRenderer& renderer) {
+    destroyTonemapper(device, renderer.tonemapper);
+    destroySceneRenderer(device, renderer.scene);
 }
 
 RenderedImage renderOffscreen(const Context& context, OffscreenRenderer& renderer, const Scene& scene,

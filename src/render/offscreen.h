@@ -18,7 +18,7 @@ struct OffscreenRenderer {
 };
 
 OffscreenRenderer createOffscreenRenderer(const Context& context);
-void destroyOffscreenRenderer(const Context& context, OffscreenRenderer& renderer);
+void destroyOffscreenRenderer(const Device& device, OffscreenRenderer& renderer);
 
 struct RenderedImage {
     Image linear;                 // RGBA32F linear radiance, unclamped (EXR output)

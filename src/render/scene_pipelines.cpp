@@ -27,7 +27,7 @@ uint32_t pipelineKey(PassKind kind, const Scene& scene) {
 }
 
 // Colour ends ready for the tonemap pass, the direction for readback; depth is not kept.
-VkRenderPass createSceneRenderPass(const Context& context, VkFormat depthFormat) {
+VkRenderPass createSceneRenderPass(const Device& device, VkFormat depthFormat) {
     const std::array<VkAttachmentDescription, 3> attachments{
         attachmentDescription(kSceneColorFormat, VK_ATTACHMENT_LOAD_OP_CLEAR, VK_ATTACHMENT_STORE_OP_STORE,
                               VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL),
@@ -62,19 +62,19 @@ VkRenderPass createSceneRenderPass(const Context& context, VkFormat depthFormat)
                        VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
                        VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT,
                        0};
-    return createRenderPass(context, {attachments, colors, &depth, dependencies});
+    return createRenderPass(device, {attachments, colors, &depth, dependencies});
 }
 
-VkDescriptorSetLayout createSceneSetLayout(const Context& context) {
+VkDescriptorSetLayout createSceneSetLayout(const Device& device) {
     const std::array<LayoutBinding, 2> bindings{
         {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT},
          {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_FRAGMENT_BIT}}};
-    return createSetLayout(context, bindings);
+    return createSetLayout(device, bindings);
 }
 
 // Meshes read vertices and write depth; the background draws at the far plane where nothing was
 // drawn.
-VkPipeline createScenePipeline(const Context& context, const ScenePipelines& pipelines, PassKind kind,
+VkPipeline createScenePipeline(const Device& device, const ScenePipelines& pipelines, PassKind kind,
                                const Scene& scene) {
     // Specialization constants SHPROBE_SPEC_RENDER_ORDER, _SHADING, _BACKGROUND (render_interface.h).
     std::array<uint32_t, 3> values{uint32_t(scene.order), uint32_t(scene.shading),
@@ -105,11 +105,10 @@ VkPipeline createScenePipeline(const Context& context, const ScenePipelines& pip
     desc.colorAttachments = 2;
     desc.layout = pipelines.layout;
     desc.renderPass = pipelines.renderPass;
-    return createGraphicsPipeline(context, desc);
+    return createGraphicsPipeline(device, desc);
 }
 
-VkPipeline findOrCreate(const Context& context, ScenePipelines& pipelines, PassKind kind,
-                        const Scene& scene) {
+VkPipeline findOrCreate(const Device& device, ScenePipelines& pipelines, PassKind kind, const Scene& scene) {
     if (scene.order < kMinRenderOrder || scene.order > kMaxRenderOrder)
         throw Error(ErrorKind::Input, "render order " + std::to_string(scene.order) + " is outside " +
                                           std::to_string(kMinRenderOrder) + ".." +
@@ -117,47 +116,47 @@ VkPipeline findOrCreate(const Context& context, ScenePipelines& pipelines, PassK
     uint32_t key = pipelineKey(kind, scene);
     auto found = pipelines.pipelines.find(key);
     if (found != pipelines.pipelines.end()) return found->second;
-    VkPipeline pipeline = createScenePipeline(context, pipelines, kind, scene);
+    VkPipeline pipeline = createScenePipeline(device, pipelines, kind, scene);
     pipelines.pipelines[key] = pipeline;
     return pipeline;
 }
 
 } // namespace
 
-ScenePipelines createScenePipelines(const Context& context) {
+ScenePipelines createScenePipelines(const Device& device) {
     ScenePipelines pipelines;
-    OnFailure undo([&] { destroyScenePipelines(context, pipelines); });
-    pipelines.depthFormat = pickDepthFormat(context);
-    pipelines.renderPass = createSceneRenderPass(context, pipelines.depthFormat);
-    pipelines.setLayout = createSceneSetLayout(context);
-    pipelines.layout = createPipelineLayout(context, pipelines.setLayout,
+    OnFailure undo([&] { destroyScenePipelines(device, pipelines); });
+    pipelines.depthFormat = pickDepthFormat(device);
+    pipelines.renderPass = createSceneRenderPass(device, pipelines.depthFormat);
+    pipelines.setLayout = createSceneSetLayout(device);
+    pipelines.layout = createPipelineLayout(device, pipelines.setLayout,
                                             VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
                                             sizeof(glsl::ObjectConstants));
-    pipelines.sceneVertex = createShaderModule(context, spirv::scene_vert);
-    pipelines.sceneFragment = createShaderModule(context, spirv::scene_frag);
-    pipelines.fullscreenVertex = createShaderModule(context, spirv::fullscreen_vert);
-    pipelines.backgroundFragment = createShaderModule(context, spirv::background_frag);
+    pipelines.sceneVertex = createShaderModule(device, spirv::scene_vert);
+    pipelines.sceneFragment = createShaderModule(device, spirv::scene_frag);
+    pipelines.fullscreenVertex = createShaderModule(device, spirv::fullscreen_vert);
+    pipelines.backgroundFragment = createShaderModule(device, spirv::background_frag);
     return pipelines;
 }
 
-void destroyScenePipelines(const Context& context, ScenePipelines& pipelines) {
+void destroyScenePipelines(const Device& device, ScenePipelines& pipelines) {
     for (auto& [key, pipeline] : pipelines.pipelines)
-        vkDestroyPipeline(context.device, pipeline, nullptr);
+        vkDestroyPipeline(device.device, pipeline, nullptr);
     for (VkShaderModule module : {pipelines.backgroundFragment, pipelines.fullscreenVertex,
                                   pipelines.sceneFragment, pipelines.sceneVertex})
-        if (module) vkDestroyShaderModule(context.device, module, nullptr);
-    if (pipelines.layout) vkDestroyPipelineLayout(context.device, pipelines.layout, nullptr);
-    if (pipelines.setLayout) vkDestroyDescriptorSetLayout(context.device, pipelines.setLayout, nullptr);
-    if (pipelines.renderPass) vkDestroyRenderPass(context.device, pipelines.renderPass, nullptr);
+        if (module) vkDestroyShaderModule(device.device, module, nullptr);
+    if (pipelines.layout) vkDestroyPipelineLayout(device.device, pipelines.layout, nullptr);
+    if (pipelines.setLayout) vkDestroyDescriptorSetLayout(device.device, pipelines.setLayout, nullptr);
+    if (pipelines.renderPass) vkDestroyRenderPass(device.device, pipelines.renderPass, nullptr);
     pipelines = ScenePipelines{};
 }
 
-VkPipeline meshPipeline(const Context& context, ScenePipelines& pipelines, const Scene& scene) {
-    return findOrCreate(context, pipelines, PassKind::Mesh, scene);
+VkPipeline meshPipeline(const Device& device, ScenePipelines& pipelines, const Scene& scene) {
+    return findOrCreate(device, pipelines, PassKind::Mesh, scene);
 }
 
-VkPipeline backgroundPipeline(const Context& context, ScenePipelines& pipelines, const Scene& scene) {
-    return findOrCreate(context, pipelines, PassKind::Background, scene);
+VkPipeline backgroundPipeline(const Device& device, ScenePipelines& pipelines, const Scene& scene) {
+    return findOrCreate(device, pipelines, PassKind::Background, scene);
 }
 
 } // namespace shprobe

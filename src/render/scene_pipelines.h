@@ -25,12 +25,12 @@ struct ScenePipelines {
     std::map<uint32_t, VkPipeline> pipelines; // by pipelineKey
 };
 
-ScenePipelines createScenePipelines(const Context& context);
-void destroyScenePipelines(const Context& context, ScenePipelines& pipelines);
+ScenePipelines createScenePipelines(const Device& device);
+void destroyScenePipelines(const Device& device, ScenePipelines& pipelines);
 
 // The pipeline that draws meshes (or the background) of the scene's order and shading (and
 // background kind); created on first use.
-VkPipeline meshPipeline(const Context& context, ScenePipelines& pipelines, const Scene& scene);
-VkPipeline backgroundPipeline(const Context& context, ScenePipelines& pipelines, const Scene& scene);
+VkPipeline meshPipeline(const Device& device, ScenePipelines& pipelines, const Scene& scene);
+VkPipeline backgroundPipeline(const Device& device, ScenePipelines& pipelines, const Scene& scene);
 
 } // namespace shprobe

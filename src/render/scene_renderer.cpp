@@ -24,9 +24,9 @@ constexpr int kSphereRings = 64;
 constexpr float kTorusMajorRadius = 1.3f;
 constexpr float kTorusMinorRadius = 0.22f;
 
-void destroyGpuMesh(const Context& context, GpuMesh& mesh) {
-    destroyBuffer(context, mesh.indices);
-    destroyBuffer(context, mesh.vertices);
+void destroyGpuMesh(const Device& device, GpuMesh& mesh) {
+    destroyBuffer(device, mesh.indices);
+    destroyBuffer(device, mesh.vertices);
     mesh.indexCount = 0;
 }
 
@@ -47,14 +47,14 @@ GpuMesh createGpuMesh(const Context& context, const MeshData& mesh) {
     return gpuMesh;
 }
 
-void writeEnvironmentDescriptor(const Context& context, const SceneRenderer& renderer) {
-    writeDescriptor(context, renderer.set, 1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+void writeEnvironmentDescriptor(const Device& device, const SceneRenderer& renderer) {
+    writeDescriptor(device, renderer.set, 1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                     {.imageView = renderer.environment.view, .sampler = renderer.sampler});
 }
 
-VkDescriptorSet createSceneSet(const Context& context, const SceneRenderer& renderer) {
-    VkDescriptorSet set = allocateDescriptorSet(context, renderer.pool, renderer.pipelines.setLayout);
-    writeDescriptor(context, set, 0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+VkDescriptorSet createSceneSet(const Device& device, const SceneRenderer& renderer) {
+    VkDescriptorSet set = allocateDescriptorSet(device, renderer.pool, renderer.pipelines.setLayout);
+    writeDescriptor(device, set, 0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
                     {renderer.uniforms.buffer, 0, sizeof(glsl::RenderUniforms)});
     return set;
 }
@@ -98,11 +98,11 @@ glsl::RenderUniforms makeUniforms(const SceneRenderer& renderer, const Scene& sc
     return uniforms;
 }
 
-void drawObjects(const Context& context, VkCommandBuffer commands, SceneRenderer& renderer,
+void drawObjects(const Device& device, VkCommandBuffer commands, SceneRenderer& renderer,
                  const Scene& scene) {
     if (scene.camera.projection == Projection::Panorama || scene.objects.empty()) return;
     vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS,
-                      meshPipeline(context, renderer.pipelines, scene));
+                      meshPipeline(device, renderer.pipelines, scene));
     for (const SceneObject& object : scene.objects) {
         const GpuMesh& mesh = object.shape == Shape::Sphere ? renderer.sphere : renderer.torus;
         glsl::ObjectConstants constants{object.model, glm::vec4(object.albedo, 1.0f)};
@@ -135,14 +135,14 @@ SceneRenderer createSceneRenderer(const Context& context) {
     return renderer;
 }
 
-void destroySceneRenderer(const Context& context, SceneRenderer& renderer) {
-    destroyImage(context, renderer.environment);
-    if (renderer.pool) vkDestroyDescriptorPool(context.device, renderer.pool, nullptr);
-    if (renderer.sampler) vkDestroySampler(context.device, renderer.sampler, nullptr);
-    destroyBuffer(context, renderer.uniforms);
-    destroyGpuMesh(context, renderer.torus);
-    destroyGpuMesh(context, renderer.sphere);
-    destroyScenePipelines(context, renderer.pipelines);
+void destroySceneRenderer(const Device& device, SceneRenderer& renderer) {
+    destroyImage(device, renderer.environment);
+    if (renderer.pool) vkDestroyDescriptorPool(device.device, renderer.pool, nullptr);
+    if (renderer.sampler) vkDestroySampler(device.device, renderer.sampler, nullptr);
+    destroyBuffer(device, renderer.uniforms);
+    destroyGpuMesh(device, renderer.torus);
+    destroyGpuMesh(device, renderer.sphere);
+    destroyScenePipelines(device, renderer.pipelines);
     renderer = SceneRenderer{};
 }
 
@@ -158,38 +158,37 @@ void setEnvironment(const Context& context, SceneRenderer& renderer, const Cubem
     writeEnvironmentDescriptor(context, renderer);
 }
 
-SceneTargets createSceneTargets(const Context& context, const SceneRenderer& renderer,
+SceneTargets createSceneTargets(const Device& device, const SceneRenderer& renderer,
                                 const Tonemapper& tonemapper, VkExtent2D extent) {
     SceneTargets targets;
     targets.extent = extent;
-    OnFailure undo([&] { destroySceneTargets(context, tonemapper, targets); });
+    OnFailure undo([&] { destroySceneTargets(device, tonemapper, targets); });
     const VkImageUsageFlags attachment = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
     targets.color =
-        createImage(context, {kSceneColorFormat, extent,
-                              attachment | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                              false, "scene colour target"});
+        createImage(device, {kSceneColorFormat, extent,
+                             attachment | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, false,
+                             "scene colour target"});
     targets.direction =
-        createImage(context, {kSceneDirectionFormat, extent, attachment | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                              false, "scene direction target"});
-    targets.depth =
-        createImage(context, {renderer.pipelines.depthFormat, extent,
-                              VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "depth target"});
+        createImage(device, {kSceneDirectionFormat, extent, attachment | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                             false, "scene direction target"});
+    targets.depth = createImage(device, {renderer.pipelines.depthFormat, extent,
+                                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "depth target"});
     const std::array<VkImageView, 3> views{targets.color.view, targets.direction.view, targets.depth.view};
-    targets.framebuffer = createFramebuffer(context, renderer.pipelines.renderPass, views, extent);
-    targets.tonemapInput = createTonemapInput(context, tonemapper, targets.color.view);
+    targets.framebuffer = createFramebuffer(device, renderer.pipelines.renderPass, views, extent);
+    targets.tonemapInput = createTonemapInput(device, tonemapper, targets.color.view);
     return targets;
 }
 
-void destroySceneTargets(const Context& context, const Tonemapper& tonemapper, SceneTargets& targets) {
-    freeTonemapInput(context, tonemapper, targets.tonemapInput);
-    if (targets.framebuffer) vkDestroyFramebuffer(context.device, targets.framebuffer, nullptr);
-    destroyImage(context, targets.depth);
-    destroyImage(context, targets.direction);
-    destroyImage(context, targets.color);
+void destroySceneTargets(const Device& device, const Tonemapper& tonemapper, SceneTargets& targets) {
+    freeTonemapInput(device, tonemapper, targets.tonemapInput);
+    if (targets.framebuffer) vkDestroyFramebuffer(device.device, targets.framebuffer, nullptr);
+    destroyImage(device, targets.depth);
+    destroyImage(device, targets.direction);
+    destroyImage(device, targets.color);
     targets = SceneTargets{};
 }
 
-void recordScene(const Context& context, VkCommandBuffer commands, SceneRenderer& renderer,
+void recordScene(const Device& device, VkCommandBuffer commands, SceneRenderer& renderer,
                  const SceneTargets& targets, const Scene& scene) {
     checkSceneFits(renderer, scene);
     glsl::RenderUniforms uniforms = makeUniforms(renderer, scene, targets.extent);
@@ -200,9 +199,9 @@ void recordScene(const Context& context, VkCommandBuffer commands, SceneRenderer
     beginRenderPass(commands, renderer.pipelines.renderPass, targets.framebuffer, targets.extent, clears);
     vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, renderer.pipelines.layout, 0, 1,
                             &renderer.set, 0, nullptr);
-    drawObjects(context, commands, renderer, scene); // first: the background only fills what is left
+    drawObjects(device, commands, renderer, scene); // first: the background only fills what is left
     vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS,
-                      backgroundPipeline(context, renderer.pipelines, scene));
+                      backgroundPipeline(device, renderer.pipelines, scene));
     vkCmdDraw(commands, 3, 1, 0, 0);
     vkCmdEndRenderPass(commands);
 }

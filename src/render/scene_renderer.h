@@ -32,7 +32,7 @@ struct SceneRenderer {
 };
 
 SceneRenderer createSceneRenderer(const Context& context);
-void destroySceneRenderer(const Context& context, SceneRenderer& renderer);
+void destroySceneRenderer(const Device& device, SceneRenderer& renderer);
 
 // Neither may be called while a frame that uses the renderer runs on the device.
 void setProbe(SceneRenderer& renderer, const ProbeShading& probe);
@@ -47,13 +47,13 @@ struct SceneTargets {
     VkDescriptorSet tonemapInput = VK_NULL_HANDLE; // color, for the tonemapper it was made with
 };
 
-SceneTargets createSceneTargets(const Context& context, const SceneRenderer& renderer,
+SceneTargets createSceneTargets(const Device& device, const SceneRenderer& renderer,
                                 const Tonemapper& tonemapper, VkExtent2D extent);
-void destroySceneTargets(const Context& context, const Tonemapper& tonemapper, SceneTargets& targets);
+void destroySceneTargets(const Device& device, const Tonemapper& tonemapper, SceneTargets& targets);
 
 // Writes the uniforms for this scene and records its pass. Throws Error(Input) when the scene
 // needs what the renderer lacks (an environment, radiance of the probe, more bands).
-void recordScene(const Context& context, VkCommandBuffer commands, SceneRenderer& renderer,
+void recordScene(const Device& device, VkCommandBuffer commands, SceneRenderer& renderer,
                  const SceneTargets& targets, const Scene& scene);
 
 } // namespace shprobe

@@ -29,7 +29,7 @@ glm::mat4 cameraProjection(const SceneCamera& camera, VkExtent2D extent, float n
     return clipFromRows({right * (f / aspect), down * f, forward}, camera.eye, nearPlane);
 }
 
-VkPipeline createProbePipeline(const Context& context, const SceneCapture& capture,
+VkPipeline createProbePipeline(const Device& device, const SceneCapture& capture,
                                const SceneViewTarget& target) {
     const uint32_t order = uint32_t(capture.options.order);
     const VkSpecializationInfo specialization = orderSpecialization(order);
@@ -49,7 +49,7 @@ VkPipeline createProbePipeline(const Context& context, const SceneCapture& captu
     desc.depthCompare = VK_COMPARE_OP_GREATER;
     desc.layout = capture.layout;
     desc.renderPass = capture.renderPass;
-    return createGraphicsPipeline(context, desc);
+    return createGraphicsPipeline(device, desc);
 }
 
 double defaultProbeRadius(const BounceGrid& grid) {
@@ -94,15 +94,15 @@ SceneViewTarget createSceneViewTarget(const Context& context, const SceneCapture
     return target;
 }
 
-void destroySceneViewTarget(const Context& context, SceneViewTarget& target) {
-    destroyBuffer(context, target.sphereIndices);
-    destroyBuffer(context, target.sphereVertices);
-    if (target.probes) vkDestroyPipeline(context.device, target.probes, nullptr);
+void destroySceneViewTarget(const Device& device, SceneViewTarget& target) {
+    destroyBuffer(device, target.sphereIndices);
+    destroyBuffer(device, target.sphereVertices);
+    if (target.probes) vkDestroyPipeline(device.device, target.probes, nullptr);
     for (VkShaderModule module : {target.probeVertex, target.probeFragment})
-        if (module) vkDestroyShaderModule(context.device, module, nullptr);
-    if (target.framebuffer) vkDestroyFramebuffer(context.device, target.framebuffer, nullptr);
-    destroyImage(context, target.depth);
-    destroyImage(context, target.color);
+        if (module) vkDestroyShaderModule(device.device, module, nullptr);
+    if (target.framebuffer) vkDestroyFramebuffer(device.device, target.framebuffer, nullptr);
+    destroyImage(device, target.depth);
+    destroyImage(device, target.color);
     target = SceneViewTarget{};
 }
 

@@ -44,7 +44,7 @@ struct SceneViewTarget {
 // `colorUsage` is added to the colour image's (e.g. SAMPLED for a tonemap pass, TRANSFER_SRC).
 SceneViewTarget createSceneViewTarget(const Context& context, const SceneCapture& capture, VkExtent2D extent,
                                       VkImageUsageFlags colorUsage);
-void destroySceneViewTarget(const Context& context, SceneViewTarget& target);
+void destroySceneViewTarget(const Device& device, SceneViewTarget& target);
 // Records the view into target.color, left in GENERAL, visible to fragment-shader reads and
 // transfers.
 void recordSceneView(VkCommandBuffer commands, const SceneCapture& capture, const SceneViewTarget& target,

@@ -94,14 +94,14 @@ Swapchain createSwapchain(const Context& context, VkExtent2D extent, VkFormat fo
     return swapchain;
 }
 
-void destroySwapchain(const Context& context, Swapchain& swapchain) {
+void destroySwapchain(const Device& device, Swapchain& swapchain) {
     for (VkSemaphore semaphore : swapchain.renderDone)
-        if (semaphore) vkDestroySemaphore(context.device, semaphore, nullptr);
+        if (semaphore) vkDestroySemaphore(device.device, semaphore, nullptr);
     for (VkFramebuffer framebuffer : swapchain.framebuffers)
-        vkDestroyFramebuffer(context.device, framebuffer, nullptr);
+        vkDestroyFramebuffer(device.device, framebuffer, nullptr);
     for (VkImageView view : swapchain.views)
-        vkDestroyImageView(context.device, view, nullptr);
-    if (swapchain.swapchain) vkDestroySwapchainKHR(context.device, swapchain.swapchain, nullptr);
+        vkDestroyImageView(device.device, view, nullptr);
+    if (swapchain.swapchain) vkDestroySwapchainKHR(device.device, swapchain.swapchain, nullptr);
     swapchain = Swapchain{};
 }
 

@@ -25,6 +25,6 @@ VkFormat pickSwapchainFormat(const Context& context);
 // `renderPass`: the tonemap pass the framebuffers are made for. FIFO presentation.
 Swapchain createSwapchain(const Context& context, VkExtent2D extent, VkFormat format, VkRenderPass renderPass,
                           VkSwapchainKHR oldSwapchain = VK_NULL_HANDLE);
-void destroySwapchain(const Context& context, Swapchain& swapchain);
+void destroySwapchain(const Device& device, Swapchain& swapchain);
 
 } // namespace shprobe

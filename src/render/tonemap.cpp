@@ -21,7 +21,7 @@ bool isSrgb(VkFormat format) {
            format == VK_FORMAT_A8B8G8R8_SRGB_PACK32;
 }
 
-VkRenderPass createTonemapRenderPass(const Context& context, VkFormat format, VkImageLayout finalLayout) {
+VkRenderPass createTonemapRenderPass(const Device& device, VkFormat format, VkImageLayout finalLayout) {
     const VkAttachmentDescription attachment =
         attachmentDescription(format, VK_ATTACHMENT_LOAD_OP_DONT_CARE, VK_ATTACHMENT_STORE_OP_STORE,
                               finalLayout); // every pixel is written
@@ -42,10 +42,10 @@ VkRenderPass createTonemapRenderPass(const Context& context, VkFormat format, Vk
                        VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
                        VK_ACCESS_TRANSFER_READ_BIT,
                        0};
-    return createRenderPass(context, {{&attachment, 1}, {&color, 1}, nullptr, dependencies});
+    return createRenderPass(device, {{&attachment, 1}, {&color, 1}, nullptr, dependencies});
 }
 
-VkPipeline createTonemapPipeline(const Context& context, const Tonemapper& tonemapper, VkShaderModule vertex,
+VkPipeline createTonemapPipeline(const Device& device, const Tonemapper& tonemapper, VkShaderModule vertex,
                                  VkShaderModule fragment) {
     uint32_t encodeSrgb = isSrgb(tonemapper.format) ? 0u : 1u;
     VkSpecializationMapEntry entry{SHPROBE_SPEC_ENCODE_SRGB, 0, 4};
@@ -56,53 +56,52 @@ VkPipeline createTonemapPipeline(const Context& context, const Tonemapper& tonem
     desc.fragmentSpecialization = &specialization;
     desc.layout = tonemapper.layout;
     desc.renderPass = tonemapper.renderPass;
-    return createGraphicsPipeline(context, desc);
+    return createGraphicsPipeline(device, desc);
 }
 
 } // namespace
 
-Tonemapper createTonemapper(const Context& context, VkFormat format, VkImageLayout finalLayout) {
+Tonemapper createTonemapper(const Device& device, VkFormat format, VkImageLayout finalLayout) {
     constexpr uint32_t kMaxInputs = 16; // one per live HDR target
     Tonemapper tonemapper;
     tonemapper.format = format;
-    OnFailure undo([&] { destroyTonemapper(context, tonemapper); });
-    tonemapper.renderPass = createTonemapRenderPass(context, format, finalLayout);
+    OnFailure undo([&] { destroyTonemapper(device, tonemapper); });
+    tonemapper.renderPass = createTonemapRenderPass(device, format, finalLayout);
     const LayoutBinding input{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_FRAGMENT_BIT};
-    tonemapper.setLayout = createSetLayout(context, {&input, 1});
-    tonemapper.layout = createPipelineLayout(context, tonemapper.setLayout, VK_SHADER_STAGE_FRAGMENT_BIT,
+    tonemapper.setLayout = createSetLayout(device, {&input, 1});
+    tonemapper.layout = createPipelineLayout(device, tonemapper.setLayout, VK_SHADER_STAGE_FRAGMENT_BIT,
                                              sizeof(glsl::TonemapConstants));
-    tonemapper.sampler = createSampler(context, VK_FILTER_NEAREST);
+    tonemapper.sampler = createSampler(device, VK_FILTER_NEAREST);
     tonemapper.pool =
-        createDescriptorPool(context, {.sets = kMaxInputs, .imageSamplers = kMaxInputs, .freeSets = true});
+        createDescriptorPool(device, {.sets = kMaxInputs, .imageSamplers = kMaxInputs, .freeSets = true});
     // The pipeline keeps what it needs of the modules.
-    VkShaderModule vertex = createShaderModule(context, spirv::fullscreen_vert);
-    ScopeExit releaseVertex([&] { vkDestroyShaderModule(context.device, vertex, nullptr); });
-    VkShaderModule fragment = createShaderModule(context, spirv::tonemap_frag);
-    ScopeExit releaseFragment([&] { vkDestroyShaderModule(context.device, fragment, nullptr); });
-    tonemapper.pipeline = createTonemapPipeline(context, tonemapper, vertex, fragment);
+    VkShaderModule vertex = createShaderModule(device, spirv::fullscreen_vert);
+    ScopeExit releaseVertex([&] { vkDestroyShaderModule(device.device, vertex, nullptr); });
+    VkShaderModule fragment = createShaderModule(device, spirv::tonemap_frag);
+    ScopeExit releaseFragment([&] { vkDestroyShaderModule(device.device, fragment, nullptr); });
+    tonemapper.pipeline = createTonemapPipeline(device, tonemapper, vertex, fragment);
     return tonemapper;
 }
 
-void destroyTonemapper(const Context& context, Tonemapper& tonemapper) {
-    if (tonemapper.pipeline) vkDestroyPipeline(context.device, tonemapper.pipeline, nullptr);
-    if (tonemapper.pool) vkDestroyDescriptorPool(context.device, tonemapper.pool, nullptr);
-    if (tonemapper.sampler) vkDestroySampler(context.device, tonemapper.sampler, nullptr);
-    if (tonemapper.layout) vkDestroyPipelineLayout(context.device, tonemapper.layout, nullptr);
-    if (tonemapper.setLayout) vkDestroyDescriptorSetLayout(context.device, tonemapper.setLayout, nullptr);
-    if (tonemapper.renderPass) vkDestroyRenderPass(context.device, tonemapper.renderPass, nullptr);
+void destroyTonemapper(const Device& device, Tonemapper& tonemapper) {
+    if (tonemapper.pipeline) vkDestroyPipeline(device.device, tonemapper.pipeline, nullptr);
+    if (tonemapper.pool) vkDestroyDescriptorPool(device.device, tonemapper.pool, nullptr);
+    if (tonemapper.sampler) vkDestroySampler(device.device, tonemapper.sampler, nullptr);
+    if (tonemapper.layout) vkDestroyPipelineLayout(device.device, tonemapper.layout, nullptr);
+    if (tonemapper.setLayout) vkDestroyDescriptorSetLayout(device.device, tonemapper.setLayout, nullptr);
+    if (tonemapper.renderPass) vkDestroyRenderPass(device.device, tonemapper.renderPass, nullptr);
     tonemapper = Tonemapper{};
 }
 
-VkDescriptorSet createTonemapInput(const Context& context, const Tonemapper& tonemapper,
-                                   VkImageView hdrView) {
-    VkDescriptorSet set = allocateDescriptorSet(context, tonemapper.pool, tonemapper.setLayout);
-    writeDescriptor(context, set, 0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+VkDescriptorSet createTonemapInput(const Device& device, const Tonemapper& tonemapper, VkImageView hdrView) {
+    VkDescriptorSet set = allocateDescriptorSet(device, tonemapper.pool, tonemapper.setLayout);
+    writeDescriptor(device, set, 0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                     {.imageView = hdrView, .sampler = tonemapper.sampler});
     return set;
 }
 
-void freeTonemapInput(const Context& context, const Tonemapper& tonemapper, VkDescriptorSet& set) {
-    if (set) VK_CHECK(vkFreeDescriptorSets(context.device, tonemapper.pool, 1, &set));
+void freeTonemapInput(const Device& device, const Tonemapper& tonemapper, VkDescriptorSet& set) {
+    if (set) VK_CHECK(vkFreeDescriptorSets(device.device, tonemapper.pool, 1, &set));
     set = VK_NULL_HANDLE;
 }
 

@@ -18,12 +18,12 @@ struct Tonemapper {
 
 // `format`: the target's; _SRGB formats encode in hardware, UNORM ones in the shader. The target
 // ends in `finalLayout` (TRANSFER_SRC_OPTIMAL for readback, PRESENT_SRC_KHR for a swapchain).
-Tonemapper createTonemapper(const Context& context, VkFormat format, VkImageLayout finalLayout);
-void destroyTonemapper(const Context& context, Tonemapper& tonemapper);
+Tonemapper createTonemapper(const Device& device, VkFormat format, VkImageLayout finalLayout);
+void destroyTonemapper(const Device& device, Tonemapper& tonemapper);
 
 // A descriptor set reading `hdrView` (in SHADER_READ_ONLY_OPTIMAL); free it before the view.
-VkDescriptorSet createTonemapInput(const Context& context, const Tonemapper& tonemapper, VkImageView hdrView);
-void freeTonemapInput(const Context& context, const Tonemapper& tonemapper, VkDescriptorSet& set);
+VkDescriptorSet createTonemapInput(const Device& device, const Tonemapper& tonemapper, VkImageView hdrView);
+void freeTonemapInput(const Device& device, const Tonemapper& tonemapper, VkDescriptorSet& set);
 
 // Records the pass into `framebuffer` (one attachment of the tonemapper's format) of `extent`,
 // the size of the HDR image.

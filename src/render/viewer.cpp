@@ -309,11 +309,11 @@ void updateTitle(GLFWwindow* window, const Session& session, std::string& shown)
 }
 
 // The HDR image the picture is drawn into, at the swapchain's size.
-void destroyPictureTargets(const Context& context, Session& session) {
+void destroyPictureTargets(const Device& device, Session& session) {
     const Tonemapper& tonemapper = session.frames.tonemapper;
-    if (!session.scene) return destroySceneTargets(context, tonemapper, session.targets);
-    freeTonemapInput(context, tonemapper, session.scene->tonemapInput);
-    destroySceneViewTarget(context, session.scene->target);
+    if (!session.scene) return destroySceneTargets(device, tonemapper, session.targets);
+    freeTonemapInput(device, tonemapper, session.scene->tonemapInput);
+    destroySceneViewTarget(device, session.scene->target);
 }
 
 void sizePictureTargets(const Context& context, Session& session) {
@@ -375,10 +375,10 @@ void endSession(const Context& context, Session& session) {
 }
 
 // Records the current view into the picture's HDR image.
-void recordPicture(const Context& context, VkCommandBuffer commands, Session& session) {
+void recordPicture(const Device& device, VkCommandBuffer commands, Session& session) {
     if (!session.scene) {
         Scene scene = viewScene(session.view);
-        return recordScene(context, commands, *session.renderer, session.targets, scene);
+        return recordScene(device, commands, *session.renderer, session.targets, scene);
     }
     const ScenePicture& scene = *session.scene;
     // The view's distance relative to its default: 1 keeps the whole scene in view.

@@ -29,15 +29,15 @@ void recordCapture(VkCommandBuffer commands, ViewerFrames& frames, uint32_t imag
                   VK_PIPELINE_STAGE_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0});
 }
 
-void prepareCapture(const Context& context, ViewerFrames& frames) {
+void prepareCapture(const Device& device, ViewerFrames& frames) {
     if (!frames.swapchain.copyable)
         throw Error(ErrorKind::Device, "this window's swapchain images cannot be copied: no screenshots here "
                                        "(`shprobe render` writes the same view offscreen)");
     VkDeviceSize size = VkDeviceSize(frames.swapchain.extent.width) * frames.swapchain.extent.height * 4;
     if (frames.capture.size == size) return;
-    destroyBuffer(context, frames.capture);
+    destroyBuffer(device, frames.capture);
     frames.capture =
-        createBuffer(context, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback, "screenshot");
+        createBuffer(device, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback, "screenshot");
 }
 
 void submit(const Context& context, ViewerFrames& frames, uint32_t imageIndex) {

@@ -83,7 +83,9 @@ struct Device {
 
 // The program's own Vulkan: the instance, the validation messenger, a window surface if asked
 // for, and the device it created, with that device's queue and a command pool for the
-// submissions of vk/resources.h. createContext / destroyContext.
+// submissions of vk/resources.h. createContext / destroyContext. What submits work (or waits for
+// it, or needs the surface or the pool) takes a Context; what only creates or destroys objects takes
+// a Device.
 struct Context : Device {
     VkInstance instance = VK_NULL_HANDLE;
     VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
