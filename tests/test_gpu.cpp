@@ -440,6 +440,24 @@ TEST_F(GpuResidentBake, RecordsIntoTheCallersCommandBufferAndBuffer) {
     destroyProbeBaker(device, baker);
 }
 
+// A lent device is checked and described as createContext checks and describes its own; a queue
+// family that does no compute work is refused by its number.
+TEST_F(GpuResidentBake, BorrowedDeviceIsCheckedAsTheContextsOwn) {
+    const Device device = borrowDevice({context().physicalDevice, context().device, context().queueFamily});
+    EXPECT_EQ(device.info.name, context().info.name);
+    EXPECT_EQ(device.info.subgroupArithmetic, context().info.subgroupArithmetic);
+    EXPECT_EQ(device.info.timestamps, context().info.timestamps);
+    EXPECT_EQ(device.info.unsupportedReason, "");
+    try {
+        borrowDevice({context().physicalDevice, context().device, 1000});
+        ADD_FAILURE() << "queue family 1000 was taken";
+    } catch (const Error& error) {
+        EXPECT_EQ(error.kind(), ErrorKind::Device);
+        EXPECT_EQ(std::string(error.what()),
+                  "queue family 1000 of " + context().info.name + " does not do compute work");
+    }
+}
+
 // The CLI's own bakes (GpuProjection above) read a storage image; this runs project.comp, the
 // sampled-image module, through the same workgroup shapes: its streams of positions must cover
 // every texel once whatever the width.

@@ -13,8 +13,8 @@
 #include <shprobe/shprobe_spirv.h>
 
 #include <algorithm>
+#include <optional>
 #include <string>
-#include <vector>
 
 namespace shprobe {
 
@@ -197,33 +197,19 @@ Device borrowDevice(const ExternalDevice& external) {
     device.device = external.device;
     device.queueFamily = external.queueFamily;
     device.pipelineCache = external.pipelineCache;
-
-    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &subgroup};
-    vkGetPhysicalDeviceProperties2(external.physicalDevice, &properties);
     vkGetPhysicalDeviceMemoryProperties(external.physicalDevice, &device.memory);
-    device.info.name = properties.properties.deviceName;
-    device.info.type = properties.properties.deviceType;
-    device.info.apiVersion = properties.properties.apiVersion;
-    device.info.limits = properties.properties.limits;
-    device.info.subgroupSize = subgroup.subgroupSize;
-    const VkSubgroupFeatureFlags needed = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
-    device.info.subgroupArithmetic = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
-                                     (subgroup.supportedOperations & needed) == needed;
-    if (!device.info.subgroupArithmetic)
-        throw Error(ErrorKind::Device,
-                    device.info.name +
-                        " cannot bake probes: project.comp needs basic and arithmetic subgroup "
-                        "operations in compute shaders");
 
-    uint32_t familyCount = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(external.physicalDevice, &familyCount, nullptr);
-    std::vector<VkQueueFamilyProperties> families(familyCount);
-    vkGetPhysicalDeviceQueueFamilyProperties(external.physicalDevice, &familyCount, families.data());
-    if (external.queueFamily >= familyCount ||
-        !(families[external.queueFamily].queueFlags & VK_QUEUE_COMPUTE_BIT))
+    // Checked as createContext checks each device, with the bakes on the caller's family; a family
+    // that does no compute work is the caller's choice, not the device's lack, and is named as such.
+    const bool computes = isComputeFamily(external.physicalDevice, external.queueFamily);
+    device.info = describeDevice(external.physicalDevice, 0,
+                                 computes ? std::optional(external.queueFamily) : std::nullopt);
+    if (!computes)
         throw Error(ErrorKind::Device, "queue family " + std::to_string(external.queueFamily) + " of " +
                                            device.info.name + " does not do compute work");
+    if (!device.info.unsupportedReason.empty())
+        throw Error(ErrorKind::Device,
+                    device.info.name + " cannot bake probes: " + device.info.unsupportedReason);
     return device;
 }
 

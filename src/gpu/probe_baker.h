@@ -62,7 +62,8 @@ struct ExternalDevice {
 
 // The borrowed handles as the Device the bakers are created on (vk/context.h): no instance, queue
 // or command pool comes with it, since nothing here submits. Nothing is created, so nothing is to
-// be destroyed. Throws Error(Device) naming what the device lacks for baking.
+// be destroyed. Throws Error(Device) when the queue family does no compute work, or naming what the
+// device lacks for baking as createContext does (missingRequirement, vk/context.h).
 Device borrowDevice(const ExternalDevice& external);
 
 // How the projection reads the cube maps (or equirect maps): project.comp (project_equirect.comp)

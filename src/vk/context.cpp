@@ -137,58 +137,24 @@ VkInstance createInstance(bool validation, ValidationLog* log,
     return createLoaderInstance(info);
 }
 
-std::optional<uint32_t> findComputeQueueFamily(VkPhysicalDevice physicalDevice) {
+std::vector<VkQueueFamilyProperties> queueFamilies(VkPhysicalDevice physicalDevice) {
     uint32_t count = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, nullptr);
     std::vector<VkQueueFamilyProperties> families(count);
     vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, families.data());
+    return families;
+}
+
+std::optional<uint32_t> findComputeQueueFamily(VkPhysicalDevice physicalDevice) {
+    const std::vector<VkQueueFamilyProperties> families = queueFamilies(physicalDevice);
     // Prefer a compute queue that also does graphics: it is the main queue of most devices.
     std::optional<uint32_t> computeOnly;
-    for (uint32_t i = 0; i < count; ++i) {
+    for (uint32_t i = 0; i < families.size(); ++i) {
         if (!(families[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) continue;
         if (families[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) return i;
         if (!computeOnly) computeOnly = i;
     }
     return computeOnly;
-}
-
-DeviceInfo describeDevice(VkPhysicalDevice physicalDevice, uint32_t index) {
-    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-    VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
-    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
-    properties.pNext = &subgroup;
-    vkGetPhysicalDeviceProperties(physicalDevice, &properties.properties);
-    if (properties.properties.apiVersion >= VK_API_VERSION_1_2) subgroup.pNext = &driver;
-    vkGetPhysicalDeviceProperties2(physicalDevice, &properties);
-
-    const VkPhysicalDeviceProperties& p = properties.properties;
-    DeviceInfo info;
-    info.index = index;
-    info.name = p.deviceName;
-    info.type = p.deviceType;
-    info.apiVersion = p.apiVersion;
-    info.driver = driver.driverName[0] ? std::string(driver.driverName) + " " + driver.driverInfo
-                                       : "driver " + std::to_string(p.driverVersion);
-    info.subgroupSize = subgroup.subgroupSize;
-    info.limits = p.limits;
-    info.timestampPeriod = p.limits.timestampPeriod;
-
-    const VkSubgroupFeatureFlags needed = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
-    info.subgroupArithmetic = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
-                              (subgroup.supportedOperations & needed) == needed;
-    std::optional<uint32_t> family = findComputeQueueFamily(physicalDevice);
-    if (family) {
-        uint32_t count = 0;
-        vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, nullptr);
-        std::vector<VkQueueFamilyProperties> families(count);
-        vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, families.data());
-        info.timestampValidBits = families[*family].timestampValidBits;
-        info.timestamps = info.timestampValidBits > 0 && p.limits.timestampPeriod > 0.0f;
-    }
-
-    info.unsupportedReason = missingRequirement(
-        {p.apiVersion, family.has_value(), subgroup.supportedStages, subgroup.supportedOperations});
-    return info;
 }
 
 int typeRank(VkPhysicalDeviceType type) {
@@ -247,7 +213,7 @@ std::vector<VkPhysicalDevice> enumeratePhysicalDevices(VkInstance instance) {
 std::vector<DeviceInfo> describeDevices(const std::vector<VkPhysicalDevice>& physicalDevices) {
     std::vector<DeviceInfo> devices;
     for (uint32_t i = 0; i < physicalDevices.size(); ++i)
-        devices.push_back(describeDevice(physicalDevices[i], i));
+        devices.push_back(describeDevice(physicalDevices[i], i, findComputeQueueFamily(physicalDevices[i])));
     return devices;
 }
 
@@ -300,11 +266,7 @@ bool hasDeviceExtension(VkPhysicalDevice physicalDevice, const std::string& name
 std::string renderingShortfall(VkPhysicalDevice physicalDevice, const ContextOptions& options,
                                VkSurfaceKHR surface) {
     uint32_t family = *findComputeQueueFamily(physicalDevice); // exists: the device can bake
-    uint32_t count = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, nullptr);
-    std::vector<VkQueueFamilyProperties> families(count);
-    vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice, &count, families.data());
-    if (options.graphics && !(families[family].queueFlags & VK_QUEUE_GRAPHICS_BIT))
+    if (options.graphics && !(queueFamilies(physicalDevice)[family].queueFlags & VK_QUEUE_GRAPHICS_BIT))
         return "no queue that does both compute and graphics";
     for (const std::string& extension : options.deviceExtensions)
         if (!hasDeviceExtension(physicalDevice, extension)) return "no " + extension;
@@ -381,6 +343,46 @@ std::string missingRequirement(const DeviceCapabilities& device) {
         if (!(device.subgroupOperations & bit))
             return std::string("no ") + name + " subgroup operations (" + use + ") in compute shaders";
     return {};
+}
+
+DeviceInfo describeDevice(VkPhysicalDevice physicalDevice, uint32_t index,
+                          std::optional<uint32_t> computeFamily) {
+    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    properties.pNext = &subgroup;
+    vkGetPhysicalDeviceProperties(physicalDevice, &properties.properties);
+    if (properties.properties.apiVersion >= VK_API_VERSION_1_2) subgroup.pNext = &driver;
+    vkGetPhysicalDeviceProperties2(physicalDevice, &properties);
+
+    const VkPhysicalDeviceProperties& p = properties.properties;
+    DeviceInfo info;
+    info.index = index;
+    info.name = p.deviceName;
+    info.type = p.deviceType;
+    info.apiVersion = p.apiVersion;
+    info.driver = driver.driverName[0] ? std::string(driver.driverName) + " " + driver.driverInfo
+                                       : "driver " + std::to_string(p.driverVersion);
+    info.subgroupSize = subgroup.subgroupSize;
+    info.limits = p.limits;
+    info.timestampPeriod = p.limits.timestampPeriod;
+
+    const VkSubgroupFeatureFlags needed = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+    info.subgroupArithmetic = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+                              (subgroup.supportedOperations & needed) == needed;
+    if (computeFamily) {
+        info.timestampValidBits = queueFamilies(physicalDevice)[*computeFamily].timestampValidBits;
+        info.timestamps = info.timestampValidBits > 0 && p.limits.timestampPeriod > 0.0f;
+    }
+
+    info.unsupportedReason = missingRequirement(
+        {p.apiVersion, computeFamily.has_value(), subgroup.supportedStages, subgroup.supportedOperations});
+    return info;
+}
+
+bool isComputeFamily(VkPhysicalDevice physicalDevice, uint32_t family) {
+    const std::vector<VkQueueFamilyProperties> families = queueFamilies(physicalDevice);
+    return family < families.size() && (families[family].queueFlags & VK_QUEUE_COMPUTE_BIT);
 }
 
 const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::string& request) {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 #include <vulkan/vulkan.h>
@@ -62,6 +63,14 @@ struct DeviceCapabilities {
 // Why a device with these capabilities cannot run shprobe, naming what it lacks as Vulkan names it
 // (e.g. VK_SUBGROUP_FEATURE_ARITHMETIC_BIT); empty when it can. `shprobe info` prints it.
 std::string missingRequirement(const DeviceCapabilities& device);
+
+// What a device is and why it cannot run shprobe (DeviceInfo::unsupportedReason, missingRequirement)
+// with its work on `computeFamily`, a family that does compute work; none: the device has none.
+// Every device is checked with it: createContext's, and an engine's lent one (borrowDevice).
+DeviceInfo describeDevice(VkPhysicalDevice physicalDevice, uint32_t index,
+                          std::optional<uint32_t> computeFamily);
+// Whether the device has queue family `family` and it does compute work.
+bool isComputeFamily(VkPhysicalDevice physicalDevice, uint32_t family);
 
 // Counts validation messages; owned by the context and shared with the messenger callback.
 struct ValidationLog {
