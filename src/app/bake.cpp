@@ -2,6 +2,7 @@
 // CPU path or the double-precision CPU reference (bake_steps.h). One input is written to -o;
 // several (or a --list) are a batch written to --out-dir (bake_batch.cpp).
 #include "app/bake_steps.h"
+#include "app/program.h"
 #include "app/stopwatch.h"
 #include "app/toolkit.h"
 #include "common/output_file.h"
@@ -137,9 +138,8 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
             "one GPU submission bakes; default and upper bound: the device's limit")
         ->type_name("N")
         ->check(numberFrom(1.0, HUGE_VAL));
-    command.add_option("--order", options.order, "SH order = number of bands (3: 9 coefficients)")
-        ->check(CLI::Range(1, kMaxOrder))
-        ->capture_default_str();
+    addRangeOption(command, "--order", options.order, "SH order = number of bands (3: 9 coefficients)", 1,
+                   kMaxOrder);
     command.add_option("--layout", options.layout, "Input layout")
         ->check(CLI::IsMember({"auto", "equirect", "hcross", "vcross", "faces"}))
         ->capture_default_str();
@@ -164,14 +164,10 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
                      "Replace NaN and infinite texels with 0 instead of failing");
     addImageLimitOption(command, options.maxPixels);
     addDeviceOptions(command, options.device, options.validation);
-    command.add_option("--workgroup-size", options.workgroupSize, "GPU projection workgroup width")
-        ->check(CLI::Range(1, 1024))
-        ->capture_default_str();
-    command
-        .add_option("--texels-per-invocation", options.texelsPerInvocation,
-                    "GPU projection texels per invocation (sets the workgroup count)")
-        ->check(CLI::Range(1, 1 << 20))
-        ->capture_default_str();
+    addRangeOption(command, "--workgroup-size", options.workgroupSize, "GPU projection workgroup width", 1,
+                   1024);
+    addRangeOption(command, "--texels-per-invocation", options.texelsPerInvocation,
+                   "GPU projection texels per invocation (sets the workgroup count)", 1, 1 << 20);
     command.add_flag("-q,--quiet", options.quiet,
                      "Print the summary only, not the coefficients (batch: not the line per probe)");
     addFormatOptions(command, options.format, options.mapSize, options.mirror);

@@ -177,9 +177,8 @@ struct Loaded {
 };
 
 // Loads the inputs in order, one ahead: when an input is taken, the next starts loading on a thread
-// of its own, so that decoding it overlaps baking and writing this one (the batch of the eight
-// blender-data HDRs took 1.15-1.25x as long loading one input at a time, on 2 cores). Where no
-// thread can be started, std::async loads on the calling thread when the input is taken. A failure
+// of its own, so that decoding it overlaps baking and writing this one. Where no thread can be
+// started, std::async loads on the calling thread when the input is taken. A failure
 // that ends the batch waits for the load in flight (its future's destructor) before it is reported.
 class InputLoader {
   public:

@@ -24,11 +24,10 @@ namespace {
 
 constexpr int kDefaultSkyFaceSize = 256;
 
-// --backend auto: the fast CPU path's speed, texels x coefficients per second per core, taken low
-// (a bake of 6 x 256^2 texels at order 3 in 0.9 ms on both cores of a 2-core VM is 2e9 per
-// core-second; half of it stands for slower cores), and the least a Vulkan start-up
-// takes (vkCreateInstance alone: 33 ms with Debian 12's four Mesa drivers installed, before any
-// device, pipeline or upload). A job whose CPU projection takes less is baked on the CPU at once.
+// --backend auto: the fast CPU path's speed, texels x coefficients per second per core, taken at
+// half of what a 2-core VM does to stand for slower cores, and the least a Vulkan start-up takes
+// before any device, pipeline or upload (docs/benchmark.md). A job whose CPU projection takes less
+// is baked on the CPU at once.
 constexpr double kCpuWorkPerCoreSecond = 1e9;
 constexpr double kVulkanStartSeconds = 0.02;
 
@@ -41,8 +40,8 @@ struct Finished {
 
 // Whether a Vulkan device here may be a GPU. On Linux a GPU's driver needs its device file (or
 // makes it from its kernel module), and the answer without one (a CPU, where the fast CPU path is
-// faster) is known without the Vulkan start-up (vkCreateInstance alone loads every installed
-// driver: 16-33 ms on a 2-core VM). Elsewhere only the device itself tells.
+// faster) is known without the Vulkan start-up, which loads every installed driver. Elsewhere
+// only the device itself tells.
 bool mayHaveGpu() {
 #if defined(__linux__)
     return !findGpuFile().empty();

@@ -6,6 +6,7 @@
 #include "app/bench.h"
 #include "app/bench_device.h"
 #include "app/parsed_option.h"
+#include "app/program.h"
 #include "app/stopwatch.h"
 #include "common/error.h"
 #include "common/output_file.h"
@@ -301,12 +302,8 @@ std::vector<int> checkedFaceSizes(const std::vector<int>& faceSizes) {
 void addBenchOptions(CLI::App& command, BenchOptions& options) {
     addParsedOption<std::vector<int>>(command, "--sizes", options.faceSizes, checkedFaceSizes, "Face sizes")
         ->default_str("[" + CLI::detail::join(options.faceSizes) + "]");
-    command.add_option("--orders", options.orders, "SH orders")
-        ->check(CLI::Range(1, kMaxOrder))
-        ->capture_default_str();
-    command.add_option("--repeat", options.repeat, "Runs per measurement (the best counts)")
-        ->check(CLI::Range(1, 100))
-        ->capture_default_str();
+    addRangeOption(command, "--orders", options.orders, "SH orders", 1, kMaxOrder);
+    addRangeOption(command, "--repeat", options.repeat, "Runs per measurement (the best counts)", 1, 100);
     command
         .add_option("--reference-max-size", options.referenceMaxFaceSize,
                     "Largest face size for the (slow) double reference")

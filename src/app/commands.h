@@ -5,7 +5,6 @@
 #include "glsl/dispatch_plan.h"
 #include "image/environment.h"
 #include "scene/probe_grid.h"
-#include "vk/context.h"
 
 #include <CLI/CLI.hpp>
 #include <cmath>
@@ -19,6 +18,7 @@
 
 namespace shprobe {
 
+struct Context;  // vk/context.h
 struct LitScene; // render/lit_scene.h
 
 struct BakeOptions {
@@ -176,14 +176,9 @@ inline void addDeviceOptions(CLI::App& command, std::string& device, bool& valid
     command.add_flag("--validation", validation, "Enable the Khronos validation layer; fail on messages");
 }
 
-// The Vulkan context of the commands that draw (render, scene): a queue that does graphics too.
-inline Context createGraphicsContext(const std::string& device, bool validation) {
-    ContextOptions options;
-    options.device = device;
-    options.validation = validation;
-    options.graphics = true;
-    return createContext(options);
-}
+// The Vulkan context of the commands that draw (render, scene): a queue that does graphics too
+// (render.cpp).
+Context createGraphicsContext(const std::string& device, bool validation);
 
 // --exposure of render and view: stops relative to the automatic exposure (2^64 either way
 // is already far past black and white).

@@ -1,10 +1,10 @@
 // `shprobe convert`: a probe file in, any format of formats/engine_export.h out, so that baking and
 // exporting are separate steps. The output name and format follow bake's rule (settleFormatAndOutput).
-#include "app/bake_steps.h"
 #include "app/commands.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "formats/engine_export.h"
+#include "formats/output_format.h"
 #include "formats/probe_export.h"
 #include "formats/probe_file.h"
 

@@ -1,13 +1,12 @@
 // A bake allocates its large buffers (the decoded image, OpenEXR's chunk buffers) once per input
-// and touches every page of them, and each first touch of a fresh 4 KiB page is a fault: about
-// 3.4 us on the 2-core CI VM, and a bake of courtyard.exr took 4,220 of them (14 ms of its 41).
-// glibc's defaults also give such buffers back to the kernel when freed (mmap and munmap above a
-// threshold that a same-size request then still exceeds), so a batch faults on every input again.
-// Here the program keeps freed memory for reuse, all threads allocate from the main heap, and the
-// next 64 MiB of that heap are advised as transparent huge pages (where the kernel offers them on
-// request, as Debian's does), so that a first touch costs one fault per 2 MiB: what glibc's tunable
-// glibc.malloc.hugetlb=1 does, which only the environment can set. docs/benchmark.md, "Memory
-// faults", has the counts and times. Other C libraries keep their defaults.
+// and touches every page of them, and each first touch of a fresh 4 KiB page is a fault (a third
+// of a bake's time, docs/benchmark.md "Memory faults"). glibc's defaults also give such buffers back to the
+// kernel when freed (mmap and munmap above a threshold that a same-size request then still exceeds), so a
+// batch faults on every input again. Here the program keeps freed memory for reuse, all threads allocate from
+// the main heap, and the next 64 MiB of that heap are advised as transparent huge pages (where the kernel
+// offers them on request, as Debian's does), so that a first touch costs one fault per 2 MiB: what glibc's
+// tunable glibc.malloc.hugetlb=1 does, which only the environment can set. Other C libraries keep their
+// defaults.
 #include "app/heap.h"
 
 #include <cstddef>

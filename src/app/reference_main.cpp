@@ -42,18 +42,13 @@ void addOptions(CLI::App& app, ReferenceOptions& options) {
     addParsedOption(app, "--grid", options.grid, parseGridCounts, "Probes per axis, NX,NY,NZ")->required();
     addParsedOption(app, "--bounds", options.bounds, parseGridBounds,
                     "Grid box X0,Y0,Z0,X1,Y1,Z1 (default: as shprobe scene)");
-    app.add_option("--order", options.order, "SH order")->check(CLI::Range(1, 8))->capture_default_str();
-    app.add_option("--bounces", options.bounces, "Diffuse bounces")
-        ->check(CLI::Range(0, 64))
-        ->capture_default_str();
-    app.add_option("--samples", options.samples, "Path-traced directions per probe")
-        ->check(CLI::Range(16, 1 << 24))
-        ->capture_default_str();
-    app.add_option("--validity-faces", options.validityFaces,
+    addRangeOption(app, "--order", options.order, "SH order", 1, 8);
+    addRangeOption(app, "--bounces", options.bounces, "Diffuse bounces", 0, 64);
+    addRangeOption(app, "--samples", options.samples, "Path-traced directions per probe", 16, 1 << 24);
+    addRangeOption(app, "--validity-faces", options.validityFaces,
                    "Face size of the texel rays that find the probes inside geometry (as shprobe scene: more "
-                   "than half of them on back faces)")
-        ->check(CLI::Range(1, 256))
-        ->capture_default_str();
+                   "than half of them on back faces)",
+                   1, 256);
     app.add_option("--sky", options.sky, "Environment seen where no geometry is (default: the built-in sky)");
     app.add_flag("-q,--quiet", options.quiet, "No report");
 }

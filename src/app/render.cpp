@@ -20,6 +20,14 @@
 
 namespace shprobe {
 
+Context createGraphicsContext(const std::string& device, bool validation) {
+    ContextOptions options;
+    options.device = device;
+    options.validation = validation;
+    options.graphics = true;
+    return createContext(options);
+}
+
 namespace {
 
 constexpr uint32_t kDefaultSize = 512;

@@ -3,6 +3,7 @@
 // bricks of one bake (docs/scene-probes.md).
 #include "app/commands.h"
 #include "app/parsed_option.h"
+#include "app/program.h"
 
 #include "app/stopwatch.h"
 #include "common/error.h"
@@ -39,18 +40,12 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
     addParsedOption(command, "--bounds", options.bounds, parseGridBounds,
                     "Grid box X0,Y0,Z0,X1,Y1,Z1, probes on its corners (default: the scene's box, "
                     "inset by half a cell)");
-    command.add_option("--order", options.order, "SH order, 1..8")
-        ->check(CLI::Range(1, 8))
-        ->capture_default_str();
-    command.add_option("--face-size", options.faceSize, "Each probe's cube-map face size")
-        ->check(CLI::Range(1, 4096))
-        ->capture_default_str();
-    command
-        .add_option("--bounces", options.bounces,
-                    "Indirect bounces: 0 is what the probes see directly (sky, emission); each "
-                    "bounce adds the light the surfaces reflect from the one before")
-        ->check(CLI::Range(0, 64))
-        ->capture_default_str();
+    addRangeOption(command, "--order", options.order, "SH order, 1..8", 1, 8);
+    addRangeOption(command, "--face-size", options.faceSize, "Each probe's cube-map face size", 1, 4096);
+    addRangeOption(command, "--bounces", options.bounces,
+                   "Indirect bounces: 0 is what the probes see directly (sky, emission); each "
+                   "bounce adds the light the surfaces reflect from the one before",
+                   0, 64);
     command.add_option("--sky", options.sky,
                        "Environment seen where no geometry is (any input `bake` "
                        "takes; default: the built-in sky)");
@@ -63,9 +58,8 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                     "bounce after that volume's, else bounce 0; `shprobe merge` joins the bricks");
     command.add_option("--previous", options.previous,
                        "The whole volume of the previous bounce: bake the one bounce after it");
-    command.add_option("--probes-per-batch", options.probesPerBatch, "Probes captured per command buffer")
-        ->check(CLI::Range(1, 4096))
-        ->capture_default_str();
+    addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
+                   "Probes captured per command buffer", 1, 4096);
     addDeviceOptions(command, options.device, options.validation);
     command.add_flag("-q,--quiet", options.quiet, "No report");
 }

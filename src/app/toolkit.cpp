@@ -3,6 +3,7 @@
 
 #include "app/commands.h"
 #include "app/parsed_option.h"
+#include "app/program.h"
 
 #include "common/error.h"
 #include "common/output_file.h"
@@ -240,9 +241,7 @@ void runRotate(const RotateOptions& options) {
 
 void addLightOptions(CLI::App& command, LightCommandOptions& options) {
     command.add_option("-o,--output", options.output, "Coefficient file (JSON)")->required();
-    command.add_option("--order", options.order, "SH order")
-        ->check(CLI::Range(1, kMaxOrder))
-        ->capture_default_str();
+    addRangeOption(command, "--order", options.order, "SH order", 1, kMaxOrder);
     command.add_flag("--irradiance", options.irradiance, "Write irradiance instead of radiance");
     addLightOptions(command, options.lights);
 }

@@ -69,7 +69,7 @@ Device borrowDevice(const ExternalDevice& external);
 // How the projection reads the cube maps (or equirect maps): project.comp (project_equirect.comp)
 // samples an image of any format; project_rgba32f.comp and project_rgba16f.comp (project_equirect_
 // rgba32f.comp, project_equirect_rgba16f.comp) read a storage image of that format. The values and
-// the results are the same; on lavapipe the storage read is three times faster (`shprobe bench`).
+// the results are the same; which is faster depends on the driver (`shprobe bench` measures).
 enum class CubemapBinding { SampledImage, StorageRgba32F, StorageRgba16F };
 
 // What a baker projects: cube maps (project.comp) or equirect maps (project_equirect.comp, which

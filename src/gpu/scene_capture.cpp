@@ -209,30 +209,12 @@ VkRenderPass createCaptureRenderPass(const Device& device, VkFormat depthFormat)
                               VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL)};
     const VkAttachmentReference color{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
     const VkAttachmentReference depth{1, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
-    const VkPipelineStageFlags attachmentStages = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT |
-                                                  VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
-                                                  VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
-    const VkAccessFlags attachmentWrites =
-        VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
-    std::array<VkSubpassDependency, 2> dependencies{};
-    // The previous batch's bake and count read the layers before they are drawn again, and the
-    // previous face's depth is written before this one clears it.
-    dependencies[0] = {VK_SUBPASS_EXTERNAL,
-                       0,
-                       attachmentStages | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                       attachmentStages,
-                       attachmentWrites,
-                       attachmentWrites | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
-                       0};
-    // The layer reaches the bake (compute), copies and a view's tonemap pass (fragment).
-    dependencies[1] = {0,
-                       VK_SUBPASS_EXTERNAL,
-                       VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT |
-                           VK_PIPELINE_STAGE_TRANSFER_BIT,
-                       VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-                       VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT,
-                       0};
+    // The previous batch's bake and count read the layers before they are drawn again; the layer
+    // reaches the bake (compute), copies and a view's tonemap pass (fragment).
+    const std::array<VkSubpassDependency, 2> dependencies =
+        attachmentDependencies(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                               VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT |
+                                   VK_PIPELINE_STAGE_TRANSFER_BIT);
     return createRenderPass(device, {attachments, {&color, 1}, &depth, dependencies});
 }
 

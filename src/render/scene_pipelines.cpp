@@ -38,30 +38,10 @@ VkRenderPass createSceneRenderPass(const Device& device, VkFormat depthFormat) {
     const std::array<VkAttachmentReference, 2> colors{
         {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}, {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}}};
     const VkAttachmentReference depth{2, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
-
-    const VkPipelineStageFlags attachmentStages = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT |
-                                                  VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
-                                                  VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
-    const VkAccessFlags attachmentWrites =
-        VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
-    std::array<VkSubpassDependency, 2> dependencies{};
-    // Earlier reads of the targets (tonemap, readback) and writes finish before this pass writes.
-    dependencies[0] = {VK_SUBPASS_EXTERNAL,
-                       0,
-                       attachmentStages | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT |
-                           VK_PIPELINE_STAGE_TRANSFER_BIT,
-                       attachmentStages,
-                       attachmentWrites,
-                       attachmentWrites | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
-                       0};
-    // The results reach the tonemap pass and copies.
-    dependencies[1] = {0,
-                       VK_SUBPASS_EXTERNAL,
-                       VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-                       VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
-                       VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-                       VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT,
-                       0};
+    // The targets are read by the tonemap pass and copies, before this pass and after it.
+    const VkPipelineStageFlags readers =
+        VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+    const std::array<VkSubpassDependency, 2> dependencies = attachmentDependencies(readers, readers);
     return createRenderPass(device, {attachments, colors, &depth, dependencies});
 }
 

@@ -20,6 +20,20 @@ VkAttachmentDescription attachmentDescription(VkFormat format, VkAttachmentLoadO
             .finalLayout = finalLayout};
 }
 
+std::array<VkSubpassDependency, 2> attachmentDependencies(VkPipelineStageFlags earlierReaders,
+                                                          VkPipelineStageFlags laterReaders) {
+    const VkPipelineStageFlags attachmentStages = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT |
+                                                  VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                                                  VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
+    const VkAccessFlags attachmentWrites =
+        VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+    return {
+        {{VK_SUBPASS_EXTERNAL, 0, attachmentStages | earlierReaders, attachmentStages, attachmentWrites,
+          attachmentWrites | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT, 0},
+         {0, VK_SUBPASS_EXTERNAL, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, laterReaders,
+          VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT, 0}}};
+}
+
 VkRenderPass createRenderPass(const Device& device, const RenderPassDesc& desc) {
     VkSubpassDescription subpass{};
     subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;

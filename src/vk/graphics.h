@@ -4,6 +4,7 @@
 #pragma once
 #include "vk/context.h"
 
+#include <array>
 #include <cstdint>
 #include <span>
 
@@ -12,6 +13,12 @@ namespace shprobe {
 // An attachment whose old contents are not kept (initial layout UNDEFINED), without stencil.
 VkAttachmentDescription attachmentDescription(VkFormat format, VkAttachmentLoadOp load,
                                               VkAttachmentStoreOp store, VkImageLayout finalLayout);
+
+// The dependencies of a pass that writes colour and depth attachments between readers of them:
+// what `earlierReaders` (stages) read, and earlier attachment writes, finish before the pass writes;
+// its colour writes are visible to shader and transfer reads at `laterReaders` after it.
+std::array<VkSubpassDependency, 2> attachmentDependencies(VkPipelineStageFlags earlierReaders,
+                                                          VkPipelineStageFlags laterReaders);
 
 // A render pass of one subpass writing `colors` (and `depth`, if any) of `attachments`.
 struct RenderPassDesc {

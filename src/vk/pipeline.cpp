@@ -72,11 +72,14 @@ VkDescriptorPool createDescriptorPool(const Device& device, const DescriptorPool
     if (size.imageSamplers) sizes.push_back({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, size.imageSamplers});
     if (size.storageImages) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, size.storageImages});
     if (size.uniformBuffers) sizes.push_back({VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, size.uniformBuffers});
-    VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    info.flags = size.freeSets ? VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT : 0;
-    info.maxSets = size.sets;
-    info.poolSizeCount = uint32_t(sizes.size());
-    info.pPoolSizes = sizes.data();
+    const VkDescriptorPoolCreateInfo info{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
+        .flags = size.freeSets
+                     ? VkDescriptorPoolCreateFlags(VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT)
+                     : 0,
+        .maxSets = size.sets,
+        .poolSizeCount = uint32_t(sizes.size()),
+        .pPoolSizes = sizes.data()};
     VkDescriptorPool pool = VK_NULL_HANDLE;
     VK_CHECK(vkCreateDescriptorPool(device.device, &info, nullptr, &pool));
     return pool;
@@ -94,9 +97,9 @@ VkDescriptorSet createDescriptorSet(const Device& device, VkDescriptorPool pool,
 }
 
 VkShaderModule createShaderModule(const Device& device, std::span<const uint32_t> spirv) {
-    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    info.codeSize = spirv.size_bytes();
-    info.pCode = spirv.data();
+    const VkShaderModuleCreateInfo info{.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
+                                        .codeSize = spirv.size_bytes(),
+                                        .pCode = spirv.data()};
     VkShaderModule module = VK_NULL_HANDLE;
     VK_CHECK(vkCreateShaderModule(device.device, &info, nullptr, &module));
     return module;
@@ -109,9 +112,9 @@ VkDescriptorSetLayout createSetLayout(const Device& device, std::span<const Layo
         layoutBindings[i] = {i, binding.type, 1, binding.stages,
                              binding.immutableSampler ? &binding.immutableSampler : nullptr};
     }
-    VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    info.bindingCount = uint32_t(layoutBindings.size());
-    info.pBindings = layoutBindings.data();
+    const VkDescriptorSetLayoutCreateInfo info{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+                                               .bindingCount = uint32_t(layoutBindings.size()),
+                                               .pBindings = layoutBindings.data()};
     VkDescriptorSetLayout layout = VK_NULL_HANDLE;
     VK_CHECK(vkCreateDescriptorSetLayout(device.device, &info, nullptr, &layout));
     return layout;
@@ -119,12 +122,12 @@ VkDescriptorSetLayout createSetLayout(const Device& device, std::span<const Layo
 
 VkPipelineLayout createPipelineLayout(const Device& device, VkDescriptorSetLayout setLayout,
                                       VkShaderStageFlags pushStages, uint32_t pushConstantSize) {
-    VkPushConstantRange range{pushStages, 0, pushConstantSize};
-    VkPipelineLayoutCreateInfo info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-    info.setLayoutCount = 1;
-    info.pSetLayouts = &setLayout;
-    info.pushConstantRangeCount = pushConstantSize ? 1 : 0;
-    info.pPushConstantRanges = &range;
+    const VkPushConstantRange range{pushStages, 0, pushConstantSize};
+    const VkPipelineLayoutCreateInfo info{.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+                                          .setLayoutCount = 1,
+                                          .pSetLayouts = &setLayout,
+                                          .pushConstantRangeCount = pushConstantSize ? 1u : 0u,
+                                          .pPushConstantRanges = &range};
     VkPipelineLayout layout = VK_NULL_HANDLE;
     VK_CHECK(vkCreatePipelineLayout(device.device, &info, nullptr, &layout));
     return layout;

@@ -1,5 +1,5 @@
 // A VkPipelineCache kept on disk between runs, so that a second run does not compile the shaders
-// again (lavapipe JIT-compiles every compute pipeline with LLVM: 10-40 ms each).
+// again (lavapipe compiles every pipeline with LLVM).
 #pragma once
 #include "vk/context.h"
 
