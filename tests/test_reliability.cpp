@@ -450,6 +450,15 @@ TEST_F(Reliability, OutputNamesFollowTheFormat) {
     expectFailure({{"bake", "--format", "binary", "-o", "OUT"},
                    2,
                    {"names a json file but --format is binary", ".bin"}});
+    // An engine's double extension names that engine: another engine's format is refused, while a
+    // plain .json (the last part of every engine's extension) takes any of them.
+    writeProbeFile(file("p.json"), testProbe(3), {});
+    expectFailure({{"convert", file("p.json"), "--format", "unity", "-o", "OUT"},
+                   2,
+                   {"names a godot file but --format is unity", ".unity.json"},
+                   "x.godot.json"});
+    runOk({"convert", file("p.json"), "--format", "unity", "-o", file("x.json")});
+    EXPECT_CONTAINS(readText(folder() / "x.json"), "{");
 }
 
 // An output that is an input, by name or through a link, is refused before any work, and the

@@ -2,7 +2,6 @@
 
 #include "common/error.h"
 
-#include <filesystem>
 #include <string_view>
 
 namespace shprobe {
@@ -15,13 +14,13 @@ std::string formatOfExtension(const std::string& path) {
     return format ? format->name : "";
 }
 
-// The extension names no format, the format itself, the other irradiance map, or the last part of
-// the format's extension (-o x.json --format threejs: ".three.json" ends in ".json").
-bool extensionAgrees(const std::string& output, const std::string& named, const std::string& format) {
-    const std::string extension = std::filesystem::path(output).extension().string();
+// The extension names no format, the format itself, the other irradiance map, or a format whose
+// whole extension ends the format's own (-o x.json --format threejs: ".three.json" ends in ".json";
+// -o x.godot.json --format unity names godot, whose ".godot.json" does not end ".unity.json").
+bool extensionAgrees(const std::string& named, const std::string& format) {
     return named.empty() || named == format ||
            (named == "irradiance-equirect" && format == "irradiance-cross") ||
-           (!extension.empty() && std::string_view(formatNamed(format).extension).ends_with(extension));
+           std::string_view(formatNamed(format).extension).ends_with(formatNamed(named).extension);
 }
 
 } // namespace
@@ -43,7 +42,7 @@ const char* formatExtension(const std::string& format) {
 void settleFormatAndOutput(std::string& format, std::string& output) {
     const std::string named = output.empty() ? "" : formatOfExtension(output);
     if (format.empty()) format = named.empty() ? "json" : named;
-    if (!extensionAgrees(output, named, format))
+    if (!extensionAgrees(named, format))
         throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
                                           format + "; use the extension " + formatExtension(format) +
                                           " or leave out --format");
