@@ -17,12 +17,15 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <numbers>
 #include <sys/mount.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
 
@@ -459,6 +462,36 @@ TEST_F(Reliability, OutputNamesFollowTheFormat) {
                    "x.godot.json"});
     runOk({"convert", file("p.json"), "--format", "unity", "-o", file("x.json")});
     EXPECT_CONTAINS(readText(folder() / "x.json"), "{");
+}
+
+// Standard streams the caller closed or shares with an input (shell redirections, run by bash):
+// with standard output closed, "-" is refused (exit 3), not written into the /dev/null that stands
+// in for it; an output that is the open file standard input reads (0<>, >>) is refused before
+// anything is written, and the file stays as it was.
+TEST_F(Reliability, ClosedOrSharedStandardStreamsAreRefused) {
+    writeProbeFile(file("p.json"), testProbe(3), {});
+    const std::string before = readText(folder() / "p.json");
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"\"$1\" convert p.json --format gltf -o - >&-", "cannot write -: descriptor 1 was closed"},
+        {"\"$1\" rotate - --euler 0,90,0 -o /dev/stdin 0<>p.json",
+         "cannot write /dev/stdin: it is the input -"},
+        {"\"$1\" convert - --format json -o /dev/stdin 0<>p.json",
+         "cannot write /dev/stdin: it is the input -"},
+        {"\"$1\" rotate - --euler 0,90,0 -o - <p.json >>p.json", "cannot write -: it is the input -"},
+    };
+    for (const auto& [command, message] : cases) {
+        writeText(folder() / "run.sh", "cd \"$2\" && " + command + " 2>err.txt\n");
+        const std::string shell =
+            "bash " + file("run.sh") + " " + SHPROBE_EXECUTABLE + " " + folder().string();
+        const int status = std::system(shell.c_str());
+        SCOPED_TRACE(command);
+        ASSERT_TRUE(WIFEXITED(status));
+        EXPECT_EQ(WEXITSTATUS(status), 3);
+        const std::string err = readText(folder() / "err.txt");
+        EXPECT_CONTAINS(err, message);
+        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+        EXPECT_EQ(readText(folder() / "p.json"), before);
+    }
 }
 
 // An output that is an input, by name or through a link, is refused before any work, and the

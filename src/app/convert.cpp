@@ -56,7 +56,7 @@ void runConvert(const ConvertOptions& given) {
     // --map-size 0 is the writer's default, which fits.
     if (options.format == "irradiance-equirect" && options.mapSize > 0) requireEquirectWidth(options.mapSize);
     checkOutputPath(options.output, format.content);
-    if (options.input != "-") checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
+    checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
     const Probe probe = readAnyProbe(options.input);
     checkProbeFits(probe, format, options.input);
 

@@ -10,7 +10,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <fcntl.h>
 #include <string>
 #include <unistd.h>
 
@@ -43,13 +42,11 @@ void printError(const char* name, const Error& e) {
     std::fprintf(stderr, "%s: error: %s\n", name, oneLine(e.what()).c_str());
 }
 
-// Descriptors 0-2 that the parent closed are opened on /dev/null, so that no file the program
-// opens takes their place (a probe file read as standard input, an output sent to standard
-// output). A reader that goes away makes a write fail with EPIPE ("cannot write -: broken pipe",
-// exit 3) instead of ending the program by SIGPIPE without a word.
+// Descriptors 0-2 that the parent closed stand open on /dev/null (common/output_file.h). A reader
+// that goes away makes a write fail with EPIPE ("cannot write -: broken pipe", exit 3) instead of
+// ending the program by SIGPIPE without a word.
 void prepareStandardStreams() {
-    for (int fd = 0; fd <= 2; ++fd)
-        if (fcntl(fd, F_GETFD) < 0) open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    openClosedStandardDescriptors();
     std::signal(SIGPIPE, SIG_IGN);
 }
 

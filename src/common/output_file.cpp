@@ -11,6 +11,7 @@
 #include <fcntl.h>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <poll.h>
 #include <pthread.h>
 #include <random>
@@ -68,6 +69,17 @@ struct OutputTarget {
 // Links are followed one at a time, like the kernel does, to at most this many (Linux's limit).
 constexpr int kMaxLinks = 40;
 
+// The standard descriptors the process was started without (openClosedStandardDescriptors).
+bool closedAtStart[3] = {false, false, false};
+
+// The descriptor an output goes to, refused when the process was started without it.
+int startedDescriptor(const std::string& destination, int descriptor) {
+    if (descriptor <= 2 && closedAtStart[descriptor])
+        failWrite(destination,
+                  "descriptor " + std::to_string(descriptor) + " was closed when shprobe started");
+    return descriptor;
+}
+
 // The descriptor N when folder/name is /proc/self/fd/N (or /dev/fd/N): a descriptor of this process.
 int ownDescriptor(const std::string& folder, const std::string& name) {
     char* real = realpath(folder.c_str(), nullptr);
@@ -105,7 +117,7 @@ void checkFolder(const std::string& destination, const std::string& folder) {
 }
 
 OutputTarget resolveTarget(const std::string& destination) {
-    if (destination == "-") return {OutputTarget::Descriptor, "", STDOUT_FILENO};
+    if (destination == "-") return {OutputTarget::Descriptor, "", startedDescriptor("-", STDOUT_FILENO)};
     if (destination.empty()) failWrite("''", "no file name given");
     std::string path = destination;
     for (int links = 0; links <= kMaxLinks; ++links) {
@@ -120,7 +132,7 @@ OutputTarget resolveTarget(const std::string& destination) {
         }
         if (S_ISLNK(status.st_mode)) {
             if (int descriptor = ownDescriptor(folder, name); descriptor >= 0)
-                return {OutputTarget::Descriptor, path, descriptor};
+                return {OutputTarget::Descriptor, path, startedDescriptor(destination, descriptor)};
             if (!mayFollowLink(folder, status))
                 failWrite(destination,
                           "permission denied (a link in a shared sticky folder owned by another user)");
@@ -259,17 +271,34 @@ void checkOutputPath(const std::string& path, OutputContent content) {
     checkedTarget(path, content);
 }
 
+void openClosedStandardDescriptors() {
+    for (int fd = 0; fd <= 2; ++fd) {
+        if (fcntl(fd, F_GETFD) >= 0) continue;
+        closedAtStart[fd] = true;
+        open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    }
+}
+
+namespace {
+
+// The regular file a name stands for ("-": the standard stream `standard`), if it is one.
+std::optional<std::pair<dev_t, ino_t>> regularFileOf(const std::string& path, int standard) {
+    struct stat status {};
+    const int result = path == "-" ? fstat(standard, &status) : stat(path.c_str(), &status);
+    if (result != 0 || !S_ISREG(status.st_mode)) return std::nullopt;
+    return std::pair(status.st_dev, status.st_ino);
+}
+
+} // namespace
+
 void checkOutputsAreNotInputs(std::span<const std::string> outputs, std::span<const std::string> inputs) {
     std::map<std::pair<dev_t, ino_t>, const std::string*> inputFiles;
-    for (const std::string& input : inputs) {
-        struct stat status {};
-        if (input != "-" && stat(input.c_str(), &status) == 0)
-            inputFiles.emplace(std::pair(status.st_dev, status.st_ino), &input);
-    }
+    for (const std::string& input : inputs)
+        if (auto file = regularFileOf(input, STDIN_FILENO)) inputFiles.emplace(*file, &input);
     for (const std::string& output : outputs) {
-        struct stat status {};
-        if (output == "-" || stat(output.c_str(), &status) != 0 || !S_ISREG(status.st_mode)) continue;
-        auto input = inputFiles.find({status.st_dev, status.st_ino});
+        const auto file = regularFileOf(output, STDOUT_FILENO);
+        if (!file) continue;
+        auto input = inputFiles.find(*file);
         if (input != inputFiles.end())
             failWrite(output, "it is the input " + *input->second + "; name another output");
     }

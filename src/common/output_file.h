@@ -24,9 +24,16 @@ enum class OutputContent { Text, Binary };
 // name fits, it is nothing that cannot be written), so that a run can refuse before any work.
 void checkOutputPath(const std::string& path, OutputContent content = OutputContent::Text);
 
-// Refuses (Error(Output), before any work) an output that is one of the inputs, after links: the
-// input would be lost. Each path is looked at once.
+// Refuses (Error(Output), before any work) an output that is one of the inputs, after links, as
+// files: the input would be lost. "-" is standard input among the inputs and standard output among
+// the outputs, so that an output opened on the file standard input reads is refused too. Each path
+// is looked at once.
 void checkOutputsAreNotInputs(std::span<const std::string> outputs, std::span<const std::string> inputs);
+
+// Opens the standard descriptors (0-2) the process was started without on /dev/null, so that no file
+// the program opens takes their place, and remembers them: an output sent to one of them ("-" with
+// standard output closed) is refused rather than written into /dev/null.
+void openClosedStandardDescriptors();
 
 // Whether path is standard output ("-", /dev/stdout, /dev/fd/1): a command writing its data there
 // prints its report on stderr instead (reportStream).
