@@ -20,6 +20,9 @@ struct BvhNode {
     vec4 boundsMin; // xyz: the box's lower corner; w: first (child or triangle index)
     vec4 boundsMax; // xyz: the box's upper corner; w: count (triangles; 0: interior node)
 };
+#ifdef __cplusplus
+static_assert(sizeof(BvhNode) == 32);
+#endif
 
 // A triangle in leaf order: its world-space corners, counter-clockwise seen from its front
 // (scene/scene.h). The w components are 0.
@@ -28,12 +31,10 @@ struct BvhTriangle {
     vec4 p1;
     vec4 p2;
 };
+#ifdef __cplusplus
+static_assert(sizeof(BvhTriangle) == 48);
+#endif
 
 SHPROBE_END
-
-#ifdef __cplusplus
-static_assert(sizeof(shprobe::glsl::BvhNode) == 32);
-static_assert(sizeof(shprobe::glsl::BvhTriangle) == 48);
-#endif
 
 #endif
