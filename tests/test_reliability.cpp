@@ -495,14 +495,17 @@ TEST_F(Reliability, ClosedOrSharedStandardStreamsAreRefused) {
 }
 
 // An output that is an input, by name or through a link, is refused before any work, and the
-// input stays as it was.
+// input stays as it was; a batch's --list counts as an input.
 TEST_F(Reliability, OutputThatIsAnInputIsRefused) {
     Image sky = makeImage(8, 4);
     writeImage(file("sky.exr"), sky);
     writeProbeFile(file("probe.json"), testProbe(3), {});
     fs::create_symlink(folder() / "sky.exr", folder() / "alias.exr");
+    fs::create_directories(folder() / "list");
+    writeText(folder() / "list/sky.json", file("sky.exr") + "\n"); // baked to list/sky.json: the list
     const std::string skyBytes = readText(folder() / "sky.exr"),
-                      probeBytes = readText(folder() / "probe.json");
+                      probeBytes = readText(folder() / "probe.json"),
+                      listBytes = readText(folder() / "list/sky.json");
     const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
         {{"bake", file("sky.exr"), "-o", file("sky.exr")}, file("sky.exr")},
         {{"bake", file("sky.exr"), "--format", "irradiance-cross", "-o", file("alias.exr")},
@@ -511,6 +514,7 @@ TEST_F(Reliability, OutputThatIsAnInputIsRefused) {
         {{"rotate", file("probe.json"), "--euler", "0,90,0", "-o", file("probe.json")}, file("probe.json")},
         {{"bake", file("sky.exr"), "--format", "irradiance-equirect", "--out-dir", folder().string()},
          file("sky.exr")},
+        {{"bake", "--list", file("list/sky.json"), "--out-dir", file("list")}, file("list/sky.json")},
     };
     for (const auto& [args, output] : cases) {
         RunResult result = run(args);
@@ -519,6 +523,8 @@ TEST_F(Reliability, OutputThatIsAnInputIsRefused) {
     }
     EXPECT_EQ(readText(folder() / "sky.exr"), skyBytes);
     EXPECT_EQ(readText(folder() / "probe.json"), probeBytes);
+    EXPECT_EQ(readText(folder() / "list/sky.json"), listBytes);
+    EXPECT_EQ(entriesOf(folder() / "list"), std::vector<std::string>{"sky.json"});
 }
 
 // An output name of 250 bytes and more, up to the longest a folder takes, is written: the

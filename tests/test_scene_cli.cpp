@@ -12,6 +12,10 @@
 
 #include <gtest/gtest.h>
 
+#include <iterator>
+#include <map>
+#include <sys/stat.h>
+
 namespace shprobe {
 namespace {
 
@@ -154,6 +158,108 @@ TEST_F(SceneCommand, BadOptionsAreRefused) {
                    "out.shpv"});
     expectFailure(
         {{"scene", scene, "--grid", "2,2,2", "--previous", scene, "-o", "OUT"}, 2, {scene}, "out.shpv"});
+}
+
+// The regular files under `folder` and their bytes, to tell that a refused run changed none.
+std::map<std::string, std::string> filesUnder(const fs::path& folder) {
+    std::map<std::string, std::string> files;
+    for (const fs::directory_entry& entry : fs::recursive_directory_iterator(folder))
+        if (entry.is_regular_file() && !entry.is_symlink())
+            files[entry.path().string()] = readText(entry.path());
+    return files;
+}
+
+// Every file a scene job reads is one of its inputs: an output onto the scene's buffer or texture
+// (by its name or through a link) is refused before any work, the files left as they were.
+TEST_F(SceneCommand, OutputOntoAFileTheSceneReadsIsRefused) {
+    fs::copy(SHPROBE_GLTF_MODELS_DIR "/BoxTextured-glTF", folder() / "box", fs::copy_options::recursive);
+    const std::string scene = file("box/BoxTextured.gltf"), buffer = file("box/BoxTextured0.bin"),
+                      texture = file("box/CesiumLogoFlat.png"), volume = file("v.shpv");
+    runOk({"scene", scene, "--grid", "2,2,2", "--face-size", "8", "--bounces", "0", "-q", "-o", volume});
+    fs::create_symlink(buffer, folder() / "alias.bin");
+    const std::map<std::string, std::string> before = filesUnder(folder() / "box");
+    const std::string volumeBytes = bytesOf(volume);
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"scene", scene, "--grid", "2,2,2", "-o", buffer}, buffer},
+        {{"scene", scene, "--grid", "2,2,2", "-o", texture}, texture},
+        {{"scene", scene, "--grid", "2,2,2", "-o", file("alias.bin")}, file("alias.bin")},
+        {{"render", "--scene", scene, "--volume", volume, "-o", texture}, texture},
+    };
+    for (const auto& [args, output] : cases) {
+        const RunResult result = run(args);
+        expectMessage({{}, 3, {"cannot write " + output, "it is the input"}}, result);
+        EXPECT_LT(result.seconds, 5.0) << "refused before any work";
+    }
+    EXPECT_EQ(filesUnder(folder() / "box"), before);
+    EXPECT_EQ(bytesOf(volume), volumeBytes);
+}
+
+// A buffer or image URI that leads out of the scene's folder (by "..", an absolute path, an escape,
+// a link to a file or a folder outside) is refused in one line naming it, before the file is
+// opened: FIFOs outside would otherwise be said to be no regular file. Files in subfolders, and
+// links that stay inside, are read as before.
+TEST_F(SceneCommand, UrisOutsideTheSceneFolderAreRefused) {
+    const fs::path models = SHPROBE_GLTF_MODELS_DIR "/BoxTextured-glTF";
+    const std::string gltf = readText(models / "BoxTextured.gltf");
+    for (const char* place : {"box/sub", "elsewhere"}) {
+        fs::create_directories(folder() / place);
+        for (const char* name : {"BoxTextured0.bin", "CesiumLogoFlat.png"})
+            fs::copy_file(models / name, folder() / place / name);
+    }
+    ASSERT_EQ(mkfifo(file("fifo.bin").c_str(), 0644), 0);
+    ASSERT_EQ(mkfifo(file("fifo.png").c_str(), 0644), 0);
+    fs::create_symlink(folder() / "elsewhere/BoxTextured0.bin", folder() / "box/out.bin");
+    fs::create_directory_symlink(folder() / "elsewhere", folder() / "box/linked");
+    fs::create_symlink("sub/BoxTextured0.bin", folder() / "box/in.bin");
+    auto sceneWith = [&](const std::string& name, const std::string& bufferUri, const std::string& imageUri) {
+        std::string text = gltf;
+        const std::pair<std::string, std::string> uris[] = {{"\"BoxTextured0.bin\"", bufferUri},
+                                                            {"\"CesiumLogoFlat.png\"", imageUri}};
+        for (const auto& [from, to] : uris)
+            text.replace(text.find(from), from.size(), "\"" + to + "\"");
+        writeText(folder() / "box" / name, text);
+        return file("box/" + name);
+    };
+    runOk({"scene", sceneWith("inside.gltf", "in.bin", "sub/CesiumLogoFlat.png"), "--grid", "2,2,2",
+           "--face-size", "8", "--bounces", "0", "-q", "-o", file("inside.shpv")});
+    const std::string longUri = [] {
+        std::string uri;
+        for (int i = 0; i < 300; ++i)
+            uri += "../";
+        return uri + "etc/passwd";
+    }();
+    const std::vector<std::pair<std::string, std::string>> buffers = {
+        {"../../../../../../../../etc/passwd", "\"../../../../../../../../etc/passwd\""},
+        {"/etc/passwd", "\"/etc/passwd\""},
+        {"%2E%2E/elsewhere/BoxTextured0.bin", "\"%2E%2E/elsewhere/BoxTextured0.bin\""},
+        {"sub/../../elsewhere/BoxTextured0.bin", "\"sub/../../elsewhere/BoxTextured0.bin\""},
+        {"out.bin", "\"out.bin\""},
+        {"../fifo.bin", "\"../fifo.bin\""},
+        {longUri, "\"" + longUri.substr(0, 200) + "\"..."},
+    };
+    std::vector<std::pair<std::string, std::string>> scenes; // the scene, what its line quotes
+    for (size_t i = 0; i < buffers.size(); ++i)
+        scenes.push_back(
+            {sceneWith("b" + std::to_string(i) + ".gltf", buffers[i].first, "sub/CesiumLogoFlat.png"),
+             "buffers[0].uri " + buffers[i].second});
+    const std::string images[] = {"../elsewhere/CesiumLogoFlat.png", "linked/CesiumLogoFlat.png",
+                                  "../fifo.png"};
+    for (size_t i = 0; i < std::size(images); ++i)
+        scenes.push_back({sceneWith("i" + std::to_string(i) + ".gltf", "sub/BoxTextured0.bin", images[i]),
+                          "images[0].uri \"" + images[i] + "\""});
+    const std::map<std::string, std::string> before = filesUnder(folder() / "box"),
+                                             outside = filesUnder(folder() / "elsewhere");
+    for (const auto& [scene, quoted] : scenes) {
+        expectFailure({{"scene", scene, "--grid", "2,2,2", "-o", "OUT"},
+                       2,
+                       {scene + ": " + quoted, "is outside the scene's folder"},
+                       "out.shpv"});
+        const RunResult result = run({"scene", scene, "--grid", "2,2,2", "-o", file("x.shpv")});
+        EXPECT_LT(result.err.size(), 600u) << "the URI is cut";
+    }
+    EXPECT_FALSE(fs::exists(file("x.shpv")));
+    EXPECT_EQ(filesUnder(folder() / "box"), before);
+    EXPECT_EQ(filesUnder(folder() / "elsewhere"), outside);
 }
 
 } // namespace

@@ -107,7 +107,8 @@ void prepareOutputFolder(const BakeOptions& options, const std::vector<BatchItem
         throw Error(ErrorKind::Output, "cannot write to " + folder + ": " + systemReason(errno));
     if (!S_ISDIR(status.st_mode))
         throw Error(ErrorKind::Output, "cannot write to " + folder + ": it is not a folder");
-    std::vector<std::string> outputs, inputs;
+    // The list counts too: read already, it would still be lost under a probe.
+    std::vector<std::string> outputs, inputs{options.listFile};
     for (const BatchItem& item : items) {
         checkOutputPath(item.output, formatContent(options.format));
         outputs.push_back(item.output);

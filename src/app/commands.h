@@ -221,6 +221,9 @@ void runMerge(const MergeOptions& options);
 // The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize
 // (0: its own), or the built-in sky (128^2 faces by default).
 Environment loadSceneSky(const std::string& path, int faceSize);
+// The files a scene job reads: the scene, its buffer and image files (when the scene can be read;
+// the load reports it otherwise) and the sky's files; an output must be none of them.
+std::vector<std::string> sceneInputs(const std::string& scene, const std::string& sky);
 void runInfo(const InfoOptions& options);
 
 // --face-size and --sanitize for an environment given to render or view (baked before showing it).
@@ -233,7 +236,7 @@ void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t heigh
 // sphere named in sphereOnly, and the others need --scene.
 void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
                         std::initializer_list<const char*> sphereOnly);
-// The files a lit scene reads: the scene, the volume and the sky if one is given.
+// The files a lit scene reads: sceneInputs and the volume.
 std::vector<std::string> litSceneInputs(const LitSceneOptions& options);
 // The scene, its whole volume (baked in that scene) and its sky, for render and view --scene; throws
 // Error(Input) for a missing half, a brick, or a volume of another scene.

@@ -90,9 +90,7 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
 
 void run(const ReferenceOptions& options) {
     checkOutputPath(options.output, OutputContent::Binary);
-    std::vector<std::string> inputs{options.scene};
-    if (!options.sky.empty()) inputs.push_back(options.sky);
-    checkOutputsAreNotInputs({&options.output, 1}, inputs);
+    checkOutputsAreNotInputs({&options.output, 1}, sceneInputs(options.scene, options.sky));
     const Clock::time_point start = Clock::now();
     const World world = loadGltfScene(options.scene);
     const ProbeGrid grid =

@@ -122,8 +122,8 @@ void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
 }
 
 std::vector<std::string> litSceneInputs(const LitSceneOptions& options) {
-    std::vector<std::string> inputs{options.scene, options.volume};
-    if (!options.sky.empty()) inputs.push_back(options.sky);
+    std::vector<std::string> inputs = sceneInputs(options.scene, options.sky);
+    inputs.push_back(options.volume);
     return inputs;
 }
 

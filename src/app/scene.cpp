@@ -80,6 +80,18 @@ Environment loadSceneSky(const std::string& path, int faceSize) {
     return loadEnvironment(path, {.faceSize = faceSize});
 }
 
+std::vector<std::string> sceneInputs(const std::string& scene, const std::string& sky) {
+    std::vector<std::string> files{scene};
+    try {
+        const std::vector<std::string> external = gltfExternalFiles(scene);
+        files.insert(files.end(), external.begin(), external.end());
+    } catch (const Error&) { // loadGltfScene says why
+    }
+    const std::vector<std::string> skyFiles = filesReadBy(sky);
+    files.insert(files.end(), skyFiles.begin(), skyFiles.end());
+    return files;
+}
+
 namespace {
 
 // A probe sees mostly back faces when more than half of its texels do: it is inside something.
@@ -167,9 +179,8 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     if (options.bounds) makeProbeGrid(options.grid, *options.bounds);
     if (options.brick) brickRange(ProbeGrid{.counts = options.grid}, options.brick->brick);
     checkOutputPath(options.output, OutputContent::Binary);
-    std::vector<std::string> inputs{options.scene};
-    for (const std::string& input : {options.previous, options.sky})
-        if (!input.empty()) inputs.push_back(input);
+    std::vector<std::string> inputs = sceneInputs(options.scene, options.sky);
+    if (!options.previous.empty()) inputs.push_back(options.previous);
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
 }
 

@@ -19,6 +19,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <span>
 #include <string_view>
 #include <tiny_gltf.h>
@@ -72,17 +73,128 @@ std::pair<std::string_view, std::string_view> glbParts(std::string_view bytes, c
     return {file, file.substr(20, size_t(jsonLength))};
 }
 
+// ---- The files a scene names: URIs kept to the scene's folder ---------------------------------
+
+std::string folderOf(const std::string& path) {
+    const std::string folder = std::filesystem::path(path).parent_path().string();
+    return folder.empty() ? "." : folder;
+}
+
+// The file name a URI means, decoded as its reader decodes it: tinygltf a buffer's (dlib's
+// urldecode, where "+" is a space and a bad escape a 0 byte), this file an image's (RFC 3986's %XX).
+std::string bufferFileName(const std::string& uri) {
+    auto hex = [](char c) {
+        return std::isxdigit(static_cast<unsigned char>(c)) ? std::stoi(std::string(1, c), nullptr, 16) : 0;
+    };
+    std::string name;
+    for (size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '+') {
+            name += ' ';
+        } else if (uri[i] == '%' && uri.size() > i + 2) {
+            name += char(hex(uri[i + 1]) << 4 | hex(uri[i + 2]));
+            i += 2;
+        } else {
+            name += uri[i];
+        }
+    }
+    return name;
+}
+
+std::string imageFileName(const std::string& uri) {
+    std::string name;
+    for (size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+            std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+            name += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+            i += 2;
+        } else {
+            name += uri[i];
+        }
+    }
+    return name;
+}
+
+// Whether folder/name stays in the folder or below it, by its name ("..", an absolute path) and
+// after its links. The name is taken as the system opens it: up to a 0 byte. A path the system
+// cannot resolve is left to the reader, which says why.
+bool insideFolder(const std::string& folder, const std::string& decoded) {
+    namespace fs = std::filesystem;
+    const fs::path name(decoded.c_str());
+    if (name.is_absolute()) return false;
+    const fs::path normal = name.lexically_normal();
+    if (!normal.empty() && *normal.begin() == "..") return false;
+    std::error_code error;
+    const fs::path base = fs::weakly_canonical(folder, error);
+    const fs::path file = error ? fs::path() : fs::weakly_canonical(fs::path(folder) / name, error);
+    if (error) return true;
+    return std::mismatch(base.begin(), base.end(), file.begin(), file.end()).first == base.end();
+}
+
+// A URI as an error shows it: quoted, cut to a few hundred bytes, control characters as '?'.
+std::string shownUri(const std::string& uri) {
+    constexpr size_t kShown = 200;
+    std::string shown = uri.substr(0, kShown);
+    for (char& c : shown)
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+    return "\"" + shown + (uri.size() > kShown ? "\"..." : "\"");
+}
+
+// A buffer's or an image's URI that names a file, not a data URI tinygltf decodes.
+struct FileUri {
+    std::string where; // "buffers[0].uri"
+    std::string uri;
+    std::string name; // decoded as its reader decodes it
+};
+
+std::vector<FileUri> fileUris(const nlohmann::json& root) {
+    std::vector<FileUri> uris;
+    for (const char* list : {"buffers", "images"}) {
+        if (!root.contains(list)) continue;
+        const nlohmann::json& items = root[list];
+        for (size_t i = 0; i < items.size(); ++i) {
+            if (!items[i].contains("uri")) continue;
+            const std::string uri = items[i]["uri"].get<std::string>();
+            if (uri.empty() || tinygltf::IsDataURI(uri)) continue;
+            uris.push_back({std::string(list) + "[" + std::to_string(i) + "].uri", uri,
+                            list == std::string_view("buffers") ? bufferFileName(uri) : imageFileName(uri)});
+        }
+    }
+    return uris;
+}
+
+// The path a URI's file is read from, after refusing one outside the scene's folder: a scene may
+// name only its own files, not any file the program can read.
+std::string uriFile(const std::string& path, const FileUri& uri) {
+    const std::string folder = folderOf(path);
+    if (!insideFolder(folder, uri.name))
+        fail(path, uri.where + " " + shownUri(uri.uri) +
+                       " is outside the scene's folder; a scene reads only files in its folder or below");
+    return folder + "/" + uri.name;
+}
+
+// The files of every buffer and image URI, checked as uriFile does; `json` was checked by
+// checkGltfJson, so each list and URI has its type.
+std::vector<std::string> uriFiles(std::string_view json, const std::string& path) {
+    std::vector<std::string> files;
+    for (const FileUri& uri : fileUris(nlohmann::json::parse(json)))
+        files.push_back(uriFile(path, uri));
+    return files;
+}
+
 // Reads buffer files through common/input_file.h, so that a buffer file that is missing, a folder or
-// too large is said in the project's words, and only files beside the scene (or below, or above
-// through "..") are looked for: tinygltf also tries the process's working folder.
+// too large is said in the project's words, and only files in the scene's folder (or below) are
+// looked for: tinygltf also tries the process's working folder. uriFiles refused the others first.
 struct FileAccess {
+    std::string folder;
     std::string prefix;  // the scene's folder, with a final '/'
     std::string failure; // the first file that could not be read: "PATH: REASON"
 };
 
 bool fileExists(const std::string& path, void* user) {
     const auto& access = *static_cast<FileAccess*>(user);
-    return path.compare(0, access.prefix.size(), access.prefix) == 0; // whether it exists is said on reading
+    // Whether it exists is said on reading.
+    return path.compare(0, access.prefix.size(), access.prefix) == 0 &&
+           insideFolder(access.folder, path.substr(access.prefix.size()));
 }
 
 std::string expandFilePath(const std::string& path, void*) {
@@ -110,11 +222,6 @@ bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string
     return true;
 }
 
-std::string folderOf(const std::string& path) {
-    const std::string folder = std::filesystem::path(path).parent_path().string();
-    return folder.empty() ? "." : folder;
-}
-
 // JSON starts with an object or an array after white space, and perhaps a UTF-8 byte order mark
 // (which nlohmann-json skips).
 bool looksLikeJson(std::string_view text) {
@@ -130,8 +237,9 @@ tinygltf::Model parseModel(const std::string& path, std::string_view bytes) {
         fail(path,
              "not a glTF file: neither JSON (a .gltf) nor binary glTF (a .glb, which starts with \"glTF\")");
     checkGltfJson(json, path);
+    uriFiles(json, path); // refuses a file outside the folder before tinygltf opens it
     const std::string folder = folderOf(path);
-    FileAccess access{folder.back() == '/' ? folder : folder + "/", {}};
+    FileAccess access{folder, folder.back() == '/' ? folder : folder + "/", {}};
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keepImageBytes, nullptr);
     loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, nullptr, &access});
@@ -407,32 +515,17 @@ class SceneBuilder {
         const std::string what = path_ + ": images[" + std::to_string(index) + "]";
         if (!image.image.empty()) return decodeColourTexture(image.image, options_.maxTexturePixels, what);
         if (image.uri.empty()) fail(what, "has no image data");
+        const std::string name = uriFile(
+            path_, {"images[" + std::to_string(index) + "].uri", image.uri, imageFileName(image.uri)});
         std::string file;
         try {
-            file = readInputFile(folderOf(path_) + "/" + percentDecoded(image.uri), kMaxGltfFileBytes,
-                                 "an image file");
+            file = readInputFile(name, kMaxGltfFileBytes, "an image file");
         } catch (const Error& error) {
             fail(what, error.what());
         }
         return decodeColourTexture(
             std::span(reinterpret_cast<const unsigned char*>(file.data()), file.size()),
             options_.maxTexturePixels, what);
-    }
-
-    // A URI's %XX escapes (RFC 3986, 2.1) decoded: the file name the URI means.
-    static std::string percentDecoded(const std::string& uri) {
-        std::string name;
-        for (size_t i = 0; i < uri.size(); ++i) {
-            if (uri[i] == '%' && i + 2 < uri.size() &&
-                std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
-                std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
-                name += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
-                i += 2;
-            } else {
-                name += uri[i];
-            }
-        }
-        return name;
     }
 
     // KHR_lights_punctual: a directional light shines along its node's -Z, so the direction
@@ -479,6 +572,14 @@ class SceneBuilder {
 };
 
 } // namespace
+
+std::vector<std::string> gltfExternalFiles(const std::string& path) {
+    const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF file");
+    const std::string_view json = isGlb(bytes) ? glbParts(bytes, path).second : std::string_view(bytes);
+    if (!isGlb(bytes) && !looksLikeJson(json)) return {}; // loadGltfScene says what it is
+    checkGltfJson(json, path);
+    return uriFiles(json, path);
+}
 
 World loadGltfScene(const std::string& path, const GltfLoadOptions& options) {
     const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF file");

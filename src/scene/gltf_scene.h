@@ -27,22 +27,25 @@
 // base shape), metallic, roughness, normal, occlusion and alpha (every surface is opaque),
 // samplers (textures repeat and are filtered bilinearly, World's rule) and KHR_texture_transform.
 //
-// What is refused, as one line "PATH: REASON" in Error(ErrorKind::Input): a path that is missing,
-// a folder, empty or unreadable (common/input_file.h); a file that is neither JSON nor a .glb, or a
-// .glb cut short; a property of the wrong JSON type (glTF 2.0's schema: "scenes[0].name must be a
-// string"); what tinygltf refuses (its messages joined into the line); a buffer or image file that
-// cannot be read; a buffer view or accessor reaching past its buffer; an index past the vertices;
-// a value that is NaN or infinite; an attribute of the wrong type or component type; a triangle
-// list whose count is not a multiple of 3; a node hierarchy with a cycle or a node with two
-// parents; an extension in extensionsRequired that is not read here (Draco, KHR_texture_basisu,
-// ...); a texture read through a TEXCOORD other than 0; a scene without triangles; and more
-// triangles or texture pixels than the limits below.
+// What is refused, as one line "PATH: REASON" in Error(ErrorKind::Input): a path that is missing, a
+// folder, empty or unreadable (common/input_file.h); a file that is neither JSON nor a .glb, or a
+// .glb cut short; a buffer or image URI naming a file outside the scene's folder (by "..", an
+// absolute path or a symbolic link), refused before the file is opened; a property of the wrong
+// JSON type (glTF 2.0's schema: "scenes[0].name must be a string"); what tinygltf refuses (its
+// messages joined into the line); a buffer or image file that cannot be read; a buffer view or
+// accessor reaching past its buffer; an index past the vertices; a value that is NaN or infinite;
+// an attribute of the wrong type or component type; a triangle list whose count is not a multiple
+// of 3; a node hierarchy with a cycle or a node with two parents; an extension in
+// extensionsRequired that is not read here (Draco, KHR_texture_basisu, ...); a texture read through
+// a TEXCOORD other than 0; a scene without triangles; and more triangles or texture pixels than the
+// limits below.
 #pragma once
 #include "scene/scene.h"
 
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace shprobe {
 
@@ -56,6 +59,12 @@ struct GltfLoadOptions {
 
 // The largest glTF, .glb, buffer or image file read: tinygltf counts bytes in int.
 constexpr uint64_t kMaxGltfFileBytes = (uint64_t(1) << 31) - 1;
+
+// The files the scene at `path` reads besides itself: the buffer and image URIs that are not data
+// URIs, as the paths loadGltfScene opens, from the JSON alone (a .gltf, or a .glb's JSON chunk), so
+// that a command can tell its outputs from them before any work. Throws what loadGltfScene throws
+// for a file it cannot read or a URI outside the scene's folder.
+std::vector<std::string> gltfExternalFiles(const std::string& path);
 
 // Reads the scene at `path` into world-space triangles; see above for what is read, ignored and
 // refused. World::description is "NAME (T triangles, M materials, S suns)" with NAME the path.
