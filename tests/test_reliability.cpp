@@ -9,6 +9,7 @@
 // inherit. Some cases need root (mounting a small tmpfs to fill it) or another user (permission
 // bits): they are skipped with a message where this process cannot have them.
 #include "child_program.h"
+#include "formats/engine_export.h"
 #include "formats/probe_file.h"
 #include "image/image_write.h"
 #include "sh/basis.h"
@@ -670,6 +671,41 @@ TEST_F(Reliability, BadOptionsAreRefusedBeforeAnyWork) {
         std::printf("%.4f s (--help %.4f s): shprobe %s\n", refused, helpSeconds[command],
                     joined(args).c_str());
     }
+}
+
+// A number a format cannot hold, after the format's own scaling, folding or convolution (a float
+// beyond FLT_MAX, an irradiance map's pixels that could overflow), is refused naming the
+// coefficient, before anything is written: no "inf" in a header, no infinite pixel in a map.
+TEST_F(Reliability, ValuesAFormatCannotHoldAreRefused) {
+    ShCoefficients huge = testProbe(3);
+    huge.rgb[1].r = 1e300; // l=1 m=-1, red: a finite double, far beyond float
+    writeProbeFile(file("huge.json"), huge, {});
+    for (const ExportFormat& format : exportFormats()) {
+        const std::string name = format.name;
+        if (name == "json") continue; // doubles: 1e300 is written as it is (below)
+        expectFailure({{"convert", file("huge.json"), "--format", name, "-o", "OUT"},
+                       2,
+                       {file("huge.json") + ": coefficient l=1 m=-1 (red) is 1e+300",
+                        "beyond what --format " + name + " holds (float)"},
+                       "out" + std::string(format.extension)});
+    }
+    runOk({"convert", file("huge.json"), "--format", "json", "-o", file("copy.json")});
+    EXPECT_EQ(readProbeFile(file("copy.json")).rgb[1].r, 1e300);
+
+    // 3e38 fits a float, but an irradiance probe whose m = 0 coefficients of order 8 are all 3e38 draws
+    // E/pi = 3e38 (1/pi) sum_l sqrt((2l+1)/4pi) = 5.8e38 towards +z: at the default sizes, texels
+    // that close to +z are infinite floats.
+    ShCoefficients bright = makeCoefficients(8, Quantity::Irradiance);
+    for (int l = 0; l < 8; ++l)
+        bright.rgb[size_t(l * (l + 1))] = glm::dvec3(3e38, 0.5, 0.25);
+    writeProbeFile(file("bright.json"), bright, {});
+    for (const std::string format : {"irradiance-equirect", "irradiance-cross"})
+        expectFailure({{"convert", file("bright.json"), "--format", format, "-o", "OUT"},
+                       2,
+                       {file("bright.json") + ": coefficient l=0 m=0 (red) is 3e+38",
+                        "beyond what --format " + format + " holds (float)"},
+                       "map.exr"});
+    runOk({"convert", file("bright.json"), "--format", "binary", "-o", file("bright.bin")});
 }
 
 } // namespace

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <vector>
@@ -289,6 +290,76 @@ std::string gltfText(const ShCoefficients& probe, const EngineCoefficients& c, c
            "}\n";
 }
 
+// ---- Numbers the writers write -----------------------------------------------------------------
+
+// The coefficients as they are (json, binary).
+std::vector<WrittenNumber> coefficientNumbers(const ShCoefficients& probe, const ExportOptions&) {
+    std::vector<WrittenNumber> numbers;
+    for (int i = 0; i < int(probe.rgb.size()); ++i)
+        for (int c = 0; c < 3; ++c)
+            numbers.push_back({probe.rgb[size_t(i)][c], c, i, i + 1});
+    return numbers;
+}
+
+// The folded coefficients of a header. Entry 0 also holds Sloan's split of y_20 (folding.h), whose
+// own entry 6 is three times that part, so a y_20 too large for entry 0 is too large for entry 6.
+std::vector<WrittenNumber> headerNumbers(const ShCoefficients& probe, const ExportOptions&) {
+    if (probe.order < 1 || probe.order > kMaxFoldedOrder) return {}; // the writer refuses it
+    const FoldedCoefficients folded = headerCoefficients(probe);
+    std::vector<WrittenNumber> numbers;
+    for (int i = 0; i < int(probe.rgb.size()); ++i)
+        for (int c = 0; c < 3; ++c)
+            numbers.push_back({folded[size_t(i)][c], c, i, i + 1});
+    return numbers;
+}
+
+// The irradiance maps draw E(n) / pi = (1/pi) sum_l sum_m E_lm y_lm(n). By Cauchy-Schwarz and the
+// addition theorem (sum_m y_lm(n)^2 = (2l+1) / 4pi at any unit n), each band's sum is at most
+// |E_l| sqrt((2l+1) / 4pi), |E_l| the norm of its 2l+1 coefficients, so every pixel of a channel is
+// at most (1/pi) sum_l sqrt((2l+1) / 4pi) |E_l|: that bound, made of all the channel's
+// coefficients, stands for its pixels. (The rounding of the double evaluation, a few ulps, stays
+// far below the half ulp by which a float rounds down to FLT_MAX.)
+std::vector<WrittenNumber> irradianceMapNumbers(const ShCoefficients& probe, const ExportOptions&) {
+    const ShCoefficients irradiance = irradianceMapCoefficients(probe);
+    std::vector<WrittenNumber> numbers;
+    for (int c = 0; c < 3; ++c) {
+        double bound = 0.0;
+        for (int l = 0; l < irradiance.order; ++l) {
+            double squares = 0.0;
+            for (int i = l * l; i < (l + 1) * (l + 1); ++i)
+                squares += irradiance.rgb[size_t(i)][c] * irradiance.rgb[size_t(i)][c];
+            bound += std::sqrt((2.0 * l + 1.0) / (4.0 * std::numbers::pi)) * std::sqrt(squares);
+        }
+        numbers.push_back({bound / std::numbers::pi, c, 0, int(probe.rgb.size())});
+    }
+    return numbers;
+}
+
+// The engine's nine values; each is made of its band (the frame turns a band within itself).
+template <Engine engine>
+std::vector<WrittenNumber> engineNumbers(const ShCoefficients& probe, const ExportOptions& options) {
+    const EngineCoefficients values = engineCoefficients(probe, engine, options.mirror);
+    std::vector<WrittenNumber> numbers;
+    for (int i = 0; i < int(values.size()); ++i) {
+        const int l = shBand(i);
+        const int end = std::min((l + 1) * (l + 1), int(probe.rgb.size()));
+        for (int c = 0; c < 3; ++c)
+            numbers.push_back({values[size_t(i)][c], c, std::min(l * l, end), end});
+    }
+    return numbers;
+}
+
+bool representable(double value, NumberType type) {
+    if (!std::isfinite(value)) return false;
+    return type == NumberType::Double || std::abs(value) <= double(std::numeric_limits<float>::max());
+}
+
+std::string numberText(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", value);
+    return text;
+}
+
 // ---- The table -------------------------------------------------------------------------------
 
 void writeEngineFile(const std::string& path, const ShCoefficients& probe, const ExportOptions& options,
@@ -303,46 +374,53 @@ void writeEngine(const std::string& path, const ShCoefficients& probe, const Exp
 
 constexpr ExportFormat kFormats[] = {
     {"json", ".json", OutputContent::Text, SunHandling::Written, kMaxOrder,
-     "the coefficient file of docs/conventions.md",
+     "the coefficient file of docs/conventions.md", NumberType::Double, coefficientNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeProbeFile(path, probe, options.metadata);
      }},
     {"binary", ".bin", OutputContent::Binary, SunHandling::Dropped, kMaxOrder, "packed float32 (README)",
+     NumberType::Float, coefficientNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions&) {
          writeBinaryProbes(path, std::span(&probe, 1));
      }},
     {"glsl", ".glsl", OutputContent::Text, SunHandling::Refused, kMaxFoldedOrder,
-     "GLSL header folded for sh_irradiance.glsl",
+     "GLSL header folded for sh_irradiance.glsl", NumberType::Float, headerNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeProbeHeader(path, probe, HeaderLanguage::Glsl, options.metadata.source);
      }},
     {"cpp", ".h", OutputContent::Text, SunHandling::Refused, kMaxFoldedOrder,
-     "C/C++ header folded for sh_irradiance.glsl",
+     "C/C++ header folded for sh_irradiance.glsl", NumberType::Float, headerNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeProbeHeader(path, probe, HeaderLanguage::C, options.metadata.source);
      }},
     {"irradiance-equirect", ".exr", OutputContent::Binary, SunHandling::Dropped, kMaxOrder,
-     "E/pi drawn as an equirect EXR",
+     "E/pi drawn as an equirect EXR", NumberType::Float, irradianceMapNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeIrradianceEquirect(path, probe, options.mapSize > 0 ? options.mapSize : 512);
      }},
     {"irradiance-cross", ".exr", OutputContent::Binary, SunHandling::Dropped, kMaxOrder,
-     "E/pi drawn as a cross EXR",
+     "E/pi drawn as a cross EXR", NumberType::Float, irradianceMapNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeIrradianceCross(path, probe, options.mapSize > 0 ? options.mapSize : 128);
      }},
     {"threejs", ".three.json", OutputContent::Text, SunHandling::Refused, kEngineOrder,
-     "three.js LightProbe JSON (ObjectLoader, LightProbe.fromJSON)", writeEngine<Engine::ThreeJs>},
+     "three.js LightProbe JSON (ObjectLoader, LightProbe.fromJSON)", NumberType::Float,
+     engineNumbers<Engine::ThreeJs>, writeEngine<Engine::ThreeJs>},
     {"babylon", ".babylon.json", OutputContent::Text, SunHandling::Refused, kEngineOrder,
-     "Babylon.js SphericalHarmonics.FromArray array (E/pi, left-handed scene)", writeEngine<Engine::Babylon>},
+     "Babylon.js SphericalHarmonics.FromArray array (E/pi, left-handed scene)", NumberType::Float,
+     engineNumbers<Engine::Babylon>, writeEngine<Engine::Babylon>},
     {"gltf", ".gltf", OutputContent::Text, SunHandling::Refused, kEngineOrder,
-     "glTF 2.0 asset with an EXT_lights_image_based light", writeEngine<Engine::Gltf>},
+     "glTF 2.0 asset with an EXT_lights_image_based light", NumberType::Float, engineNumbers<Engine::Gltf>,
+     writeEngine<Engine::Gltf>},
     {"filament", ".filament.txt", OutputContent::Text, SunHandling::Refused, kEngineOrder,
-     "Filament sh.txt as cmgen --sh-shader writes it (see --mirror)", writeEngine<Engine::Filament>},
+     "Filament sh.txt as cmgen --sh-shader writes it (see --mirror)", NumberType::Float,
+     engineNumbers<Engine::Filament>, writeEngine<Engine::Filament>},
     {"unity", ".unity.json", OutputContent::Text, SunHandling::Refused, kEngineOrder,
-     "Unity SphericalHarmonicsL2, 27 floats channel-major", writeEngine<Engine::Unity>},
+     "Unity SphericalHarmonicsL2, 27 floats channel-major", NumberType::Float, engineNumbers<Engine::Unity>,
+     writeEngine<Engine::Unity>},
     {"godot", ".godot.json", OutputContent::Text, SunHandling::Refused, kEngineOrder,
-     "Godot LightmapGI capture SH: 9 radiance colors", writeEngine<Engine::Godot>},
+     "Godot LightmapGI capture SH: 9 radiance colors", NumberType::Float, engineNumbers<Engine::Godot>,
+     writeEngine<Engine::Godot>},
 };
 
 std::string lowercase(std::string text) {
@@ -352,6 +430,41 @@ std::string lowercase(std::string text) {
 }
 
 } // namespace
+
+void requireRepresentable(const ExportFormat& format, const ShCoefficients& probe,
+                          const ExportOptions& options) {
+    // Of the coefficients the unrepresentable numbers are made of, the largest names the problem.
+    int worstIndex = -1, worstChannel = 0;
+    auto magnitude = [&](int index, int channel) {
+        const double value = std::abs(probe.rgb[size_t(index)][channel]);
+        return std::isnan(value) ? std::numeric_limits<double>::infinity() : value;
+    };
+    bool refused = false;
+    for (const WrittenNumber& number : format.numbersOf(probe, options)) {
+        if (representable(number.value, format.type)) continue;
+        refused = true;
+        for (int i = number.first; i < number.end; ++i)
+            if (worstIndex < 0 || magnitude(i, number.channel) > magnitude(worstIndex, worstChannel))
+                worstIndex = i, worstChannel = number.channel;
+    }
+    if (!refused) return;
+    const std::string name = options.metadata.source.empty() ? "the probe" : options.metadata.source;
+    const std::string holds = std::string("beyond what --format ") + format.name + " holds (" +
+                              (format.type == NumberType::Float ? "float" : "finite double") + ")";
+    if (worstIndex < 0) throw Error(ErrorKind::Input, name + ": a value is " + holds);
+    static const char* const kChannels[] = {"red", "green", "blue"};
+    const int l = shBand(worstIndex);
+    throw Error(ErrorKind::Input, name + ": coefficient l=" + std::to_string(l) +
+                                      " m=" + std::to_string(worstIndex - l * (l + 1)) + " (" +
+                                      kChannels[worstChannel] + ") is " +
+                                      numberText(probe.rgb[size_t(worstIndex)][worstChannel]) + ", " + holds);
+}
+
+void ExportFormat::write(const std::string& path, const ShCoefficients& probe,
+                         const ExportOptions& options) const {
+    requireRepresentable(*this, probe, options);
+    writeFile(path, probe, options);
+}
 
 std::span<const ExportFormat> exportFormats() {
     return kFormats;

@@ -15,6 +15,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace shprobe {
 
@@ -32,6 +33,20 @@ enum class SunHandling {
     Refused, // the headers and engine formats: asking for a sun they would drop is an error
 };
 
+// What a format stores each of its numbers as.
+enum class NumberType {
+    Double, // finite doubles (json)
+    Float,  // float32: finite, |x| <= FLT_MAX (binary, headers, irradiance maps, engine formats)
+};
+
+// A number a format writes (or, for the irradiance maps, a bound on the numbers it writes), in one
+// channel and made of the probe's coefficients first..end-1 (flat index) of that channel.
+struct WrittenNumber {
+    double value;
+    int channel; // 0 red, 1 green, 2 blue
+    int first, end;
+};
+
 struct ExportFormat {
     const char* name;      // the --format value
     const char* extension; // of its files; an output name ending in it chooses the format
@@ -39,8 +54,23 @@ struct ExportFormat {
     SunHandling sun;
     int maxOrder;     // highest order it holds whole (engine formats: 3; they take bands 0..2)
     const char* what; // one line for --help
-    void (*write)(const std::string& path, const ShCoefficients& probe, const ExportOptions& options);
+    NumberType type;  // what its numbers are stored as
+    // The numbers the writer would write for the probe, after the format's own scaling, folding or
+    // convolution (none where the writer refuses the probe for another reason).
+    std::vector<WrittenNumber> (*numbersOf)(const ShCoefficients& probe, const ExportOptions& options);
+    void (*writeFile)(const std::string& path, const ShCoefficients& probe, const ExportOptions& options);
+
+    // Every caller writes through here: refuses a probe with a number the format cannot hold
+    // (requireRepresentable), then writes.
+    void write(const std::string& path, const ShCoefficients& probe, const ExportOptions& options) const;
 };
+
+// Throws Error(Input) when a number the format would write for the probe is not representable in
+// its type (NumberType), naming the probe (options.metadata.source) and its coefficient of largest
+// magnitude among those that number is made of: "p.json: coefficient l=1 m=-1 (red) is 1e+300,
+// beyond what --format cpp holds (float)". Nothing is written.
+void requireRepresentable(const ExportFormat& format, const ShCoefficients& probe,
+                          const ExportOptions& options);
 
 std::span<const ExportFormat> exportFormats();
 // nullptr for a name that is no format.

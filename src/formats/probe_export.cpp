@@ -64,10 +64,6 @@ void checkSameKind(std::span<const ShCoefficients> probes) {
                         "binary probes: all probes of a file must share order and quantity");
 }
 
-ShCoefficients irradianceOf(const ShCoefficients& probe) {
-    return probe.quantity == Quantity::Irradiance ? probe : convolveIrradiance(probe);
-}
-
 glm::vec4 reflectedRadiance(const ShCoefficients& irradiance, const glm::dvec3& direction) {
     return glm::vec4(glm::vec3(evaluate(irradiance, direction) / std::numbers::pi), 1.0f);
 }
@@ -179,6 +175,10 @@ std::string headerIdentifier(std::string_view stem) {
     return identifier;
 }
 
+FoldedCoefficients headerCoefficients(const ShCoefficients& probe) {
+    return *foldCoefficients(probe, probe.order, headerPlan(probe).quantity);
+}
+
 std::string probeToHeader(const ShCoefficients& probe, HeaderLanguage language, const std::string& identifier,
                           const std::string& source) {
     if (probe.order < 1 || probe.order > kMaxFoldedOrder)
@@ -186,7 +186,7 @@ std::string probeToHeader(const ShCoefficients& probe, HeaderLanguage language, 
                                           " (sh_irradiance.glsl evaluates up to order 5), not " +
                                           std::to_string(probe.order));
     const HeaderPlan plan = headerPlan(probe);
-    const FoldedCoefficients folded = *foldCoefficients(probe, probe.order, plan.quantity);
+    const FoldedCoefficients folded = headerCoefficients(probe);
     const bool glsl = language == HeaderLanguage::Glsl;
     const std::string array = identifier + "_sh";
     const std::string guard = "SHPROBE_PROBE_" + upperCase(identifier) + (glsl ? "_GLSL" : "_H");
@@ -269,6 +269,10 @@ std::vector<ShCoefficients> readBinaryProbes(const std::string& path) {
     return parseBinaryProbes(readInputFile(path, kMaxBinaryProbeFileBytes, "a binary probe file"), path);
 }
 
+ShCoefficients irradianceMapCoefficients(const ShCoefficients& probe) {
+    return probe.quantity == Quantity::Irradiance ? probe : convolveIrradiance(probe);
+}
+
 void requireEquirectWidth(int width) {
     if (width < 2 || width % 2 != 0)
         throw Error(ErrorKind::Input, "equirect width must be even and at least 2");
@@ -276,7 +280,7 @@ void requireEquirectWidth(int width) {
 
 void writeIrradianceEquirect(const std::string& path, const ShCoefficients& probe, int width) {
     requireEquirectWidth(width);
-    ShCoefficients irradiance = irradianceOf(probe);
+    ShCoefficients irradiance = irradianceMapCoefficients(probe);
     Image image = makeImage(width, width / 2);
     for (int j = 0; j < image.height; ++j)
         for (int i = 0; i < image.width; ++i)
@@ -287,7 +291,7 @@ void writeIrradianceEquirect(const std::string& path, const ShCoefficients& prob
 
 void writeIrradianceCross(const std::string& path, const ShCoefficients& probe, int faceSize) {
     if (faceSize < 1) throw Error(ErrorKind::Input, "cube-map face size must be at least 1");
-    ShCoefficients irradiance = irradianceOf(probe);
+    ShCoefficients irradiance = irradianceMapCoefficients(probe);
     Image cross = makeImage(4 * faceSize, 3 * faceSize);
     for (int face = 0; face < kFaceCount; ++face)
         for (int j = 0; j < faceSize; ++j)

@@ -3,6 +3,7 @@
 // drawn into an equirect map or a horizontal-cross cube map (EXR).
 #pragma once
 #include "sh/coefficients.h"
+#include "sh/folding.h"
 
 #include <cstdint>
 #include <span>
@@ -52,6 +53,9 @@ std::string headerIdentifier(std::string_view stem);
 // (identifier + "_sh"); `source` is copied into a comment (control characters and '\' replaced).
 std::string probeToHeader(const ShCoefficients& probe, HeaderLanguage language, const std::string& identifier,
                           const std::string& source);
+// The coefficients a header holds for the probe (order 1..5): folded to shRadiance for a radiance
+// probe, to shIrradianceOverPi for an irradiance one.
+FoldedCoefficients headerCoefficients(const ShCoefficients& probe);
 // The identifier is headerIdentifier(stem of path). Written atomically.
 void writeProbeHeader(const std::string& path, const ShCoefficients& probe, HeaderLanguage language,
                       const std::string& source);
@@ -60,6 +64,8 @@ void writeProbeHeader(const std::string& path, const ShCoefficients& probe, Head
 // Lambertian surface facing each direction reflects, E(n) / pi: a W x W/2 equirect map (directions
 // of docs/conventions.md) or a horizontal cross (4:3) of faceSize faces, empty cells black. EXR (linear
 // float); written atomically.
+// The irradiance coefficients E_lm the maps draw (the probe's, or their convolution).
+ShCoefficients irradianceMapCoefficients(const ShCoefficients& probe);
 void writeIrradianceEquirect(const std::string& path, const ShCoefficients& probe, int width);
 void writeIrradianceCross(const std::string& path, const ShCoefficients& probe, int faceSize);
 // Throws Error(Input) for a width writeIrradianceEquirect refuses (odd, or below 2), so that an
