@@ -56,8 +56,10 @@ if [ ${#cpu_tests[@]} -eq 0 ]; then
   echo "sanitize: no CPU tests found in build-asan" >&2
   exit 1
 fi
-# test_bench_decode is a script around the program: its target is shprobe_cli.
+# test_bench_decode is a script around the program: its target is shprobe_cli; test_floors reads
+# the sources (target check_floors).
 cpu_tests=("${cpu_tests[@]/#test_bench_decode/shprobe_cli}")
+cpu_tests=("${cpu_tests[@]/#test_floors/check_floors}")
 cmake --build build-asan -j"$jobs" --target "${cpu_tests[@]}" || cmake --build build-asan -j"$jobs"
 ctest --test-dir build-asan -LE gpu --output-on-failure
 

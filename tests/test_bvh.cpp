@@ -284,7 +284,9 @@ TEST(Bvh, NoRayFromInsideAClosedMeshMisses) {
     auto onOctahedron = [](const glm::vec3& p) { return std::abs(p.x) + std::abs(p.y) + std::abs(p.z); };
     const std::vector<std::pair<World, std::function<float(const glm::vec3&)>>> meshes = {
         {cube(), onCube}, {octahedron(), onOctahedron}};
-    for (const auto& [world, level] : meshes) {
+    for (const auto& mesh : meshes) {
+        const World& world = mesh.first;
+        const std::function<float(const glm::vec3&)>& level = mesh.second; // lambdas capture no bindings
         const Bvh bvh = buildBvh(world);
         int misses = 0, frontFaces = 0, offSurface = 0, rays = 0;
         auto cast = [&](const Ray& ray) {
