@@ -2,6 +2,8 @@
 // .glb layout of its section 4.4), so that the reader is checked against an independent writer.
 #include "scene_fixtures.h"
 
+#include "scene/gltf_scene.h"
+
 #include <glm/geometric.hpp>
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -9,9 +11,11 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <unistd.h>
 
 namespace shprobe::testing {
 
@@ -264,6 +268,15 @@ FixtureScene cornellBoxScene(const CornellBoxOptions& options) {
 
 void writeCornellBoxGltf(const std::string& path, const CornellBoxOptions& options) {
     writeGltf(path, cornellBoxScene(options), options.container);
+}
+
+World loadCornellBoxWorld(const CornellBoxOptions& options) {
+    const std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("shprobe_cornell_box_" + std::to_string(getpid()) + ".glb");
+    writeCornellBoxGltf(path.string(), options);
+    World world = loadGltfScene(path.string());
+    std::filesystem::remove(path);
+    return world;
 }
 
 FixtureScene boxScene(const BoxOptions& options) {

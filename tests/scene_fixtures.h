@@ -3,6 +3,8 @@
 // a .glb. A scene is described as plain data (FixtureScene) and written by writeGltf; the Cornell
 // box, the single box and the node hierarchy are such descriptions, in metres.
 #pragma once
+#include "scene/scene.h"
+
 #include <glm/gtc/quaternion.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
@@ -111,6 +113,8 @@ constexpr glm::vec3 kCornellRed{0.65f, 0.05f, 0.05f};
 constexpr glm::vec3 kCornellGreen{0.12f, 0.45f, 0.15f};
 FixtureScene cornellBoxScene(const CornellBoxOptions& options = {});
 void writeCornellBoxGltf(const std::string& path, const CornellBoxOptions& options = {});
+// The Cornell box as loadGltfScene reads it (written to a temporary .glb, read, removed).
+World loadCornellBoxWorld(const CornellBoxOptions& options = {});
 
 // One axis-aligned box centred at the origin, of one material: with inward faces, closed and of
 // uniform emission and albedo, the white furnace of scene probes.

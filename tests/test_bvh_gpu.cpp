@@ -51,14 +51,7 @@ const World& engine() {
 
 // The Cornell box with its two blocks, open at the front so that some rays leave it.
 const World& cornellBox() {
-    static const World world = [] {
-        const fs::path path =
-            fs::temp_directory_path() / ("shprobe_test_bvh_gpu_" + std::to_string(getpid()) + ".glb");
-        writeCornellBoxGltf(path.string(), {.innerBoxes = true});
-        World loaded = loadGltfScene(path.string());
-        fs::remove(path);
-        return loaded;
-    }();
+    static const World world = loadCornellBoxWorld({.innerBoxes = true});
     return world;
 }
 
