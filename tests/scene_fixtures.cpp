@@ -332,4 +332,15 @@ HierarchyFixture hierarchyFixture() {
     return fixture;
 }
 
+Cubemap directionalSky(int faceSize) {
+    Cubemap sky = makeCubemap(faceSize);
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < faceSize; ++j)
+            for (int i = 0; i < faceSize; ++i) {
+                const glm::dvec3 d = texelDirection(face, i, j, faceSize);
+                sky.at(face, i, j) = glm::vec4(glm::vec3(1.0 + d.x, 2.0 + d.y, 3.0 + d.z), 1.0f);
+            }
+    return sky;
+}
+
 } // namespace shprobe::testing

@@ -4,6 +4,7 @@
 // box, the single box and the node hierarchy are such descriptions, in metres.
 #pragma once
 #include "scene/scene.h"
+#include "sh/cubemap.h"
 
 #include <glm/gtc/quaternion.hpp>
 #include <glm/mat4x4.hpp>
@@ -139,5 +140,8 @@ struct HierarchyFixture {
     glm::vec3 sunIrradiance;
 };
 HierarchyFixture hierarchyFixture();
+
+// A sky whose every texel differs: radiance (1 + x, 2 + y, 3 + z) from the texel's own direction.
+Cubemap directionalSky(int faceSize);
 
 } // namespace shprobe::testing

@@ -62,19 +62,6 @@ World boxWorld(glm::vec3 lo, glm::vec3 hi, const SceneMaterial& material, bool i
     return world;
 }
 
-// A sky whose every texel differs: radiance from the texel's own direction.
-Cubemap directionalSky(int faceSize) {
-    Cubemap sky = makeCubemap(faceSize);
-    for (int face = 0; face < kFaceCount; ++face)
-        for (int j = 0; j < faceSize; ++j)
-            for (int i = 0; i < faceSize; ++i) {
-                const glm::dvec3 d = texelDirection(face, i, j, faceSize);
-                sky.texels[(size_t(face) * faceSize + j) * faceSize + i] =
-                    glm::vec4(glm::vec3(1.0 + d.x, 2.0 + d.y, 3.0 + d.z), 1.0f);
-            }
-    return sky;
-}
-
 // Texels of a capture whose radiance differs from the reference's rays through the same texel
 // centres by more than `tolerance` of max(1, |reference|).
 size_t differingTexels(const Cubemap& seen, const Cubemap& traced, double tolerance) {
@@ -94,7 +81,7 @@ class SceneCaptureTest : public GpuTest {};
 // sky's own bake.
 TEST_F(SceneCaptureTest, OpenSkyIsTheSkyItself) {
     const int n = 16;
-    const Cubemap sky = directionalSky(n);
+    const Cubemap sky = testing::directionalSky(n);
     World world;
     world.description = "nothing";
     SceneCapture capture = createSceneCapture(context(), world, sky, {.faceSize = n});
@@ -123,7 +110,7 @@ TEST_F(SceneCaptureTest, ClosedEmissiveBoxIsUniform) {
     const World world =
         boxWorld(glm::vec3(-1.0f), glm::vec3(1.0f), {.albedo = glm::vec3(0.0f), .emission = le}, true);
     SceneCapture capture =
-        createSceneCapture(context(), world, directionalSky(4), {.faceSize = 8, .order = 3});
+        createSceneCapture(context(), world, testing::directionalSky(4), {.faceSize = 8, .order = 3});
     const std::array<glm::dvec3, 3> positions{glm::dvec3(0.0), glm::dvec3(0.5, -0.3, 0.8),
                                               glm::dvec3(-0.9, 0.9, -0.9)};
     const std::vector<SceneProbe> probes =
@@ -154,7 +141,8 @@ TEST_F(SceneCaptureTest, BackFacesAreCountedAndDark) {
         SceneMaterial material = glowing;
         material.doubleSided = doubleSided;
         const World world = boxWorld(glm::vec3(-1.0f), glm::vec3(1.0f), material, false);
-        SceneCapture capture = createSceneCapture(context(), world, directionalSky(4), {.faceSize = n});
+        SceneCapture capture =
+            createSceneCapture(context(), world, testing::directionalSky(4), {.faceSize = n});
         const std::vector<SceneProbe> probes =
             bakeSceneProbes(context(), capture, {&centre, 1}, {.order = 3});
         destroySceneCapture(context(), capture);
@@ -175,7 +163,7 @@ TEST_F(SceneCaptureTest, FurnaceFollowsTheGeometricSeries) {
     const World world =
         boxWorld(glm::vec3(-1.0f), glm::vec3(1.0f), {.albedo = glm::vec3(float(a)), .emission = le}, true);
     SceneCapture capture =
-        createSceneCapture(context(), world, directionalSky(4), {.faceSize = 8, .order = 3});
+        createSceneCapture(context(), world, testing::directionalSky(4), {.faceSize = 8, .order = 3});
     std::vector<glm::dvec3> positions;
     for (int k = 0; k < 2; ++k)
         for (int j = 0; j < 2; ++j)
@@ -221,7 +209,7 @@ TEST_F(SceneCaptureTest, DirectLightMatchesTheReferenceRays) {
     world.materials.push_back(block.materials[0]);
     world.triangleMaterials.insert(world.triangleMaterials.end(), block.triangleCount(), 1u);
     const int n = 32;
-    const Cubemap sky = directionalSky(8);
+    const Cubemap sky = testing::directionalSky(8);
     const glm::dvec3 probe(-0.3, 0.1, 0.2);
     SceneCapture capture = createSceneCapture(context(), world, sky, {.faceSize = n});
     const Cubemap seen = captureProbeCubemap(context(), capture, probe);
@@ -248,7 +236,7 @@ TEST_F(SceneCaptureTest, SunlightMatchesTheReferenceRays) {
         {.innerBoxes = true, .sun = testing::FixtureSun{glm::vec3(0.3f, 0.7f, 1.0f), glm::vec3(1.0f), 3.0f}});
     const World world = loadGltfScene(path);
     ASSERT_EQ(world.suns.size(), 1u);
-    const Cubemap sky = directionalSky(8);
+    const Cubemap sky = testing::directionalSky(8);
     const int n = 32;
     SceneCapture capture = createSceneCapture(context(), world, sky, {.faceSize = n});
     const ReferenceTracer tracer(world, sky);
@@ -432,7 +420,7 @@ TEST_F(SceneCaptureTest, CornellBoxApproachesThePathTracedReference) {
     const std::string path = ::testing::TempDir() + "/cornell_capture.glb";
     testing::writeCornellBoxGltf(path, {.lightSide = 1.0f, .closed = true, .innerBoxes = true});
     const World world = loadGltfScene(path);
-    const Cubemap sky = directionalSky(4); // the box is closed: never seen
+    const Cubemap sky = testing::directionalSky(4); // the box is closed: never seen
     const int faceSize = 32;
     std::array<ReferenceAgreement, 2> bounce1;
     for (int n : {2, 4}) {
@@ -465,7 +453,7 @@ TEST_F(SceneCaptureTest, CornellBoxApproachesThePathTracedReference) {
 TEST_F(SceneCaptureTest, EngineBounceApproachesThePathTracedReference) {
     const World world =
         loadGltfScene(SHPROBE_GLTF_MODELS_DIR "/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
-    const Cubemap sky = directionalSky(8);
+    const Cubemap sky = testing::directionalSky(8);
     const int faceSize = 32;
     const ProbeGrid grid = probeGridInWorld(glm::ivec3(3), world);
     SceneCapture capture = createSceneCapture(context(), world, sky, {.faceSize = faceSize});
@@ -488,7 +476,7 @@ TEST_F(SceneCaptureTest, EngineBounceApproachesThePathTracedReference) {
 TEST_F(SceneCaptureTest, EngineMatchesTheReferenceRays) {
     const World world =
         loadGltfScene(SHPROBE_GLTF_MODELS_DIR "/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
-    const Cubemap sky = directionalSky(8);
+    const Cubemap sky = testing::directionalSky(8);
     const int n = 32;
     const ProbeGrid grid = probeGridInWorld(glm::ivec3(2), world);
     SceneCapture capture = createSceneCapture(context(), world, sky, {.faceSize = n});

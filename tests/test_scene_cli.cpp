@@ -32,15 +32,16 @@ std::string bytesOf(const std::string& path) {
     return readText(path);
 }
 
-// Bricks bake one bounce each: bounce 0 in three bricks, merged, must be the whole bounce-0 bake
-// byte for byte (each probe's capture and bake do not depend on which probes share its batch); so
-// must bounce 1 in bricks reading the merged bounce 0 (--previous), against the whole --bounces 1
-// bake. The grid is 3x3x3 inside the box, faces 16^2: small enough for lavapipe, and the bricks
-// cut through batches of 4 probes.
+// On the gpu backend, bricks bake one bounce each: bounce 0 in three bricks, merged, must be the whole
+// bounce-0 bake byte for byte (each probe's capture and bake do not depend on which probes share its batch);
+// so must bounce 1 in bricks reading the merged bounce 0 (--previous), against the whole --bounces 1 bake.
+// The grid is 3x3x3 inside the box, faces 16^2: small enough for lavapipe, and the bricks cut through batches
+// of 4 probes.
 TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
     const std::string scene = cornellBox();
     const std::vector<std::string> common{
-        "scene", scene, "--grid", "3,3,3", "--face-size", "16", "--probes-per-batch", "4", "-q"};
+        "scene", scene,       "--grid", "3,3,3", "--face-size", "16", "--probes-per-batch",
+        "4",     "--backend", "gpu",    "-q"};
     auto bake = [&](std::vector<std::string> extra, const std::string& output) {
         std::vector<std::string> args = common;
         args.insert(args.end(), extra.begin(), extra.end());
@@ -77,6 +78,36 @@ TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
         if (!zero.valid[p]) continue; // inside an inner block
         EXPECT_GT(one.radiance[p * 9].g, zero.radiance[p * 9].g) << "probe " << p;
     }
+}
+
+// On the cpu backend every run bakes all bounces of its probes, the surfaces' cache gathered where
+// they need it with random numbers named by the point: bricks of a two-bounce bake merge to the
+// whole bake byte for byte, and a second whole run gives the same bytes.
+TEST_F(SceneCommand, RayBricksMergeToTheWholeBake) {
+    const std::string scene = cornellBox();
+    const std::vector<std::string> common{"scene",     scene, "--grid",    "3,3,3", "--face-size", "8",
+                                          "--bounces", "2",   "--backend", "cpu",   "-q"};
+    auto bake = [&](std::vector<std::string> extra, const std::string& output) {
+        std::vector<std::string> args = common;
+        args.insert(args.end(), extra.begin(), extra.end());
+        args.insert(args.end(), {"-o", output});
+        runOk(args);
+    };
+    bake({}, file("whole.shpv"));
+    bake({}, file("again.shpv"));
+    EXPECT_EQ(bytesOf(file("again.shpv")), bytesOf(file("whole.shpv")));
+    std::vector<std::string> merge{"merge"};
+    for (const char* brick : {"1/2", "0/2"}) {
+        const std::string name = file(std::string("b_") + brick[0] + ".shpv");
+        bake({"--brick", brick}, name);
+        merge.push_back(name);
+    }
+    merge.insert(merge.end(), {"-o", file("merged.shpv")});
+    runOk(merge);
+    EXPECT_EQ(bytesOf(file("merged.shpv")), bytesOf(file("whole.shpv")));
+    const ProbeVolume volume = readProbeVolume(file("whole.shpv"));
+    EXPECT_EQ(volume.bounces, 2);
+    EXPECT_CONTAINS(volume.settings, "\"backend\":\"cpu\"");
 }
 
 // The real engine model bakes with the defaults but a small grid; some probes lie inside its parts
@@ -152,12 +183,26 @@ TEST_F(SceneCommand, BadOptionsAreRefused) {
     expectFailure({{"scene", scene, "--grid", "3,3", "-o", "OUT"}, 2, {"--grid"}, "out.shpv"});
     expectFailure(
         {{"scene", scene, "--grid", "2,2,2", "--brick", "2/2", "-o", "OUT"}, 2, {"--brick"}, "out.shpv"});
-    expectFailure({{"scene", scene, "--grid", "2,2,2", "--brick", "0/2", "--bounces", "2", "-o", "OUT"},
+    expectFailure({{"scene", scene, "--grid", "2,2,2", "--brick", "0/2", "--bounces", "2", "--backend", "gpu",
+                    "-o", "OUT"},
                    2,
                    {"--bounces"},
                    "out.shpv"});
     expectFailure(
         {{"scene", scene, "--grid", "2,2,2", "--previous", scene, "-o", "OUT"}, 2, {scene}, "out.shpv"});
+    expectFailure({{"scene", scene, "--grid", "2,2,2", "--previous", scene, "--backend", "cpu", "-o", "OUT"},
+                   2,
+                   {"--previous", "cpu"},
+                   "out.shpv"});
+    expectFailure(
+        {{"scene", scene, "--grid", "2,2,2", "--rays-per-texel", "4", "--backend", "gpu", "-o", "OUT"},
+         2,
+         {"--rays-per-texel"},
+         "out.shpv"});
+    expectFailure({{"scene", scene, "--grid", "2,2,2", "--backend", "rays", "-o", "OUT"},
+                   2,
+                   {"--backend"},
+                   "out.shpv"});
 }
 
 // The regular files under `folder` and their bytes, to tell that a refused run changed none.

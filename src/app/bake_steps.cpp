@@ -38,18 +38,6 @@ struct Finished {
     std::vector<double> window; // empty: none
 };
 
-// Whether a Vulkan device here may be a GPU. On Linux a GPU's driver needs its device file (or
-// makes it from its kernel module), and the answer without one (a CPU, where the fast CPU path is
-// faster) is known without the Vulkan start-up, which loads every installed driver. Elsewhere
-// only the device itself tells.
-bool mayHaveGpu() {
-#if defined(__linux__)
-    return !findGpuFile().empty();
-#else
-    return true;
-#endif
-}
-
 bool needsFinishing(const BakeOptions& options) {
     return hasLights(options.lights) || !options.window.none();
 }
@@ -61,6 +49,17 @@ Finished finish(const BakeOptions& options, ShCoefficients radiance) {
 }
 
 } // namespace
+
+// On Linux a GPU's driver needs its device file (or makes it from its kernel module), so that the
+// answer without one is known without the Vulkan start-up, which loads every installed driver.
+// Elsewhere only the device itself tells.
+bool mayHaveGpu() {
+#if defined(__linux__)
+    return !findGpuFile().empty();
+#else
+    return true;
+#endif
+}
 
 Environment loadInput(const BakeOptions& options, const std::string& input) {
     if (!input.empty()) {

@@ -74,6 +74,9 @@ struct Backend {
 // CPU (lavapipe: the fast CPU path projects faster than llvmpipe runs the shaders), or when no
 // Vulkan device can be used; Vulkan on a GPU. With --device or --validation auto means gpu.
 Backend chooseBackend(const BakeOptions& options, double work);
+// Whether a Vulkan device here may be a GPU: false where none can be (then any is a CPU, where the
+// CPU paths are faster), without starting Vulkan.
+bool mayHaveGpu();
 // Whether the options ask for Vulkan whatever the job: --backend gpu, a --device named, or
 // --validation (which checks Vulkan's use).
 bool requestsVulkan(const BakeOptions& options);

@@ -136,6 +136,10 @@ struct SceneOptions {
     std::optional<BrickOption> brick; // I/N: one brick of the grid, one bounce
     std::string previous;             // the previous bounce's whole volume
     uint32_t probesPerBatch = 32;
+    std::string backend = "auto"; // auto | gpu (rasterized captures) | cpu (rays: scene/ray_bake.h)
+    int raysPerTexel = 0;         // cpu: 0 is 4; gpu: one, at the texel's centre
+    double cacheSpacing = 0.0;    // cpu: 0 is the world's diagonal / 64
+    int gatherRays = 64;          // cpu: per cache point
     std::string device;
     bool validation = false;
     bool quiet = false;

@@ -5,6 +5,7 @@
 #include "app/parsed_option.h"
 #include "app/program.h"
 
+#include "app/bake_steps.h"
 #include "app/stopwatch.h"
 #include "common/error.h"
 #include "common/output_file.h"
@@ -14,12 +15,15 @@
 #include "image/environment.h"
 #include "scene/gltf_scene.h"
 #include "scene/probe_grid.h"
+#include "scene/ray_bake.h"
 #include "vk/context.h"
 
 #include <algorithm>
 #include <cstdio>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <unistd.h>
 
 namespace shprobe {
 
@@ -58,8 +62,26 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                     "bounce after that volume's, else bounce 0; `shprobe merge` joins the bricks");
     command.add_option("--previous", options.previous,
                        "The whole volume of the previous bounce: bake the one bounce after it");
+    command
+        .add_option("--backend", options.backend,
+                    "gpu: captures rasterized on the Vulkan device, bounces through the probe grid; "
+                    "cpu: rays on all cores, bounces at the surfaces; auto: cpu where no GPU is "
+                    "(lavapipe), else gpu")
+        ->check(CLI::IsMember({"auto", "gpu", "cpu"}))
+        ->capture_default_str();
     addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
-                   "Probes captured per command buffer", 1, 4096);
+                   "gpu: probes captured per command buffer", 1, 4096);
+    addRangeOption(command, "--rays-per-texel", options.raysPerTexel,
+                   "cpu: jittered rays per cube-map texel, rounded up to a square (0: 4; 1: the "
+                   "texel's centre, as the gpu backend sees it)",
+                   0, 1024);
+    command
+        .add_option("--cache-spacing", options.cacheSpacing,
+                    "cpu: the largest distance between the surface points that gather bounced light "
+                    "(0: the scene's diagonal / 64)")
+        ->check(numberFrom(0.0, 1e30));
+    addRangeOption(command, "--gather-rays", options.gatherRays,
+                   "cpu: rays each surface point gathers a bounce with", 1, 1 << 20);
     addDeviceOptions(command, options.device, options.validation);
     command.add_flag("-q,--quiet", options.quiet, "No report");
 }
@@ -99,6 +121,10 @@ bool insideGeometry(uint32_t backFaceTexels, int faceSize) {
     return 2 * uint64_t(backFaceTexels) > 6 * uint64_t(faceSize) * uint64_t(faceSize);
 }
 
+int cpuRaysPerTexel(const SceneOptions& options) {
+    return options.raysPerTexel > 0 ? options.raysPerTexel : 4;
+}
+
 ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
     return options.bounds ? makeProbeGrid(options.grid, *options.bounds)
                           : probeGridInWorld(options.grid, world);
@@ -106,8 +132,14 @@ ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
 
 // What decides the probes' values besides the grid, order and bounces: bricks merge only when it
 // is the same.
-std::string bakeSettings(const SceneOptions& options, const Environment& sky) {
-    return nlohmann::json{{"face_size", options.faceSize}, {"sky", sky.description}}.dump();
+std::string bakeSettings(const SceneOptions& options, const std::string& backend, const Environment& sky) {
+    nlohmann::json settings{{"backend", backend}, {"face_size", options.faceSize}, {"sky", sky.description}};
+    if (backend == "cpu") {
+        settings["rays_per_texel"] = cpuRaysPerTexel(options);
+        settings["cache_spacing"] = options.cacheSpacing;
+        settings["gather_rays"] = options.gatherRays;
+    }
+    return settings.dump();
 }
 
 // The previous bounce as the capture reads it: the whole grid, the same grid and order.
@@ -141,15 +173,18 @@ BounceSource bounceSourceOf(const ProbeVolume& volume, std::vector<glm::dvec3>& 
             volume.valid};
 }
 
-// One bounce of probes [range.begin, range.end) into a volume: coefficients of valid probes,
-// zeros for those inside geometry.
-ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, const SceneOptions& options,
-                       const ProbeGrid& grid, ProbeRange range) {
+std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range) {
     std::vector<glm::dvec3> positions;
     for (uint32_t p = range.begin; p < range.end; ++p)
         positions.push_back(probePosition(grid, probeCell(grid, p)));
-    const std::vector<SceneProbe> probes = bakeSceneProbes(
-        context, capture, positions, {.order = options.order, .probesPerBatch = options.probesPerBatch});
+    return positions;
+}
+
+// Probes [range.begin, range.end) into a volume: coefficients of valid probes, zeros for those
+// inside geometry. Probe is gpu's SceneProbe or cpu's RayBakedProbe.
+template <typename Probe>
+ProbeVolume volumeOf(const std::vector<Probe>& probes, const SceneOptions& options, const ProbeGrid& grid,
+                     ProbeRange range) {
     ProbeVolume volume;
     volume.grid = grid;
     volume.order = options.order;
@@ -170,12 +205,113 @@ ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, cons
     return volume;
 }
 
+// One bounce of probes [range.begin, range.end) on the GPU.
+ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, const SceneOptions& options,
+                       const ProbeGrid& grid, ProbeRange range) {
+    const std::vector<SceneProbe> probes =
+        bakeSceneProbes(context, capture, probePositions(grid, range),
+                        {.order = options.order, .probesPerBatch = options.probesPerBatch});
+    return volumeOf(probes, options, grid, range);
+}
+
+// A line on stderr, redrawn at most every quarter second, while a bake runs on a terminal:
+// "probes 1200/4096, 3.1 Mrays/s, 12 s left".
+class BakeProgressLine {
+  public:
+    BakeProgressLine(size_t total, bool quiet)
+        : total_(total), enabled_(!quiet && isatty(STDERR_FILENO) == 1) {}
+    ~BakeProgressLine() {
+        if (drawn_) std::fputs("\r\033[K", stderr);
+    }
+    void update(size_t done, uint64_t rays) {
+        if (!enabled_ || millisecondsSince(last_) < 250.0) return;
+        last_ = Clock::now();
+        const double seconds = millisecondsSince(start_) / 1000.0;
+        const double left = done > 0 ? seconds * double(total_ - done) / double(done) : 0.0;
+        std::fprintf(stderr, "\r\033[Kprobes %zu/%zu, %.1f Mrays/s, %.0f s left", done, total_,
+                     double(rays) / seconds * 1e-6, left);
+        std::fflush(stderr);
+        drawn_ = true;
+    }
+
+  private:
+    size_t total_;
+    bool enabled_;
+    bool drawn_ = false;
+    Clock::time_point start_ = Clock::now();
+    Clock::time_point last_ = Clock::now();
+};
+
+RayBakeOptions rayBakeOptions(const SceneOptions& options) {
+    return {.order = options.order,
+            .faceSize = options.faceSize,
+            .raysPerTexel = cpuRaysPerTexel(options),
+            .bounces = options.bounces,
+            .cacheSpacing = options.cacheSpacing,
+            .gatherRays = options.gatherRays};
+}
+
+// Every bounce of probes [range.begin, range.end) by rays: the surfaces' cache is gathered where
+// these probes need it, so a brick is exactly its part of the whole bake.
+ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
+                       const ProbeGrid& grid, ProbeRange range, RayBakeCounts& counts) {
+    RayBaker baker(world, sky.cubemap, rayBakeOptions(options));
+    BakeProgressLine line(range.end - range.begin, options.quiet);
+    const std::vector<RayBakedProbe> probes = baker.bakeProbes(probePositions(grid, range), [&](size_t done) {
+        const RayBakeCounts sofar = baker.counts();
+        line.update(done, sofar.probeRays + sofar.cacheRays);
+    });
+    counts = baker.counts();
+    ProbeVolume volume = volumeOf(probes, options, grid, range);
+    volume.bounces = options.bounces;
+    return volume;
+}
+
+// The device a scene bakes on and, for auto, why: cpu (no context) or gpu (its context).
+struct SceneBackend {
+    std::string name;
+    std::string reason;
+    std::optional<Context> context;
+};
+
+// auto means gpu where the options ask for Vulkan (--device, --validation) or continue a gpu bake
+// (--previous), cpu where no GPU can be (no device file) or the Vulkan device is a CPU (lavapipe:
+// rays on the cores are faster than llvmpipe's rasterizer), else gpu.
+SceneBackend chooseSceneBackend(const SceneOptions& options) {
+    const bool asksForVulkan = !options.device.empty() || options.validation || !options.previous.empty();
+    if (options.backend == "cpu") return {"cpu", "", std::nullopt};
+    if (options.backend == "auto" && !asksForVulkan && !mayHaveGpu())
+        return {"cpu", "no GPU device file: any Vulkan device here is a CPU", std::nullopt};
+    Context context;
+    try {
+        context = createGraphicsContext(options.device, options.validation);
+    } catch (const Error& error) {
+        if (options.backend != "auto" || asksForVulkan || error.kind() != ErrorKind::Device) throw;
+        return {"cpu", "no usable Vulkan device", std::nullopt};
+    }
+    if (options.backend == "auto" && !asksForVulkan && context.info.type == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+        std::string reason = "the Vulkan device is a CPU (" + context.info.name + ")";
+        destroyContext(context);
+        return {"cpu", reason, std::nullopt};
+    }
+    return {"gpu", options.backend == "auto" ? "a GPU" : "", std::move(context)};
+}
+
 // What the options ask for that no scene can give, before the scene is read: a bounce count with
-// one bounce's options, bounds that make no grid of these counts, more bricks than probes.
+// one bounce's options, a cpu option for the gpu, bounds that make no grid of these counts, more
+// bricks than probes.
 void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
-    if (bouncesGiven && (options.brick || !options.previous.empty()))
+    if (bouncesGiven && !options.previous.empty())
+        throw Error(ErrorKind::Input, "scene: --previous bakes one bounce; --bounces is for whole bakes");
+    if (bouncesGiven && options.brick && options.backend == "gpu")
         throw Error(ErrorKind::Input,
-                    "scene: --brick and --previous bake one bounce; --bounces is for whole bakes");
+                    "scene: --brick bakes one bounce on the gpu backend; --bounces is for whole bakes");
+    if (!options.previous.empty() && options.backend == "cpu")
+        throw Error(ErrorKind::Input, "scene: --previous continues a gpu bake; the cpu backend bakes every "
+                                      "bounce in one run (a --brick too)");
+    if (options.raysPerTexel > 1 && options.backend == "gpu")
+        throw Error(ErrorKind::Input, "scene: --rays-per-texel is for the cpu backend; the gpu rasterizes "
+                                      "one sample per texel");
     if (options.bounds) makeProbeGrid(options.grid, *options.bounds);
     if (options.brick) brickRange(ProbeGrid{.counts = options.grid}, options.brick->brick);
     checkOutputPath(options.output, OutputContent::Binary);
@@ -184,27 +320,17 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
 }
 
-} // namespace
-
-void runScene(const SceneOptions& options, bool bouncesGiven) {
-    checkSceneOptions(options, bouncesGiven);
-    const Clock::time_point start = Clock::now();
-    const World world = loadGltfScene(options.scene);
-    const ProbeGrid grid = chosenGrid(options, world);
-    const ProbeRange range =
-        options.brick ? brickRange(grid, options.brick->brick) : ProbeRange{0, grid.probeCount()};
-    const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
-    const std::string settings = bakeSettings(options, sky);
+// Bounces on the GPU, each through the previous one's probe grid: a whole bake, one brick of one
+// bounce, or the bounce after --previous.
+ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environment& sky,
+                      const SceneOptions& options, const ProbeGrid& grid, ProbeRange range,
+                      const std::string& settings) {
     const std::optional<ProbeVolume> previous =
         options.previous.empty() ? std::nullopt
                                  : std::optional(readPreviousBounce(options, grid, world, settings));
-
-    Context context = createGraphicsContext(options.device, options.validation);
-    ScopeExit releaseContext([&] { destroyContext(context); });
     SceneCapture capture = createSceneCapture(context, world, sky.cubemap,
                                               {.faceSize = options.faceSize, .order = options.order});
     ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });
-
     std::vector<glm::dvec3> irradiance;
     const int first = previous ? previous->bounces + 1 : 0;
     const int last = !options.brick && !previous ? options.bounces : first;
@@ -220,10 +346,37 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     if (context.validationMessages() > 0)
         throw Error(ErrorKind::Device, "scene: the Vulkan validation layer reported " +
                                            std::to_string(context.validationMessages()) + " messages");
+    return volume;
+}
+
+} // namespace
+
+void runScene(const SceneOptions& options, bool bouncesGiven) {
+    checkSceneOptions(options, bouncesGiven);
+    const Clock::time_point start = Clock::now();
+    const World world = loadGltfScene(options.scene);
+    const ProbeGrid grid = chosenGrid(options, world);
+    const ProbeRange range =
+        options.brick ? brickRange(grid, options.brick->brick) : ProbeRange{0, grid.probeCount()};
+    const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
+
+    SceneBackend backend = chooseSceneBackend(options);
+    ScopeExit releaseContext([&] {
+        if (backend.context) destroyContext(*backend.context);
+    });
+    if (backend.name == "gpu" && bouncesGiven && options.brick)
+        throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason +
+                                          "), where --brick bakes one bounce; --bounces is for whole bakes");
+    const std::string settings = bakeSettings(options, backend.name, sky);
+    RayBakeCounts rays;
+    ProbeVolume volume = backend.context
+                             ? bakeOnGpu(*backend.context, world, sky, options, grid, range, settings)
+                             : bakeByRays(world, sky, options, grid, range, rays);
     volume.source = world.description;
     volume.settings = settings;
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;
+    const double seconds = millisecondsSince(start) / 1000.0;
     const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0));
     std::printf("scene    %s\n", world.description.c_str());
     std::printf("sky      %s\n", sky.description.c_str());
@@ -232,8 +385,16 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                 options.brick ? ("brick " + options.brick->text).c_str() : "whole", options.order,
                 options.faceSize, volume.bounces);
     std::printf("invalid  %zu inside geometry (more than half of their view is back faces)\n", inside);
-    std::printf("device   %s\n", context.info.name.c_str());
-    std::printf("wrote    %s in %.2f s\n", options.output.c_str(), millisecondsSince(start) / 1000.0);
+    const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
+    if (backend.context) {
+        std::printf("backend  gpu: %s%s\n", backend.context->info.name.c_str(), reason.c_str());
+    } else {
+        std::printf("backend  cpu: rays, %d per texel, %llu cache points%s\n", cpuRaysPerTexel(options),
+                    (unsigned long long)rays.cachePoints, reason.c_str());
+        std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
+                    double(rays.probeRays + rays.cacheRays), double(rays.probeRays), double(rays.cacheRays));
+    }
+    std::printf("wrote    %s in %.2f s\n", options.output.c_str(), seconds);
 }
 
 void runMerge(const MergeOptions& options) {

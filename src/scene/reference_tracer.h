@@ -5,6 +5,7 @@
 // (pathTraceProbe). docs/scene-probes.md, "The ray-traced reference", says how it is built.
 #pragma once
 #include "scene/scene.h"
+#include "scene/surface_shading.h"
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 
@@ -19,19 +20,8 @@
 
 namespace shprobe {
 
-// The first surface a ray meets, with what the transport of scene.h reads of it.
-struct SurfaceHit {
-    glm::dvec3 position{0.0};      // on the triangle, from Embree's barycentrics
-    glm::dvec3 normal{0.0};        // geometric (from the winding), unit, turned to the ray's side
-    glm::dvec3 shadingNormal{0.0}; // interpolated vertex normal, unit, turned with `normal`
-    glm::dvec3 rayOrigin{0.0};     // position moved off the surface along `normal`: leaving rays start here
-    glm::dvec3 albedo{0.0};        // material factor times texture at TEXCOORD_0
-    glm::dvec3 emission{0.0};      // likewise
-    bool backFace = false;         // the back of a one-sided material: it leaves nothing
-};
-
-// Embree's device and scene, built once from a World, with a copy of what shading reads (vertices,
-// materials, textures, suns) and of the sky. Move-only. Rays may be cast from many threads at once.
+// Embree's device and scene, built once from a World, with its SceneShading (surface_shading.h). Move-only.
+// Rays may be cast from many threads at once.
 class ReferenceTracer {
   public:
     // The sky is what rays that hit nothing see (skyRadiance). Throws Error(Input) for a World whose

@@ -1,0 +1,353 @@
+// RayBaker (ray_bake.h): probes by rays through texel centres, bounces from a lazily gathered
+// irradiance cache on the surfaces.
+#include "scene/ray_bake.h"
+
+#include "common/error.h"
+#include "common/parallel.h"
+#include "scene/bvh.h"
+#include "scene/sampling.h"
+#include "scene/surface_shading.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
+#include "sh/projection.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace shprobe {
+
+namespace {
+
+// A thread should cast at least this many rays, so that starting it stays a small part of its run.
+constexpr size_t kRaysPerThread = 4096;
+
+void requireOptions(const RayBakeOptions& options) {
+    auto refuse = [](const std::string& what) { throw Error(ErrorKind::Input, "scene: " + what); };
+    if (options.order < 1 || options.order > kMaxOrder)
+        refuse("SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " +
+               std::to_string(options.order));
+    requireFaceSize(options.faceSize);
+    if (options.bounces < 0) refuse("bounces must be 0 or more, got " + std::to_string(options.bounces));
+    if (!(options.cacheSpacing >= 0.0) || !std::isfinite(options.cacheSpacing))
+        refuse("the cache spacing must be a finite number of 0 or more");
+    if (options.raysPerTexel < 1 || options.raysPerTexel > 1024)
+        refuse("rays per texel must be in 1..1024, got " + std::to_string(options.raysPerTexel));
+    if (options.gatherRays < 1 || options.gatherRays > 1 << 20)
+        refuse("gather rays must be in 1..1048576, got " + std::to_string(options.gatherRays));
+}
+
+// Points of a lattice of m subdivisions: rows j = 0..m of m + 1 - j points.
+size_t latticePoints(int m) {
+    return size_t(m + 1) * size_t(m + 2) / 2;
+}
+
+// The index of lattice point (i, j), i + j <= m, row by row.
+size_t latticeIndex(int m, int i, int j) {
+    return size_t(j) * size_t(m + 1) - size_t(j) * size_t(j - 1) / 2 + size_t(i);
+}
+
+// A triangle's cache points: lattice side s starts at first + s * latticePoints(subdivisions).
+struct TriangleLattice {
+    size_t first = 0;
+    int subdivisions = 1;
+};
+
+// Three lattice points and their weights: the corners of the lattice triangle a point lies in.
+struct LatticeBlend {
+    std::array<size_t, 3> points{};
+    glm::dvec3 weights{0.0};
+};
+
+// Linear interpolation over the lattice triangles: (u, v) m falls in cell (i0, j0), whose lower
+// triangle has corners (i0, j0), (i0 + 1, j0), (i0, j0 + 1) and whose upper one, where it exists
+// (i0 + j0 + 2 <= m), (i0 + 1, j0 + 1), (i0, j0 + 1), (i0 + 1, j0).
+LatticeBlend blendAt(int m, const glm::dvec2& barycentric) {
+    const double x = std::clamp(barycentric.x, 0.0, 1.0) * m;
+    const double y = std::clamp(barycentric.y, 0.0, 1.0) * m;
+    int i0 = std::min(int(x), m - 1);
+    int j0 = std::min(int(y), m - 1);
+    while (i0 + j0 > m - 1) // u + v a rounding over 1
+        (i0 > 0 ? i0 : j0) -= 1;
+    const double fx = x - i0;
+    const double fy = y - j0;
+    if (fx + fy <= 1.0 || i0 + j0 + 2 > m) {
+        return {{latticeIndex(m, i0, j0), latticeIndex(m, i0 + 1, j0), latticeIndex(m, i0, j0 + 1)},
+                glm::dvec3(1.0 - fx - fy, fx, fy)};
+    }
+    return {{latticeIndex(m, i0 + 1, j0 + 1), latticeIndex(m, i0, j0 + 1), latticeIndex(m, i0 + 1, j0)},
+            glm::dvec3(fx + fy - 1.0, 1.0 - fx, 1.0 - fy)};
+}
+
+// The barycentrics (i / m, j / m) of lattice point `index`.
+glm::dvec2 latticeBarycentric(int m, size_t index) {
+    int j = 0;
+    while (latticeIndex(m, 0, j + 1) <= index)
+        ++j;
+    const int i = int(index - latticeIndex(m, 0, j));
+    return glm::dvec2(i, j) / double(m);
+}
+
+// Subdivisions so that each lattice edge is at most `spacing` long.
+int subdivisionsFor(const World& world, uint32_t triangle, double spacing) {
+    const glm::dvec3 p0(world.positions[world.indices[3 * size_t(triangle)]]);
+    const glm::dvec3 p1(world.positions[world.indices[3 * size_t(triangle) + 1]]);
+    const glm::dvec3 p2(world.positions[world.indices[3 * size_t(triangle) + 2]]);
+    const double longest = std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
+    const double cells = std::ceil(longest / spacing);
+    return int(std::clamp(cells, 1.0, double(kMaxCacheSubdivisions)));
+}
+
+double defaultSpacing(const World& world) {
+    const double diagonal = glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin));
+    return diagonal > 0.0 ? diagonal / kDefaultCacheCells : 1.0;
+}
+
+} // namespace
+
+struct RayBaker::State {
+    State(const World& world, const Cubemap& sky, const RayBakeOptions& bakeOptions)
+        : options(bakeOptions), shading(world, sky), bvh(buildBvh(world)) {}
+
+    RayBakeOptions options;
+    SceneShading shading;
+    Bvh bvh;
+    std::vector<TriangleLattice> lattices;
+    size_t pointCount = 0;
+    int gatherSide = 1;                                         // g: g x g gather rays per point
+    int texelSide = 1;                                          // s: s x s rays per texel
+    std::vector<std::vector<glm::vec3>> irradiance;             // bounce k's at [k - 1], per point
+    std::vector<std::unique_ptr<std::atomic<uint8_t>[]>> state; // likewise: kEmpty, kGathering, kReady
+    std::atomic<uint64_t> probeRays{0};
+    std::atomic<uint64_t> cacheRays{0};
+    std::atomic<uint64_t> cachePoints{0};
+
+    void layOutCache();
+    std::optional<SurfaceHit> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
+    bool occluded(const glm::dvec3& origin, const glm::dvec3& direction) const;
+    glm::dvec3 arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, uint64_t& rays,
+                        bool& backFace);
+    glm::dvec3 cachedIrradiance(int bounce, const SurfaceHit& hit);
+    glm::vec3 pointIrradiance(int bounce, uint32_t triangle, int side, int subdivisions, size_t index,
+                              size_t point);
+    glm::dvec2 insideTriangle(uint32_t triangle, const glm::dvec2& barycentric) const;
+    glm::vec3 gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, size_t point);
+    Cubemap trace(const glm::dvec3& position, uint64_t& rays, uint32_t& backFaces);
+};
+
+void RayBaker::State::layOutCache() {
+    const World& world = shading.world();
+    const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultSpacing(world);
+    lattices.resize(world.triangleCount());
+    for (uint32_t t = 0; t < uint32_t(lattices.size()); ++t) {
+        const int m = subdivisionsFor(world, t, spacing);
+        const int sides = world.materials[world.triangleMaterials[t]].doubleSided ? 2 : 1;
+        lattices[t] = {pointCount, m};
+        pointCount += sides * latticePoints(m);
+    }
+    gatherSide = int(std::ceil(std::sqrt(double(options.gatherRays))));
+    texelSide = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
+    for (int k = 1; k <= options.bounces; ++k) {
+        irradiance.emplace_back(pointCount);
+        state.push_back(std::make_unique<std::atomic<uint8_t>[]>(pointCount));
+    }
+}
+
+std::optional<SurfaceHit> RayBaker::State::intersect(const glm::dvec3& origin,
+                                                     const glm::dvec3& direction) const {
+    const std::optional<RayHit> hit = closestHit(bvh, {glm::vec3(origin), glm::vec3(direction)});
+    if (!hit) return std::nullopt;
+    return shading.describe(hit->triangle, glm::dvec2(hit->hit.u, hit->hit.v), direction);
+}
+
+bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direction) const {
+    return anyHit(bvh, {glm::vec3(origin), glm::vec3(direction)});
+}
+
+// The radiance arriving at `origin` from `direction` with `bounce` bounces (scene.h): the sky, or
+// what the surface met leaves: nothing from a back face, else emission and the suns' light plus
+// bounce's cached irradiance, reflected.
+glm::dvec3 RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction,
+                                     uint64_t& rays, bool& backFace) {
+    ++rays;
+    const std::optional<SurfaceHit> hit = intersect(origin, direction);
+    backFace = hit && hit->backFace;
+    if (!hit) return shading.skyRadiance(direction);
+    if (hit->backFace) return glm::dvec3(0.0);
+    const glm::dvec3 direct =
+        leavingWithoutBounce(shading.suns(), *hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
+    if (bounce == 0 || hit->albedo == glm::dvec3(0.0)) return direct;
+    return direct + hit->albedo * std::numbers::inv_pi * cachedIrradiance(bounce, *hit);
+}
+
+glm::dvec3 RayBaker::State::cachedIrradiance(int bounce, const SurfaceHit& hit) {
+    const TriangleLattice& lattice = lattices[hit.triangle];
+    const int side = hit.frontSide ? 0 : 1;
+    const LatticeBlend blend = blendAt(lattice.subdivisions, hit.barycentric);
+    glm::dvec3 sum(0.0);
+    for (int c = 0; c < 3; ++c) {
+        if (blend.weights[c] == 0.0) continue;
+        const size_t point =
+            lattice.first + size_t(side) * latticePoints(lattice.subdivisions) + blend.points[c];
+        sum += blend.weights[c] * glm::dvec3(pointIrradiance(bounce, hit.triangle, side, lattice.subdivisions,
+                                                             blend.points[c], point));
+    }
+    return sum;
+}
+
+// A lattice point on an edge or a corner, where a wall meets the next, gathers from a point moved
+// towards the triangle's centroid: by 1% of the way, or 4 surface offsets where that is more (at most
+// half the way), so that its rays start inside the room and not on the plane of the next wall, where
+// a ray along that wall could slip out between the two.
+glm::dvec2 RayBaker::State::insideTriangle(uint32_t triangle, const glm::dvec2& barycentric) const {
+    const World& world = shading.world();
+    const glm::dvec3 p0(world.positions[world.indices[3 * size_t(triangle)]]);
+    const glm::dvec3 p1(world.positions[world.indices[3 * size_t(triangle) + 1]]);
+    const glm::dvec3 p2(world.positions[world.indices[3 * size_t(triangle) + 2]]);
+    const glm::dvec2 centroid(1.0 / 3.0);
+    const glm::dvec3 point =
+        (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
+    const double distance = glm::length((p0 + p1 + p2) / 3.0 - point);
+    if (distance == 0.0) return barycentric;
+    const double fraction = std::clamp(4.0 * shading.offset() / distance, 0.01, 0.5);
+    return barycentric + fraction * (centroid - barycentric);
+}
+
+// A cache point's state: not gathered, being gathered by some thread, gathered.
+constexpr uint8_t kEmpty = 0;
+constexpr uint8_t kGathering = 1;
+constexpr uint8_t kReady = 2;
+
+// E_k at a cache point, gathered by the first thread that needs it; another that needs it meanwhile
+// waits (a point takes well under a millisecond), so each point is gathered once.
+glm::vec3 RayBaker::State::pointIrradiance(int bounce, uint32_t triangle, int side, int subdivisions,
+                                           size_t index, size_t point) {
+    std::atomic<uint8_t>& flag = state[size_t(bounce - 1)][point];
+    glm::vec3& value = irradiance[size_t(bounce - 1)][point];
+    uint8_t seen = flag.load(std::memory_order_acquire);
+    if (seen == kEmpty && flag.compare_exchange_strong(seen, kGathering, std::memory_order_acquire)) {
+        value = gather(bounce, triangle, side, latticeBarycentric(subdivisions, index), point);
+        flag.store(kReady, std::memory_order_release);
+        return value;
+    }
+    while (flag.load(std::memory_order_acquire) != kReady)
+        std::this_thread::yield();
+    return value;
+}
+
+// E_k at a cache point: pi times the mean of L_{k-1} over g x g cosine-distributed rays, one in each
+// stratum of the unit square (jittered), about the point's shading normal.
+glm::vec3 RayBaker::State::gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric,
+                                  size_t point) {
+    const SurfaceHit at = shading.surfacePoint(triangle, insideTriangle(triangle, barycentric), side == 0);
+    RandomStream random(options.seed, uint64_t(bounce), uint64_t(point));
+    const int g = gatherSide;
+    uint64_t rays = 0;
+    glm::dvec3 sum(0.0);
+    for (int a = 0; a < g; ++a) {
+        for (int b = 0; b < g; ++b) {
+            const double u1 = (a + random.next()) / g;
+            const double u2 = (b + random.next()) / g;
+            bool backFace = false;
+            sum +=
+                arriving(bounce - 1, at.rayOrigin, cosineDirection(at.shadingNormal, u1, u2), rays, backFace);
+        }
+    }
+    cacheRays += rays;
+    ++cachePoints;
+    return glm::vec3(sum * (std::numbers::pi / (double(g) * g)));
+}
+
+// The random numbers of the rays through texel t of a view: the same for every probe.
+constexpr uint64_t kViewStream = ~uint64_t(0);
+
+Cubemap RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays, uint32_t& backFaces) {
+    const int n = options.faceSize;
+    const int s = texelSide;
+    Cubemap view = makeCubemap(n);
+    for (int face = 0; face < kFaceCount; ++face) {
+        for (int j = 0; j < n; ++j) {
+            for (int i = 0; i < n; ++i) {
+                if (s == 1) {
+                    bool backFace = false;
+                    const glm::dvec3 radiance =
+                        arriving(options.bounces, position, texelDirection(face, i, j, n), rays, backFace);
+                    view.at(face, i, j) = glm::vec4(glm::vec3(radiance), backFace ? 1.0f : 0.0f);
+                    backFaces += backFace ? 1 : 0;
+                    continue;
+                }
+                RandomStream random(options.seed, kViewStream, (uint64_t(face) * n + j) * n + i);
+                glm::dvec3 sum(0.0);
+                int backFacing = 0;
+                for (int sb = 0; sb < s; ++sb) {
+                    for (int sa = 0; sa < s; ++sa) {
+                        const double a = 2.0 * (i + (sa + random.next()) / s) / n - 1.0;
+                        const double b = 2.0 * (j + (sb + random.next()) / s) / n - 1.0;
+                        bool backFace = false;
+                        sum += arriving(options.bounces, position, glm::normalize(faceDirection(face, a, b)),
+                                        rays, backFace);
+                        backFacing += backFace ? 1 : 0;
+                    }
+                }
+                const bool mostlyBack = 2 * backFacing > s * s;
+                view.at(face, i, j) = glm::vec4(glm::vec3(sum / double(s * s)), mostlyBack ? 1.0f : 0.0f);
+                backFaces += mostlyBack ? 1 : 0;
+            }
+        }
+    }
+    return view;
+}
+
+RayBaker::RayBaker(const World& world, const Cubemap& sky, const RayBakeOptions& options) {
+    requireOptions(options);
+    state_ = std::make_unique<State>(world, sky, options);
+    state_->layOutCache();
+}
+
+RayBaker::~RayBaker() = default;
+RayBaker::RayBaker(RayBaker&&) noexcept = default;
+RayBaker& RayBaker::operator=(RayBaker&&) noexcept = default;
+
+std::vector<RayBakedProbe> RayBaker::bakeProbes(std::span<const glm::dvec3> positions,
+                                                const BakeProgress& progress) {
+    State& state = *state_;
+    const size_t raysPerProbe = size_t(kFaceCount) * state.options.faceSize * state.options.faceSize;
+    std::vector<RayBakedProbe> probes(positions.size());
+    std::mutex reporting;
+    size_t done = 0;
+    forEachItem(int(positions.size()), threadCount(positions.size() * raysPerProbe, kRaysPerThread),
+                [&](int p) {
+                    uint64_t rays = 0;
+                    RayBakedProbe& probe = probes[size_t(p)];
+                    const Cubemap view = state.trace(positions[size_t(p)], rays, probe.backFaceTexels);
+                    probe.radiance = projectCubemap(view, state.options.order);
+                    probe.irradiance = convolveIrradiance(probe.radiance);
+                    state.probeRays += rays;
+                    if (!progress) return;
+                    const std::lock_guard lock(reporting);
+                    progress(++done);
+                });
+    return probes;
+}
+
+Cubemap RayBaker::traceProbe(const glm::dvec3& position) {
+    uint64_t rays = 0;
+    uint32_t backFaces = 0;
+    Cubemap view = state_->trace(position, rays, backFaces);
+    state_->probeRays += rays;
+    return view;
+}
+
+RayBakeCounts RayBaker::counts() const {
+    return {state_->probeRays.load(), state_->cacheRays.load(), state_->cachePoints.load()};
+}
+
+} // namespace shprobe

@@ -1,0 +1,99 @@
+// Light probes inside a scene by rays on the CPU (scene/bvh.h casts them, scene/surface_shading.h
+// shades what they hit), following the transport of scene.h:
+//
+//   RayBaker baker(world, sky, {.order = 3, .faceSize = 32, .bounces = 2});
+//   std::vector<RayBakedProbe> probes = baker.bakeProbes(positions);
+//
+// A probe's view is a 6 x N x N cube map, projected with each texel's solid angle as a cube map is
+// (sh/projection.h). One ray through each texel centre sees what the GPU capture
+// (gpu/scene_capture.h) rasterizes, texel for texel; sharp edges (a bright opening, the rim of a
+// light) then alias, an error falling as 1 / N. s x s jittered rays per texel turn that error into
+// noise that falls faster, at s^2 the cost (docs/scene-probes.md measures both).
+//
+// The light the surfaces reflect is computed at the surfaces, not read from a probe grid. Each
+// triangle carries a lattice of cache points (barycentrics (i/m, j/m), i + j <= m, m chosen so that
+// neighbouring points lie at most `cacheSpacing` apart; one lattice per side of a double-sided
+// material). A point's irradiance at bounce k, E_k(x) = integral of L_{k-1}(x, w) max(0, n.w) dw, is
+// gathered by g x g stratified cosine-distributed rays about its shading normal, each ray reading
+// what the surface it meets leaves at bounce k - 1 (emission, the suns by shadow rays, and E_{k-1}
+// interpolated linearly between that triangle's points), or the sky. A probe at bounce k sees
+// surfaces leave emission + albedo / pi (E_sun + E_k). Points are gathered on first use, each once,
+// with its own random numbers (the seed, its bounce, its index): a bake gives the same bits for any
+// thread count and any subset of probes, so bricks merge into exactly the whole bake. The estimate
+// converges to the exact transport as the points grow denser (interpolation) and the gather rays
+// more (noise); docs/scene-probes.md measures both against the path tracer.
+#pragma once
+#include "scene/scene.h"
+#include "sh/coefficients.h"
+#include "sh/cubemap.h"
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace shprobe {
+
+struct RayBakeOptions {
+    int order = 3;             // SH order of the probes, 1..kMaxOrder
+    int faceSize = 32;         // N: a probe's view is a 6 x N x N cube map
+    int raysPerTexel = 1;      // 1: through the texel's centre (the rasterized capture's view); more,
+                               // rounded up to a square s x s: one jittered in each stratum, averaged
+    int bounces = 1;           // 0: what the probes see directly; k: k bounces off the surfaces
+    double cacheSpacing = 0.0; // the largest distance between neighbouring cache points; 0: the
+                               // world's diagonal / kDefaultCacheCells
+    int gatherRays = 64;       // per cache point, rounded up to a square (g x g strata)
+    uint64_t seed = 1;
+};
+
+// Cache points per world diagonal when RayBakeOptions::cacheSpacing is 0.
+constexpr double kDefaultCacheCells = 64.0;
+// The most subdivisions of a triangle's edges: (m + 1)(m + 2) / 2 points per lattice at most.
+constexpr int kMaxCacheSubdivisions = 256;
+
+struct RayBakedProbe {
+    ShCoefficients radiance;
+    ShCoefficients irradiance;
+    uint32_t backFaceTexels = 0; // of the 6 N^2 texels, those whose rays met mostly back faces
+};
+
+// What a baker has cast so far.
+struct RayBakeCounts {
+    uint64_t probeRays = 0;   // the probes' own, with their shadow rays
+    uint64_t cacheRays = 0;   // gathering cache points, with their shadow rays
+    uint64_t cachePoints = 0; // gathered, over all bounces
+};
+
+// Called after each probe with the number done so far, from whichever thread finished it (one call
+// at a time).
+using BakeProgress = std::function<void(size_t probesDone)>;
+
+// The hierarchy, the shading and the cache of one world, sky and options. Bakes may run one after
+// another on the same baker (the cache is kept); not two at once.
+class RayBaker {
+  public:
+    // Throws Error(Input) for a world, sky or options it cannot bake (surface_shading.h, bvh.h;
+    // order, face size, bounces, spacing or gather rays out of range).
+    RayBaker(const World& world, const Cubemap& sky, const RayBakeOptions& options);
+    ~RayBaker();
+    RayBaker(RayBaker&&) noexcept;
+    RayBaker& operator=(RayBaker&&) noexcept;
+
+    // The probes at `positions`, on all cores; entry k depends on positions[k] alone.
+    std::vector<RayBakedProbe> bakeProbes(std::span<const glm::dvec3> positions,
+                                          const BakeProgress& progress = {});
+    // What a probe at `position` sees through its texel centres (alpha: 1 where a ray met the back
+    // of a one-sided material, else 0).
+    Cubemap traceProbe(const glm::dvec3& position);
+    RayBakeCounts counts() const;
+
+  private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
+
+} // namespace shprobe

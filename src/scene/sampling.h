@@ -1,0 +1,52 @@
+// Random numbers and directions for the scene's Monte-Carlo integrals (scene/reference_tracer.h,
+// scene/ray_bake.h): counter-based, so that a result never depends on which thread drew it.
+#pragma once
+#include <glm/vec3.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+
+namespace shprobe {
+
+// splitmix64's output function (Steele, Lea & Flood, "Fast Splittable Pseudorandom Number
+// Generators", 2014): a bijection of 64-bit words that scrambles every input bit into every output bit.
+inline uint64_t mix64(uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+// Counter-based random numbers: a stream is named by (seed, stream, index), never by the thread
+// that draws from it, so results do not depend on how work is spread over threads.
+class RandomStream {
+  public:
+    RandomStream(uint64_t seed, uint64_t stream, uint64_t index)
+        : state_(mix64(mix64(mix64(seed) + stream) + index)) {}
+    // Uniform in [0, 1), 53 bits (splitmix64's Weyl sequence, scrambled).
+    double next() {
+        state_ += 0x9e3779b97f4a7c15ull;
+        return double(mix64(state_) >> 11) * 0x1p-53;
+    }
+
+  private:
+    uint64_t state_;
+};
+
+// A branch-free orthonormal frame (t, b, n) about unit n (Duff et al., "Building an Orthonormal
+// Basis, Revisited", 2017), then a cosine-distributed direction in it by Malley's method: a uniform
+// point (u1, u2) of the unit square taken to the unit disc and lifted onto the hemisphere (Pharr,
+// Jakob & Humphreys, "Physically Based Rendering", "Cosine-Weighted Hemisphere Sampling").
+inline glm::dvec3 cosineDirection(const glm::dvec3& n, double u1, double u2) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double b = n.x * n.y * a;
+    const glm::dvec3 t(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    const glm::dvec3 bitangent(b, sign + n.y * n.y * a, -n.y);
+    const double r = std::sqrt(u1);
+    const double phi = 2.0 * std::numbers::pi * u2;
+    return r * std::cos(phi) * t + r * std::sin(phi) * bitangent + std::sqrt(std::max(0.0, 1.0 - u1)) * n;
+}
+
+} // namespace shprobe

@@ -1,0 +1,81 @@
+// What the light transport of scene.h reads at a surface, for any ray caster: the hit point, its
+// normals, its materials (textures sampled as glTF says), the sky where rays escape, the suns. The
+// ray casters (scene/bvh.h in the program, Embree in scene/reference_tracer.h) find the triangle
+// and its barycentrics; SceneShading describes the point.
+#pragma once
+#include "scene/scene.h"
+#include "sh/cubemap.h"
+
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <numbers>
+#include <span>
+#include <vector>
+
+namespace shprobe {
+
+// A point on a surface, with what the transport of scene.h reads of it.
+struct SurfaceHit {
+    glm::dvec3 position{0.0};      // on the triangle, from the barycentrics
+    glm::dvec3 normal{0.0};        // geometric (from the winding), unit, turned to the ray's side
+    glm::dvec3 shadingNormal{0.0}; // interpolated vertex normal, unit, turned with `normal`
+    glm::dvec3 rayOrigin{0.0};     // position moved off the surface along `normal`: leaving rays start here
+    glm::dvec3 albedo{0.0};        // material factor times texture at TEXCOORD_0
+    glm::dvec3 emission{0.0};      // likewise
+    uint32_t triangle = 0;         // the World's triangle
+    glm::dvec2 barycentric{0.0};   // (u, v): the point is (1 - u - v) p0 + u p1 + v p2
+    bool frontSide = false;        // the side the winding faces (scene.h)
+    bool backFace = false;         // the back of a one-sided material: it leaves nothing
+};
+
+// A World checked and copied with what shading needs (suns normalized), and the sky. Immutable:
+// describe and skyRadiance may run on many threads at once.
+class SceneShading {
+  public:
+    // Throws Error(Input) for a World whose arrays disagree (scene.h), for non-finite vertices or a
+    // sun without a direction, or for a sky whose texel count is not that of a cube map.
+    SceneShading(const World& world, const Cubemap& sky);
+
+    // The point of `triangle` at barycentrics (u, v), seen by a ray along `direction`.
+    SurfaceHit describe(uint32_t triangle, const glm::dvec2& barycentric, const glm::dvec3& direction) const;
+    // The same point seen from its front side (frontSide) or its back.
+    SurfaceHit surfacePoint(uint32_t triangle, const glm::dvec2& barycentric, bool frontSide) const;
+    // The sky's texel the direction falls in: nearest texel, no filtering, as the GPU capture's
+    // background reads it with a NEAREST sampler.
+    glm::dvec3 skyRadiance(const glm::dvec3& direction) const;
+
+    const World& world() const { return world_; }
+    std::span<const SceneSun> suns() const { return world_.suns; }
+    // The triangles of non-zero area: the others cover no solid angle and have no normal.
+    std::span<const uint32_t> solidTriangles() const { return solidTriangles_; }
+    // How far leaving rays start off a surface (SurfaceHit::rayOrigin).
+    double offset() const { return offset_; }
+
+  private:
+    World world_;
+    std::vector<uint32_t> solidTriangles_;
+    Cubemap sky_;
+    double offset_ = 0.0;
+};
+
+// What a front face leaves towards the ray with no bounced light (scene.h): emission + albedo / pi
+// times sum_suns E_sun max(0, n.l) V(x, l), n the shading normal; one shadow ray per sun above the
+// surface, occluded(origin, direction) saying whether anything blocks it, counted in rays.
+template <typename Occluded>
+glm::dvec3 leavingWithoutBounce(std::span<const SceneSun> suns, const SurfaceHit& hit, uint64_t& rays,
+                                const Occluded& occluded) {
+    glm::dvec3 sunLight(0.0);
+    for (const SceneSun& sun : suns) {
+        const glm::dvec3 toSun(sun.direction);
+        const double cosine = glm::dot(hit.shadingNormal, toSun);
+        if (cosine <= 0.0) continue;
+        ++rays;
+        if (!occluded(hit.rayOrigin, toSun)) sunLight += glm::dvec3(sun.irradiance) * cosine;
+    }
+    return hit.emission + hit.albedo * std::numbers::inv_pi * sunLight;
+}
+
+} // namespace shprobe
