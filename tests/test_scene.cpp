@@ -334,7 +334,7 @@ TEST(SceneModels, EveryPrimitiveModeOfTheAssetGenerator) {
 // before tinygltf meets the accessors without buffer views that Draco leaves.
 TEST(SceneModels, RequiredExtensionsThatAreNotReadAreRefused) {
     expectRefused((kModels / "draco/2CylinderEngine.gltf").string(),
-                  {"requires extension KHR_draco_mesh_compression"});
+                  {"requires extension \"KHR_draco_mesh_compression\""});
 }
 
 // ---- Fixtures: transforms, normals, winding ------------------------------------------------------

@@ -280,7 +280,7 @@ TEST_F(SceneCommand, UrisOutsideTheSceneFolderAreRefused) {
         {"sub/../../elsewhere/BoxTextured0.bin", "\"sub/../../elsewhere/BoxTextured0.bin\""},
         {"out.bin", "\"out.bin\""},
         {"../fifo.bin", "\"../fifo.bin\""},
-        {longUri, "\"" + longUri.substr(0, 200) + "\"..."},
+        {longUri, "\"" + longUri.substr(0, 200) + "...\" (" + std::to_string(longUri.size()) + " bytes)"},
     };
     std::vector<std::pair<std::string, std::string>> scenes; // the scene, what its line quotes
     for (size_t i = 0; i < buffers.size(); ++i)
@@ -305,6 +305,31 @@ TEST_F(SceneCommand, UrisOutsideTheSceneFolderAreRefused) {
     EXPECT_FALSE(fs::exists(file("x.shpv")));
     EXPECT_EQ(filesUnder(folder() / "box"), before);
     EXPECT_EQ(filesUnder(folder() / "elsewhere"), outside);
+}
+
+// Input a message quotes is cut to a few hundred bytes, so that the one line stays short: a data
+// URI of megabytes that tinygltf quotes whole (its decoded size is not the buffer's byteLength; the
+// line had 64 MB), an extension's name of megabytes, one required. Each line, less the scene's path,
+// is under 400 bytes.
+TEST_F(SceneCommand, QuotedInputIsCutShort) {
+    const std::string longText(4'000'000, 'A');
+    const std::string dataUri = "data:application/octet-stream;base64," + longText;
+    const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+        {R"({"asset": {"version": "2.0"}, "buffers": [{"uri": ")" + dataUri + R"(", "byteLength": 60}]})",
+         {"data:application/octet-stream;base64,AAAA", "A... (4000"}},
+        {R"({"asset": {"version": "2.0", "extensions": {")" + longText + R"(": 1}}})",
+         {"asset.extensions.AAAA", "... (4000000 bytes) must be an object, not a number (1)"}},
+        {R"({"asset": {"version": "2.0"}, "extensionsRequired": [")" + longText + R"("]})",
+         {"the file requires extension \"AAAA", "...\" (4000000 bytes), which is not read"}},
+    };
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const std::string scene = file("long" + std::to_string(i) + ".gltf");
+        writeText(scene, cases[i].first);
+        const RunResult result = run({"scene", scene, "--grid", "1,1,1", "-o", file("out.shpv")});
+        expectMessage({{}, 2, cases[i].second}, result);
+        EXPECT_LT(result.err.size() - scene.size(), 400u) << "the input is cut; the path is the test's";
+        EXPECT_FALSE(fs::exists(file("out.shpv")));
+    }
 }
 
 } // namespace

@@ -3,6 +3,7 @@
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
+#include "common/quoted.h"
 #include "formats/json_reading.h"
 #include "sh/basis.h"
 
@@ -55,7 +56,8 @@ Quantity requireQuantity(const json& root, const std::string& name) {
     std::string quantity = requireString(root, "quantity", name);
     if (quantity == "radiance") return Quantity::Radiance;
     if (quantity == "irradiance") return Quantity::Irradiance;
-    fail(name, "field \"quantity\" is \"" + quantity + "\"; expected \"radiance\" or \"irradiance\"");
+    fail(name,
+         "field \"quantity\" is " + quotedInput(quantity) + "; expected \"radiance\" or \"irradiance\"");
 }
 
 glm::dvec3 parseRow(const json& row, size_t index, const std::string& name) {
@@ -199,7 +201,8 @@ Probe parseProbe(std::string_view text, const std::string& name) {
         fail(name, "field \"version\" must be " + std::to_string(kVersion));
     std::string convention = requireString(root, "convention", name);
     if (convention != kConvention)
-        fail(name, "field \"convention\" is \"" + convention + "\"; expected \"" + kConvention + "\"");
+        fail(name,
+             "field \"convention\" is " + quotedInput(convention) + "; expected \"" + kConvention + "\"");
 
     ShCoefficients coefficients = makeCoefficients(requireOrder(root, name), requireQuantity(root, name));
     const json& rows = requireField(root, "coefficients", name);

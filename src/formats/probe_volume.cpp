@@ -6,6 +6,7 @@
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
+#include "common/quoted.h"
 #include "formats/json_reading.h"
 #include "sh/basis.h"
 
@@ -470,13 +471,13 @@ std::string settingsDifference(const std::string& a, const std::string& b, const
     const json first = *settingsObject(a), second = *settingsObject(b);
     auto valueIn = [](const json& settings, const std::string& key) {
         auto it = settings.find(key);
-        return it == settings.end() ? std::string("missing") : it->dump();
+        return it == settings.end() ? std::string("missing") : clipped(it->dump());
     };
     json keys = first;
     keys.update(second);
     for (const auto& [key, unused] : keys.items())
         if (valueIn(first, key) != valueIn(second, key))
-            return "setting \"" + key + "\" is " + valueIn(first, key) + " in " + nameA + ", " +
+            return "setting " + quotedInput(key) + " is " + valueIn(first, key) + " in " + nameA + ", " +
                    valueIn(second, key) + " in " + nameB;
     return "";
 }

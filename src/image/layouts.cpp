@@ -6,6 +6,7 @@
 
 #include "common/error.h"
 #include "common/parallel.h"
+#include "common/quoted.h"
 
 #include <algorithm>
 #include <array>
@@ -219,7 +220,7 @@ Layout parseLayout(const std::string& name) {
     for (const NamedLayout& entry : kLayoutNames)
         if (name == entry.name) return entry.layout;
     throw Error(ErrorKind::Input,
-                "unknown layout \"" + name + "\"; expected auto, equirect, hcross, vcross or faces");
+                "unknown layout " + quotedInput(name) + "; expected auto, equirect, hcross, vcross or faces");
 }
 
 const char* layoutName(Layout layout) {

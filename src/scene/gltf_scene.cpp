@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "common/input_file.h"
+#include "common/quoted.h"
 #include "image/codec.h"
 #include "scene/gltf_geometry.h"
 #include "scene/gltf_schema.h"
@@ -130,15 +131,6 @@ bool insideFolder(const std::string& folder, const std::string& decoded) {
     return std::mismatch(base.begin(), base.end(), file.begin(), file.end()).first == base.end();
 }
 
-// A URI as an error shows it: quoted, cut to a few hundred bytes, control characters as '?'.
-std::string shownUri(const std::string& uri) {
-    constexpr size_t kShown = 200;
-    std::string shown = uri.substr(0, kShown);
-    for (char& c : shown)
-        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
-    return "\"" + shown + (uri.size() > kShown ? "\"..." : "\"");
-}
-
 // A buffer's or an image's URI that names a file, not a data URI tinygltf decodes.
 struct FileUri {
     std::string where; // "buffers[0].uri"
@@ -167,7 +159,7 @@ std::vector<FileUri> fileUris(const nlohmann::json& root) {
 std::string uriFile(const std::string& path, const FileUri& uri) {
     const std::string folder = folderOf(path);
     if (!insideFolder(folder, uri.name))
-        fail(path, uri.where + " " + shownUri(uri.uri) +
+        fail(path, uri.where + " " + quotedInput(uri.uri) +
                        " is outside the scene's folder; a scene reads only files in its folder or below");
     return folder + "/" + uri.name;
 }
@@ -230,6 +222,21 @@ bool looksLikeJson(std::string_view text) {
     return start != std::string_view::npos && (text[start] == '{' || text[start] == '[');
 }
 
+// tinygltf's messages as the one line gives them: the first, cut (it may quote a data URI of
+// megabytes whole), and the number of the others.
+std::string tinygltfProblem(const std::string& messages) {
+    std::string first;
+    size_t count = 0;
+    for (size_t start = 0; start < messages.size();) {
+        size_t end = messages.find('\n', start);
+        if (end == std::string::npos) end = messages.size();
+        if (end > start && count++ == 0)
+            first = clipped(std::string_view(messages).substr(start, end - start));
+        start = end + 1;
+    }
+    return count > 1 ? first + " (and " + counted(count - 1, "more problem") + ")" : first;
+}
+
 tinygltf::Model parseModel(const std::string& path, std::string_view bytes) {
     const bool binary = isGlb(bytes);
     const auto [data, json] = binary ? glbParts(bytes, path) : std::pair{bytes, bytes};
@@ -253,7 +260,7 @@ tinygltf::Model parseModel(const std::string& path, std::string_view bytes) {
     if (!access.failure.empty()) fail(path, "cannot read " + access.failure);
     // tinygltf also reports some faults in `err` while it goes on (a texture info without index).
     if (!loaded || !err.empty()) {
-        const std::string message = oneLine(err + warn);
+        const std::string message = tinygltfProblem(err + warn);
         fail(path, message.empty() ? "tinygltf cannot read the file" : message);
     }
     return model;

@@ -3,6 +3,7 @@
 #include "scene/gltf_schema.h"
 
 #include "common/error.h"
+#include "common/quoted.h"
 #include "formats/json_reading.h"
 
 #include <algorithm>
@@ -217,7 +218,7 @@ class Checker {
         const std::string at = child(where, "extensions");
         if (!extensions->is_object()) mustBe(*extensions, at, "an object");
         for (auto extension = extensions->begin(); extension != extensions->end(); ++extension)
-            if (!extension->is_object()) mustBe(*extension, child(at, extension.key()), "an object");
+            if (!extension->is_object()) mustBe(*extension, child(at, clipped(extension.key())), "an object");
     }
 
     [[noreturn]] void mustBe(const json& value, const std::string& where, const char* expected) const {
@@ -273,7 +274,7 @@ class Checker {
     void checkIndexMap(const json& value, const std::string& where) const {
         if (!value.is_object()) mustBe(value, where, "an object");
         for (auto member = value.begin(); member != value.end(); ++member)
-            checkInteger(*member, kMaxIndex, child(where, member.key()));
+            checkInteger(*member, kMaxIndex, child(where, clipped(member.key())));
     }
 
     void checkValue(const json& value, const Field& field, const std::string& where) {
@@ -346,16 +347,17 @@ void checkRequiredExtensions(const json& root, const std::string& path) {
         if (std::find(std::begin(kSupportedExtensions), std::end(kSupportedExtensions),
                       name.get<std::string>()) == std::end(kSupportedExtensions))
             throw Error(ErrorKind::Input,
-                        path + ": the file requires extension " + name.get<std::string>() +
+                        path + ": the file requires extension " + quotedInput(name.get<std::string>()) +
                             ", which is not read (only KHR_lights_punctual, "
                             "KHR_materials_emissive_strength and KHR_mesh_quantization are)");
 }
 
-// The parser's problem with the bytes it quotes kept printable: a binary file is not text.
+// The parser's problem with the bytes it quotes kept printable (a binary file is not text) and
+// short (it quotes the whole token it stopped in, a string of megabytes perhaps).
 std::string parseProblem(const json::exception& error) {
-    std::string text = jsonProblem(error);
+    std::string text = clipped(jsonProblem(error), 2 * kMaxQuotedBytes);
     for (char& c : text)
-        if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+        if (static_cast<unsigned char>(c) >= 0x7f) c = '?';
     return text;
 }
 
