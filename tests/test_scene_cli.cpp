@@ -7,11 +7,15 @@
 
 #include "formats/probe_volume.h"
 #include "image/environment.h"
+#include "image/image_write.h"
 
 #include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <cstring>
 #include <iterator>
 #include <map>
 #include <sys/stat.h>
@@ -330,6 +334,158 @@ TEST_F(SceneCommand, QuotedInputIsCutShort) {
         EXPECT_LT(result.err.size() - scene.size(), 400u) << "the input is cut; the path is the test's";
         EXPECT_FALSE(fs::exists(file("out.shpv")));
     }
+}
+
+// ---- Sizes a file claims ----------------------------------------------------------------------
+
+using nlohmann::json;
+
+// Little-endian bytes of floats and integers, for a scene's .bin.
+template <typename T> std::string binaryOf(const std::vector<T>& values) {
+    std::string bytes(values.size() * sizeof(T), '\0');
+    if (!values.empty()) std::memcpy(bytes.data(), values.data(), bytes.size());
+    return bytes;
+}
+
+// A one-triangle scene: positions (3 vertices, 36 bytes) and texture coordinates (24 bytes) in
+// buffer 0, "h.bin", with a view each; the mesh draws them, indexed by nothing. Tests change it.
+json triangleScene() {
+    return json{
+        {"asset", {{"version", "2.0"}}},
+        {"buffers", json::array({{{"uri", "h.bin"}, {"byteLength", 60}}})},
+        {"bufferViews", json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 36}},
+                                     {{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 24}}})},
+        {"accessors",
+         json::array({{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
+                      {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}}})},
+        {"meshes", json::array({{{"primitives", json::array({{{"attributes", {{"POSITION", 0}}}}})}}})},
+        {"nodes", json::array({{{"mesh", 0}}})},
+    };
+}
+
+std::string triangleBin() {
+    return binaryOf(std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0}) +
+           binaryOf(std::vector<float>{0, 0, 1, 0, 0, 1});
+}
+
+class HostileScene : public SceneCommand {
+  protected:
+    // The peak memory of a refused run that reads nothing (a missing scene): the program itself.
+    void SetUp() override {
+        const RunResult empty = run({"scene", file("missing.gltf"), "--grid", "1,1,1", "-o", file("m.shpv")});
+        ASSERT_EQ(empty.exitCode, 2) << describe(empty);
+        baselineKiB_ = empty.peakKiB;
+    }
+
+    // Writes the scene (and `bin` as h.bin beside it) and runs `shprobe scene` on it: refused with
+    // exit 2 in one line holding `mentions`, nothing written. A refusal must come from the counts and
+    // headers alone: within 5 s (it took 36 s to allocate 11.7 GB for a claimed count; a loaded CI
+    // machine may be slow, so a generous bound) and within 64 MiB of the run that reads nothing
+    // (the hostile files are a few kilobytes; reading what they claim takes gigabytes).
+    void expectRefusedFromItsCounts(const std::string& name, const json& scene, const std::string& bin,
+                                    const std::vector<std::string>& mentions) {
+        SCOPED_TRACE(name);
+        writeText(folder() / name, scene.dump());
+        writeText(folder() / "h.bin", bin);
+        const std::string output = file("out.shpv");
+        const RunResult result = run({"scene", file(name), "--grid", "1,1,1", "-o", output});
+        expectMessage({{}, 2, mentions}, result);
+        EXPECT_FALSE(fs::exists(output));
+        EXPECT_LT(result.seconds, 5.0) << "refused from the counts, before reading";
+        EXPECT_LT(result.peakKiB, baselineKiB_ + 64 * 1024)
+            << "peak " << result.peakKiB << " KiB; a run reading nothing: " << baselineKiB_ << " KiB";
+        std::printf("%s: %.3f s, peak %ld KiB (reading nothing: %ld KiB)\n", name.c_str(), result.seconds,
+                    result.peakKiB, baselineKiB_);
+    }
+
+    long baselineKiB_ = 0;
+};
+
+// Every accessor's count is checked against the bytes of the buffer view that holds it (offset +
+// stride * (count - 1) + element size), from the JSON, before tinygltf reads a buffer: a 648-byte
+// view whose POSITION claims 10^9 or 2^31 vertices, a stride or an offset past the view, sparse
+// indices past theirs. An accessor without a buffer view (zeros) is held to the vertex limit.
+TEST_F(HostileScene, AccessorCountsAreCheckedAgainstTheirBytes) {
+    // 54 vertices in a 648-byte view, then 3 indices in a 12-byte one.
+    std::vector<float> positions(54 * 3, 0.0f);
+    for (size_t i = 0; i < positions.size(); ++i)
+        positions[i] = float(i % 7);
+    const std::string bin = binaryOf(positions) + binaryOf(std::vector<uint32_t>{0, 1, 2});
+    auto indexed = [](json position) {
+        json scene = triangleScene();
+        scene["buffers"][0]["byteLength"] = 660;
+        scene["bufferViews"] = json::array({{{"buffer", 0}, {"byteLength", 648}, {"byteStride", 12}},
+                                            {{"buffer", 0}, {"byteOffset", 648}, {"byteLength", 12}}});
+        position.merge_patch({{"componentType", 5126}, {"type", "VEC3"}});
+        scene["accessors"] = json::array(
+            {position, {{"bufferView", 1}, {"componentType", 5125}, {"count", 3}, {"type", "SCALAR"}}});
+        scene["meshes"][0]["primitives"][0]["indices"] = 1;
+        return scene;
+    };
+    expectRefusedFromItsCounts("billion.gltf", indexed({{"bufferView", 0}, {"count", 1'000'000'000}}), bin,
+                               {"accessors[0] claims 1000000000 elements of 12 bytes, 12 apart, from byte 0",
+                                "need 12000000000 bytes of bufferViews[0], which has 648"});
+    expectRefusedFromItsCounts("two31.gltf", indexed({{"bufferView", 0}, {"count", int64_t(1) << 31}}), bin,
+                               {"accessors[0] claims 2147483648 elements", "which has 648"});
+    json strided = indexed({{"bufferView", 0}, {"count", 4}});
+    strided["bufferViews"][0]["byteStride"] = 252;
+    expectRefusedFromItsCounts("stride.gltf", strided, bin,
+                               {"accessors[0] claims 4 elements of 12 bytes, 252 apart", "need 768 bytes"});
+    expectRefusedFromItsCounts("offset.gltf", indexed({{"bufferView", 0}, {"count", 1}, {"byteOffset", 640}}),
+                               bin, {"accessors[0] claims 1 element of 12 bytes from byte 640", "need 652"});
+    expectRefusedFromItsCounts(
+        "sparse.gltf",
+        indexed({{"count", 54},
+                 {"sparse",
+                  {{"count", 54},
+                   {"indices", {{"bufferView", 1}, {"componentType", 5125}}},
+                   {"values", {{"bufferView", 0}}}}}}),
+        bin, {"accessors[0].sparse.indices claims 54 elements of 4 bytes", "bufferViews[1], which has 12"});
+    expectRefusedFromItsCounts("zeros.gltf", indexed({{"count", int64_t(1) << 31}}), bin,
+                               {"POSITION has 2147483648 vertices, more than the limit of 60000000"});
+}
+
+// The triangle limit holds for the scene's total, every node that instances a mesh counted, and is
+// checked before any vertex is read: 21 nodes instancing a mesh of a million triangles (positions
+// without a buffer view, zeros) took 2.5 GB reading 20 of them before the 21st was refused.
+TEST_F(HostileScene, InstancedTrianglesAreCountedBeforeReading) {
+    json scene = triangleScene();
+    scene["accessors"].push_back({{"componentType", 5126}, {"count", 3'000'000}, {"type", "VEC3"}});
+    scene["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 2;
+    scene["nodes"] = json::array();
+    json children = json::array();
+    for (int n = 1; n <= 21; ++n) {
+        scene["nodes"].push_back({{"mesh", 0}, {"translation", {n, 0, 0}}});
+        children.push_back(n);
+    }
+    scene["nodes"].insert(scene["nodes"].begin(), json{{"children", children}});
+    expectRefusedFromItsCounts(
+        "instances.gltf", scene, triangleBin(),
+        {"the scene's 21 mesh instances make 21000000 triangles, more than the limit of 20000000 triangles"});
+}
+
+// Texture pixels are summed over the images the drawn materials use, from their headers, before any
+// is decoded: 24 textures of 4096 x 4096 (each within the limit of one texture) in a scene of a few
+// hundred kilobytes needed 4 GB decoded.
+TEST_F(HostileScene, TexturePixelsAreSummedFromTheHeaders) {
+    { // released before the runs: a forked child's peak memory counts this process's pages
+        const std::vector<uint8_t> grey(size_t(4096) * 4096 * 4, 128);
+        writeText(folder() / "big.png", encodeRgba8("png", 4096, 4096, grey));
+    }
+    ASSERT_LT(fs::file_size(folder() / "big.png"), 1u << 20);
+    json scene = triangleScene();
+    scene["images"] = scene["textures"] = scene["materials"] = scene["meshes"][0]["primitives"] =
+        json::array();
+    for (int i = 0; i < 24; ++i) {
+        scene["images"].push_back({{"uri", "big.png"}});
+        scene["textures"].push_back({{"source", i}});
+        scene["materials"].push_back({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", i}}}}}});
+        scene["meshes"][0]["primitives"].push_back(
+            {{"attributes", {{"POSITION", 0}, {"TEXCOORD_0", 1}}}, {"material", i}});
+    }
+    expectRefusedFromItsCounts("textures.gltf", scene, triangleBin(),
+                               {"the 24 textures the scene's materials use have 402653184 pixels",
+                                "more than the limit of 134217728 pixels in all"});
 }
 
 } // namespace

@@ -3,6 +3,7 @@
 #include "scene/gltf_geometry.h"
 
 #include "common/error.h"
+#include "scene/gltf_limits.h"
 
 #include <algorithm>
 #include <bit>
@@ -24,8 +25,6 @@ static_assert(std::endian::native == std::endian::little, "glTF buffers are read
 
 // A triangle of no area is never hit by a ray: any unit vector keeps World's normals unit.
 constexpr glm::vec3 kDegenerateNormal{0.0f, 0.0f, 1.0f};
-// The largest byte stride glTF allows (bufferView.byteStride, 4 to 252).
-constexpr size_t kMaxByteStride = 252;
 
 [[noreturn]] void fail(const GltfGeometrySource& source, const std::string& where,
                        const std::string& problem) {
@@ -165,7 +164,7 @@ struct AccessorReader {
         const size_t byteStride = source.model.bufferViews.size() > size_t(a.bufferView)
                                       ? source.model.bufferViews[size_t(a.bufferView)].byteStride
                                       : 0;
-        if (byteStride != 0 && (byteStride < elementSize || byteStride > kMaxByteStride))
+        if (byteStride != 0 && (byteStride < elementSize || byteStride > size_t(kMaxGltfByteStride)))
             fail("has a byte stride of " + std::to_string(byteStride) + ", but its elements take " +
                  std::to_string(elementSize) + " bytes (and glTF's stride is at most 252)");
         if (byteStride != 0) elements.stride = byteStride;

@@ -21,6 +21,8 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
 #include <span>
 #include <string_view>
 #include <tiny_gltf.h>
@@ -392,15 +394,151 @@ std::vector<PlacedNode> placeNodes(const tinygltf::Model& model, const std::vect
     return placed;
 }
 
+// ---- The scene's totals, before anything is read ---------------------------------------------
+
+std::string meshName(int mesh) {
+    return "meshes[" + std::to_string(mesh) + "]";
+}
+
+// The vertices the World may hold: 3 per triangle of the triangle limit, within its uint32_t indices.
+uint64_t vertexLimit(const GltfLoadOptions& options) {
+    return options.maxTriangles > UINT32_MAX / 3 ? UINT32_MAX : 3 * uint64_t(options.maxTriangles);
+}
+
+uint64_t saturatingAdd(uint64_t a, uint64_t b) {
+    return a > UINT64_MAX - b ? UINT64_MAX : a + b;
+}
+
+// The bytes of image `index`: those tinygltf kept (from a buffer view or a data URI), else its
+// file's, read into `file`.
+std::span<const unsigned char> imageBytes(const tinygltf::Model& model, int index, const std::string& path,
+                                          std::string& file) {
+    const tinygltf::Image& image = model.images[size_t(index)];
+    const std::string what = path + ": images[" + std::to_string(index) + "]";
+    if (!image.image.empty()) return image.image;
+    if (image.uri.empty()) fail(what, "has no image data");
+    const std::string name =
+        uriFile(path, {"images[" + std::to_string(index) + "].uri", image.uri, imageFileName(image.uri)});
+    try {
+        file = readInputFile(name, kMaxGltfFileBytes, "an image file");
+    } catch (const Error& error) {
+        fail(what, error.what());
+    }
+    return {reinterpret_cast<const unsigned char*>(file.data()), file.size()};
+}
+
+// What the World will hold, counted from the counts and image headers alone: the triangles and
+// vertices of every node that instances a mesh, and the pixels of every image the drawn primitives'
+// materials use. A small file may instance a large mesh many times, or name many images whose
+// headers claim large sizes; each total is refused before any vertex is read or image decoded.
+class SceneTotals {
+  public:
+    SceneTotals(const GltfGeometrySource& source, const GltfLoadOptions& options)
+        : source_(source), options_(options), meshes_(source.model.meshes.size()) {}
+
+    void check(const std::vector<PlacedNode>& placed) {
+        const tinygltf::Model& model = source_.model;
+        uint64_t triangles = 0, vertices = 0;
+        size_t instances = 0;
+        for (const PlacedNode& node : placed) {
+            const int mesh = model.nodes[size_t(node.node)].mesh;
+            if (mesh < 0) continue;
+            if (size_t(mesh) >= model.meshes.size())
+                fail(source_.path, nodeName(node.node) + ".mesh is " + std::to_string(mesh) +
+                                       ", but the file has " + counted(model.meshes.size(), "mesh"));
+            const MeshTotals& totals = meshTotals(mesh);
+            if (totals.triangles == 0) continue;
+            ++instances;
+            triangles = saturatingAdd(triangles, totals.triangles);
+            vertices = saturatingAdd(vertices, totals.vertices);
+        }
+        const std::string made =
+            "the scene's " + counted(instances, "mesh instance") + (instances == 1 ? " makes " : " make ");
+        if (triangles > options_.maxTriangles)
+            fail(source_.path, made + counted(triangles, "triangle") + ", more than the limit of " +
+                                   counted(options_.maxTriangles, "triangle") + " (every instance counted)");
+        if (vertices > vertexLimit(options_))
+            fail(source_.path, made + std::to_string(vertices) + " vertices, more than the limit of " +
+                                   std::to_string(vertexLimit(options_)) +
+                                   " vertices (3 per triangle of the triangle limit)");
+        checkTexturePixels();
+    }
+
+  private:
+    struct MeshTotals {
+        uint64_t triangles = 0;
+        uint64_t vertices = 0; // as the World keeps them: 3 per triangle where flat normals are made
+    };
+
+    const MeshTotals& meshTotals(int mesh) {
+        std::optional<MeshTotals>& known = meshes_[size_t(mesh)];
+        if (known) return *known;
+        MeshTotals totals;
+        const auto& primitives = source_.model.meshes[size_t(mesh)].primitives;
+        for (size_t p = 0; p < primitives.size(); ++p) {
+            const PrimitiveShape shape = primitiveShape(source_, mesh, int(p));
+            if (shape.triangles == 0) continue;
+            // POSITION is read whole; an accessor without a buffer view (zeros) is backed by no bytes.
+            if (shape.vertices > vertexLimit(options_))
+                fail(source_.path, meshName(mesh) + ".primitives[" + std::to_string(p) +
+                                       "].attributes.POSITION has " + std::to_string(shape.vertices) +
+                                       " vertices" + ", more than the limit of " +
+                                       std::to_string(vertexLimit(options_)));
+            const bool flat = primitives[p].attributes.count("NORMAL") == 0;
+            totals.triangles = saturatingAdd(totals.triangles, shape.triangles);
+            totals.vertices =
+                saturatingAdd(totals.vertices, flat ? 3 * uint64_t(shape.triangles) : shape.vertices);
+            materials_.insert(primitives[p].material);
+        }
+        return *(known = totals);
+    }
+
+    // The pixels of the images the used materials' textures name, from their headers. Indices that
+    // name nothing are left to SceneBuilder, which refuses them in its words.
+    void checkTexturePixels() const {
+        const tinygltf::Model& model = source_.model;
+        std::set<int> images;
+        for (int material : materials_) {
+            if (material < 0 || size_t(material) >= model.materials.size()) continue;
+            const tinygltf::Material& m = model.materials[size_t(material)];
+            for (int texture : {m.pbrMetallicRoughness.baseColorTexture.index, m.emissiveTexture.index}) {
+                if (texture < 0 || size_t(texture) >= model.textures.size()) continue;
+                const int image = model.textures[size_t(texture)].source;
+                if (image >= 0 && size_t(image) < model.images.size()) images.insert(image);
+            }
+        }
+        int64_t pixels = 0;
+        for (int image : images) {
+            std::string file;
+            pixels +=
+                colourTexturePixels(imageBytes(model, image, source_.path, file), options_.maxTexturePixels,
+                                    source_.path + ": images[" + std::to_string(image) + "]");
+        }
+        if (pixels > options_.maxSceneTexturePixels)
+            fail(source_.path, "the " + counted(images.size(), "texture") +
+                                   " the scene's materials use have " + std::to_string(pixels) +
+                                   " pixels, more than the limit of " +
+                                   std::to_string(options_.maxSceneTexturePixels) + " pixels in all");
+    }
+
+    const GltfGeometrySource& source_;
+    const GltfLoadOptions& options_;
+    std::vector<std::optional<MeshTotals>> meshes_;
+    std::set<int> materials_; // of the primitives drawn (-1: the default material)
+};
+
 // ---- The World ----------------------------------------------------------------------------------
 
 class SceneBuilder {
   public:
     SceneBuilder(const tinygltf::Model& model, const std::string& path, const GltfLoadOptions& options)
         : model_(model), path_(path),
-          options_(options), source_{model, path, usesExtension(model, "KHR_mesh_quantization")},
-          maxVertices_(options.maxTriangles > UINT32_MAX / 3 ? UINT32_MAX
-                                                             : 3 * uint64_t(options.maxTriangles)) {}
+          options_(options), source_{model, path, usesExtension(model, "KHR_mesh_quantization")} {}
+
+    // Before anything is read, the scene's totals against the limits (SceneTotals).
+    void checkTotals(const std::vector<PlacedNode>& placed) const {
+        SceneTotals(source_, options_).check(placed);
+    }
 
     void addNode(const PlacedNode& placed) {
         const tinygltf::Node& node = model_.nodes[size_t(placed.node)];
@@ -426,17 +564,13 @@ class SceneBuilder {
     }
 
   private:
+    // `mesh` exists: SceneTotals checked.
     void addMesh(const PlacedNode& placed, int mesh) {
-        const std::string where = nodeName(placed.node) + ".mesh";
-        if (size_t(mesh) >= model_.meshes.size())
-            fail(path_, where + " is " + std::to_string(mesh) + ", but the file has " +
-                            counted(model_.meshes.size(), "mesh"));
         const auto& primitives = model_.meshes[size_t(mesh)].primitives;
         for (size_t p = 0; p < primitives.size(); ++p) {
             const PrimitiveShape shape = primitiveShape(source_, mesh, int(p));
             if (shape.pointsOrLines) ++notes_["line or point primitive"];
             if (shape.triangles == 0) continue;
-            checkBudget(shape, primitives[p].attributes.count("NORMAL") == 0);
             const uint32_t material = materialSlot(primitives[p].material, mesh, int(p));
             const SceneMaterial& scene = world_.materials[material];
             if ((scene.albedoTexture >= 0 || scene.emissionTexture >= 0) &&
@@ -447,16 +581,6 @@ class SceneBuilder {
                             path_ + ": " + nodeName(placed.node) + " (meshes[" + std::to_string(mesh) +
                                 "].primitives[" + std::to_string(p) + "])");
         }
-    }
-
-    // Before anything is read: a small file can instance a large mesh many times.
-    void checkBudget(const PrimitiveShape& shape, bool flat) const {
-        if (world_.triangleCount() + shape.triangles > options_.maxTriangles)
-            fail(path_, "the scene has more than the limit of " + counted(options_.maxTriangles, "triangle") +
-                            " (every instance counted)");
-        if (world_.positions.size() + (flat ? 3 * shape.triangles : shape.vertices) > maxVertices_)
-            fail(path_, "the scene has more than the limit of " + std::to_string(maxVertices_) +
-                            " vertices (3 per triangle of the triangle limit)");
     }
 
     // The World material of a glTF material (-1: glTF's default), added on first use.
@@ -518,21 +642,9 @@ class SceneBuilder {
     }
 
     SceneTexture decodeImage(int index) {
-        const tinygltf::Image& image = model_.images[size_t(index)];
-        const std::string what = path_ + ": images[" + std::to_string(index) + "]";
-        if (!image.image.empty()) return decodeColourTexture(image.image, options_.maxTexturePixels, what);
-        if (image.uri.empty()) fail(what, "has no image data");
-        const std::string name = uriFile(
-            path_, {"images[" + std::to_string(index) + "].uri", image.uri, imageFileName(image.uri)});
         std::string file;
-        try {
-            file = readInputFile(name, kMaxGltfFileBytes, "an image file");
-        } catch (const Error& error) {
-            fail(what, error.what());
-        }
-        return decodeColourTexture(
-            std::span(reinterpret_cast<const unsigned char*>(file.data()), file.size()),
-            options_.maxTexturePixels, what);
+        return decodeColourTexture(imageBytes(model_, index, path_, file), options_.maxTexturePixels,
+                                   path_ + ": images[" + std::to_string(index) + "]");
     }
 
     // KHR_lights_punctual: a directional light shines along its node's -Z, so the direction
@@ -571,7 +683,6 @@ class SceneBuilder {
     const std::string& path_;
     const GltfLoadOptions& options_;
     GltfGeometrySource source_;
-    uint64_t maxVertices_;
     World world_;
     std::map<int, uint32_t> materialSlots_; // glTF material (-1: the default) -> World::materials
     std::map<int, int> textureSlots_;       // glTF image -> World::textures
@@ -593,8 +704,10 @@ World loadGltfScene(const std::string& path, const GltfLoadOptions& options) {
     const tinygltf::Model model = parseModel(path, bytes);
     const std::vector<int> parents = checkedParents(model, path);
     SceneBuilder builder(model, path, options);
-    for (const PlacedNode& placed : placeNodes(model, sceneRoots(model, parents, path), path))
-        builder.addNode(placed);
+    const std::vector<PlacedNode> placed = placeNodes(model, sceneRoots(model, parents, path), path);
+    builder.checkTotals(placed);
+    for (const PlacedNode& node : placed)
+        builder.addNode(node);
     return builder.finish();
 }
 

@@ -32,14 +32,19 @@
 // .glb cut short; a buffer or image URI naming a file outside the scene's folder (by "..", an
 // absolute path or a symbolic link), refused before the file is opened; a property of the wrong
 // JSON type (glTF 2.0's schema: "scenes[0].name must be a string"); what tinygltf refuses (its
-// messages joined into the line); a buffer or image file that cannot be read; a buffer view or
-// accessor reaching past its buffer; an index past the vertices; a value that is NaN or infinite;
+// messages joined into the line); a buffer or image file that cannot be read; a buffer view
+// reaching past its buffer, or an accessor whose count of elements (at its stride, from its
+// offset) needs more bytes than its buffer view holds, refused from the JSON before tinygltf reads
+// a buffer; an index past the vertices; a value that is NaN or infinite;
 // an attribute of the wrong type or component type; a triangle list whose count is not a multiple
 // of 3; a node hierarchy with a cycle or a node with two parents; an extension in
 // extensionsRequired that is not read here (Draco, KHR_texture_basisu, ...); a texture read through
-// a TEXCOORD other than 0; a scene without triangles; and more triangles or texture pixels than the
-// limits below.
+// a TEXCOORD other than 0; a scene without triangles; and more triangles or vertices (summed over every node
+// that instances a mesh), pixels in one texture or in all the textures the drawn materials use (from the
+// images' headers) than the limits below (scene/gltf_limits.h), before any vertex is read or image
+// decoded. Input quoted in a message (a URI, a name) is cut to a few hundred bytes (common/quoted.h).
 #pragma once
+#include "scene/gltf_limits.h"
 #include "scene/scene.h"
 
 #include <cstddef>
@@ -50,15 +55,14 @@
 namespace shprobe {
 
 struct GltfLoadOptions {
-    // Triangles in the World, every instance counted: a scene past it is refused before its
-    // vertices are read, since a small file may instance one large mesh many times.
-    size_t maxTriangles = 20'000'000;
-    // Pixels of one texture: a texel takes 16 bytes in World, so the default is 1 GiB.
-    int64_t maxTexturePixels = int64_t(8192) * 8192;
+    // Triangles in the World, every instance counted: the scene's total is checked before any
+    // vertex is read; vertices are limited to 3 per triangle of it.
+    size_t maxTriangles = kMaxGltfTriangles;
+    // Pixels of one texture, and of all the textures the drawn materials use: checked from the
+    // images' headers before any is decoded.
+    int64_t maxTexturePixels = kMaxGltfTexturePixels;
+    int64_t maxSceneTexturePixels = kMaxGltfSceneTexturePixels;
 };
-
-// The largest glTF, .glb, buffer or image file read: tinygltf counts bytes in int.
-constexpr uint64_t kMaxGltfFileBytes = (uint64_t(1) << 31) - 1;
 
 // The files the scene at `path` reads besides itself: the buffer and image URIs that are not data
 // URIs, as the paths loadGltfScene opens, from the JSON alone (a .gltf, or a .glb's JSON chunk), so

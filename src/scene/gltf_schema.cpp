@@ -5,6 +5,7 @@
 #include "common/error.h"
 #include "common/quoted.h"
 #include "formats/json_reading.h"
+#include "scene/gltf_limits.h"
 
 #include <algorithm>
 #include <climits>
@@ -19,14 +20,8 @@ namespace {
 
 using nlohmann::json;
 
-// glTF nests a handful of levels (root, meshes, a primitive, its attributes); extras may go
-// further. The parser stops here, before it builds the levels below.
-constexpr int kMaxJsonDepth = 64;
-
-// tinygltf reads indices into int, and sizes (byteLength, byteOffset, count) into size_t from
-// JSON numbers, which hold integers exactly up to 2^53.
-constexpr int64_t kMaxIndex = INT_MAX;
-constexpr int64_t kMaxSize = int64_t(1) << 53;
+constexpr int64_t kMaxIndex = kMaxGltfIndex;
+constexpr int64_t kMaxSize = kMaxGltfSize;
 
 enum class Type {
     String,
@@ -330,6 +325,11 @@ void checkBufferViews(const json& root, const Checker& checker) {
         if (!view.contains("buffer") || !view.contains("byteLength")) continue;
         const uint64_t length = sizeOr(view, "byteLength", 0);
         if (length < 1) checker.fail(where + ".byteLength", "must be at least 1");
+        if (const uint64_t stride = sizeOr(view, "byteStride", 0);
+            stride > uint64_t(kMaxGltfByteStride) || stride % 4 != 0)
+            checker.fail(where + ".byteStride", "is " + std::to_string(stride) +
+                                                    "; it must be a multiple of 4 up to " +
+                                                    std::to_string(kMaxGltfByteStride));
         const uint64_t buffer = view["buffer"].get<uint64_t>();
         if (buffer >= buffers.size())
             checker.fail(where + ".buffer", "is " + std::to_string(buffer) + ", but the file has " +
@@ -339,6 +339,97 @@ void checkBufferViews(const json& root, const Checker& checker) {
         if (end > bufferLength)
             checker.fail(where, "ends at byte " + std::to_string(end) + ", past the end of buffer " +
                                     std::to_string(buffer) + " (" + std::to_string(bufferLength) + " bytes)");
+    }
+}
+
+// Bytes of an element of an accessor (the specification's 3.6.2, "Accessors"); 0 for a type or
+// component type glTF does not have, left to the readers to name. Matrix columns start on 4-byte
+// boundaries (3.6.2.4), so MAT2 and MAT3 of 1-byte and MAT3 of 2-byte components are padded.
+uint64_t elementBytes(const std::string& type, uint64_t componentType) {
+    const uint64_t component = componentType == 5120 || componentType == 5121   ? 1
+                               : componentType == 5122 || componentType == 5123 ? 2
+                               : componentType == 5125 || componentType == 5126 ? 4
+                                                                                : 0;
+    if (type == "SCALAR") return component;
+    if (type == "VEC2") return 2 * component;
+    if (type == "VEC3") return 3 * component;
+    if (type == "VEC4") return 4 * component;
+    if (type == "MAT2") return component == 1 ? 8 : 4 * component;
+    if (type == "MAT3") return component == 1 ? 12 : component == 2 ? 24 : 9 * component;
+    if (type == "MAT4") return 16 * component;
+    return 0;
+}
+
+// The view of index `view` (checked by checkBufferViews), or null when there is none such.
+const json* viewAt(const json& views, uint64_t view) {
+    return view < views.size() && views[view].contains("byteLength") ? &views[view] : nullptr;
+}
+
+// `count` elements of `size` bytes, `stride` apart from byte `offset` of a buffer view must end
+// within its byteLength (3.6.2.4: offset + stride * (count - 1) + size <= byteLength). Offset and
+// count are below 2^53, stride and size at most 252 (checkBufferViews): the end is below 2^62.
+void checkElementsInView(const Checker& checker, const std::string& where, uint64_t count, uint64_t size,
+                         uint64_t stride, uint64_t offset, uint64_t view, const json& bufferView) {
+    if (count == 0) return;
+    const uint64_t length = sizeOr(bufferView, "byteLength", 0);
+    const uint64_t end = offset + stride * (count - 1) + size;
+    if (end <= length) return;
+    checker.fail(where, "claims " + std::to_string(count) + (count == 1 ? " element of " : " elements of ") +
+                            std::to_string(size) + " bytes" +
+                            (count > 1 ? ", " + std::to_string(stride) + " apart," : "") + " from byte " +
+                            std::to_string(offset) + ": they need " + std::to_string(end) +
+                            " bytes of bufferViews[" + std::to_string(view) + "], which has " +
+                            std::to_string(length));
+}
+
+// Every accessor's elements, and its sparse indices and values, within the buffer views that hold
+// them, so that a count a file claims is never allocated unless its bytes are there (the buffer
+// views were checked within their buffers, and tinygltf checks each buffer's bytes against its
+// byteLength). An accessor without a buffer view is zeros: its count is bounded by the scene's
+// vertex limit (gltf_scene.cpp) before it is read.
+void checkAccessors(const json& root, const Checker& checker) {
+    const json& views = arrayOf(root, "bufferViews");
+    const json& accessors = arrayOf(root, "accessors");
+    for (size_t i = 0; i < accessors.size(); ++i) {
+        const json& accessor = accessors[i];
+        const std::string where = "accessors[" + std::to_string(i) + "]";
+        if (!accessor.contains("type") || !accessor.contains("componentType")) continue; // tinygltf says
+        const uint64_t size =
+            elementBytes(accessor["type"].get<std::string>(), accessor["componentType"].get<uint64_t>());
+        if (size == 0) continue;
+        const uint64_t count = sizeOr(accessor, "count", 0);
+        if (accessor.contains("bufferView")) {
+            const uint64_t view = accessor["bufferView"].get<uint64_t>();
+            if (const json* bufferView = viewAt(views, view)) {
+                const uint64_t byteStride = sizeOr(*bufferView, "byteStride", 0);
+                if (byteStride != 0 && byteStride < size)
+                    checker.fail(where, "has elements of " + std::to_string(size) +
+                                            " bytes, but bufferViews[" + std::to_string(view) +
+                                            "].byteStride is " + std::to_string(byteStride));
+                checkElementsInView(checker, where, count, size, byteStride ? byteStride : size,
+                                    sizeOr(accessor, "byteOffset", 0), view, *bufferView);
+            }
+        }
+        if (!accessor.contains("sparse")) continue;
+        const json& sparse = accessor["sparse"];
+        const uint64_t sparseCount = sizeOr(sparse, "count", 0);
+        if (sparseCount > count)
+            checker.fail(where + ".sparse.count", "is " + std::to_string(sparseCount) + ", more than the " +
+                                                      std::to_string(count) + " elements of the accessor");
+        for (const char* part : {"indices", "values"}) {
+            if (!sparse.contains(part) || !sparse[part].contains("bufferView")) continue; // tinygltf says
+            const json& of = sparse[part];
+            uint64_t partSize = size;
+            if (part == std::string_view("indices")) {
+                const uint64_t type = sizeOr(of, "componentType", 0);
+                partSize = type == 5121 ? 1 : type == 5123 ? 2 : type == 5125 ? 4 : 0;
+                if (partSize == 0) continue; // the reader names the type
+            }
+            const uint64_t view = of["bufferView"].get<uint64_t>();
+            if (const json* bufferView = viewAt(views, view))
+                checkElementsInView(checker, where + ".sparse." + part, sparseCount, partSize, partSize,
+                                    sizeOr(of, "byteOffset", 0), view, *bufferView);
+        }
     }
 }
 
@@ -366,12 +457,12 @@ std::string parseProblem(const json::exception& error) {
 void checkGltfJson(std::string_view text, const std::string& path) {
     json root;
     try {
-        root = parseBoundedJson(text, kMaxJsonDepth);
+        root = parseBoundedJson(text, kMaxGltfJsonDepth);
     } catch (const json::exception& error) {
         throw Error(ErrorKind::Input, path + ": not valid JSON (" + parseProblem(error) + ")");
     } catch (const JsonTooDeep&) {
-        throw Error(ErrorKind::Input, path + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
-                                          " levels; not a glTF file");
+        throw Error(ErrorKind::Input, path + ": JSON nested deeper than " +
+                                          std::to_string(kMaxGltfJsonDepth) + " levels; not a glTF file");
     }
     if (!root.is_object())
         throw Error(ErrorKind::Input, path + ": the top level must be a JSON object, not " +
@@ -380,6 +471,7 @@ void checkGltfJson(std::string_view text, const std::string& path) {
     checker.checkObject(root, kRoot, "");
     checkRequiredExtensions(root, path);
     checkBufferViews(root, checker);
+    checkAccessors(root, checker);
 }
 
 } // namespace shprobe

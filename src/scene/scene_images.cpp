@@ -33,8 +33,9 @@ void decodeRgb(const uint16_t* codes, const std::vector<float>& table, SceneText
 
 } // namespace
 
-SceneTexture decodeColourTexture(std::span<const unsigned char> bytes, int64_t maxPixels,
-                                 const std::string& what) {
+namespace {
+
+RgbCodes checkedHeader(std::span<const unsigned char> bytes, int64_t maxPixels, const std::string& what) {
     const ImageFormat format = sniffImageFormat(bytes.data(), bytes.size());
     if (format != ImageFormat::Png && format != ImageFormat::Jpeg)
         fail(what, "not a PNG or JPEG image (the texture formats of glTF 2.0)");
@@ -42,6 +43,20 @@ SceneTexture decodeColourTexture(std::span<const unsigned char> bytes, int64_t m
     if (int64_t(image.width) * image.height > maxPixels)
         fail(what, "the image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                        ", more than the limit of " + std::to_string(maxPixels) + " pixels per texture");
+    return image;
+}
+
+} // namespace
+
+int64_t colourTexturePixels(std::span<const unsigned char> bytes, int64_t maxPixels,
+                            const std::string& what) {
+    const RgbCodes image = checkedHeader(bytes, maxPixels, what);
+    return int64_t(image.width) * image.height;
+}
+
+SceneTexture decodeColourTexture(std::span<const unsigned char> bytes, int64_t maxPixels,
+                                 const std::string& what) {
+    RgbCodes image = checkedHeader(bytes, maxPixels, what);
     decodeRgbCodes(bytes, image, what);
     SceneTexture texture;
     texture.width = image.width;

@@ -14,6 +14,10 @@ namespace shprobe {
 // and alpha is ignored (set to 1). An image of more than maxPixels pixels is refused from its
 // header, before it is decoded. Throws Error(Input) "WHAT: REASON" ("scene.gltf: image 0: not a
 // PNG or JPEG image").
+// The pixels of a texture from its header alone (nothing is decoded), after the checks
+// decodeColourTexture makes first: a PNG or JPEG of at most maxPixels pixels.
+int64_t colourTexturePixels(std::span<const unsigned char> bytes, int64_t maxPixels, const std::string& what);
+
 SceneTexture decodeColourTexture(std::span<const unsigned char> bytes, int64_t maxPixels,
                                  const std::string& what);
 
