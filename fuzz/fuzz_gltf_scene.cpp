@@ -2,7 +2,8 @@
 // buffers and images by path): it must return a consistent World or throw shprobe::Error, never
 // crash, hang or throw anything else. A World it returns must hold what the capture and the
 // reference index blindly: whole triangles, indices within the vertices, one material per triangle
-// that exists, textures that exist with their texels, finite positions inside the bounds.
+// that exists, textures that exist with their texels, finite positions inside the bounds, and no
+// more triangles or texture pixels than the limits it was given.
 #include "fuzz_support.h"
 #include "scene/gltf_scene.h"
 
@@ -21,8 +22,16 @@ bool validTexture(const World& world, int index) {
     return index == -1 || (index >= 0 && size_t(index) < world.textures.size());
 }
 
-void checkWorld(const World& world) {
+void checkWorld(const World& world, const GltfLoadOptions& options) {
     const size_t vertices = world.positions.size();
+    if (world.triangleCount() > options.maxTriangles) fuzz::finding("more triangles than the limit");
+    int64_t pixels = 0;
+    for (const SceneTexture& texture : world.textures) {
+        const int64_t size = int64_t(texture.width) * texture.height;
+        if (size > options.maxTexturePixels) fuzz::finding("a texture larger than the limit");
+        pixels += size;
+    }
+    if (pixels > options.maxSceneTexturePixels) fuzz::finding("more texture pixels than the limit");
     if (world.indices.size() % 3 != 0) fuzz::finding("indices are not whole triangles");
     if (world.normals.size() != vertices || world.uvs.size() != vertices)
         fuzz::finding("normals or uvs do not match the positions");
@@ -65,8 +74,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         std::ofstream out(path, std::ios::binary | std::ios::trunc);
         out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
     }
-    // Limits small enough that no input costs more than a few MiB to accept.
-    const GltfLoadOptions options{.maxTriangles = 100'000, .maxTexturePixels = 256 * 256};
-    fuzz::expectOnlyShprobeErrors("loadGltfScene", [&] { checkWorld(loadGltfScene(path, options)); });
+    // Limits small enough that no input costs more than a few MiB to accept; whatever counts a
+    // file claims, the reader checks them against these or against its bytes before allocating.
+    const GltfLoadOptions options{
+        .maxTriangles = 100'000, .maxTexturePixels = 256 * 256, .maxSceneTexturePixels = 4 * 256 * 256};
+    fuzz::expectOnlyShprobeErrors("loadGltfScene",
+                                  [&] { checkWorld(loadGltfScene(path, options), options); });
     return 0;
 }

@@ -11,7 +11,8 @@
 #     uninstrumented Mesa code. scripts/test.sh runs them without sanitizers.
 #  2. build-fuzz: the libFuzzer targets of fuzz/ (clang), each run for FUZZ_SECONDS (default 20) on
 #     a temporary copy of its seed corpus in fuzz/corpus/, so CI never writes into the repository;
-#     fuzz_gltf_scene's also takes the small real glTFs of assimp-testmodels, broken ones included.
+#     fuzz_gltf_scene's also takes the small real glTFs of assimp-testmodels, broken ones included,
+#     and the dictionary fuzz/gltf_scene.dict (a target's fuzz/<name>.dict is passed where it exists).
 #     A crash, sanitizer report or foreign exception fails the run; the input is kept in
 #     $FUZZ_ARTIFACTS (default: a temporary folder, printed) to reproduce with
 #     ./build-fuzz/fuzz/fuzz_<name> <file>.
@@ -87,9 +88,13 @@ for target in probe_json probe_stdin probe_volume gltf_scene layout cross channe
       cp "$model" "$corpus/assimp-$n-$(basename "$model")"
     done < <(find "$gltf_models" -size -64k \( -name '*.gltf' -o -name '*.glb' \) -print0)
   fi
+  # A target's dictionary, where it has one, holds the words its format is made of.
+  dict=()
+  [ -f fuzz/"$target".dict ] && dict=(-dict=fuzz/"$target".dict)
   echo "-- fuzz_$target"
   if ! ./build-fuzz/fuzz/fuzz_"$target" "$corpus" -max_total_time="$fuzz_seconds" -rss_limit_mb=2048 \
-       -timeout=25 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" 2>"$work/$target.log"; then
+       -timeout=25 -print_final_stats=1 -artifact_prefix="$artifacts/$target-" ${dict[@]+"${dict[@]}"} \
+       2>"$work/$target.log"; then
     tail -n 60 "$work/$target.log" >&2
     failed+=("fuzz_$target")
   fi
