@@ -172,7 +172,8 @@ TEST_F(BadInputs, TruncatedExr) {
 
 // EXR files and OpenImageIO's formats are read and written by plugins loaded on first use
 // (image/exr_plugin.h, image/oiio_plugin.h). One that cannot be loaded fails the run like any bad
-// input, naming the file, the library it needs and where it looked: reading (exit 2) and writing
+// input, naming the file, the library it needs and why (the dynamic loader's reason, or where it
+// looked): reading (exit 2) and writing
 // (exit 3, before any output is made), with nothing written.
 TEST_F(BadInputs, CodecPluginsThatCannotBeLoadedAreNamed) {
     writeImage(file("sky.exr"), constantImage(16, 8, glm::vec3(1.0f)));
@@ -183,7 +184,8 @@ TEST_F(BadInputs, CodecPluginsThatCannotBeLoadedAreNamed) {
     expectFailure({{"bake", file("sky.exr"), "-o", "OUT"},
                    2,
                    {file("sky.exr") + ": this format needs OpenEXR, and its plugin libshprobe_exr.so",
-                    "(looked in " + missing + ")"},
+                    "(SHPROBE_EXR_PLUGIN: loading " + missing + " failed: " + missing +
+                        ": cannot open shared object file: No such file or directory)"},
                    "out.json",
                    noExr});
     expectFailure({{"bake", file("sky.hdr"), "--format", "irradiance-equirect", "-o", "OUT"},

@@ -708,5 +708,69 @@ TEST_F(Reliability, ValuesAFormatCannotHoldAreRefused) {
     runOk({"convert", file("bright.json"), "--format", "binary", "-o", file("bright.bin")});
 }
 
+// The codec plugins load only from the program's own tree, by absolute path. SHPROBE_EXR_PLUGIN
+// and SHPROBE_OIIO_PLUGIN must name an absolute path; a plugin in a folder every user may write,
+// or writable by every user itself, is refused; a load that fails says the dynamic loader's reason.
+TEST_F(Reliability, PluginsLoadOnlyFromTrustedAbsolutePaths) {
+    writeImage(file("sky.exr"), makeImage(8, 4));
+    writeImage(file("sky.tif"), makeImage(8, 4), "tiff");
+    const fs::path built = fs::path(SHPROBE_EXECUTABLE).parent_path() / "libshprobe_exr.so";
+    const std::vector<std::string> bakeExr{"bake", file("sky.exr"), "--backend", "cpu", "-o", "OUT"};
+    const std::string needsExr =
+        file("sky.exr") + ": this format needs OpenEXR, and its plugin libshprobe_exr.so";
+    expectFailure({bakeExr,
+                   2,
+                   {needsExr, "SHPROBE_EXR_PLUGIN=libshprobe_exr.so is not an absolute path"},
+                   "out.json",
+                   {{"SHPROBE_EXR_PLUGIN", "libshprobe_exr.so"}}});
+    expectFailure({{"bake", file("sky.tif"), "--backend", "cpu", "-o", "OUT"},
+                   2,
+                   {file("sky.tif") + ": this format needs OpenImageIO",
+                    "SHPROBE_OIIO_PLUGIN=./libshprobe_oiio.so is not an absolute path"},
+                   "out.json",
+                   {{"SHPROBE_OIIO_PLUGIN", "./libshprobe_oiio.so"}}});
+    const std::string missing = file("no-such-plugin.so");
+    expectFailure({bakeExr,
+                   2,
+                   {needsExr, "SHPROBE_EXR_PLUGIN: loading " + missing + " failed: " + missing +
+                                  ": cannot open shared object file: No such file or directory"},
+                   "out.json",
+                   {{"SHPROBE_EXR_PLUGIN", missing}}});
+
+    // A copy of the plugin in a private folder loads; in a folder every user may write, or writable
+    // by every user itself, it is refused.
+    const fs::path trusted = folder() / "trusted";
+    fs::create_directories(trusted);
+    fs::permissions(trusted, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                                 fs::perms::others_read | fs::perms::others_exec);
+    fs::copy_file(built, trusted / "libshprobe_exr.so");
+    RunResult loaded =
+        run({"bake", file("sky.exr"), "--backend", "cpu", "-q", "-o", file("loaded.json")},
+            {.environment = {{"SHPROBE_EXR_PLUGIN", (trusted / "libshprobe_exr.so").string()}}});
+    EXPECT_EQ(loaded.exitCode, 0) << describe(loaded);
+    EXPECT_EQ(loaded.err, "") << describe(loaded);
+
+    std::string shared = (folder() / "sharedXXXXXX").string();
+    ASSERT_NE(mkdtemp(shared.data()), nullptr) << std::strerror(errno);
+    ASSERT_EQ(chmod(shared.c_str(), 0777), 0);
+    const std::string sharedPlugin = shared + "/libshprobe_exr.so";
+    fs::copy_file(built, sharedPlugin);
+    expectFailure(
+        {bakeExr,
+         2,
+         {needsExr, "refusing " + sharedPlugin + ": its folder " + shared + " is writable by every user"},
+         "out.json",
+         {{"SHPROBE_EXR_PLUGIN", sharedPlugin}}});
+
+    const fs::path writable = trusted / "writable.so";
+    fs::copy_file(built, writable);
+    fs::permissions(writable, fs::perms::others_write, fs::perm_options::add);
+    expectFailure({bakeExr,
+                   2,
+                   {needsExr, "the file " + writable.string() + " is writable by every user"},
+                   "out.json",
+                   {{"SHPROBE_EXR_PLUGIN", writable.string()}}});
+}
+
 } // namespace
 } // namespace shprobe

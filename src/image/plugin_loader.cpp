@@ -3,11 +3,16 @@
 #include "image/exr_plugin.h"
 #include "image/oiio_plugin.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <dlfcn.h>
 #include <filesystem>
 #include <link.h>
 #include <mutex>
+#include <string>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <utility>
 #include <vector>
 
 namespace shprobe {
@@ -44,18 +49,60 @@ fs::path folderOfThisCode() {
     return error ? fs::path() : file.parent_path();
 }
 
-// Where the plugin may be, in order: the file its variable names; beside the code (the build tree's
-// program; an installed libshprobe.so's folder has it in shprobe/); one folder up (tests in the
-// build tree); the installed layout seen from bin/ (../lib/shprobe); the configured install
-// location; the build tree it was built in.
+// Why `path` may not be loaded, or "" if it may: the plugin runs with the user's rights, so the file
+// and the folder it lies in must be owned by root or the user and not writable by every user.
+// Checked for the path as named and for the file a link leads to.
+std::string refusal(const fs::path& path) {
+    auto check = [](const fs::path& place, const char* what) -> std::string {
+        struct stat status {};
+        if (stat(place.c_str(), &status) != 0) return {}; // missing: the loader says so
+        const std::string named = std::string(what) + " " + place.string();
+        if (status.st_uid != 0 && status.st_uid != geteuid())
+            return named + " belongs to user " + std::to_string(status.st_uid) +
+                   ", neither root nor the user running shprobe";
+        if (status.st_mode & S_IWOTH) return named + " is writable by every user";
+        return {};
+    };
+    std::error_code error;
+    const fs::path real = fs::canonical(path, error);
+    std::vector<std::pair<fs::path, const char*>> places{{path.parent_path(), "its folder"}};
+    if (!error) places.insert(places.end(), {{real, "the file"}, {real.parent_path(), "its folder"}});
+    for (const auto& [place, what] : places)
+        if (std::string why = check(place, what); !why.empty()) return why;
+    return {};
+}
+
+// `folder` less its trailing `tail` (both made of whole names), or "" if it does not end so.
+fs::path withoutTail(const fs::path& folder, const fs::path& tail) {
+    fs::path head = folder;
+    std::vector<fs::path> names(tail.begin(), tail.end());
+    for (auto name = names.rbegin(); name != names.rend(); ++name) {
+        if (name->empty()) continue; // a trailing '/'
+        if (head.filename() != *name) return {};
+        head = head.parent_path();
+    }
+    return head;
+}
+
+// Where the plugin may be, in order, each an absolute path of the program's own tree: beside the
+// code (the build tree's program); shprobe/ beside it (an installed libshprobe.so); for a program
+// installed in <prefix>/bin, <prefix>/lib/shprobe; the configured install location; and for code
+// inside the build tree it was built in (its tests), that build tree. Never a folder above.
 std::vector<fs::path> candidates(const PluginName& plugin) {
-    if (const char* named = std::getenv(plugin.environment); named && *named) return {named};
     std::vector<fs::path> places;
-    if (fs::path here = folderOfThisCode(); !here.empty())
-        places = {here / plugin.file, here / "shprobe" / plugin.file, here.parent_path() / plugin.file,
-                  here.parent_path() / SHPROBE_INSTALL_LIBDIR_NAME / "shprobe" / plugin.file};
+    const fs::path here = folderOfThisCode();
+    if (!here.empty()) {
+        places = {here / plugin.file, here / "shprobe" / plugin.file};
+        if (fs::path prefix = withoutTail(here, SHPROBE_INSTALL_BINDIR_NAME); !prefix.empty())
+            places.push_back(prefix / SHPROBE_INSTALL_LIBDIR_NAME / "shprobe" / plugin.file);
+    }
     places.push_back(fs::path(SHPROBE_INSTALL_PLUGIN_DIR) / plugin.file);
-    places.push_back(fs::path(SHPROBE_BUILD_PLUGIN_DIR) / plugin.file);
+    std::error_code error;
+    const fs::path build = fs::canonical(SHPROBE_BUILD_PLUGIN_DIR, error);
+    if (!error && !here.empty()) {
+        if (std::mismatch(build.begin(), build.end(), here.begin(), here.end()).first == build.end())
+            places.push_back(build / plugin.file);
+    }
     return places;
 }
 
@@ -64,19 +111,43 @@ struct Found {
     std::string failure;   // why none, with the places looked in
 };
 
+// The dynamic loader's reason for the last failure.
+std::string loaderReason() {
+    const char* reason = dlerror();
+    return reason && *reason ? reason : "the dynamic loader gave no reason";
+}
+
+// Loads the plugin at `place` (an absolute path, checked by `refusal`) and finds its entry.
+Found load(const fs::path& place, const PluginName& plugin) {
+    if (std::string why = refusal(place); !why.empty())
+        return {nullptr, "refusing " + place.string() + ": " + why};
+    dlerror();
+    void* module = dlopen(place.c_str(), RTLD_NOW | RTLD_LOCAL); // kept open for the process
+    if (!module) return {nullptr, "loading " + place.string() + " failed: " + loaderReason()};
+    void* entry = dlsym(module, plugin.entry);
+    if (!entry) return {nullptr, place.string() + " has no " + plugin.entry + ": " + loaderReason()};
+    return {entry, {}};
+}
+
 Found find(const PluginName& plugin) {
+    // The variable, when set (empty is not set), names the one file to load, by its absolute path:
+    // a relative one would be looked up in the working folder or the loader's search path.
+    if (const char* named = std::getenv(plugin.environment); named && *named) {
+        if (named[0] != '/')
+            return {nullptr, std::string(plugin.environment) + "=" + named +
+                                 " is not an absolute path; name the plugin by its absolute path"};
+        Found found = load(named, plugin);
+        if (!found.entry) found.failure = std::string(plugin.environment) + ": " + found.failure;
+        return found;
+    }
     std::string tried;
     for (const fs::path& place : candidates(plugin)) {
         std::error_code error;
-        if (!fs::is_regular_file(place, error)) {
+        if (place.is_relative() || !fs::exists(place, error)) {
             tried += (tried.empty() ? "" : ", ") + place.string();
             continue;
         }
-        void* module = dlopen(place.c_str(), RTLD_NOW | RTLD_LOCAL); // kept open for the process
-        if (!module) return {nullptr, "loading " + place.string() + " failed: " + dlerror()};
-        void* entry = dlsym(module, plugin.entry);
-        if (!entry) return {nullptr, place.string() + " has no " + plugin.entry};
-        return {entry, {}};
+        return load(place, plugin);
     }
     return {nullptr, "looked in " + tried};
 }
