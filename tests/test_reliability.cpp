@@ -772,5 +772,23 @@ TEST_F(Reliability, PluginsLoadOnlyFromTrustedAbsolutePaths) {
                    {{"SHPROBE_EXR_PLUGIN", writable.string()}}});
 }
 
+// VK_ICD_FILENAMES (or VK_DRIVER_FILES) set but empty lists no driver at all: the message names
+// the variable rather than asking for a driver to be installed.
+TEST_F(Reliability, AnEmptyDriverListIsNamed) {
+    const std::vector<std::string> bake{"bake", "--face-size", "4", "--backend", "gpu", "-o", "OUT"};
+    expectFailure({bake,
+                   4,
+                   {"no Vulkan driver found: VK_ICD_FILENAMES is set but empty, which lists no driver"},
+                   "out.json",
+                   {{"VK_ICD_FILENAMES", ""}, {"VK_DRIVER_FILES", std::nullopt}}});
+    const char* lavapipe = std::getenv("VK_ICD_FILENAMES");
+    expectFailure(
+        {bake,
+         4,
+         {"VK_DRIVER_FILES is set but empty, which lists no driver (it overrides VK_ICD_FILENAMES)"},
+         "out.json",
+         {{"VK_ICD_FILENAMES", lavapipe ? lavapipe : "/no/driver.json"}, {"VK_DRIVER_FILES", ""}}});
+}
+
 } // namespace
 } // namespace shprobe

@@ -157,17 +157,33 @@ std::string driverListVariable() {
     const char* driverFiles = std::getenv("VK_DRIVER_FILES");
     const char* icdFilenames = std::getenv("VK_ICD_FILENAMES");
     bool hasDriverFiles = driverFiles && *driverFiles, hasIcdFilenames = icdFilenames && *icdFilenames;
-    // The loader reads VK_ICD_FILENAMES, the older name, only when VK_DRIVER_FILES is not set.
+    // The loader reads VK_ICD_FILENAMES, the older name, only when VK_DRIVER_FILES is not set (set
+    // but empty, it lists no driver: emptyDriverListVariable).
+    if (driverFiles && !hasDriverFiles) return {};
     if (hasDriverFiles)
         return std::string("VK_DRIVER_FILES=") + driverFiles +
                (hasIcdFilenames ? " (it overrides VK_ICD_FILENAMES)" : "");
     return hasIcdFilenames ? std::string("VK_ICD_FILENAMES=") + icdFilenames : std::string();
 }
 
+std::string emptyDriverListVariable() {
+    const char* driverFiles = std::getenv("VK_DRIVER_FILES");
+    const char* icdFilenames = std::getenv("VK_ICD_FILENAMES");
+    if (driverFiles) return *driverFiles ? std::string() : "VK_DRIVER_FILES";
+    return icdFilenames && !*icdFilenames ? "VK_ICD_FILENAMES" : std::string();
+}
+
 std::string driverListAdvice() {
-    const std::string variable = driverListVariable();
-    const std::string check =
-        variable.empty() ? "install a Vulkan driver or check the installed ones" : "check " + variable;
+    const std::string variable = driverListVariable(), empty = emptyDriverListVariable();
+    std::string check = "install a Vulkan driver or check the installed ones";
+    if (!variable.empty())
+        check = "check " + variable;
+    else if (!empty.empty())
+        check = empty + " is set but empty, which lists no driver" +
+                (empty == "VK_DRIVER_FILES" && std::getenv("VK_ICD_FILENAMES")
+                     ? " (it overrides VK_ICD_FILENAMES)"
+                     : "") +
+                ": unset it or name a driver manifest in it";
     return check + " (VK_LOADER_DEBUG=error says why a driver is refused); " + kLavapipeHint;
 }
 

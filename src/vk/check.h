@@ -38,10 +38,14 @@ std::string vkErrorMessage(VkResult result, const char* call, const char* file, 
 [[noreturn]] void throwVkError(VkResult result, const char* call, const char* file, int line);
 
 // The variable that replaces the loader's search of the icd.d folders (VK_DRIVER_FILES, or else
-// VK_ICD_FILENAMES) with its value, "VK_ICD_FILENAMES=/tmp/x.json"; empty when neither is set.
+// VK_ICD_FILENAMES) with its value, "VK_ICD_FILENAMES=/tmp/x.json"; empty when neither is set to a
+// list (one set but empty: emptyDriverListVariable).
 std::string driverListVariable();
-// What to check when the driver list gives no usable driver: that variable and its value, or the
-// installed manifests; then lavapipe and `--backend cpu`.
+// The variable the loader reads that is set but empty, which lists no driver (the loader reads it
+// as an empty list, not as unset): "VK_DRIVER_FILES", or else "VK_ICD_FILENAMES"; empty if none.
+std::string emptyDriverListVariable();
+// What to check when the driver list gives no usable driver: that variable and its value, the one
+// set but empty, or the installed manifests; then lavapipe and `--backend cpu`.
 std::string driverListAdvice();
 
 } // namespace shprobe
