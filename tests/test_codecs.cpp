@@ -624,7 +624,7 @@ TEST_F(Codecs, HdrCutShortIsTruncated) {
                         "holds a run of length 0)");
     writeBytes(file("bad.hdr"), "#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 2 +X 2\n");
     EXPECT_CONTAINS(inputErrorOf([&] { openStbDecoder(file("bad.hdr"), ImageFormat::Hdr); }),
-                    file("bad.hdr") + ": not an image stb_image can read (");
+                    file("bad.hdr") + ": not a Radiance HDR image (");
 }
 
 // ---- PNG -------------------------------------------------------------------------------------------
@@ -852,7 +852,7 @@ TEST_F(Codecs, PngCorruptChunksAreRefused) {
     badHeader[8 + 8 + 13 + 3] ^= 1; // IHDR's CRC
     writeBytes(file("ihdr.png"), badHeader);
     EXPECT_CONTAINS(inputErrorOf([&] { openStbDecoder(file("ihdr.png"), ImageFormat::Png); }),
-                    file("ihdr.png") + ": not an image stb_image can read (IHDR: CRC error)");
+                    file("ihdr.png") + ": not a PNG image (IHDR: CRC error)");
     EXPECT_FALSE(OIIO::ImageInput::open(file("ihdr.png")));
     OIIO::geterror();
 
@@ -909,8 +909,7 @@ TEST_F(Codecs, PngCutShortSaysEndOfFile) {
     }
     cutFile(file("full.png"), file("head.png"), 20);
     EXPECT_CONTAINS(inputErrorOf([&] { openStbDecoder(file("head.png"), ImageFormat::Png); }),
-                    file("head.png") +
-                        ": not an image stb_image can read (the file ends before its first IDAT chunk");
+                    file("head.png") + ": not a PNG image (the file ends before its first IDAT chunk");
 }
 
 // ---- JPEG ------------------------------------------------------------------------------------------
@@ -974,7 +973,7 @@ TEST_F(Codecs, JpegCutShortIsTruncated) {
     }
     writeBytes(file("notes.jpg"), "\xff\xd8\xff not a JPEG");
     EXPECT_CONTAINS(inputErrorOf([&] { openStbDecoder(file("notes.jpg"), ImageFormat::Jpeg); }),
-                    file("notes.jpg") + ": not an image stb_image can read (");
+                    file("notes.jpg") + ": not a JPEG image (");
 }
 
 // ---- The encoders ----------------------------------------------------------------------------------

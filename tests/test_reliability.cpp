@@ -790,5 +790,68 @@ TEST_F(Reliability, AnEmptyDriverListIsNamed) {
          {{"VK_ICD_FILENAMES", lavapipe ? lavapipe : "/no/driver.json"}, {"VK_DRIVER_FILES", ""}}});
 }
 
+// A Radiance HDR file in flat RGBE: `pixels` in the order stored, under the resolution line given.
+void writeRadiance(const fs::path& path, const std::string& resolution,
+                   const std::vector<glm::u8vec4>& pixels) {
+    std::string bytes = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n" + resolution + "\n";
+    for (const glm::u8vec4& pixel : pixels)
+        bytes.append({char(pixel.r), char(pixel.g), char(pixel.b), char(pixel.a)});
+    writeText(path, bytes);
+}
+
+// Radiance defines eight scan orders (resolution lines "-Y H +X W", "+Y H +X W", ..., "+X W -Y H",
+// ...): the same image stored in each bakes to the same coefficients; a line naming none is refused.
+TEST_F(Reliability, RadianceFilesReadInEveryOrientation) {
+    constexpr int kWidth = 16, kHeight = 8;
+    auto pixel = [](int x, int row) {
+        return glm::u8vec4((x * 13 + row * 7) % 200 + 20, (x * 3 + row * 29) % 200 + 20,
+                           (x + row * 11) % 200 + 20, 129);
+    };
+    // Each orientation: its line, and the pixel (x, row from the top) stored n-th.
+    struct Orientation {
+        std::string line;
+        std::function<glm::u8vec4(int)> stored;
+    };
+    const std::vector<Orientation> orientations{
+        {"-Y 8 +X 16", [&](int n) { return pixel(n % kWidth, n / kWidth); }},
+        {"+Y 8 +X 16", [&](int n) { return pixel(n % kWidth, kHeight - 1 - n / kWidth); }},
+        {"-Y 8 -X 16", [&](int n) { return pixel(kWidth - 1 - n % kWidth, n / kWidth); }},
+        {"+X 16 -Y 8", [&](int n) { return pixel(n / kHeight, n % kHeight); }},
+        {"-X 16 +Y 8", [&](int n) { return pixel(kWidth - 1 - n / kHeight, kHeight - 1 - n % kHeight); }},
+    };
+    auto bakedCoefficients = [&](const std::string& path) {
+        RunResult baked = run({"bake", path, "--backend", "cpu", "-q", "-o", path + ".json"});
+        EXPECT_EQ(baked.exitCode, 0) << describe(baked);
+        EXPECT_EQ(baked.err, "") << describe(baked);
+        return baked.exitCode == 0 ? readProbeFile(path + ".json").rgb : std::vector<glm::dvec3>{};
+    };
+    std::vector<glm::dvec3> standard;
+    for (size_t i = 0; i < orientations.size(); ++i) {
+        SCOPED_TRACE(orientations[i].line);
+        std::vector<glm::u8vec4> pixels;
+        for (int n = 0; n < kWidth * kHeight; ++n)
+            pixels.push_back(orientations[i].stored(n));
+        const std::string path = file("o" + std::to_string(i) + ".hdr");
+        writeRadiance(path, orientations[i].line, pixels);
+        std::vector<glm::dvec3> baked = bakedCoefficients(path);
+        ASSERT_EQ(baked.size(), 9u);
+        if (i == 0) standard = baked;
+        EXPECT_EQ(baked, standard);
+    }
+    // The rows bottom to top under the standard line bake to other coefficients.
+    std::vector<glm::u8vec4> flipped;
+    for (int n = 0; n < kWidth * kHeight; ++n)
+        flipped.push_back(orientations[1].stored(n));
+    writeRadiance(file("flipped.hdr"), "-Y 8 +X 16", flipped);
+    EXPECT_NE(bakedCoefficients(file("flipped.hdr")), standard);
+
+    writeRadiance(file("z.hdr"), "-Z 8 +X 16", flipped);
+    expectFailure(
+        {{"bake", file("z.hdr"), "--backend", "cpu", "-o", "OUT"},
+         2,
+         {file("z.hdr") + ": not a Radiance HDR image (the resolution line \"-Z 8 +X 16\" names none "
+                          "of Radiance's eight orientations"}});
+}
+
 } // namespace
 } // namespace shprobe

@@ -301,10 +301,120 @@ bool validBitDepth(int colourType, int depth) {
     }
 }
 
+// ---- Radiance HDR orientation --------------------------------------------------------------------
+// The resolution line after the header names the scan order (Radiance's resolu.h): two axes, each
+// with its sign and size, the first the one scanlines advance along, the second the one pixels of
+// a scanline advance along. X grows to the right, Y upwards: "-Y H +X W", the usual one, stores
+// rows from the top, each from the left; "+Y H -X W" rows from the bottom, each from the right;
+// "+X W -Y H" (X first) stores columns from the left, each from the top. stb_image reads only
+// "-Y H +X W": any other line is rewritten to it (its sizes those of the scanlines as stored), and
+// the pixels decoded are moved to their places afterwards.
+
+struct HdrOrientation {
+    bool columns = false;     // scanlines are columns (X first)
+    bool rightToLeft = false; // -X
+    bool bottomToTop = false; // +Y
+    uint64_t scanlines = 0;   // as stored: how many
+    uint64_t length = 0;      // and the pixels of each
+
+    bool standard() const { return !columns && !rightToLeft && !bottomToTop; }
+    int width() const { return int(columns ? scanlines : length); }
+    int height() const { return int(columns ? length : scanlines); }
+};
+
+// Where the resolution line starts: after the program-type line and the header lines up to an
+// empty one (for stb_image a line whose first byte is '\n' or 0 is empty). npos when the bytes end
+// before it does.
+size_t hdrResolutionLine(const unsigned char* bytes, size_t size) {
+    size_t at = 0;
+    for (bool programType = true;; programType = false) {
+        const void* newline = std::memchr(bytes + at, '\n', size - at);
+        if (!newline) return std::string::npos;
+        const bool empty = bytes[at] == '\n' || bytes[at] == 0;
+        at = size_t(static_cast<const unsigned char*>(newline) - bytes) + 1;
+        if (empty && !programType) break;
+    }
+    return std::memchr(bytes + at, '\n', size - at) ? at : std::string::npos;
+}
+
+// The line quoted for a message: printable ASCII, others as \xNN, at most 80 characters.
+std::string quotedLine(const unsigned char* line, size_t size) {
+    static const char kHex[] = "0123456789abcdef";
+    std::string text = "\"";
+    for (size_t i = 0; i < size && i < 80; ++i) {
+        if (line[i] >= 0x20 && line[i] < 0x7f && line[i] != '"' && line[i] != '\\') {
+            text += char(line[i]);
+        } else {
+            text += "\\x";
+            text += kHex[line[i] >> 4];
+            text += kHex[line[i] & 15];
+        }
+    }
+    return text + (size > 80 ? "...\"" : "\"");
+}
+
+// Reads the resolution line at `line` ("[+-][XY] N [+-][XY] M", what follows M ignored, as
+// Radiance's str2resolu does). On any orientation but "-Y +X", writes "-Y" and "+X" over its two
+// axes, so that stb_image reads the scanlines as stored. False if it names none of the eight.
+bool readHdrOrientation(unsigned char* line, size_t size, HdrOrientation& orientation) {
+    size_t at = 0;
+    unsigned char* axes[2] = {};
+    uint64_t sizes[2] = {};
+    for (int i = 0; i < 2; ++i) {
+        while (i > 0 && at < size && line[at] == ' ')
+            ++at;
+        if (size - at < 3 || (line[at] != '+' && line[at] != '-') ||
+            (line[at + 1] != 'X' && line[at + 1] != 'Y') || line[at + 2] != ' ')
+            return false;
+        axes[i] = line + at;
+        at += 2;
+        while (at < size && line[at] == ' ')
+            ++at;
+        if (at >= size || !std::isdigit(line[at])) return false;
+        for (; at < size && std::isdigit(line[at]); ++at) {
+            sizes[i] = sizes[i] * 10 + uint64_t(line[at] - '0');
+            if (sizes[i] > uint64_t(INT_MAX)) return false;
+        }
+    }
+    if (axes[0][1] == axes[1][1]) return false;
+    orientation.columns = axes[0][1] == 'X';
+    const unsigned char* x = orientation.columns ? axes[0] : axes[1];
+    const unsigned char* y = orientation.columns ? axes[1] : axes[0];
+    orientation.rightToLeft = x[0] == '-';
+    orientation.bottomToTop = y[0] == '+';
+    orientation.scanlines = sizes[0];
+    orientation.length = sizes[1];
+    if (!orientation.standard()) {
+        std::memcpy(axes[0], "-Y", 2);
+        std::memcpy(axes[1], "+X", 2);
+    }
+    return true;
+}
+
+// Moves the decoded pixels (3 floats each), in the order stored, to rows from the top, each from
+// the left.
+void reorderHdrPixels(float* pixels, const HdrOrientation& orientation) {
+    const uint64_t width = uint64_t(orientation.width()), height = uint64_t(orientation.height());
+    std::vector<float> stored(pixels, pixels + width * height * 3);
+    for (uint64_t s = 0; s < orientation.scanlines; ++s)
+        for (uint64_t p = 0; p < orientation.length; ++p) {
+            uint64_t x = orientation.columns ? s : p, row = orientation.columns ? p : s;
+            if (orientation.rightToLeft) x = width - 1 - x;
+            if (orientation.bottomToTop) row = height - 1 - row;
+            std::memcpy(pixels + (row * width + x) * 3, stored.data() + (s * orientation.length + p) * 3,
+                        3 * sizeof(float));
+        }
+}
+
 // ---- Decoders -----------------------------------------------------------------------------------
 
-std::string notReadable(const std::string& path, const std::string& reason) {
-    return path + ": not an image stb_image can read (" + reason + ")";
+// "not a PNG image (...)": the format the file's first bytes named, not the decoder's name.
+std::string notReadable(const std::string& path, ImageFormat format, const std::string& reason) {
+    const char* name = format == ImageFormat::Hdr    ? "a Radiance HDR image"
+                       : format == ImageFormat::Png  ? "a PNG image"
+                       : format == ImageFormat::Jpeg ? "a JPEG image"
+                                                     : "an image shprobe reads itself";
+    return path + ": not " + name + " (" + reason + ")";
 }
 std::string pixelsUnreadable(const std::string& path, const std::string& reason) {
     return path + ": cannot read the pixels; the file may be truncated or corrupt (" + reason + ")";
@@ -357,7 +467,7 @@ class StbDecoder final : public ImageDecoder {
     };
 
     [[noreturn]] void failHeader(const std::string& reason) const {
-        throw Error(ErrorKind::Input, notReadable(path_, reason));
+        throw Error(ErrorKind::Input, notReadable(path_, format_, reason));
     }
     [[noreturn]] void failPixels(const std::string& reason) const {
         throw Error(ErrorKind::Input, pixelsUnreadable(path_, reason));
@@ -380,6 +490,7 @@ class StbDecoder final : public ImageDecoder {
     // the header is longer (a JPEG's metadata segments come before its frame header).
     void readStbHeader() {
         file_.have(64 * 1024);
+        if (format_ == ImageFormat::Hdr) readHdrResolution();
         int width = 0, height = 0, components = 0;
         bool known = stbi_info_from_memory(file_.data(), int(std::min<size_t>(file_.size(), INT_MAX)), &width,
                                            &height, &components);
@@ -392,12 +503,32 @@ class StbDecoder final : public ImageDecoder {
         header_.width = width;
         header_.height = height;
         if (format_ == ImageFormat::Hdr) {
+            hdr_.scanlines = uint64_t(height); // as stb_image read them: the line is rewritten
+            hdr_.length = uint64_t(width);
+            header_.width = hdr_.width();
+            header_.height = hdr_.height();
             header_.channels = {"R", "G", "B"}; // stb_image reads RGBE as RGB
             header_.srgb = false;
         } else {
             header_.channels = channelNames(components); // 1 (grey) or 3 (YCbCr, RGB, CMYK)
             header_.srgb = true;
         }
+    }
+
+    // The resolution line, read here (and rewritten for stb_image) if it is not "-Y H +X W".
+    void readHdrResolution() {
+        size_t line = hdrResolutionLine(file_.data(), file_.size());
+        if (line == std::string::npos && file_.have(file_.size() + 1)) {
+            file_.readAll();
+            line = hdrResolutionLine(file_.data(), file_.size());
+        }
+        if (line == std::string::npos) return; // stb_image says what is missing
+        unsigned char* start = file_.mutableData() + line;
+        const size_t length =
+            size_t(static_cast<const unsigned char*>(std::memchr(start, '\n', file_.size() - line)) - start);
+        if (!readHdrOrientation(start, length, hdr_))
+            failHeader("the resolution line " + quotedLine(start, length) +
+                       " names none of Radiance's eight orientations, such as \"-Y 512 +X 1024\"");
     }
 
     // PNG: the chunks up to the first IDAT, walked here as libpng walks them: a critical chunk
@@ -538,8 +669,8 @@ class StbDecoder final : public ImageDecoder {
         if (nextLineEmpty() < 0) failPixels(cut); // #?RADIANCE
         for (int empty = 0; empty != 1;)
             if ((empty = nextLineEmpty()) < 0) failPixels(cut);
-        if (nextLineEmpty() < 0) failPixels(cut); // -Y height +X width
-        const uint64_t width = uint64_t(header_.width), height = uint64_t(header_.height);
+        if (nextLineEmpty() < 0) failPixels(cut);                    // -Y height +X width
+        const uint64_t width = hdr_.length, height = hdr_.scanlines; // as stored
         auto needFlat = [&](uint64_t pixels) {
             if (size - at < pixels * 4) failPixels(cut);
         };
@@ -596,18 +727,23 @@ class StbDecoder final : public ImageDecoder {
                        ": end of file");
         if (!pixels && std::string_view(failureReason()).find("too large") != std::string_view::npos)
             throw Error(ErrorKind::Input,
-                        path_ + ": the image is too large for stb_image to decode (" + failureReason() + ")");
+                        path_ + ": the image is too large to decode (" + failureReason() + ")");
         if (!pixels) failPixels(failureReason());
-        if (width != header_.width || height != header_.height)
+        const bool hdr = format_ == ImageFormat::Hdr;
+        const int storedWidth = hdr ? int(hdr_.length) : header_.width;
+        const int storedHeight = hdr ? int(hdr_.scanlines) : header_.height;
+        if (width != storedWidth || height != storedHeight)
             failPixels("the pixels are " + std::to_string(width) + "x" + std::to_string(height) +
-                       ", the header says " + std::to_string(header_.width) + "x" +
-                       std::to_string(header_.height));
+                       ", the header says " + std::to_string(storedWidth) + "x" +
+                       std::to_string(storedHeight));
+        if (hdr && !hdr_.standard()) reorderHdrPixels(static_cast<float*>(pixels_.get()), hdr_);
     }
 
     std::string path_;
     ImageFormat format_;
     FileBytes file_;
     PngHeader png_;
+    HdrOrientation hdr_; // the standard one until the resolution line says otherwise
     bool sixteenBit_ = false;
     std::unique_ptr<void, StbFree> pixels_;
 };
@@ -644,7 +780,7 @@ void checkSize(int width, int height, int channels, int pixelStride, bool hasDat
     if (!hasData) failOutput(what, "no pixels given");
     if (int64_t(width) * height * (channels + 1) * 4 > INT_MAX)
         failOutput(what, "the image is " + std::to_string(width) + "x" + std::to_string(height) +
-                             ", too large for stb_image_write");
+                             ", too large to encode");
 }
 
 // The values packed, `channels` per pixel, as stb_image_write takes them.
@@ -660,7 +796,7 @@ std::vector<T> packed(const T* data, int width, int height, int channels, int pi
 
 std::string finish(int ok, Sink& sink, const std::string& what) {
     if (sink.failed) failOutput(what, "out of memory");
-    if (!ok) failOutput(what, "stb_image_write could not encode the image");
+    if (!ok) failOutput(what, "the image could not be encoded");
     return std::move(sink.bytes);
 }
 
@@ -668,7 +804,7 @@ std::string finish(int ok, Sink& sink, const std::string& what) {
 
 std::unique_ptr<ImageDecoder> openStbDecoder(const std::string& path, ImageFormat format) {
     if (format != ImageFormat::Hdr && format != ImageFormat::Png && format != ImageFormat::Jpeg)
-        throw Error(ErrorKind::Input, notReadable(path, "not a Radiance HDR, PNG or JPEG file"));
+        throw Error(ErrorKind::Input, notReadable(path, format, "not a Radiance HDR, PNG or JPEG file"));
     return std::make_unique<StbDecoder>(path, format);
 }
 
@@ -722,8 +858,7 @@ RgbCodes readRgbCodesHeader(std::span<const unsigned char> bytes, const std::str
     RgbCodes image;
     int channels = 0;
     if (!stbi_info_from_memory(bytes.data(), int(bytes.size()), &image.width, &image.height, &channels))
-        throw Error(ErrorKind::Input,
-                    what + ": not an image stb_image can read (" + stbi_failure_reason() + ")");
+        throw Error(ErrorKind::Input, what + ": not a PNG or JPEG image (" + failureReason() + ")");
     image.bits = stbi_is_16_bit_from_memory(bytes.data(), int(bytes.size())) ? 16 : 8;
     return image;
 }
@@ -736,8 +871,7 @@ void decodeRgbCodes(std::span<const unsigned char> bytes, RgbCodes& image, const
                                                                      &image.height, &channels, 3))
                        : static_cast<void*>(stbi_load_from_memory(bytes.data(), size, &image.width,
                                                                   &image.height, &channels, 3));
-    if (!pixels)
-        throw Error(ErrorKind::Input, what + ": cannot decode the image (" + stbi_failure_reason() + ")");
+    if (!pixels) throw Error(ErrorKind::Input, what + ": cannot decode the image (" + failureReason() + ")");
     ScopeExit release([&] { stbi_image_free(pixels); });
     image.codes.resize(size_t(image.width) * size_t(image.height) * 3);
     if (image.bits == 16)
