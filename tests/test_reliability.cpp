@@ -853,5 +853,40 @@ TEST_F(Reliability, RadianceFilesReadInEveryOrientation) {
                           "of Radiance's eight orientations"}});
 }
 
+// A PNG whose signature was damaged (a text-mode transfer), read by shprobe's own reader, and a PNG
+// with a bad CRC inside an icon, read by OpenImageIO through libpng, which prints its own
+// "libpng error: ..." line: either way stderr holds the one line of the program, libpng's words in it.
+TEST_F(Reliability, PngLibraryMessagesAreFoldedIntoTheOneLine) {
+    writeImage(file("good.png"), makeImage(16, 8));
+    std::string png = readText(file("good.png"));
+    ASSERT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+    std::string damaged = png;
+    damaged[7] = 'J';
+    writeText(file("damaged.png"), damaged);
+    expectFailure({{"bake", file("damaged.png"), "--backend", "cpu", "-o", "OUT"},
+                   2,
+                   {file("damaged.png") + ": not a PNG image (the PNG signature is damaged"}});
+
+    const size_t idat = png.find("IDAT");
+    ASSERT_NE(idat, std::string::npos);
+    const uint32_t length = uint32_t(uint8_t(png[idat - 4])) << 24 | uint32_t(uint8_t(png[idat - 3])) << 16 |
+                            uint32_t(uint8_t(png[idat - 2])) << 8 | uint32_t(uint8_t(png[idat - 1]));
+    png[idat + 4 + length] ^= 1; // the first byte of IDAT's CRC
+    // An icon (ICONDIR, one ICONDIRENTRY: 16 x 8, 32 bits, the PNG's size and offset 22) of that PNG.
+    auto little = [](uint32_t value, int bytes) {
+        std::string text;
+        for (int i = 0; i < bytes; ++i)
+            text += char((value >> (8 * i)) & 0xff);
+        return text;
+    };
+    writeText(file("icon.ico"), little(0, 2) + little(1, 2) + little(1, 2) + std::string{16, 8, 0, 0} +
+                                    little(1, 2) + little(32, 2) + little(uint32_t(png.size()), 4) +
+                                    little(22, 4) + png);
+    expectFailure({{"bake", file("icon.ico"), "--backend", "cpu", "--layout", "equirect", "-o", "OUT"},
+                   2,
+                   {file("icon.ico") + ": cannot read the pixels; the file may be truncated or corrupt",
+                    "IDAT: CRC error"}});
+}
+
 } // namespace
 } // namespace shprobe

@@ -20,8 +20,9 @@ bool startsWith(const unsigned char* bytes, size_t count, std::string_view magic
 ImageFormat sniffImageFormat(const unsigned char* bytes, size_t count) {
     // "OpenEXR File Layout": the magic number 20000630 as a little-endian int32.
     if (startsWith(bytes, count, std::string_view("\x76\x2f\x31\x01", 4))) return ImageFormat::Exr;
-    // The PNG signature (PNG specification, 5.2).
-    if (startsWith(bytes, count, std::string_view("\x89PNG\r\n\x1a\n", 8))) return ImageFormat::Png;
+    // The PNG signature (PNG specification, 5.2). As for libpng, its first four bytes make a PNG,
+    // one whose other four are damaged (a text-mode transfer) refused as such by the PNG reader.
+    if (startsWith(bytes, count, std::string_view("\x89PNG", 4))) return ImageFormat::Png;
     // JPEG: the SOI marker FF D8 and the first byte of the next marker.
     if (startsWith(bytes, count, std::string_view("\xff\xd8\xff", 3))) return ImageFormat::Jpeg;
     // Radiance's "program type" line (Radiance's own files say RADIANCE; Greg Ward's rgbe.c RGBE),

@@ -7,8 +7,89 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <cstdio>
+#include <fcntl.h>
+#include <mutex>
+#include <sstream>
+#include <sys/mman.h>
+#include <unistd.h>
+
 namespace shprobe {
 namespace {
+
+// What the libraries under OpenImageIO print to stderr themselves during one of its calls
+// (libpng's default handlers print "libpng error: ..." and "libpng warning: ..." before OpenImageIO
+// reports the same), captured in a memory file so that the program's error stays one line. One
+// capture at a time: stderr is the process's.
+class StderrCapture {
+  public:
+    explicit StderrCapture(std::string path) : path_(std::move(path)), lock_(mutex()) {
+        std::fflush(stderr);
+        file_ = memfd_create("shprobe-stderr", MFD_CLOEXEC);
+        if (file_ >= 0) saved_ = fcntl(2, F_DUPFD_CLOEXEC, 3);
+        if (saved_ >= 0 && dup2(file_, 2) >= 0) return;
+        closeAll(); // stderr stays as it is
+    }
+    ~StderrCapture() {
+        // Not folded into an error (the call succeeded, or threw): said as the program's warnings.
+        // A line of the program's own, from another thread meanwhile, is passed on as it is.
+        std::istringstream lines(finish());
+        std::string text;
+        for (std::string line; std::getline(lines, line);)
+            if (!line.empty())
+                text += line.starts_with("shprobe: ") ? line + "\n"
+                                                      : "shprobe: warning: " + path_ + ": " + line + "\n";
+        if (!text.empty()) (void)!write(2, text.data(), text.size());
+    }
+    StderrCapture(const StderrCapture&) = delete;
+    StderrCapture& operator=(const StderrCapture&) = delete;
+
+    // OpenImageIO's reason, with the captured lines it does not already say: "libpng error: X" is
+    // left out of "PNG read error: X". Ends the capture.
+    std::string fold(const std::string& reason) {
+        std::string folded = oneLine(reason), other;
+        std::istringstream lines(finish());
+        for (std::string line; std::getline(lines, line);) {
+            if (line.starts_with("shprobe: ")) {
+                other += line + "\n";
+                continue;
+            }
+            const size_t colon = line.find(": ");
+            const std::string tail = colon == std::string::npos ? line : line.substr(colon + 2);
+            if (!tail.empty() && folded.find(tail) == std::string::npos)
+                folded += (folded.empty() ? "" : "; ") + line;
+        }
+        if (!other.empty()) (void)!write(2, other.data(), other.size());
+        return folded;
+    }
+
+  private:
+    static std::mutex& mutex() {
+        static std::mutex one;
+        return one;
+    }
+    // Restores stderr and gives what was written meanwhile (up to 64 KiB).
+    std::string finish() {
+        if (saved_ < 0) return {};
+        std::fflush(stderr);
+        dup2(saved_, 2);
+        std::string text(64 * 1024, '\0');
+        const ssize_t got = pread(file_, text.data(), text.size(), 0);
+        text.resize(size_t(std::max<ssize_t>(got, 0)));
+        closeAll();
+        return text;
+    }
+    void closeAll() {
+        if (saved_ >= 0) close(saved_);
+        if (file_ >= 0) close(file_);
+        saved_ = file_ = -1;
+    }
+
+    std::string path_;
+    std::lock_guard<std::mutex> lock_;
+    int file_ = -1;
+    int saved_ = -1;
+};
 
 // Integer images are sRGB-encoded unless the file says otherwise; float images are linear.
 bool isSrgbEncoded(const OIIO::ImageSpec& spec) {
@@ -33,10 +114,11 @@ class OiioDecoder : public ImageDecoder {
         // unassociated alpha of Targa and similar formats into it.
         OIIO::ImageSpec config;
         config.attribute("oiio:UnassociatedAlpha", 1);
+        StderrCapture capture(path);
         input_ = OIIO::ImageInput::open(path, &config);
         if (!input_)
-            throw Error(ErrorKind::Input,
-                        path + ": not an image OpenImageIO can read (" + oneLine(OIIO::geterror()) + ")");
+            throw Error(ErrorKind::Input, path + ": not an image OpenImageIO can read (" +
+                                              capture.fold(OIIO::geterror()) + ")");
         const OIIO::ImageSpec& spec = input_->spec();
         header_.width = spec.width;
         header_.height = spec.height;
@@ -48,11 +130,12 @@ class OiioDecoder : public ImageDecoder {
 
     void readChannels(int begin, int end, float* first) override {
         constexpr OIIO::stride_t texelStride = 4 * sizeof(float);
+        StderrCapture capture(path_);
         if (!input_->read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, first, texelStride,
                                 texelStride * header_.width))
             throw Error(ErrorKind::Input,
                         path_ + ": cannot read the pixels; the file may be truncated or corrupt (" +
-                            oneLine(input_->geterror()) + ")");
+                            capture.fold(input_->geterror()) + ")");
     }
 
   private:

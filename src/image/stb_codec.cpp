@@ -534,8 +534,11 @@ class StbDecoder final : public ImageDecoder {
     // PNG: the chunks up to the first IDAT, walked here as libpng walks them: a critical chunk
     // with a bad CRC or of an unknown type is an error, an ancillary one with a bad CRC is ignored.
     void readPngHeader() {
-        if (!file_.have(8) || std::memcmp(file_.data(), "\x89PNG\r\n\x1a\n", 8) != 0)
-            failHeader("no PNG signature");
+        if (!file_.have(8) || std::memcmp(file_.data(), "\x89PNG", 4) != 0) failHeader("no PNG signature");
+        if (std::memcmp(file_.data() + 4, "\r\n\x1a\n", 4) != 0)
+            failHeader("the PNG signature is damaged: its last four bytes are " +
+                       quotedLine(file_.data() + 4, 4) +
+                       ", not \"\\x0d\\x0a\\x1a\\x0a\" (as after a transfer as text)");
         PngChunk chunk;
         for (uint64_t offset = 8;; offset = chunk.next()) {
             const bool first = offset == 8;
