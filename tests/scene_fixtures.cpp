@@ -270,13 +270,44 @@ void writeCornellBoxGltf(const std::string& path, const CornellBoxOptions& optio
     writeGltf(path, cornellBoxScene(options), options.container);
 }
 
-World loadCornellBoxWorld(const CornellBoxOptions& options) {
+World loadFixtureWorld(const FixtureScene& scene) {
     const std::filesystem::path path =
-        std::filesystem::temp_directory_path() / ("shprobe_cornell_box_" + std::to_string(getpid()) + ".glb");
-    writeCornellBoxGltf(path.string(), options);
+        std::filesystem::temp_directory_path() / ("shprobe_fixture_" + std::to_string(getpid()) + ".glb");
+    writeGltf(path.string(), scene, GltfContainer::Glb);
     World world = loadGltfScene(path.string());
     std::filesystem::remove(path);
     return world;
+}
+
+World loadCornellBoxWorld(const CornellBoxOptions& options) {
+    return loadFixtureWorld(cornellBoxScene(options));
+}
+
+FixtureScene twoRoomsScene() {
+    FixtureMesh mesh;
+    mesh.material = 0;
+    addQuad(mesh, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {2.0f, 0.0f, 0.0f});   // floor
+    addQuad(mesh, {0.0f, 1.0f, -1.0f}, {2.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f});  // back
+    addQuad(mesh, {0.0f, 1.0f, 1.0f}, {0.0f, 1.0f, 0.0f}, {2.0f, 0.0f, 0.0f});   // front
+    addQuad(mesh, {-2.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 1.0f});  // left
+    addQuad(mesh, {2.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 0.0f});   // right
+    addQuad(mesh, {-0.01f, 1.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 0.0f}); // the wall, lit side
+    addQuad(mesh, {0.01f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 1.0f});  // the wall, closed side
+    addQuad(mesh, {1.0f, 2.0f, 0.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f});   // closed room's ceiling
+    // The lit room's ceiling around a 0.5 m square opening centred above (-1, 0).
+    addQuad(mesh, {-1.625f, 2.0f, 0.0f}, {0.375f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f});
+    addQuad(mesh, {-0.375f, 2.0f, 0.0f}, {0.375f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f});
+    addQuad(mesh, {-1.0f, 2.0f, -0.625f}, {0.25f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.375f});
+    addQuad(mesh, {-1.0f, 2.0f, 0.625f}, {0.25f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.375f});
+    FixtureScene scene;
+    scene.meshes = {mesh};
+    scene.materials = {{glm::vec3(0.7f)}};
+    scene.nodes = {
+        FixtureNode{.mesh = 0},
+        FixtureNode{.light = 0, .rotation = rotationTowards(glm::normalize(glm::vec3(-0.2f, 1.0f, 0.1f)))}};
+    scene.lights = {FixtureLight{.intensity = 3.0f}};
+    scene.roots = {0, 1};
+    return scene;
 }
 
 FixtureScene boxScene(const BoxOptions& options) {

@@ -114,8 +114,15 @@ constexpr glm::vec3 kCornellRed{0.65f, 0.05f, 0.05f};
 constexpr glm::vec3 kCornellGreen{0.12f, 0.45f, 0.15f};
 FixtureScene cornellBoxScene(const CornellBoxOptions& options = {});
 void writeCornellBoxGltf(const std::string& path, const CornellBoxOptions& options = {});
-// The Cornell box as loadGltfScene reads it (written to a temporary .glb, read, removed).
+// A scene as loadGltfScene reads it (written to a temporary .glb, read, removed).
+World loadFixtureWorld(const FixtureScene& scene);
 World loadCornellBoxWorld(const CornellBoxOptions& options = {});
+
+// Two rooms side by side, each 2 m wide, high and deep: the lit one (x from -2 to 0) open to the
+// sky through a 0.5 m square in its ceiling above (-1, 2, 0), with a sun shining in, the closed one
+// (x from 0 to 2) shut; between them a wall 2 cm thick. One white material (albedo 0.7), every
+// surface facing into its room, one-sided.
+FixtureScene twoRoomsScene();
 
 // One axis-aligned box centred at the origin, of one material: with inward faces, closed and of
 // uniform emission and albedo, the white furnace of scene probes.

@@ -255,7 +255,8 @@ RayBakeOptions rayBakeOptions(const SceneOptions& options) {
 // these probes need it, so a brick is exactly its part of the whole bake.
 ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
                        const ProbeGrid& grid, ProbeRange range, RayBakeCounts& counts) {
-    RayBaker baker(world, sky.cubemap, rayBakeOptions(options));
+    const RayBakeOptions bakeOptions = rayBakeOptions(options);
+    RayBaker baker(world, sky.cubemap, bakeOptions);
     BakeProgressLine line(range.end - range.begin, options.quiet);
     const std::vector<RayBakedProbe> probes = baker.bakeProbes(probePositions(grid, range), [&](size_t done) {
         const RayBakeCounts sofar = baker.counts();
@@ -264,6 +265,9 @@ ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOp
     counts = baker.counts();
     ProbeVolume volume = volumeOf(probes, options, grid, range);
     volume.bounces = options.bounces;
+    volume.visibilitySize = bakeOptions.visibilitySize;
+    for (const RayBakedProbe& probe : probes)
+        volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
     return volume;
 }
 

@@ -1,6 +1,6 @@
 // The probe-volume file of docs/probe-volume.md: a 16-byte preamble (magic, header length), a JSON
-// header padded to a multiple of 16 bytes, then the payload: radiance, irradiance (those held), one
-// validity byte per probe.
+// header padded to a multiple of 16 bytes, then the payload: radiance, irradiance (those held), the
+// visibility maps (where held), one validity byte per probe.
 #include "formats/probe_volume.h"
 
 #include "common/error.h"
@@ -34,6 +34,7 @@ using nlohmann::json;
 static_assert(std::endian::native == std::endian::little,
               "probe volumes are little-endian: a big-endian host needs a byte swap here");
 static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "coefficients are read into glm::vec3 arrays");
+static_assert(sizeof(glm::vec2) == 2 * sizeof(float), "visibility is read into glm::vec2 arrays");
 
 constexpr char kMagic[8] = {'S', 'H', 'P', 'R', 'O', 'B', 'E', 'V'};
 constexpr uint64_t kPreambleBytes = 16; // magic, then the header's length as a uint64
@@ -42,6 +43,8 @@ constexpr uint64_t kPreambleBytes = 16; // magic, then the header's length as a 
 constexpr uint64_t kAlignment = 16;
 // A header is well under a kilobyte plus the baker's settings; a "header" far larger is not one.
 constexpr uint64_t kMaxHeaderBytes = 1u << 20;
+// A visibility map of more texels a side is finer than any probe's rays resolve.
+constexpr int kMaxVisibilitySize = 64;
 // The header nests a few levels (the object, "grid", "settings" and what the baker puts in it);
 // the parser stops at this depth before it builds the levels below.
 constexpr int kMaxJsonDepth = 16;
@@ -131,6 +134,28 @@ void checkValidity(const ProbeVolume& volume, const std::string& what) {
                            ", neither 0 nor 1");
 }
 
+size_t visibilityTexels(const ProbeVolume& volume) {
+    return size_t(volume.probeCount()) * size_t(volume.visibilitySize) * size_t(volume.visibilitySize);
+}
+
+// Each texel's mean distance and mean square: finite, not negative.
+void checkVisibility(const ProbeVolume& volume, const std::string& what) {
+    if (volume.visibilitySize < 0 || volume.visibilitySize > kMaxVisibilitySize)
+        fail(what, "the visibility maps' size " + std::to_string(volume.visibilitySize) + " is outside 0.." +
+                       text(kMaxVisibilitySize));
+    if (volume.visibility.size() != visibilityTexels(volume))
+        fail(what, "holds " + text(volume.visibility.size()) + " visibility texels, not " +
+                       text(visibilityTexels(volume)) + " for maps of " +
+                       text(uint64_t(volume.visibilitySize)) + "^2");
+    const size_t perProbe = size_t(volume.visibilitySize) * size_t(volume.visibilitySize);
+    for (size_t t = 0; t < volume.visibility.size(); ++t) {
+        const glm::vec2 moments = volume.visibility[t];
+        if (!(std::isfinite(moments.x) && std::isfinite(moments.y) && moments.x >= 0.0f && moments.y >= 0.0f))
+            fail(what, "the visibility of probe " + text(volume.begin + t / perProbe) +
+                           " is not a finite distance");
+    }
+}
+
 // Everything writeProbeVolume and mergeProbeVolumes rely on; throws Error(Input) "WHAT: PROBLEM".
 void checkVolume(const ProbeVolume& volume, const std::string& what) {
     checkProbeGrid(volume.grid, what);
@@ -147,6 +172,7 @@ void checkVolume(const ProbeVolume& volume, const std::string& what) {
         fail(what,
              "the settings are not a JSON object (nested at most " + text(kMaxJsonDepth - 1) + " levels)");
     checkValidity(volume, what);
+    checkVisibility(volume, what);
     checkCoefficients(volume, volume.radiance, "radiance", what);
     checkCoefficients(volume, volume.irradiance, "irradiance", what);
 }
@@ -177,6 +203,7 @@ nlohmann::ordered_json headerJson(const ProbeVolume& volume) {
     probes["begin"] = volume.begin;
     probes["end"] = volume.end;
     header["probes"] = probes;
+    if (volume.visibilitySize > 0) header["visibility"] = volume.visibilitySize;
     header["bounces"] = volume.bounces;
     header["source"] = volume.source;
     header["settings"] = *settingsObject(volume.settings); // keys sorted: one text per value
@@ -363,6 +390,9 @@ VolumeHeader parseHeader(std::string_view headerText, const std::string& name) {
     parseQuantities(root, header, name);
     volume.grid = parseGrid(root, name);
     parseProbeRange(root, volume, name);
+    if (root.contains("visibility"))
+        volume.visibilitySize =
+            int(requireInteger(root["visibility"], "visibility", 1, kMaxVisibilitySize, name));
     volume.bounces = int(requireInteger(requireField(root, "bounces", name), "bounces", 0, INT_MAX, name));
     volume.source = requireString(root, "source", name);
     volume.settings = requireObject(root, "settings", name).dump();
@@ -393,8 +423,10 @@ uint64_t readPreamble(const VolumeBytes& bytes, const std::string& name) {
 
 uint64_t payloadBytes(const VolumeHeader& header) {
     const uint64_t floats = uint64_t(coefficientCount(header.volume.order)) * 3 * sizeof(float);
+    const uint64_t visibility =
+        uint64_t(header.volume.visibilitySize) * header.volume.visibilitySize * 2 * sizeof(float);
     return uint64_t(header.volume.probeCount()) *
-           ((int(header.radiance) + int(header.irradiance)) * floats + 1);
+           ((int(header.radiance) + int(header.irradiance)) * floats + visibility + 1);
 }
 
 template <class T>
@@ -423,8 +455,10 @@ ProbeVolume parseVolume(const VolumeBytes& bytes, const std::string& name) {
     const size_t coefficients = size_t(volume.probeCount()) * coefficientsPerProbe(volume);
     if (header.radiance) readSection(bytes, offset, volume.radiance, coefficients);
     if (header.irradiance) readSection(bytes, offset, volume.irradiance, coefficients);
+    readSection(bytes, offset, volume.visibility, visibilityTexels(volume));
     readSection(bytes, offset, volume.valid, volume.probeCount());
     checkValidity(volume, name);
+    checkVisibility(volume, name);
     // Invalid probes are written as zeros: a non-finite value there is damage as anywhere else.
     for (const std::vector<glm::vec3>* quantity : {&volume.radiance, &volume.irradiance})
         for (size_t i = 0; i < quantity->size(); ++i)
@@ -494,6 +528,8 @@ std::string bakeDifference(const ProbeVolume& a, const ProbeVolume& b, const std
         return "bounds " + both(boundsText(a.grid), boundsText(b.grid));
     if (a.order != b.order) return "order " + both(std::to_string(a.order), std::to_string(b.order));
     if (quantitiesText(a) != quantitiesText(b)) return both(quantitiesText(a), quantitiesText(b));
+    if (a.visibilitySize != b.visibilitySize)
+        return "visibility maps " + both(std::to_string(a.visibilitySize), std::to_string(b.visibilitySize));
     if (a.bounces != b.bounces)
         return "bounces " + both(std::to_string(a.bounces), std::to_string(b.bounces));
     if (a.source != b.source) return "source " + both(jsonText(a.source), jsonText(b.source));
@@ -563,6 +599,7 @@ void writeProbeVolume(const std::string& path, const ProbeVolume& volume) {
     out.append(header.data(), header.size());
     writeCoefficients(out, volume, volume.radiance);
     writeCoefficients(out, volume, volume.irradiance);
+    out.append(volume.visibility.data(), volume.visibility.size() * sizeof(glm::vec2));
     out.append(volume.valid.data(), volume.valid.size());
     out.flush();
     file.commit();
@@ -611,12 +648,15 @@ ProbeVolume mergeProbeVolumes(std::span<const ProbeVolume> bricks, std::span<con
                       .order = first.order,
                       .begin = 0,
                       .end = first.grid.probeCount(),
+                      .visibilitySize = first.visibilitySize,
                       .bounces = first.bounces,
                       .source = first.source,
                       .settings = first.settings};
     for (size_t i : sorted) {
         append(whole.radiance, bricks[i].radiance);
         append(whole.irradiance, bricks[i].irradiance);
+        whole.visibility.insert(whole.visibility.end(), bricks[i].visibility.begin(),
+                                bricks[i].visibility.end());
         whole.valid.insert(whole.valid.end(), bricks[i].valid.begin(), bricks[i].valid.end());
     }
     return whole;

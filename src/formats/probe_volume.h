@@ -8,6 +8,7 @@
 // into bricks.
 #pragma once
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <span>
 #include <string>
@@ -51,6 +52,11 @@ struct ProbeVolume {
     // 1 where the probe may be used, 0 where the bake found it unusable (inside geometry, say):
     // a renderer gives it no weight, and its coefficients are written as zeros.
     std::vector<uint8_t> valid;
+    // Per probe, visibilitySize^2 octahedral texels (scene/volume_sampling.h) of the mean and the
+    // mean square distance to the first surface the probe sees that way: by these a sampler tells
+    // whether a probe sees the point it shades. Empty (size 0) where the bake recorded none.
+    int visibilitySize = 0;
+    std::vector<glm::vec2> visibility;
     int bounces = 0;    // indirect bounces in the bake; 0: direct light only
     std::string source; // what was baked, e.g. World::description
     // A JSON object of whatever else decides the bake (face size, sky, window...), set by the

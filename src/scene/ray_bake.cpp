@@ -7,6 +7,7 @@
 #include "scene/bvh.h"
 #include "scene/sampling.h"
 #include "scene/surface_shading.h"
+#include "scene/volume_sampling.h"
 #include "sh/basis.h"
 #include "sh/irradiance.h"
 #include "sh/projection.h"
@@ -17,6 +18,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <numbers>
 #include <optional>
@@ -41,6 +43,8 @@ void requireOptions(const RayBakeOptions& options) {
         refuse("the cache spacing must be a finite number of 0 or more");
     if (options.raysPerTexel < 1 || options.raysPerTexel > 1024)
         refuse("rays per texel must be in 1..1024, got " + std::to_string(options.raysPerTexel));
+    if (options.visibilitySize < 0 || options.visibilitySize > 64)
+        refuse("the visibility map's size must be in 0..64, got " + std::to_string(options.visibilitySize));
     if (options.gatherRays < 1 || options.gatherRays > 1 << 20)
         refuse("gather rays must be in 1..1048576, got " + std::to_string(options.gatherRays));
 }
@@ -111,6 +115,51 @@ double defaultSpacing(const World& world) {
     return diagonal > 0.0 ? diagonal / kDefaultCacheCells : 1.0;
 }
 
+// What a ray brings back: the radiance, how far it went (kFar where it met nothing) and whether it
+// met the back of a one-sided material.
+constexpr double kFar = std::numeric_limits<double>::infinity();
+struct Arrival {
+    glm::dvec3 radiance{0.0};
+    double distance = kFar;
+    bool backFace = false;
+};
+
+// A probe's view and the visibility it gives (RayBakedProbe).
+struct ProbeView {
+    Cubemap radiance;
+    uint32_t backFaceTexels = 0;
+    std::vector<glm::vec2> visibility;
+};
+
+// Hit distances of a view gathered per octahedral texel (scene/volume_sampling.h) into their mean
+// and mean square, each distance clamped to `range` (rays that meet nothing count as `range`). A
+// texel no ray fell in holds range, range^2: nothing near.
+class DistanceMoments {
+  public:
+    DistanceMoments(int size, double range)
+        : size_(size), range_(range), sums_(size_t(size) * size, glm::dvec2(0.0)), counts_(sums_.size(), 0) {}
+    void add(const glm::dvec3& direction, double distance) {
+        if (size_ == 0) return;
+        const size_t texel = size_t(octahedralTexel(direction, size_));
+        const double d = std::min(distance, range_);
+        sums_[texel] += glm::dvec2(d, d * d);
+        ++counts_[texel];
+    }
+    std::vector<glm::vec2> texels() const {
+        std::vector<glm::vec2> moments(sums_.size());
+        for (size_t t = 0; t < moments.size(); ++t)
+            moments[t] = counts_[t] > 0 ? glm::vec2(sums_[t] / double(counts_[t]))
+                                        : glm::vec2(range_, range_ * range_);
+        return moments;
+    }
+
+  private:
+    int size_;
+    double range_;
+    std::vector<glm::dvec2> sums_;
+    std::vector<uint32_t> counts_;
+};
+
 } // namespace
 
 struct RayBaker::State {
@@ -122,8 +171,9 @@ struct RayBaker::State {
     Bvh bvh;
     std::vector<TriangleLattice> lattices;
     size_t pointCount = 0;
-    int gatherSide = 1;                                         // g: g x g gather rays per point
-    int texelSide = 1;                                          // s: s x s rays per texel
+    int gatherSide = 1;           // g: g x g gather rays per point
+    int texelSide = 1;            // s: s x s rays per texel
+    double visibilityRange = 1.0; // the farthest distance visibility records: the world's diagonal
     std::vector<std::vector<glm::vec3>> irradiance;             // bounce k's at [k - 1], per point
     std::vector<std::unique_ptr<std::atomic<uint8_t>[]>> state; // likewise: kEmpty, kGathering, kReady
     std::atomic<uint64_t> probeRays{0};
@@ -133,14 +183,13 @@ struct RayBaker::State {
     void layOutCache();
     std::optional<SurfaceHit> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
     bool occluded(const glm::dvec3& origin, const glm::dvec3& direction) const;
-    glm::dvec3 arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, uint64_t& rays,
-                        bool& backFace);
+    Arrival arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, uint64_t& rays);
     glm::dvec3 cachedIrradiance(int bounce, const SurfaceHit& hit);
     glm::vec3 pointIrradiance(int bounce, uint32_t triangle, int side, int subdivisions, size_t index,
                               size_t point);
     glm::dvec2 insideTriangle(uint32_t triangle, const glm::dvec2& barycentric) const;
     glm::vec3 gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, size_t point);
-    Cubemap trace(const glm::dvec3& position, uint64_t& rays, uint32_t& backFaces);
+    ProbeView trace(const glm::dvec3& position, uint64_t& rays);
 };
 
 void RayBaker::State::layOutCache() {
@@ -155,6 +204,7 @@ void RayBaker::State::layOutCache() {
     }
     gatherSide = int(std::ceil(std::sqrt(double(options.gatherRays))));
     texelSide = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
+    visibilityRange = std::max(glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin)), 1e-30);
     for (int k = 1; k <= options.bounces; ++k) {
         irradiance.emplace_back(pointCount);
         state.push_back(std::make_unique<std::atomic<uint8_t>[]>(pointCount));
@@ -175,17 +225,17 @@ bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direc
 // The radiance arriving at `origin` from `direction` with `bounce` bounces (scene.h): the sky, or
 // what the surface met leaves: nothing from a back face, else emission and the suns' light plus
 // bounce's cached irradiance, reflected.
-glm::dvec3 RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction,
-                                     uint64_t& rays, bool& backFace) {
+Arrival RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction,
+                                  uint64_t& rays) {
     ++rays;
     const std::optional<SurfaceHit> hit = intersect(origin, direction);
-    backFace = hit && hit->backFace;
-    if (!hit) return shading.skyRadiance(direction);
-    if (hit->backFace) return glm::dvec3(0.0);
+    if (!hit) return {shading.skyRadiance(direction), kFar, false};
+    const double distance = glm::length(hit->position - origin);
+    if (hit->backFace) return {glm::dvec3(0.0), distance, true};
     const glm::dvec3 direct =
         leavingWithoutBounce(shading.suns(), *hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
-    if (bounce == 0 || hit->albedo == glm::dvec3(0.0)) return direct;
-    return direct + hit->albedo * std::numbers::inv_pi * cachedIrradiance(bounce, *hit);
+    if (bounce == 0 || hit->albedo == glm::dvec3(0.0)) return {direct, distance, false};
+    return {direct + hit->albedo * std::numbers::inv_pi * cachedIrradiance(bounce, *hit), distance, false};
 }
 
 glm::dvec3 RayBaker::State::cachedIrradiance(int bounce, const SurfaceHit& hit) {
@@ -256,9 +306,8 @@ glm::vec3 RayBaker::State::gather(int bounce, uint32_t triangle, int side, const
         for (int b = 0; b < g; ++b) {
             const double u1 = (a + random.next()) / g;
             const double u2 = (b + random.next()) / g;
-            bool backFace = false;
             sum +=
-                arriving(bounce - 1, at.rayOrigin, cosineDirection(at.shadingNormal, u1, u2), rays, backFace);
+                arriving(bounce - 1, at.rayOrigin, cosineDirection(at.shadingNormal, u1, u2), rays).radiance;
         }
     }
     cacheRays += rays;
@@ -269,40 +318,39 @@ glm::vec3 RayBaker::State::gather(int bounce, uint32_t triangle, int side, const
 // The random numbers of the rays through texel t of a view: the same for every probe.
 constexpr uint64_t kViewStream = ~uint64_t(0);
 
-Cubemap RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays, uint32_t& backFaces) {
+// A view's rays through the texels of a cube map: s x s per texel, through the centre where s is 1,
+// else jittered in each stratum; the hit distances into octahedral texels of visibilitySize^2.
+ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
     const int n = options.faceSize;
     const int s = texelSide;
-    Cubemap view = makeCubemap(n);
+    ProbeView view{makeCubemap(n), 0, {}};
+    DistanceMoments moments(options.visibilitySize, visibilityRange);
     for (int face = 0; face < kFaceCount; ++face) {
         for (int j = 0; j < n; ++j) {
             for (int i = 0; i < n; ++i) {
-                if (s == 1) {
-                    bool backFace = false;
-                    const glm::dvec3 radiance =
-                        arriving(options.bounces, position, texelDirection(face, i, j, n), rays, backFace);
-                    view.at(face, i, j) = glm::vec4(glm::vec3(radiance), backFace ? 1.0f : 0.0f);
-                    backFaces += backFace ? 1 : 0;
-                    continue;
-                }
                 RandomStream random(options.seed, kViewStream, (uint64_t(face) * n + j) * n + i);
                 glm::dvec3 sum(0.0);
                 int backFacing = 0;
                 for (int sb = 0; sb < s; ++sb) {
                     for (int sa = 0; sa < s; ++sa) {
-                        const double a = 2.0 * (i + (sa + random.next()) / s) / n - 1.0;
-                        const double b = 2.0 * (j + (sb + random.next()) / s) / n - 1.0;
-                        bool backFace = false;
-                        sum += arriving(options.bounces, position, glm::normalize(faceDirection(face, a, b)),
-                                        rays, backFace);
-                        backFacing += backFace ? 1 : 0;
+                        const double ja = s == 1 ? 0.5 : random.next();
+                        const double jb = s == 1 ? 0.5 : random.next();
+                        const glm::dvec3 direction = faceDirection(face, 2.0 * (i + (sa + ja) / s) / n - 1.0,
+                                                                   2.0 * (j + (sb + jb) / s) / n - 1.0);
+                        const Arrival arrival = arriving(options.bounces, position, direction, rays);
+                        sum += arrival.radiance;
+                        backFacing += arrival.backFace ? 1 : 0;
+                        moments.add(direction, arrival.distance);
                     }
                 }
                 const bool mostlyBack = 2 * backFacing > s * s;
-                view.at(face, i, j) = glm::vec4(glm::vec3(sum / double(s * s)), mostlyBack ? 1.0f : 0.0f);
-                backFaces += mostlyBack ? 1 : 0;
+                view.radiance.at(face, i, j) =
+                    glm::vec4(glm::vec3(sum / double(s * s)), mostlyBack ? 1.0f : 0.0f);
+                view.backFaceTexels += mostlyBack ? 1 : 0;
             }
         }
     }
+    view.visibility = moments.texels();
     return view;
 }
 
@@ -327,8 +375,10 @@ std::vector<RayBakedProbe> RayBaker::bakeProbes(std::span<const glm::dvec3> posi
                 [&](int p) {
                     uint64_t rays = 0;
                     RayBakedProbe& probe = probes[size_t(p)];
-                    const Cubemap view = state.trace(positions[size_t(p)], rays, probe.backFaceTexels);
-                    probe.radiance = projectCubemap(view, state.options.order);
+                    ProbeView view = state.trace(positions[size_t(p)], rays);
+                    probe.radiance = projectCubemap(view.radiance, state.options.order);
+                    probe.backFaceTexels = view.backFaceTexels;
+                    probe.visibility = std::move(view.visibility);
                     probe.irradiance = convolveIrradiance(probe.radiance);
                     state.probeRays += rays;
                     if (!progress) return;
@@ -340,10 +390,9 @@ std::vector<RayBakedProbe> RayBaker::bakeProbes(std::span<const glm::dvec3> posi
 
 Cubemap RayBaker::traceProbe(const glm::dvec3& position) {
     uint64_t rays = 0;
-    uint32_t backFaces = 0;
-    Cubemap view = state_->trace(position, rays, backFaces);
+    ProbeView view = state_->trace(position, rays);
     state_->probeRays += rays;
-    return view;
+    return std::move(view.radiance);
 }
 
 RayBakeCounts RayBaker::counts() const {

@@ -27,6 +27,7 @@
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstddef>
@@ -47,6 +48,7 @@ struct RayBakeOptions {
     double cacheSpacing = 0.0; // the largest distance between neighbouring cache points; 0: the
                                // world's diagonal / kDefaultCacheCells
     int gatherRays = 64;       // per cache point, rounded up to a square (g x g strata)
+    int visibilitySize = 16;   // each probe's visibility map: size x size octahedral texels; 0: none
     uint64_t seed = 1;
 };
 
@@ -59,6 +61,11 @@ struct RayBakedProbe {
     ShCoefficients radiance;
     ShCoefficients irradiance;
     uint32_t backFaceTexels = 0; // of the 6 N^2 texels, those whose rays met mostly back faces
+    // Per octahedral texel (volume_sampling.h), the mean and mean square distance to the first
+    // surface its rays met, at most the world's diagonal (which rays that meet nothing count as):
+    // the depth moments of Majercik et al., "Dynamic Diffuse Global Illumination with Ray-Traced
+    // Irradiance Fields" (JCGT 2019), by which a sampler tells whether the probe sees a point.
+    std::vector<glm::vec2> visibility;
 };
 
 // What a baker has cast so far.

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <limits>
 
 namespace shprobe {
 
@@ -31,7 +32,54 @@ AxisSpan axisSpan(double coordinate, int count) {
     return {lower, lower + 1, coordinate - double(lower)};
 }
 
+// Surface points are moved this many of the grid's smallest cell edges along their normal before
+// the visibility test, so that a probe that sees the surface sees the point (DDGI's normal bias).
+constexpr double kNormalBias = 0.1;
+
+double smallestCellEdge(const ProbeGrid& grid) {
+    double edge = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (grid.counts[a] > 1)
+            edge = std::min(edge, (grid.boundsMax[a] - grid.boundsMin[a]) / (grid.counts[a] - 1));
+    }
+    return std::isfinite(edge) ? edge : 0.0;
+}
+
+// DDGI's weight of a probe at `probe` for a surface point: in front of the surface, and seen.
+double visibilityWeight(const ProbeVolume& volume, uint32_t index, const glm::dvec3& probe,
+                        const glm::dvec3& position, const glm::dvec3& biased, const glm::dvec3& normal) {
+    double weight = 1.0;
+    const glm::dvec3 toProbe = probe - position;
+    const double length = glm::length(toProbe);
+    if (length > 0.0) {
+        const double facing = (glm::dot(toProbe / length, normal) + 1.0) * 0.5;
+        weight *= facing * facing + 0.2;
+    }
+    const glm::dvec3 fromProbe = biased - probe;
+    const double distance = glm::length(fromProbe);
+    if (distance == 0.0) return weight;
+    const size_t texels = size_t(volume.visibilitySize) * size_t(volume.visibilitySize);
+    const glm::dvec2 moments(
+        volume.visibility[index * texels + size_t(octahedralTexel(fromProbe, volume.visibilitySize))]);
+    if (distance <= moments.x) return weight;
+    const double variance = std::max(moments.y - moments.x * moments.x, 1e-12 * moments.y);
+    const double seen = variance / (variance + (distance - moments.x) * (distance - moments.x));
+    return weight * seen * seen * seen;
+}
+
 } // namespace
+
+int octahedralTexel(const glm::dvec3& direction, int size) {
+    const glm::dvec3 d = direction / (std::abs(direction.x) + std::abs(direction.y) + std::abs(direction.z));
+    glm::dvec2 p(d.x, d.y);
+    if (d.z < 0.0) {
+        const glm::dvec2 sign(p.x >= 0.0 ? 1.0 : -1.0, p.y >= 0.0 ? 1.0 : -1.0);
+        p = (1.0 - glm::abs(glm::dvec2(p.y, p.x))) * sign;
+    }
+    const int i = std::clamp(int((p.x * 0.5 + 0.5) * size), 0, size - 1);
+    const int j = std::clamp(int((p.y * 0.5 + 0.5) * size), 0, size - 1);
+    return j * size + i;
+}
 
 ProbeWeights volumeProbeWeights(const ProbeVolume& volume, const glm::dvec3& position) {
     if (volume.begin != 0 || volume.end != volume.grid.probeCount())
@@ -64,12 +112,29 @@ ProbeWeights volumeProbeWeights(const ProbeVolume& volume, const glm::dvec3& pos
     return result;
 }
 
+ProbeWeights surfaceProbeWeights(const ProbeVolume& volume, const glm::dvec3& position,
+                                 const glm::dvec3& normal) {
+    ProbeWeights result = volumeProbeWeights(volume, position);
+    if (volume.visibilitySize == 0) return result;
+    const glm::dvec3 biased = position + kNormalBias * smallestCellEdge(volume.grid) * normal;
+    double sum = 0.0;
+    for (int n = 0; n < 8; ++n) {
+        if (result.weights[n] == 0.0) continue;
+        const glm::dvec3 probe = probePosition(volume.grid, probeCell(volume.grid, result.probes[n]));
+        result.weights[n] *= visibilityWeight(volume, result.probes[n], probe, position, biased, normal);
+        sum += result.weights[n];
+    }
+    for (double& weight : result.weights)
+        weight = sum > 0.0 ? weight / sum : 0.0;
+    return result;
+}
+
 glm::dvec3 sampleVolumeIrradiance(const ProbeVolume& volume, const glm::dvec3& position,
                                   const glm::dvec3& normal) {
     if (volume.irradiance.empty()) fail("the volume holds no irradiance coefficients");
     const double length = glm::length(normal);
     if (!(length > 0.0) || !std::isfinite(length)) fail("the normal has no length");
-    const ProbeWeights probes = volumeProbeWeights(volume, position);
+    const ProbeWeights probes = surfaceProbeWeights(volume, position, normal / length);
     const size_t perProbe = size_t(coefficientCount(volume.order));
     ShCoefficients blend = makeCoefficients(volume.order, Quantity::Irradiance);
     for (int n = 0; n < 8; ++n) {
