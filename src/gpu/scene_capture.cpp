@@ -6,6 +6,7 @@
 #include "glsl/gpu_interface.h"
 #include "glsl/texel_geometry.h"
 #include "gpu/host_bake.h"
+#include "scene/surface_shading.h"
 #include "vk/check.h"
 #include "vk/graphics.h"
 #include "vk/pipeline.h"
@@ -163,7 +164,8 @@ glsl::CaptureSun sunView(const SceneSun& sun, const World& world, uint32_t mapSi
             high[a] = std::max(high[a], glm::dot(axes[a], p));
         }
     }
-    const float worldSize = std::max(glm::length(world.boundsMax - world.boundsMin), 1e-6f);
+    // A floor for a flat box, relative to the scene (checkSceneScale keeps it above kMinSceneSize).
+    const float worldSize = std::max(glm::length(world.boundsMax - world.boundsMin), float(kMinSceneSize));
     const float extent = std::max({high.x - low.x, high.y - low.y, 1e-6f * worldSize}) * 1.01f;
     const float depthRange = std::max(high.z - low.z, 1e-6f * worldSize) * 1.02f;
     const glm::vec3 centre = 0.5f * (low + high);
@@ -468,15 +470,18 @@ SceneCapture createSceneCapture(const Context& context, const World& world, cons
         throw Error(ErrorKind::Input, "scene capture: shadow map size " +
                                           std::to_string(options.shadowMapSize) + " is outside 1..16384");
     checkWorld(world);
+    checkSceneScale(world);
 
     SceneCapture capture;
     OnFailure undo([&] { destroySceneCapture(context, capture); });
     capture.options = options;
     capture.triangleCount = uint32_t(world.triangleCount());
     capture.skyFaceSize = uint32_t(sky.faceSize);
-    // A millionth of the world's size: closer than any probe sits to a wall it should see.
+    // A millionth of the world's size, whatever its scale (an absolute floor would cut away a small
+    // scene whole): closer than any probe sits to a wall it should see. Reversed float depth holds
+    // near / w at any scale checkSceneScale accepts.
     const float size = glm::length(world.boundsMax - world.boundsMin);
-    capture.nearPlane = std::max(size, 1.0f) * 1e-6f;
+    capture.nearPlane = std::max(size, float(kMinSceneSize)) * 1e-6f;
     // 32-bit float depth: with the near plane at a millionth of the world, 16-bit depth would round
     // everything past a tenth of it to the cleared far value and lose it.
     VkFormatProperties depthProperties;

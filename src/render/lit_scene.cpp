@@ -28,8 +28,9 @@ SceneCapture createLitSceneCapture(const Context& context, const LitScene& scene
 SceneCamera orbitSceneCamera(const World& world, float yawDegrees, float pitchDegrees, float zoom) {
     const glm::dvec3 centre = 0.5 * glm::dvec3(world.boundsMin + world.boundsMax);
     const double radius = 0.5 * glm::length(glm::dvec3(world.boundsMax - world.boundsMin));
-    // The bounding sphere fills the vertical field of view at this distance.
-    const double distance = std::max(radius, 1e-6) / std::sin(kFovDegrees * 0.5 * M_PI / 180.0);
+    // The bounding sphere fills the vertical field of view at this distance, at any scale (a point
+    // of a scene: a unit sphere).
+    const double distance = (radius > 0.0 ? radius : 1.0) / std::sin(kFovDegrees * 0.5 * M_PI / 180.0);
     const Camera orbit = orbitCamera(yawDegrees, pitchDegrees, float(distance * zoom), float(kFovDegrees));
     return {centre + glm::dvec3(orbit.position), centre, glm::dvec3(0.0, 1.0, 0.0), kFovDegrees};
 }

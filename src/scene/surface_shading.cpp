@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -189,11 +190,48 @@ glm::dvec3 nearestSkyTexel(const Cubemap& sky, const glm::dvec3& direction) {
     return glm::dvec3(glm::vec3(sky.at(point.face, texel(point.a), texel(point.b))));
 }
 
+// A number as the messages give it: 3 significant digits ("3.46e-11", "2e+06", "0.5").
+std::string number(double value) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.3g", value);
+    return text;
+}
+
 } // namespace
+
+void checkSceneScale(const World& world) {
+    if (world.triangleCount() == 0) return;    // the sky alone, at any scale
+    glm::dvec3 low(INFINITY), high(-INFINITY); // of the positions: a World built by hand may not set bounds
+    for (const glm::vec3& p : world.positions) {
+        low = glm::min(low, glm::dvec3(p));
+        high = glm::max(high, glm::dvec3(p));
+    }
+    const double size = glm::length(high - low);
+    const double largest = largestCoordinate(world);
+    if (largest > kMaxSceneCoordinate)
+        throw sceneError("its coordinates reach " + number(largest) + ", beyond the " +
+                         number(kMaxSceneCoordinate) +
+                         " the float ray test and capture hold (products of three coordinates); scale "
+                         "the scene down");
+    if (size < kMinSceneSize)
+        throw sceneError("it is " + number(size) + " across (its box's diagonal), smaller than the " +
+                         number(kMinSceneSize) +
+                         " the float ray test and capture resolve (products of three coordinates); scale "
+                         "the scene up");
+    const double offset = kOffsetScale * largest;
+    if (offset > kMaxSurfaceOffsetShare * size)
+        throw sceneError("its coordinates reach " + number(largest) + ", where float's spacing (" +
+                         number(largest * std::numeric_limits<float>::epsilon()) +
+                         ") is too coarse for a scene " + number(size) +
+                         " across: rays leaving a surface start 256 such steps off it (" + number(offset) +
+                         "), more than " + number(100.0 * kMaxSurfaceOffsetShare) +
+                         "% of the scene; move the scene nearer the origin");
+}
 
 SceneShading::SceneShading(const World& world, const Cubemap& sky) {
     requireVertices(world);
     requireTriangles(world);
+    checkSceneScale(world);
     requireMaterials(world);
     requireSky(sky);
     world_ = world;

@@ -31,12 +31,29 @@ struct SurfaceHit {
     bool backFace = false;         // the back of a one-sided material: it leaves nothing
 };
 
+// The sizes both backends bake alike: a scene scaled by any factor that keeps it inside these bakes
+// to the same volume (its probes scaled too), as every distance the bakes use is a fraction of the
+// scene's size or of its largest coordinate. The ray test (scene/bvh.h) multiplies three coordinate
+// differences in float, which stay normal floats, far from underflow and overflow, from 1e-30 to
+// 1e30; the capture's depth and normals need less.
+constexpr double kMinSceneSize = 1e-10;         // the bounding box's diagonal, at least
+constexpr double kMaxSceneCoordinate = 1e10;    // |x|, |y|, |z| of any vertex, at most
+constexpr double kMaxSurfaceOffsetShare = 0.01; // SceneShading::offset() over the diagonal, at most
+
+// Throws Error(Input) "scene: ..." naming the scale for a World with triangles that is smaller than
+// kMinSceneSize, whose coordinates reach past kMaxSceneCoordinate, or whose float spacing is too
+// coarse for its size: where rays leaving a surface start (256 float steps of the largest
+// coordinate off it) more than kMaxSurfaceOffsetShare of the scene away, a scene far from the
+// origin for its size. Both backends call it.
+void checkSceneScale(const World& world);
+
 // A World checked and copied with what shading needs (suns normalized), and the sky. Immutable:
 // describe and skyRadiance may run on many threads at once.
 class SceneShading {
   public:
     // Throws Error(Input) for a World whose arrays disagree (scene.h), for non-finite vertices or a
-    // sun without a direction, or for a sky whose texel count is not that of a cube map.
+    // sun without a direction, for a scale checkSceneScale refuses, or for a sky whose texel count
+    // is not that of a cube map.
     SceneShading(const World& world, const Cubemap& sky);
 
     // The point of `triangle` at barycentrics (u, v), seen by a ray along `direction`.
