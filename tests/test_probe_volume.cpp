@@ -2,6 +2,7 @@
 // (docs/probe-volume.md): where the probes are, that every malformed option and file is refused
 // with its own message, that bricks cover a grid exactly once and merge to the whole bake bit for
 // bit, and that sampling reproduces what trilinear interpolation must reproduce exactly.
+#include "common/content_hash.h"
 #include "common/error.h"
 #include "formats/probe_volume.h"
 #include "scene/probe_grid.h"
@@ -63,6 +64,7 @@ void expectSameVolume(const ProbeVolume& a, const ProbeVolume& b) {
     EXPECT_EQ(a.valid, b.valid);
     EXPECT_EQ(a.bounces, b.bounces);
     EXPECT_EQ(a.source, b.source);
+    EXPECT_EQ(a.sourceHash, b.sourceHash);
     EXPECT_EQ(a.settings, b.settings);
 }
 
@@ -79,6 +81,7 @@ ProbeVolume sampleVolume(const ProbeGrid& grid, int order, bool radiance = true,
     volume.end = grid.probeCount();
     volume.bounces = 2;
     volume.source = "room.glb (12 triangles, 1 material, 1 sun)";
+    volume.sourceHash = "fnv1a64:0123456789abcdef";
     volume.settings = R"({"face_size":32,"sky":"uniform 1,1,1"})";
     const size_t perProbe = size_t(coefficientCount(order));
     volume.valid.resize(volume.end);
@@ -596,6 +599,7 @@ TEST(ProbeVolumeFile, EveryHeaderFieldIsChecked) {
          "field \"probes.end\" must be an integer"},
         {[](ordered_json& h) { h["bounces"] = -1; }, "field \"bounces\" must be an integer from 0"},
         {[](ordered_json& h) { h.erase("source"); }, "missing field \"source\""},
+        {[](ordered_json& h) { h["source_hash"] = 12; }, "field \"source_hash\" must be a string"},
         {[](ordered_json& h) { h["settings"] = "face_size=32"; }, "field \"settings\" must be an object"},
     };
     for (const auto& [edit, message] : cases)
@@ -605,6 +609,11 @@ TEST(ProbeVolumeFile, EveryHeaderFieldIsChecked) {
     const ProbeVolume read =
         parseProbeVolume(withHeader(bytes, [](ordered_json& h) { h["baked_on"] = "gpu"; }), "v");
     EXPECT_EQ(read.end, 4u);
+    // A volume written before volumes held a source hash reads with none.
+    const ProbeVolume old =
+        parseProbeVolume(withHeader(bytes, [](ordered_json& h) { h.erase("source_hash"); }), "v");
+    EXPECT_EQ(old.sourceHash, "");
+    EXPECT_EQ(old.source, "room.glb (12 triangles, 1 material, 1 sun)");
 }
 
 TEST(ProbeVolumeFile, DamagedPayloadsAreRefused) {
@@ -700,8 +709,10 @@ TEST(Merge, RefusesBricksOfDifferentBakes) {
         {[](ProbeVolume& v) { v.settings = R"({"face_size":32})"; },
          "setting \"sky\" is \"uniform 1,1,1\" in a.shpv, missing in b.shpv"},
         {[](ProbeVolume& v) { v.bounces = 1; }, "bounces 2 in a.shpv, 1 in b.shpv"},
-        {[](ProbeVolume& v) { v.source = "hall.glb"; },
-         "source \"room.glb (12 triangles, 1 material, 1 sun)\" in a.shpv"},
+        {[](ProbeVolume& v) { v.sourceHash = "fnv1a64:00000000000000ff"; },
+         "source \"room.glb (12 triangles, 1 material, 1 sun)\" (fnv1a64:0123456789abcdef) in a.shpv, "
+         "\"room.glb (12 triangles, 1 material, 1 sun)\" (fnv1a64:00000000000000ff) in b.shpv"},
+        {[](ProbeVolume& v) { v.sourceHash.clear(); }, "(no source hash) in b.shpv"},
         {[](ProbeVolume& v) { v.grid.boundsMax.x = 5.0; }, "bounds [-2.0,0.25,1.0]..[4.0,3.0,5.5] in a.shpv"},
         {[](ProbeVolume& v) { v.grid.counts.y = 2; }, "grid 4x1x1 in a.shpv, 4x2x1 in b.shpv"},
         {[](ProbeVolume& v) { v.radiance.clear(); },
@@ -722,6 +733,52 @@ TEST(Merge, RefusesBricksOfDifferentBakes) {
     ProbeVolume reordered = sliceOf(whole, {2, 4});
     reordered.settings = R"({ "sky": "uniform 1,1,1", "face_size": 32 })";
     EXPECT_EQ(mergeProbeVolumes(std::vector{first, reordered}).end, 4u);
+}
+
+// Bricks of one scene baked under two paths (on two machines) have one source hash and two
+// descriptions: they merge, the brick of probe 0 naming the source whatever the order given.
+// Without hashes (volumes written before them) the descriptions must agree.
+TEST(Merge, OneSceneUnderTwoPathsMerges) {
+    const ProbeVolume whole = sampleVolume(testGrid({4, 1, 1}), 2);
+    ProbeVolume first = sliceOf(whole, {0, 2}), second = sliceOf(whole, {2, 4});
+    second.source = "/farm/7/room.glb (12 triangles, 1 material, 1 sun)";
+    const ProbeVolume merged = mergeProbeVolumes(std::vector{second, first});
+    EXPECT_EQ(merged.source, whole.source);
+    EXPECT_EQ(merged.sourceHash, whole.sourceHash);
+    first.sourceHash.clear();
+    second.sourceHash.clear();
+    expectInputError(
+        [&] {
+            mergeProbeVolumes(std::vector{first, second}, std::vector<std::string>{"a", "b"});
+        },
+        "source \"room.glb (12 triangles, 1 material, 1 sun)\" in a, \"/farm/7/room.glb");
+}
+
+// FNV-1a 64's published test vectors (draft-eastlake-fnv, the test suite): "", "a", "foobar".
+TEST(ContentHash, MatchesFnv1a64) {
+    auto of = [](std::string_view bytes) {
+        Fnv1a64 hash;
+        hash.add(bytes);
+        return hash.text();
+    };
+    EXPECT_EQ(of(""), "fnv1a64:cbf29ce484222325");
+    EXPECT_EQ(of("a"), "fnv1a64:af63dc4c8601ec8c");
+    EXPECT_EQ(of("foobar"), "fnv1a64:85944171f73967e8");
+}
+
+// A volume is of a scene when the hashes agree, whatever the description; without a hash, when
+// the descriptions agree.
+TEST(ProbeVolumeFile, SceneMismatchComparesHashesElseDescriptions) {
+    ProbeVolume volume = sampleVolume(testGrid({2, 1, 1}), 2);
+    EXPECT_EQ(sceneMismatch(volume, volume.sourceHash, "./room.glb (12 triangles, 1 material, 1 sun)"), "");
+    EXPECT_NE(sceneMismatch(volume, "fnv1a64:00000000000000ff", volume.source)
+                  .find("(fnv1a64:0123456789abcdef), not in room.glb (12 triangles, 1 material, 1 sun) "
+                        "(fnv1a64:00000000000000ff)"),
+              std::string::npos);
+    volume.sourceHash.clear();
+    EXPECT_EQ(sceneMismatch(volume, "fnv1a64:00000000000000ff", volume.source), "");
+    EXPECT_NE(sceneMismatch(volume, "fnv1a64:00000000000000ff", "./room.glb").find("holds no source hash"),
+              std::string::npos);
 }
 
 // ---- Sampling ----------------------------------------------------------------------------------

@@ -194,6 +194,71 @@ TEST_F(SceneCommand, ScalesFloatCannotHoldAreRefused) {
     }
 }
 
+// A volume knows its scene by the hash of its files (the glTF, its buffer and its texture), not by
+// the path typed: baked in the scene's folder as "BoxTextured.gltf", it is rendered with
+// "./BoxTextured.gltf" and with the absolute path, a gpu bounce continues it (--previous) under
+// another path, and bricks baked from a copy of the folder elsewhere merge to the whole bake byte for
+// byte. A changed scene (a material colour) is refused by render, --previous and merge.
+TEST_F(SceneCommand, VolumesKnowTheirSceneByContent) {
+    const fs::path models = SHPROBE_GLTF_MODELS_DIR "/BoxTextured-glTF";
+    const fs::path here = folder() / "here", there = folder() / "there";
+    fs::copy(models, here);
+    fs::copy(models, there);
+    const std::string name = "BoxTextured.gltf";
+    const std::string absolute = (here / name).string(), copy = (there / name).string();
+    auto bake = [&](const std::string& scene, std::vector<std::string> extra) {
+        std::vector<std::string> args{
+            "scene",       scene, "--grid",    "2,2,2", "--bounds", "-2,-2,-2,2,2,2",
+            "--face-size", "8",   "--backend", "cpu",   "-q"};
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    };
+    auto inHere = [&](const std::vector<std::string>& args) {
+        const RunResult result = run(args, {.workingFolder = here.string()});
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_EQ(result.err, "") << describe(result);
+    };
+    inHere(bake(name, {"-o", "v.shpv"}));
+    const std::string volume = (here / "v.shpv").string();
+    EXPECT_CONTAINS(readProbeVolume(volume).sourceHash, "fnv1a64:");
+    inHere({"render", "--scene", "./" + name, "--volume", "v.shpv", "--size", "32x24", "-o", "dot.png"});
+    runOk({"render", "--scene", absolute, "--volume", volume, "--size", "32x24", "-o", file("absolute.png")});
+
+    inHere(bake(name, {"--brick", "0/2", "-o", "b0.shpv"}));
+    runOk(bake(copy, {"--brick", "1/2", "-o", file("b1.shpv")}));
+    runOk({"merge", file("b1.shpv"), (here / "b0.shpv").string(), "-o", file("merged.shpv")});
+    EXPECT_EQ(bytesOf(file("merged.shpv")), bytesOf(volume));
+
+    const std::vector<std::string> gpu{"--face-size",    "8",         "--grid", "2,2,2", "--bounds",
+                                       "-2,-2,-2,2,2,2", "--backend", "gpu",    "-q"};
+    std::vector<std::string> bounce0{"scene", name, "-o", "g0.shpv"},
+        bounce1{"scene", copy, "--previous", (here / "g0.shpv").string()};
+    bounce0.insert(bounce0.end(), gpu.begin(), gpu.end());
+    bounce1.insert(bounce1.end(), gpu.begin(), gpu.end());
+    inHere(bounce0);
+    std::vector<std::string> next = bounce1;
+    next.insert(next.end(), {"-o", file("g1.shpv")});
+    runOk(next);
+
+    // The copy's material turns pink: its hash changes, and the volumes baked before are refused.
+    std::string text = readText(copy);
+    const size_t at = text.find("\"metallicFactor\"");
+    ASSERT_NE(at, std::string::npos);
+    text.insert(at, "\"baseColorFactor\": [1.0, 0.5, 0.5, 1.0], ");
+    writeText(copy, text);
+    expectFailure({{"render", "--scene", copy, "--volume", volume, "-o", "OUT"},
+                   2,
+                   {volume + ": baked in BoxTextured.gltf", "fnv1a64:", "bake it again"},
+                   "out.png"});
+    bounce1.insert(bounce1.end(), {"-o", "OUT"});
+    expectFailure({bounce1, 2, {"g0.shpv: baked in BoxTextured.gltf", "bake it again"}, "out.shpv"});
+    runOk(bake(copy, {"--brick", "1/2", "-o", file("pink1.shpv")}));
+    expectFailure({{"merge", (here / "b0.shpv").string(), file("pink1.shpv"), "-o", "OUT"},
+                   2,
+                   {"not bricks of one bake: source", "fnv1a64:"},
+                   "out.shpv"});
+}
+
 // The real engine model bakes with the defaults but a small grid; some probes lie inside its parts
 // and are reported invalid, others not.
 TEST_F(SceneCommand, RealSceneBakes) {

@@ -82,6 +82,7 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
         }
     }
     volume.source = world.description;
+    volume.sourceHash = gltfSceneHash(options.scene);
     volume.settings =
         nlohmann::json{{"reference", "path traced"}, {"samples", options.samples}, {"sky", sky.description}}
             .dump();

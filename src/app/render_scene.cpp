@@ -132,9 +132,10 @@ LitScene loadLitScene(const LitSceneOptions& options) {
         throw Error(ErrorKind::Input, "--scene and --volume go together");
     LitScene lit{.volume = readWholeVolume(options.volume)};
     lit.world = loadGltfScene(options.scene);
-    if (lit.volume.source != lit.world.description)
-        throw Error(ErrorKind::Input,
-                    options.volume + ": baked in " + lit.volume.source + ", not " + lit.world.description);
+    if (const std::string mismatch =
+            sceneMismatch(lit.volume, gltfSceneHash(options.scene), lit.world.description);
+        !mismatch.empty())
+        throw Error(ErrorKind::Input, options.volume + ": " + mismatch);
     lit.sky = loadSceneSky(options.sky, 0).cubemap;
     return lit;
 }

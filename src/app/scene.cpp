@@ -159,8 +159,9 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
     if (previous.order != options.order)
         refuse("order " + std::to_string(previous.order) + ", this bake's is " +
                std::to_string(options.order));
-    if (previous.source != world.description)
-        refuse("baked in " + previous.source + ", not " + world.description);
+    if (const std::string mismatch = sceneMismatch(previous, gltfSceneHash(options.scene), world.description);
+        !mismatch.empty())
+        refuse(mismatch);
     if (nlohmann::json::parse(previous.settings) != nlohmann::json::parse(settings))
         refuse("baked with " + previous.settings + ", this bake is " + settings);
     if (previous.irradiance.empty()) refuse("the volume holds no irradiance");
@@ -377,6 +378,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                              ? bakeOnGpu(*backend.context, world, sky, options, grid, range, settings)
                              : bakeByRays(world, sky, options, grid, range, rays);
     volume.source = world.description;
+    volume.sourceHash = gltfSceneHash(options.scene);
     volume.settings = settings;
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;

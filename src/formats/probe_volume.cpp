@@ -206,6 +206,7 @@ nlohmann::ordered_json headerJson(const ProbeVolume& volume) {
     if (volume.visibilitySize > 0) header["visibility"] = volume.visibilitySize;
     header["bounces"] = volume.bounces;
     header["source"] = volume.source;
+    if (!volume.sourceHash.empty()) header["source_hash"] = volume.sourceHash;
     header["settings"] = *settingsObject(volume.settings); // keys sorted: one text per value
     return header;
 }
@@ -395,6 +396,7 @@ VolumeHeader parseHeader(std::string_view headerText, const std::string& name) {
             int(requireInteger(root["visibility"], "visibility", 1, kMaxVisibilitySize, name));
     volume.bounces = int(requireInteger(requireField(root, "bounces", name), "bounces", 0, INT_MAX, name));
     volume.source = requireString(root, "source", name);
+    if (root.contains("source_hash")) volume.sourceHash = requireString(root, "source_hash", name);
     volume.settings = requireObject(root, "settings", name).dump();
     return header;
 }
@@ -516,6 +518,10 @@ std::string settingsDifference(const std::string& a, const std::string& b, const
     return "";
 }
 
+std::string hashText(const ProbeVolume& volume) {
+    return volume.sourceHash.empty() ? "no source hash" : clipped(volume.sourceHash);
+}
+
 // What differs between two bricks' bakes, in words; empty when they are of one bake.
 std::string bakeDifference(const ProbeVolume& a, const ProbeVolume& b, const std::string& nameA,
                            const std::string& nameB) {
@@ -532,7 +538,12 @@ std::string bakeDifference(const ProbeVolume& a, const ProbeVolume& b, const std
         return "visibility maps " + both(std::to_string(a.visibilitySize), std::to_string(b.visibilitySize));
     if (a.bounces != b.bounces)
         return "bounces " + both(std::to_string(a.bounces), std::to_string(b.bounces));
-    if (a.source != b.source) return "source " + both(jsonText(a.source), jsonText(b.source));
+    // One scene under two paths (bricks baked on several machines) is one source: the hashes say.
+    if (a.sourceHash != b.sourceHash)
+        return "source " + both(jsonText(a.source) + " (" + hashText(a) + ")",
+                                jsonText(b.source) + " (" + hashText(b) + ")");
+    if (a.sourceHash.empty() && a.source != b.source)
+        return "source " + both(jsonText(a.source), jsonText(b.source));
     return settingsDifference(a.settings, b.settings, nameA, nameB);
 }
 
@@ -589,6 +600,20 @@ void checkProbeGrid(const ProbeGrid& grid, const std::string& what) {
     }
 }
 
+std::string sceneMismatch(const ProbeVolume& volume, const std::string& hash,
+                          const std::string& description) {
+    if (!volume.sourceHash.empty()) {
+        if (volume.sourceHash == hash) return "";
+        return "baked in " + volume.source + " (" + clipped(volume.sourceHash) + "), not in " + description +
+               " (" + hash +
+               "): the scene's files (the glTF file, its buffers and images) are not those the volume was "
+               "baked from; bake it again from this scene";
+    }
+    if (volume.source == description) return "";
+    return "baked in " + volume.source + ", not " + description +
+           " (the volume holds no source hash, so the scene is known by its description, path and all)";
+}
+
 void writeProbeVolume(const std::string& path, const ProbeVolume& volume) {
     checkVolume(volume, "cannot write " + path);
     const std::string header = headerText(volume);
@@ -643,7 +668,8 @@ ProbeVolume mergeProbeVolumes(std::span<const ProbeVolume> bricks, std::span<con
                      [&](size_t a, size_t b) { return bricks[a].begin < bricks[b].begin; });
     checkCoverage(bricks, sorted, nameOf);
 
-    const ProbeVolume& first = bricks[0];
+    // The brick of probe 0 names the source, so that the bricks' order does not change the file.
+    const ProbeVolume& first = bricks[sorted[0]];
     ProbeVolume whole{.grid = first.grid,
                       .order = first.order,
                       .begin = 0,
@@ -651,6 +677,7 @@ ProbeVolume mergeProbeVolumes(std::span<const ProbeVolume> bricks, std::span<con
                       .visibilitySize = first.visibilitySize,
                       .bounces = first.bounces,
                       .source = first.source,
+                      .sourceHash = first.sourceHash,
                       .settings = first.settings};
     for (size_t i : sorted) {
         append(whole.radiance, bricks[i].radiance);

@@ -58,13 +58,21 @@ struct ProbeVolume {
     int visibilitySize = 0;
     std::vector<glm::vec2> visibility;
     int bounces = 0;    // indirect bounces in the bake; 0: direct light only
-    std::string source; // what was baked, e.g. World::description
+    std::string source; // what was baked, in words, e.g. World::description
+    // What was baked, by content, whatever its path: gltfSceneHash (scene/gltf_scene.h),
+    // "fnv1a64:..."; empty where unknown (a volume written before volumes held it).
+    std::string sourceHash;
     // A JSON object of whatever else decides the bake (face size, sky, window...), set by the
     // baker. Bricks merge only when it is equal, as JSON values.
     std::string settings = "{}";
 
     uint32_t probeCount() const { return end - begin; }
 };
+
+// Whether `volume` was baked in the scene whose gltfSceneHash is `hash` and whose description is
+// `description`: by the hashes, or by the descriptions where the volume holds no hash. Empty when it
+// was, else why not in words: "baked in DESCRIPTION (HASH), not in DESCRIPTION (HASH): ...".
+std::string sceneMismatch(const ProbeVolume& volume, const std::string& hash, const std::string& description);
 
 // Writes atomically (common/output_file.h). Throws Error(Input) "cannot write PATH: PROBLEM" for a
 // volume that is not consistent (sizes, ranges, validity bytes other than 0 and 1, settings that
@@ -80,9 +88,9 @@ ProbeVolume readProbeVolume(const std::string& path);
 ProbeVolume parseProbeVolume(std::string_view bytes, const std::string& name);
 
 // One volume of the whole grid from its bricks, given in any order: they must be of one bake (the
-// same grid, order, quantities, bounces, source and settings) and hold every probe of the grid
-// exactly once. Throws Error(Input) naming what differs, what overlaps or what is missing; names
-// (one per brick, the files they came from) are used in messages when given, else "brick N".
+// same grid, order, quantities, bounces, source hash (else source) and settings) and hold every probe of the
+// grid exactly once. Throws Error(Input) naming what differs, what overlaps or what is missing; names (one
+// per brick, the files they came from) are used in messages when given, else "brick N".
 ProbeVolume mergeProbeVolumes(std::span<const ProbeVolume> bricks, std::span<const std::string> names = {});
 
 } // namespace shprobe

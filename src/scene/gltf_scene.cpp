@@ -2,6 +2,7 @@
 // the node hierarchy walked, each mesh instance, material, texture and sun added to the World.
 #include "scene/gltf_scene.h"
 
+#include "common/content_hash.h"
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/quoted.h"
@@ -13,6 +14,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <glm/geometric.hpp>
@@ -697,6 +699,26 @@ std::vector<std::string> gltfExternalFiles(const std::string& path) {
     if (!isGlb(bytes) && !looksLikeJson(json)) return {}; // loadGltfScene says what it is
     checkGltfJson(json, path);
     return uriFiles(json, path);
+}
+
+std::string gltfSceneHash(const std::string& path) {
+    const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF file");
+    Fnv1a64 hash;
+    hash.addLength(bytes.size());
+    hash.add(bytes);
+    const std::string_view json = isGlb(bytes) ? glbParts(bytes, path).second : std::string_view(bytes);
+    if (!isGlb(bytes) && !looksLikeJson(json)) return hash.text(); // no scene: loadGltfScene says why
+    checkGltfJson(json, path);
+    for (const std::string& file : uriFiles(json, path)) {
+        try {
+            const std::string content = readInputFile(file, kMaxGltfFileBytes, "a glTF buffer or image file");
+            hash.addLength(content.size());
+            hash.add(content);
+        } catch (const Error&) {
+            hash.addLength(UINT64_MAX);
+        }
+    }
+    return hash.text();
 }
 
 World loadGltfScene(const std::string& path, const GltfLoadOptions& options) {

@@ -70,6 +70,13 @@ struct GltfLoadOptions {
 // for a file it cannot read or a URI outside the scene's folder.
 std::vector<std::string> gltfExternalFiles(const std::string& path);
 
+// What the scene at `path` is, whatever path names it: Fnv1a64 (common/content_hash.h) of the file
+// and then of each file gltfExternalFiles lists, in its order, each part its length (8 bytes, least
+// significant first) and its bytes, as "fnv1a64:" and 16 hex digits. A listed file that cannot be
+// read (an image no material uses, which loadGltfScene never opens) counts as the length 2^64 - 1
+// and no bytes. Throws what gltfExternalFiles throws.
+std::string gltfSceneHash(const std::string& path);
+
 // Reads the scene at `path` into world-space triangles; see above for what is read, ignored and
 // refused. World::description is "NAME (T triangles, M materials, S suns)" with NAME the path.
 World loadGltfScene(const std::string& path, const GltfLoadOptions& options = {});
