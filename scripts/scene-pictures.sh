@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's pictures of probes in a scene, made by shprobe itself: 2CylinderEngine.glb
+# The pictures of probes in a scene (docs/commands.md), made by shprobe itself: 2CylinderEngine.glb
 # (Debian's assimp-testmodels) under the built-in sky, a 6x3x4 probe volume baked with bounce 0 and
 # with 2 bounces, and the latter with its probes shown.
 #   bash scripts/scene-pictures.sh [BUILD_DIR]     (default: build)

@@ -168,7 +168,7 @@ std::vector<std::string> entriesOf(const fs::path& folder) {
 
 struct Failure {
     std::vector<std::string> args;       // "OUT" is replaced by the output path
-    int exitCode;                        // README: 2 input or usage, 3 output, 4 device
+    int exitCode;                        // docs/commands.md: 2 input or usage, 3 output, 4 device
     std::vector<std::string> mentions;   // parts the one error line must contain
     std::string output = "out.json";     // the output's file name (the extension picks the format)
     EnvironmentChanges environment = {}; // for the runs

@@ -1,4 +1,4 @@
-// What the program does with hostile inputs, one test per row of the README's "Reliability" table:
+// What the program does with hostile inputs, one test per row of the table of docs/reliability.md:
 // truncated and oversized images, odd faces and channel counts, extreme texel values, options out
 // of range, bad probe files, outputs that cannot be written, and Ctrl-C. Each failure must exit
 // with the table's code and print exactly one line, "shprobe: error: ...", naming the input and the

@@ -2,8 +2,8 @@
 // an argv array so no path is ever parsed by a shell, stdout and stderr captured into files, the
 // environment passed explicitly). Checks the bake summary and coefficient table, the files it
 // writes (read back with readProbeFile), GPU = CPU through the program, determinism, the exit codes
-// and one-line error messages of the README, that failures leave no file behind and never touch an
-// existing one, `shprobe info`, layout detection, batches (equal to single bakes, chunked or not;
+// and one-line error messages of docs/commands.md, that failures leave no file behind and never touch
+// an existing one, `shprobe info`, layout detection, batches (equal to single bakes, chunked or not;
 // bad inputs, output folders, ambiguous names, the progress bar on a terminal) and the header
 // formats. Test images are written by each test into its own temporary folder; no binary file is
 // checked in.
@@ -421,7 +421,7 @@ TEST_F(Cli, GpuBakeIsDeterministic) {
 
 struct Failure {
     std::vector<std::string> args;     // "OUT" is replaced by the output path
-    int exitCode;                      // README table: 2 input or usage, 3 output, 4 device
+    int exitCode;                      // docs/commands.md: 2 input or usage, 3 output, 4 device
     std::vector<std::string> mentions; // parts the message must contain
     bool usageError = false;           // printed by CLI11: a non-zero exit and the option named
     EnvironmentChanges environment = {};

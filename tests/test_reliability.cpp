@@ -1,5 +1,5 @@
-// The program's second round of reliability, one test per class of the README's "Reliability"
-// table that test_bad_inputs does not hold: a full file system, outputs that are links, devices,
+// The program's second round of reliability, one test per class of the table of docs/reliability.md
+// that test_bad_inputs does not hold: a full file system, outputs that are links, devices,
 // FIFOs and standard output, file-system errors as one line, the pipeline cache, number options,
 // output names, outputs that are inputs, memory bounded by what a file holds, and bad options refused
 // before any work. Each failure follows test_bad_inputs' rules (ProgramTest::expectFailure): its exit
