@@ -258,16 +258,28 @@ TEST_F(SceneCaptureTest, SunlightMatchesTheReferenceRays) {
 // glsl/probe_volume.glsl as an engine uses it (tests/shaders/sample_volume.comp: the coefficients
 // in a 2D-array texture) against the CPU reference scene/volume_sampling.h, on a 3x2x4 volume of
 // random order-3 irradiance with a quarter of its probes invalid (holding NaN, which must not leak
-// in), at 500 points inside and around the grid with random normals. Both evaluate the same
-// formula; the GPU in float: 1e-5 of the largest |E| (coefficients below 1, 8 x 9 products).
-TEST_F(SceneCaptureTest, VolumeIncludeMatchesTheCpuSampling) {
+// in), at 500 points inside and around the grid with random normals; without visibility, and with
+// random 4 x 4 visibility maps (means 0.2 to 2.8, variances up to 0.3), which weigh the probes. Both evaluate
+// the same formula; the GPU in float: 1e-5 of the largest |E| (coefficients below 1, 8 x 9 products). The
+// largest difference between probe_volume.glsl and the CPU over the points, and the largest |E|.
+struct SamplingAgreement {
+    double worst = 0.0;
+    double largest = 0.0;
+};
+
+SamplingAgreement sampleVolumeOnGpu(const Context& context, int visibilitySize) {
     std::mt19937 random(7);
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
     ProbeVolume volume;
     volume.grid = {glm::ivec3(3, 2, 4), glm::dvec3(-1.0, 0.0, -2.0), glm::dvec3(2.0, 1.0, 2.0)};
     volume.order = 3;
     volume.end = volume.grid.probeCount();
+    volume.visibilitySize = visibilitySize;
     for (uint32_t p = 0; p < volume.end; ++p) {
+        for (int t = 0; t < visibilitySize * visibilitySize; ++t) {
+            const float mean = 1.5f + 1.3f * unit(random), variance = 0.15f * (1.0f + unit(random));
+            volume.visibility.push_back(glm::vec2(mean, mean * mean + variance));
+        }
         volume.valid.push_back(p % 4 != 1);
         for (int c = 0; c < 9; ++c)
             volume.irradiance.push_back(
@@ -282,11 +294,11 @@ TEST_F(SceneCaptureTest, VolumeIncludeMatchesTheCpuSampling) {
     }
     const uint32_t width = 3 * 9, layers = 4;
     GpuImage texture =
-        createImage(context(), {.format = VK_FORMAT_R32G32B32A32_SFLOAT,
-                                .extent = {width, 2},
-                                .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                .what = "volume texture",
-                                .layers = layers});
+        createImage(context, {.format = VK_FORMAT_R32G32B32A32_SFLOAT,
+                              .extent = {width, 2},
+                              .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                              .what = "volume texture",
+                              .layers = layers});
     std::vector<glm::vec4> texels(size_t(width) * 2 * layers);
     for (uint32_t p = 0; p < volume.end; ++p) {
         const glm::ivec3 cell(p % 3, (p / 3) % 2, p / 6);
@@ -295,42 +307,50 @@ TEST_F(SceneCaptureTest, VolumeIncludeMatchesTheCpuSampling) {
                 glm::vec4(volume.irradiance[p * 9 + c], float(volume.valid[p]));
     }
     const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-    Buffer staging = createBuffer(context(), texels.size() * 16, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+    Buffer staging = createBuffer(context, texels.size() * 16, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                   MemoryUse::Upload, "texels");
     std::memcpy(staging.mapped, texels.data(), texels.size() * 16);
-    Buffer input = createBuffer(context(), points.size() * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+    Buffer input = createBuffer(context, points.size() * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                 MemoryUse::Device, "points");
-    uploadBuffer(context(), input, points.data(), points.size() * 16);
-    Buffer output = createBuffer(context(), points.size() / 2 * 16, storage, MemoryUse::Readback, "results");
-    VkSampler sampler = createSampler(context(), VK_FILTER_NEAREST);
+    uploadBuffer(context, input, points.data(), points.size() * 16);
+    Buffer output = createBuffer(context, points.size() / 2 * 16, storage, MemoryUse::Readback, "results");
+    const std::vector<glm::vec2> visibility =
+        volume.visibility.empty() ? std::vector<glm::vec2>(1) : volume.visibility;
+    Buffer moments = createBuffer(context, visibility.size() * 8, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                  MemoryUse::Device, "visibility");
+    uploadBuffer(context, moments, visibility.data(), visibility.size() * 8);
+    VkSampler sampler = createSampler(context, VK_FILTER_NEAREST);
     const VkDescriptorType bindings[] = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                                         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                                          VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
     struct Push {
         glm::vec4 boundsMin, boundsMax;
         glm::uvec4 counts;
-    } push{glm::vec4(glm::vec3(volume.grid.boundsMin), 0.0f),
-           glm::vec4(glm::vec3(volume.grid.boundsMax), 0.0f),
-           glm::uvec4(3, 2, 4, uint32_t(points.size() / 2))};
-    ComputeProgram program = createComputeProgram(context(), {.name = "sample_volume.comp",
-                                                              .spirv = spirv::sample_volume_comp,
-                                                              .bindings = bindings,
-                                                              .immutableSampler = sampler,
-                                                              .pushConstantSize = sizeof(Push),
-                                                              .localSize = 64,
-                                                              .order = 3});
+        glm::uvec4 visibility;
+    } push{
+        glm::vec4(glm::vec3(volume.grid.boundsMin), 0.0f), glm::vec4(glm::vec3(volume.grid.boundsMax), 0.0f),
+        glm::uvec4(3, 2, 4, uint32_t(points.size() / 2)), glm::uvec4(uint32_t(visibilitySize), 0u, 0u, 0u)};
+    ComputeProgram program = createComputeProgram(context, {.name = "sample_volume.comp",
+                                                            .spirv = spirv::sample_volume_comp,
+                                                            .bindings = bindings,
+                                                            .immutableSampler = sampler,
+                                                            .pushConstantSize = sizeof(Push),
+                                                            .localSize = 64,
+                                                            .order = 3});
     VkDescriptorPool pool =
-        createDescriptorPool(context(), {.sets = 1, .storageBuffers = 2, .imageSamplers = 1});
-    const BindingTarget targets[] = {
-        {.imageView = texture.view}, {.buffer = input.buffer}, {.buffer = output.buffer}};
-    VkDescriptorSet set = createDescriptorSet(context(), pool, program, targets);
-    submitAndWait(context(), [&](VkCommandBuffer commands) {
+        createDescriptorPool(context, {.sets = 1, .storageBuffers = 3, .imageSamplers = 1});
+    const BindingTarget targets[] = {{.imageView = texture.view},
+                                     {.buffer = input.buffer},
+                                     {.buffer = output.buffer},
+                                     {.buffer = moments.buffer}};
+    VkDescriptorSet set = createDescriptorSet(context, pool, program, targets);
+    submitAndWait(context, [&](VkCommandBuffer commands) {
         recordImageUpload(commands, staging.buffer, texture, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                           VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
         dispatch(commands, program, set, push, {uint32_t(points.size() / 2 + 63) / 64, 1});
         computeWriteBarrier(commands);
     });
-    invalidateBuffer(context(), output);
+    invalidateBuffer(context, output);
     const auto* results = static_cast<const glm::vec4*>(output.mapped);
     double worst = 0.0, largest = 0.0;
     for (size_t k = 0; k < points.size() / 2; ++k) {
@@ -339,15 +359,24 @@ TEST_F(SceneCaptureTest, VolumeIncludeMatchesTheCpuSampling) {
         worst = std::max(worst, glm::length(cpu - glm::dvec3(glm::vec3(results[k]))));
         largest = std::max(largest, glm::length(cpu));
     }
-    vkDestroyDescriptorPool(context().device, pool, nullptr);
-    destroyComputeProgram(context(), program);
-    vkDestroySampler(context().device, sampler, nullptr);
-    for (Buffer* buffer : {&staging, &input, &output})
-        destroyBuffer(context(), *buffer);
-    destroyImage(context(), texture);
-    std::printf("probe_volume.glsl against the CPU: worst %.3g of the largest |E| %.3g\n", worst, largest);
-    EXPECT_GT(largest, 0.1);
-    EXPECT_LT(worst, 1e-5 * largest);
+    vkDestroyDescriptorPool(context.device, pool, nullptr);
+    destroyComputeProgram(context, program);
+    vkDestroySampler(context.device, sampler, nullptr);
+    for (Buffer* buffer : {&staging, &input, &output, &moments})
+        destroyBuffer(context, *buffer);
+    destroyImage(context, texture);
+    return {worst, largest};
+}
+
+TEST_F(SceneCaptureTest, VolumeIncludeMatchesTheCpuSampling) {
+    for (int visibilitySize : {0, 4}) {
+        const SamplingAgreement agreement = sampleVolumeOnGpu(context(), visibilitySize);
+        std::printf(
+            "probe_volume.glsl against the CPU, visibility maps %d^2: worst %.3g of the largest |E| %.3g\n",
+            visibilitySize, agreement.worst, agreement.largest);
+        EXPECT_GT(agreement.largest, 0.1);
+        EXPECT_LT(agreement.worst, 1e-5 * agreement.largest);
+    }
 }
 
 // Bakes the grid bounce after bounce, as `shprobe scene` does: bounce k + 1 reflects bounce k's

@@ -44,11 +44,14 @@ struct CaptureTexture {
 // The volume the previous bounce baked (grid of scene/probe_grid.h: probe (i, j, k) at
 // boundsMin + (boundsMax - boundsMin) * (i, j, k) / (counts - 1), an axis of one probe at the
 // centre), followed by order^2 vec4 per probe in flat order i + nx (j + ny k): the irradiance
-// coefficients' rgb, and w = 1 for a valid probe, 0 for one inside geometry.
+// coefficients' rgb, and w = 1 for a valid probe, 0 for one inside geometry; then, where the
+// volume holds visibility, each probe's size^2 texels of (mean, mean square) distance, two to a
+// vec4 (xy, zw).
 struct CaptureVolumeHeader {
-    vec4 boundsMin; // xyz
-    vec4 boundsMax; // xyz
-    uvec4 counts;   // xyz: probes per axis; w: 0 when there is no previous bounce
+    vec4 boundsMin;   // xyz
+    vec4 boundsMax;   // xyz
+    uvec4 counts;     // xyz: probes per axis; w: 0 when there is no previous bounce
+    uvec4 visibility; // x: texels a side of each probe's map, 0: none; y: the maps' first vec4
 };
 
 // A sun (scene/scene.h) and its shadow map: the depth, seen from the sun (orthographic, over the
@@ -79,7 +82,7 @@ SHPROBE_END
 static_assert(sizeof(shprobe::glsl::CaptureVertex) == 32);
 static_assert(sizeof(shprobe::glsl::CaptureMaterial) == 48);
 static_assert(sizeof(shprobe::glsl::CaptureTexture) == 16);
-static_assert(sizeof(shprobe::glsl::CaptureVolumeHeader) == 48);
+static_assert(sizeof(shprobe::glsl::CaptureVolumeHeader) == 64);
 static_assert(sizeof(shprobe::glsl::CaptureConstants) == 112); // within the 128 bytes every device has
 static_assert(sizeof(shprobe::glsl::CaptureSun) == 128);
 #endif

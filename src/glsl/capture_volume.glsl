@@ -1,5 +1,6 @@
 // The capture's volume of the previous bounce (SHPROBE_CAPTURE_VOLUME: CaptureVolumeHeader, then
-// order^2 vec4 per probe), and its coefficients as glsl/probe_volume.glsl reads them. The includer
+// order^2 vec4 per probe, then the visibility maps), its coefficients and visibility as
+// glsl/probe_volume.glsl reads them. The includer
 // declares SH_ORDER first.
 #ifndef SHPROBE_CAPTURE_VOLUME_GLSL
 #define SHPROBE_CAPTURE_VOLUME_GLSL
@@ -11,6 +12,18 @@ layout(std430, set = 0, binding = SHPROBE_CAPTURE_VOLUME) readonly buffer Volume
 
 vec4 probeVolumeCoefficient(uint probe, uint index) {
     return volumeCoefficients[probe * SH_ORDER * SH_ORDER + index];
+}
+
+#define SHPROBE_PROBE_VOLUME_VISIBILITY
+uint probeVolumeVisibilitySize() {
+    return volume.visibility.x;
+}
+
+vec2 probeVolumeVisibility(uint probe, uint texel) {
+    uint size = volume.visibility.x;
+    uint index = probe * size * size + texel;
+    vec4 pair = volumeCoefficients[volume.visibility.y + index / 2u];
+    return (index & 1u) == 0u ? pair.xy : pair.zw;
 }
 
 #endif

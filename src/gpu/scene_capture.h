@@ -36,6 +36,8 @@ struct BounceSource {
     int order = 0;
     std::span<const glm::dvec3> irradiance; // probe p's coefficient i at p * order^2 + i
     std::span<const uint8_t> valid;         // one per probe
+    int visibilitySize = 0;                 // ProbeVolume's visibility maps; 0: none
+    std::span<const glm::vec2> visibility;
 };
 
 // Where the probes of a bounce source are (its grid, without the coefficients).

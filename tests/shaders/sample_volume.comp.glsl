@@ -1,8 +1,8 @@
 #version 450
 // Test module: glsl/probe_volume.glsl as an engine uses it, its coefficients in a 2D-array texture
 // (docs/probe-volume.md, "On the GPU"): probe (i, j, k)'s coefficient c at texel
-// (i * SH_ORDER^2 + c, j) of layer k, rgb and validity in w. Writes E(n) at each point, for the
-// CPU reference of scene/volume_sampling.h to check.
+// (i * SH_ORDER^2 + c, j) of layer k, rgb and validity in w; the visibility maps in a storage
+// buffer. Writes E(n) at each point, for the CPU reference of scene/volume_sampling.h to check.
 #extension GL_GOOGLE_include_directive : require
 #include "gpu_interface.h"
 
@@ -11,15 +11,24 @@ layout(constant_id = SHPROBE_SPEC_ORDER) const uint SH_ORDER = 3u;
 layout(set = 0, binding = 0) uniform sampler2DArray volumeTexture;
 layout(set = 0, binding = 1, std430) readonly buffer Points { vec4 points[]; }; // position, normal, ...
 layout(set = 0, binding = 2, std430) writeonly buffer Results { vec4 results[]; };
+layout(set = 0, binding = 3, std430) readonly buffer Visibility { vec2 moments[]; };
 layout(push_constant, std430) uniform Push {
     vec4 boundsMin;
     vec4 boundsMax;
-    uvec4 counts; // xyz: probes per axis; w: points
+    uvec4 counts;     // xyz: probes per axis; w: points
+    uvec4 visibility; // x: texels a side of each probe's map; 0: none
 };
 
 vec4 probeVolumeCoefficient(uint probe, uint index) {
     uint i = probe % counts.x, j = (probe / counts.x) % counts.y, k = probe / (counts.x * counts.y);
     return texelFetch(volumeTexture, ivec3(i * SH_ORDER * SH_ORDER + index, j, k), 0);
+}
+#define SHPROBE_PROBE_VOLUME_VISIBILITY
+uint probeVolumeVisibilitySize() {
+    return visibility.x;
+}
+vec2 probeVolumeVisibility(uint probe, uint texel) {
+    return moments[probe * visibility.x * visibility.x + texel];
 }
 #include "probe_volume.glsl"
 
