@@ -225,6 +225,14 @@ void runMerge(const MergeOptions& options);
 // The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize
 // (0: its own), or the built-in sky (128^2 faces by default).
 Environment loadSceneSky(const std::string& path, int faceSize);
+// The sky as the ray paths read it: its sun, where it has one (sh/lights.h extractSun), taken out
+// as a directional sun of the same power, which they sample explicitly (a sun of 1e-3 sr is found
+// by less than one ray in a thousand); the rest stays in the cube map.
+struct SplitSky {
+    Cubemap residual;
+    std::vector<SceneSun> suns;
+};
+SplitSky splitSceneSky(const Environment& sky);
 // The files a scene job reads: the scene, its buffer and image files (when the scene can be read;
 // the load reports it otherwise) and the sky's files; an output must be none of them.
 std::vector<std::string> sceneInputs(const std::string& scene, const std::string& sky);

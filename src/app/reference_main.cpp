@@ -55,12 +55,18 @@ void addOptions(CLI::App& app, ReferenceOptions& options) {
 
 ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, const ProbeGrid& grid,
                         const Environment& sky) {
-    const ReferenceTracer tracer(world, sky.cubemap);
+    const SplitSky split = splitSceneSky(sky);
+    World lit = world;
+    lit.suns.insert(lit.suns.end(), split.suns.begin(), split.suns.end());
+    const ReferenceTracer tracer(lit, split.residual);
     std::vector<glm::dvec3> positions;
     for (uint32_t p = 0; p < grid.probeCount(); ++p)
         positions.push_back(probePosition(grid, probeCell(grid, p)));
-    const std::vector<PathTracedProbe> traced = pathTraceProbes(
-        tracer, positions, {.order = options.order, .bounces = options.bounces, .samples = options.samples});
+    const std::vector<PathTracedProbe> traced = pathTraceProbes(tracer, positions,
+                                                                {.order = options.order,
+                                                                 .bounces = options.bounces,
+                                                                 .samples = options.samples,
+                                                                 .seenSuns = split.suns});
     ProbeVolume volume;
     volume.grid = grid;
     volume.order = options.order;

@@ -16,6 +16,7 @@
 #include "scene/gltf_scene.h"
 #include "scene/probe_grid.h"
 #include "scene/ray_bake.h"
+#include "sh/lights.h"
 #include "vk/context.h"
 
 #include <algorithm>
@@ -100,6 +101,13 @@ Environment loadSceneSky(const std::string& path, int faceSize) {
         return sky;
     }
     return loadEnvironment(path, {.faceSize = faceSize});
+}
+
+SplitSky splitSceneSky(const Environment& sky) {
+    SplitSky split{sky.cubemap, {}};
+    const SunExtraction sun = extractSun(split.residual);
+    if (sun.found) split.suns.push_back({glm::vec3(sun.direction), glm::vec3(sun.power)});
+    return split;
 }
 
 std::vector<std::string> sceneInputs(const std::string& scene, const std::string& sky) {
@@ -256,8 +264,10 @@ RayBakeOptions rayBakeOptions(const SceneOptions& options) {
 // these probes need it, so a brick is exactly its part of the whole bake.
 ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
                        const ProbeGrid& grid, ProbeRange range, RayBakeCounts& counts) {
-    const RayBakeOptions bakeOptions = rayBakeOptions(options);
-    RayBaker baker(world, sky.cubemap, bakeOptions);
+    const SplitSky split = splitSceneSky(sky);
+    RayBakeOptions bakeOptions = rayBakeOptions(options);
+    bakeOptions.skySuns = split.suns;
+    RayBaker baker(world, split.residual, bakeOptions);
     BakeProgressLine line(range.end - range.begin, options.quiet);
     const std::vector<RayBakedProbe> probes = baker.bakeProbes(probePositions(grid, range), [&](size_t done) {
         const RayBakeCounts sofar = baker.counts();

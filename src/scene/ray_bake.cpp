@@ -160,11 +160,19 @@ class DistanceMoments {
     std::vector<uint32_t> counts_;
 };
 
+// The World lit by the sky's suns too.
+World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
+    if (skySuns.empty()) return world;
+    World lit = world;
+    lit.suns.insert(lit.suns.end(), skySuns.begin(), skySuns.end());
+    return lit;
+}
+
 } // namespace
 
 struct RayBaker::State {
     State(const World& world, const Cubemap& sky, const RayBakeOptions& bakeOptions)
-        : options(bakeOptions), shading(world, sky), bvh(buildBvh(world)) {}
+        : options(bakeOptions), shading(withSuns(world, bakeOptions.skySuns), sky), bvh(buildBvh(world)) {}
 
     RayBakeOptions options;
     SceneShading shading;
@@ -190,6 +198,7 @@ struct RayBaker::State {
     glm::dvec2 insideTriangle(uint32_t triangle, const glm::dvec2& barycentric) const;
     glm::vec3 gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, size_t point);
     ProbeView trace(const glm::dvec3& position, uint64_t& rays);
+    void addSeenSuns(const glm::dvec3& position, ShCoefficients& radiance, uint64_t& rays) const;
 };
 
 void RayBaker::State::layOutCache() {
@@ -354,6 +363,21 @@ ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
     return view;
 }
 
+// The sky's suns a probe sees: each a delta of irradiance E in direction l, whose projection is
+// E y_lm(l) exactly.
+void RayBaker::State::addSeenSuns(const glm::dvec3& position, ShCoefficients& radiance,
+                                  uint64_t& rays) const {
+    std::array<double, coefficientCount(kMaxOrder)> basis{};
+    for (const SceneSun& sun : options.skySuns) {
+        const glm::dvec3 direction = glm::normalize(glm::dvec3(sun.direction));
+        ++rays;
+        if (occluded(position, direction)) continue;
+        evalBasis(options.order, direction, basis);
+        for (size_t i = 0; i < radiance.rgb.size(); ++i)
+            radiance.rgb[i] += glm::dvec3(sun.irradiance) * basis[i];
+    }
+}
+
 RayBaker::RayBaker(const World& world, const Cubemap& sky, const RayBakeOptions& options) {
     requireOptions(options);
     state_ = std::make_unique<State>(world, sky, options);
@@ -377,6 +401,7 @@ std::vector<RayBakedProbe> RayBaker::bakeProbes(std::span<const glm::dvec3> posi
                     RayBakedProbe& probe = probes[size_t(p)];
                     ProbeView view = state.trace(positions[size_t(p)], rays);
                     probe.radiance = projectCubemap(view.radiance, state.options.order);
+                    state.addSeenSuns(positions[size_t(p)], probe.radiance, rays);
                     probe.backFaceTexels = view.backFaceTexels;
                     probe.visibility = std::move(view.visibility);
                     probe.irradiance = convolveIrradiance(probe.radiance);

@@ -49,6 +49,10 @@ struct RayBakeOptions {
                                // world's diagonal / kDefaultCacheCells
     int gatherRays = 64;       // per cache point, rounded up to a square (g x g strata)
     int visibilitySize = 16;   // each probe's visibility map: size x size octahedral texels; 0: none
+    // Suns taken out of the sky (sh/lights.h extractSun): light too small for rays to find, so it
+    // is sampled explicitly. They light the surfaces as the World's suns do (a shadow ray each),
+    // and a probe that sees one adds its delta to its radiance, E y_lm(l).
+    std::vector<SceneSun> skySuns;
     uint64_t seed = 1;
 };
 

@@ -287,6 +287,21 @@ ReplicaEstimate traceReplica(const ReferenceTracer& tracer, const glm::dvec3& po
     return estimate;
 }
 
+// The seen suns' deltas, E y_lm(l) where nothing blocks them: the same in every replica, so they
+// add no variance.
+void addSeenSuns(const ReferenceTracer& tracer, const glm::dvec3& position, const PathTraceOptions& options,
+                 PathTracedProbe& probe) {
+    std::array<double, coefficientCount(kMaxOrder)> basis{};
+    for (const SceneSun& sun : options.seenSuns) {
+        const glm::dvec3 direction = glm::normalize(glm::dvec3(sun.direction));
+        ++probe.rays;
+        if (tracer.occluded(position, direction)) continue;
+        evalBasis(options.order, direction, basis);
+        for (size_t i = 0; i < probe.radiance.rgb.size(); ++i)
+            probe.radiance.rgb[i] += glm::dvec3(sun.irradiance) * basis[i];
+    }
+}
+
 // The replicas' mean, and its standard error sqrt(sum (X_r - mean)^2 / (R (R - 1))).
 PathTracedProbe combineReplicas(std::span<const ReplicaEstimate> replicas, int order) {
     PathTracedProbe probe{makeCoefficients(order, Quantity::Radiance),
@@ -375,6 +390,7 @@ std::vector<PathTracedProbe> pathTraceProbes(const ReferenceTracer& tracer,
     for (size_t p = 0; p < positions.size(); ++p) {
         probes.push_back(combineReplicas(
             std::span(replicas).subspan(p * kPathTraceReplicas, kPathTraceReplicas), options.order));
+        addSeenSuns(tracer, positions[p], options, probes.back());
     }
     return probes;
 }

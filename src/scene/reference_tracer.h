@@ -77,6 +77,9 @@ struct PathTraceOptions {
     int samples = 4096; // directions per probe, rounded up to a multiple of kPathTraceReplicas
     uint64_t seed = 1;
     unsigned threads = 0; // 0: all cores (fewer for small jobs, where starting threads costs more)
+    // Suns taken out of the sky, which the probe sees directly: each adds E y_lm(l) where nothing
+    // blocks it. (The tracer's World holds them too, so that they light the surfaces.)
+    std::vector<SceneSun> seenSuns;
 };
 
 // A path-traced probe: the radiance coefficients and, per coefficient, the standard error of each
