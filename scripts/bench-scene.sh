@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Scene probes per second and memory per probe: `shprobe scene` (GPU capture and bake) and
+# Scene probes per second and memory per probe: `shprobe scene` on both backends (gpu: capture and
+# bake; cpu: rays through the texel centres, one per texel as the capture has) and
 # `shprobe-reference` (Embree path tracing, as many directions per probe as a capture has texels)
 # on 1,000 and 10,000 probes at faces 32^2, bounce 0, in a Cornell box (36 triangles, written here)
-# and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels).
+# and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels); then one
+# bounce at 4^3 probes (the cpu backend's defaults against the reference's).
 # Whole processes, timed by GNU time with their peak memory; memory per probe is the difference of
 # the 10,000- and 1,000-probe runs' peaks over the 9,000 probes between them.
 #   bash scripts/bench-scene.sh [BUILD_DIR] [OUT.json]
@@ -75,14 +77,25 @@ run() {
 for grid in 10,10,10 25,20,20; do
     probes=$(( ${grid//,/*} ))
     run "gpu: cornell box" "$probes" "$build/shprobe" scene "$work/cornell.gltf" --grid "$grid" --face-size 32 \
-        --bounces 0 -q -o "$work/gpu.shpv"
+        --bounces 0 --backend gpu -q -o "$work/gpu.shpv"
+    run "cpu: cornell box" "$probes" "$build/shprobe" scene "$work/cornell.gltf" --grid "$grid" --face-size 32 \
+        --bounces 0 --backend cpu --rays-per-texel 1 -q -o "$work/cpu.shpv"
     run "reference: cornell box" "$probes" "$build/shprobe-reference" "$work/cornell.gltf" --grid "$grid" \
         --bounces 0 -q -o "$work/reference.shpv"
 done
-run "gpu: 2CylinderEngine" 1000 "$build/shprobe" scene "$engine" --grid 10,10,10 --face-size 32 --bounces 0 -q \
-    -o "$work/gpu.shpv"
+run "gpu: 2CylinderEngine" 1000 "$build/shprobe" scene "$engine" --grid 10,10,10 --face-size 32 --bounces 0 \
+    --backend gpu -q -o "$work/gpu.shpv"
+run "cpu: 2CylinderEngine" 1000 "$build/shprobe" scene "$engine" --grid 10,10,10 --face-size 32 --bounces 0 \
+    --backend cpu --rays-per-texel 1 -q -o "$work/cpu.shpv"
 run "reference: 2CylinderEngine" 1000 "$build/shprobe-reference" "$engine" --grid 10,10,10 --bounces 0 -q \
     -o "$work/reference.shpv"
+for scene in "$work/cornell.gltf" "$engine"; do
+    name=$(basename "$scene" | sed 's/\..*//')
+    run "cpu, 1 bounce: $name" 64 "$build/shprobe" scene "$scene" --grid 4,4,4 --bounces 1 --backend cpu -q \
+        -o "$work/cpu.shpv"
+    run "reference, 1 bounce: $name" 64 "$build/shprobe-reference" "$scene" --grid 4,4,4 --bounces 1 -q \
+        -o "$work/reference.shpv"
+done
 
 # Memory per probe: (peak at 10,000 - peak at 1,000) / 9,000, per program.
 perProbe() {
@@ -91,8 +104,8 @@ perProbe() {
     big=$(printf '%s\n' "${rows[@]}" | awk -v n="$1" '$0 ~ n && $(NF-2) == 10000 {print $NF}' | head -1)
     awk -v b="$big" -v s="$small" 'BEGIN { print (b - s) * 1024 / 9000 }'
 }
-printf 'memory per probe: gpu %.0f bytes, reference %.0f bytes\n' "$(perProbe 'gpu: cornell')" \
-    "$(perProbe 'reference: cornell')"
+printf 'memory per probe: gpu %.0f bytes, cpu %.0f bytes, reference %.0f bytes\n' "$(perProbe 'gpu: cornell')" \
+    "$(perProbe 'cpu: cornell')" "$(perProbe 'reference: cornell')"
 if [ -n "$json" ]; then
     printf '%s\n' "${rows[@]}" | python3 -c '
 import json, sys
