@@ -23,7 +23,6 @@
 #include <numbers>
 #include <optional>
 #include <string>
-#include <thread>
 
 namespace shprobe {
 
@@ -285,21 +284,22 @@ constexpr uint8_t kEmpty = 0;
 constexpr uint8_t kGathering = 1;
 constexpr uint8_t kReady = 2;
 
-// E_k at a cache point, gathered by the first thread that needs it; another that needs it meanwhile
-// waits (a point takes well under a millisecond), so each point is gathered once.
+// E_k at a cache point, gathered by the first thread that needs it and kept. Another that needs it
+// while it is being gathered gathers it too, rather than wait on a thread the system may not be
+// running: the same rays and numbers give the same value, so only time is lost, and rarely.
 glm::vec3 RayBaker::State::pointIrradiance(int bounce, uint32_t triangle, int side, int subdivisions,
                                            size_t index, size_t point) {
     std::atomic<uint8_t>& flag = state[size_t(bounce - 1)][point];
     glm::vec3& value = irradiance[size_t(bounce - 1)][point];
     uint8_t seen = flag.load(std::memory_order_acquire);
+    if (seen == kReady) return value;
+    const glm::vec3 gathered = gather(bounce, triangle, side, latticeBarycentric(subdivisions, index), point);
     if (seen == kEmpty && flag.compare_exchange_strong(seen, kGathering, std::memory_order_acquire)) {
-        value = gather(bounce, triangle, side, latticeBarycentric(subdivisions, index), point);
+        value = gathered;
         flag.store(kReady, std::memory_order_release);
-        return value;
+        ++cachePoints;
     }
-    while (flag.load(std::memory_order_acquire) != kReady)
-        std::this_thread::yield();
-    return value;
+    return gathered;
 }
 
 // E_k at a cache point: pi times the mean of L_{k-1} over g x g cosine-distributed rays, one in each
@@ -320,7 +320,6 @@ glm::vec3 RayBaker::State::gather(int bounce, uint32_t triangle, int side, const
         }
     }
     cacheRays += rays;
-    ++cachePoints;
     return glm::vec3(sum * (std::numbers::pi / (double(g) * g)));
 }
 

@@ -13,15 +13,15 @@
 // The light the surfaces reflect is computed at the surfaces, not read from a probe grid. Each
 // triangle carries a lattice of cache points (barycentrics (i/m, j/m), i + j <= m, m chosen so that
 // neighbouring points lie at most `cacheSpacing` apart; one lattice per side of a double-sided
-// material). A point's irradiance at bounce k, E_k(x) = integral of L_{k-1}(x, w) max(0, n.w) dw, is
-// gathered by g x g stratified cosine-distributed rays about its shading normal, each ray reading
-// what the surface it meets leaves at bounce k - 1 (emission, the suns by shadow rays, and E_{k-1}
-// interpolated linearly between that triangle's points), or the sky. A probe at bounce k sees
-// surfaces leave emission + albedo / pi (E_sun + E_k). Points are gathered on first use, each once,
-// with its own random numbers (the seed, its bounce, its index): a bake gives the same bits for any
-// thread count and any subset of probes, so bricks merge into exactly the whole bake. The estimate
-// converges to the exact transport as the points grow denser (interpolation) and the gather rays
-// more (noise); docs/scene-probes.md measures both against the path tracer.
+// material). A point's irradiance at bounce k, E_k(x) = integral of L_{k-1}(x, w) max(0, n.w) dw,
+// is gathered by g x g stratified cosine-distributed rays about its shading normal, each ray
+// reading what the surface it meets leaves at bounce k - 1 (emission, the suns by shadow rays, and
+// E_{k-1} interpolated linearly between that triangle's points), or the sky. A probe at bounce k
+// sees surfaces leave emission + albedo / pi (E_sun + E_k). Points are gathered on first use and
+// kept, with their own random numbers (the seed, the bounce, the point's index): a bake gives the
+// same bits for any thread count and any subset of probes, so bricks merge into exactly the whole
+// bake. The estimate converges to the exact transport as the points grow denser (interpolation)
+// and the gather rays more (noise); docs/scene-probes.md measures both against the path tracer.
 #pragma once
 #include "scene/scene.h"
 #include "sh/coefficients.h"
@@ -75,7 +75,8 @@ struct RayBakedProbe {
 // What a baker has cast so far.
 struct RayBakeCounts {
     uint64_t probeRays = 0;   // the probes' own, with their shadow rays
-    uint64_t cacheRays = 0;   // gathering cache points, with their shadow rays
+    uint64_t cacheRays = 0;   // gathering cache points, with their shadow rays (a point two threads
+                              // needed at once is gathered by both)
     uint64_t cachePoints = 0; // gathered, over all bounces
 };
 
