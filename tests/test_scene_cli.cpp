@@ -142,11 +142,13 @@ double largestDifference(const ProbeVolume& a, const ProbeVolume& b) {
 // coordinate) and everything computed from them, so hits, shadows and sums differ in their last
 // bits: the bound, 1e-4 of the largest L00, is some 100 times that rounding summed over a probe's
 // texels, and far below any real change (a surface lost to a near plane changes L00 by 10-100%).
+// One texel of a probe, towards -X, passes exactly through the tall block's top front edge, where
+// its top and its front face (seen from behind) tie in depth: the gpu capture draws back faces a
+// little farther, or rounding lets the back win at some scales (on lavapipe 1e-6, 1e-2 and 1e3;
+// 0.46% of the largest L00 at 1e-6).
 TEST_F(SceneCommand, ScaledScenesBakeTheSameVolume) {
     for (const char* backend : {"cpu", "gpu"}) {
-        // On lavapipe the capture of the room 1e-6 of its size still differs by 0.46% of L00 in
-        // bounce 0 (1e-5 and 1e-4: 4e-8 and 6e-8), a cause not yet found: it is tested from 1e-5.
-        const std::array<float, 3> scales{std::string(backend) == "gpu" ? 1e-5f : 1e-6f, 1.0f, 1e6f};
+        const std::array<float, 3> scales{1e-6f, 1.0f, 1e6f};
         std::vector<ProbeVolume> volumes;
         for (size_t s = 0; s < scales.size(); ++s) {
             const std::string scene = file("room" + std::to_string(s) + ".glb");

@@ -73,7 +73,8 @@ struct CaptureConstants {
     vec4 probe;       // xyz: the probe's (or camera's) position; w: the probes' sphere radius
     uvec4 face;       // x: face 0..5 (sh/cubemap.h order), y: capture face size, z: sky face size,
                       // w: sun count
-    vec4 view;        // a camera's view: xy its size in pixels
+    vec4 view;        // xy: a camera's view's size in pixels; z: 1 to draw back faces a little
+                      // farther (captures and views, capture.vert), 0 for the shadow maps
 };
 
 SHPROBE_END

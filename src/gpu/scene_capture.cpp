@@ -593,7 +593,8 @@ void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, c
             const glsl::CaptureConstants constants{
                 faceProjection(face, positions[p], capture.nearPlane),
                 glm::vec4(glm::vec3(positions[p]), 1.0f),
-                glm::uvec4(face, n, capture.skyFaceSize, sunCount(capture))};
+                glm::uvec4(face, n, capture.skyFaceSize, sunCount(capture)),
+                glm::vec4(0.0f, 0.0f, 1.0f, 0.0f)};
             beginRenderPass(commands, capture.renderPass, target.framebuffers[6 * p + face], {n, n}, clears);
             vkCmdPushConstants(commands, capture.layout,
                                VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,

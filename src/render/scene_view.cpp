@@ -113,7 +113,7 @@ void recordSceneView(VkCommandBuffer commands, const SceneCapture& capture, cons
     const glsl::CaptureConstants constants{
         cameraProjection(camera, target.extent, capture.nearPlane), glm::vec4(glm::vec3(camera.eye), radius),
         glm::uvec4(SHPROBE_CAPTURE_CAMERA, 0u, capture.skyFaceSize, uint32_t(capture.suns.size())),
-        glm::vec4(float(target.extent.width), float(target.extent.height), 0.0f, 0.0f)};
+        glm::vec4(float(target.extent.width), float(target.extent.height), 1.0f, 0.0f)};
     const VkClearValue clears[2] = {{}, {.depthStencil = {0.0f, 0}}};
     beginRenderPass(commands, capture.renderPass, target.framebuffer, target.extent, clears);
     vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, capture.layout, 0, 1, &capture.set, 0,
