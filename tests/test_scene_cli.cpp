@@ -272,6 +272,28 @@ TEST_F(SceneCommand, RealSceneBakes) {
     EXPECT_EQ(volume.probeCount(), 8u);
 }
 
+// --invalid-back-faces sets the share of back faces in a probe's view above which the probe is
+// invalid. Of the closed Cornell box's 27 probes, those in the room see no back face, and one lies
+// inside a block, whose open bottom shows it the floor's front: most of its view, not all, is back
+// faces. So it is invalid by default (0.5) and with 0 (any back face), valid with 0.99; a share
+// outside 0..1 is refused.
+TEST_F(SceneCommand, TheBackFaceShareForValidityIsAnOption) {
+    const std::string scene = cornellBox();
+    auto invalidAt = [&](const std::string& share) {
+        runOk({"scene", scene, "--grid", "3,3,3", "--face-size", "8", "--bounces", "0",
+               "--invalid-back-faces", share, "-q", "-o", file("v.shpv")});
+        const ProbeVolume volume = readProbeVolume(file("v.shpv"));
+        return std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0));
+    };
+    EXPECT_EQ(invalidAt("0.5"), 1);
+    EXPECT_EQ(invalidAt("0"), 1);
+    EXPECT_EQ(invalidAt("0.99"), 0);
+    expectFailure({{"scene", scene, "--grid", "2,2,2", "--invalid-back-faces", "1.5", "-o", "OUT"},
+                   2,
+                   {"--invalid-back-faces"},
+                   "out.shpv"});
+}
+
 // `shprobe render --scene` draws the scene lit by its volume: the surfaces reflect the volume's
 // irradiance (the Cornell box's walls are lit, so the picture is not black), and --show-probes adds
 // the probes' spheres (the picture changes). A brick is refused, and so are --scene without

@@ -136,10 +136,11 @@ struct SceneOptions {
     std::optional<BrickOption> brick; // I/N: one brick of the grid, one bounce
     std::string previous;             // the previous bounce's whole volume
     uint32_t probesPerBatch = 32;
-    std::string backend = "auto"; // auto | gpu (rasterized captures) | cpu (rays: scene/ray_bake.h)
-    int raysPerTexel = 0;         // cpu: 0 is 4; gpu: one, at the texel's centre
-    double cacheSpacing = 0.0;    // cpu: 0 is the world's diagonal / 64
-    int gatherRays = 64;          // cpu: per cache point
+    std::string backend = "auto";  // auto | gpu (rasterized captures) | cpu (rays: scene/ray_bake.h)
+    int raysPerTexel = 0;          // cpu: 0 is 4; gpu: one, at the texel's centre
+    double cacheSpacing = 0.0;     // cpu: 0 is the world's diagonal / 64
+    int gatherRays = 64;           // cpu: per cache point
+    double invalidBackFaces = 0.5; // a probe is invalid where more of its view meets back faces
     std::string device;
     bool validation = false;
     bool quiet = false;

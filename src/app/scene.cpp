@@ -70,6 +70,12 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                     "(lavapipe), else gpu")
         ->check(CLI::IsMember({"auto", "gpu", "cpu"}))
         ->capture_default_str();
+    command
+        .add_option("--invalid-back-faces", options.invalidBackFaces,
+                    "A probe is invalid (inside geometry) where more than this fraction of its view "
+                    "meets back faces")
+        ->check(numberFrom(0.0, 1.0))
+        ->capture_default_str();
     addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
                    "gpu: probes captured per command buffer", 1, 4096);
     addRangeOption(command, "--rays-per-texel", options.raysPerTexel,
@@ -124,9 +130,11 @@ std::vector<std::string> sceneInputs(const std::string& scene, const std::string
 
 namespace {
 
-// A probe sees mostly back faces when more than half of its texels do: it is inside something.
-bool insideGeometry(uint32_t backFaceTexels, int faceSize) {
-    return 2 * uint64_t(backFaceTexels) > 6 * uint64_t(faceSize) * uint64_t(faceSize);
+// A probe is inside something when more than the --invalid-back-faces fraction of its texels see
+// back faces (half, by default: a probe in a room sees none, one inside a wall nearly all).
+bool insideGeometry(uint32_t backFaceTexels, const SceneOptions& options) {
+    return double(backFaceTexels) >
+           options.invalidBackFaces * 6.0 * double(options.faceSize) * options.faceSize;
 }
 
 int cpuRaysPerTexel(const SceneOptions& options) {
@@ -141,7 +149,10 @@ ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
 // What decides the probes' values besides the grid, order and bounces: bricks merge only when it
 // is the same.
 std::string bakeSettings(const SceneOptions& options, const std::string& backend, const Environment& sky) {
-    nlohmann::json settings{{"backend", backend}, {"face_size", options.faceSize}, {"sky", sky.description}};
+    nlohmann::json settings{{"backend", backend},
+                            {"face_size", options.faceSize},
+                            {"invalid_back_faces", options.invalidBackFaces},
+                            {"sky", sky.description}};
     if (backend == "cpu") {
         settings["rays_per_texel"] = cpuRaysPerTexel(options);
         settings["cache_spacing"] = options.cacheSpacing;
@@ -204,7 +215,7 @@ ProbeVolume volumeOf(const std::vector<Probe>& probes, const SceneOptions& optio
     volume.irradiance.assign(probes.size() * perProbe, glm::vec3(0.0f));
     volume.valid.assign(probes.size(), 0);
     for (size_t p = 0; p < probes.size(); ++p) {
-        if (insideGeometry(probes[p].backFaceTexels, options.faceSize)) continue;
+        if (insideGeometry(probes[p].backFaceTexels, options)) continue;
         volume.valid[p] = 1;
         for (size_t i = 0; i < perProbe; ++i) {
             volume.radiance[p * perProbe + i] = glm::vec3(probes[p].radiance.rgb[i]);
@@ -400,7 +411,8 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                 grid.counts.x, grid.counts.y, grid.counts.z,
                 options.brick ? ("brick " + options.brick->text).c_str() : "whole", options.order,
                 options.faceSize, volume.bounces);
-    std::printf("invalid  %zu inside geometry (more than half of their view is back faces)\n", inside);
+    std::printf("invalid  %zu inside geometry (more than %g of their view is back faces)\n", inside,
+                options.invalidBackFaces);
     const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
     if (backend.context) {
         std::printf("backend  gpu: %s%s\n", backend.context->info.name.c_str(), reason.c_str());
