@@ -141,6 +141,7 @@ struct SceneOptions {
     double cacheSpacing = 0.0;     // cpu: 0 is the world's diagonal / 64
     int gatherRays = 64;           // cpu: per cache point
     double invalidBackFaces = 0.5; // a probe is invalid where more of its view meets back faces
+    bool dilate = true;            // cpu: invalid probes filled from their valid neighbours
     std::string device;
     bool validation = false;
     bool quiet = false;

@@ -16,11 +16,13 @@
 #include "scene/gltf_scene.h"
 #include "scene/probe_grid.h"
 #include "scene/ray_bake.h"
+#include "sh/irradiance.h"
 #include "sh/lights.h"
 #include "vk/context.h"
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -76,6 +78,8 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                     "meets back faces")
         ->check(numberFrom(0.0, 1.0))
         ->capture_default_str();
+    command.add_flag("!--no-dilation", options.dilate,
+                     "cpu: leave invalid probes empty, not filled from their valid neighbours");
     addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
                    "gpu: probes captured per command buffer", 1, 4096);
     addRangeOption(command, "--rays-per-texel", options.raysPerTexel,
@@ -157,6 +161,7 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
         settings["rays_per_texel"] = cpuRaysPerTexel(options);
         settings["cache_spacing"] = options.cacheSpacing;
         settings["gather_rays"] = options.gatherRays;
+        settings["dilation"] = options.dilate;
     }
     return settings.dump();
 }
@@ -273,23 +278,107 @@ RayBakeOptions rayBakeOptions(const SceneOptions& options) {
 
 // Every bounce of probes [range.begin, range.end) by rays: the surfaces' cache is gathered where
 // these probes need it, so a brick is exactly its part of the whole bake.
+// A probe still invalid is filled from its valid neighbours (Unity's dilation): the mean of the
+// probes of its 3 x 3 x 3 block that are valid, weighed by the inverse of their distance in cells,
+// made valid, and given a visibility map that hides nothing (its own saw only the inside of a
+// wall). A brick bakes the neighbours it lacks, so that it is exactly its part of the whole bake.
+struct Dilation {
+    std::vector<uint32_t> probes; // flat indices of the probes filled
+};
+
+Dilation dilateInvalidProbes(RayBaker& baker, const SceneOptions& options, const ProbeGrid& grid,
+                             ProbeRange range, std::vector<RayBakedProbe>& probes) {
+    auto invalid = [&](const RayBakedProbe& probe) { return insideGeometry(probe.backFaceTexels, options); };
+    auto neighbours = [&](uint32_t index, const auto& visit) {
+        const glm::ivec3 cell = probeCell(grid, index);
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const glm::ivec3 next = cell + glm::ivec3(dx, dy, dz);
+                    if ((dx | dy | dz) == 0 || glm::any(glm::lessThan(next, glm::ivec3(0))) ||
+                        glm::any(glm::greaterThanEqual(next, grid.counts)))
+                        continue;
+                    visit(probeIndex(grid, next), std::sqrt(double(dx * dx + dy * dy + dz * dz)));
+                }
+    };
+    std::map<uint32_t, size_t> outside; // neighbours beyond the range, by flat index
+    std::vector<glm::dvec3> outsidePositions;
+    for (uint32_t p = range.begin; p < range.end; ++p) {
+        if (!invalid(probes[p - range.begin])) continue;
+        neighbours(p, [&](uint32_t q, double) {
+            if ((q >= range.begin && q < range.end) || outside.count(q)) return;
+            outside[q] = outsidePositions.size();
+            outsidePositions.push_back(probePosition(grid, probeCell(grid, q)));
+        });
+    }
+    const std::vector<RayBakedProbe> extra = baker.bakeProbes(outsidePositions);
+    auto probeAt = [&](uint32_t q) -> const RayBakedProbe& {
+        return q >= range.begin && q < range.end ? probes[q - range.begin] : extra[outside.at(q)];
+    };
+    std::vector<RayBakedProbe> filled = probes;
+    Dilation dilation;
+    for (uint32_t p = range.begin; p < range.end; ++p) {
+        RayBakedProbe& probe = filled[p - range.begin];
+        if (!invalid(probe)) continue;
+        double weights = 0.0;
+        ShCoefficients radiance = makeCoefficients(options.order, Quantity::Radiance);
+        neighbours(p, [&](uint32_t q, double distance) {
+            const RayBakedProbe& neighbour = probeAt(q);
+            if (invalid(neighbour)) return;
+            for (size_t i = 0; i < radiance.rgb.size(); ++i)
+                radiance.rgb[i] += neighbour.radiance.rgb[i] / distance;
+            weights += 1.0 / distance;
+        });
+        if (weights == 0.0) continue;
+        for (glm::dvec3& coefficient : radiance.rgb)
+            coefficient /= weights;
+        probe.radiance = radiance;
+        probe.irradiance = convolveIrradiance(radiance);
+        dilation.probes.push_back(p);
+    }
+    probes = std::move(filled);
+    return dilation;
+}
+
+// Every bounce of probes [range.begin, range.end) by rays: the surfaces' cache is gathered where
+// these probes need it, so a brick is exactly its part of the whole bake.
+// What a ray bake reports besides its volume.
+struct RayBakeReport {
+    RayBakeCounts counts;
+    size_t filled = 0; // invalid probes filled from their neighbours
+};
+
 ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
-                       const ProbeGrid& grid, ProbeRange range, RayBakeCounts& counts) {
+                       const ProbeGrid& grid, ProbeRange range, RayBakeReport& report) {
     const SplitSky split = splitSceneSky(sky);
     RayBakeOptions bakeOptions = rayBakeOptions(options);
     bakeOptions.skySuns = split.suns;
     RayBaker baker(world, split.residual, bakeOptions);
     BakeProgressLine line(range.end - range.begin, options.quiet);
-    const std::vector<RayBakedProbe> probes = baker.bakeProbes(probePositions(grid, range), [&](size_t done) {
+    std::vector<RayBakedProbe> probes = baker.bakeProbes(probePositions(grid, range), [&](size_t done) {
         const RayBakeCounts sofar = baker.counts();
         line.update(done, sofar.probeRays + sofar.cacheRays);
     });
-    counts = baker.counts();
+    const Dilation dilation =
+        options.dilate ? dilateInvalidProbes(baker, options, grid, range, probes) : Dilation{};
+    report = {baker.counts(), dilation.probes.size()};
     ProbeVolume volume = volumeOf(probes, options, grid, range);
     volume.bounces = options.bounces;
     volume.visibilitySize = bakeOptions.visibilitySize;
     for (const RayBakedProbe& probe : probes)
         volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
+    const size_t perProbe = size_t(options.order) * options.order;
+    const size_t texels = size_t(bakeOptions.visibilitySize) * bakeOptions.visibilitySize;
+    const float far = glm::length(world.boundsMax - world.boundsMin);
+    for (uint32_t p : dilation.probes) {
+        const size_t k = p - range.begin;
+        volume.valid[k] = 1;
+        for (size_t i = 0; i < perProbe; ++i) {
+            volume.radiance[k * perProbe + i] = glm::vec3(probes[k].radiance.rgb[i]);
+            volume.irradiance[k * perProbe + i] = glm::vec3(probes[k].irradiance.rgb[i]);
+        }
+        std::fill_n(volume.visibility.begin() + ptrdiff_t(k * texels), texels, glm::vec2(far, far * far));
+    }
     return volume;
 }
 
@@ -394,7 +483,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason +
                                           "), where --brick bakes one bounce; --bounces is for whole bakes");
     const std::string settings = bakeSettings(options, backend.name, sky);
-    RayBakeCounts rays;
+    RayBakeReport rays;
     ProbeVolume volume = backend.context
                              ? bakeOnGpu(*backend.context, world, sky, options, grid, range, settings)
                              : bakeByRays(world, sky, options, grid, range, rays);
@@ -404,7 +493,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;
     const double seconds = millisecondsSince(start) / 1000.0;
-    const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0));
+    const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0)) + rays.filled;
     std::printf("scene    %s\n", world.description.c_str());
     std::printf("sky      %s\n", sky.description.c_str());
     std::printf("probes   %u of a %dx%dx%d grid (%s), order %d, faces %d^2, bounce %d\n", volume.probeCount(),
@@ -418,9 +507,11 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         std::printf("backend  gpu: %s%s\n", backend.context->info.name.c_str(), reason.c_str());
     } else {
         std::printf("backend  cpu: rays, %d per texel, %llu cache points%s\n", cpuRaysPerTexel(options),
-                    (unsigned long long)rays.cachePoints, reason.c_str());
+                    (unsigned long long)rays.counts.cachePoints, reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
-                    double(rays.probeRays + rays.cacheRays), double(rays.probeRays), double(rays.cacheRays));
+                    double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
+                    double(rays.counts.cacheRays));
+        std::printf("filled   %zu invalid probes from their valid neighbours\n", rays.filled);
     }
     std::printf("wrote    %s in %.2f s\n", options.output.c_str(), seconds);
 }
