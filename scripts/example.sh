@@ -33,23 +33,30 @@
 # Last, INTERFACE.md's "Sources": every installed module's source is installed, and glslang, with the
 # options the document gives, compiles it into the installed module, byte for byte.
 # SHPROBE_BUILD_DIR picks the build to install (default ./build, built here if needed); the same
-# checks serve a -DBUILD_SHARED_LIBS=ON build.
+# checks serve a -DBUILD_SHARED_LIBS=ON build. SHPROBE_PREFIX=/usr checks what is installed there
+# instead (the Debian package, scripts/package.sh), with its own program; only the examples are built.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${SHPROBE_BUILD_DIR:-build}
 export VK_ICD_FILENAMES=${VK_ICD_FILENAMES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}
 
 bash scripts/install-deps.sh
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release > /dev/null
-cmake --build "$build" -j"$(nproc)"
-
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-cmake --install "$build" --prefix "$work/prefix" > /dev/null
-prefix=$work/prefix
+if [ -n "${SHPROBE_PREFIX:-}" ]; then
+  prefix=$SHPROBE_PREFIX
+  shprobe=$prefix/bin/shprobe
+  [ -x "$shprobe" ] || { echo "FAIL: no $shprobe: shprobe is not installed in $prefix"; exit 1; }
+else
+  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release > /dev/null
+  cmake --build "$build" -j"$(nproc)"
+  cmake --install "$build" --prefix "$work/prefix" > /dev/null
+  prefix=$work/prefix
+  shprobe=$build/shprobe
+fi
 
 # The package config finds only what the installed headers include, so none may include these.
-if grep -rlE '#include *[<"](OpenImageIO|nlohmann)/' "$prefix/include"; then
+if grep -rlE '#include *[<"](OpenImageIO|nlohmann)/' "$prefix/include/shprobe"; then
   echo "FAIL: installed headers include a private dependency"; exit 1
 fi
 
@@ -105,9 +112,9 @@ echo "== sky: the example against shprobe bake on the same texels"
 mkdir -p "$work/faces"
 "$example" --environment sky --face-size 128 --order 5 --write-faces "$work/faces" --validation | tee "$work/sky.txt"
 check_plan "$work/sky.txt"
-"$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 -o "$work/radiance.json" -q
-"$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 --irradiance -o "$work/irradiance.json" -q
-"$build/shprobe" bake "$work/faces/{face}.pfm" --order 5 --backend reference -o "$work/cpu.json" -q
+"$shprobe" bake "$work/faces/{face}.pfm" --order 5 -o "$work/radiance.json" -q
+"$shprobe" bake "$work/faces/{face}.pfm" --order 5 --irradiance -o "$work/irradiance.json" -q
+"$shprobe" bake "$work/faces/{face}.pfm" --order 5 --backend reference -o "$work/cpu.json" -q
 compare() { # tag, probe file, tolerance relative to the first coefficient
   paste -d ' ' <(rows "$1" "$work/sky.txt") <(json_rows "$2") | awk -v tag="$1" -v file="${2##*/}" -v tolerance="$3" '
     NR == 1 { for (c = 2; c <= 4; ++c) scale[c] = ($c < 0 ? -$c : $c) }
@@ -124,7 +131,7 @@ compare L "$work/cpu.json" 1e-5
 echo "== probe_reader: the C++ library through the package, built with CMake and with pkg-config"
 configure examples/probe_reader "$work/reader"
 cmake --build "$work/reader" > /dev/null
-PKG_CONFIG_PATH=$(dirname "$(find "$prefix" -name shprobe.pc)")
+PKG_CONFIG_PATH=$(dirname "$(find "$prefix"/lib* -path "*/pkgconfig/shprobe.pc")")
 export PKG_CONFIG_PATH
 libdir=$(pkg-config --variable=libdir shprobe)
 if [ -e "$libdir/libshprobe.so" ]; then # shared: the program finds the libraries by its RUNPATH
@@ -146,7 +153,7 @@ echo "== codec plugins: the installed program reads EXR and PFM through the inst
 # it, where its own name is no path to its folder.
 "$prefix/bin/shprobe" bake --format irradiance-equirect --map-size 32 -q -o "$work/sky.exr" > /dev/null
 { printf 'PF\n32 16\n-1.0\n'; head -c $((32 * 16 * 3 * 4)) /dev/zero; } > "$work/sky.pfm" # OpenImageIO's alone
-plugins=$(dirname "$(find "$(realpath "$prefix")" -name libshprobe_exr.so)")
+plugins=$(dirname "$(find "$(realpath "$prefix")"/lib* -name libshprobe_exr.so)")
 for input in sky.exr:exr sky.pfm:oiio; do
   file=$work/${input%%:*}
   plugin=libshprobe_${input##*:}.so
