@@ -434,6 +434,7 @@ uint64_t payloadBytes(const VolumeHeader& header) {
 template <class T>
 void readSection(const VolumeBytes& bytes, uint64_t& offset, std::vector<T>& out, size_t count) {
     out.resize(count);
+    if (count == 0) return; // an absent section: no bytes, and no buffer to copy them to
     bytes.read(offset, reinterpret_cast<char*>(out.data()), count * sizeof(T));
     offset += count * sizeof(T);
 }
