@@ -398,6 +398,36 @@ TEST_F(Cli, AutoBackendChoosesByJobAndDevice) {
     EXPECT_EQ(named.out.find("auto:"), std::string::npos) << named.out;
 }
 
+// `shprobe info` says what `bake` and `scene` run under auto, by the same rule and with the same
+// reason as the bake itself: the CPU at once for a small job; for a larger one on lavapipe the CPU
+// (a CPU device, or no GPU device file), as the large bake's summary says. Never "bake uses device
+// N" while the bake runs on the CPU.
+TEST_F(Cli, InfoSaysWhatAutoRuns) {
+    const std::string info = runOk({"info"}).out;
+    EXPECT_EQ(info.find("bake uses device"), std::string::npos) << info;
+    std::smatch bakeLine, sceneLine;
+    ASSERT_TRUE(std::regex_search(
+        info, bakeLine,
+        std::regex(R"(bake +--backend auto \(the default\): cpu for a job under ([0-9.]+)M )"
+                   R"(texels x coefficients.*; a larger one: cpu \((.*), where the CPU path )"
+                   R"(is faster\)\n)")))
+        << info;
+    const double cores = std::max(1u, std::thread::hardware_concurrency());
+    EXPECT_NEAR(std::stod(bakeLine[1]), 20.0 * cores, 0.5) << info; // 20 ms at 1e9 per core-second
+    ASSERT_TRUE(std::regex_search(info, sceneLine,
+                                  std::regex(R"(scene +--backend auto \(the default\): cpu \((.*)\)\n)")))
+        << info;
+    const std::string reason = bakeLine[2];
+    EXPECT_EQ(std::string(sceneLine[1]), reason) << info;
+
+    const double work = 4.0 * 2e7 * cores;
+    const int height = 16 * int(std::ceil(std::sqrt(work / 64.0 / 2.0) / 16.0));
+    writeImage(file("large.exr"), smoothEquirect(2 * height, height));
+    RunResult large = runOk({"bake", file("large.exr"), "--order", "8", "-q", "-o", file("large.json")});
+    EXPECT_CONTAINS(large.out,
+                    "backend  cpu: cpu (float, all cores) (auto: " + reason + ", where this path is faster)");
+}
+
 // ---- 3. Determinism ---------------------------------------------------------------------------
 
 // The same input baked twice on the GPU gives byte-identical coefficient rows in the file (the
@@ -761,11 +791,13 @@ TEST_F(Cli, FormatsHoldTheSameProbe) {
 // ---- 5. shprobe info --------------------------------------------------------------------------
 
 // `shprobe info` exits 0, lists the llvmpipe device with its subgroup size (LP_NATIVE_VECTOR_WIDTH
-// / 32 when that is set) and says the bake uses it.
+// / 32 when that is set) and says that `--backend gpu` uses it.
 TEST_F(Cli, InfoNamesTheDeviceAndItsSubgroupSize) {
     RunResult info = runOk({"info"});
     EXPECT_CONTAINS(info.out, "llvmpipe");
-    EXPECT_TRUE(std::regex_search(info.out, std::regex(R"(bake uses device \d+: llvmpipe)"))) << info.out;
+    EXPECT_TRUE(std::regex_search(
+        info.out, std::regex(R"(--backend gpu, --device, --validation: device \d+: llvmpipe)")))
+        << info.out;
     std::smatch match;
     ASSERT_TRUE(std::regex_search(info.out, match, std::regex(R"(subgroup size (\d+))"))) << info.out;
     int subgroupSize = std::stoi(match[1]);

@@ -38,6 +38,28 @@ std::string bytesOf(const std::string& path) {
     return readText(path);
 }
 
+// `shprobe info` says what `scene --backend auto` runs, and a scene bake under auto runs that, for
+// the reason info gives.
+TEST_F(SceneCommand, InfoSaysWhatAutoRuns) {
+    const RunResult info = run({"info"});
+    ASSERT_EQ(info.exitCode, 0) << describe(info);
+    const std::string marker = "scene    --backend auto (the default): ";
+    const size_t at = info.out.find(marker);
+    ASSERT_NE(at, std::string::npos) << info.out;
+    const std::string said =
+        info.out.substr(at + marker.size(), info.out.find('\n', at) - at - marker.size());
+    const RunResult bake =
+        run({"scene", cornellBox(), "--grid", "2,2,2", "--bounces", "0", "-o", file("auto.shpv")});
+    ASSERT_EQ(bake.exitCode, 0) << describe(bake);
+    if (said.starts_with("cpu (")) {
+        const std::string reason = said.substr(5, said.size() - 6);
+        EXPECT_CONTAINS(bake.out, "backend  cpu: ");
+        EXPECT_CONTAINS(bake.out, "(auto: " + reason + ")");
+    } else {
+        EXPECT_CONTAINS(bake.out, "backend  gpu: ");
+    }
+}
+
 // On the gpu backend, bricks bake one bounce each: bounce 0 in three bricks, merged, must be the whole
 // bounce-0 bake byte for byte (each probe's capture and bake do not depend on which probes share its batch);
 // so must bounce 1 in bricks reading the merged bounce 0 (--previous), against the whole --bounces 1 bake.

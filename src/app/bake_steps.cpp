@@ -135,30 +135,43 @@ Backend gpuBackend(std::unique_ptr<GpuSession> session) {
     return Backend{"gpu", "", std::move(session)};
 }
 
+std::string cpuReasonWithoutVulkan() {
+    return mayHaveGpu() ? "" : "no GPU device file: any Vulkan device here is a CPU";
+}
+
+std::string cpuReasonForDevice(const DeviceInfo* device) {
+    if (!device) return "no usable Vulkan device";
+    if (device->type == VK_PHYSICAL_DEVICE_TYPE_CPU)
+        return "the Vulkan device is a CPU (" + device->name + ")";
+    return "";
+}
+
+double smallJobWork() {
+    return kVulkanStartSeconds * kCpuWorkPerCoreSecond * std::max(1u, std::thread::hardware_concurrency());
+}
+
 Backend chooseBackend(const BakeOptions& options, double work) {
     if (requestsVulkan(options)) return gpuBackend(std::make_unique<GpuSession>(options));
     Backend backend{options.backend, "", nullptr};
     if (options.backend == "cpu" || options.backend == "reference") return backend;
     backend.name = "cpu";
-    double cpuSeconds = work / (kCpuWorkPerCoreSecond * std::max(1u, std::thread::hardware_concurrency()));
-    if (cpuSeconds < kVulkanStartSeconds) {
+    if (work < smallJobWork()) {
         backend.reason = "a job this small is done on the CPU before Vulkan could start";
         return backend;
     }
-    if (!mayHaveGpu()) {
-        backend.reason = "no GPU device file: any Vulkan device here is a CPU, where this path is faster";
+    if (std::string reason = cpuReasonWithoutVulkan(); !reason.empty()) {
+        backend.reason = reason + ", where this path is faster";
         return backend;
     }
     try {
         backend.session = std::make_unique<GpuSession>(options);
     } catch (const Error& error) {
         if (error.kind() != ErrorKind::Device) throw;
-        backend.reason = "no usable Vulkan device"; // `--backend gpu` says why in full
+        backend.reason = cpuReasonForDevice(nullptr); // `--backend gpu` says why in full
         return backend;
     }
-    const DeviceInfo& device = backend.session->context().info;
-    if (device.type == VK_PHYSICAL_DEVICE_TYPE_CPU) {
-        backend.reason = "the Vulkan device is a CPU (" + device.name + "), where this path is faster";
+    if (std::string reason = cpuReasonForDevice(&backend.session->context().info); !reason.empty()) {
+        backend.reason = reason + ", where this path is faster";
         backend.session->finish();
         backend.session.reset();
         return backend;

@@ -74,6 +74,15 @@ struct Backend {
 // CPU (lavapipe: the fast CPU path projects faster than llvmpipe runs the shaders), or when no
 // Vulkan device can be used; Vulkan on a GPU. With --device or --validation auto means gpu.
 Backend chooseBackend(const BakeOptions& options, double work);
+// The work (texels x coefficients, all inputs) under which auto bakes on the CPU at once: what the
+// fast CPU path does on this machine's cores in less time than a Vulkan start-up takes.
+double smallJobWork();
+// auto's rule on the machine, the same for `bake` and `scene` (and what `info` reports): the CPU
+// where no GPU device file is (known before Vulkan starts: cpuReasonWithoutVulkan), where no Vulkan
+// device can be used or the device is a CPU (cpuReasonForDevice; `device`: the one a context would
+// use, nullptr where none is usable); else the GPU. Each returns why the CPU, or "" for the GPU.
+std::string cpuReasonWithoutVulkan();
+std::string cpuReasonForDevice(const DeviceInfo* device);
 // Whether a Vulkan device here may be a GPU: false where none can be (then any is a CPU, where the
 // CPU paths are faster), without starting Vulkan.
 bool mayHaveGpu();

@@ -395,17 +395,17 @@ struct SceneBackend {
 SceneBackend chooseSceneBackend(const SceneOptions& options) {
     const bool asksForVulkan = !options.device.empty() || options.validation || !options.previous.empty();
     if (options.backend == "cpu") return {"cpu", "", std::nullopt};
-    if (options.backend == "auto" && !asksForVulkan && !mayHaveGpu())
-        return {"cpu", "no GPU device file: any Vulkan device here is a CPU", std::nullopt};
+    const bool automatic = options.backend == "auto" && !asksForVulkan;
+    if (std::string reason = automatic ? cpuReasonWithoutVulkan() : ""; !reason.empty())
+        return {"cpu", reason, std::nullopt};
     Context context;
     try {
         context = createGraphicsContext(options.device, options.validation);
     } catch (const Error& error) {
-        if (options.backend != "auto" || asksForVulkan || error.kind() != ErrorKind::Device) throw;
-        return {"cpu", "no usable Vulkan device", std::nullopt};
+        if (!automatic || error.kind() != ErrorKind::Device) throw;
+        return {"cpu", cpuReasonForDevice(nullptr), std::nullopt};
     }
-    if (options.backend == "auto" && !asksForVulkan && context.info.type == VK_PHYSICAL_DEVICE_TYPE_CPU) {
-        std::string reason = "the Vulkan device is a CPU (" + context.info.name + ")";
+    if (std::string reason = automatic ? cpuReasonForDevice(&context.info) : ""; !reason.empty()) {
         destroyContext(context);
         return {"cpu", reason, std::nullopt};
     }

@@ -217,11 +217,6 @@ std::vector<DeviceInfo> describeDevices(const std::vector<VkPhysicalDevice>& phy
     return devices;
 }
 
-std::string requestedDevice(const ContextOptions& options) {
-    const char* fromEnvironment = std::getenv("SHPROBE_DEVICE");
-    return options.device.empty() && fromEnvironment ? fromEnvironment : options.device;
-}
-
 VkDevice createLogicalDevice(VkPhysicalDevice physicalDevice, uint32_t queueFamily,
                              const std::vector<std::string>& extensions) {
     std::vector<const char*> names;
@@ -403,6 +398,11 @@ const DeviceInfo& pickDevice(const std::vector<DeviceInfo>& devices, const std::
     for (const DeviceInfo& device : devices)
         reasons += (reasons.empty() ? "" : "; ") + device.name + ": " + device.unsupportedReason;
     throw Error(ErrorKind::Device, "no usable Vulkan device (" + reasons + ")" + kCpuBackendHint);
+}
+
+std::string requestedDevice(const ContextOptions& options) {
+    const char* fromEnvironment = std::getenv("SHPROBE_DEVICE");
+    return options.device.empty() && fromEnvironment ? fromEnvironment : options.device;
 }
 
 std::vector<DeviceInfo> listDevices(const ContextOptions& options) {

@@ -114,6 +114,9 @@ void destroyContext(Context& context);
 // Every physical device with its properties, for `shprobe info` and device selection.
 std::vector<DeviceInfo> listDevices(const ContextOptions& options);
 
+// The device the options ask for: ContextOptions::device, else SHPROBE_DEVICE, else "" (the best).
+std::string requestedDevice(const ContextOptions& options);
+
 // The device to use: the one `request` names (an index or a part of the name; see ContextOptions)
 // or else the best usable one. Throws Error(Device) when there is none, or when the one requested
 // or every one cannot be used, naming each device and what it lacks: the run is refused, and the
