@@ -348,6 +348,50 @@ TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
     }
 }
 
+// The pipeline cache's folder: $XDG_CACHE_HOME/shprobe when XDG_CACHE_HOME is an absolute path, else
+// $HOME/.cache/shprobe when HOME is a folder that exists. A missing home is never created (the
+// cache made ~/.cache/shprobe, and with it HOME, where HOME did not exist): the bake runs without a
+// cache after one warning line. A relative XDG_CACHE_HOME is ignored.
+TEST_F(Reliability, PipelineCacheFollowsXdgAndNeverMakesAHome) {
+    const std::vector<std::string> bake = {"bake", "--backend", "gpu", "--face-size",
+                                           "4",    "-q",        "-o",  file("probe.json")};
+    const std::string missingHome = file("nonexistent/x");
+    RunResult homeless = run(bake, {.environment = {{"HOME", missingHome},
+                                                    {"XDG_CACHE_HOME", std::nullopt},
+                                                    {"SHPROBE_CACHE_DIR", std::nullopt}}});
+    EXPECT_EQ(homeless.exitCode, 0) << describe(homeless);
+    EXPECT_EQ(linesOf(homeless.err).size(), 1u) << homeless.err;
+    EXPECT_CONTAINS(homeless.err, "shprobe: warning: pipeline cache not used: no folder for it");
+    EXPECT_CONTAINS(homeless.err, "HOME (" + missingHome + ") is not a folder");
+    EXPECT_FALSE(fs::exists(file("nonexistent"))) << "the bake created the missing home's parent";
+    EXPECT_NO_THROW(readProbeFile(file("probe.json")));
+
+    const std::string xdg = file("xdg");
+    RunResult withXdg =
+        run(bake, {.environment = {
+                       {"HOME", missingHome}, {"XDG_CACHE_HOME", xdg}, {"SHPROBE_CACHE_DIR", std::nullopt}}});
+    EXPECT_EQ(withXdg.exitCode, 0) << describe(withXdg);
+    EXPECT_EQ(withXdg.err, "") << describe(withXdg);
+    ASSERT_TRUE(fs::is_directory(xdg + "/shprobe"));
+    const std::vector<std::string> cached = entriesOf(xdg + "/shprobe");
+    ASSERT_EQ(cached.size(), 1u);
+    EXPECT_EQ(cached[0].rfind("pipelines-", 0), 0u) << cached[0];
+    EXPECT_FALSE(fs::exists(file("nonexistent")));
+
+    const std::string home = file("home");
+    fs::create_directories(home);
+    fs::create_directories(file("work"));
+    RunResult relative = run(
+        bake,
+        {.environment = {{"HOME", home}, {"XDG_CACHE_HOME", "relative"}, {"SHPROBE_CACHE_DIR", std::nullopt}},
+         .workingFolder = file("work")});
+    EXPECT_EQ(relative.exitCode, 0) << describe(relative);
+    EXPECT_EQ(relative.err, "") << describe(relative);
+    EXPECT_EQ(entriesOf(home + "/.cache/shprobe").size(), 1u);
+    // (Mesa's own shader cache may take the relative folder: only shprobe's is checked.)
+    EXPECT_FALSE(fs::exists(file("work/relative/shprobe")));
+}
+
 // Every number option is refused at parse time unless finite and in its range, with a short line
 // that says what is allowed.
 TEST_F(Reliability, NumberOptionsMustBeFiniteAndInRange) {

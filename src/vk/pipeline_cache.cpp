@@ -27,19 +27,36 @@ bool headerMatches(const std::string& data, const VkPhysicalDeviceProperties& pr
            std::memcmp(header.pipelineCacheUUID, properties.pipelineCacheUUID, VK_UUID_SIZE) == 0;
 }
 
-std::string cacheFolder() {
-    if (const char* dir = std::getenv("SHPROBE_CACHE_DIR"); dir && *dir) return dir;
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/shprobe";
-    if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/shprobe";
-    return {};
-}
-
 // A cache is only an optimization: what is wrong with it is said once, and the run goes on.
 void warnOnce(const std::string& problem) {
     static bool warned = false;
     if (warned) return;
     warned = true;
     std::fprintf(stderr, "shprobe: warning: pipeline cache not used: %s\n", problem.c_str());
+}
+
+bool isFolder(const char* path) {
+    struct stat status {};
+    return stat(path, &status) == 0 && S_ISDIR(status.st_mode);
+}
+
+// SHPROBE_CACHE_DIR as given; else $XDG_CACHE_HOME/shprobe where that is an absolute path (the XDG
+// Base Directory rule: a relative one is ignored); else $HOME/.cache/shprobe where $HOME is a folder
+// that exists, since a cache must never create a missing home. Else "", with one warning.
+std::string cacheFolder() {
+    if (const char* dir = std::getenv("SHPROBE_CACHE_DIR"); dir && *dir) return dir;
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg == '/')
+        return std::string(xdg) + "/shprobe";
+    const char* home = std::getenv("HOME");
+    if (home && *home == '/' && isFolder(home)) return std::string(home) + "/.cache/shprobe";
+    const char* xdg = std::getenv("XDG_CACHE_HOME");
+    warnOnce(std::string("no folder for it: ") +
+             (xdg && *xdg ? "XDG_CACHE_HOME (" + std::string(xdg) + ") is not an absolute path"
+                          : "XDG_CACHE_HOME is not set") +
+             " and " +
+             (home && *home ? "HOME (" + std::string(home) + ") is not a folder" : "HOME is not set") +
+             "; set XDG_CACHE_HOME or SHPROBE_CACHE_DIR to keep compiled shaders between runs");
+    return {};
 }
 
 // Real caches are a few megabytes at most (lavapipe's: a 32-byte header).

@@ -7,9 +7,10 @@
 
 namespace shprobe {
 
-// The cache file for this device: $SHPROBE_CACHE_DIR, else $XDG_CACHE_HOME/shprobe, else
-// $HOME/.cache/shprobe, then "pipelines-<pipelineCacheUUID>.bin". Empty when none of the three is
-// set (no cache on disk then).
+// The cache file for this device: $SHPROBE_CACHE_DIR, else $XDG_CACHE_HOME/shprobe (an absolute
+// path), else $HOME/.cache/shprobe (HOME an existing folder: a missing home is never created), then
+// "pipelines-<pipelineCacheUUID>.bin". Empty, after one warning line on stderr, when none can be
+// used (no cache on disk then).
 std::string pipelineCachePath(const Device& device);
 
 // A cache holding the file's data when it was written for this device (same vendor, device and
