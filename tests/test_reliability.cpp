@@ -348,6 +348,36 @@ TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
     }
 }
 
+// A sun (bake --extract-sun, or a probe file that has one) is kept or refused, never dropped without
+// a word: json keeps it; binary, whose header has no place for it, is refused like the headers and
+// engine formats, in one line that says so and names the format that holds it. The advice names
+// only what the program can do (no `shprobe light` adds a sun back).
+TEST_F(Reliability, SunIsKeptOrRefusedNeverDropped) {
+    for (const std::string& output : {"probe.bin", "probe.h", "probe.unity.json"}) {
+        const bool byName = output != "probe.bin";
+        std::vector<std::string> args = {"bake", "--face-size", "16", "--extract-sun", "-q", "-o", "OUT"};
+        if (!byName) args.insert(args.end(), {"--format", "binary"});
+        expectFailure({args, 2, {"--extract-sun", "cannot hold the sun", "--format json"}, output});
+    }
+    expectFailure({{"bake", "--face-size", "16", "--extract-sun", "-q", "-o", "OUT"},
+                   2,
+                   {"--format binary cannot hold the sun", "--format json"},
+                   "probe.bin"});
+
+    runOk({"bake", "--extract-sun", "-q", "-o", file("sun.json")}); // the built-in sky's sun
+    ASSERT_TRUE(readProbe(file("sun.json")).sun.has_value());
+    for (const std::string& format : {"binary", "cpp", "godot"}) {
+        SCOPED_TRACE(format);
+        RunResult refused = run({"convert", file("sun.json"), "--format", format, "-o", file("out")});
+        expectMessage({{}, 2, {"sun.json has a sun", "--format " + format + " cannot hold", "--format json"}},
+                      refused);
+        EXPECT_EQ(refused.err.find("shprobe light"), std::string::npos) << refused.err;
+        EXPECT_FALSE(fs::exists(file("out")));
+    }
+    runOk({"convert", file("sun.json"), "--format", "json", "-o", file("copy.json")});
+    EXPECT_TRUE(readProbe(file("copy.json")).sun.has_value());
+}
+
 // The pipeline cache's folder: $XDG_CACHE_HOME/shprobe when XDG_CACHE_HOME is an absolute path, else
 // $HOME/.cache/shprobe when HOME is a folder that exists. A missing home is never created (the
 // cache made ~/.cache/shprobe, and with it HOME, where HOME did not exist): the bake runs without a

@@ -331,7 +331,7 @@ void checkFormatOptions(const BakeOptions& options) {
     if (options.extractSun && format.sun == SunHandling::Refused)
         throw Error(ErrorKind::Input,
                     "--extract-sun: --format " + options.format +
-                        " holds the coefficients only and would drop the sun; use --format json");
+                        " cannot hold the sun; use --format json, which keeps it beside the coefficients");
     if (options.format == "irradiance-equirect" && options.mapSize % 2 != 0)
         throw Error(ErrorKind::Input, "--map-size: an equirect map's width must be even");
 }

@@ -31,7 +31,8 @@ void checkProbeFits(const Probe& probe, const ExportFormat& format, const std::s
     if (probe.sun && format.sun == SunHandling::Refused)
         throw Error(ErrorKind::Input,
                     input + " has a sun beside its coefficients, which --format " + format.name +
-                        " would drop; add it back first (shprobe light) or use --format json");
+                        " cannot hold; use --format json, or bake again without --extract-sun to keep "
+                        "the sun in the coefficients");
     if (probe.coefficients.order > format.maxOrder && format.maxOrder < 3)
         throw Error(ErrorKind::Input, "--format " + std::string(format.name) + " holds orders 1 to " +
                                           std::to_string(format.maxOrder));

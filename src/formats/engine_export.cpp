@@ -378,7 +378,7 @@ constexpr ExportFormat kFormats[] = {
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeProbeFile(path, probe, options.metadata);
      }},
-    {"binary", ".bin", OutputContent::Binary, SunHandling::Dropped, kMaxOrder,
+    {"binary", ".bin", OutputContent::Binary, SunHandling::Refused, kMaxOrder,
      "packed float32, docs/formats.md", NumberType::Float, coefficientNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions&) {
          writeBinaryProbes(path, std::span(&probe, 1));

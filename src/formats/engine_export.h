@@ -29,8 +29,8 @@ struct ExportOptions {
 // What a format does with the sun of --extract-sun (or of a probe file that has one).
 enum class SunHandling {
     Written, // json: beside the coefficients
-    Dropped, // binary, the irradiance maps: the coefficients (or their drawing) only
-    Refused, // the headers and engine formats: asking for a sun they would drop is an error
+    Dropped, // the irradiance maps: the drawing of the coefficients only
+    Refused, // binary, the headers and engine formats: asking for a sun they would drop is an error
 };
 
 // What a format stores each of its numbers as.
