@@ -642,14 +642,13 @@ TEST(VulkanErrors, DeviceLostNamesTheResultTheCallAndTheStep) {
     EXPECT_CONTAINS(message, "VK_ERROR_DEVICE_LOST (-4)");
     EXPECT_CONTAINS(message, "VK_ERROR_DEVICE_LOST failed"); // the call's text
     EXPECT_CONTAINS(message, "while baking sky.exr: projecting the environment");
-    EXPECT_CONTAINS(message, "tests/test_bad_inputs.cpp:");
+    EXPECT_EQ(message.find(".cpp"), std::string::npos) << "a source file in a user's message: " << message;
     EXPECT_CONTAINS(message, "device was lost");
     EXPECT_EQ(deviceErrorOf(lost).find("while"), std::string::npos);
 
-    std::string submit = vkErrorMessage(VK_ERROR_DEVICE_LOST, "vkQueueSubmit(queue, 1, &submit, fence)",
-                                        "/build/shprobe/src/gpu/host_bake.cpp", 120);
-    EXPECT_CONTAINS(submit, "vkQueueSubmit(queue, 1, &submit, fence) failed with VK_ERROR_DEVICE_LOST (-4) "
-                            "(src/gpu/host_bake.cpp:120): the Vulkan device was lost");
+    std::string submit = vkErrorMessage(VK_ERROR_DEVICE_LOST, "vkQueueSubmit(queue, 1, &submit, fence)");
+    EXPECT_CONTAINS(submit, "vkQueueSubmit(queue, 1, &submit, fence) failed with VK_ERROR_DEVICE_LOST (-4): "
+                            "the Vulkan device was lost");
 }
 
 TEST(VulkanErrors, OutOfMemoryIsSaidInWords) {

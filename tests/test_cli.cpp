@@ -1181,6 +1181,8 @@ TEST_F(CliFailures, BrokenDriverListIsNamed) {
         EXPECT_CONTAINS(result.err, "--backend cpu");
         EXPECT_EQ(result.err.find("--face-size"), std::string::npos) << result.err;
         EXPECT_EQ(result.err.find("out of host memory; try"), std::string::npos) << result.err;
+        EXPECT_EQ(result.err.find(".cpp"), std::string::npos)
+            << "a source file in the message: " << result.err;
     };
 
     for (const std::string& list :
@@ -1201,6 +1203,17 @@ TEST_F(CliFailures, BrokenDriverListIsNamed) {
                                    {"VK_LOADER_DEBUG", std::nullopt},
                                    {"SHPROBE_VALIDATION", "1"}};
     expectDriverListError(gpuCommands[0], driverFiles, "VK_DRIVER_FILES=" + file("garbage.json"));
+    // SHPROBE_DEBUG=1 adds the failed call's place in the source, on a line of its own.
+    EnvironmentChanges debug = driverFiles;
+    debug["SHPROBE_DEBUG"] = "1";
+    RunResult debugged = run(gpuCommands[0], debug);
+    EXPECT_EQ(debugged.exitCode, 4) << describe(debugged);
+    const std::vector<std::string> debugLines = linesOf(debugged.err);
+    ASSERT_EQ(debugLines.size(), 2u) << debugged.err;
+    EXPECT_TRUE(std::regex_search(
+        debugLines[0], std::regex(R"(^shprobe: debug: vkCreateInstance failed at src/vk/context\.cpp:\d+$)")))
+        << debugged.err;
+    EXPECT_TRUE(startsWith(debugLines[1], "shprobe: error: ")) << debugged.err;
 
     // A list the loader copes with (lavapipe and a missing manifest) bakes under validation.
     const char* lavapipe = std::getenv("VK_ICD_FILENAMES");

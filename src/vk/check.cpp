@@ -1,5 +1,6 @@
 #include "vk/check.h"
 
+#include <cstdio>
 #include <cstdlib>
 #include <string_view>
 #include <vector>
@@ -140,17 +141,18 @@ DeviceStep::~DeviceStep() {
     deviceSteps.pop_back();
 }
 
-std::string vkErrorMessage(VkResult result, const char* call, const char* file, int line) {
+std::string vkErrorMessage(VkResult result, const char* call) {
     std::string message =
         std::string(call) + " failed with " + vkResultName(result) + " (" + std::to_string(int(result)) + ")";
     std::string steps = currentSteps();
     if (!steps.empty()) message += " while " + steps;
-    return message + " (" + sourcePath(file) + ":" + std::to_string(line) + ")" +
-           explanation(result, currentWork());
+    return message + explanation(result, currentWork());
 }
 
 void throwVkError(VkResult result, const char* call, const char* file, int line) {
-    throw Error(ErrorKind::Device, vkErrorMessage(result, call, file, line));
+    if (const char* debug = std::getenv("SHPROBE_DEBUG"); debug && *debug && std::string_view(debug) != "0")
+        std::fprintf(stderr, "shprobe: debug: %s failed at %s:%d\n", call, sourcePath(file).c_str(), line);
+    throw Error(ErrorKind::Device, vkErrorMessage(result, call));
 }
 
 std::string driverListVariable() {

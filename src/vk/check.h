@@ -1,6 +1,7 @@
 // VK_CHECK stays on in every build: a failed call throws Error(Device) naming the call, the
-// result, what the program was doing (DeviceStep) and where it happened; a lost device and a lack
-// of memory are said in words, with what to try where that depends on what was being done.
+// result and what the program was doing (DeviceStep); a lost device and a lack of memory are said
+// in words, with what to try where that depends on what was being done. The source file and line
+// stay out of the message (it is the user's); SHPROBE_DEBUG=1 prints them on a line of their own.
 #pragma once
 #include "common/error.h"
 #include <string>
@@ -32,9 +33,11 @@ class DeviceStep {
 };
 
 // The message VK_CHECK throws when `call` (its source text) returned `result`, e.g.
-// "vkQueueSubmit(...) failed with VK_ERROR_DEVICE_LOST (-4) while projecting the environment
-// (src/gpu/host_bake.cpp:120): the Vulkan device was lost ...".
-std::string vkErrorMessage(VkResult result, const char* call, const char* file, int line);
+// "vkQueueSubmit(...) failed with VK_ERROR_DEVICE_LOST (-4) while projecting the environment: the
+// Vulkan device was lost ...".
+std::string vkErrorMessage(VkResult result, const char* call);
+// Throws vkErrorMessage's Error(Device); with SHPROBE_DEBUG set (not 0), first prints
+// "shprobe: debug: CALL failed at src/FILE.cpp:LINE" to stderr.
 [[noreturn]] void throwVkError(VkResult result, const char* call, const char* file, int line);
 
 // The variable that replaces the loader's search of the icd.d folders (VK_DRIVER_FILES, or else
