@@ -306,10 +306,14 @@ TEST_F(BadInputs, NanAndInfinityNeedSanitize) {
                filledImage(16, 8, [&](int x, int) { return glm::vec3(x < 2 ? inf : 1.0f); }));
     expectFailure({{"bake", file("nan.exr"), "-o", "OUT"},
                    2,
-                   {file("nan.exr"), "1 texels are NaN or infinite", "--sanitize"}});
-    expectFailure({{"bake", file("inf.exr"), "-o", "OUT"}, 2, {file("inf.exr"), "16 texels", "--sanitize"}});
+                   {file("nan.exr"), "1 texel is NaN or infinite", "--sanitize to replace it with 0"}});
+    expectFailure({{"bake", file("inf.exr"), "-o", "OUT"},
+                   2,
+                   {file("inf.exr"), "16 texels are NaN or infinite", "--sanitize to replace them with 0"}});
     RunResult sanitized = runOk({"bake", file("inf.exr"), "--sanitize", "-q", "-o", file("sanitized.json")});
-    EXPECT_CONTAINS(sanitized.out, "replaced 16");
+    EXPECT_CONTAINS(sanitized.out, "replaced 16 NaN/Inf texels with 0");
+    RunResult one = runOk({"bake", file("nan.exr"), "--sanitize", "-o", file("one.json")});
+    EXPECT_CONTAINS(one.out, "replaced 1 NaN/Inf texel with 0");
     EXPECT_TRUE(std::isfinite(readProbeFile(file("sanitized.json")).rgb[0].r));
 }
 

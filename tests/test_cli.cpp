@@ -291,6 +291,10 @@ TEST_F(Cli, BakesTheBuiltInSky) {
             EXPECT_NEAR(file3.rgb[i][c], rows[i].rgb[c], 5.1e-7 + 1e-9 * std::abs(rows[i].rgb[c])) << i;
     EXPECT_GT(file3.rgb[0].r, 0.0);
 
+    // Counts agree with their nouns: order 1 holds 1 coefficient.
+    EXPECT_CONTAINS(runOk({"bake", "--order", "1", "-o", file("sky1.json")}).out,
+                    "order 1 (1 coefficient)\n");
+
     std::string out5 = file("sky5.json");
     RunResult irradiance = runOk({"bake", "--order", "5", "--irradiance", "-o", out5});
     EXPECT_CONTAINS(irradiance.out, "order 5 (25 coefficients)");

@@ -5,6 +5,7 @@
 #include "app/program.h"
 #include "app/stopwatch.h"
 #include "app/toolkit.h"
+#include "common/counted.h"
 #include "common/output_file.h"
 #include "formats/engine_export.h"
 #include "sh/basis.h"
@@ -46,13 +47,14 @@ void printSummary(FILE* report, const BakeOptions& options, const Environment& e
                   const Backend& backend, const BakeResult& result, double loadMs, double bakeMs) {
     std::fprintf(report, "shprobe bake: %s -> %s\n", environment.description.c_str(), options.output.c_str());
     std::fprintf(report, "%s\n", backendLine(backend, result.device).c_str());
-    std::fprintf(report, "  input    %s%s, order %d (%d coefficients)\n", inputSize(environment).c_str(),
+    std::fprintf(report, "  input    %s%s, order %d (%s)\n", inputSize(environment).c_str(),
                  environment.keptEquirect() ? " projected directly"
                  : environment.keptCross()  ? " projected where they lie in the cross"
                                             : "",
-                 options.order, coefficientCount(options.order));
+                 options.order, counted(coefficientCount(options.order), "coefficient").c_str());
     if (environment.replacedTexels > 0)
-        std::fprintf(report, "  sanitize replaced %zu NaN/Inf texels with 0\n", environment.replacedTexels);
+        std::fprintf(report, "  sanitize replaced %s with 0\n",
+                     counted(environment.replacedTexels, "NaN/Inf texel").c_str());
     if (hasLights(options.lights)) std::fprintf(report, "  lights   added to the environment's radiance\n");
     if (!options.window.none()) std::fprintf(report, "  window   %s\n", options.window.text.c_str());
     std::fprintf(report, "  time     load %.1f ms, bake %.1f ms", loadMs, bakeMs);

@@ -2,6 +2,7 @@
 // GPU submission takes (or one by one on the CPU); bad inputs are reported and skipped.
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
+#include "common/counted.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
 
@@ -250,7 +251,7 @@ void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const
     std::string line = "  " + loaded.environment.description + " -> " + loaded.item->output + ", " +
                        inputSize(loaded.environment);
     if (loaded.environment.replacedTexels > 0)
-        line += ", " + std::to_string(loaded.environment.replacedTexels) + " NaN/Inf texels replaced with 0";
+        line += ", " + counted(loaded.environment.replacedTexels, "NaN/Inf texel") + " replaced with 0";
     if (options.extractSun) line += loaded.sun ? ", sun taken out" : ", no sun found";
     printLine(batch, stdout, line);
 }
@@ -349,7 +350,7 @@ void finishBatch(Batch& batch, size_t count, double seconds) {
                                              : "the other " + std::to_string(batch.baked) +
                                                    " probes were written to " + batch.options.outDir;
     throw Error(batch.inputFailed ? ErrorKind::Input : ErrorKind::Output,
-                std::to_string(batch.failed) + " of " + std::to_string(count) + " inputs failed (above); " +
+                std::to_string(batch.failed) + " of " + counted(count, "input") + " failed (above); " +
                     written);
 }
 

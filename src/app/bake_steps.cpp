@@ -1,6 +1,7 @@
 #include "app/bake_steps.h"
 
 #include "app/toolkit.h"
+#include "common/counted.h"
 #include "common/scope_exit.h"
 #include "formats/engine_export.h"
 #include "formats/probe_export.h"
@@ -119,7 +120,7 @@ void GpuSession::finish() {
     uint32_t messages = context_.validationMessages();
     release();
     if (messages > 0)
-        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
+        throw Error(ErrorKind::Device, counted(messages, "Vulkan validation message") + " (above)");
 }
 
 double projectionWork(const BakeOptions& options, const Environment& environment) {

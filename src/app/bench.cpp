@@ -8,6 +8,7 @@
 #include "app/parsed_option.h"
 #include "app/program.h"
 #include "app/stopwatch.h"
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
@@ -329,7 +330,7 @@ void runBench(const BenchOptions& options) {
     const PipelineCreations pipelineCreations = measurePipelines(context, options.orders);
     // With the validation layer (SHPROBE_VALIDATION=1), a message fails the run as it fails a bake.
     if (uint32_t messages = context.validationMessages(); messages > 0)
-        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
+        throw Error(ErrorKind::Device, counted(messages, "Vulkan validation message") + " (above)");
     if (!options.json.empty())
         writeOutputFile(options.json,
                         reportJson(context, bench.measurements(), pipelineCreations).dump(2) + "\n");

@@ -7,6 +7,7 @@
 #include "app/program.h"
 #include "app/stopwatch.h"
 
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "formats/probe_volume.h"
@@ -107,8 +108,9 @@ void run(const ReferenceOptions& options) {
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;
     const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0));
-    std::printf("reference %s: %u probes, %zu inside geometry, %d bounces, %d samples each -> %s in %.2f s\n",
-                world.description.c_str(), volume.probeCount(), inside, options.bounces, options.samples,
+    std::printf("reference %s: %s, %zu inside geometry, %s, %s each -> %s in %.2f s\n",
+                world.description.c_str(), counted(volume.probeCount(), "probe").c_str(), inside,
+                counted(options.bounces, "bounce").c_str(), counted(options.samples, "sample").c_str(),
                 options.output.c_str(), millisecondsSince(start) / 1000.0);
 }
 

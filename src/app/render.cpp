@@ -4,6 +4,7 @@
 #include "app/commands.h"
 #include "app/parsed_option.h"
 #include "app/stopwatch.h"
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
@@ -96,7 +97,7 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
         renderInput(context, options, size, result);
     }
     if (uint32_t messages = context.validationMessages(); messages > 0)
-        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
+        throw Error(ErrorKind::Device, counted(messages, "Vulkan validation message") + " (above)");
     return result;
 }
 

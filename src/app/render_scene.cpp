@@ -3,6 +3,7 @@
 #include "app/commands.h"
 #include "app/stopwatch.h"
 
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
@@ -156,7 +157,7 @@ void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t heigh
                     volumeExposure(volume) * std::exp2(options.exposure));
     const double milliseconds = millisecondsSince(start);
     if (uint32_t messages = context.validationMessages(); messages > 0)
-        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
+        throw Error(ErrorKind::Device, counted(messages, "Vulkan validation message") + " (above)");
     writeRenderedImage(options.output, image);
     std::printf("shprobe render: %s lit by %s -> %s (%ux%u)\n", scene.world.description.c_str(),
                 options.scene.volume.c_str(), options.output.c_str(), width, height);

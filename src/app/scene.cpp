@@ -7,6 +7,7 @@
 
 #include "app/bake_steps.h"
 #include "app/stopwatch.h"
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
@@ -460,7 +461,7 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
     }
     if (context.validationMessages() > 0)
         throw Error(ErrorKind::Device, "scene: the Vulkan validation layer reported " +
-                                           std::to_string(context.validationMessages()) + " messages");
+                                           counted(context.validationMessages(), "message"));
     return volume;
 }
 
@@ -506,12 +507,13 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     if (backend.context) {
         std::printf("backend  gpu: %s%s\n", backend.context->info.name.c_str(), reason.c_str());
     } else {
-        std::printf("backend  cpu: rays, %d per texel, %llu cache points%s\n", cpuRaysPerTexel(options),
-                    (unsigned long long)rays.counts.cachePoints, reason.c_str());
+        std::printf("backend  cpu: rays, %d per texel, %s%s\n", cpuRaysPerTexel(options),
+                    counted(rays.counts.cachePoints, "cache point").c_str(), reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
                     double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
                     double(rays.counts.cacheRays));
-        std::printf("filled   %zu invalid probes from their valid neighbours\n", rays.filled);
+        std::printf("filled   %s from their valid neighbours\n",
+                    counted(rays.filled, "invalid probe").c_str());
     }
     std::printf("wrote    %s in %.2f s\n", options.output.c_str(), seconds);
 }
@@ -524,8 +526,8 @@ void runMerge(const MergeOptions& options) {
         bricks.push_back(readProbeVolume(path));
     const ProbeVolume whole = mergeProbeVolumes(bricks, options.bricks);
     writeProbeVolume(options.output, whole);
-    std::printf("merged   %zu bricks into %s (%u probes)\n", bricks.size(), options.output.c_str(),
-                whole.probeCount());
+    std::printf("merged   %s into %s (%s)\n", counted(bricks.size(), "brick").c_str(), options.output.c_str(),
+                counted(whole.probeCount(), "probe").c_str());
 }
 
 } // namespace shprobe

@@ -1,5 +1,6 @@
 #include "formats/probe_export.h"
 
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
@@ -246,8 +247,8 @@ std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std:
     if (dataOffset < kBinaryProbeHeaderBytes || dataOffset > bytes.size()) fail(name, "bad header size");
     uint64_t expected = uint64_t(count) * order * order * 3 * sizeof(float);
     if (bytes.size() - dataOffset != expected)
-        fail(name, "holds " + std::to_string(bytes.size() - dataOffset) + " data bytes, not " +
-                       std::to_string(expected) + " for " + std::to_string(count) + " probes of order " +
+        fail(name, "holds " + counted(bytes.size() - dataOffset, "data byte") + ", not " +
+                       std::to_string(expected) + " for " + counted(count, "probe") + " of order " +
                        std::to_string(order));
     std::vector<ShCoefficients> probes;
     size_t offset = dataOffset;

@@ -1,5 +1,6 @@
 #include "formats/probe_file.h"
 
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
@@ -207,8 +208,8 @@ Probe parseProbe(std::string_view text, const std::string& name) {
     ShCoefficients coefficients = makeCoefficients(requireOrder(root, name), requireQuantity(root, name));
     const json& rows = requireField(root, "coefficients", name);
     if (!rows.is_array() || rows.size() != coefficients.rgb.size())
-        fail(name, "field \"coefficients\" must hold " + std::to_string(coefficients.rgb.size()) +
-                       " rows for order " + std::to_string(coefficients.order) + ", not " +
+        fail(name, "field \"coefficients\" must hold " + counted(coefficients.rgb.size(), "row") +
+                       " for order " + std::to_string(coefficients.order) + ", not " +
                        (rows.is_array() ? std::to_string(rows.size()) : std::string("a non-array")));
     for (size_t i = 0; i < rows.size(); ++i)
         coefficients.rgb[i] = parseRow(rows[i], i, name);

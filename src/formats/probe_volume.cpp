@@ -3,6 +3,7 @@
 // visibility maps (where held), one validity byte per probe.
 #include "formats/probe_volume.h"
 
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
@@ -112,9 +113,9 @@ void checkCoefficients(const ProbeVolume& volume, const std::vector<glm::vec3>& 
     if (coefficients.empty()) return;
     const size_t perProbe = coefficientsPerProbe(volume);
     if (coefficients.size() != size_t(volume.probeCount()) * perProbe)
-        fail(what, std::string(quantity) + " holds " + text(coefficients.size()) + " coefficients, not " +
-                       text(size_t(volume.probeCount()) * perProbe) + " for " + text(volume.probeCount()) +
-                       " probes of order " + text(uint64_t(volume.order)));
+        fail(what, std::string(quantity) + " holds " + counted(coefficients.size(), "coefficient") +
+                       ", not " + text(size_t(volume.probeCount()) * perProbe) + " for " +
+                       counted(volume.probeCount(), "probe") + " of order " + text(uint64_t(volume.order)));
     for (uint32_t p = 0; p < volume.probeCount(); ++p) {
         if (!volume.valid[p]) continue; // written as zeros
         for (size_t c = 0; c < perProbe; ++c)
@@ -126,8 +127,8 @@ void checkCoefficients(const ProbeVolume& volume, const std::vector<glm::vec3>& 
 
 void checkValidity(const ProbeVolume& volume, const std::string& what) {
     if (volume.valid.size() != volume.probeCount())
-        fail(what, "holds " + text(volume.valid.size()) + " validity bytes for " + text(volume.probeCount()) +
-                       " probes");
+        fail(what, "holds " + counted(volume.valid.size(), "validity byte") + " for " +
+                       counted(volume.probeCount(), "probe"));
     for (uint32_t p = 0; p < volume.probeCount(); ++p)
         if (volume.valid[p] > 1)
             fail(what, "probe " + text(volume.begin + p) + " has validity " + text(volume.valid[p]) +
@@ -163,8 +164,8 @@ void checkVolume(const ProbeVolume& volume, const std::string& what) {
         fail(what, "order " + std::to_string(volume.order) + " is outside 1.." + text(kMaxOrder));
     if (volume.begin >= volume.end || volume.end > volume.grid.probeCount())
         fail(what, "the probe range [" + text(volume.begin) + ", " + text(volume.end) +
-                       ") is not a non-empty range of the grid's " + text(volume.grid.probeCount()) +
-                       " probes");
+                       ") is not a non-empty range of the grid's " +
+                       counted(volume.grid.probeCount(), "probe"));
     if (volume.radiance.empty() && volume.irradiance.empty())
         fail(what, "holds neither radiance nor irradiance coefficients");
     if (volume.bounces < 0) fail(what, "a negative bounce count (" + std::to_string(volume.bounces) + ")");
@@ -654,7 +655,7 @@ ProbeVolume readProbeVolume(const std::string& path) {
 ProbeVolume mergeProbeVolumes(std::span<const ProbeVolume> bricks, std::span<const std::string> names) {
     if (bricks.empty()) fail("merge", "no bricks to merge");
     if (!names.empty() && names.size() != bricks.size())
-        fail("merge", text(names.size()) + " names for " + text(bricks.size()) + " bricks");
+        fail("merge", counted(names.size(), "name") + " for " + counted(bricks.size(), "brick"));
     auto nameOf = [&](size_t i) { return names.empty() ? "brick " + text(i + 1) : names[i]; };
     for (size_t i = 0; i < bricks.size(); ++i) {
         checkVolume(bricks[i], nameOf(i));

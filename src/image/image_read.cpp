@@ -2,6 +2,7 @@
 // (equirect or cross) and six face files. Every failure is an Error(Input) naming the file.
 #include "image/environment.h"
 
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/parallel.h"
@@ -383,9 +384,9 @@ size_t applyNonFinitePolicy(std::span<glm::vec4> texels, NonFinitePolicy policy,
     size_t count = size_t(std::count_if(texels.begin(), texels.end(), isNonFinite));
     if (count == 0) return 0;
     if (policy == NonFinitePolicy::Refuse)
-        throw Error(ErrorKind::Input,
-                    what + ": " + std::to_string(count) +
-                        " texels are NaN or infinite; use --sanitize to replace them with 0");
+        throw Error(ErrorKind::Input, what + ": " + counted(count, "texel") + (count == 1 ? " is" : " are") +
+                                          " NaN or infinite; use --sanitize to replace " +
+                                          (count == 1 ? "it" : "them") + " with 0");
     for (glm::vec4& texel : texels)
         if (isNonFinite(texel)) texel = glm::vec4(0.0f, 0.0f, 0.0f, texel.a);
     return count;

@@ -2,6 +2,7 @@
 // renderer's scene pass plus the tonemap pass into the swapchain (viewer_frames.cpp).
 #include "render/viewer.h"
 
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/scope_exit.h"
 #include "image/image_write.h"
@@ -487,7 +488,7 @@ void runViewer(const ViewerOptions& options) {
     ScopeExit release([&] { destroyContext(context); });
     runSession(context, options, window, events);
     if (uint32_t messages = context.validationMessages(); messages > 0)
-        throw Error(ErrorKind::Device, std::to_string(messages) + " Vulkan validation messages (above)");
+        throw Error(ErrorKind::Device, counted(messages, "Vulkan validation message") + " (above)");
 }
 
 } // namespace shprobe
