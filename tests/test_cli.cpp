@@ -530,10 +530,15 @@ TEST_F(CliFailures, EmptyFile) {
     expectFailure({{"bake", file("empty.exr"), "-o", "OUT"}, 2, {file("empty.exr"), "empty"}});
 }
 
-// A text file named .exr: exit 2, one line naming the file (OpenImageIO's reason included).
+// A text file named .exr: exit 2, one line naming the file and the format it is not (the reader's
+// reason included), not the library that tried to read it.
 TEST_F(CliFailures, TextFileNamedExr) {
     writeText(file("notes.exr"), "these are not the pixels you are looking for\n");
-    expectFailure({{"bake", file("notes.exr"), "-o", "OUT"}, 2, {file("notes.exr"), "not an image"}});
+    expectFailure({{"bake", file("notes.exr"), "-o", "OUT"},
+                   2,
+                   {file("notes.exr"), "not an image the EXR reader can read"}});
+    RunResult result = run({"bake", file("notes.exr"), "-o", file("notes.json")});
+    EXPECT_EQ(result.err.find("OpenImageIO"), std::string::npos) << result.err;
 }
 
 // A 50x40 PNG matches no layout (2:1, 4:3, 3:4): exit 2, the message names the file and its size.

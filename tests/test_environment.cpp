@@ -1135,8 +1135,8 @@ TEST_F(EnvironmentFiles, SubsampledChannelsAreRefusedNamingThem) {
     writeText(file("yca.exr"), bytes + std::string(256, '\0'));
     EXPECT_EQ(inputErrorOf([&] { readImage(file("yca.exr")); }),
               file("yca.exr") +
-                  ": channel BY is subsampled (2 x 2), which OpenImageIO cannot read; store the "
-                  "image at full resolution");
+                  ": channel BY is subsampled (2 x 2), and shprobe reads only full-resolution EXR "
+                  "channels; store the image at full resolution");
 }
 
 // Files OpenImageIO writes, one part or two, pass the scan, which stops at the header's end.

@@ -251,8 +251,8 @@ std::string readName(HeaderReader& in, const char* where) {
 
 // The channel list ("chlist"): per channel `name\0 int32 pixel type, uint8 pLinear, 3 reserved,
 // int32 xSampling, int32 ySampling`, ended by an empty name; read as the library reads it, to its
-// empty name, and held to the size claimed. OpenImageIO refuses subsampled channels (OpenEXR's
-// luminance/chroma images keep chroma at half resolution) in words of its own; said here instead.
+// empty name, and held to the size claimed. Subsampled channels (OpenEXR's luminance/chroma images
+// keep chroma at half resolution) are not read: said here, in words about the file.
 void checkChannelList(HeaderReader& in, const std::string& attribute, int32_t size) {
     const uint64_t start = in.offset();
     for (std::string name = readName(in, "a channel name"); !name.empty();
@@ -262,7 +262,8 @@ void checkChannelList(HeaderReader& in, const std::string& attribute, int32_t si
         if (xSampling != 1 || ySampling != 1)
             fail(in.path(), "channel " + printable(name) + " is subsampled (" + std::to_string(xSampling) +
                                 " x " + std::to_string(ySampling) +
-                                "), which OpenImageIO cannot read; store the image at full resolution");
+                                "), and shprobe reads only full-resolution EXR channels; store the image at "
+                                "full resolution");
     }
     if (in.offset() - start != uint64_t(size))
         failExr(in, attribute + " claims " + std::to_string(size) + " bytes but its channels take " +

@@ -27,7 +27,7 @@ struct ImageHeader {
 };
 
 // An open image file. Errors are Error(Input) naming the file:
-//   "PATH: not an image <library> can read (REASON)"                    opening, header
+//   "PATH: not an image the <FORMAT> reader can read (REASON)"            opening, header
 //   "PATH: cannot read the pixels; the file may be truncated or corrupt (REASON)"   pixels
 class ImageDecoder {
   public:

@@ -229,17 +229,18 @@ class ExrDecoder final : public ImageDecoder {
             }
             for (auto channel = header.channels().begin(); channel != header.channels().end(); ++channel)
                 if (channel.channel().xSampling != 1 || channel.channel().ySampling != 1)
-                    throw Error(ErrorKind::Input,
-                                path + ": channel " + printable(channel.name()) + " is subsampled (" +
-                                    std::to_string(channel.channel().xSampling) + " x " +
-                                    std::to_string(channel.channel().ySampling) +
-                                    "), which OpenImageIO cannot read; store the image at full resolution");
+                    throw Error(ErrorKind::Input, path + ": channel " + printable(channel.name()) +
+                                                      " is subsampled (" +
+                                                      std::to_string(channel.channel().xSampling) + " x " +
+                                                      std::to_string(channel.channel().ySampling) +
+                                                      "), and shprobe reads only full-resolution EXR "
+                                                      "channels; store the image at full resolution");
             if (!header_.volumeOrDeep) part_ = std::make_unique<Imf::InputPart>(*file_, 0);
         } catch (const Error&) {
             throw;
         } catch (const std::exception& error) {
             throw Error(ErrorKind::Input,
-                        path + ": not an image OpenEXR can read (" + oneLine(error.what()) + ")");
+                        path + ": not an image the EXR reader can read (" + oneLine(error.what()) + ")");
         }
     }
 

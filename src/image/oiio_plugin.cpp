@@ -7,6 +7,7 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <cctype>
 #include <cstdio>
 #include <fcntl.h>
 #include <mutex>
@@ -107,6 +108,18 @@ std::optional<Chromaticities> chromaticitiesOf(const OIIO::ImageSpec& spec) {
     return Chromaticities{{xy[0], xy[1]}, {xy[2], xy[3]}, {xy[4], xy[5]}, {xy[6], xy[7]}};
 }
 
+// "the TIFF reader", from the file's extension ("shprobe" for a file without one): an error names the
+// format the user gave (a text file named sky.exr: the EXR reader), not the library behind it.
+std::string readerOf(const std::string& path) {
+    const size_t dot = path.rfind('.');
+    if (dot == std::string::npos || dot + 1 == path.size() || path.find('/', dot) != std::string::npos)
+        return "shprobe";
+    std::string format;
+    for (char c : path.substr(dot + 1))
+        format += char(std::toupper(static_cast<unsigned char>(c)));
+    return "the " + format + " reader";
+}
+
 class OiioDecoder : public ImageDecoder {
   public:
     explicit OiioDecoder(const std::string& path) : path_(path) {
@@ -117,7 +130,7 @@ class OiioDecoder : public ImageDecoder {
         StderrCapture capture(path);
         input_ = OIIO::ImageInput::open(path, &config);
         if (!input_)
-            throw Error(ErrorKind::Input, path + ": not an image OpenImageIO can read (" +
+            throw Error(ErrorKind::Input, path + ": not an image " + readerOf(path) + " can read (" +
                                               capture.fold(OIIO::geterror()) + ")");
         const OIIO::ImageSpec& spec = input_->spec();
         header_.width = spec.width;
