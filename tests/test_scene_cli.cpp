@@ -20,6 +20,7 @@
 #include <cstring>
 #include <iterator>
 #include <map>
+#include <spawn.h>
 #include <sys/stat.h>
 
 namespace shprobe {
@@ -36,6 +37,93 @@ class SceneCommand : public ProgramTest {
 
 std::string bytesOf(const std::string& path) {
     return readText(path);
+}
+
+// Runs shprobe with its stderr on a pseudo-terminal (isatty(2) holds in the child) and stdout into
+// a file, and returns what it wrote on the terminal, read while it runs so that it never blocks.
+struct TerminalRun {
+    int exitCode = -1;
+    std::string terminal;
+    double seconds = 0.0;
+};
+
+TerminalRun runOnTerminal(const std::vector<std::string>& args, const fs::path& stdoutPath) {
+    TerminalRun result;
+    const int master = posix_openpt(O_RDWR | O_NOCTTY);
+    if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0) {
+        ADD_FAILURE() << "cannot open a pseudo-terminal: " << std::strerror(errno);
+        return result;
+    }
+    const int terminal = open(ptsname(master), O_RDWR | O_NOCTTY);
+    std::vector<std::string> argStrings{SHPROBE_EXECUTABLE};
+    argStrings.insert(argStrings.end(), args.begin(), args.end());
+    std::vector<std::string> envStrings = changedEnvironment({});
+    std::vector<char*> argv = pointersTo(argStrings), envp = pointersTo(envStrings);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 1, stdoutPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, terminal, 2);
+    const Clock::time_point start = Clock::now();
+    pid_t pid = 0;
+    const int spawnError = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
+    posix_spawn_file_actions_destroy(&actions);
+    close(terminal);
+    if (spawnError != 0) {
+        ADD_FAILURE() << "cannot start " << argv[0] << ": " << std::strerror(spawnError);
+        close(master);
+        return result;
+    }
+    fcntl(master, F_SETFL, O_NONBLOCK);
+    char buffer[4096];
+    int status = 0;
+    for (bool running = true; running;) {
+        running = waitpid(pid, &status, WNOHANG) == 0;
+        for (ssize_t n; (n = read(master, buffer, sizeof buffer)) > 0;)
+            result.terminal.append(buffer, size_t(n));
+        if (running) usleep(20000);
+    }
+    close(master);
+    result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return result;
+}
+
+// A ray bake of more than a second draws a progress line on a terminal ("probes 12/216, 3.1 Mrays/s,
+// 2 s left"), redrawn at most 4 times a second and erased at the end; nothing of it with -q or with
+// stderr in a file, and stdout is the same either way.
+TEST_F(SceneCommand, ProgressLineOnlyOnATerminal) {
+    const std::string scene = cornellBox();
+    const std::vector<std::string> bake = {"scene",     scene, "--backend",        "cpu", "--grid", "6,6,6",
+                                           "--bounces", "2",   "--rays-per-texel", "16"};
+    auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> args = bake;
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    };
+    const TerminalRun shown = runOnTerminal(with({"-o", file("shown.shpv")}), folder() / "shown.out");
+    ASSERT_EQ(shown.exitCode, 0) << shown.terminal;
+    ASSERT_GT(shown.seconds, 1.0) << "the bake is too short to show its progress";
+    EXPECT_CONTAINS(shown.terminal, "\rprobes ");
+    EXPECT_CONTAINS(shown.terminal, "/216, ");
+    EXPECT_CONTAINS(shown.terminal, "rays/s");
+    EXPECT_CONTAINS(shown.terminal, " s left");
+    EXPECT_TRUE(shown.terminal.ends_with("\r\033[K")) << "the line is erased at the end: " << shown.terminal;
+    size_t draws = 0;
+    for (size_t at = shown.terminal.find("\rprobes "); at != std::string::npos;
+         at = shown.terminal.find("\rprobes ", at + 1))
+        ++draws;
+    EXPECT_LE(double(draws), 4.0 * shown.seconds + 2.0) << shown.terminal;
+
+    const TerminalRun quiet = runOnTerminal(with({"-q", "-o", file("quiet.shpv")}), folder() / "quiet.out");
+    EXPECT_EQ(quiet.exitCode, 0) << quiet.terminal;
+    EXPECT_EQ(quiet.terminal, "");
+
+    const RunResult plain = run(with({"-o", file("plain.shpv")}));
+    EXPECT_EQ(plain.exitCode, 0) << describe(plain);
+    EXPECT_EQ(plain.err, "");
+    EXPECT_EQ(linesOf(readText(folder() / "shown.out")).size(), linesOf(plain.out).size());
+    EXPECT_EQ(bytesOf(file("shown.shpv")), bytesOf(file("plain.shpv")));
 }
 
 // `shprobe info` says what `scene --backend auto` runs, and a scene bake under auto runs that, for

@@ -1,6 +1,7 @@
 // `shprobe bake` with --out-dir: every input to its own file, baked in chunks of as many maps as one
 // GPU submission takes (or one by one on the CPU); bad inputs are reported and skipped.
 #include "app/bake_steps.h"
+#include "app/progress_line.h"
 #include "app/stopwatch.h"
 #include "common/counted.h"
 #include "common/input_file.h"
@@ -119,34 +120,10 @@ void prepareOutputFolder(const BakeOptions& options, const std::vector<BatchItem
     checkOutputsAreNotInputs(outputs, inputs);
 }
 
-// A progress bar on stderr, drawn only when stderr is a terminal: "[#####-----] 12/40 probes".
-struct ProgressBar {
-    size_t total = 0;
-    size_t done = 0;
-    bool enabled = isatty(STDERR_FILENO) == 1;
-    bool drawn = false;
-
-    void draw() {
-        if (!enabled) return;
-        constexpr size_t kWidth = 30;
-        size_t filled = total > 0 ? done * kWidth / total : kWidth;
-        std::string bar = std::string(filled, '#') + std::string(kWidth - filled, '-');
-        std::fprintf(stderr, "\r[%s] %zu/%zu probes", bar.c_str(), done, total);
-        std::fflush(stderr);
-        drawn = true;
-    }
-    void clear() {
-        if (!drawn) return;
-        std::fputs("\r\033[K", stderr);
-        std::fflush(stderr);
-        drawn = false;
-    }
-    ~ProgressBar() { clear(); }
-};
-
 struct Batch {
     const BakeOptions& options;
-    ProgressBar progress;
+    ProgressLine progress; // a bar: "[#####-----] 12/40 probes, ..."
+    size_t processed = 0;  // baked or failed
     size_t baked = 0;
     size_t failed = 0;
     bool inputFailed = false; // an input error among the failures (exit code 2, else 3)
@@ -160,7 +137,7 @@ void printLine(Batch& batch, FILE* stream, const std::string& line) {
     batch.progress.clear();
     std::fprintf(stream, "%s\n", line.c_str());
     std::fflush(stream);
-    batch.progress.draw();
+    batch.progress.redraw();
 }
 
 void reportFailure(Batch& batch, const BatchItem& item, const Error& error) {
@@ -168,7 +145,7 @@ void reportFailure(Batch& batch, const BatchItem& item, const Error& error) {
     if (message.find(item.input) == std::string::npos) message = item.input + ": " + message;
     ++batch.failed;
     batch.inputFailed = batch.inputFailed || error.kind() == ErrorKind::Input;
-    ++batch.progress.done;
+    batch.progress.update(++batch.processed);
     printLine(batch, stderr, "shprobe: error: " + message);
 }
 
@@ -242,12 +219,9 @@ void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const
         return;
     }
     ++batch.baked;
-    ++batch.progress.done;
+    batch.progress.update(++batch.processed);
     batch.texels += loaded.environment.texelCount();
-    if (options.quiet) {
-        batch.progress.draw();
-        return;
-    }
+    if (options.quiet) return;
     std::string line = "  " + loaded.environment.description + " -> " + loaded.item->output + ", " +
                        inputSize(loaded.environment);
     if (loaded.environment.replacedTexels > 0)
@@ -301,7 +275,7 @@ void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
         chunk.clear();
         bytes = 0;
     };
-    batch.progress.draw();
+    batch.progress.redraw();
     for (InputLoader loader(batch.options, items); !loader.done();) {
         std::optional<Loaded> loaded = loader.next(batch);
         if (!loaded) continue;
@@ -334,8 +308,7 @@ void printBatchStart(const BakeOptions& options, size_t count) {
 
 // The summary line; then, if an input failed, the error that gives the exit code.
 void finishBatch(Batch& batch, size_t count, double seconds) {
-    batch.progress.clear();
-    batch.progress.enabled = false;
+    batch.progress.disable();
     std::string submissions = batch.gpu
                                   ? " in " + std::to_string(batch.submissions) +
                                         (batch.submissions == 1 ? " GPU submission" : " GPU submissions")
@@ -361,7 +334,8 @@ void runBatchBake(const BakeOptions& options) {
     prepareOutputFolder(options, items);
 
     Clock::time_point start = Clock::now();
-    Batch batch{options, ProgressBar{items.size()}};
+    Batch batch{options,
+                ProgressLine("probes", items.size(), options.quiet, ProgressLine::Style{.bar = true})};
     printBatchStart(options, items.size());
     bakeInChunks(batch, items);
     finishBatch(batch, items.size(), millisecondsSince(start) / 1000.0);

@@ -5,6 +5,7 @@
 #include "app/commands.h"
 #include "app/parsed_option.h"
 #include "app/program.h"
+#include "app/progress_line.h"
 #include "app/stopwatch.h"
 
 #include "common/counted.h"
@@ -20,6 +21,8 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
+#include <thread>
 
 namespace shprobe {
 namespace {
@@ -63,11 +66,24 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
     std::vector<glm::dvec3> positions;
     for (uint32_t p = 0; p < grid.probeCount(); ++p)
         positions.push_back(probePosition(grid, probeCell(grid, p)));
-    const std::vector<PathTracedProbe> traced = pathTraceProbes(tracer, positions,
-                                                                {.order = options.order,
-                                                                 .bounces = options.bounces,
-                                                                 .samples = options.samples,
-                                                                 .seenSuns = split.suns});
+    // In parts, between which the progress line is drawn: each probe's estimate is the same bits
+    // whichever probes are traced with it. A part holds at least one probe per core.
+    const PathTraceOptions trace{.order = options.order,
+                                 .bounces = options.bounces,
+                                 .samples = options.samples,
+                                 .seenSuns = split.suns};
+    const size_t part = std::max<size_t>({1, positions.size() / 64, std::thread::hardware_concurrency()});
+    ProgressLine line("probes", positions.size(), options.quiet);
+    std::vector<PathTracedProbe> traced;
+    traced.reserve(positions.size());
+    for (size_t first = 0; first < positions.size(); first += part) {
+        const size_t count = std::min(part, positions.size() - first);
+        for (PathTracedProbe& probe :
+             pathTraceProbes(tracer, std::span(positions).subspan(first, count), trace))
+            traced.push_back(std::move(probe));
+        line.update(first + count);
+    }
+    line.disable();
     ProbeVolume volume;
     volume.grid = grid;
     volume.order = options.order;

@@ -6,6 +6,7 @@
 #include "app/program.h"
 
 #include "app/bake_steps.h"
+#include "app/progress_line.h"
 #include "app/stopwatch.h"
 #include "common/counted.h"
 #include "common/error.h"
@@ -240,34 +241,6 @@ ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, cons
     return volumeOf(probes, options, grid, range);
 }
 
-// A line on stderr, redrawn at most every quarter second, while a bake runs on a terminal:
-// "probes 1200/4096, 3.1 Mrays/s, 12 s left".
-class BakeProgressLine {
-  public:
-    BakeProgressLine(size_t total, bool quiet)
-        : total_(total), enabled_(!quiet && isatty(STDERR_FILENO) == 1) {}
-    ~BakeProgressLine() {
-        if (drawn_) std::fputs("\r\033[K", stderr);
-    }
-    void update(size_t done, uint64_t rays) {
-        if (!enabled_ || millisecondsSince(last_) < 250.0) return;
-        last_ = Clock::now();
-        const double seconds = millisecondsSince(start_) / 1000.0;
-        const double left = done > 0 ? seconds * double(total_ - done) / double(done) : 0.0;
-        std::fprintf(stderr, "\r\033[Kprobes %zu/%zu, %.1f Mrays/s, %.0f s left", done, total_,
-                     double(rays) / seconds * 1e-6, left);
-        std::fflush(stderr);
-        drawn_ = true;
-    }
-
-  private:
-    size_t total_;
-    bool enabled_;
-    bool drawn_ = false;
-    Clock::time_point start_ = Clock::now();
-    Clock::time_point last_ = Clock::now();
-};
-
 RayBakeOptions rayBakeOptions(const SceneOptions& options) {
     return {.order = options.order,
             .faceSize = options.faceSize,
@@ -277,8 +250,6 @@ RayBakeOptions rayBakeOptions(const SceneOptions& options) {
             .gatherRays = options.gatherRays};
 }
 
-// Every bounce of probes [range.begin, range.end) by rays: the surfaces' cache is gathered where
-// these probes need it, so a brick is exactly its part of the whole bake.
 // A probe still invalid is filled from its valid neighbours (Unity's dilation): the mean of the
 // probes of its 3 x 3 x 3 block that are valid, weighed by the inverse of their distance in cells,
 // made valid, and given a visibility map that hides nothing (its own saw only the inside of a
@@ -341,24 +312,24 @@ Dilation dilateInvalidProbes(RayBaker& baker, const SceneOptions& options, const
     return dilation;
 }
 
-// Every bounce of probes [range.begin, range.end) by rays: the surfaces' cache is gathered where
-// these probes need it, so a brick is exactly its part of the whole bake.
 // What a ray bake reports besides its volume.
 struct RayBakeReport {
     RayBakeCounts counts;
     size_t filled = 0; // invalid probes filled from their neighbours
 };
 
+// Every bounce of probes [range.begin, range.end) by rays: the surfaces' cache is gathered where
+// these probes need it, so a brick is exactly its part of the whole bake.
 ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
                        const ProbeGrid& grid, ProbeRange range, RayBakeReport& report) {
     const SplitSky split = splitSceneSky(sky);
     RayBakeOptions bakeOptions = rayBakeOptions(options);
     bakeOptions.skySuns = split.suns;
     RayBaker baker(world, split.residual, bakeOptions);
-    BakeProgressLine line(range.end - range.begin, options.quiet);
+    ProgressLine line("probes", range.end - range.begin, options.quiet);
     std::vector<RayBakedProbe> probes = baker.bakeProbes(probePositions(grid, range), [&](size_t done) {
         const RayBakeCounts sofar = baker.counts();
-        line.update(done, sofar.probeRays + sofar.cacheRays);
+        line.update(done, double(sofar.probeRays + sofar.cacheRays), "rays");
     });
     const Dilation dilation =
         options.dilate ? dilateInvalidProbes(baker, options, grid, range, probes) : Dilation{};
