@@ -353,7 +353,7 @@ TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
 // engine formats, in one line that says so and names the format that holds it. The advice names
 // only what the program can do (no `shprobe light` adds a sun back).
 TEST_F(Reliability, SunIsKeptOrRefusedNeverDropped) {
-    for (const std::string& output : {"probe.bin", "probe.h", "probe.unity.json"}) {
+    for (const std::string output : {"probe.bin", "probe.h", "probe.unity.json"}) {
         const bool byName = output != "probe.bin";
         std::vector<std::string> args = {"bake", "--face-size", "16", "--extract-sun", "-q", "-o", "OUT"};
         if (!byName) args.insert(args.end(), {"--format", "binary"});
@@ -366,7 +366,7 @@ TEST_F(Reliability, SunIsKeptOrRefusedNeverDropped) {
 
     runOk({"bake", "--extract-sun", "-q", "-o", file("sun.json")}); // the built-in sky's sun
     ASSERT_TRUE(readProbe(file("sun.json")).sun.has_value());
-    for (const std::string& format : {"binary", "cpp", "godot"}) {
+    for (const std::string format : {"binary", "cpp", "godot"}) {
         SCOPED_TRACE(format);
         RunResult refused = run({"convert", file("sun.json"), "--format", format, "-o", file("out")});
         expectMessage({{}, 2, {"sun.json has a sun", "--format " + format + " cannot hold", "--format json"}},
