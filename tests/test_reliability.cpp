@@ -349,8 +349,9 @@ TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
 }
 
 // A sun (bake --extract-sun, or a probe file that has one) is kept or refused, never dropped without
-// a word: json keeps it; binary, whose header has no place for it, is refused like the headers and
-// engine formats, in one line that says so and names the format that holds it. The advice names
+// a word: json keeps it; binary, whose header has no place for it, is refused like the headers, the
+// engine formats and the irradiance maps, in one line that says so and names the format that holds
+// it. The advice names
 // only what the program can do (no `shprobe light` adds a sun back).
 TEST_F(Reliability, SunIsKeptOrRefusedNeverDropped) {
     for (const std::string output : {"probe.bin", "probe.h", "probe.unity.json"}) {
@@ -366,7 +367,12 @@ TEST_F(Reliability, SunIsKeptOrRefusedNeverDropped) {
 
     runOk({"bake", "--extract-sun", "-q", "-o", file("sun.json")}); // the built-in sky's sun
     ASSERT_TRUE(readProbe(file("sun.json")).sun.has_value());
-    for (const std::string format : {"binary", "cpp", "godot"}) {
+    expectFailure(
+        {{"bake", "--face-size", "16", "--extract-sun", "--format", "irradiance-cross", "-q", "-o", "OUT"},
+         2,
+         {"--format irradiance-cross cannot hold the sun", "--format json"},
+         "cross.exr"});
+    for (const std::string format : {"binary", "cpp", "godot", "irradiance-equirect"}) {
         SCOPED_TRACE(format);
         RunResult refused = run({"convert", file("sun.json"), "--format", format, "-o", file("out")});
         expectMessage({{}, 2, {"sun.json has a sun", "--format " + format + " cannot hold", "--format json"}},

@@ -393,12 +393,12 @@ constexpr ExportFormat kFormats[] = {
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeProbeHeader(path, probe, HeaderLanguage::C, options.metadata.source);
      }},
-    {"irradiance-equirect", ".exr", OutputContent::Binary, SunHandling::Dropped, kMaxOrder,
+    {"irradiance-equirect", ".exr", OutputContent::Binary, SunHandling::Refused, kMaxOrder,
      "E/pi drawn as an equirect EXR", NumberType::Float, irradianceMapNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeIrradianceEquirect(path, probe, options.mapSize > 0 ? options.mapSize : 512);
      }},
-    {"irradiance-cross", ".exr", OutputContent::Binary, SunHandling::Dropped, kMaxOrder,
+    {"irradiance-cross", ".exr", OutputContent::Binary, SunHandling::Refused, kMaxOrder,
      "E/pi drawn as a cross EXR", NumberType::Float, irradianceMapNumbers,
      [](const std::string& path, const ShCoefficients& probe, const ExportOptions& options) {
          writeIrradianceCross(path, probe, options.mapSize > 0 ? options.mapSize : 128);

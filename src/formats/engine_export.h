@@ -29,8 +29,7 @@ struct ExportOptions {
 // What a format does with the sun of --extract-sun (or of a probe file that has one).
 enum class SunHandling {
     Written, // json: beside the coefficients
-    Dropped, // the irradiance maps: the drawing of the coefficients only
-    Refused, // binary, the headers and engine formats: asking for a sun they would drop is an error
+    Refused, // every other format: asking for a sun it would drop is an error
 };
 
 // What a format stores each of its numbers as.
