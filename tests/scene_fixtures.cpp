@@ -283,6 +283,17 @@ World loadCornellBoxWorld(const CornellBoxOptions& options) {
     return loadFixtureWorld(cornellBoxScene(options));
 }
 
+const World& engineWorld(const std::string& modelsFolder) {
+    static const World world =
+        loadGltfScene(modelsFolder + "/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
+    return world;
+}
+
+const World& openCornellBoxWithBlocks() {
+    static const World world = loadCornellBoxWorld({.innerBoxes = true});
+    return world;
+}
+
 FixtureScene twoRoomsScene() {
     FixtureMesh mesh;
     mesh.material = 0;

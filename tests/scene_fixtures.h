@@ -118,6 +118,12 @@ void writeCornellBoxGltf(const std::string& path, const CornellBoxOptions& optio
 World loadFixtureWorld(const FixtureScene& scene);
 World loadCornellBoxWorld(const CornellBoxOptions& options = {});
 
+// Loaded once per process and kept, for tests that cast many rays at one scene: 2CylinderEngine.glb
+// (121,496 triangles) from the glTF2 folder of Debian's assimp-testmodels, and the Cornell box with
+// its two blocks, open at the front so that some rays leave it.
+const World& engineWorld(const std::string& modelsFolder);
+const World& openCornellBoxWithBlocks();
+
 // Two rooms side by side, each 2 m wide, high and deep: the lit one (x from -2 to 0) open to the
 // sky through a 0.5 m square in its ceiling above (-1, 2, 0), with a sun shining in, the closed one
 // (x from 0 to 2) shut; between them a wall 2 cm thick. One white material (albedo 0.7), every

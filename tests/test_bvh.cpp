@@ -16,7 +16,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <functional>
 #include <limits>
 #include <random>
@@ -26,10 +25,8 @@
 namespace shprobe {
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shprobe::testing;
 
-const fs::path kModels = SHPROBE_GLTF_MODELS_DIR;
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 // --- Scenes ------------------------------------------------------------------------------------
@@ -83,18 +80,6 @@ std::array<glm::vec3, 3> cornersOf(const World& world, size_t t) {
 glm::vec3 windingNormal(const World& world, size_t t) {
     const auto [p0, p1, p2] = cornersOf(world, t);
     return glm::cross(p1 - p0, p2 - p0);
-}
-
-const World& engine() {
-    static const World world =
-        loadGltfScene((kModels / "2CylinderEngine-glTF-Binary/2CylinderEngine.glb").string());
-    return world;
-}
-
-// The Cornell box with its two blocks, open at the front so that some rays leave it.
-const World& cornellBox() {
-    static const World world = loadCornellBoxWorld({.innerBoxes = true});
-    return world;
 }
 
 // --- Rays --------------------------------------------------------------------------------------
@@ -374,7 +359,7 @@ void expectLayout(const World& world, const Bvh& bvh) {
 }
 
 TEST(Bvh, LayoutOfRealAndSmallScenes) {
-    for (const World* world : {&engine(), &cornellBox()})
+    for (const World* world : {&engineWorld(SHPROBE_GLTF_MODELS_DIR), &openCornellBoxWithBlocks()})
         expectLayout(*world, buildBvh(*world));
     const World single = unitTriangle();
     const Bvh bvh = buildBvh(single);
@@ -441,7 +426,8 @@ TEST(Bvh, BadInputsAreRefused) {
 // same tie rule), and anyHit says whether there is one. No tolerance: the conservative box test
 // must not drop a hit, not even one on a box's face or at the current closest t.
 TEST(Bvh, TraversalsEqualTestingEveryTriangle) {
-    for (auto [world, count] : {std::pair{&engine(), 2'000}, std::pair{&cornellBox(), 20'000}}) {
+    for (auto [world, count] : {std::pair{&engineWorld(SHPROBE_GLTF_MODELS_DIR), 2'000},
+                                std::pair{&openCornellBoxWithBlocks(), 20'000}}) {
         const Bvh bvh = buildBvh(*world);
         int differ = 0, anyDiffer = 0, hits = 0;
         for (const Ray& ray : sceneRays(*world, count, 7)) {
@@ -553,7 +539,7 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 // is held to 1e-5, and the worst to 2e-5 of the scene's extent (relative to t alone, a ray starting
 // a hair from a surface would show the coordinates' rounding as a large fraction of a tiny t).
 TEST(Bvh, AgreesWithEmbree) {
-    for (const World* world : {&engine(), &cornellBox()}) {
+    for (const World* world : {&engineWorld(SHPROBE_GLTF_MODELS_DIR), &openCornellBoxWithBlocks()}) {
         const auto buildStart = std::chrono::steady_clock::now();
         const Bvh bvh = buildBvh(*world);
         const double buildSeconds = secondsSince(buildStart);
@@ -627,7 +613,7 @@ TEST(Bvh, AgreesWithEmbree) {
 // on average under 1% as many boxes as there are triangles and tests under 0.1% of the triangles
 // (testing every triangle is the alternative). Shadow rays stop at the first hit and visit fewer.
 TEST(Bvh, SplitsKeepVisitsFew) {
-    const World& world = engine();
+    const World& world = engineWorld(SHPROBE_GLTF_MODELS_DIR);
     const Bvh bvh = buildBvh(world);
     RandomRays random(13);
     constexpr int kRays = 100'000;

@@ -19,7 +19,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <random>
 #include <unistd.h>
 #include <vector>
@@ -27,10 +26,7 @@
 namespace shprobe {
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shprobe::testing;
-
-const fs::path kModels = SHPROBE_GLTF_MODELS_DIR;
 
 // The layouts of trace_rays.comp's buffers.
 struct TraceRay {
@@ -42,18 +38,6 @@ struct TraceResult {
     glm::uvec4 flags; // front face, any hit
 };
 static_assert(sizeof(TraceRay) == 32 && sizeof(TraceResult) == 32);
-
-const World& engine() {
-    static const World world =
-        loadGltfScene((kModels / "2CylinderEngine-glTF-Binary/2CylinderEngine.glb").string());
-    return world;
-}
-
-// The Cornell box with its two blocks, open at the front so that some rays leave it.
-const World& cornellBox() {
-    static const World world = loadCornellBoxWorld({.innerBoxes = true});
-    return world;
-}
 
 // Rays from random points of the scene's bounds: half in random directions, half aimed at a random
 // vertex (through edges and vertices shared by several triangles, where ties and rounding are most
@@ -147,7 +131,7 @@ class BvhGpu : public GpuTest {
 // answer is anyHit's, for every ray. No tolerance: the shader does the C++'s float operations in
 // the same order, unfused (`precise`), and lavapipe rounds each one as the CPU does.
 TEST_F(BvhGpu, HitsEqualTheCpuTraversalsBitForBit) {
-    for (const World* world : {&engine(), &cornellBox()}) {
+    for (const World* world : {&engineWorld(SHPROBE_GLTF_MODELS_DIR), &openCornellBoxWithBlocks()}) {
         const Bvh bvh = buildBvh(*world);
         const std::vector<Ray> rays = sceneRays(*world, 100'000, 11);
         const auto start = std::chrono::steady_clock::now();

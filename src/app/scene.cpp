@@ -341,7 +341,7 @@ ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOp
         volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
     const size_t perProbe = size_t(options.order) * options.order;
     const size_t texels = size_t(bakeOptions.visibilitySize) * bakeOptions.visibilitySize;
-    const float far = glm::length(world.boundsMax - world.boundsMin);
+    const float far = float(baker.visibilityRange());
     for (uint32_t p : dilation.probes) {
         const size_t k = p - range.begin;
         volume.valid[k] = 1;

@@ -419,6 +419,10 @@ Cubemap RayBaker::traceProbe(const glm::dvec3& position) {
     return std::move(view.radiance);
 }
 
+double RayBaker::visibilityRange() const {
+    return state_->visibilityRange;
+}
+
 RayBakeCounts RayBaker::counts() const {
     return {state_->probeRays.load(), state_->cacheRays.load(), state_->cachePoints.load()};
 }

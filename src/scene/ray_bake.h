@@ -102,6 +102,9 @@ class RayBaker {
     // of a one-sided material, else 0).
     Cubemap traceProbe(const glm::dvec3& position);
     RayBakeCounts counts() const;
+    // The distance the visibility maps record for rays that meet nothing: the world's diagonal. A
+    // map of (range, range^2) in every texel hides nothing.
+    double visibilityRange() const;
 
   private:
     struct State;

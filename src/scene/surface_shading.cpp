@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <utility>
 
 namespace shprobe {
 
@@ -228,17 +229,17 @@ void checkSceneScale(const World& world) {
                          "% of the scene; move the scene nearer the origin");
 }
 
-SceneShading::SceneShading(const World& world, const Cubemap& sky) {
+SceneShading::SceneShading(World world, const Cubemap& sky) {
     requireVertices(world);
     requireTriangles(world);
     checkSceneScale(world);
     requireMaterials(world);
     requireSky(sky);
-    world_ = world;
-    world_.suns = normalizedSuns(world.suns);
+    world.suns = normalizedSuns(std::move(world.suns));
     solidTriangles_ = triangleList(world);
-    sky_ = sky;
     offset_ = kOffsetScale * largestCoordinate(world);
+    world_ = std::move(world);
+    sky_ = sky;
 }
 
 SurfaceHit SceneShading::describe(uint32_t triangle, const glm::dvec2& barycentric,

@@ -54,7 +54,7 @@ class SceneShading {
     // Throws Error(Input) for a World whose arrays disagree (scene.h), for non-finite vertices or a
     // sun without a direction, for a scale checkSceneScale refuses, or for a sky whose texel count
     // is not that of a cube map.
-    SceneShading(const World& world, const Cubemap& sky);
+    SceneShading(World world, const Cubemap& sky);
 
     // The point of `triangle` at barycentrics (u, v), seen by a ray along `direction`.
     SurfaceHit describe(uint32_t triangle, const glm::dvec2& barycentric, const glm::dvec3& direction) const;
