@@ -23,6 +23,7 @@
 #include "sh/lights.h"
 #include "sh/rotation.h"
 #include "sh/windowing.h"
+#include "terminal_run.h"
 #include "vk/context.h"
 
 #include <OpenImageIO/imageio.h>
@@ -53,6 +54,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::EnvironmentChanges;
 using testing::readText;
+using testing::runOnTerminal;
+using testing::TerminalRun;
 
 #define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "in: " << (text)
 
@@ -114,26 +117,6 @@ RunResult runShprobe(const std::vector<std::string>& args, const fs::path& logFo
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     result.out = readText(outPath);
     if (stderrFd < 0) result.err = readText(errPath);
-    return result;
-}
-
-// Runs shprobe with its stderr on a pseudo-terminal (so isatty(2) holds in the child) and returns
-// what it wrote there in err. The output is small (a few hundred bytes), well within the
-// terminal's buffer, so it is read after the child exits.
-RunResult runWithTerminalStderr(const std::vector<std::string>& args, const fs::path& logFolder) {
-    int master = posix_openpt(O_RDWR | O_NOCTTY);
-    if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0) {
-        ADD_FAILURE() << "cannot open a pseudo-terminal: " << std::strerror(errno);
-        return {};
-    }
-    int terminal = open(ptsname(master), O_RDWR | O_NOCTTY);
-    RunResult result = runShprobe(args, logFolder, {}, terminal);
-    close(terminal);
-    fcntl(master, F_SETFL, O_NONBLOCK);
-    char buffer[4096];
-    for (ssize_t n; (n = read(master, buffer, sizeof(buffer))) > 0;)
-        result.err.append(buffer, size_t(n));
-    close(master);
     return result;
 }
 
@@ -1087,14 +1070,50 @@ TEST_F(CliBatch, ProgressBarOnlyOnATerminal) {
     writeInputs();
     RunResult plain = runOk({"bake", a(), b(), "--out-dir", file("plain")});
     EXPECT_EQ(plain.err.find('\r'), std::string::npos);
-    RunResult terminal =
-        runWithTerminalStderr({"bake", a(), b(), "--out-dir", file("terminal")}, folder() / "logs");
-    EXPECT_EQ(terminal.exitCode, 0) << describe(terminal);
-    EXPECT_CONTAINS(terminal.err, "\r[");
-    EXPECT_CONTAINS(terminal.err, "] 2/2 probes");
-    EXPECT_EQ(terminal.err.find("error"), std::string::npos) << terminal.err;
-    EXPECT_TRUE(hasBatchSummary(terminal.out, "2 probes baked, 0 failed;")) << terminal.out;
-    EXPECT_EQ(linesOf(terminal.out).size(), linesOf(plain.out).size()) << terminal.out;
+    const TerminalRun terminal =
+        runOnTerminal({"bake", a(), b(), "--out-dir", file("terminal")}, folder() / "terminal.out");
+    const std::string out = readText(folder() / "terminal.out");
+    EXPECT_EQ(terminal.exitCode, 0) << terminal.terminal;
+    EXPECT_CONTAINS(terminal.terminal, "\r[");
+    EXPECT_CONTAINS(terminal.terminal, "] 2/2 probes");
+    EXPECT_EQ(terminal.terminal.find("error"), std::string::npos) << terminal.terminal;
+    EXPECT_TRUE(hasBatchSummary(out, "2 probes baked, 0 failed;")) << out;
+    EXPECT_EQ(linesOf(out).size(), linesOf(plain.out).size()) << out;
+}
+
+// A single bake of more than a second draws a line per stage on a terminal ("projecting, rows
+// 4096/9216, 10.1 Mtexels/s, 1 s left"), at most 4 times a second, erased at the end; nothing of
+// it with -q or without a terminal, and the probe is the same either way. The order-8 reference
+// projection of 6 x 1536^2 texels takes 1.4-3 s here; the resampling before it ends within the
+// first second, when nothing is drawn yet, so only the projection's line is required.
+TEST_F(Cli, LargeSingleBakeDrawsProgressOnATerminal) {
+    writeImage(file("sky.exr"), smoothEquirect(512, 256));
+    const std::vector<std::string> bake = {"bake", file("sky.exr"), "--face-size", "1536", "--order",
+                                           "8",    "--backend",     "reference"};
+    auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> args = bake;
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    };
+    const TerminalRun shown = runOnTerminal(with({"-o", file("shown.json")}), folder() / "shown.out");
+    ASSERT_EQ(shown.exitCode, 0) << shown.terminal;
+    ASSERT_GT(shown.seconds, 1.2) << "the bake is too short to show its progress";
+    EXPECT_CONTAINS(shown.terminal, "\rprojecting, rows ");
+    EXPECT_CONTAINS(shown.terminal, "/9216, ");
+    EXPECT_CONTAINS(shown.terminal, "texels/s");
+    EXPECT_CONTAINS(shown.terminal, " s left");
+    EXPECT_TRUE(shown.terminal.ends_with("\r\033[K")) << "the line is erased at the end: " << shown.terminal;
+    const size_t draws = testing::drawsOf(shown.terminal, "\rprojecting, ") +
+                         testing::drawsOf(shown.terminal, "\rresampling, ");
+    EXPECT_LE(double(draws), 4.0 * shown.seconds + 2.0) << shown.terminal;
+
+    const TerminalRun quiet = runOnTerminal(with({"-q", "-o", file("quiet.json")}), folder() / "quiet.out");
+    EXPECT_EQ(quiet.exitCode, 0) << quiet.terminal;
+    EXPECT_EQ(quiet.terminal, "");
+
+    const RunResult plain = runOk(with({"-o", file("plain.json")}));
+    EXPECT_EQ(linesOf(readText(folder() / "shown.out")).size(), linesOf(plain.out).size());
+    EXPECT_EQ(readText(file("shown.json")), readText(file("plain.json")));
 }
 
 // ---- 8. Header formats ------------------------------------------------------------------------

@@ -4,6 +4,7 @@
 // baked; and every broken glTF there refused in one line, leaving no file.
 #include "child_program.h"
 #include "scene_fixtures.h"
+#include "terminal_run.h"
 
 #include "formats/probe_volume.h"
 #include "image/environment.h"
@@ -20,11 +21,13 @@
 #include <cstring>
 #include <iterator>
 #include <map>
-#include <spawn.h>
 #include <sys/stat.h>
 
 namespace shprobe {
 namespace {
+
+using testing::runOnTerminal;
+using testing::TerminalRun;
 
 class SceneCommand : public ProgramTest {
   protected:
@@ -37,56 +40,6 @@ class SceneCommand : public ProgramTest {
 
 std::string bytesOf(const std::string& path) {
     return readText(path);
-}
-
-// Runs shprobe with its stderr on a pseudo-terminal (isatty(2) holds in the child) and stdout into
-// a file, and returns what it wrote on the terminal, read while it runs so that it never blocks.
-struct TerminalRun {
-    int exitCode = -1;
-    std::string terminal;
-    double seconds = 0.0;
-};
-
-TerminalRun runOnTerminal(const std::vector<std::string>& args, const fs::path& stdoutPath) {
-    TerminalRun result;
-    const int master = posix_openpt(O_RDWR | O_NOCTTY);
-    if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0) {
-        ADD_FAILURE() << "cannot open a pseudo-terminal: " << std::strerror(errno);
-        return result;
-    }
-    const int terminal = open(ptsname(master), O_RDWR | O_NOCTTY);
-    std::vector<std::string> argStrings{SHPROBE_EXECUTABLE};
-    argStrings.insert(argStrings.end(), args.begin(), args.end());
-    std::vector<std::string> envStrings = changedEnvironment({});
-    std::vector<char*> argv = pointersTo(argStrings), envp = pointersTo(envStrings);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 1, stdoutPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&actions, terminal, 2);
-    const Clock::time_point start = Clock::now();
-    pid_t pid = 0;
-    const int spawnError = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
-    posix_spawn_file_actions_destroy(&actions);
-    close(terminal);
-    if (spawnError != 0) {
-        ADD_FAILURE() << "cannot start " << argv[0] << ": " << std::strerror(spawnError);
-        close(master);
-        return result;
-    }
-    fcntl(master, F_SETFL, O_NONBLOCK);
-    char buffer[4096];
-    int status = 0;
-    for (bool running = true; running;) {
-        running = waitpid(pid, &status, WNOHANG) == 0;
-        for (ssize_t n; (n = read(master, buffer, sizeof buffer)) > 0;)
-            result.terminal.append(buffer, size_t(n));
-        if (running) usleep(20000);
-    }
-    close(master);
-    result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return result;
 }
 
 // A ray bake of more than a second draws a progress line on a terminal ("probes 12/216, 3.1 Mrays/s,
@@ -109,11 +62,8 @@ TEST_F(SceneCommand, ProgressLineOnlyOnATerminal) {
     EXPECT_CONTAINS(shown.terminal, "rays/s");
     EXPECT_CONTAINS(shown.terminal, " s left");
     EXPECT_TRUE(shown.terminal.ends_with("\r\033[K")) << "the line is erased at the end: " << shown.terminal;
-    size_t draws = 0;
-    for (size_t at = shown.terminal.find("\rprobes "); at != std::string::npos;
-         at = shown.terminal.find("\rprobes ", at + 1))
-        ++draws;
-    EXPECT_LE(double(draws), 4.0 * shown.seconds + 2.0) << shown.terminal;
+    EXPECT_LE(double(testing::drawsOf(shown.terminal, "\rprobes ")), 4.0 * shown.seconds + 2.0)
+        << shown.terminal;
 
     const TerminalRun quiet = runOnTerminal(with({"-q", "-o", file("quiet.shpv")}), folder() / "quiet.out");
     EXPECT_EQ(quiet.exitCode, 0) << quiet.terminal;

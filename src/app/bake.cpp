@@ -3,6 +3,7 @@
 // several (or a --list) are a batch written to --out-dir (bake_batch.cpp).
 #include "app/bake_steps.h"
 #include "app/program.h"
+#include "app/progress_line.h"
 #include "app/stopwatch.h"
 #include "app/toolkit.h"
 #include "common/counted.h"
@@ -83,8 +84,10 @@ void runSingleBake(const BakeOptions& options) {
         }
     }
 
+    CountedProgress progress(options.quiet);
     Clock::time_point start = Clock::now();
-    Environment environment = loadInput(options, options.inputs.empty() ? std::string() : options.inputs[0]);
+    Environment environment =
+        loadInput(options, options.inputs.empty() ? std::string() : options.inputs[0], progress.counter());
     std::optional<ProbeSun> sun = takeOutSun(options, environment);
     double loadMs = millisecondsSince(start);
 
@@ -93,9 +96,10 @@ void runSingleBake(const BakeOptions& options) {
                                        : chooseBackend(options, projectionWork(options, environment));
     fitBackend(backend, environment);
     const Environment* environments[] = {&environment};
-    BakeResult result = bake(options, backend, environments)[0];
+    BakeResult result = bake(options, backend, environments, progress.counter())[0];
     if (backend.session) backend.session->finish();
     double bakeMs = millisecondsSince(start);
+    progress.stop();
     requireUsable(backend, result, environment.description);
 
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;

@@ -62,9 +62,10 @@ bool mayHaveGpu() {
 #endif
 }
 
-Environment loadInput(const BakeOptions& options, const std::string& input) {
+Environment loadInput(const BakeOptions& options, const std::string& input, WorkCounter* progress) {
     if (!input.empty()) {
         LoadOptions load;
+        load.progress = progress;
         load.layout = parseLayout(options.layout);
         load.faceSize = options.faceSize;
         load.nonFinite = options.sanitize ? NonFinitePolicy::Replace : NonFinitePolicy::Refuse;
@@ -258,22 +259,24 @@ const char* cpuBackendName(const std::string& backend) {
     return backend == "reference" ? "cpu reference (double)" : "cpu (float, all cores)";
 }
 
-ShCoefficients projectOnCpu(const std::string& backend, const Environment& environment, int order) {
+ShCoefficients projectOnCpu(const std::string& backend, const Environment& environment, int order,
+                            WorkCounter* progress) {
     bool reference = backend == "reference";
     if (environment.keptEquirect())
-        return reference ? projectEquirect(environment.equirect, order)
+        return reference ? projectEquirect(environment.equirect, order, progress)
                          : projectEquirectFast(environment.equirect, order);
     if (environment.keptCross() && !reference) {
         std::vector<glm::vec4> turned;
         const FaceRows faces = crossFaceRows(environment.cross, environment.layout, turned);
         return projectFacesFast(faces, TexelFormat::Rgba32F, environment.faceSize(), order);
     }
-    return reference ? projectCubemap(environment.cubemap, order)
+    return reference ? projectCubemap(environment.cubemap, order, progress)
                      : projectCubemapFast(environment.cubemap, order);
 }
 
-BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, const Environment& environment) {
-    Finished finished = finish(options, projectOnCpu(backend, environment, options.order));
+BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, const Environment& environment,
+                     WorkCounter* progress) {
+    Finished finished = finish(options, projectOnCpu(backend, environment, options.order, progress));
     BakeResult result;
     result.radiance =
         finished.window.empty() ? finished.radiance : applyWindow(finished.radiance, finished.window);
@@ -283,7 +286,7 @@ BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, con
 }
 
 std::vector<BakeResult> bake(const BakeOptions& options, Backend& backend,
-                             std::span<const Environment* const> environments) {
+                             std::span<const Environment* const> environments, WorkCounter* progress) {
     if (backend.session) {
         DeviceStep step(environments.size() == 1
                             ? "baking " + environments[0]->description
@@ -292,7 +295,7 @@ std::vector<BakeResult> bake(const BakeOptions& options, Backend& backend,
     }
     std::vector<BakeResult> results;
     for (const Environment* environment : environments)
-        results.push_back(bakeOnCpu(options, backend.name, *environment));
+        results.push_back(bakeOnCpu(options, backend.name, *environment, progress));
     return results;
 }
 

@@ -5,6 +5,7 @@
 #include "app/commands.h"
 #include "common/error.h"
 #include "common/output_file.h"
+#include "common/work_counter.h"
 #include "formats/output_format.h"
 #include "formats/probe_file.h"
 #include "gpu/host_bake.h"
@@ -30,8 +31,9 @@ struct BakeResult {
 };
 
 // An empty input is the built-in sky. An equirect input is kept as decoded (projected directly)
-// unless a cube map is asked for (--face-size) or needed (--extract-sun).
-Environment loadInput(const BakeOptions& options, const std::string& input);
+// unless a cube map is asked for (--face-size) or needed (--extract-sun). A resampling is counted
+// into `progress`.
+Environment loadInput(const BakeOptions& options, const std::string& input, WorkCounter* progress = nullptr);
 
 // The device and the bake pipelines of a run, for any number of bakes. The pipelines of each source
 // (cube maps, equirect maps) are created the first time a bake needs them, so a run compiles only
@@ -107,11 +109,15 @@ void requireUsable(const Backend& backend, const BakeResult& result, const std::
 
 // "cpu": the fast float path on all cores; "reference": the double-precision reference.
 const char* cpuBackendName(const std::string& backend);
-BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, const Environment& environment);
+// The reference projection's rows are counted into `progress` (the fast path takes tens of
+// milliseconds where the reference takes seconds).
+BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, const Environment& environment,
+                     WorkCounter* progress = nullptr);
 
-// Bakes on the chosen backend, one environment or (gpu) a chunk.
+// Bakes on the chosen backend, one environment or (gpu) a chunk; a cpu bake counts into `progress`.
 std::vector<BakeResult> bake(const BakeOptions& options, Backend& backend,
-                             std::span<const Environment* const> environments);
+                             std::span<const Environment* const> environments,
+                             WorkCounter* progress = nullptr);
 
 // The bytes one environment's texels take in a GPU submission (the chunks of a batch).
 VkDeviceSize environmentBytes(const Environment& environment);

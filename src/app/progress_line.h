@@ -6,11 +6,19 @@
 // they are without a terminal.
 #pragma once
 #include "app/stopwatch.h"
+#include "common/work_counter.h"
 
 #include <algorithm>
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
+#include <mutex>
+#include <optional>
+#include <stop_token>
 #include <string>
+#include <system_error>
+#include <thread>
 #include <unistd.h>
 
 namespace shprobe {
@@ -31,6 +39,9 @@ class ProgressLine {
     ~ProgressLine() { clear(); }
     ProgressLine(const ProgressLine&) = delete;
     ProgressLine& operator=(const ProgressLine&) = delete;
+
+    // The rate and the time left count from `start` (a job that began before the line was made).
+    void startedAt(Clock::time_point start) { start_ = start; }
 
     bool enabled() const { return enabled_; }
     // Stops drawing for good (the job's summary follows), erasing the line.
@@ -119,6 +130,73 @@ class ProgressLine {
     const char* workUnit_ = nullptr;
     Clock::time_point start_ = Clock::now();
     Clock::time_point lastDraw_ = Clock::now();
+};
+
+// The progress line of a job whose loops run in library code and count into a WorkCounter
+// (common/work_counter.h): a thread of its own redraws the line from the counter, a line per stage
+// ("resampling, rows 1200/4096, 20.1 Mtexels/s, 3 s left", then "projecting, rows ..."), and
+// nothing before the job has run a second. counter() is null where no line is drawn (not a
+// terminal, -q), so that the loops count nothing. The line is erased when this is destroyed.
+class CountedProgress {
+  public:
+    explicit CountedProgress(bool quiet) {
+        if (quiet || isatty(STDERR_FILENO) != 1) return;
+        try {
+            watcher_ = std::jthread([this](std::stop_token stop) { watch(stop); });
+        } catch (const std::system_error&) { // no thread: no line
+        }
+    }
+    ~CountedProgress() { stop(); }
+    CountedProgress(const CountedProgress&) = delete;
+    CountedProgress& operator=(const CountedProgress&) = delete;
+
+    WorkCounter* counter() { return watcher_.joinable() ? &counter_ : nullptr; }
+    // Stops drawing for good and erases the line (before the job's summary).
+    void stop() {
+        if (!watcher_.joinable()) return;
+        watcher_.request_stop();
+        watcher_.join();
+    }
+
+  private:
+    static constexpr auto kPoll = std::chrono::milliseconds(100);
+    static constexpr double kFirstDrawSeconds = 1.0;
+
+    void watch(std::stop_token stop) {
+        const Clock::time_point start = Clock::now();
+        const char* shown = nullptr;
+        std::optional<ProgressLine> line;
+        std::mutex mutex;
+        std::condition_variable_any wake;
+        std::unique_lock lock(mutex);
+        while (!stop.stop_requested()) {
+            wake.wait_for(lock, stop, kPoll, [] { return false; }); // a poll interrupted by stop()
+            if (stop.stop_requested()) break;
+            const char* what = counter_.what.load(std::memory_order_acquire);
+            if (!what) continue;
+            if (what != shown) {
+                shown = what;
+                const Clock::time_point stageStart(
+                    Clock::duration(counter_.startTicks.load(std::memory_order_relaxed)));
+                const double stageBegan = std::chrono::duration<double>(stageStart - start).count();
+                line.emplace(
+                    what, counter_.total.load(std::memory_order_relaxed), false,
+                    ProgressLine::Style{.firstDrawSeconds = std::max(0.0, kFirstDrawSeconds - stageBegan)});
+                line->startedAt(stageStart);
+            }
+            if (!line) continue; // the stage is over: its line is erased
+            const uint64_t done = counter_.done.load(std::memory_order_relaxed);
+            if (done >= counter_.total.load(std::memory_order_relaxed)) {
+                line.reset();
+                continue;
+            }
+            line->update(done, double(done) * double(counter_.texelsPerItem.load(std::memory_order_relaxed)),
+                         "texels");
+        }
+    }
+
+    WorkCounter counter_;
+    std::jthread watcher_; // last: it reads counter_
 };
 
 } // namespace shprobe

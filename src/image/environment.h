@@ -1,6 +1,7 @@
 // Loading HDR environments into cube maps: equirect, horizontal and vertical crosses, six face
 // files, and the built-in procedural sky. Layouts and orientations follow docs/conventions.md.
 #pragma once
+#include "common/work_counter.h"
 #include "sh/cubemap.h"
 #include <array>
 #include <cstddef>
@@ -48,6 +49,8 @@ struct LoadOptions {
     // projection that reads the faces where they lie (crossFaceRows), instead of being copied into a
     // cube map.
     bool keepCross = false;
+    // Counts the cube-map rows an equirect image is resampled into, for a progress line.
+    WorkCounter* progress = nullptr;
 };
 
 // A cube map, an equirect map kept as it was decoded (LoadOptions::keepEquirect) or a cross kept
@@ -103,8 +106,9 @@ Environment loadEnvironment(const std::string& path, const LoadOptions& options)
 void checkEquirectShape(int width, int height);
 
 // Cube map of an equirect map: each texel averages a grid of supersamples (enough to cover the
-// equirect pixels under it), each bilinearly interpolated, wrapping in longitude.
-Cubemap equirectToCubemap(const Image& equirect, int faceSize);
+// equirect pixels under it), each bilinearly interpolated, wrapping in longitude. Its rows (of all
+// six faces) are counted into `progress`.
+Cubemap equirectToCubemap(const Image& equirect, int faceSize, WorkCounter* progress = nullptr);
 // The face size of a cross of that size (HorizontalCross or VerticalCross). Throws Error(Input)
 // unless the size has the cross's aspect ratio, 4:3 or 3:4 (since 3 and 4 are coprime, the ratio
 // alone makes the width a multiple of the columns).

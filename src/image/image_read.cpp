@@ -301,9 +301,11 @@ Layout chooseLayout(const Image& image, Layout requested) {
     return requested == Layout::Auto ? detectLayout(image.width, image.height) : requested;
 }
 
-Cubemap imageToCubemap(const Image& image, Layout layout, int faceSize) {
+Cubemap imageToCubemap(const Image& image, Layout layout, const LoadOptions& options) {
+    const int faceSize = options.faceSize;
     if (layout == Layout::Equirect)
-        return equirectToCubemap(image, faceSize > 0 ? faceSize : std::max(1, image.width / 4));
+        return equirectToCubemap(image, faceSize > 0 ? faceSize : std::max(1, image.width / 4),
+                                 options.progress);
     return resizedTo(crossToCubemap(image, layout), faceSize);
 }
 
@@ -334,7 +336,7 @@ Environment loadSingleImage(const std::string& path, const LoadOptions& options)
             if (!equirect) crossFaceSize(image.width, image.height, environment.layout); // or throws
             (equirect ? environment.equirect : environment.cross) = std::move(image);
         } else {
-            environment.cubemap = imageToCubemap(image, environment.layout, options.faceSize);
+            environment.cubemap = imageToCubemap(image, environment.layout, options);
         }
     } catch (const Error& error) {
         throw Error(error.kind(), path + ": " + error.what());

@@ -307,7 +307,7 @@ void checkEquirectShape(int width, int height) {
                     "image is " + sizeText(width, height) + ", but an equirect image must be 2:1");
 }
 
-Cubemap equirectToCubemap(const Image& equirect, int faceSize) {
+Cubemap equirectToCubemap(const Image& equirect, int faceSize, WorkCounter* progress) {
     if (equirect.texels.empty()) throw Error(ErrorKind::Input, "the equirect image is empty");
     checkEquirectShape(equirect.width, equirect.height);
     Cubemap cubemap = makeCubemap(faceSize); // throws for a face size below 1
@@ -315,8 +315,11 @@ Cubemap equirectToCubemap(const Image& equirect, int faceSize) {
     // equirect pixels; k supersamples per side are at least that dense.
     int k = std::max(1, int(std::ceil(double(equirect.width) / (4.0 * faceSize))));
     const size_t samples = cubemap.texels.size() * size_t(k) * size_t(k);
-    forEachItem(faceSize, threadCount(samples, kSamplesPerThread),
-                [&](int j) { resampleRow(equirect, j, k, cubemap); });
+    startWork(progress, "resampling, rows", uint64_t(faceSize), uint64_t(kFaceCount) * uint64_t(faceSize));
+    forEachItem(faceSize, threadCount(samples, kSamplesPerThread), [&](int j) {
+        resampleRow(equirect, j, k, cubemap);
+        countWork(progress, 1);
+    });
     return cubemap;
 }
 

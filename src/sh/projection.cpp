@@ -51,11 +51,12 @@ void requireTexelCount(size_t actual, size_t expected, const char* what) {
 
 } // namespace
 
-ShCoefficients projectCubemap(const Cubemap& cubemap, int order) {
+ShCoefficients projectCubemap(const Cubemap& cubemap, int order, WorkCounter* progress) {
     const int n = cubemap.faceSize;
     requireTexelCount(cubemap.texels.size(), size_t(kFaceCount) * size_t(n) * size_t(n), "cube map");
     ShCoefficients sum = makeRadianceCoefficients(order);
     const std::vector<double> solidAngles = faceSolidAngles(n);
+    startWork(progress, "projecting, rows", uint64_t(kFaceCount) * uint64_t(n), uint64_t(n));
     BasisValues basis{};
     for (int face = 0; face < kFaceCount; ++face) {
         for (int j = 0; j < n; ++j) {
@@ -63,22 +64,25 @@ ShCoefficients projectCubemap(const Cubemap& cubemap, int order) {
                 accumulateSample(sum, cubemap.at(face, i, j), texelDirection(face, i, j, n),
                                  solidAngles[size_t(j) * n + i], basis);
             }
+            countWork(progress, 1);
         }
     }
     return sum;
 }
 
-ShCoefficients projectEquirect(const Image& equirect, int order) {
+ShCoefficients projectEquirect(const Image& equirect, int order, WorkCounter* progress) {
     const int w = equirect.width;
     const int h = equirect.height;
     requireTexelCount(equirect.texels.size(), size_t(w) * size_t(h), "equirect image");
     ShCoefficients sum = makeRadianceCoefficients(order);
+    startWork(progress, "projecting, rows", uint64_t(h), uint64_t(w));
     BasisValues basis{};
     for (int j = 0; j < h; ++j) {
         const double rowSolidAngle = equirectRowSolidAngle(j, w, h);
         for (int i = 0; i < w; ++i) {
             accumulateSample(sum, equirect.at(i, j), equirectDirection(i, j, w, h), rowSolidAngle, basis);
         }
+        countWork(progress, 1);
     }
     return sum;
 }

@@ -2,12 +2,14 @@
 // each texel weighted by its exact solid angle (Sloan, "Stupid Spherical Harmonics (SH) Tricks",
 // projection from cube maps).
 #pragma once
+#include "common/work_counter.h"
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 
 namespace shprobe {
 
-ShCoefficients projectCubemap(const Cubemap& cubemap, int order);
-ShCoefficients projectEquirect(const Image& equirect, int order);
+// Their rows (of each face, or of the equirect image) are counted into `progress`.
+ShCoefficients projectCubemap(const Cubemap& cubemap, int order, WorkCounter* progress = nullptr);
+ShCoefficients projectEquirect(const Image& equirect, int order, WorkCounter* progress = nullptr);
 
 } // namespace shprobe
