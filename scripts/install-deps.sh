@@ -17,6 +17,7 @@ packages=(
   xvfb xauth
   blender-data  # real HDR environments for the tests (eight equirect EXRs)
   assimp-testmodels  # real and broken glTF scenes for the tests
+  mono-mcs  # C#: test_engine_exports compiles and runs docs/exports.md's Unity snippet (mcs, mono)
 )
 
 missing=()

@@ -5,6 +5,9 @@
 // Each evaluates the exported file at 1,000 directions mapped through the documented frame
 // (F d, engineFrame) and must equal shprobe's own evaluation at d. Without node or the packages the
 // JS checks are skipped with a message (ctest shows them as skipped), never passed.
+// docs/exports.md's loader snippets are checked here too, read out of the docs (tests/engines/common.mjs
+// for the JS ones, which threejs.mjs and babylon.mjs load the files through; CMake copies the others
+// into BUILD/snippets): see "docs/exports.md's loader snippets" below.
 #include "formats/engine_export.h"
 #include "formats/probe_file.h"
 #include "render/run_program.h"
@@ -20,11 +23,25 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <numbers>
 #include <regex>
 #include <spawn.h>
 #include <sstream>
 #include <sys/wait.h>
+
+// docs/exports.md's Filament snippet, compiled against tests/engines/filament_stub: it defines
+// loadShprobeLight.
+#include "filament.cpp"
+
+// docs/exports.md's Godot shader include, which is GLSL, compiled as C++: GLSL's vec3 as GLM's,
+// its float as double (the precision of the transcriptions here; only the arithmetic is checked).
+namespace godot_snippet {
+using vec3 = glm::dvec3;
+#define float double
+#include "godot-include.glsl"
+#undef float
+} // namespace godot_snippet
 
 namespace shprobe {
 namespace {
@@ -161,25 +178,33 @@ std::string nodeMissing() {
         if (!missing.empty()) GTEST_SKIP() << "engine check skipped: " << missing;                           \
     } while (0)
 
-// Runs `node tests/engines/SCRIPT FILE DIRECTIONS` (no shell) and parses its JSON line.
-nlohmann::json runNode(const std::string& script, const std::string& file, const std::string& directions,
-                       const fs::path& folder) {
-    const fs::path out = folder / (script + ".out"), err = folder / (script + ".err");
-    std::vector<std::string> args{"node", std::string(SHPROBE_ENGINE_SCRIPTS) + "/" + script, file,
-                                  directions};
-    std::vector<std::string> env = testing::changedEnvironment({{"SHPROBE_NODE_MODULES", modulesFolder()}});
-    std::vector<char*> argv = testing::pointersTo(args), envp = testing::pointersTo(env);
+// Runs ARGS (no shell; ARGS[0] found on the PATH) in FOLDER's files NAME.out and NAME.err; the test
+// fails unless it exits 0. Its stdout.
+std::string runTool(const std::vector<std::string>& args, const fs::path& folder, const std::string& name,
+                    const testing::EnvironmentChanges& changes = {}) {
+    const fs::path out = folder / (name + ".out"), err = folder / (name + ".err");
+    std::vector<std::string> arguments = args, env = testing::changedEnvironment(changes);
+    std::vector<char*> argv = testing::pointersTo(arguments), envp = testing::pointersTo(env);
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     pid_t pid = 0;
     int status = -1;
-    if (posix_spawnp(&pid, "node", &actions, nullptr, argv.data(), envp.data()) == 0)
+    if (posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), envp.data()) == 0)
         waitpid(pid, &status, 0);
     posix_spawn_file_actions_destroy(&actions);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << script << ": " << readText(err);
-    return nlohmann::json::parse(readText(out), nullptr, false);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0)
+        << name << ": " << readText(err) << readText(out);
+    return readText(out);
+}
+
+// Runs `node tests/engines/SCRIPT FILE DIRECTIONS` and parses its JSON line.
+nlohmann::json runNode(const std::string& script, const std::string& file, const std::string& directions,
+                       const fs::path& folder) {
+    std::string out = runTool({"node", std::string(SHPROBE_ENGINE_SCRIPTS) + "/" + script, file, directions},
+                              folder, script, {{"SHPROBE_NODE_MODULES", modulesFolder()}});
+    return nlohmann::json::parse(out, nullptr, false);
 }
 
 std::vector<glm::dvec3> vectors(const nlohmann::json& rows) {
@@ -326,6 +351,96 @@ TEST_F(EngineExports, GodotCaptureEvaluatesToOurs) {
                                                     [&](glm::dvec3 n) { return godotCapture(sh, n); }),
                          irradianceAt),
                  kEngineTolerance, "Godot lightmap capture");
+}
+
+// ---- docs/exports.md's loader snippets --------------------------------------------------------
+// The three.js and Babylon.js snippets run in threejs.mjs and babylon.mjs (the tests above). Here
+// the Filament, Unity and Godot ones run on the file shprobe wrote; what they hand the engine is
+// evaluated with the engine's formula above and compared at kEngineTolerance. The C++ and C#
+// snippets keep the values in float (2^-24 relative each, a few 1e-8 of the probe's scale over 9
+// terms), well inside it.
+
+std::string snippetFile(const std::string& name) {
+    return std::string(SHPROBE_SNIPPETS) + "/" + name;
+}
+
+TEST_F(EngineExports, FilamentSnippetHandsFilamentTheFile) {
+    filament::Engine engine;
+    std::unique_ptr<filament::IndirectLight> light(
+        loadShprobeLight(engine, convert("probe.filament.txt").c_str()));
+    ASSERT_EQ(light->bands, 3);
+    std::vector<double> values;
+    for (const filament::math::float3& c : light->sh)
+        values.insert(values.end(), {c.r, c.g, c.b});
+    expectWithin(
+        compare(evaluateAtEngineDirections(Engine::Filament, true,
+                                           [&](glm::dvec3 n) { return filamentIrradiance(values, n); }),
+                irradianceOverPiAt),
+        kEngineTolerance, "Filament snippet's irradiance(3, sh)");
+}
+
+// The reason the C# snippet cannot run here, or empty.
+std::string monoMissing() {
+    for (const char* tool : {"mcs", "mono"})
+        if (std::system(("command -v " + std::string(tool) + " > /dev/null 2>&1").c_str()) != 0)
+            return std::string(tool) + " is not installed (Debian's mono-mcs; scripts/install-deps.sh)";
+    return "";
+}
+
+// mcs compiles the snippet with tests/engines/unity_stub.cs, whose Main runs its Start on the file
+// and prints the SphericalHarmonicsL2 it set as RenderSettings.ambientProbe.
+TEST_F(EngineExports, UnitySnippetSetsShadeSH9sProbe) {
+    if (std::string missing = monoMissing(); !missing.empty())
+        GTEST_SKIP() << "Unity snippet check skipped: " << missing;
+    std::string file = convert("probe.unity.json");
+    runTool({"mcs", "-out:" + path("snippet.exe"), snippetFile("unity.cs"),
+             std::string(SHPROBE_ENGINE_SCRIPTS) + "/unity_stub.cs"},
+            folder_, "mcs");
+    std::vector<double> sh = numbersIn(runTool({"mono", path("snippet.exe"), file}, folder_, "mono"));
+    ASSERT_EQ(sh.size(), 27u);
+    expectWithin(compare(evaluateAtEngineDirections(Engine::Unity, true,
+                                                    [&](glm::dvec3 n) { return unityShadeSH9(sh, n); }),
+                         irradianceOverPiAt),
+                 kEngineTolerance, "Unity snippet's ambientProbe through ShadeSH9");
+}
+
+// What follows the Godot include in the fragment shader glslangValidator parses.
+constexpr const char* kGlslCaller = R"(layout(location = 0) out vec4 color;
+void main() {
+    vec3 sh[9];
+    for (int i = 0; i < 9; ++i) sh[i] = vec3(i);
+    color = vec4(shIrradiance(sh, vec3(0.0, 1.0, 0.0)), 1.0);
+}
+)";
+
+// No Debian 12 package reads Godot 4's shader language or GDScript (bookworm's godot3 is Godot
+// 3.2.3, another syntax), so neither the shader nor the script runs. Checked: the include parses
+// as GLSL (glslangValidator, inside a fragment shader), its arithmetic on the file's colors equals
+// ours (compiled as C++ above, within kEngineTolerance: Godot's 6-digit constants), the shader
+// includes it and sets the uniform the script fills. Not checked: Godot's own parsing of the
+// three blocks, the script's JSON reading, and the world-space normal.
+TEST_F(EngineExports, GodotSnippetsParseAndEvaluateToOurs) {
+    const std::string include = readText(snippetFile("godot-include.glsl")),
+                      shader = readText(snippetFile("godot-shader.gdshader")),
+                      script = readText(snippetFile("godot-script.gd"));
+    std::ofstream(path("snippet.frag")) << "#version 450\n" << include << kGlslCaller;
+    runTool({SHPROBE_GLSLANG, path("snippet.frag")}, folder_, "glslangValidator");
+
+    std::vector<glm::dvec3> sh = vectors(nlohmann::json::parse(readText(convert("probe.godot.json"))));
+    ASSERT_EQ(sh.size(), 9u);
+    expectWithin(compare(evaluateAtEngineDirections(
+                             Engine::Godot, true,
+                             [&](glm::dvec3 n) { return godot_snippet::shIrradiance(sh.data(), n); }),
+                         irradianceAt),
+                 kEngineTolerance, "Godot snippet's shIrradiance");
+
+    std::smatch includeName, uniform, parameter;
+    ASSERT_TRUE(std::regex_search(shader, includeName, std::regex(R"re(#include "res://([\w.]+)")re")));
+    EXPECT_NE(include.find(includeName[1].str()), std::string::npos) << "the include names itself otherwise";
+    EXPECT_NE(shader.find("shIrradiance(sh, "), std::string::npos) << shader;
+    ASSERT_TRUE(std::regex_search(shader, uniform, std::regex(R"(uniform vec3 (\w+)\[9\])")));
+    ASSERT_TRUE(std::regex_search(script, parameter, std::regex(R"re(set_shader_parameter\("(\w+)")re")));
+    EXPECT_EQ(parameter[1].str(), uniform[1].str());
 }
 
 // ---- Conversions ------------------------------------------------------------------------------

@@ -1,15 +1,27 @@
-// Babylon.js: the array through SphericalHarmonics.FromArray, SphericalPolynomial.FromHarmonics
-// (what a texture's sphericalPolynomial holds) and its preScaledHarmonics, the values the PBR
-// material uploads as vSphericalL00..L22 (materialHelper.functions BindIBLParameters); evaluated as
-// harmonicsFunctions.fx computeEnvironmentIrradiance does with SPHERICAL_HARMONICS: E(n)/pi.
+// Babylon.js: the array given to docs/exports.md's Babylon.js snippet (SphericalHarmonics.FromArray,
+// SphericalPolynomial.FromHarmonics into the environment texture's sphericalPolynomial), on a
+// NullEngine scene whose environment texture stands for a loaded one (an internal texture, ready).
+// Then the texture's preScaledHarmonics, the values the PBR material uploads as vSphericalL00..L22
+// (materialHelper.functions BindIBLParameters), evaluated as harmonicsFunctions.fx
+// computeEnvironmentIrradiance does with SPHERICAL_HARMONICS: E(n)/pi.
 // Usage: node babylon.mjs PROBE.babylon.json DIRECTIONS
 import { readFileSync } from "node:fs";
-import { importPackage, print, readDirections } from "./common.mjs";
+import { importPackage, importSnippet, print, readDirections } from "./common.mjs";
 
-const { SphericalHarmonics, SphericalPolynomial } = await importPackage("@babylonjs/core/Maths/sphericalPolynomial.js");
+const { BaseTexture, InternalTexture, InternalTextureSource, Logger, NullEngine, Scene } =
+    await importPackage("@babylonjs/core/index.js");
+const { useShprobeDiffuse } = await importSnippet("babylon");
 const [file, directionsFile] = process.argv.slice(2);
-const harmonics = SphericalHarmonics.FromArray(JSON.parse(readFileSync(file, "utf8")));
-const sh = SphericalPolynomial.FromHarmonics(harmonics).preScaledHarmonics;
+Logger.LogLevels = Logger.ErrorLogLevel; // no banner on stdout
+const engine = new NullEngine();
+const scene = new Scene(engine);
+const internal = new InternalTexture(engine, InternalTextureSource.Unknown);
+internal.isReady = true;
+scene.environmentTexture = new BaseTexture(scene, internal);
+useShprobeDiffuse(scene, JSON.parse(readFileSync(file, "utf8")));
+const polynomial = scene.environmentTexture.sphericalPolynomial;
+if (!polynomial) throw new Error(`${file}: the snippet left the environment texture without a sphericalPolynomial`);
+const sh = polynomial.preScaledHarmonics;
 // computeEnvironmentIrradiance's nine terms (harmonicsFunctions.fx), transcribed.
 const terms = (x, y, z) => [
     [sh.l00, 1], [sh.l1_1, y], [sh.l10, z], [sh.l11, x], [sh.l2_2, y * x],
