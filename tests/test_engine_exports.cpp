@@ -240,6 +240,20 @@ TEST_F(EngineExports, BabylonHarmonicsEvaluateToOurs) {
                  "Babylon.js computeEnvironmentIrradiance");
 }
 
+// The specular chain as gltf.mjs read it: log2(size / 16) + 1 mips of 6 square faces, halving from
+// specularImageSize down to 16.
+void expectSpecularChain(const nlohmann::json& result, int size) {
+    ASSERT_EQ(result["specularImageSize"].get<int>(), size);
+    const nlohmann::json& mips = result["specularMips"];
+    ASSERT_EQ(int(mips.size()), int(std::log2(size / 16)) + 1);
+    for (size_t mip = 0; mip < mips.size(); ++mip) {
+        ASSERT_EQ(mips[mip].size(), 6u) << "mip " << mip;
+        for (const nlohmann::json& face : mips[mip])
+            EXPECT_EQ(face, nlohmann::json::array({size >> mip, size >> mip})) << "mip " << mip;
+    }
+    EXPECT_EQ(size >> (mips.size() - 1), 16);
+}
+
 TEST_F(EngineExports, GltfPassesTheValidatorAndEvaluatesToOurs) {
     SKIP_WITHOUT_NODE();
     nlohmann::json result = runNode("gltf.mjs", convert("probe.gltf"), directionsFile(Engine::Gltf), folder_);
@@ -248,6 +262,23 @@ TEST_F(EngineExports, GltfPassesTheValidatorAndEvaluatesToOurs) {
     EXPECT_EQ(result["numWarnings"].get<int>(), 0) << result["messages"].dump(2);
     expectWithin(compare(vectors(result["irradianceOverPi"]), irradianceOverPiAt), kEngineTolerance,
                  "glTF through Babylon's loader");
+    expectSpecularChain(result, 128);
+}
+
+// bake's glTF, its specular chain prefiltered from the environment with the lights drawn in, at
+// another size: valid too.
+TEST_F(EngineExports, GltfFromBakePassesTheValidator) {
+    SKIP_WITHOUT_NODE();
+    testing::RunResult run = testing::runProgram({"bake", "--face-size", "32", "--backend", "cpu", "-q",
+                                                  "--ambient", "0.1,0.1,0.1", "--sphere", "0,1,0", "10",
+                                                  "5,5,5", "--map-size", "64", "-o", path("bake.gltf")},
+                                                 folder_ / "logs");
+    ASSERT_EQ(run.exitCode, 0) << testing::describe(run);
+    nlohmann::json result = runNode("gltf.mjs", path("bake.gltf"), directionsFile(Engine::Gltf), folder_);
+    ASSERT_FALSE(result.is_discarded());
+    EXPECT_EQ(result["numErrors"].get<int>(), 0) << result["messages"].dump(2);
+    EXPECT_EQ(result["numWarnings"].get<int>(), 0) << result["messages"].dump(2);
+    expectSpecularChain(result, 64);
 }
 
 // ---- Published shader formulas ----------------------------------------------------------------

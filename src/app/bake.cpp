@@ -103,7 +103,8 @@ void runSingleBake(const BakeOptions& options) {
     requireUsable(backend, result, environment.description);
 
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
-    writeOutput(options, options.output, written, metadataFor(backend, options, environment, result, sun));
+    writeOutput(options, options.output, written, metadataFor(backend, options, environment, result, sun),
+                environment);
 
     // With the probe on standard output, the report goes to stderr.
     FILE* report = reportStream(options.output);
@@ -197,12 +198,15 @@ void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool
         help += std::string(" ") + each.name + " (" + each.what + ", " + each.extension + ");";
     }
     help += " default: from -o's extension, else json. The engine formats hold bands 0..2. gltf's "
-            "required specularImages are one mip of the probe's own diffuse radiance E/pi (a probe has no "
-            "prefiltered specular environment), for bake and convert alike";
+            "specularImages are GGX-prefiltered mips (roughness 0 to 1) of the environment's radiance "
+            "(bake; --directional is refused, --sphere draws a light) or of the probe's own radiance "
+            "from its coefficients (convert)";
     command.add_option("--format", format, help)->check(CLI::IsMember(names));
     command
         .add_option("--map-size", mapSize,
-                    "Irradiance maps: equirect width (even; default 512) or cross face size (default 128)")
+                    "Irradiance maps: equirect width (even; default 512) or cross face size (default 128); "
+                    "gltf: specularImageSize, mip 0's face size (a power of two from 32 to 512; default "
+                    "128)")
         ->check(CLI::Range(1, 16384));
     command
         .add_option("--mirror", mirror,

@@ -212,7 +212,8 @@ void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
     try {
         writeOutput(options, loaded.item->output, written,
-                    metadataFor(backend, options, loaded.environment, result, loaded.sun));
+                    metadataFor(backend, options, loaded.environment, result, loaded.sun),
+                    loaded.environment);
     } catch (const Error& error) {
         if (error.kind() != ErrorKind::Output) throw;
         reportFailure(batch, *loaded.item, error);

@@ -5,6 +5,7 @@
 #include "common/scope_exit.h"
 #include "formats/engine_export.h"
 #include "formats/probe_export.h"
+#include "image/specular_prefilter.h"
 #include "sh/basis.h"
 #include "sh/fast_projection.h"
 #include "sh/folding.h"
@@ -338,11 +339,47 @@ void checkFormatOptions(const BakeOptions& options) {
                         " cannot hold the sun; use --format json, which keeps it beside the coefficients");
     if (options.format == "irradiance-equirect" && options.mapSize % 2 != 0)
         throw Error(ErrorKind::Input, "--map-size: an equirect map's width must be even");
+    requireMapSizeFits(options.format, options.mapSize);
+    if (options.format == "gltf" && !options.lights.directional.empty())
+        throw Error(ErrorKind::Input,
+                    "--directional: --format gltf's specularImages cannot hold a delta light (its mirror "
+                    "image has no size); give the light a size with --sphere X,Y,Z RADIUS R,G,B");
 }
 
+namespace {
+
+// gltf's specularImages source: the environment's radiance at the specularImageSize (an area
+// average: equirect maps by supersamples covering their pixels, cube maps by resizeCubemap) with
+// the analytic lights drawn in: --ambient everywhere, each --sphere's cap by texel coverage.
+Cubemap specularRadianceOf(const BakeOptions& options, const Environment& environment, int size) {
+    Cubemap radiance = environment.keptEquirect() ? equirectToCubemap(environment.equirect, size)
+                       : environment.keptCross()
+                           ? resizeCubemap(crossToCubemap(environment.cross, environment.layout), size)
+                           : resizeCubemap(environment.cubemap, size);
+    for (const glm::dvec3& ambient : options.lights.ambient)
+        addUniformRadiance(radiance, ambient);
+    for (const SphericalLight& light : options.lights.spheres)
+        drawSphericalLight(radiance, light);
+    return radiance;
+}
+
+std::string lightsDrawnIn(const LightOptions& lights) {
+    if (lights.ambient.empty() && lights.spheres.empty()) return "";
+    if (lights.spheres.empty()) return " with --ambient added";
+    return lights.ambient.empty() ? " with --sphere drawn in" : " with --ambient added and --sphere drawn in";
+}
+
+} // namespace
+
 void writeOutput(const BakeOptions& options, const std::string& path, const ShCoefficients& probe,
-                 const ProbeMetadata& metadata) {
+                 const ProbeMetadata& metadata, const Environment& environment) {
     ExportOptions exportOptions{.metadata = metadata, .mapSize = options.mapSize, .mirror = options.mirror};
+    Cubemap specular;
+    if (options.format == "gltf") {
+        specular = specularRadianceOf(options, environment,
+                                      options.mapSize > 0 ? options.mapSize : kDefaultSpecularSize);
+        exportOptions.specular = {&specular, environment.description + lightsDrawnIn(options.lights)};
+    }
     formatNamed(options.format).write(path, probe, exportOptions);
 }
 

@@ -141,8 +141,10 @@ BakeOptions withFormatAndOutput(BakeOptions options);
 void checkFormatOptions(const BakeOptions& options);
 
 // Writes the probe in the chosen format (probe_file.h, probe_export.h); every writer is atomic.
+// gltf's specularImages are prefiltered from the environment's radiance, its --ambient and --sphere
+// lights drawn in.
 void writeOutput(const BakeOptions& options, const std::string& path, const ShCoefficients& probe,
-                 const ProbeMetadata& metadata);
+                 const ProbeMetadata& metadata, const Environment& environment);
 
 ProbeMetadata metadataFor(const Backend& backend, const BakeOptions& options, const Environment& environment,
                           const BakeResult& result, const std::optional<ProbeSun>& sun);

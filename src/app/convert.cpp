@@ -56,6 +56,7 @@ void runConvert(const ConvertOptions& given) {
     const ExportFormat& format = *findExportFormat(options.format);
     // --map-size 0 is the writer's default, which fits.
     if (options.format == "irradiance-equirect" && options.mapSize > 0) requireEquirectWidth(options.mapSize);
+    requireMapSizeFits(options.format, options.mapSize);
     checkOutputPath(options.output, format.content);
     checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
     const Probe probe = readAnyProbe(options.input);

@@ -4,6 +4,7 @@
 #include "formats/engine_export.h"
 
 #include "image/image_write.h"
+#include "image/specular_prefilter.h"
 
 #include "common/error.h"
 #include "formats/probe_export.h"
@@ -192,30 +193,17 @@ std::string unityText(const EngineCoefficients& c) {
 
 // ---- glTF --------------------------------------------------------------------------------------
 
-constexpr int kSpecularFaceSize = 16; // EXT_lights_image_based: square, power of two
-
 // RGBD as EXT_lights_image_based's PNGs hold HDR (Babylon's toRGBD in helperFunctions.fx):
-// D = floor(max(255 / max(rgb), 1)) / 255, rgb' = (rgb D)^(1/2.2), alpha D.
-std::array<uint8_t, 4> rgbd(const glm::dvec3& color) {
+// D = floor(max(255 / max(rgb), 1)) / 255, rgb' = (rgb D)^(1/2.2), alpha D. Values above 255 clip
+// (D cannot fall below 1/255); a non-finite value is taken as the largest float (NaN as 0).
+std::array<uint8_t, 4> rgbd(glm::dvec3 color) {
+    for (int c = 0; c < 3; ++c)
+        color[c] = std::isnan(color[c]) ? 0.0 : std::min(color[c], double(std::numeric_limits<float>::max()));
     const double maxRgb = std::max({color.r, color.g, color.b, 1e-6});
     const double d = std::clamp(std::floor(std::max(255.0 / maxRgb, 1.0)) / 255.0, 0.0, 1.0);
     auto byte = [](double v) { return uint8_t(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); };
     auto gamma = [&](double v) { return byte(std::pow(std::max(v * d, 0.0), 1.0 / 2.2)); };
     return {gamma(color.r), gamma(color.g), gamma(color.b), byte(d)};
-}
-
-// One face of the probe's diffuse radiance E/pi (face orientation of docs/conventions.md), flipped about
-// its vertical axis as the extension asks of every face image.
-std::string specularFacePng(const ShCoefficients& irradiance, int face) {
-    std::vector<uint8_t> rgba;
-    for (int j = 0; j < kSpecularFaceSize; ++j)
-        for (int i = kSpecularFaceSize - 1; i >= 0; --i) {
-            glm::dvec3 c =
-                evaluate(irradiance, texelDirection(face, i, j, kSpecularFaceSize)) / std::numbers::pi;
-            for (uint8_t b : rgbd(c))
-                rgba.push_back(b);
-        }
-    return encodeRgba8("png", kSpecularFaceSize, kSpecularFaceSize, rgba);
 }
 
 std::string base64(std::string_view bytes) {
@@ -246,23 +234,69 @@ std::string jsonString(const std::string& text) {
     return out + "\"";
 }
 
-// A glTF 2.0 asset holding one EXT_lights_image_based light, referenced by the scene. The
-// specular cube is one mip of the probe's own diffuse radiance E/pi (RGBD PNGs): a probe carries
-// no prefiltered specular environment, and the extension requires the images.
-std::string gltfText(const ShCoefficients& probe, const EngineCoefficients& c, const std::string& source) {
-    ShCoefficients irradiance = convolveIrradiance(radianceBands(probe));
-    std::string images, faces;
-    for (int face = 0; face < kFaceCount; ++face) {
-        images += std::string(face ? ",\n" : "") +
-                  "    {\"mimeType\": \"image/png\", \"uri\": \"data:image/png;base64," +
-                  base64(specularFacePng(irradiance, face)) + "\"}";
-        faces += (face ? ", " : "") + std::to_string(face);
+// The probe's radiance at its order; an irradiance probe whose odd bands past 1 were lost (A_l = 0)
+// gives bands 0..2.
+ShCoefficients probeRadiance(const ShCoefficients& probe) {
+    if (std::optional<ShCoefficients> radiance = radianceOf(probe, probe.order)) return *radiance;
+    return *radianceOf(probe, std::min(probe.order, kEngineOrder));
+}
+
+// The specular chain and the words for asset.extras: prefiltered from the source the caller gave,
+// else from the probe's own band-limited radiance.
+std::vector<Cubemap> specularChain(const ShCoefficients& probe, const ExportOptions& options,
+                                   std::string& what) {
+    const int size = options.mapSize > 0 ? options.mapSize : kDefaultSpecularSize;
+    const int mips = specularMipCount(size);
+    std::string source;
+    std::vector<Cubemap> chain;
+    if (options.specular.radiance) {
+        source = "the environment's radiance, " + options.specular.what;
+        chain = prefilterSpecular(*options.specular.radiance, size);
+    } else {
+        const ShCoefficients radiance = probeRadiance(probe);
+        source = "the probe's radiance from its order-" + std::to_string(radiance.order) +
+                 " coefficients (band-limited, negatives clamped to 0)";
+        chain = prefilterSpecular(radianceCubemap(radiance, size), size);
+    }
+    what = "GGX-prefiltered (split sum, n = v = R) from " + source + ": " + std::to_string(mips) +
+           " mips, faces " + std::to_string(size) + " down to " + std::to_string(kSmallestSpecularMip) +
+           ", mip i at roughness i/" + std::to_string(mips - 1) + " (GGX alpha = roughness^2)";
+    return chain;
+}
+
+// One face of a mip (face orientation of docs/conventions.md) as an RGBD PNG, flipped about its
+// vertical axis as the extension asks of every face image.
+std::string specularFacePng(const Cubemap& mip, int face) {
+    const int n = mip.faceSize;
+    std::vector<uint8_t> rgba;
+    rgba.reserve(size_t(4) * size_t(n) * size_t(n));
+    for (int j = 0; j < n; ++j)
+        for (int i = n - 1; i >= 0; --i)
+            for (uint8_t b : rgbd(glm::dvec3(glm::vec3(mip.at(face, i, j)))))
+                rgba.push_back(b);
+    return encodeRgba8("png", n, n, rgba);
+}
+
+// A glTF 2.0 asset holding one EXT_lights_image_based light, referenced by the scene: its
+// irradiance coefficients and its specular chain, mip after mip, six RGBD PNGs each.
+std::string gltfText(const ShCoefficients& probe, const EngineCoefficients& c, const ExportOptions& options) {
+    std::string what;
+    const std::vector<Cubemap> chain = specularChain(probe, options, what);
+    std::string images, mips;
+    for (size_t mip = 0; mip < chain.size(); ++mip) {
+        std::string faces;
+        for (int face = 0; face < kFaceCount; ++face) {
+            images += std::string(mip || face ? ",\n" : "") +
+                      "    {\"mimeType\": \"image/png\", \"uri\": \"data:image/png;base64," +
+                      base64(specularFacePng(chain[mip], face)) + "\"}";
+            faces += (face ? ", " : "") + std::to_string(int(mip) * kFaceCount + face);
+        }
+        mips += std::string(mip ? ",\n" : "\n") + "          [" + faces + "]";
     }
     return "{\n"
            "  \"asset\": {\"version\": \"2.0\", \"generator\": \"shprobe\", \"extras\": {\"source\": " +
-           jsonString(source) +
-           ", \"specularImages\": \"one mip of the probe's diffuse radiance E/pi, not a prefiltered "
-           "specular environment\"}},\n"
+           jsonString(options.metadata.source) + ", \"specularImages\": " + jsonString(what) +
+           "}},\n"
            "  \"extensionsUsed\": [\"EXT_lights_image_based\"],\n"
            "  \"extensions\": {\n"
            "    \"EXT_lights_image_based\": {\n"
@@ -274,11 +308,11 @@ std::string gltfText(const ShCoefficients& probe, const EngineCoefficients& c, c
            rowsArray(c, "        ") +
            ",\n"
            "        \"specularImageSize\": " +
-           std::to_string(kSpecularFaceSize) +
+           std::to_string(chain[0].faceSize) +
            ",\n"
-           "        \"specularImages\": [[" +
-           faces +
-           "]]\n"
+           "        \"specularImages\": [" +
+           mips +
+           "\n        ]\n"
            "      }]\n"
            "    }\n"
            "  },\n"
@@ -534,7 +568,7 @@ std::string engineFileText(const ShCoefficients& probe, Engine engine, const Exp
     case Engine::Godot:
         return rowsArray(c, "") + "\n";
     case Engine::Gltf:
-        return gltfText(probe, c, options.metadata.source);
+        return gltfText(probe, c, options);
     case Engine::Filament:
         return filamentText(c);
     case Engine::Unity:

@@ -8,6 +8,7 @@
 #include "common/output_file.h"
 #include "formats/probe_file.h"
 #include "sh/coefficients.h"
+#include "sh/cubemap.h"
 
 #include <array>
 #include <glm/mat3x3.hpp>
@@ -19,11 +20,21 @@
 
 namespace shprobe {
 
+// What gltf's specularImages are prefiltered from (image/specular_prefilter.h): a radiance cube map
+// (bake: the environment, its analytic lights drawn in) and what it is, for asset.extras. Without
+// one, the probe's own radiance from its coefficients.
+struct SpecularSource {
+    const Cubemap* radiance = nullptr;
+    std::string what; // "forest.exr (equirect 1024x512) with --ambient, --sphere"
+};
+
 // What a writer may need beside the coefficients.
 struct ExportOptions {
     ProbeMetadata metadata; // json keeps it all; the headers and glTF copy metadata.source
-    int mapSize = 0;        // irradiance maps: equirect width or face size (0: 512 / 128)
-    bool mirror = true;     // filament: the frame of cmgen's default mirroring (cmgen --no-mirror: false)
+    // Irradiance maps: equirect width or face size (0: 512 / 128); gltf: specularImageSize (0: 128).
+    int mapSize = 0;
+    bool mirror = true;      // filament: the frame of cmgen's default mirroring (cmgen --no-mirror: false)
+    SpecularSource specular; // gltf
 };
 
 // What a format does with the sun of --extract-sun (or of a probe file that has one).

@@ -1,6 +1,7 @@
 #include "formats/output_format.h"
 
 #include "common/error.h"
+#include "image/specular_prefilter.h"
 
 #include <string_view>
 
@@ -51,6 +52,14 @@ void settleFormatAndOutput(std::string& format, std::string& output) {
 
 OutputContent formatContent(const std::string& format) {
     return formatNamed(format).content;
+}
+
+void requireMapSizeFits(const std::string& format, int mapSize) {
+    if (format == "gltf" && mapSize != 0 && !isSpecularSize(mapSize))
+        throw Error(ErrorKind::Input, "--map-size: gltf's specularImageSize must be a power of two from " +
+                                          std::to_string(kMinSpecularSize) + " to " +
+                                          std::to_string(kMaxSpecularSize) + ", not " +
+                                          std::to_string(mapSize));
 }
 
 } // namespace shprobe

@@ -1,5 +1,6 @@
 // The built-in default environment: a procedural sky (gradient, ground, sun disc), +Y up.
 #include "image/environment.h"
+#include "image/texel_mean.h"
 
 #include "common/parallel.h"
 
@@ -56,24 +57,6 @@ glm::dvec3 radianceToward(const SkyParameters& sky, const Sun& sun, const glm::d
 // Texels worth a thread: a few hundred microseconds of work.
 constexpr size_t kTexelsPerThread = 4096;
 
-// Mean sky radiance over an n x n grid in texel (i, j), each sample weighted by the solid angle
-// per unit face area, 1 / (1 + a^2 + b^2)^(3/2), so that mean x texel solid angle is the integral.
-glm::dvec3 texelMean(const SkyParameters& sky, const Sun& sun, int face, int i, int j, int faceSize, int n) {
-    double step = 2.0 / (double(faceSize) * n);
-    glm::dvec3 sum(0.0);
-    double weights = 0.0;
-    for (int sj = 0; sj < n; ++sj) {
-        for (int si = 0; si < n; ++si) {
-            double a = -1.0 + (i * n + si + 0.5) * step;
-            double b = -1.0 + (j * n + sj + 0.5) * step;
-            double weight = std::pow(1.0 + a * a + b * b, -1.5);
-            sum += weight * radianceToward(sky, sun, faceDirection(face, a, b));
-            weights += weight;
-        }
-    }
-    return sum / weights;
-}
-
 // Row j of a face of the sky. Along a row the face table is start + a * along, with no rounding
 // (each component is 0, +-1, +-a or +-b): texelDirection's directions (bit for bit where the
 // compiler fuses no multiply-adds, as for x86-64's baseline; the signs of zeros aside), without its
@@ -98,9 +81,10 @@ void makeSkyRow(Cubemap& cubemap, const SkyParameters& sky, const Sun& sun, int 
         for (int k = 0; k < count; ++k) {
             const int i = first + k;
             const bool mayTouchSun = sunSamples > 1 && cosToSun[size_t(k)] > sun.cosReach;
-            const glm::dvec3 radiance = mayTouchSun
-                                            ? texelMean(sky, sun, face, i, j, faceSize, sunSamples)
-                                            : radianceAt(sky, sun, cosToSun[size_t(k)], up[size_t(k)]);
+            const glm::dvec3 radiance =
+                mayTouchSun ? texelMean(face, i, j, faceSize, sunSamples,
+                                        [&](const glm::dvec3& d) { return radianceToward(sky, sun, d); })
+                            : radianceAt(sky, sun, cosToSun[size_t(k)], up[size_t(k)]);
             cubemap.at(face, i, j) = glm::vec4(glm::vec3(radiance), 1.0f);
         }
     }

@@ -1,7 +1,8 @@
 // glTF: the Khronos glTF validator's report on the file (numErrors must be 0), and the light's
 // irradianceCoefficients as Babylon's glTF loader takes them (loaders EXT_lights_image_based:
 // SphericalHarmonics.FromArray, scaled by intensity, convertIrradianceToLambertianRadiance), then
-// evaluated like babylon.mjs: E(n)/pi in glTF's frame.
+// evaluated like babylon.mjs: E(n)/pi in glTF's frame; and the specular chain as the light lists it:
+// per mip, the width and height of each face's PNG (from its IHDR chunk).
 // Usage: node gltf.mjs ASSET.gltf DIRECTIONS
 import { readFileSync } from "node:fs";
 import { importPackage, print, readDirections, requirePackage } from "./common.mjs";
@@ -25,9 +26,16 @@ const irradianceOverPi = readDirections(directionsFile).map(([x, y, z]) => {
     for (const [c, p] of terms) sum[0] += c.x * p, sum[1] += c.y * p, sum[2] += c.z * p;
     return sum;
 });
+// A data-URI PNG's size: the IHDR chunk's width and height, big-endian at bytes 16 and 20.
+const pngSize = (uri) => {
+    const png = Buffer.from(uri.slice(uri.indexOf(",") + 1), "base64");
+    return [png.readUInt32BE(16), png.readUInt32BE(20)];
+};
 print({
     numErrors: report.issues.numErrors,
     numWarnings: report.issues.numWarnings,
     messages: report.issues.messages.map((m) => `${m.severity} ${m.code} ${m.pointer ?? ""}: ${m.message}`),
     irradianceOverPi,
+    specularImageSize: light.specularImageSize,
+    specularMips: light.specularImages.map((faces) => faces.map((index) => pngSize(asset.images[index].uri))),
 });
