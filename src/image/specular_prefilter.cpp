@@ -4,7 +4,6 @@
 #include "common/parallel.h"
 #include "image/environment.h"
 #include "image/texel_mean.h"
-#include "sh/basis.h"
 #include "sh/irradiance.h"
 
 #include <algorithm>
@@ -21,7 +20,7 @@ constexpr double kPi = std::numbers::pi;
 // Output texels worth a thread: each sums a thousand or more source texels.
 constexpr size_t kTexelsPerThread = 64;
 
-// ---- The pyramid the samples read --------------------------------------------------------------
+// ---- The pyramid the sums read ----------------------------------------------------------------
 
 // Level k + 1 of level k: each texel the solid-angle-weighted mean of its 2 x 2 children, which tile
 // it exactly, so that every level is the area average of level 0.
