@@ -3,7 +3,8 @@
 # bake; cpu: rays through the texel centres, one per texel as the capture has) and
 # `shprobe-reference` (Embree path tracing, as many directions per probe as a capture has texels)
 # on 1,000 and 10,000 probes at faces 32^2, bounce 0, in a Cornell box (36 triangles, written here)
-# and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels); then one
+# and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels) and in ten
+# of it (1,214,960 triangles, cpu and reference: the cost per probe against the triangles); then one
 # bounce at 4^3 probes (the cpu backend's defaults against the reference's).
 # Whole processes, timed by GNU time with their peak memory; memory per probe is the difference of
 # the 10,000- and 1,000-probe runs' peaks over the 9,000 probes between them.
@@ -63,6 +64,59 @@ json.dump(doc, open(sys.argv[1], "w"))
 PY
 engine=/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb
 
+# Ten engines (1,214,960 triangles): the engine's nodes copied ten times under roots placed 1.2 of
+# its box apart in a 5 x 2 row, sharing its meshes and buffer (glTF instancing).
+python3 - "$engine" "$work/engines.glb" <<'PY'
+import json, struct, sys
+data = open(sys.argv[1], "rb").read()
+length = struct.unpack_from("<I", data, 12)[0]
+doc = json.loads(data[20:20 + length])
+binary = data[20 + length + 8:]
+def multiply(a, b):  # column-major 4x4, as glTF stores them
+    return [sum(a[k * 4 + r] * b[c * 4 + k] for k in range(4)) for c in range(4) for r in range(4)]
+def local(node):  # the engine's nodes hold matrices or nothing
+    return node.get("matrix", [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1])
+low, high = [float("inf")] * 3, [float("-inf")] * 3
+def walk(index, parent):
+    world = multiply(parent, local(doc["nodes"][index]))
+    if "mesh" in doc["nodes"][index]:
+        for primitive in doc["meshes"][doc["nodes"][index]["mesh"]]["primitives"]:
+            box = doc["accessors"][primitive["attributes"]["POSITION"]]
+            for corner in range(8):
+                p = [(box["max"] if corner >> i & 1 else box["min"])[i] for i in range(3)]
+                for i in range(3):
+                    v = sum(world[c * 4 + i] * p[c] for c in range(3)) + world[12 + i]
+                    low[i], high[i] = min(low[i], v), max(high[i], v)
+    for child in doc["nodes"][index].get("children", []):
+        walk(child, world)
+roots = doc["scenes"][doc.get("scene", 0)]["nodes"]
+for root in roots:
+    walk(root, local({}))
+size = [high[i] - low[i] for i in range(3)]
+count = len(doc["nodes"])
+nodes = []
+for copy in range(10):
+    for node in doc["nodes"]:
+        node = dict(node)
+        node.pop("camera", None)
+        if "children" in node:
+            node["children"] = [c + copy * count for c in node["children"]]
+        nodes.append(node)
+for copy in range(10):
+    nodes.append({"translation": [1.2 * size[0] * (copy % 5), 0, 1.2 * size[2] * (copy // 5)],
+                  "children": [r + copy * count for r in roots]})
+doc["nodes"] = nodes
+doc.pop("cameras", None)
+doc["scenes"] = [{"nodes": list(range(10 * count, 10 * count + 10))}]
+doc["scene"] = 0
+text = json.dumps(doc).encode()
+text += b" " * (-len(text) % 4)
+binary += b"\0" * (-len(binary) % 4)
+out = struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(binary))
+out += struct.pack("<II", len(text), 0x4E4F534A) + text + struct.pack("<II", len(binary), 0x004E4942) + binary
+open(sys.argv[2], "wb").write(out)
+PY
+
 rows=()
 # run NAME PROBES COMMAND...: seconds and peak KiB of the whole process.
 run() {
@@ -89,6 +143,10 @@ run "cpu: 2CylinderEngine" 1000 "$build/shprobe" scene "$engine" --grid 10,10,10
     --backend cpu --rays-per-texel 1 -q -o "$work/cpu.shpv"
 run "reference: 2CylinderEngine" 1000 "$build/shprobe-reference" "$engine" --grid 10,10,10 --bounces 0 -q \
     -o "$work/reference.shpv"
+run "cpu: 10 x 2CylinderEngine" 1000 "$build/shprobe" scene "$work/engines.glb" --grid 10,10,10 --face-size 32 \
+    --bounces 0 --backend cpu --rays-per-texel 1 -q -o "$work/cpu.shpv"
+run "reference: 10 x 2CylinderEngine" 1000 "$build/shprobe-reference" "$work/engines.glb" --grid 10,10,10 \
+    --bounces 0 -q -o "$work/reference.shpv"
 for scene in "$work/cornell.gltf" "$engine"; do
     name=$(basename "$scene" | sed 's/\..*//')
     run "cpu, 1 bounce: $name" 64 "$build/shprobe" scene "$scene" --grid 4,4,4 --bounces 1 --backend cpu -q \
