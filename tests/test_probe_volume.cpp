@@ -62,6 +62,7 @@ void expectSameVolume(const ProbeVolume& a, const ProbeVolume& b) {
     EXPECT_TRUE(sameBits(a.radiance, b.radiance));
     EXPECT_TRUE(sameBits(a.irradiance, b.irradiance));
     EXPECT_EQ(a.valid, b.valid);
+    EXPECT_TRUE(sameBits(a.offsets, b.offsets));
     EXPECT_EQ(a.bounces, b.bounces);
     EXPECT_EQ(a.source, b.source);
     EXPECT_EQ(a.sourceHash, b.sourceHash);
@@ -114,6 +115,8 @@ ProbeVolume sliceOf(const ProbeVolume& whole, ProbeRange range) {
     brick.radiance = slice(whole.radiance);
     brick.irradiance = slice(whole.irradiance);
     brick.valid.assign(whole.valid.begin() + range.begin, whole.valid.begin() + range.end);
+    if (!whole.offsets.empty())
+        brick.offsets.assign(whole.offsets.begin() + range.begin, whole.offsets.begin() + range.end);
     return brick;
 }
 
@@ -405,6 +408,50 @@ TEST(ProbeVolumeFile, LayoutIsTheDocumentedOne) {
     std::memcpy(&red, bytes.data() + 16 + header + 9 * 12, sizeof(red));
     EXPECT_EQ(red, volume.radiance[9].r);
     EXPECT_EQ(bytes.substr(bytes.size() - 12), std::string(volume.valid.begin(), volume.valid.end()));
+}
+
+// The optional capture offsets: announced by "capture_offsets": true, 12 bytes a probe between the
+// visibility maps (none here) and the validity bytes, read back bit for bit; a volume without them
+// reads as no offsets (each zero); bricks with them merge to the whole volume byte for byte, and not
+// with bricks without them; a non-finite offset and a key that is not a boolean are refused.
+TEST(ProbeVolumeFile, CaptureOffsetsAreAnOptionalSection) {
+    TempFolder folder;
+    ProbeVolume volume = sampleVolume(testGrid({3, 2, 2}), 3);
+    const std::string without = volumeBytes(volume);
+    EXPECT_FALSE(headerOf(without).contains("capture_offsets"));
+    EXPECT_TRUE(parseProbeVolume(without, "v").offsets.empty());
+    for (uint32_t p = 0; p < volume.probeCount(); ++p)
+        volume.offsets.push_back(p % 3 == 0 ? glm::vec3(0.1f * float(p), -0.25f, 1.0f / 3.0f)
+                                            : glm::vec3(0.0f));
+    const std::string bytes = volumeBytes(volume);
+    const uint64_t header = headerLength(bytes);
+    EXPECT_EQ(headerOf(bytes)["capture_offsets"], true);
+    EXPECT_EQ(bytes.size(), 16 + header + 12 * (2 * 9 * 12 + 12 + 1));
+    float y;
+    std::memcpy(&y, bytes.data() + 16 + header + 12 * 2 * 9 * 12 + 3 * 12 + 4, sizeof(y));
+    EXPECT_EQ(y, -0.25f); // probe 3's offset.y
+    expectSameVolume(parseProbeVolume(bytes, "v"), volume);
+
+    const std::string wholeFile = folder.file("whole.shpv");
+    writeProbeVolume(wholeFile, volume);
+    std::vector<ProbeVolume> bricks;
+    for (uint32_t index : {2u, 0u, 1u})
+        bricks.push_back(sliceOf(volume, brickRange(volume.grid, {index, 3})));
+    writeProbeVolume(folder.file("merged.shpv"), mergeProbeVolumes(bricks));
+    EXPECT_EQ(fileBytes(folder.file("merged.shpv")), fileBytes(wholeFile));
+    bricks[1].offsets.clear();
+    expectInputError([&] { mergeProbeVolumes(bricks); },
+                     "capture offsets present in brick 1, absent in brick 2");
+
+    ProbeVolume broken = volume;
+    broken.offsets[4].z = NAN;
+    expectInputError([&] { writeProbeVolume(folder.file("broken.shpv"), broken); },
+                     "the capture offset of probe 4 is not finite");
+    std::string edited = bytes;
+    const size_t key = edited.find("\"capture_offsets\": true");
+    edited.replace(key, 23, "\"capture_offsets\": 1   ");
+    expectInputError([&] { parseProbeVolume(edited, "v"); },
+                     "field \"capture_offsets\" must be true or false");
 }
 
 // An invalid probe's coefficients are written as zeros (a NaN there is the bake's business, not

@@ -259,7 +259,9 @@ TEST_F(SceneCaptureTest, SunlightMatchesTheReferenceRays) {
 // in a 2D-array texture) against the CPU reference scene/volume_sampling.h, on a 3x2x4 volume of
 // random order-3 irradiance with a quarter of its probes invalid (holding NaN, which must not leak
 // in), at 500 points inside and around the grid with random normals; without visibility, and with
-// random 4 x 4 visibility maps (means 0.2 to 2.8, variances up to 0.3), which weigh the probes. Both evaluate
+// random 4 x 4 visibility maps (means 0.2 to 2.8, variances up to 0.3), which weigh the probes, and
+// with those maps and random capture offsets (each coordinate up to 0.3 of the smallest cell side, 1),
+// which move where the maps are looked up from. Both evaluate
 // the same formula; the GPU in float: 1e-5 of the largest |E| (coefficients below 1, 8 x 9 products). The
 // largest difference between probe_volume.glsl and the CPU over the points, and the largest |E|.
 struct SamplingAgreement {
@@ -267,7 +269,7 @@ struct SamplingAgreement {
     double largest = 0.0;
 };
 
-SamplingAgreement sampleVolumeOnGpu(const Context& context, int visibilitySize) {
+SamplingAgreement sampleVolumeOnGpu(const Context& context, int visibilitySize, bool withOffsets) {
     std::mt19937 random(7);
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
     ProbeVolume volume;
@@ -281,6 +283,7 @@ SamplingAgreement sampleVolumeOnGpu(const Context& context, int visibilitySize) 
             volume.visibility.push_back(glm::vec2(mean, mean * mean + variance));
         }
         volume.valid.push_back(p % 4 != 1);
+        if (withOffsets) volume.offsets.push_back(0.3f * glm::vec3(unit(random), unit(random), unit(random)));
         for (int c = 0; c < 9; ++c)
             volume.irradiance.push_back(
                 volume.valid.back() ? glm::vec3(unit(random), unit(random), unit(random)) : glm::vec3(NAN));
@@ -319,17 +322,27 @@ SamplingAgreement sampleVolumeOnGpu(const Context& context, int visibilitySize) 
     Buffer moments = createBuffer(context, visibility.size() * 8, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                   MemoryUse::Device, "visibility");
     uploadBuffer(context, moments, visibility.data(), visibility.size() * 8);
+    std::vector<glm::vec4> offsets(1);
+    if (withOffsets) offsets.assign(volume.offsets.size(), glm::vec4(0.0f));
+    for (size_t p = 0; p < volume.offsets.size(); ++p)
+        offsets[p] = glm::vec4(volume.offsets[p], 0.0f);
+    Buffer offsetBuffer =
+        createBuffer(context, offsets.size() * 16, storage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                     MemoryUse::Device, "offsets");
+    uploadBuffer(context, offsetBuffer, offsets.data(), offsets.size() * 16);
     VkSampler sampler = createSampler(context, VK_FILTER_NEAREST);
     const VkDescriptorType bindings[] = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                                          VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                                          VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
     struct Push {
         glm::vec4 boundsMin, boundsMax;
         glm::uvec4 counts;
         glm::uvec4 visibility;
-    } push{
-        glm::vec4(glm::vec3(volume.grid.boundsMin), 0.0f), glm::vec4(glm::vec3(volume.grid.boundsMax), 0.0f),
-        glm::uvec4(3, 2, 4, uint32_t(points.size() / 2)), glm::uvec4(uint32_t(visibilitySize), 0u, 0u, 0u)};
+    } push{glm::vec4(glm::vec3(volume.grid.boundsMin), 0.0f),
+           glm::vec4(glm::vec3(volume.grid.boundsMax), 0.0f),
+           glm::uvec4(3, 2, 4, uint32_t(points.size() / 2)),
+           glm::uvec4(uint32_t(visibilitySize), withOffsets ? 1u : 0u, 0u, 0u)};
     ComputeProgram program = createComputeProgram(context, {.name = "sample_volume.comp",
                                                             .spirv = spirv::sample_volume_comp,
                                                             .bindings = bindings,
@@ -338,11 +351,12 @@ SamplingAgreement sampleVolumeOnGpu(const Context& context, int visibilitySize) 
                                                             .localSize = 64,
                                                             .order = 3});
     VkDescriptorPool pool =
-        createDescriptorPool(context, {.sets = 1, .storageBuffers = 3, .imageSamplers = 1});
+        createDescriptorPool(context, {.sets = 1, .storageBuffers = 4, .imageSamplers = 1});
     const BindingTarget targets[] = {{.imageView = texture.view},
                                      {.buffer = input.buffer},
                                      {.buffer = output.buffer},
-                                     {.buffer = moments.buffer}};
+                                     {.buffer = moments.buffer},
+                                     {.buffer = offsetBuffer.buffer}};
     VkDescriptorSet set = createDescriptorSet(context, pool, program, targets);
     submitAndWait(context, [&](VkCommandBuffer commands) {
         recordImageUpload(commands, staging.buffer, texture, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
@@ -362,18 +376,19 @@ SamplingAgreement sampleVolumeOnGpu(const Context& context, int visibilitySize) 
     vkDestroyDescriptorPool(context.device, pool, nullptr);
     destroyComputeProgram(context, program);
     vkDestroySampler(context.device, sampler, nullptr);
-    for (Buffer* buffer : {&staging, &input, &output, &moments})
+    for (Buffer* buffer : {&staging, &input, &output, &moments, &offsetBuffer})
         destroyBuffer(context, *buffer);
     destroyImage(context, texture);
     return {worst, largest};
 }
 
 TEST_F(SceneCaptureTest, VolumeIncludeMatchesTheCpuSampling) {
-    for (int visibilitySize : {0, 4}) {
-        const SamplingAgreement agreement = sampleVolumeOnGpu(context(), visibilitySize);
+    for (const auto [visibilitySize, withOffsets] : {std::pair(0, false), {4, false}, {4, true}}) {
+        const SamplingAgreement agreement = sampleVolumeOnGpu(context(), visibilitySize, withOffsets);
         std::printf(
-            "probe_volume.glsl against the CPU, visibility maps %d^2: worst %.3g of the largest |E| %.3g\n",
-            visibilitySize, agreement.worst, agreement.largest);
+            "probe_volume.glsl against the CPU, visibility maps %d^2%s: worst %.3g of the largest |E| "
+            "%.3g\n",
+            visibilitySize, withOffsets ? ", capture offsets" : "", agreement.worst, agreement.largest);
         EXPECT_GT(agreement.largest, 0.1);
         EXPECT_LT(agreement.worst, 1e-5 * agreement.largest);
     }

@@ -16,11 +16,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <cstring>
 #include <iterator>
 #include <map>
+#include <span>
 #include <sys/stat.h>
 
 namespace shprobe {
@@ -174,6 +176,66 @@ TEST_F(SceneCommand, RayBricksMergeToTheWholeBake) {
     const ProbeVolume volume = readProbeVolume(file("whole.shpv"));
     EXPECT_EQ(volume.bounces, 2);
     EXPECT_CONTAINS(volume.settings, "\"backend\":\"cpu\"");
+}
+
+// Probe relocation on the cpu backend, in the closed Cornell box with its blocks: of a 4x3x3 grid
+// (cells 0.24 along x, 0.8 along y, 0.5 along z), five probes lie inside a block 0.06 from a face and
+// are moved out, each by at most 0.45 of 0.24 and valid where it was captured; two lie in the tall
+// block's middle, 0.2 from any face, and stay inside (invalid, then filled). Bricks (baking the
+// neighbours they fill from, relocated as the whole bake relocates them) merge to the whole bake
+// byte for byte, and a second run repeats it. With --relocation-limit 0 the volume holds no capture
+// offsets (neither the header's key and setting nor the section: the volume of a bake before
+// relocation), and every probe that did not move is the relocating bake's, bit for bit.
+TEST_F(SceneCommand, ProbesInsideGeometryAreMovedOut) {
+    const std::string scene = cornellBox();
+    const std::vector<std::string> common{
+        "scene",       scene, "--grid",    "4,3,3", "--bounds",  "-0.58,0.2,-0.3,0.14,1.8,0.7",
+        "--face-size", "8",   "--bounces", "1",     "--backend", "cpu"};
+    auto bake = [&](std::vector<std::string> extra, const std::string& output) {
+        std::vector<std::string> args = common;
+        args.insert(args.end(), extra.begin(), extra.end());
+        args.insert(args.end(), {"-o", output});
+        return runOk(args);
+    };
+    const std::string report = bake({}, file("moved.shpv")).out;
+    EXPECT_CONTAINS(report, "invalid  7 inside geometry");
+    EXPECT_CONTAINS(
+        report, "moved    5 out of geometry (by at most 0.45 of the smallest cell side), 2 stayed inside");
+    EXPECT_CONTAINS(report, "filled   2 invalid probes");
+    bake({"-q"}, file("again.shpv"));
+    EXPECT_EQ(bytesOf(file("again.shpv")), bytesOf(file("moved.shpv")));
+    std::vector<std::string> merge{"merge"};
+    for (const char* brick : {"2/3", "0/3", "1/3"}) {
+        const std::string name = file(std::string("moved_") + brick[0] + ".shpv");
+        bake({"--brick", brick, "-q"}, name);
+        merge.push_back(name);
+    }
+    merge.insert(merge.end(), {"-o", file("merged.shpv")});
+    runOk(merge);
+    EXPECT_EQ(bytesOf(file("merged.shpv")), bytesOf(file("moved.shpv")));
+
+    bake({"--no-dilation", "-q"}, file("kept.shpv"));
+    bake({"--no-dilation", "--relocation-limit", "0", "-q"}, file("fixed.shpv"));
+    EXPECT_EQ(bytesOf(file("fixed.shpv")).find("capture_offsets"), std::string::npos);
+    EXPECT_EQ(bytesOf(file("fixed.shpv")).find("relocation_limit"), std::string::npos);
+    const ProbeVolume moved = readProbeVolume(file("kept.shpv"));
+    const ProbeVolume fixed = readProbeVolume(file("fixed.shpv"));
+    EXPECT_TRUE(fixed.offsets.empty());
+    ASSERT_EQ(moved.offsets.size(), size_t(36));
+    int count = 0;
+    for (uint32_t p = 0; p < 36; ++p) {
+        const std::span<const glm::vec3> a(&moved.radiance[p * 9], 9), b(&fixed.radiance[p * 9], 9);
+        if (moved.offsets[p] == glm::vec3(0.0f)) {
+            EXPECT_EQ(moved.valid[p], fixed.valid[p]) << p;
+            EXPECT_TRUE(std::equal(a.begin(), a.end(), b.begin())) << p;
+            continue;
+        }
+        ++count;
+        EXPECT_LE(glm::length(moved.offsets[p]), 0.45f * 0.24f) << p;
+        EXPECT_EQ(moved.valid[p], 1) << p;
+        EXPECT_EQ(fixed.valid[p], 0) << p;
+    }
+    EXPECT_EQ(count, 5);
 }
 
 // The open Cornell box with its blocks and a sun through the opening (shadows), under a root node
@@ -356,14 +418,15 @@ TEST_F(SceneCommand, TheBackFaceShareForValidityIsAnOption) {
 }
 
 // On the cpu backend an invalid probe is filled from its valid neighbours: 2CylinderEngine at 4^3
-// probes has 15 inside its parts. Filled, each holds the mean of the valid probes of its 3x3x3
-// block weighed by 1 / distance in cells (checked against the unfilled volume, to float rounding
-// of the sums: 1e-5 of the largest coefficient), and is valid; --no-dilation leaves them invalid;
-// bricks fill their probes exactly as the whole bake does.
+// probes has 15 inside its parts (none moved out: --relocation-limit 0). Filled, each holds the mean of the
+// valid probes of its 3x3x3 block weighed by 1 / distance in cells (checked against the unfilled volume, to
+// float rounding of the sums: 1e-5 of the largest coefficient), and is valid; --no-dilation leaves them
+// invalid; bricks fill their probes exactly as the whole bake does.
 TEST_F(SceneCommand, InvalidProbesAreFilledFromTheirNeighbours) {
     const std::string engine = SHPROBE_GLTF_MODELS_DIR "/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
-    const std::vector<std::string> common{"scene", engine,      "--grid", "4,4,4",     "--face-size",
-                                          "8",     "--bounces", "0",      "--backend", "cpu"};
+    const std::vector<std::string> common{
+        "scene",     engine, "--grid",    "4,4,4", "--face-size",        "8",
+        "--bounces", "0",    "--backend", "cpu",   "--relocation-limit", "0"};
     auto bake = [&](std::vector<std::string> extra, const std::string& output) {
         std::vector<std::string> args = common;
         args.insert(args.end(), extra.begin(), extra.end());

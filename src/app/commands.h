@@ -142,6 +142,7 @@ struct SceneOptions {
     int gatherRays = 64;           // cpu: per cache point
     double invalidBackFaces = 0.5; // a probe is invalid where more of its view meets back faces
     bool dilate = true;            // cpu: invalid probes filled from their valid neighbours
+    double relocationLimit = 0.45; // cpu: the longest move out of geometry, in smallest cell sides
     std::string device;
     bool validation = false;
     bool quiet = false;

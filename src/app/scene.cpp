@@ -80,6 +80,13 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                     "meets back faces")
         ->check(numberFrom(0.0, 1.0))
         ->capture_default_str();
+    command
+        .add_option("--relocation-limit", options.relocationLimit,
+                    "cpu: a probe inside geometry is moved out (through the nearest back face its rays "
+                    "meet) by at most this fraction of the grid's smallest cell side, and captured there; "
+                    "0: not moved. At most 0.5, so that a probe stays nearest its own grid point")
+        ->check(numberFrom(0.0, 0.5))
+        ->capture_default_str();
     command.add_flag("!--no-dilation", options.dilate,
                      "cpu: leave invalid probes empty, not filled from their valid neighbours");
     addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
@@ -137,11 +144,16 @@ std::vector<std::string> sceneInputs(const std::string& scene, const std::string
 namespace {
 
 // A probe is inside something when more than the --invalid-back-faces fraction of its texels see
-// back faces (half, by default: a probe in a room sees none, one inside a wall nearly all).
+// back faces.
 bool insideGeometry(uint32_t backFaceTexels, const SceneOptions& options) {
-    return double(backFaceTexels) >
-           options.invalidBackFaces * 6.0 * double(options.faceSize) * options.faceSize;
+    return shprobe::insideGeometry(backFaceTexels, options.faceSize, options.invalidBackFaces);
 }
+
+// A relocated probe keeps this many smallest cell sides from the front faces near it (ProbeRelocation
+// in scene/ray_bake.h), and passes the back face it leaves through by half as much: the sampler's
+// normal bias (scene/volume_sampling.h), so that the surface it left lies behind the points a
+// sampler tests it against.
+constexpr double kRelocationFrontCells = 0.1;
 
 int cpuRaysPerTexel(const SceneOptions& options) {
     return options.raysPerTexel > 0 ? options.raysPerTexel : 4;
@@ -164,6 +176,7 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
         settings["cache_spacing"] = options.cacheSpacing;
         settings["gather_rays"] = options.gatherRays;
         settings["dilation"] = options.dilate;
+        if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
     }
     return settings.dump();
 }
@@ -241,13 +254,17 @@ ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, cons
     return volumeOf(probes, options, grid, range);
 }
 
-RayBakeOptions rayBakeOptions(const SceneOptions& options) {
+RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid) {
+    const double cell = smallestCellEdge(grid);
     return {.order = options.order,
             .faceSize = options.faceSize,
             .raysPerTexel = cpuRaysPerTexel(options),
             .bounces = options.bounces,
             .cacheSpacing = options.cacheSpacing,
-            .gatherRays = options.gatherRays};
+            .gatherRays = options.gatherRays,
+            .relocation = {.limit = options.relocationLimit * cell,
+                           .minFrontDistance = kRelocationFrontCells * cell,
+                           .invalidBackFaces = options.invalidBackFaces}};
 }
 
 // A probe still invalid is filled from its valid neighbours (Unity's dilation): the mean of the
@@ -315,7 +332,8 @@ Dilation dilateInvalidProbes(RayBaker& baker, const SceneOptions& options, const
 // What a ray bake reports besides its volume.
 struct RayBakeReport {
     RayBakeCounts counts;
-    size_t filled = 0; // invalid probes filled from their neighbours
+    size_t relocated = 0; // probes moved out of geometry, valid where they were captured
+    size_t filled = 0;    // invalid probes filled from their neighbours
 };
 
 // Every bounce of probes [range.begin, range.end) by rays: the surfaces' cache is gathered where
@@ -323,7 +341,7 @@ struct RayBakeReport {
 ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
                        const ProbeGrid& grid, ProbeRange range, RayBakeReport& report) {
     const SplitSky split = splitSceneSky(sky);
-    RayBakeOptions bakeOptions = rayBakeOptions(options);
+    RayBakeOptions bakeOptions = rayBakeOptions(options, grid);
     bakeOptions.skySuns = split.suns;
     RayBaker baker(world, split.residual, bakeOptions);
     ProgressLine line("probes", range.end - range.begin, options.quiet);
@@ -333,8 +351,14 @@ ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOp
     });
     const Dilation dilation =
         options.dilate ? dilateInvalidProbes(baker, options, grid, range, probes) : Dilation{};
-    report = {baker.counts(), dilation.probes.size()};
+    const size_t relocated =
+        size_t(std::count_if(probes.begin(), probes.end(),
+                             [](const RayBakedProbe& probe) { return probe.offset != glm::vec3(0.0f); }));
+    report = {baker.counts(), relocated, dilation.probes.size()};
     ProbeVolume volume = volumeOf(probes, options, grid, range);
+    if (options.relocationLimit > 0.0)
+        for (const RayBakedProbe& probe : probes)
+            volume.offsets.push_back(probe.offset);
     volume.bounces = options.bounces;
     volume.visibilitySize = bakeOptions.visibilitySize;
     for (const RayBakedProbe& probe : probes)
@@ -472,17 +496,21 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                 grid.counts.x, grid.counts.y, grid.counts.z,
                 options.brick ? ("brick " + options.brick->text).c_str() : "whole", options.order,
                 options.faceSize, volume.bounces);
-    std::printf("invalid  %zu inside geometry (more than %g of their view is back faces)\n", inside,
-                options.invalidBackFaces);
+    std::printf("invalid  %zu inside geometry (more than %g of their view is back faces)\n",
+                inside + rays.relocated, options.invalidBackFaces);
     const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
     if (backend.context) {
-        std::printf("backend  gpu: %s%s\n", backend.context->info.name.c_str(), reason.c_str());
+        std::printf("backend  gpu: %s%s; probes inside geometry stay in place (relocation: cpu only)\n",
+                    backend.context->info.name.c_str(), reason.c_str());
     } else {
         std::printf("backend  cpu: rays, %d per texel, %s%s\n", cpuRaysPerTexel(options),
                     counted(rays.counts.cachePoints, "cache point").c_str(), reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
                     double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
                     double(rays.counts.cacheRays));
+        std::printf(
+            "moved    %zu out of geometry (by at most %g of the smallest cell side), %zu stayed inside\n",
+            rays.relocated, options.relocationLimit, inside);
         std::printf("filled   %s from their valid neighbours\n",
                     counted(rays.filled, "invalid probe").c_str());
     }

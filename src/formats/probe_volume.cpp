@@ -139,6 +139,16 @@ size_t visibilityTexels(const ProbeVolume& volume) {
     return size_t(volume.probeCount()) * size_t(volume.visibilitySize) * size_t(volume.visibilitySize);
 }
 
+// The capture offsets: none, or one finite offset per probe.
+void checkOffsets(const ProbeVolume& volume, const std::string& what) {
+    if (!volume.offsets.empty() && volume.offsets.size() != volume.probeCount())
+        fail(what, "holds " + counted(volume.offsets.size(), "capture offset") + " for " +
+                       counted(volume.probeCount(), "probe"));
+    for (size_t p = 0; p < volume.offsets.size(); ++p)
+        if (!isFinite(volume.offsets[p]))
+            fail(what, "the capture offset of probe " + text(volume.begin + p) + " is not finite");
+}
+
 // Each texel's mean distance and mean square: finite, not negative.
 void checkVisibility(const ProbeVolume& volume, const std::string& what) {
     if (volume.visibilitySize < 0 || volume.visibilitySize > kMaxVisibilitySize)
@@ -174,6 +184,7 @@ void checkVolume(const ProbeVolume& volume, const std::string& what) {
              "the settings are not a JSON object (nested at most " + text(kMaxJsonDepth - 1) + " levels)");
     checkValidity(volume, what);
     checkVisibility(volume, what);
+    checkOffsets(volume, what);
     checkCoefficients(volume, volume.radiance, "radiance", what);
     checkCoefficients(volume, volume.irradiance, "irradiance", what);
 }
@@ -205,6 +216,7 @@ nlohmann::ordered_json headerJson(const ProbeVolume& volume) {
     probes["end"] = volume.end;
     header["probes"] = probes;
     if (volume.visibilitySize > 0) header["visibility"] = volume.visibilitySize;
+    if (!volume.offsets.empty()) header["capture_offsets"] = true;
     header["bounces"] = volume.bounces;
     header["source"] = volume.source;
     if (!volume.sourceHash.empty()) header["source_hash"] = volume.sourceHash;
@@ -276,6 +288,7 @@ struct VolumeHeader {
     ProbeVolume volume; // coefficients and validity not allocated yet
     bool radiance = false;
     bool irradiance = false;
+    bool offsets = false; // capture_offsets
 };
 
 const json& requireField(const json& object, const char* field, const std::string& name) {
@@ -395,6 +408,11 @@ VolumeHeader parseHeader(std::string_view headerText, const std::string& name) {
     if (root.contains("visibility"))
         volume.visibilitySize =
             int(requireInteger(root["visibility"], "visibility", 1, kMaxVisibilitySize, name));
+    if (root.contains("capture_offsets")) {
+        if (!root["capture_offsets"].is_boolean())
+            fail(name, "field \"capture_offsets\" must be true or false");
+        header.offsets = root["capture_offsets"].get<bool>();
+    }
     volume.bounces = int(requireInteger(requireField(root, "bounces", name), "bounces", 0, INT_MAX, name));
     volume.source = requireString(root, "source", name);
     if (root.contains("source_hash")) volume.sourceHash = requireString(root, "source_hash", name);
@@ -428,8 +446,9 @@ uint64_t payloadBytes(const VolumeHeader& header) {
     const uint64_t floats = uint64_t(coefficientCount(header.volume.order)) * 3 * sizeof(float);
     const uint64_t visibility =
         uint64_t(header.volume.visibilitySize) * header.volume.visibilitySize * 2 * sizeof(float);
+    const uint64_t offsets = header.offsets ? 3 * sizeof(float) : 0;
     return uint64_t(header.volume.probeCount()) *
-           ((int(header.radiance) + int(header.irradiance)) * floats + visibility + 1);
+           ((int(header.radiance) + int(header.irradiance)) * floats + visibility + offsets + 1);
 }
 
 template <class T>
@@ -460,9 +479,11 @@ ProbeVolume parseVolume(const VolumeBytes& bytes, const std::string& name) {
     if (header.radiance) readSection(bytes, offset, volume.radiance, coefficients);
     if (header.irradiance) readSection(bytes, offset, volume.irradiance, coefficients);
     readSection(bytes, offset, volume.visibility, visibilityTexels(volume));
+    readSection(bytes, offset, volume.offsets, header.offsets ? volume.probeCount() : 0);
     readSection(bytes, offset, volume.valid, volume.probeCount());
     checkValidity(volume, name);
     checkVisibility(volume, name);
+    checkOffsets(volume, name);
     // Invalid probes are written as zeros: a non-finite value there is damage as anywhere else.
     for (const std::vector<glm::vec3>* quantity : {&volume.radiance, &volume.irradiance})
         for (size_t i = 0; i < quantity->size(); ++i)
@@ -538,6 +559,9 @@ std::string bakeDifference(const ProbeVolume& a, const ProbeVolume& b, const std
     if (quantitiesText(a) != quantitiesText(b)) return both(quantitiesText(a), quantitiesText(b));
     if (a.visibilitySize != b.visibilitySize)
         return "visibility maps " + both(std::to_string(a.visibilitySize), std::to_string(b.visibilitySize));
+    if (a.offsets.empty() != b.offsets.empty())
+        return "capture offsets " +
+               both(a.offsets.empty() ? "absent" : "present", b.offsets.empty() ? "absent" : "present");
     if (a.bounces != b.bounces)
         return "bounces " + both(std::to_string(a.bounces), std::to_string(b.bounces));
     // One scene under two paths (bricks baked on several machines) is one source: the hashes say.
@@ -627,6 +651,7 @@ void writeProbeVolume(const std::string& path, const ProbeVolume& volume) {
     writeCoefficients(out, volume, volume.radiance);
     writeCoefficients(out, volume, volume.irradiance);
     out.append(volume.visibility.data(), volume.visibility.size() * sizeof(glm::vec2));
+    out.append(volume.offsets.data(), volume.offsets.size() * sizeof(glm::vec3));
     out.append(volume.valid.data(), volume.valid.size());
     out.flush();
     file.commit();
@@ -686,6 +711,7 @@ ProbeVolume mergeProbeVolumes(std::span<const ProbeVolume> bricks, std::span<con
         append(whole.irradiance, bricks[i].irradiance);
         whole.visibility.insert(whole.visibility.end(), bricks[i].visibility.begin(),
                                 bricks[i].visibility.end());
+        append(whole.offsets, bricks[i].offsets);
         whole.valid.insert(whole.valid.end(), bricks[i].valid.begin(), bricks[i].valid.end());
     }
     return whole;

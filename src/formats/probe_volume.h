@@ -1,5 +1,6 @@
 // Probe volumes (docs/probe-volume.md): a regular grid of SH light probes in one file, a JSON
-// header followed by little-endian float32 coefficients and one validity byte per probe. A volume
+// header followed by little-endian float32 coefficients, optional visibility maps and capture
+// offsets, and one validity byte per probe. A volume
 // holds the whole grid or one brick of it, a contiguous range of the probes' flat indices; merging
 // the bricks of a bake gives the file the whole bake writes, byte for byte.
 //
@@ -57,6 +58,10 @@ struct ProbeVolume {
     // whether a probe sees the point it shades. Empty (size 0) where the bake recorded none.
     int visibilitySize = 0;
     std::vector<glm::vec2> visibility;
+    // Per probe, where the bake captured it from its grid position (world units): zero unless it
+    // was moved out of geometry (probe relocation). A sampler weighs a probe's visibility from there.
+    // Empty where the bake recorded none, which reads as every offset zero.
+    std::vector<glm::vec3> offsets;
     int bounces = 0;    // indirect bounces in the bake; 0: direct light only
     std::string source; // what was baked, in words, e.g. World::description
     // What was baked, by content, whatever its path: gltfSceneHash (scene/gltf_scene.h),

@@ -46,12 +46,14 @@ struct CaptureTexture {
 // centre), followed by order^2 vec4 per probe in flat order i + nx (j + ny k): the irradiance
 // coefficients' rgb, and w = 1 for a valid probe, 0 for one inside geometry; then, where the
 // volume holds visibility, each probe's size^2 texels of (mean, mean square) distance, two to a
-// vec4 (xy, zw).
+// vec4 (xy, zw); then, where it holds capture offsets, one vec4 per probe (xyz: the offset from its
+// grid position where it was captured).
 struct CaptureVolumeHeader {
     vec4 boundsMin;   // xyz
     vec4 boundsMax;   // xyz
     uvec4 counts;     // xyz: probes per axis; w: 0 when there is no previous bounce
-    uvec4 visibility; // x: texels a side of each probe's map, 0: none; y: the maps' first vec4
+    uvec4 visibility; // x: texels a side of each probe's map, 0: none; y: the maps' first vec4;
+                      // z: the capture offsets' first vec4, 0: none (all zero)
 };
 
 // A sun (scene/scene.h) and its shadow map: the depth, seen from the sun (orthographic, over the

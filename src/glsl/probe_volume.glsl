@@ -12,8 +12,11 @@
 // An includer that has the volume's visibility defines SHPROBE_PROBE_VOLUME_VISIBILITY and
 //   uint probeVolumeVisibilitySize()
 //   vec2 probeVolumeVisibility(uint probe, uint texel)
-// the size of the volume's visibility maps (0 where it holds none) and a probe's (mean, mean
-// square) distance in octahedral texel `texel`. With visibility, each probe is also weighed as
+//   vec3 probeVolumeOffset(uint probe)
+// the size of the volume's visibility maps (0 where it holds none), a probe's (mean, mean square)
+// distance in octahedral texel `texel`, and where the bake captured it from its grid position (the
+// volume's capture offset; vec3(0) where it holds none). The visibility terms take each probe at its
+// captured position, the trilinear weights at its grid position. With visibility, each probe is also weighed as
 // DDGI does (Majercik et al., "Dynamic Diffuse Global Illumination with Ray-Traced Irradiance
 // Fields", JCGT 2019), exactly as scene/volume_sampling.h does on the CPU: ((cos + 1) / 2)^2 + 0.2
 // for facing the surface, times Chebyshev's bound, cubed, that it sees the point moved 0.1 of the
@@ -91,7 +94,8 @@ vec3 probeVolumeIrradiance(ProbeVolumeGrid grid, vec3 x, vec3 n) {
 #ifdef SHPROBE_PROBE_VOLUME_VISIBILITY
         if (visibility && w > 0.0) {
             vec3 at = mix(0.5 * (grid.boundsMin + grid.boundsMax), grid.boundsMin + spacing * vec3(p),
-                          greaterThan(grid.counts, uvec3(1u)));
+                          greaterThan(grid.counts, uvec3(1u))) +
+                      probeVolumeOffset(probe);
             w *= probeVolumeVisibilityWeight(probe, at, x, biased, n);
         }
 #endif

@@ -123,31 +123,36 @@ PackedTextures packTextures(const World& world) {
 }
 
 // Probes and their bounce volume header, with no previous bounce: counts.w = 0; then the
-// visibility maps, two texels to a vec4.
+// visibility maps, two texels to a vec4, and the capture offsets, one to a vec4.
 std::vector<glm::vec4> packBounce(const BounceSource& bounce) {
     constexpr size_t kHeader = sizeof(glsl::CaptureVolumeHeader) / sizeof(glm::vec4);
     const size_t probes = size_t(bounce.counts.x) * bounce.counts.y * bounce.counts.z;
     const size_t perProbe = size_t(bounce.order) * bounce.order;
     const size_t texels = probes * size_t(bounce.visibilitySize) * size_t(bounce.visibilitySize);
-    std::vector<glm::vec4> packed(kHeader + probes * perProbe + (texels + 1) / 2, glm::vec4(0.0f));
+    const size_t offsetsAt = probes * perProbe + (texels + 1) / 2; // after the header
+    std::vector<glm::vec4> packed(kHeader + offsetsAt + bounce.offsets.size(), glm::vec4(0.0f));
     if (probes == 0) return packed;
     if (bounce.irradiance.size() != probes * perProbe || bounce.valid.size() != probes ||
-        bounce.visibility.size() != texels)
+        bounce.visibility.size() != texels || (!bounce.offsets.empty() && bounce.offsets.size() != probes))
         throw Error(ErrorKind::Input, "scene capture: the previous bounce's volume holds " +
-                                          std::to_string(bounce.irradiance.size()) + " coefficients and " +
+                                          std::to_string(bounce.irradiance.size()) + " coefficients, " +
                                           std::to_string(bounce.visibility.size()) +
-                                          " visibility texels for " + std::to_string(probes) +
+                                          " visibility texels and " + std::to_string(bounce.offsets.size()) +
+                                          " capture offsets for " + std::to_string(probes) +
                                           " probes of order " + std::to_string(bounce.order));
     const glsl::CaptureVolumeHeader header{
         glm::vec4(glm::vec3(bounce.boundsMin), 0.0f), glm::vec4(glm::vec3(bounce.boundsMax), 0.0f),
         glm::uvec4(glm::uvec3(bounce.counts), 1u),
-        glm::uvec4(uint32_t(bounce.visibilitySize), uint32_t(probes * perProbe), 0u, 0u)};
+        glm::uvec4(uint32_t(bounce.visibilitySize), uint32_t(probes * perProbe),
+                   bounce.offsets.empty() ? 0u : uint32_t(offsetsAt), 0u)};
     std::memcpy(packed.data(), &header, sizeof(header));
     for (size_t p = 0; p < probes; ++p)
         for (size_t i = 0; i < perProbe; ++i)
             packed[kHeader + p * perProbe + i] =
                 glm::vec4(glm::vec3(bounce.irradiance[p * perProbe + i]), bounce.valid[p] ? 1.0f : 0.0f);
     std::memcpy(&packed[kHeader + probes * perProbe], bounce.visibility.data(), texels * sizeof(glm::vec2));
+    for (size_t p = 0; p < bounce.offsets.size(); ++p)
+        packed[kHeader + offsetsAt + p] = glm::vec4(bounce.offsets[p], 0.0f);
     return packed;
 }
 

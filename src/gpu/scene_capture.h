@@ -38,6 +38,7 @@ struct BounceSource {
     std::span<const uint8_t> valid;         // one per probe
     int visibilitySize = 0;                 // ProbeVolume's visibility maps; 0: none
     std::span<const glm::vec2> visibility;
+    std::span<const glm::vec3> offsets; // ProbeVolume's capture offsets; empty: all zero
 };
 
 // Where the probes of a bounce source are (its grid, without the coefficients).

@@ -21,7 +21,7 @@ SceneCapture createLitSceneCapture(const Context& context, const LitScene& scene
     const std::vector<glm::dvec3> irradiance(volume.irradiance.begin(), volume.irradiance.end());
     setBounceSource(context, capture,
                     {volume.grid.boundsMin, volume.grid.boundsMax, volume.grid.counts, volume.order,
-                     irradiance, volume.valid, volume.visibilitySize, volume.visibility});
+                     irradiance, volume.valid, volume.visibilitySize, volume.visibility, volume.offsets});
     return capture;
 }
 

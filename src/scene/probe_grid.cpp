@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <string_view>
 #include <vector>
 
@@ -135,6 +136,15 @@ glm::dvec3 gridCoordinates(const ProbeGrid& grid, const glm::dvec3& position) {
         coordinates[a] = std::clamp(u, 0.0, last);
     }
     return coordinates;
+}
+
+double smallestCellEdge(const ProbeGrid& grid) {
+    double edge = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (grid.counts[a] > 1)
+            edge = std::min(edge, (grid.boundsMax[a] - grid.boundsMin[a]) / (grid.counts[a] - 1));
+    }
+    return std::isfinite(edge) ? edge : 0.0;
 }
 
 Brick parseBrick(const std::string& text) {

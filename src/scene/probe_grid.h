@@ -51,6 +51,10 @@ glm::ivec3 probeCell(const ProbeGrid& grid, uint32_t index);
 // outside the bounds the nearest probes' values hold.
 glm::dvec3 gridCoordinates(const ProbeGrid& grid, const glm::dvec3& position);
 
+// The shortest side of the grid's cells, over the axes of more than one probe; 0 for a grid of one
+// probe. The scale of everything a sampler or a bake measures in cells.
+double smallestCellEdge(const ProbeGrid& grid);
+
 // Brick `index` of `count` (`--brick I/N`), numbered from 0 as the probes are: 0/4, 1/4, 2/4 and
 // 3/4 are the four bricks of a grid.
 struct Brick {

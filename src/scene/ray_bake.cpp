@@ -46,6 +46,12 @@ void requireOptions(const RayBakeOptions& options) {
         refuse("the visibility map's size must be in 0..64, got " + std::to_string(options.visibilitySize));
     if (options.gatherRays < 1 || options.gatherRays > 1 << 20)
         refuse("gather rays must be in 1..1048576, got " + std::to_string(options.gatherRays));
+    const ProbeRelocation& relocation = options.relocation;
+    if (!(relocation.limit >= 0.0 && relocation.minFrontDistance >= 0.0) ||
+        !std::isfinite(relocation.limit) || !std::isfinite(relocation.minFrontDistance))
+        refuse("the relocation's limit and front-face distance must be finite numbers of 0 or more");
+    if (!(relocation.invalidBackFaces >= 0.0 && relocation.invalidBackFaces <= 1.0))
+        refuse("the back-face share of a probe inside geometry must be in 0..1");
 }
 
 // Points of a lattice of m subdivisions: rows j = 0..m of m + 1 - j points.
@@ -123,11 +129,27 @@ struct Arrival {
     bool backFace = false;
 };
 
+// The nearest back face and the nearest front face a view's rays met: their directions (unit) and
+// distances, kFar where none was met. Of rays at one distance, the first cast counts.
+struct NearestHits {
+    glm::dvec3 backDirection{0.0};
+    double back = kFar;
+    glm::dvec3 frontDirection{0.0};
+    double front = kFar;
+    void add(const glm::dvec3& direction, double distance, bool backFace) {
+        double& nearest = backFace ? back : front;
+        if (!(distance < nearest)) return;
+        nearest = distance;
+        (backFace ? backDirection : frontDirection) = direction;
+    }
+};
+
 // A probe's view and the visibility it gives (RayBakedProbe).
 struct ProbeView {
     Cubemap radiance;
     uint32_t backFaceTexels = 0;
     std::vector<glm::vec2> visibility;
+    NearestHits nearest;
 };
 
 // Hit distances of a view gathered per octahedral texel (scene/volume_sampling.h) into their mean
@@ -169,6 +191,10 @@ World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
 
 } // namespace
 
+bool insideGeometry(uint32_t backFaceTexels, int faceSize, double share) {
+    return double(backFaceTexels) > share * 6.0 * double(faceSize) * faceSize;
+}
+
 struct RayBaker::State {
     State(const World& world, const Cubemap& sky, const RayBakeOptions& bakeOptions)
         : options(bakeOptions), shading(withSuns(world, bakeOptions.skySuns), sky), bvh(buildBvh(world)) {}
@@ -196,7 +222,12 @@ struct RayBaker::State {
                               size_t point);
     glm::dvec2 insideTriangle(uint32_t triangle, const glm::dvec2& barycentric) const;
     glm::vec3 gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, size_t point);
+    template <typename Ray, typename Texel> void forEachViewRay(Ray&& ray, Texel&& texel) const;
     ProbeView trace(const glm::dvec3& position, uint64_t& rays);
+    NearestHits survey(const glm::dvec3& position, uint64_t& rays) const;
+    std::optional<glm::vec3> relocation(const glm::dvec3& position, const NearestHits& seen,
+                                        uint64_t& rays) const;
+    RayBakedProbe bake(const glm::dvec3& position, uint64_t& rays);
     void addSeenSuns(const glm::dvec3& position, ShCoefficients& radiance, uint64_t& rays) const;
 };
 
@@ -326,40 +357,110 @@ glm::vec3 RayBaker::State::gather(int bounce, uint32_t triangle, int side, const
 // The random numbers of the rays through texel t of a view: the same for every probe.
 constexpr uint64_t kViewStream = ~uint64_t(0);
 
-// A view's rays through the texels of a cube map: s x s per texel, through the centre where s is 1,
-// else jittered in each stratum; the hit distances into octahedral texels of visibilitySize^2.
-ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
+// Calls ray(direction) for each ray of a view, s x s through each texel of the cube map (through the
+// centre where s is 1, else jittered in each stratum), and texel(face, i, j) after each texel's.
+template <typename Ray, typename Texel> void RayBaker::State::forEachViewRay(Ray&& ray, Texel&& texel) const {
     const int n = options.faceSize;
     const int s = texelSide;
-    ProbeView view{makeCubemap(n), 0, {}};
-    DistanceMoments moments(options.visibilitySize, visibilityRange);
     for (int face = 0; face < kFaceCount; ++face) {
         for (int j = 0; j < n; ++j) {
             for (int i = 0; i < n; ++i) {
                 RandomStream random(options.seed, kViewStream, (uint64_t(face) * n + j) * n + i);
-                glm::dvec3 sum(0.0);
-                int backFacing = 0;
                 for (int sb = 0; sb < s; ++sb) {
                     for (int sa = 0; sa < s; ++sa) {
                         const double ja = s == 1 ? 0.5 : random.next();
                         const double jb = s == 1 ? 0.5 : random.next();
-                        const glm::dvec3 direction = faceDirection(face, 2.0 * (i + (sa + ja) / s) / n - 1.0,
-                                                                   2.0 * (j + (sb + jb) / s) / n - 1.0);
-                        const Arrival arrival = arriving(options.bounces, position, direction, rays);
-                        sum += arrival.radiance;
-                        backFacing += arrival.backFace ? 1 : 0;
-                        moments.add(direction, arrival.distance);
+                        ray(faceDirection(face, 2.0 * (i + (sa + ja) / s) / n - 1.0,
+                                          2.0 * (j + (sb + jb) / s) / n - 1.0));
                     }
                 }
-                const bool mostlyBack = 2 * backFacing > s * s;
-                view.radiance.at(face, i, j) =
-                    glm::vec4(glm::vec3(sum / double(s * s)), mostlyBack ? 1.0f : 0.0f);
-                view.backFaceTexels += mostlyBack ? 1 : 0;
+                texel(face, i, j);
             }
         }
     }
+}
+
+// A view's rays through the texels of a cube map (forEachViewRay); the hit distances into
+// octahedral texels of visibilitySize^2.
+ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
+    const int s = texelSide;
+    ProbeView view{makeCubemap(options.faceSize), 0, {}, {}};
+    DistanceMoments moments(options.visibilitySize, visibilityRange);
+    glm::dvec3 sum(0.0);
+    int backFacing = 0;
+    forEachViewRay(
+        [&](const glm::dvec3& direction) {
+            const Arrival arrival = arriving(options.bounces, position, direction, rays);
+            sum += arrival.radiance;
+            backFacing += arrival.backFace ? 1 : 0;
+            moments.add(direction, arrival.distance);
+            view.nearest.add(direction, arrival.distance, arrival.backFace);
+        },
+        [&](int face, int i, int j) {
+            const bool mostlyBack = 2 * backFacing > s * s;
+            view.radiance.at(face, i, j) =
+                glm::vec4(glm::vec3(sum / double(s * s)), mostlyBack ? 1.0f : 0.0f);
+            view.backFaceTexels += mostlyBack ? 1 : 0;
+            sum = glm::dvec3(0.0);
+            backFacing = 0;
+        });
     view.visibility = moments.texels();
     return view;
+}
+
+// The faces a view's rays meet from `position`, without shading them.
+NearestHits RayBaker::State::survey(const glm::dvec3& position, uint64_t& rays) const {
+    NearestHits nearest;
+    forEachViewRay(
+        [&](const glm::dvec3& direction) {
+            ++rays;
+            if (const std::optional<SurfaceHit> hit = intersect(position, direction))
+                nearest.add(direction, glm::length(hit->position - position), hit->backFace);
+        },
+        [](int, int, int) {});
+    return nearest;
+}
+
+// Where a probe inside geometry that saw `seen` would be captured, from `position` (ProbeRelocation):
+// through the nearest back face, then off the nearest front face there; none beyond the limit.
+std::optional<glm::vec3> RayBaker::State::relocation(const glm::dvec3& position, const NearestHits& seen,
+                                                     uint64_t& rays) const {
+    const ProbeRelocation& rule = options.relocation;
+    if (!(rule.limit > 0.0) || seen.back == kFar) return std::nullopt;
+    glm::dvec3 offset = seen.backDirection * (seen.back + 0.5 * rule.minFrontDistance);
+    if (glm::length(offset) > rule.limit) return std::nullopt;
+    const NearestHits there = survey(position + offset, rays);
+    if (there.front < rule.minFrontDistance) {
+        const glm::dvec3 away = offset - there.frontDirection * (rule.minFrontDistance - there.front);
+        if (glm::length(away) <= rule.limit) offset = away;
+    }
+    return glm::vec3(offset);
+}
+
+// A probe at `position`, or where relocation takes it out of geometry.
+RayBakedProbe RayBaker::State::bake(const glm::dvec3& position, uint64_t& rays) {
+    auto inside = [&](const ProbeView& view) {
+        return insideGeometry(view.backFaceTexels, options.faceSize, options.relocation.invalidBackFaces);
+    };
+    ProbeView view = trace(position, rays);
+    glm::vec3 offset(0.0f);
+    if (inside(view)) {
+        if (const std::optional<glm::vec3> moved = relocation(position, view.nearest, rays)) {
+            ProbeView there = trace(position + glm::dvec3(*moved), rays);
+            if (!inside(there)) {
+                view = std::move(there);
+                offset = *moved;
+            }
+        }
+    }
+    RayBakedProbe probe;
+    probe.radiance = projectCubemap(view.radiance, options.order);
+    addSeenSuns(position + glm::dvec3(offset), probe.radiance, rays);
+    probe.backFaceTexels = view.backFaceTexels;
+    probe.visibility = std::move(view.visibility);
+    probe.irradiance = convolveIrradiance(probe.radiance);
+    probe.offset = offset;
+    return probe;
 }
 
 // The sky's suns a probe sees: each a delta of irradiance E in direction l, whose projection is
@@ -397,13 +498,7 @@ std::vector<RayBakedProbe> RayBaker::bakeProbes(std::span<const glm::dvec3> posi
     forEachItem(int(positions.size()), threadCount(positions.size() * raysPerProbe, kRaysPerThread),
                 [&](int p) {
                     uint64_t rays = 0;
-                    RayBakedProbe& probe = probes[size_t(p)];
-                    ProbeView view = state.trace(positions[size_t(p)], rays);
-                    probe.radiance = projectCubemap(view.radiance, state.options.order);
-                    state.addSeenSuns(positions[size_t(p)], probe.radiance, rays);
-                    probe.backFaceTexels = view.backFaceTexels;
-                    probe.visibility = std::move(view.visibility);
-                    probe.irradiance = convolveIrradiance(probe.radiance);
+                    probes[size_t(p)] = state.bake(positions[size_t(p)], rays);
                     state.probeRays += rays;
                     if (!progress) return;
                     const std::lock_guard lock(reporting);

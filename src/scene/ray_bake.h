@@ -20,8 +20,10 @@
 // sees surfaces leave emission + albedo / pi (E_sun + E_k). Points are gathered on first use and
 // kept, with their own random numbers (the seed, the bounce, the point's index): a bake gives the
 // same bits for any thread count and any subset of probes, so bricks merge into exactly the whole
-// bake. The estimate converges to the exact transport as the points grow denser (interpolation)
-// and the gather rays more (noise); docs/scene-probes.md measures both against the path tracer.
+// bake. A probe inside geometry may be moved out before it is captured (ProbeRelocation), by its own
+// rays alone, so that this stays true. The estimate converges to the exact transport as the points grow
+// denser (interpolation) and the gather rays more (noise); docs/scene-probes.md measures both against the
+// path tracer.
 #pragma once
 #include "scene/scene.h"
 #include "sh/coefficients.h"
@@ -39,6 +41,23 @@
 
 namespace shprobe {
 
+// Whether a probe is inside geometry: more than `share` of its 6 N^2 texels (faces N^2) see mostly
+// back faces (half, by default: a probe in a room sees none, one inside a wall nearly all).
+bool insideGeometry(uint32_t backFaceTexels, int faceSize, double share);
+
+// Probe relocation (DDGI's, Majercik et al. 2019 and RTXGI; Unity's "virtual offset"): a probe
+// inside geometry is moved along its nearest ray that met a back face, through that face and
+// `minFrontDistance` / 2 past it, then, where its rays from there meet a front face nearer than
+// `minFrontDistance`, away from that face by the difference; it is captured there and kept there if
+// it is no longer inside geometry. An offset longer than `limit` is not taken: the probe stays where
+// it was, inside. Both lengths are world units (the caller scales them by the grid's cells); the
+// offset is rounded to float, as a volume records it, before the probe is captured.
+struct ProbeRelocation {
+    double limit = 0.0;            // the longest offset; 0: no probe moves
+    double minFrontDistance = 0.0; // the least distance to a front face a moved probe keeps
+    double invalidBackFaces = 0.5; // insideGeometry's share
+};
+
 struct RayBakeOptions {
     int order = 3;             // SH order of the probes, 1..kMaxOrder
     int faceSize = 32;         // N: a probe's view is a 6 x N x N cube map
@@ -53,6 +72,7 @@ struct RayBakeOptions {
     // is sampled explicitly. They light the surfaces as the World's suns do (a shadow ray each),
     // and a probe that sees one adds its delta to its radiance, E y_lm(l).
     std::vector<SceneSun> skySuns;
+    ProbeRelocation relocation;
     uint64_t seed = 1;
 };
 
@@ -70,6 +90,9 @@ struct RayBakedProbe {
     // the depth moments of Majercik et al., "Dynamic Diffuse Global Illumination with Ray-Traced
     // Irradiance Fields" (JCGT 2019), by which a sampler tells whether the probe sees a point.
     std::vector<glm::vec2> visibility;
+    // Where the probe was captured, from the position it was asked for (ProbeRelocation): zero
+    // unless it was moved out of geometry, which it then no longer is.
+    glm::vec3 offset{0.0f};
 };
 
 // What a baker has cast so far.
@@ -95,7 +118,8 @@ class RayBaker {
     RayBaker(RayBaker&&) noexcept;
     RayBaker& operator=(RayBaker&&) noexcept;
 
-    // The probes at `positions`, on all cores; entry k depends on positions[k] alone.
+    // The probes at `positions` (each moved out of geometry where options.relocation says), on all
+    // cores; entry k depends on positions[k] alone.
     std::vector<RayBakedProbe> bakeProbes(std::span<const glm::dvec3> positions,
                                           const BakeProgress& progress = {});
     // What a probe at `position` sees through its texel centres (alpha: 1 where a ray met the back

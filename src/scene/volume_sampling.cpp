@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
-#include <limits>
 
 namespace shprobe {
 
@@ -35,15 +34,6 @@ AxisSpan axisSpan(double coordinate, int count) {
 // Surface points are moved this many of the grid's smallest cell edges along their normal before
 // the visibility test, so that a probe that sees the surface sees the point (DDGI's normal bias).
 constexpr double kNormalBias = 0.1;
-
-double smallestCellEdge(const ProbeGrid& grid) {
-    double edge = std::numeric_limits<double>::infinity();
-    for (int a = 0; a < 3; ++a) {
-        if (grid.counts[a] > 1)
-            edge = std::min(edge, (grid.boundsMax[a] - grid.boundsMin[a]) / (grid.counts[a] - 1));
-    }
-    return std::isfinite(edge) ? edge : 0.0;
-}
 
 // DDGI's weight of a probe at `probe` for a surface point: in front of the surface, and seen.
 double visibilityWeight(const ProbeVolume& volume, uint32_t index, const glm::dvec3& probe,
@@ -120,7 +110,9 @@ ProbeWeights surfaceProbeWeights(const ProbeVolume& volume, const glm::dvec3& po
     double sum = 0.0;
     for (int n = 0; n < 8; ++n) {
         if (result.weights[n] == 0.0) continue;
-        const glm::dvec3 probe = probePosition(volume.grid, probeCell(volume.grid, result.probes[n]));
+        // Where the probe was captured (moved out of geometry, perhaps): what its visibility saw.
+        glm::dvec3 probe = probePosition(volume.grid, probeCell(volume.grid, result.probes[n]));
+        if (!volume.offsets.empty()) probe += glm::dvec3(volume.offsets[result.probes[n]]);
         result.weights[n] *= visibilityWeight(volume, result.probes[n], probe, position, biased, normal);
         sum += result.weights[n];
     }

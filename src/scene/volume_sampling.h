@@ -11,7 +11,9 @@
 // how much the probe lies in front of the surface, ((cos + 1) / 2)^2 + 0.2, and by Chebyshev's
 // bound on the chance that the probe sees the point, from the mean and variance of the distances
 // it recorded towards it: a probe behind a wall, which saw the wall nearer than the point, gets
-// almost no weight, so light does not leak through.
+// almost no weight, so light does not leak through. Both terms take the probe where the bake captured
+// it (its grid position plus the volume's capture offset, where a probe was moved out of geometry),
+// as DDGI does with relocated probes; the trilinear weights stay those of the grid positions.
 #pragma once
 #include "formats/probe_volume.h"
 
