@@ -3,6 +3,7 @@
 #include "scene_fixtures.h"
 
 #include "scene/gltf_scene.h"
+#include "scene/volume_sampling.h"
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/constants.hpp>
@@ -10,6 +11,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -319,6 +321,27 @@ FixtureScene twoRoomsScene() {
     scene.lights = {FixtureLight{.intensity = 3.0f}};
     scene.roots = {0, 1};
     return scene;
+}
+
+double twoRoomsIrradiance(const ProbeVolume& volume, double x0, double x1) {
+    double sum = 0.0;
+    int count = 0;
+    for (int a = 0; a < 16; ++a) {
+        for (int b = 0; b < 16; ++b) {
+            const double u = (a + 0.5) / 16.0, v = (b + 0.5) / 16.0;
+            const double x = x0 + (x1 - x0) * u;
+            const std::array<std::pair<glm::dvec3, glm::dvec3>, 3> points{{
+                {{x, 0.01, -1.0 + 2.0 * v}, {0.0, 1.0, 0.0}},  // floor
+                {{x, 2.0 * v, -0.99}, {0.0, 0.0, 1.0}},        // back wall
+                {{x, 1.99, -1.0 + 2.0 * v}, {0.0, -1.0, 0.0}}, // ceiling
+            }};
+            for (const auto& point : points) {
+                sum += sampleVolumeIrradiance(volume, point.first, point.second).g;
+                ++count;
+            }
+        }
+    }
+    return sum / count;
 }
 
 FixtureScene boxScene(const BoxOptions& options) {

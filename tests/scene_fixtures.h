@@ -3,6 +3,7 @@
 // a .glb. A scene is described as plain data (FixtureScene) and written by writeGltf; the Cornell
 // box, the single box and the node hierarchy are such descriptions, in metres.
 #pragma once
+#include "formats/probe_volume.h"
 #include "scene/scene.h"
 #include "sh/cubemap.h"
 
@@ -129,6 +130,9 @@ const World& openCornellBoxWithBlocks();
 // (x from 0 to 2) shut; between them a wall 2 cm thick. One white material (albedo 0.7), every
 // surface facing into its room, one-sided.
 FixtureScene twoRoomsScene();
+// The mean irradiance (green) a volume gives the floor, back wall and ceiling of the two rooms
+// between x0 and x1: points on a 16 x 16 grid of each surface, 1 cm off it (sampleVolumeIrradiance).
+double twoRoomsIrradiance(const ProbeVolume& volume, double x0, double x1);
 
 // One axis-aligned box centred at the origin, of one material: with inward faces, closed and of
 // uniform emission and albedo, the white furnace of scene probes.

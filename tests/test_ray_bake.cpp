@@ -260,29 +260,6 @@ ProbeVolume volumeOf(const ProbeGrid& grid, const std::vector<RayBakedProbe>& pr
     return volume;
 }
 
-// The mean irradiance (green) the volume gives a room's floor and walls: points on a 16 x 16 grid
-// of each surface, 1 cm off it, x from x0 to x1.
-double roomIrradiance(const ProbeVolume& volume, double x0, double x1) {
-    double sum = 0.0;
-    int count = 0;
-    for (int a = 0; a < 16; ++a) {
-        for (int b = 0; b < 16; ++b) {
-            const double u = (a + 0.5) / 16.0, v = (b + 0.5) / 16.0;
-            const double x = x0 + (x1 - x0) * u;
-            const std::array<std::pair<glm::dvec3, glm::dvec3>, 3> points{{
-                {{x, 0.01, -1.0 + 2.0 * v}, {0.0, 1.0, 0.0}},  // floor
-                {{x, 2.0 * v, -0.99}, {0.0, 0.0, 1.0}},        // back wall
-                {{x, 1.99, -1.0 + 2.0 * v}, {0.0, -1.0, 0.0}}, // ceiling
-            }};
-            for (const auto& point : points) {
-                sum += sampleVolumeIrradiance(volume, point.first, point.second).g;
-                ++count;
-            }
-        }
-    }
-    return sum / count;
-}
-
 // 2CylinderEngine.glb (121,496 triangles) in the open under the built-in sky, whose sun covers
 // about 1e-3 sr: taken out of the sky as a directional sun (sh/lights.h) and sampled explicitly by
 // the bake and by the path tracer alike, 3^3 probes, one bounce, the bake's defaults against the
@@ -333,11 +310,12 @@ TEST(RayBake, LightDoesNotLeakThroughAThinWall) {
     ProbeVolume volume = volumeOf(grid, baker.bakeProbes(positions), 16);
     const std::vector<glm::vec2> visibility = std::move(volume.visibility);
     volume.visibility.clear();
-    const double leakWithout = roomIrradiance(volume, 0.01, 2.0) / roomIrradiance(volume, -2.0, -0.01);
+    const double leakWithout =
+        testing::twoRoomsIrradiance(volume, 0.01, 2.0) / testing::twoRoomsIrradiance(volume, -2.0, -0.01);
     volume.visibilitySize = 16;
     volume.visibility = visibility;
-    const double lit = roomIrradiance(volume, -2.0, -0.01);
-    const double leak = roomIrradiance(volume, 0.01, 2.0) / lit;
+    const double lit = testing::twoRoomsIrradiance(volume, -2.0, -0.01);
+    const double leak = testing::twoRoomsIrradiance(volume, 0.01, 2.0) / lit;
     std::printf("the closed room receives %.4f of the lit room's irradiance (%.4f without visibility)\n",
                 leak, leakWithout);
     EXPECT_GT(lit, 0.05);
