@@ -383,7 +383,7 @@ SamplingAgreement sampleVolumeOnGpu(const Context& context, int visibilitySize, 
 }
 
 TEST_F(SceneCaptureTest, VolumeIncludeMatchesTheCpuSampling) {
-    for (const auto [visibilitySize, withOffsets] : {std::pair(0, false), {4, false}, {4, true}}) {
+    for (const auto& [visibilitySize, withOffsets] : {std::pair(0, false), {4, false}, {4, true}}) {
         const SamplingAgreement agreement = sampleVolumeOnGpu(context(), visibilitySize, withOffsets);
         std::printf(
             "probe_volume.glsl against the CPU, visibility maps %d^2%s: worst %.3g of the largest |E| "

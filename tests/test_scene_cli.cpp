@@ -283,7 +283,9 @@ TEST_F(SceneCommand, LeakMeasuresInTheTwoRooms) {
         std::printf("%-34s %zu invalid, %2zu moved: the closed room receives %.4f, %.4f with visibility\n",
                     bake.name, size_t(std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0))),
                     moved, blind, seeing);
-        if (!bake.options.empty() && bake.options[0] == "--no-dilation") EXPECT_EQ(moved, 25u);
+        if (!bake.options.empty() && bake.options[0] == "--no-dilation") {
+            EXPECT_EQ(moved, 25u);
+        }
         shares.push_back(seeing);
     }
     EXPECT_LT(shares[4], 0.025);

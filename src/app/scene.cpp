@@ -508,11 +508,11 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
                     double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
                     double(rays.counts.cacheRays));
-        std::printf(
-            "moved    %zu out of geometry (by at most %g of the smallest cell side), %zu stayed inside\n",
-            rays.relocated, options.relocationLimit, inside);
-        std::printf("filled   %s from their valid neighbours\n",
-                    counted(rays.filled, "invalid probe").c_str());
+        if (options.relocationLimit > 0.0)
+            std::printf("moved    %zu out of geometry (by at most %g of the smallest cell side), %zu stayed "
+                        "inside\n",
+                        rays.relocated, options.relocationLimit, inside);
+        std::printf("filled   %s from valid neighbours\n", counted(rays.filled, "invalid probe").c_str());
     }
     std::printf("wrote    %s in %.2f s\n", options.output.c_str(), seconds);
 }
