@@ -33,6 +33,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
@@ -755,6 +756,23 @@ TEST_F(CliFailures, BadLightsAndWindows) {
     expectFailure({{"bake", "--sphere", "0,1,0", "-5", "1,1,1", "-o", "OUT"}, 2, {"--sphere", "radius"}});
     expectFailure({{"bake", "--window", "gauss:3", "-o", "OUT"}, 2, {"--window"}});
     expectFailure({{"light", "-o", "OUT"}, 2, {"at least one"}});
+}
+
+// --timings prints each phase of a GPU bake once, named and with a time that is a non-negative
+// number; without --timings no phase is printed.
+TEST_F(Cli, TimingsNameEachPhaseOfAGpuBake) {
+    RunResult timed = runOk({"bake", "--backend", "gpu", "-q", "--timings", "-o", file("timed.json")});
+    for (const char* phase : {"instance", "device", "pipelines", "upload", "dispatch", "readback"}) {
+        const std::string label = std::string("  timing   ") + phase;
+        const size_t at = timed.out.find(label);
+        ASSERT_NE(at, std::string::npos) << phase << " in: " << timed.out;
+        EXPECT_EQ(timed.out.find(label, at + 1), std::string::npos) << phase << " twice in: " << timed.out;
+        double ms = -1.0;
+        EXPECT_EQ(std::sscanf(timed.out.c_str() + at + label.size(), " %lf ms", &ms), 1) << phase;
+        EXPECT_GE(ms, 0.0) << phase;
+    }
+    RunResult plain = runOk({"bake", "--backend", "gpu", "-q", "-o", file("plain.json")});
+    EXPECT_EQ(plain.out.find("timing"), std::string::npos) << plain.out;
 }
 
 // --format binary writes the same coefficients as the JSON file (both hold the GPU's float values:

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <future>
+#include <string>
 #include <system_error>
 
 namespace shprobe {
@@ -63,6 +64,30 @@ void printSummary(FILE* report, const BakeOptions& options, const Environment& e
     std::fprintf(report, "\n");
 }
 
+// --timings: the phases of a GPU bake, one a line. The instance and the device start beside the
+// load; the pipelines are created in the bake; "dispatch" is the submission's wall time (copies,
+// the bake's dispatches; llvmpipe compiles each shader at its first dispatch), of which the device's
+// timestamps time the dispatches.
+std::string gpuTimings(const GpuSession& session, const BakeResult& result) {
+    const Context& context = session.context();
+    const bool cached = session.loadedCacheBytes() > sizeof(VkPipelineCacheHeaderVersionOne);
+    const GpuBake& phases = result.phases;
+    char text[1024];
+    std::snprintf(text, sizeof(text),
+                  "  timing   instance %10.1f ms\n"
+                  "  timing   device   %10.1f ms\n"
+                  "  timing   pipelines %9.1f ms (%s)\n"
+                  "  timing   upload   %10.1f ms (%s)\n"
+                  "  timing   dispatch %10.1f ms (device %.1f ms)\n"
+                  "  timing   readback %10.1f ms\n",
+                  context.instanceMilliseconds, context.deviceMilliseconds, session.pipelineMilliseconds(),
+                  cached ? "from the pipeline cache" : "cold: the pipeline cache held none",
+                  phases.uploadMilliseconds,
+                  phases.inPlace ? "texels read in place, no copy" : "texels copied through a staging buffer",
+                  phases.submitMilliseconds, result.deviceMilliseconds, phases.readbackMilliseconds);
+    return text;
+}
+
 // Before any work: a failed write must not waste a bake, nor may the output be an input.
 void checkSingleOutput(const BakeOptions& options) {
     checkOutputPath(options.output, formatContent(options.format));
@@ -97,6 +122,8 @@ void runSingleBake(const BakeOptions& options) {
     fitBackend(backend, environment);
     const Environment* environments[] = {&environment};
     BakeResult result = bake(options, backend, environments, progress.counter())[0];
+    const std::string timings =
+        options.timings && backend.session ? gpuTimings(*backend.session, result) : "";
     if (backend.session) backend.session->finish();
     double bakeMs = millisecondsSince(start);
     progress.stop();
@@ -109,6 +136,7 @@ void runSingleBake(const BakeOptions& options) {
     // With the probe on standard output, the report goes to stderr.
     FILE* report = reportStream(options.output);
     printSummary(report, options, environment, backend, result, loadMs, bakeMs);
+    std::fputs(timings.c_str(), report);
     if (options.extractSun) printSun(report, sun);
     if (!options.quiet) printCoefficients(report, written);
 }
@@ -175,6 +203,9 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
                    1024);
     addRangeOption(command, "--texels-per-invocation", options.texelsPerInvocation,
                    "GPU projection texels per invocation (sets the workgroup count)", 1, 1 << 20);
+    command.add_flag("--timings", options.timings,
+                     "GPU bake of one input: print the time of each phase (instance, device, pipelines, "
+                     "upload, dispatch, readback)");
     command.add_flag("-q,--quiet", options.quiet,
                      "Print the summary only, not the coefficients (batch: not the line per probe)");
     addFormatOptions(command, options.format, options.mapSize, options.mirror);

@@ -3,6 +3,7 @@
 #include "app/toolkit.h"
 #include "common/counted.h"
 #include "common/scope_exit.h"
+#include "common/stopwatch.h"
 #include "formats/engine_export.h"
 #include "formats/probe_export.h"
 #include "image/specular_prefilter.h"
@@ -90,6 +91,7 @@ GpuSession::GpuSession(const BakeOptions& options) : options_(options) {
     OnFailure destroy([&] { destroyContext(context_); });
     cachePath_ = pipelineCachePath(context_);
     context_.pipelineCache = loadPipelineCache(context_, cachePath_);
+    VK_CHECK(vkGetPipelineCacheData(context_.device, context_.pipelineCache, &loadedCacheBytes_, nullptr));
 }
 
 GpuSession::~GpuSession() {
@@ -100,11 +102,13 @@ const ProbeBaker& GpuSession::baker(ProbeSource source) {
     std::optional<ProbeBaker>& baker = source == ProbeSource::Equirect ? equirectBaker_ : cubemapBaker_;
     if (baker) return *baker;
     DeviceStep step("creating the bake pipelines", DeviceWork::Setup);
+    Clock::time_point start = Clock::now();
     baker = createProbeBaker(context_, {.order = options_.order,
                                         .cubemaps = uploadBinding(context_, TexelFormat::Rgba32F),
                                         .workgroupSize = options_.workgroupSize,
                                         .texelsPerInvocation = options_.texelsPerInvocation,
                                         .source = source});
+    pipelineMilliseconds_ += millisecondsSince(start);
     savePipelineCache(context_, context_.pipelineCache, cachePath_);
     return *baker;
 }
@@ -234,7 +238,7 @@ std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, GpuSession& sessio
         bool equirect = environment->keptEquirect();
         const GpuBake& bake = equirect ? equirectBakes[nextEquirect++] : cubemapBakes[nextCubemap++];
         BakeResult result{bake.radiance, bake.irradiance, session.context().info.name,
-                          bake.deviceMilliseconds};
+                          bake.deviceMilliseconds, bake};
         if (needsFinishing(options) && isFinite(bake)) {
             Finished finished = finish(options, bake.radiance);
             const ProbeBaker& baker = session.baker(equirect ? ProbeSource::Equirect : ProbeSource::Cubemaps);

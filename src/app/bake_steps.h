@@ -28,6 +28,7 @@ struct BakeResult {
     ShCoefficients irradiance;
     std::string device; // cpuBackendName or the GPU's name
     double deviceMilliseconds = 0.0;
+    GpuBake phases; // GPU only: its upload, submit and readback times (coefficients unused)
 };
 
 // An empty input is the built-in sky. An equirect input is kept as decoded (projected directly)
@@ -48,6 +49,10 @@ class GpuSession {
 
     const Context& context() const { return context_; }
     const ProbeBaker& baker(ProbeSource source);
+    // Wall time of creating the bake pipelines so far, and the bytes of pipeline data the on-disk
+    // cache held when loaded (a bare header when it held none: the pipelines were compiled cold).
+    double pipelineMilliseconds() const { return pipelineMilliseconds_; }
+    size_t loadedCacheBytes() const { return loadedCacheBytes_; }
     // Releases everything; throws Error(Device) when validation messages were printed.
     void finish();
 
@@ -59,6 +64,8 @@ class GpuSession {
     std::string cachePath_;
     std::optional<ProbeBaker> cubemapBaker_;
     std::optional<ProbeBaker> equirectBaker_;
+    double pipelineMilliseconds_ = 0.0;
+    size_t loadedCacheBytes_ = 0;
     bool released_ = false;
 };
 

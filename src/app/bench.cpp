@@ -48,6 +48,7 @@ struct Measurement {
     double texelsPerSecond;
     double bytesPerSecond; // the texel bytes the path reads, per second
     double fractionOfBound;
+    const char* bound;       // what fractionOfBound is against (Bench::kBoundNames)
     double errorToReference; // max |c - reference| / |L_00|; negative when not measured
 };
 
@@ -151,6 +152,24 @@ double errorToReference(const ShCoefficients& coefficients, const ShCoefficients
     return worst / std::max({std::abs(dc.r), std::abs(dc.g), std::abs(dc.b)});
 }
 
+// A memcpy of the bytes into memory already written once (no page faults), best of `repeat`: what
+// putting the texels where a CPU device reads them would cost.
+double memcpyMilliseconds(std::span<const std::byte> bytes, int repeat) {
+    std::vector<std::byte> destination(bytes.size());
+    return bestMilliseconds(repeat, [&] { std::memcpy(destination.data(), bytes.data(), bytes.size()); });
+}
+
+// What a row's fraction is against, each measured in the same run on the same bytes.
+enum class Bound {
+    CpuRead,              // memoryReadMilliseconds: the CPU rows
+    DeviceRead,           // the faster of read_buffer.comp and a buffer copy: the device rows
+    Transfer,             // a host-to-device copy from pinned memory: the uploads
+    TransferAndProjection // the transfer, then the projection on the device: a whole GPU bake
+};
+
+// The names of Bound in the report's `against` column and JSON `bound`.
+constexpr const char* kBoundNames[] = {"cpu read", "gpu read", "transfer", "xfer+proj"};
+
 class Bench {
   public:
     Bench(const BenchOptions& options, Context& context) : options_(options), context_(context) {}
@@ -159,13 +178,26 @@ class Bench {
         const BenchInput input = noiseInput(faceSize);
         texels_ = double(input.rgba32f.texels.size());
         for (TexelFormat format : kFormats) {
-            boundMs_[size_t(format)] = memoryReadMilliseconds(bytesOf(input, format), options_.repeat);
-            add(faceSize, format, 0, "memory read (bound)", boundMs_[size_t(format)], -1.0);
+            const std::span<const std::byte> bytes = bytesOf(input, format);
+            Bounds& bounds = bounds_[size_t(format)];
+            bounds.cpuReadMs = memoryReadMilliseconds(bytes, options_.repeat);
+            add(faceSize, format, 0, "cpu memory read (bound)", bounds.cpuReadMs, -1.0, Bound::CpuRead);
+            add(faceSize, format, 0, "cpu memcpy", memcpyMilliseconds(bytes, options_.repeat), -1.0,
+                Bound::CpuRead);
+            bounds.device = measureDeviceBounds(context_, bytes, options_.repeat);
+            if (bounds.device.readMilliseconds <= 0.0) continue; // no timestamps
+            add(faceSize, format, 0, "gpu buffer read (device)", bounds.device.readMilliseconds, -1.0,
+                Bound::DeviceRead);
+            add(faceSize, format, 0, "gpu buffer copy (device)", bounds.device.copyMilliseconds, -1.0,
+                Bound::DeviceRead);
+            add(faceSize, format, 0, "host-to-device copy, pinned (transfer bound)",
+                bounds.device.transferMilliseconds, -1.0, Bound::Transfer);
         }
-        // The device's own bound: read_texels reads the texels as the projection does.
+        // read_texels reads the texels as the projection does: its access pattern's own bound.
         for (TexelFormat format : kFormats) {
             const double ms = deviceReadMilliseconds(context_, input.rgba32f, format, options_.repeat);
-            if (ms > 0.0) add(faceSize, format, 0, "gpu texel reads only (device)", ms, -1.0);
+            if (ms > 0.0)
+                add(faceSize, format, 0, "gpu texel reads only (device)", ms, -1.0, Bound::DeviceRead);
         }
         for (int order : options_.orders)
             runOrder(input, order);
@@ -176,13 +208,36 @@ class Bench {
   private:
     static constexpr std::array<TexelFormat, 2> kFormats{TexelFormat::Rgba32F, TexelFormat::Rgba16F};
 
+    // One format's bounds, and the projection's device time of the order being measured.
+    struct Bounds {
+        double cpuReadMs = 0.0;
+        DeviceBounds device;
+        double projectionMs = 0.0;
+    };
+
+    double boundMilliseconds(TexelFormat format, Bound bound) const {
+        const Bounds& bounds = bounds_[size_t(format)];
+        switch (bound) {
+        case Bound::CpuRead:
+            return bounds.cpuReadMs;
+        case Bound::DeviceRead: // a copy reads every byte too, and on some devices sooner
+            return std::min(bounds.device.readMilliseconds, bounds.device.copyMilliseconds);
+        case Bound::Transfer:
+            return bounds.device.transferMilliseconds;
+        case Bound::TransferAndProjection:
+            return bounds.device.transferMilliseconds + bounds.projectionMs;
+        }
+        return 0.0;
+    }
+
     void runOrder(const BenchInput& input, int order) {
         const Cubemap& cubemap = input.rgba32f;
         ShCoefficients reference;
         bool haveReference = cubemap.faceSize <= options_.referenceMaxFaceSize;
         if (haveReference) {
             double ms = bestMilliseconds(1, [&] { reference = projectCubemap(cubemap, order); });
-            add(cubemap.faceSize, TexelFormat::Rgba32F, order, "cpu reference (double)", ms, 0.0);
+            add(cubemap.faceSize, TexelFormat::Rgba32F, order, "cpu reference (double)", ms, 0.0,
+                Bound::CpuRead);
         }
         for (TexelFormat format : kFormats)
             runGpu(cubemap, format, order, haveReference ? &reference : nullptr);
@@ -201,9 +256,12 @@ class Bench {
             deviceMs = std::min(deviceMs, bake.deviceMilliseconds);
         });
         const double error = reference ? errorToReference(bake.radiance, *reference) : -1.0;
+        bounds_[size_t(format)].projectionMs = bake.deviceMilliseconds > 0.0 ? deviceMs : 0.0;
         if (bake.deviceMilliseconds > 0.0)
-            add(cubemap.faceSize, format, order, "gpu projection (device)", deviceMs, error);
-        add(cubemap.faceSize, format, order, "gpu bake (wall: upload, dispatch, readback)", wallMs, error);
+            add(cubemap.faceSize, format, order, "gpu projection (device)", deviceMs, error,
+                Bound::DeviceRead);
+        add(cubemap.faceSize, format, order, "gpu bake (wall: upload, dispatch, readback)", wallMs, error,
+            Bound::TransferAndProjection);
     }
 
     // The fast CPU path on all cores, reading the texels in `format`.
@@ -215,19 +273,21 @@ class Bench {
         const auto project = [&] { result = projectFacesFast(texels, format, faceSize, order, fast); };
         const double ms = bestMilliseconds(options_.repeat, project);
         const std::string path = "cpu fast (float, " + std::to_string(fast.threads) + " threads)";
-        add(faceSize, format, order, path, ms, reference ? errorToReference(result, *reference) : -1.0);
+        add(faceSize, format, order, path, ms, reference ? errorToReference(result, *reference) : -1.0,
+            Bound::CpuRead);
     }
 
-    void add(int faceSize, TexelFormat format, int order, const std::string& path, double ms, double error) {
+    void add(int faceSize, TexelFormat format, int order, const std::string& path, double ms, double error,
+             Bound bound) {
         const double rate = texels_ / (ms * 1e-3);
         const double bytes = rate * double(texelBytes(format));
-        const double boundMs = boundMs_[size_t(format)];
-        measurements_.push_back(
-            {faceSize, formatName(format), order, path, ms, rate, bytes, boundMs / ms, error});
+        const double boundMs = boundMilliseconds(format, bound);
+        measurements_.push_back({faceSize, formatName(format), order, path, ms, rate, bytes, boundMs / ms,
+                                 kBoundNames[size_t(bound)], error});
         const Measurement& m = measurements_.back();
-        std::printf("%6d  %-7s  %5s  %-44s %10.2f %10.1f %7.2f %8.1f%%", m.faceSize, m.format,
+        std::printf("%6d  %-7s  %5s  %-46s %10.2f %10.1f %7.2f %8.1f%% %-10s", m.faceSize, m.format,
                     order ? std::to_string(order).c_str() : "-", m.path.c_str(), m.milliseconds,
-                    m.texelsPerSecond * 1e-6, m.bytesPerSecond * 1e-9, m.fractionOfBound * 100.0);
+                    m.texelsPerSecond * 1e-6, m.bytesPerSecond * 1e-9, m.fractionOfBound * 100.0, m.bound);
         if (m.errorToReference >= 0.0) std::printf("  %.1e", m.errorToReference);
         std::printf("\n");
         std::fflush(stdout);
@@ -236,7 +296,7 @@ class Bench {
     const BenchOptions& options_;
     Context& context_;
     double texels_ = 0.0;
-    std::array<double, kFormats.size()> boundMs_{}; // indexed by TexelFormat
+    std::array<Bounds, kFormats.size()> bounds_{}; // indexed by TexelFormat
     std::vector<Measurement> measurements_;
 };
 
@@ -276,7 +336,8 @@ nlohmann::ordered_json reportJson(const Device& device, const std::vector<Measur
         row["milliseconds"] = m.milliseconds;
         row["texels_per_second"] = m.texelsPerSecond;
         row["bytes_per_second"] = m.bytesPerSecond;
-        row["fraction_of_memory_read_bound"] = m.fractionOfBound;
+        row["fraction_of_bound"] = m.fractionOfBound;
+        row["bound"] = m.bound;
         if (m.errorToReference >= 0.0) row["max_error_relative_to_L00"] = m.errorToReference;
         rows.push_back(row);
     }
@@ -322,8 +383,11 @@ void runBench(const BenchOptions& options) {
     std::printf("device: %s (%s), %s, subgroup size %u; CPU threads: %u\n", context.info.name.c_str(),
                 deviceTypeName(context.info.type), context.info.driver.c_str(), context.info.subgroupSize,
                 std::thread::hardware_concurrency());
-    std::printf("%6s  %-7s  %5s  %-44s %10s %10s %7s %9s  %s\n", "face", "format", "order", "path", "ms",
-                "Mtexel/s", "GB/s", "of bound", "error/|L00|");
+    if (context.info.type == VK_PHYSICAL_DEVICE_TYPE_CPU)
+        std::printf("the device is a CPU: its bounds (gpu buffer read, copy, transfer) are passes over CPU "
+                    "memory\n");
+    std::printf("%6s  %-7s  %5s  %-46s %10s %10s %7s %9s %-10s %s\n", "face", "format", "order", "path", "ms",
+                "Mtexel/s", "GB/s", "of bound", "against", "error/|L00|");
     Bench bench(options, context);
     for (int faceSize : options.faceSizes)
         bench.runFaceSize(faceSize);

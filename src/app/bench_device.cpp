@@ -10,12 +10,109 @@
 #include "vk/vulkan_commands.h"
 #include <shprobe/shprobe_bench_spirv.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <unistd.h>
+#include <vector>
 
 namespace shprobe {
+
+namespace {
+
+// Best device milliseconds of `repeat` submissions of `record` between two timestamps, after an
+// untimed one (llvmpipe compiles a shader at its first dispatch); `first` is recorded before the
+// untimed run's commands only (an upload). INFINITY without timestamps.
+double bestDeviceMilliseconds(const Context& context, int repeat,
+                              const std::function<void(VkCommandBuffer)>& record,
+                              const std::function<void(VkCommandBuffer)>& first = {}) {
+    VkQueryPool timestamps = createTimestampPool(context);
+    if (!timestamps) return INFINITY;
+    ScopeExit destroyTimestamps([&] { vkDestroyQueryPool(context.device, timestamps, nullptr); });
+    double best = INFINITY;
+    for (int run = 0; run <= repeat; ++run) {
+        submitAndWait(context, [&](VkCommandBuffer commands) {
+            if (run == 0 && first) first(commands);
+            computeWriteBarrier(commands); // what earlier submissions wrote, to this one's reads
+            vkCmdResetQueryPool(commands, timestamps, 0, 2);
+            vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);
+            record(commands);
+            vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
+        });
+        if (run > 0) best = std::min(best, timestampMilliseconds(context, timestamps));
+    }
+    return best;
+}
+
+void recordCopy(VkCommandBuffer commands, const Buffer& from, const Buffer& to) {
+    VkBufferCopy region{0, 0, from.size};
+    vkCmdCopyBuffer(commands, from.buffer, to.buffer, 1, &region);
+}
+
+// read_buffer.comp over the whole buffer, in ranges of at most maxStorageBufferRange (one set each).
+double bufferReadMilliseconds(const Context& context, const Buffer& words, int repeat) {
+    constexpr uint32_t kLocalSize = 256;
+    constexpr uint32_t kPerGroup = 1u << 12; // vec4s each workgroup reads: 64 KiB
+    const VkDeviceSize largest = VkDeviceSize(context.info.limits.maxStorageBufferRange) / (kPerGroup * 16) *
+                                 (kPerGroup * 16); // whole workgroups per range
+    const VkDeviceSize range = std::min(words.size, largest);
+    const uint32_t ranges = uint32_t((words.size + range - 1) / range);
+    const uint32_t groups = uint32_t((range / 16 + kPerGroup - 1) / kPerGroup);
+    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                                     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    ComputeProgram read = createComputeProgram(context, {.name = "read_buffer.comp",
+                                                         .spirv = spirv::read_buffer_comp,
+                                                         .bindings = kBindings,
+                                                         .pushConstantSize = 8,
+                                                         .localSize = kLocalSize});
+    ScopeExit destroyRead([&] { destroyComputeProgram(context, read); });
+    Buffer sums = createBuffer(context, VkDeviceSize(groups) * kLocalSize * 16,
+                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "read sums");
+    ScopeExit destroySums([&] { destroyBuffer(context, sums); });
+    VkDescriptorPool pool = createDescriptorPool(context, {.sets = ranges, .storageBuffers = 2 * ranges});
+    ScopeExit destroyPool([&] { vkDestroyDescriptorPool(context.device, pool, nullptr); });
+    std::vector<VkDescriptorSet> sets;
+    for (uint32_t r = 0; r < ranges; ++r) {
+        const VkDeviceSize size = std::min(range, words.size - r * range);
+        const BindingTarget targets[] = {{words.buffer, r * range, size}, {sums.buffer, 0, VK_WHOLE_SIZE}};
+        sets.push_back(createDescriptorSet(context, pool, read, targets));
+    }
+    return bestDeviceMilliseconds(context, repeat, [&](VkCommandBuffer commands) {
+        for (uint32_t r = 0; r < ranges; ++r) {
+            const uint32_t count = uint32_t(std::min(range, words.size - r * range) / 16);
+            const uint32_t push[] = {count, kPerGroup};
+            dispatch(commands, read, sets[r], push, {(count + kPerGroup - 1) / kPerGroup, 1});
+            computeWriteBarrier(commands); // the ranges' sums share one buffer
+        }
+    });
+}
+
+} // namespace
+
+DeviceBounds measureDeviceBounds(const Context& context, std::span<const std::byte> bytes, int repeat) {
+    if (!context.info.timestamps) return {};
+    const VkDeviceSize size = bytes.size();
+    constexpr VkBufferUsageFlags kBoth = VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    Buffer staging =
+        createBuffer(context, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, "bound staging");
+    ScopeExit destroyStaging([&] { destroyBuffer(context, staging); });
+    Buffer words = createBuffer(context, size, kBoth | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device,
+                                "bound source");
+    ScopeExit destroyWords([&] { destroyBuffer(context, words); });
+    Buffer copy =
+        createBuffer(context, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Device, "bound copy");
+    ScopeExit destroyCopy([&] { destroyBuffer(context, copy); });
+    std::memcpy(staging.mapped, bytes.data(), bytes.size());
+    DeviceBounds bounds;
+    bounds.transferMilliseconds = bestDeviceMilliseconds(
+        context, repeat, [&](VkCommandBuffer commands) { recordCopy(commands, staging, words); });
+    bounds.copyMilliseconds = bestDeviceMilliseconds(
+        context, repeat, [&](VkCommandBuffer commands) { recordCopy(commands, words, copy); });
+    bounds.readMilliseconds = bufferReadMilliseconds(context, words, repeat);
+    return bounds;
+}
 
 double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format,
                               int repeat) {
@@ -59,21 +156,12 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
     ScopeExit destroyPool([&] { vkDestroyDescriptorPool(context.device, pool, nullptr); });
     const BindingTarget targets[] = {{.imageView = upload.image.view}, {sums.buffer, 0, VK_WHOLE_SIZE}};
     VkDescriptorSet set = createDescriptorSet(context, pool, read, targets);
-    VkQueryPool timestamps = createTimestampPool(context);
-    ScopeExit destroyTimestamps([&] { vkDestroyQueryPool(context.device, timestamps, nullptr); });
-    // Run 0 is not timed: it uploads, and llvmpipe compiles a shader at its first dispatch.
-    double best = INFINITY;
-    for (int run = 0; run <= repeat; ++run) {
-        submitAndWait(context, [&](VkCommandBuffer commands) {
-            if (run == 0) recordCubemapUpload(commands, upload);
-            vkCmdResetQueryPool(commands, timestamps, 0, 2);
-            vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);
+    return bestDeviceMilliseconds(
+        context, repeat,
+        [&](VkCommandBuffer commands) {
             dispatch(commands, read, set, glsl::ProjectParams{upload.faceSize}, {groups, 1});
-            vkCmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
-        });
-        if (run > 0) best = std::min(best, timestampMilliseconds(context, timestamps));
-    }
-    return best;
+        },
+        [&](VkCommandBuffer commands) { recordCubemapUpload(commands, upload); });
 }
 
 PipelineCreation measurePipelineCreation(const Device& device, int order) {

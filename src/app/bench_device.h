@@ -6,12 +6,26 @@
 #include "sh/cubemap.h"
 #include "vk/context.h"
 
+#include <cstddef>
+#include <functional>
+#include <span>
+
 namespace shprobe {
 
 // Device milliseconds (timestamps) of read_texels_<format>.comp over the cube map: every texel read
 // as the storage-image projection reads it, and only summed. The best of `repeat` runs after an
 // untimed one; 0 without timestamps or without storage images of the format.
 double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format, int repeat);
+
+// The device's own bounds for `bytes` (a multiple of 16 bytes), timed with timestamps, each the best
+// of `repeat` runs after an untimed one; 0 without timestamps. On a CPU device such as lavapipe all
+// three are CPU memory passes.
+struct DeviceBounds {
+    double readMilliseconds = 0.0;     // read_buffer.comp: a plain coalesced read of a device-local buffer
+    double copyMilliseconds = 0.0;     // vkCmdCopyBuffer of it to another device-local buffer
+    double transferMilliseconds = 0.0; // vkCmdCopyBuffer from a host-visible (pinned) staging buffer
+};
+DeviceBounds measureDeviceBounds(const Context& context, std::span<const std::byte> bytes, int repeat);
 
 struct PipelineCreation {
     double firstMilliseconds = 0.0;  // createProbeBaker with an empty pipeline cache

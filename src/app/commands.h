@@ -39,6 +39,7 @@ struct BakeOptions {
     uint32_t workgroupSize = glsl::kDefaultWorkgroupWidth;
     uint32_t texelsPerInvocation = glsl::kDefaultTexelsPerInvocation;
     bool quiet = false;      // no coefficient table
+    bool timings = false;    // single GPU bake: print each phase's time
     LightOptions lights;     // analytic lights added to the environment's radiance
     Window window;           // none | hanning:W | lanczos:W | dering | dering-lanczos
     bool extractSun = false; // take the sun out and write it beside the probe

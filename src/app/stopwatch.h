@@ -1,13 +1,3 @@
-// Wall-clock milliseconds for the commands' reports.
+// The commands' stopwatch is common/stopwatch.h, which the device code times its phases with too.
 #pragma once
-#include <chrono>
-
-namespace shprobe {
-
-using Clock = std::chrono::steady_clock;
-
-inline double millisecondsSince(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-} // namespace shprobe
+#include "common/stopwatch.h"

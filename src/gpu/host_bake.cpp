@@ -2,9 +2,11 @@
 
 #include "common/error.h"
 #include "common/scope_exit.h"
+#include "common/stopwatch.h"
 #include "glsl/gpu_interface.h"
 #include "sh/basis.h"
 #include "vk/check.h"
+#include "vk/host_memory.h"
 #include "vk/image.h"
 #include "vk/resources.h"
 #include "vk/vulkan_commands.h"
@@ -92,12 +94,24 @@ TexelFormat uploadFormat(CubemapBinding binding) {
     return binding == CubemapBinding::StorageRgba16F ? TexelFormat::Rgba16F : TexelFormat::Rgba32F;
 }
 
-// The staging buffer and the image of an upload: `layers` layers of `extent` for `binding`, and
-// the texels of each probe (probeTexels, whole layers each) packed in turn.
-void createLayers(const Device& device, VkExtent2D extent, uint32_t layers, CubemapBinding binding,
+// The image of an upload, `layers` layers of `extent` for `binding`, holding the texels of each
+// probe (probeTexels, whole layers each). Where the device reads host memory in place
+// (vk/host_memory.h), one probe's RGBA32F texels become the image itself: no staging buffer, no
+// copy; returns true then. Otherwise they are packed into the staging buffer, to be copied.
+bool createLayers(const Device& device, VkExtent2D extent, uint32_t layers, CubemapBinding binding,
                   std::span<const std::span<const glm::vec4>> probeTexels, const char* what, Buffer& staging,
                   GpuImage& image) {
     const TexelFormat format = uploadFormat(binding);
+    const VkImageUsageFlags readUsage =
+        binding == CubemapBinding::SampledImage ? VK_IMAGE_USAGE_SAMPLED_BIT : VK_IMAGE_USAGE_STORAGE_BIT;
+    if (probeTexels.size() == 1 && format == TexelFormat::Rgba32F) {
+        const std::span<const glm::vec4> texels = probeTexels.front();
+        if (std::optional<GpuImage> inPlace = importHostImage(
+                device, texels.data(), texels.size_bytes(), imageFormat(format), extent, layers, readUsage)) {
+            image = *inPlace;
+            return true;
+        }
+    }
     const VkDeviceSize layerBytes = VkDeviceSize(extent.width) * extent.height * texelBytes(format);
     staging =
         createBuffer(device, layerBytes * layers, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, what);
@@ -106,21 +120,24 @@ void createLayers(const Device& device, VkExtent2D extent, uint32_t layers, Cube
         packTexels(texels, format, out);
         out += texels.size() * texelBytes(format);
     }
-    const VkImageUsageFlags readUsage =
-        binding == CubemapBinding::SampledImage ? VK_IMAGE_USAGE_SAMPLED_BIT : VK_IMAGE_USAGE_STORAGE_BIT;
     image = createImage(device, {.format = imageFormat(format),
                                  .extent = extent,
                                  .usage = readUsage | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                                  .what = what,
                                  .layers = layers});
+    return false;
 }
 
-// Records the copy of every layer and leaves the image as probe_baker.h asks: in
-// cubemapLayout(binding), visible to compute-shader reads.
+// Records the copy of every layer (none for an image read in place) and leaves the image as
+// probe_baker.h asks: in cubemapLayout(binding), visible to compute-shader reads.
 void recordLayers(VkCommandBuffer commands, const Buffer& staging, const GpuImage& image,
-                  CubemapBinding binding) {
-    recordImageUpload(commands, staging.buffer, image, cubemapLayout(binding),
-                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+                  CubemapBinding binding, bool inPlace) {
+    if (!inPlace)
+        return recordImageUpload(commands, staging.buffer, image, cubemapLayout(binding),
+                                 VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+    changeLayout(commands, image,
+                 {VK_IMAGE_LAYOUT_UNDEFINED, cubemapLayout(binding), VK_PIPELINE_STAGE_HOST_BIT,
+                  VK_ACCESS_HOST_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
 }
 
 // A source kind's host side, for bakeBatch: cube maps (6 layers each) or equirect maps (1).
@@ -220,21 +237,26 @@ std::vector<GpuBake> bakeBatch(const Context& context, const ProbeBaker& baker,
         outputBytes = alignUp(outputBytes + probeBakeOutputBytes(order, uint32_t(group.members.size())),
                               context.info.limits.minStorageBufferOffsetAlignment);
     }
+    auto start = Clock::now();
     Buffer output = createBuffer(context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                  MemoryUse::Readback, "coefficients");
     ScopeExit releaseOutput([&] { destroyBuffer(context, output); });
+    bool inPlace = true;
     for (BakeGroup<Source>& group : groups) {
         std::vector<const typename Source::Texels*> members;
         for (size_t index : group.members)
             members.push_back(sources[index]);
         group.upload = Source::upload(context, members, baker.options.cubemaps);
         group.set = Source::bakeSet(context, baker, group.upload, output.buffer, group.outputOffset);
+        inPlace = inPlace && group.upload.inPlace;
     }
     VkQueryPool timestamps = createTimestampPool(context);
     ScopeExit releaseTimestamps([&] {
         if (timestamps) vkDestroyQueryPool(context.device, timestamps, nullptr);
     });
 
+    const double uploadMs = millisecondsSince(start);
+    start = Clock::now();
     submitAndWait(context, [&](VkCommandBuffer commands) {
         for (const BakeGroup<Source>& group : groups)
             Source::record(commands, group.upload);
@@ -248,6 +270,8 @@ std::vector<GpuBake> bakeBatch(const Context& context, const ProbeBaker& baker,
         computeWriteBarrier(commands); // the coefficients, to the host
     });
 
+    const double submitMs = millisecondsSince(start);
+    start = Clock::now();
     invalidateBuffer(context, output);
     const double deviceMs = timestampMilliseconds(context, timestamps);
     std::vector<GpuBake> bakes(sources.size());
@@ -259,6 +283,13 @@ std::vector<GpuBake> bakeBatch(const Context& context, const ProbeBaker& baker,
             bake.deviceMilliseconds = deviceMs;
             bake.workgroups = group.set.groupsPerProbe;
         }
+    const double readbackMs = millisecondsSince(start);
+    for (GpuBake& bake : bakes) {
+        bake.uploadMilliseconds = uploadMs;
+        bake.submitMilliseconds = submitMs;
+        bake.readbackMilliseconds = readbackMs;
+        bake.inPlace = inPlace;
+    }
     return bakes;
 }
 
@@ -293,13 +324,13 @@ CubemapUpload createCubemapUpload(const Device& device, std::span<const Cubemap*
         texels.emplace_back(cubemap->texels);
     }
     OnFailure undo([&] { destroyCubemapUpload(device, upload); });
-    createLayers(device, {upload.faceSize, upload.faceSize}, kFaceCount * upload.probeCount, binding, texels,
-                 "cube maps to bake", upload.staging, upload.image);
+    upload.inPlace = createLayers(device, {upload.faceSize, upload.faceSize}, kFaceCount * upload.probeCount,
+                                  binding, texels, "cube maps to bake", upload.staging, upload.image);
     return upload;
 }
 
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload) {
-    recordLayers(commands, upload.staging, upload.image, upload.binding);
+    recordLayers(commands, upload.staging, upload.image, upload.binding, upload.inPlace);
 }
 
 void destroyCubemapUpload(const Device& device, CubemapUpload& upload) {
@@ -323,15 +354,15 @@ EquirectUpload createEquirectUpload(const Device& device, std::span<const Image*
         texels.emplace_back(equirect->texels);
     }
     OnFailure undo([&] { destroyEquirectUpload(device, upload); });
-    createLayers(device, {upload.width, upload.height}, upload.probeCount, binding, texels,
-                 "equirect maps to bake", upload.staging, upload.image);
+    upload.inPlace = createLayers(device, {upload.width, upload.height}, upload.probeCount, binding, texels,
+                                  "equirect maps to bake", upload.staging, upload.image);
     upload.view = createImageView(device, upload.image.image, VK_IMAGE_VIEW_TYPE_2D_ARRAY,
                                   upload.image.format, upload.probeCount);
     return upload;
 }
 
 void recordEquirectUpload(VkCommandBuffer commands, const EquirectUpload& upload) {
-    recordLayers(commands, upload.staging, upload.image, upload.binding);
+    recordLayers(commands, upload.staging, upload.image, upload.binding, upload.inPlace);
 }
 
 void destroyEquirectUpload(const Device& device, EquirectUpload& upload) {

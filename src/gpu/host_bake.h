@@ -23,13 +23,16 @@ namespace shprobe {
 CubemapBinding uploadBinding(const Device& device, TexelFormat format);
 
 // Cube maps of one face size in a 2D-array image, 6 layers each (probe_baker.h's layout), with the
-// staging buffer they are copied from.
+// staging buffer they are copied from; or, where the device reads host memory in place
+// (vk/host_memory.h), one cube map's own texels as the image (inPlace: no staging buffer, no copy;
+// the cube map must outlive the upload).
 struct CubemapUpload {
     uint32_t faceSize = 0;
     uint32_t probeCount = 0;
     CubemapBinding binding = CubemapBinding::SampledImage;
     Buffer staging;
     GpuImage image;
+    bool inPlace = false;
 };
 
 // Creates the image for a baker of this binding and fills the staging buffer (all cube maps must
@@ -52,6 +55,7 @@ struct EquirectUpload {
     Buffer staging;
     GpuImage image;
     VkImageView view = VK_NULL_HANDLE;
+    bool inPlace = false;
 };
 
 // As the cube-map upload functions, for equirect maps (all of one size).
@@ -66,6 +70,13 @@ struct GpuBake {
     double deviceMilliseconds = 0.0; // from timestamps around the bake dispatches (all probes of the
                                      // submission, uploads excluded); 0 where unsupported
     uint32_t workgroups = 0;         // projection workgroups of this probe
+    // Host wall times of the whole submission (all probes): creating the images and bake sets
+    // (packing texels into staging memory unless read in place), submitting and waiting (copies,
+    // dispatches), reading the coefficients back.
+    double uploadMilliseconds = 0.0;
+    double submitMilliseconds = 0.0;
+    double readbackMilliseconds = 0.0;
+    bool inPlace = false; // the texels were read where they lie (vk/host_memory.h), not copied
 };
 
 // Probe k of the `probes` probes of a bake whose output (probe_baker.h's layout) starts at `offset`

@@ -1,6 +1,7 @@
 #include "vk/context.h"
 
 #include "common/scope_exit.h"
+#include "common/stopwatch.h"
 #include "vk/check.h"
 #include "vk/vulkan_commands.h"
 
@@ -19,6 +20,8 @@
 namespace shprobe {
 
 namespace {
+
+constexpr const char* kHostMemoryExtension = VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME;
 
 const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 // What a user can do when the devices there cannot run the shaders: nothing is baked on them.
@@ -416,6 +419,7 @@ std::vector<DeviceInfo> listDevices(const ContextOptions& options) {
 Context createContext(const ContextOptions& options) {
     DeviceStep step("creating the Vulkan device", DeviceWork::Setup);
     Context context;
+    auto start = Clock::now();
     bool validation = options.validation || envFlag("SHPROBE_VALIDATION");
     context.validationLog = std::make_unique<ValidationLog>();
     context.instance = createInstance(validation, context.validationLog.get(), options.instanceExtensions);
@@ -423,20 +427,26 @@ Context createContext(const ContextOptions& options) {
     if (validation) context.messenger = createMessenger(context.instance, context.validationLog.get());
     if (options.createSurface) context.surface = options.createSurface(context.instance);
     std::vector<VkPhysicalDevice> physicalDevices = enumeratePhysicalDevices(context.instance);
+    context.instanceMilliseconds = millisecondsSince(start);
+    start = Clock::now();
     std::vector<DeviceInfo> devices = describeDevices(physicalDevices);
     applyRenderingRequirements(devices, physicalDevices, options, context.surface);
     context.info = pickDevice(devices, requestedDevice(options));
     context.physicalDevice = physicalDevices[context.info.index];
     context.queueFamily = *findComputeQueueFamily(context.physicalDevice);
     vkGetPhysicalDeviceMemoryProperties(context.physicalDevice, &context.memory);
-    context.device =
-        createLogicalDevice(context.physicalDevice, context.queueFamily, options.deviceExtensions);
+    // Bakes read host memory in place where the device can (vk/host_memory.h).
+    std::vector<std::string> extensions = options.deviceExtensions;
+    context.hostMemoryImport = hasDeviceExtension(context.physicalDevice, kHostMemoryExtension);
+    if (context.hostMemoryImport) extensions.push_back(kHostMemoryExtension);
+    context.device = createLogicalDevice(context.physicalDevice, context.queueFamily, extensions);
     vkGetDeviceQueue(context.device, context.queueFamily, 0, &context.queue);
 
     VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
     pool.queueFamilyIndex = context.queueFamily;
     VK_CHECK(vkCreateCommandPool(context.device, &pool, nullptr, &context.commandPool));
+    context.deviceMilliseconds = millisecondsSince(start);
     return context;
 }
 

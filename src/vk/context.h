@@ -88,6 +88,7 @@ struct Device {
     DeviceInfo info;
     VkPhysicalDeviceMemoryProperties memory{};
     VkPipelineCache pipelineCache = VK_NULL_HANDLE; // optional; destroyed by whoever set it
+    bool hostMemoryImport = false; // VK_EXT_external_memory_host is enabled (vk/host_memory.h)
 };
 
 // The program's own Vulkan: the instance, the validation messenger, a window surface if asked
@@ -102,6 +103,8 @@ struct Context : Device {
     VkQueue queue = VK_NULL_HANDLE;
     VkCommandPool commandPool = VK_NULL_HANDLE;
     std::unique_ptr<ValidationLog> validationLog;
+    double instanceMilliseconds = 0.0; // createContext's wall time: the instance (and the driver list),
+    double deviceMilliseconds = 0.0;   // then choosing the device and creating it with its queue and pool
 
     uint32_t validationMessages() const { return validationLog ? validationLog->messages.load() : 0; }
 };

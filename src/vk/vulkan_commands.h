@@ -26,6 +26,8 @@
     X(vkGetPhysicalDeviceQueueFamilyProperties)                                                              \
     X(vkGetPhysicalDeviceMemoryProperties)                                                                   \
     X(vkGetPhysicalDeviceFormatProperties)                                                                   \
+    X(vkGetPhysicalDeviceImageFormatProperties2)                                                             \
+    X(vkGetDeviceProcAddr)                                                                                   \
     X(vkCreateDevice)                                                                                        \
     X(vkDestroyDevice)                                                                                       \
     X(vkGetDeviceQueue)                                                                                      \
@@ -43,6 +45,7 @@
     X(vkCreateImage)                                                                                         \
     X(vkDestroyImage)                                                                                        \
     X(vkGetImageMemoryRequirements)                                                                          \
+    X(vkGetImageSubresourceLayout)                                                                           \
     X(vkBindImageMemory)                                                                                     \
     X(vkCreateImageView)                                                                                     \
     X(vkDestroyImageView)                                                                                    \

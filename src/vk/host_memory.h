@@ -1,0 +1,25 @@
+// Images over host memory the program already holds (VK_EXT_external_memory_host), for a CPU
+// device such as lavapipe, which reads host memory where it lies. The texels are then read in
+// place, with no staging copy and no copy into an image: on lavapipe, 6 x 4096^2 RGBA32F (1.6 GB)
+// would otherwise be copied twice into fresh pages, which the kernel clears first. Where anything
+// is missing the caller copies as before.
+#pragma once
+#include "vk/context.h"
+#include "vk/image.h"
+
+#include <optional>
+
+namespace shprobe {
+
+// A linear-tiled image of `layers` layers of `extent` in `format` whose texels are the `bytes`
+// bytes at `texels` (rows tightly packed, layer after layer), bound to that memory imported, in
+// VK_IMAGE_LAYOUT_UNDEFINED (an image of external memory starts there; on a CPU device the
+// transition out of it keeps the texels); nullopt where the device cannot: it is not a CPU device,
+// the extension is not enabled, the imported memory is not device-local, the driver's linear layout
+// of this size has padding or the format's linear tiling lacks `usage`. The memory must outlive the image and
+// must not change while the device reads it. destroyImage releases both.
+std::optional<GpuImage> importHostImage(const Device& device, const void* texels, VkDeviceSize bytes,
+                                        VkFormat format, VkExtent2D extent, uint32_t layers,
+                                        VkImageUsageFlags usage);
+
+} // namespace shprobe
