@@ -423,6 +423,35 @@ TEST(Equirect, ConstantStaysConstant) {
     }
 }
 
+// averageCubemap keeps each block's integral: for every texel of the 8^2 map, its value times its
+// solid angle equals the sum of value times solid angle of the 4 x 4 texels of the 32^2 map it
+// covers (double sums of float texels: 1e-6 relative). A map of random texels, so that a texel
+// taken from the wrong block or weighed by face area instead (up to a quarter apart within a block
+// near a corner) fails.
+TEST(Cubemap, AveragingKeepsEachBlocksIntegral) {
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> value(0.0f, 1.0f);
+    Cubemap fine = makeCubemap(32);
+    for (glm::vec4& texel : fine.texels)
+        texel = glm::vec4(value(random), value(random), value(random), 1.0f);
+    const Cubemap coarse = averageCubemap(fine, 8);
+    ASSERT_EQ(coarse.faceSize, 8);
+    for (int face = 0; face < kFaceCount; ++face) {
+        for (int j = 0; j < 8; ++j) {
+            for (int i = 0; i < 8; ++i) {
+                glm::dvec3 block(0.0);
+                for (int y = 4 * j; y < 4 * j + 4; ++y)
+                    for (int x = 4 * i; x < 4 * i + 4; ++x)
+                        block += texelSolidAngle(x, y, 32) * glm::dvec3(fine.at(face, x, y));
+                const glm::dvec3 kept = texelSolidAngle(i, j, 8) * glm::dvec3(coarse.at(face, i, j));
+                EXPECT_NEAR(kept.r, block.r, 1e-6 * block.r) << face << " " << i << " " << j;
+                EXPECT_NEAR(kept.b, block.b, 1e-6 * block.b) << face << " " << i << " " << j;
+            }
+        }
+    }
+    EXPECT_EQ(averageCubemap(fine, 32).texels, fine.texels); // not smaller: the map itself
+}
+
 // Bilinear interpolation reproduces a function linear in the pixel coordinates, so with one
 // sample per texel (width = 4 faceSize) every texel holds the equirect coordinates of its own
 // direction: red the column coordinate x (away from the seam, where x wraps), green the row

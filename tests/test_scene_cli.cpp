@@ -10,6 +10,7 @@
 #include "image/environment.h"
 #include "image/image_write.h"
 #include "scene/probe_grid.h"
+#include "sh/projection.h"
 
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
@@ -355,6 +356,43 @@ TEST_F(SceneCommand, ScaledScenesBakeTheSameVolume) {
 // Where float cannot hold the scene, both backends refuse it in one line naming the scale: smaller
 // than 1e-10 across, coordinates past 1e10, or a room 3.46 across a million units from the origin,
 // where rays would leave a surface 30 units off it.
+// A sky's small bright patch counts by its area on both backends: a probe in the open (a 1 m
+// quad 100 m below, so that the scene has a size) under a black 256 x 128 sky holding a 2 x 2
+// pixel patch of radiance 2e4 (0.6 of the sky's light) gets the sky's own projection, computed here
+// from the cube map the bake loads. The patch covers 6e-4 sr; a probe texel of faces 16^2 covers
+// 8e-3 sr, so texel rays that meet the patch or miss it by chance (the sky read at its own 64^2)
+// put L00 off by up to +-100%. Averaged to the rays' footprints (32^2 for the cpu's 2 x 2 rays a
+// texel, 16^2 for the gpu's one, each texel the solid-angle mean of those it covers) the sky keeps
+// every texel's share of the integral: the gpu is then exact to float rounding (its texel centres
+// read the averaged texels), the cpu 4e-4 off (its jittered rays weigh a texel's four averaged sky
+// texels by where they fall, not by their solid angles), and the quad hides 1e-4 sr of black sky:
+// bound 0.25% of L00.
+TEST_F(SceneCommand, SmallBrightPatchesOfTheSkyCountByTheirArea) {
+    Image sky = makeImage(256, 128);
+    for (int y = 50; y < 52; ++y)
+        for (int x = 100; x < 102; ++x)
+            sky.at(x, y) = glm::vec4(2e4f, 2e4f, 2e4f, 1.0f);
+    writeImage(file("patch.exr"), sky);
+    testing::FixtureScene scene;
+    testing::FixtureMesh quad;
+    testing::addQuad(quad, {0.0f, -100.0f, 0.0f}, {0.5f, 0.0f, 0.0f}, {0.0f, 0.0f, -0.5f});
+    scene.meshes.push_back(quad);
+    scene.nodes.push_back({.mesh = 0});
+    scene.roots = {0};
+    testing::writeGltf(file("open.glb"), scene, testing::GltfContainer::Glb);
+    const glm::dvec3 exact = projectCubemap(loadEnvironment(file("patch.exr"), {}).cubemap, 3).rgb[0];
+    for (const std::string backend : {"cpu", "gpu"}) {
+        const RunResult bake = run({"scene", file("open.glb"), "--sky", file("patch.exr"), "--grid", "1,1,1",
+                                    "--bounds", "-1,-1,-1,1,1,1", "--face-size", "16", "--bounces", "0",
+                                    "--backend", backend, "-o", file(backend + ".shpv")});
+        ASSERT_EQ(bake.exitCode, 0) << describe(bake);
+        EXPECT_CONTAINS(bake.out, backend == "cpu" ? "averaged to 32^2 faces" : "averaged to 16^2 faces");
+        const glm::vec3 l00 = readProbeVolume(file(backend + ".shpv")).radiance[0];
+        std::printf("%s: L00 %.5g against the sky's %.5g\n", backend.c_str(), l00.r, exact.r);
+        EXPECT_NEAR(l00.r, exact.r, 0.0025 * exact.r) << backend;
+    }
+}
+
 TEST_F(SceneCommand, ScalesFloatCannotHoldAreRefused) {
     writeScaledCornellBox(file("tiny.glb"), 1e-12f);
     writeScaledCornellBox(file("huge.glb"), 1e11f);

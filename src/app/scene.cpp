@@ -23,6 +23,7 @@
 #include "vk/context.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <mutex>
@@ -157,6 +158,20 @@ constexpr double kRelocationFrontCells = 0.1;
 
 int cpuRaysPerTexel(const SceneOptions& options) {
     return options.raysPerTexel > 0 ? options.raysPerTexel : 4;
+}
+
+// The face size of the sky as the probes' rays see it: a texel a ray (a texel of the probes' faces
+// on the gpu, one of the cpu's s x s jittered rays of a texel), never finer than the sky's own.
+int skyFaceSizeForProbes(const SceneOptions& options, bool rays, int skyFaceSize) {
+    const int raysPerSide = rays ? int(std::sqrt(double(cpuRaysPerTexel(options)))) : 1;
+    return std::min(skyFaceSize, options.faceSize * raysPerSide);
+}
+
+// The sky averaged over the probes' ray footprints where it is finer (docs/scene-probes.md, "Small
+// bright patches of a sky"): a patch smaller than a ray's share of the sphere counts by its area,
+// not by whether a ray happened to meet it.
+Cubemap skySeenByProbes(const Cubemap& sky, const SceneOptions& options, bool rays) {
+    return averageCubemap(sky, skyFaceSizeForProbes(options, rays, sky.faceSize));
 }
 
 ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
@@ -343,7 +358,7 @@ ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOp
     const SplitSky split = splitSceneSky(sky);
     RayBakeOptions bakeOptions = rayBakeOptions(options, grid);
     bakeOptions.skySuns = split.suns;
-    RayBaker baker(world, split.residual, bakeOptions);
+    RayBaker baker(world, skySeenByProbes(split.residual, options, true), bakeOptions);
     ProgressLine line("probes", range.end - range.begin, options.quiet);
     std::vector<RayBakedProbe> probes = baker.bakeProbes(probePositions(grid, range), [&](size_t done) {
         const RayBakeCounts sofar = baker.counts();
@@ -439,7 +454,7 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
     const std::optional<ProbeVolume> previous =
         options.previous.empty() ? std::nullopt
                                  : std::optional(readPreviousBounce(options, grid, world, settings));
-    SceneCapture capture = createSceneCapture(context, world, sky.cubemap,
+    SceneCapture capture = createSceneCapture(context, world, skySeenByProbes(sky.cubemap, options, false),
                                               {.faceSize = options.faceSize, .order = options.order});
     ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });
     std::vector<glm::dvec3> irradiance;
@@ -491,7 +506,11 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     const double seconds = millisecondsSince(start) / 1000.0;
     const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0)) + rays.filled;
     std::printf("scene    %s\n", world.description.c_str());
-    std::printf("sky      %s\n", sky.description.c_str());
+    const int skySeen = skyFaceSizeForProbes(options, !backend.context, sky.faceSize());
+    const std::string averaged = skySeen < sky.faceSize() ? ", averaged to " + std::to_string(skySeen) +
+                                                                "^2 faces for the probes' rays"
+                                                          : "";
+    std::printf("sky      %s%s\n", sky.description.c_str(), averaged.c_str());
     std::printf("probes   %u of a %dx%dx%d grid (%s), order %d, faces %d^2, bounce %d\n", volume.probeCount(),
                 grid.counts.x, grid.counts.y, grid.counts.z,
                 options.brick ? ("brick " + options.brick->text).c_str() : "whole", options.order,

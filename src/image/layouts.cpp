@@ -323,6 +323,29 @@ Cubemap equirectToCubemap(const Image& equirect, int faceSize, WorkCounter* prog
     return cubemap;
 }
 
+Cubemap averageCubemap(const Cubemap& cubemap, int faceSize) {
+    const int n = cubemap.faceSize;
+    if (faceSize >= n) return cubemap;
+    Cubemap result = makeCubemap(faceSize); // throws for a face size below 1
+    std::vector<double> weights(result.texels.size(), 0.0);
+    std::vector<glm::dvec3> sums(result.texels.size(), glm::dvec3(0.0));
+    for (int face = 0; face < kFaceCount; ++face) {
+        for (int j = 0; j < n; ++j) {
+            for (int i = 0; i < n; ++i) {
+                const size_t to =
+                    (size_t(face) * faceSize + size_t((2 * j + 1) * faceSize / (2 * n))) * faceSize +
+                    size_t((2 * i + 1) * faceSize / (2 * n));
+                const double solidAngle = texelSolidAngle(i, j, n);
+                sums[to] += solidAngle * glm::dvec3(cubemap.at(face, i, j));
+                weights[to] += solidAngle;
+            }
+        }
+    }
+    for (size_t t = 0; t < result.texels.size(); ++t)
+        result.texels[t] = glm::vec4(glm::vec3(sums[t] / weights[t]), 1.0f);
+    return result;
+}
+
 Cubemap resizeCubemap(const Cubemap& cubemap, int faceSize) {
     if (faceSize == cubemap.faceSize) return cubemap;
     Cubemap result = makeCubemap(faceSize); // throws for a face size below 1
