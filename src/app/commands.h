@@ -155,6 +155,18 @@ struct MergeOptions {
     std::string output;
 };
 
+// `shprobe transfer SCENE -o OUT`: per-vertex radiance transfer written into the scene (transfer.cpp).
+struct TransferCommandOptions {
+    std::string scene;              // .gltf or .glb
+    std::string output;             // .glb, or the binary file (.shpt)
+    std::string model = "shadowed"; // unshadowed | shadowed | interreflected
+    int order = 3;
+    int rays = 256;
+    int bounces = 1;    // interreflected only
+    std::string format; // glb | binary; empty: binary for a .shpt output, else glb
+    bool quiet = false;
+};
+
 // Every number option is checked at parse time: finite (CLI11 reads "nan" and "inf" as numbers)
 // and within [min, max] (infinite bounds: none). The error says what is allowed: "--yaw: nan is not a number
 // from -360 to 360".
@@ -224,6 +236,8 @@ void addInfoOptions(CLI::App& command, InfoOptions& options);
 void addSceneOptions(CLI::App& command, SceneOptions& options);
 // bouncesGiven: --bounces was on the command line (it cannot go with --brick or --previous).
 void runScene(const SceneOptions& options, bool bouncesGiven);
+void addTransferOptions(CLI::App& command, TransferCommandOptions& options);
+void runTransfer(const TransferCommandOptions& options, bool bouncesGiven);
 void addMergeOptions(CLI::App& command, MergeOptions& options);
 void runMerge(const MergeOptions& options);
 // The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize

@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
     shprobe::LightCommandOptions light;
     shprobe::SceneOptions scene;
     shprobe::MergeOptions merge;
+    shprobe::TransferCommandOptions transfer;
     shprobe::BenchOptions bench;
     shprobe::BenchJobOptions benchJob;
     const Command commands[] = {
@@ -121,6 +122,11 @@ int main(int argc, char** argv) {
          "(docs/scene-probes.md)",
          [&](CLI::App& c) { shprobe::addSceneOptions(c, scene); },
          [&](const CLI::App& c) { shprobe::runScene(scene, c.count("--bounces") > 0); }},
+        {"transfer",
+         "Bake per-vertex radiance transfer of a glTF scene (any sky relights it) into the scene's "
+         "vertex attributes, on the CPU (docs/transfer.md)",
+         [&](CLI::App& c) { shprobe::addTransferOptions(c, transfer); },
+         [&](const CLI::App& c) { shprobe::runTransfer(transfer, c.count("--bounces") > 0); }},
         {"merge", "Join the bricks of one `shprobe scene` bake into its whole volume",
          [&](CLI::App& c) { shprobe::addMergeOptions(c, merge); },
          [&](const CLI::App&) { shprobe::runMerge(merge); }},

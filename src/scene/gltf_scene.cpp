@@ -21,7 +21,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <glm/matrix.hpp>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -579,12 +581,37 @@ class SceneBuilder {
                 !primitives[p].attributes.count("TEXCOORD_0"))
                 fail(path_, "meshes[" + std::to_string(mesh) + "].primitives[" + std::to_string(p) +
                                 "] has a textured material but no TEXCOORD_0");
-            appendPrimitive(world_, readPrimitive(source_, mesh, int(p)), placed.world, material,
+            const PrimitiveGeometry geometry = readPrimitive(source_, mesh, int(p));
+            const uint32_t firstVertex = uint32_t(world_.positions.size());
+            appendPrimitive(world_, geometry, placed.world, material,
                             path_ + ": " + nodeName(placed.node) + " (meshes[" + std::to_string(mesh) +
                                 "].primitives[" + std::to_string(p) + "])");
+            placedPrimitives_.push_back(placement(placed, mesh, int(p), geometry, firstVertex));
         }
     }
 
+    // The World vertices appendPrimitive added from `firstVertex` on, by their POSITION elements: in
+    // order, or a flat primitive's triangle corners (their order turned as appendPrimitive turns it).
+    GltfPlacedPrimitive placement(const PlacedNode& placed, int mesh, int primitive,
+                                  const PrimitiveGeometry& geometry, uint32_t firstVertex) const {
+        GltfPlacedPrimitive record{placed.node, mesh, primitive,
+                                   firstVertex, {},   uint32_t(geometry.positions.size())};
+        if (!geometry.normals.empty()) {
+            for (uint32_t v = 0; v < record.positionCount; ++v)
+                record.sourceVertices.push_back(v);
+            return record;
+        }
+        const bool flip = glm::determinant(glm::dmat3(placed.world)) < 0.0;
+        for (size_t i = 0; i < geometry.indices.size(); i += 3)
+            for (size_t c : {size_t(0), size_t(flip ? 2 : 1), size_t(flip ? 1 : 2)})
+                record.sourceVertices.push_back(geometry.indices[i + c]);
+        return record;
+    }
+
+  public:
+    std::vector<GltfPlacedPrimitive> takePlacedPrimitives() { return std::move(placedPrimitives_); }
+
+  private:
     // The World material of a glTF material (-1: glTF's default), added on first use.
     uint32_t materialSlot(int material, int mesh, int primitive) {
         if (auto found = materialSlots_.find(material); found != materialSlots_.end()) return found->second;
@@ -689,6 +716,7 @@ class SceneBuilder {
     std::map<int, uint32_t> materialSlots_; // glTF material (-1: the default) -> World::materials
     std::map<int, int> textureSlots_;       // glTF image -> World::textures
     std::map<std::string, size_t> notes_;   // what was left out, and how many
+    std::vector<GltfPlacedPrimitive> placedPrimitives_;
 };
 
 } // namespace
@@ -721,16 +749,41 @@ std::string gltfSceneHash(const std::string& path) {
     return hash.text();
 }
 
-World loadGltfScene(const std::string& path, const GltfLoadOptions& options) {
+namespace {
+
+// The World and where its vertices come from; `model` is the model they were read from.
+GltfSceneSource readScene(const std::string& path, const GltfLoadOptions& options,
+                          std::shared_ptr<tinygltf::Model>& model) {
     const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF file");
-    const tinygltf::Model model = parseModel(path, bytes);
-    const std::vector<int> parents = checkedParents(model, path);
-    SceneBuilder builder(model, path, options);
-    const std::vector<PlacedNode> placed = placeNodes(model, sceneRoots(model, parents, path), path);
+    model = std::make_shared<tinygltf::Model>(parseModel(path, bytes));
+    const std::vector<int> parents = checkedParents(*model, path);
+    SceneBuilder builder(*model, path, options);
+    const std::vector<PlacedNode> placed = placeNodes(*model, sceneRoots(*model, parents, path), path);
     builder.checkTotals(placed);
     for (const PlacedNode& node : placed)
         builder.addNode(node);
-    return builder.finish();
+    return {builder.finish(), builder.takePlacedPrimitives(), nullptr};
+}
+
+} // namespace
+
+World loadGltfScene(const std::string& path, const GltfLoadOptions& options) {
+    std::shared_ptr<tinygltf::Model> model;
+    return std::move(readScene(path, options, model).world);
+}
+
+GltfSceneSource loadGltfSceneSource(const std::string& path, const GltfLoadOptions& options) {
+    std::shared_ptr<tinygltf::Model> model;
+    GltfSceneSource source = readScene(path, options, model);
+    for (size_t i = 0; i < model->images.size(); ++i) {
+        tinygltf::Image& image = model->images[i];
+        if (!image.image.empty() || image.bufferView >= 0) continue;
+        std::string file;
+        const std::span<const unsigned char> read = imageBytes(*model, int(i), path, file);
+        image.image.assign(read.begin(), read.end());
+    }
+    source.model = std::move(model);
+    return source;
 }
 
 } // namespace shprobe

@@ -49,8 +49,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
+
+namespace tinygltf {
+class Model;
+}
 
 namespace shprobe {
 
@@ -80,5 +85,28 @@ std::string gltfSceneHash(const std::string& path);
 // Reads the scene at `path` into world-space triangles; see above for what is read, ignored and
 // refused. World::description is "NAME (T triangles, M materials, S suns)" with NAME the path.
 World loadGltfScene(const std::string& path, const GltfLoadOptions& options = {});
+
+// Where World vertices come from: the node that placed a mesh primitive, and each vertex's index in
+// the primitive's POSITION (a primitive without normals has 3 World vertices per triangle, its
+// corners; the others one per POSITION element, in order).
+struct GltfPlacedPrimitive {
+    int node = -1;
+    int mesh = -1;
+    int primitive = -1;
+    uint32_t firstVertex = 0;             // World vertices firstVertex, firstVertex + 1, ...
+    std::vector<uint32_t> sourceVertices; // ... each one's POSITION element
+    uint32_t positionCount = 0;           // POSITION's count
+};
+
+// The scene as loadGltfScene reads it, with tinygltf's model kept for a command that writes the
+// scene back with more in it (scene/transfer_gltf.h): every image given its bytes (from its buffer
+// view, data URI or file), and the placed primitives in World vertex order. Throws what
+// loadGltfScene throws, and Error(Input) for an image file that cannot be read.
+struct GltfSceneSource {
+    World world;
+    std::vector<GltfPlacedPrimitive> primitives;
+    std::shared_ptr<const tinygltf::Model> model;
+};
+GltfSceneSource loadGltfSceneSource(const std::string& path, const GltfLoadOptions& options = {});
 
 } // namespace shprobe

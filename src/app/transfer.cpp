@@ -1,0 +1,120 @@
+// `shprobe transfer`: per-vertex radiance transfer of a glTF scene (scene/transfer.h), on all cores,
+// written into the scene as vertex attributes or into the binary file (scene/transfer_gltf.h).
+#include "app/commands.h"
+#include "app/program.h"
+
+#include "app/progress_line.h"
+#include "app/stopwatch.h"
+#include "common/counted.h"
+#include "common/error.h"
+#include "common/output_file.h"
+#include "scene/gltf_scene.h"
+#include "scene/transfer.h"
+#include "scene/transfer_gltf.h"
+#include "sh/basis.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <optional>
+
+namespace shprobe {
+
+namespace {
+
+bool writesBinary(const TransferCommandOptions& options) {
+    if (!options.format.empty()) return options.format == "binary";
+    return options.output.size() >= 5 && options.output.compare(options.output.size() - 5, 5, ".shpt") == 0;
+}
+
+// Every refusal the options and paths allow, before the scene is read.
+void checkTransferOptions(const TransferCommandOptions& options, bool bouncesGiven) {
+    const TransferModel model = parseTransferModel(options.model);
+    if (bouncesGiven && model != TransferModel::Interreflected)
+        throw Error(ErrorKind::Input,
+                    "transfer: --bounces is for the interreflected model, not " + options.model);
+    checkOutputPath(options.output, OutputContent::Binary);
+    std::vector<std::string> inputs{options.scene};
+    try {
+        const std::vector<std::string> external = gltfExternalFiles(options.scene);
+        inputs.insert(inputs.end(), external.begin(), external.end());
+    } catch (const Error&) { // loadGltfSceneSource says why
+    }
+    checkOutputsAreNotInputs({&options.output, 1}, inputs);
+}
+
+void report(const TransferCommandOptions& options, const GltfSceneSource& source,
+            const VertexTransfer& transfer, double seconds) {
+    FILE* out = reportStream(options.output);
+    const int channels = transferChannels(transfer);
+    std::fprintf(out, "scene    %s\n", source.world.description.c_str());
+    std::fprintf(
+        out, "model    %s, order %d%s, %s\n", options.model.c_str(), options.order,
+        options.model == "interreflected" ? (", " + counted(size_t(options.bounces), "bounce")).c_str() : "",
+        channels == 3 ? "RGB" : "grey (one channel)");
+    std::fprintf(out, "vertices %zu in %s\n", transfer.vertexCount(),
+                 counted(source.primitives.size(), "primitive").c_str());
+    if (transfer.rays > 0)
+        std::fprintf(out, "rays     %d per vertex and bounce, %.3g in all, %.3g Mrays/s\n", transfer.rays,
+                     double(transfer.raysCast), double(transfer.raysCast) / std::max(seconds, 1e-9) / 1e6);
+    std::fprintf(out, "wrote    %s (%s) in %.2f s\n", options.output.c_str(),
+                 writesBinary(options)
+                     ? "binary"
+                     : (counted(size_t(transferAttributeCount(options.order, channels)), "VEC4 attribute") +
+                        " per vertex")
+                           .c_str(),
+                 seconds);
+}
+
+} // namespace
+
+void addTransferOptions(CLI::App& command, TransferCommandOptions& options) {
+    command.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
+    command
+        .add_option("-o,--output", options.output,
+                    "The scene with the transfer as vertex attributes (.glb), or the binary file (.shpt)")
+        ->required();
+    command
+        .add_option("--model", options.model,
+                    "unshadowed: exact, no rays; shadowed: the sky each vertex sees; interreflected: "
+                    "shadowed plus --bounces of the light the surfaces reflect")
+        ->check(CLI::IsMember({"unshadowed", "shadowed", "interreflected"}))
+        ->capture_default_str();
+    addRangeOption(command, "--order", options.order, "SH order, 1..8", 1, kMaxOrder);
+    addRangeOption(command, "--rays", options.rays,
+                   "Rays per vertex (and bounce), stratified, rounded up to a square", 1, kMaxTransferRays);
+    addRangeOption(command, "--bounces", options.bounces, "interreflected: bounces off the surfaces", 0,
+                   kMaxTransferBounces);
+    command
+        .add_option("--format", options.format,
+                    "glb: the scene with the attributes; binary: the transfer alone (default: binary for a "
+                    ".shpt output, else glb)")
+        ->check(CLI::IsMember({"glb", "binary"}));
+    command.add_flag("-q,--quiet", options.quiet, "No report");
+}
+
+void runTransfer(const TransferCommandOptions& options, bool bouncesGiven) {
+    checkTransferOptions(options, bouncesGiven);
+    const Clock::time_point start = Clock::now();
+    const GltfSceneSource source = loadGltfSceneSource(options.scene);
+    const TransferModel model = parseTransferModel(options.model);
+    const TransferOptions transferOptions{.model = model,
+                                          .order = options.order,
+                                          .rays = options.rays,
+                                          .bounces =
+                                              model == TransferModel::Interreflected ? options.bounces : 0};
+    std::optional<ProgressLine> line; // made at the first pass, which knows the total
+    const VertexTransfer transfer =
+        computeTransfer(source.world, transferOptions, [&](uint64_t done, uint64_t total) {
+            if (!line) line.emplace("vertex passes", total, options.quiet).startedAt(start);
+            line->update(done);
+        });
+    if (line) line->disable();
+    const TransferDescription description{model, transferOptions.bounces};
+    writeOutputFile(options.output,
+                    writesBinary(options) ? transferBinary(source, transfer, description)
+                                          : transferGlb(source, transfer, description),
+                    OutputContent::Binary);
+    if (!options.quiet) report(options, source, transfer, millisecondsSince(start) / 1000.0);
+}
+
+} // namespace shprobe
