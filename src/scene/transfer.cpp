@@ -11,6 +11,7 @@
 #include "sh/cubemap.h"
 #include "sh/irradiance.h"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -64,6 +65,7 @@ class TransferBaker {
     void layOutSides();
     glm::dvec3 albedo(uint32_t vertex) const;
     glm::dvec3 normal(const Side& side) const;
+    glm::dvec3 rayOrigin(uint32_t vertex) const;
     template <typename Ray> void forEachRay(const Side& side, Ray&& ray) const;
     void direct(const Side& side, std::span<glm::vec3> out, uint64_t& rays) const;
     void bounce(const Side& side, std::span<const glm::vec3> previous, std::span<glm::vec3> out,
@@ -111,6 +113,22 @@ glm::dvec3 TransferBaker::albedo(uint32_t vertex) const {
     return shading_.surfacePoint(uint32_t(at / 3), barycentric, true).albedo;
 }
 
+// A vertex where walls meet (a room's corner) lies on the plane of the next wall: its rays start
+// moved into its first triangle, towards the centroid, by 4 surface offsets (at most half the way),
+// so that a ray along that wall cannot slip out between the two.
+glm::dvec3 TransferBaker::rayOrigin(uint32_t vertex) const {
+    const World& world = shading_.world();
+    const uint32_t* t = &world.indices[size_t(corner_[vertex]) / 3 * 3];
+    const glm::dvec3 p(world.positions[vertex]);
+    const glm::dvec3 towards = (glm::dvec3(world.positions[t[0]]) + glm::dvec3(world.positions[t[1]]) +
+                                glm::dvec3(world.positions[t[2]])) /
+                                   3.0 -
+                               p;
+    const double distance = glm::length(towards);
+    if (distance == 0.0) return p;
+    return p + towards * (std::min(4.0 * shading_.offset(), 0.5 * distance) / distance);
+}
+
 glm::dvec3 TransferBaker::normal(const Side& side) const {
     const glm::dvec3 n(shading_.world().normals[side.vertex]);
     return side.back ? -n : n;
@@ -119,7 +137,7 @@ glm::dvec3 TransferBaker::normal(const Side& side) const {
 // Calls ray(origin, direction) for the side's g x g stratified cosine-distributed rays.
 template <typename Ray> void TransferBaker::forEachRay(const Side& side, Ray&& ray) const {
     const glm::dvec3 n = normal(side);
-    const glm::dvec3 origin = glm::dvec3(shading_.world().positions[side.vertex]) + shading_.offset() * n;
+    const glm::dvec3 origin = rayOrigin(side.vertex) + shading_.offset() * n;
     RandomStream random(options_.seed, side.back ? 1 : 0, side.vertex);
     const int g = strata_;
     for (int a = 0; a < g; ++a) {

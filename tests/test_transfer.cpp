@@ -1,0 +1,456 @@
+// Per-vertex transfer (scene/transfer.h) against closed forms, and `shprobe transfer`'s files
+// (scene/transfer_gltf.h): refusals, the attributes read back from the .glb, the binary file, and the
+// Khronos glTF validator's report.
+#include "scene/gltf_scene.h"
+#include "scene/transfer.h"
+#include "scene/transfer_gltf.h"
+#include "scene_fixtures.h"
+#include "sh/basis.h"
+#include "sh/irradiance.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+namespace shprobe {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::FixtureMesh;
+using testing::FixtureScene;
+
+constexpr double kPi = std::numbers::pi;
+
+// ---- Scenes ----------------------------------------------------------------------------------------
+
+// A horizontal square of half-side `half` at the origin, facing +y, fanned about a centre vertex
+// (vertex 0 of the mesh), so that one vertex sits where the closed forms put it.
+void addFannedSquare(FixtureMesh& mesh, float half) {
+    const uint32_t first = uint32_t(mesh.positions.size());
+    mesh.positions.push_back(glm::vec3(0.0f));
+    const glm::vec3 corners[4] = {{-half, 0, -half}, {-half, 0, half}, {half, 0, half}, {half, 0, -half}};
+    for (const glm::vec3& c : corners)
+        mesh.positions.push_back(c);
+    mesh.normals.assign(mesh.positions.size(), glm::vec3(0, 1, 0));
+    for (uint32_t k = 0; k < 4; ++k) // counter-clockwise seen from +y
+        mesh.indices.insert(mesh.indices.end(), {first, first + 1 + k, first + 1 + (k + 1) % 4});
+}
+
+// A regular M-gon of circumradius r at height h, centred above the origin, facing down.
+void addDisc(FixtureMesh& mesh, float r, float h, int segments) {
+    const uint32_t centre = uint32_t(mesh.positions.size());
+    mesh.positions.push_back({0.0f, h, 0.0f});
+    for (int k = 0; k < segments; ++k) {
+        const double a = 2.0 * kPi * k / segments;
+        mesh.positions.push_back({float(r * std::cos(a)), h, float(r * std::sin(a))});
+    }
+    mesh.normals.resize(mesh.positions.size(), glm::vec3(0, -1, 0));
+    for (uint32_t k = 0; k < uint32_t(segments); ++k) // counter-clockwise seen from -y
+        mesh.indices.insert(mesh.indices.end(),
+                            {centre, centre + 1 + k, centre + 1 + (k + 1) % uint32_t(segments)});
+}
+
+// The inside of a unit sphere with the cap of half-angle `cap` about +y cut away: rings of latitude
+// from the cap's rim down to the south pole, faces and normals inward.
+void addOpenSphere(FixtureMesh& mesh, double cap, int rings, int segments) {
+    for (int i = 0; i <= rings; ++i) {
+        const double theta = cap + (kPi - cap) * i / rings;
+        for (int k = 0; k < segments; ++k) {
+            const double phi = 2.0 * kPi * k / segments;
+            const glm::vec3 p(float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)),
+                              float(std::sin(theta) * std::sin(phi)));
+            mesh.positions.push_back(p);
+            mesh.normals.push_back(-p);
+        }
+    }
+    for (uint32_t i = 0; i < uint32_t(rings); ++i)
+        for (uint32_t k = 0; k < uint32_t(segments); ++k) {
+            const uint32_t n = uint32_t(segments), a = i * n + k, b = i * n + (k + 1) % n;
+            // seen from the centre (inside), a, a + n, b + n, b runs counter-clockwise
+            mesh.indices.insert(mesh.indices.end(), {a, a + n, b + n, a, b + n, b});
+        }
+}
+
+FixtureScene sceneOf(std::vector<FixtureMesh> meshes, std::vector<testing::FixtureMaterial> materials,
+                     const glm::quat& rotation = glm::quat(1, 0, 0, 0)) {
+    FixtureScene scene;
+    scene.materials = std::move(materials);
+    for (size_t m = 0; m < meshes.size(); ++m) {
+        if (meshes[m].material < 0) meshes[m].material = 0;
+        scene.nodes.push_back({.mesh = int(m), .rotation = rotation});
+        scene.roots.push_back(int(m));
+    }
+    scene.meshes = std::move(meshes);
+    return scene;
+}
+
+// ---- Closed forms --------------------------------------------------------------------------------
+
+// P_l(t) by Bonnet's recurrence.
+double legendre(int l, double t) {
+    double previous = 1.0, current = t;
+    if (l == 0) return 1.0;
+    for (int k = 1; k < l; ++k) {
+        const double next = ((2 * k + 1) * t * current - k * previous) / (k + 1);
+        previous = current;
+        current = next;
+    }
+    return current;
+}
+
+// integral over [a, b] of t P_l(t) dt by 8-point Gauss-Legendre, exact for polynomials of degree up
+// to 15 (t P_l has degree l + 1 <= 8).
+double integralOfTPl(int l, double a, double b) {
+    static const double x[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                                0.9602898564975363};
+    static const double w[4] = {0.3626837833783620, 0.3137066238569540, 0.2223810344533745,
+                                0.1012285362903763};
+    double sum = 0.0;
+    for (int i = 0; i < 4; ++i)
+        for (double s : {-x[i], x[i]}) {
+            const double t = 0.5 * (b - a) * s + 0.5 * (a + b);
+            sum += w[i] * t * legendre(l, t);
+        }
+    return 0.5 * (b - a) * sum;
+}
+
+// Shadowed transfer of albedo rho at normal n where the sky is seen only outside the cone of
+// half-angle alpha about n: the zonal coefficients z_l = 2 pi K_l integral_0^cos(alpha) t P_l(t) dt
+// rotated to n, sqrt(4 pi / (2l + 1)) z_l y_lm(n) = 2 pi integral(...) y_lm(n).
+std::vector<double> coneTransfer(int order, double rho, const glm::dvec3& n, double alpha) {
+    std::vector<double> basis(size_t(coefficientCount(order)));
+    evalBasis(order, n, basis);
+    for (int l = 0; l < order; ++l)
+        for (int m = -l; m <= l; ++m)
+            basis[size_t(shIndex(l, m))] *= rho / kPi * 2.0 * kPi * integralOfTPl(l, 0.0, std::cos(alpha));
+    return basis;
+}
+
+double greenAt(const VertexTransfer& transfer, uint32_t vertex, int i) {
+    return transfer.coefficients[size_t(vertex) * size_t(coefficientCount(transfer.order)) + size_t(i)].g;
+}
+
+// Unshadowed transfer is rho / pi A_l y_lm(n), exact: at n = +y, by the hand values of
+// docs/conventions.md (y00 = 0.282094792, y1-1 = -0.488602512 y, A_0 = pi, A_1 = 2 pi / 3,
+// A_2 = pi / 4, y20 = 0.315391565 (3 z^2 - 1) with z = 0), to float's rounding. A vertex on a plane
+// that nothing lies above sees the whole hemisphere: its shadowed transfer is the same integral,
+// estimated by 32 x 32 jittered stratified cosine rays. That estimate's error, measured here with
+// rho = 0.6, is at most 1.3e-3 at order 3 and 3.0e-3 at order 8 (the higher bands oscillate within
+// a stratum); the tolerance, 6e-3, is twice the larger.
+TEST(Transfer, OpenPlaneShadowedEqualsUnshadowed) {
+    const double rho = 0.6;
+    FixtureMesh plane;
+    addFannedSquare(plane, 1.0f);
+    const World world = testing::loadFixtureWorld(sceneOf({plane}, {{glm::vec3(float(rho))}}));
+    const VertexTransfer exact = computeTransfer(world, {.model = TransferModel::Unshadowed, .order = 8});
+    constexpr double kExact = 1e-6; // float storage of values below 1
+    for (uint32_t v = 0; v < 5; ++v) {
+        EXPECT_NEAR(greenAt(exact, v, 0), rho * 0.282094792, kExact);
+        EXPECT_NEAR(greenAt(exact, v, shIndex(1, -1)), rho * (2.0 / 3.0) * -0.488602512, kExact);
+        EXPECT_NEAR(greenAt(exact, v, shIndex(1, 0)), 0.0, kExact);
+        EXPECT_NEAR(greenAt(exact, v, shIndex(2, 0)), rho * 0.25 * 0.315391565 * -1.0, kExact);
+        EXPECT_NEAR(greenAt(exact, v, shIndex(3, 0)), 0.0, kExact); // A_3 = 0
+    }
+    constexpr double kStratified = 6e-3;
+    for (int order : {3, 8}) {
+        const VertexTransfer shadowed =
+            computeTransfer(world, {.model = TransferModel::Shadowed, .order = order, .rays = 1024});
+        const VertexTransfer unshadowed =
+            computeTransfer(world, {.model = TransferModel::Unshadowed, .order = order});
+        double worst = 0.0;
+        for (uint32_t v = 0; v < 5; ++v)
+            for (int i = 0; i < coefficientCount(order); ++i) {
+                EXPECT_NEAR(greenAt(shadowed, v, i), greenAt(unshadowed, v, i), kStratified)
+                    << "order " << order << ", vertex " << v << ", i " << i;
+                worst = std::max(worst, std::abs(greenAt(shadowed, v, i) - greenAt(unshadowed, v, i)));
+            }
+        std::printf("open plane, order %d: largest difference %.3g\n", order, worst);
+    }
+}
+
+// A vertex under a disc of radius r at height h sees the sky outside the cone of half-angle
+// atan(r / h): its transfer has the closed form of coneTransfer. The configuration is turned so that
+// the normal is not an axis (the zonal rotation is exercised). The disc is a 512-gon (its rim within
+// 2e-5 r of the circle: a change below 1e-5 in any coefficient). 64 x 64 jittered stratified rays
+// estimate the coefficients within 4.9e-4 (order 3) and 1.2e-3 (order 8, whose integrands jump at
+// the cone's rim), measured with rho = 0.8; the tolerance, 3e-3, is 2.5 times the larger.
+TEST(Transfer, DiscAboveAPlaneMatchesTheConeClosedForm) {
+    const double rho = 0.8, r = 1.0, h = 1.5;
+    FixtureMesh plane, disc;
+    addFannedSquare(plane, 4.0f);
+    addDisc(disc, float(r), float(h), 512);
+    const glm::quat turn = glm::angleAxis(0.7f, glm::normalize(glm::vec3(1.0f, 0.2f, -0.5f)));
+    const World world = testing::loadFixtureWorld(sceneOf({plane, disc}, {{glm::vec3(float(rho))}}, turn));
+    const glm::dvec3 n = glm::normalize(glm::dvec3(turn * glm::vec3(0, 1, 0)));
+    for (int order : {3, 8}) {
+        const VertexTransfer transfer =
+            computeTransfer(world, {.model = TransferModel::Shadowed, .order = order, .rays = 4096});
+        const std::vector<double> expected = coneTransfer(order, rho, n, std::atan(r / h));
+        double worst = 0.0;
+        for (int i = 0; i < coefficientCount(order); ++i) {
+            EXPECT_NEAR(greenAt(transfer, 0, i), expected[size_t(i)], 3e-3)
+                << "order " << order << ", i " << i;
+            worst = std::max(worst, std::abs(greenAt(transfer, 0, i) - expected[size_t(i)]));
+        }
+        std::printf("disc, order %d: largest difference %.3g\n", order, worst);
+    }
+}
+
+// Inside a closed box no ray reaches the sky: the shadowed and the interreflected transfer (every
+// bounce made of that sky) are exactly 0, of a triangle floating inside and of the walls.
+TEST(Transfer, InsideAClosedBoxIsExactlyZero) {
+    FixtureMesh box, triangle;
+    testing::addBox(box, glm::vec3(0.0f), glm::vec3(2.0f), true);
+    testing::addQuad(triangle, glm::vec3(0.0f), {0.0f, 0.0f, 0.1f}, {0.1f, 0.0f, 0.0f});
+    const World world = testing::loadFixtureWorld(sceneOf({box, triangle}, {{glm::vec3(0.9f)}}));
+    for (TransferModel model : {TransferModel::Shadowed, TransferModel::Interreflected}) {
+        const VertexTransfer transfer = computeTransfer(world, {.model = model, .rays = 64, .bounces = 2});
+        for (const glm::vec3& c : transfer.coefficients)
+            ASSERT_EQ(c, glm::vec3(0.0f)) << transferModelName(model);
+    }
+}
+
+// The open sphere: from any point inside a sphere, a piece of it of area a takes a / (4 pi) of the
+// cosine-weighted hemisphere (its form factor), wherever the point is. With the cap of half-angle c
+// cut away, each point sees the sky through f = (1 - cos c) / 2 and the sphere through 1 - f, so
+// under a uniform sky (L00 only) every bounce is the one before times rho (1 - f):
+//   T_00 = rho f y00 sum_{k=0..K} (rho (1 - f))^k.
+// The sphere is faceted (48 rings of 96 segments: the facets fall short of it by up to 1.6e-3 of
+// the radius and the rim is a 96-gon), which moves f by about 1e-3 relative; the mean over the
+// vertices of the stratified estimate (64 rays) errs by less: measured, the mean is within 0.1% of
+// the series for K = 0 to 3. 1% of T_00 is the tolerance of the mean. Each bounce adds energy: T_00 never
+// falls as K grows, at every vertex.
+TEST(Transfer, OpenSphereFollowsTheBounceSeries) {
+    const double rho = 0.7, cap = kPi / 3.0, f = (1.0 - std::cos(cap)) / 2.0;
+    FixtureMesh sphere;
+    addOpenSphere(sphere, cap, 48, 96);
+    const World world = testing::loadFixtureWorld(sceneOf({sphere}, {{glm::vec3(float(rho))}}));
+    std::vector<double> previous(world.positions.size(), 0.0);
+    double series = 0.0;
+    for (int bounces = 0; bounces <= 3; ++bounces) {
+        series += rho * f * 0.282094792 * std::pow(rho * (1.0 - f), bounces);
+        const VertexTransfer transfer = computeTransfer(
+            world, {.model = TransferModel::Interreflected, .order = 1, .rays = 64, .bounces = bounces});
+        double mean = 0.0;
+        for (uint32_t v = 0; v < world.positions.size(); ++v) {
+            const double t00 = greenAt(transfer, v, 0);
+            mean += t00 / double(world.positions.size());
+            EXPECT_GE(t00, previous[v]) << "vertex " << v << ", bounces " << bounces;
+            previous[v] = t00;
+        }
+        EXPECT_NEAR(mean, series, 0.01 * series) << "bounces " << bounces;
+        std::printf("open sphere, %d bounces: mean T00 %.6f, series %.6f\n", bounces, mean, series);
+    }
+}
+
+// The same bits for the same inputs, and a coloured albedo gives coloured transfer.
+TEST(Transfer, DeterministicAndColoured) {
+    FixtureMesh box, plane;
+    testing::addBox(box, glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.5f), false);
+    addFannedSquare(plane, 2.0f);
+    box.material = 1;
+    const World world =
+        testing::loadFixtureWorld(sceneOf({plane, box}, {{glm::vec3(0.5f)}, {{0.8f, 0.2f, 0.1f}}}));
+    const TransferOptions options{
+        .model = TransferModel::Interreflected, .order = 3, .rays = 64, .bounces = 1};
+    const VertexTransfer a = computeTransfer(world, options), b = computeTransfer(world, options);
+    ASSERT_EQ(a.coefficients.size(), b.coefficients.size());
+    EXPECT_EQ(
+        std::memcmp(a.coefficients.data(), b.coefficients.data(), a.coefficients.size() * sizeof(glm::vec3)),
+        0);
+    EXPECT_TRUE(a.coloured());
+    EXPECT_EQ(transferChannels(a), 3);
+}
+
+// ---- The program ---------------------------------------------------------------------------------
+
+class TransferProgram : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        folder_ = fs::temp_directory_path() /
+                  ("shprobe-transfer-" +
+                   std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(folder_);
+        fs::create_directories(folder_);
+        // Two nodes draw one mesh (a square under a box), the second turned: each gets its own copy.
+        FixtureMesh ground, block;
+        addFannedSquare(ground, 2.0f);
+        testing::addBox(block, glm::vec3(0.0f, 0.6f, 0.0f), glm::vec3(0.5f), false);
+        block.material = 1;
+        FixtureScene scene = sceneOf({ground, block}, {{glm::vec3(0.6f)}, {{0.7f, 0.3f, 0.2f}}});
+        scene.nodes.push_back({.mesh = 1, .translation = {1.0f, 0.0f, 1.0f}});
+        scene.roots.push_back(2);
+        testing::writeGltf(path("scene.glb"), scene, testing::GltfContainer::Glb);
+    }
+    void TearDown() override { fs::remove_all(folder_); }
+
+    std::string path(const std::string& name) const { return (folder_ / name).string(); }
+
+    // Runs `shprobe ARGS`; its exit code, stdout and stderr in out_ and err_.
+    int run(const std::string& args) {
+        const std::string command =
+            std::string(SHPROBE_EXECUTABLE) + " " + args + " > " + path("out.txt") + " 2> " + path("err.txt");
+        const int status = std::system(command.c_str());
+        out_ = read(path("out.txt"));
+        err_ = read(path("err.txt"));
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
+    static std::string read(const std::string& file) {
+        std::ifstream in(file, std::ios::binary);
+        return {std::istreambuf_iterator<char>(in), {}};
+    }
+
+    fs::path folder_;
+    std::string out_, err_;
+};
+
+// Each refusal is one line "shprobe: error: ..." (or CLI11's for an option out of range), a non-zero
+// exit, and no output file.
+TEST_F(TransferProgram, BadInputsAreRefusedWithOneLine) {
+    const std::string scene = path("scene.glb"), output = path("bad.glb");
+    for (const std::string& args :
+         {"transfer " + path("missing.glb") + " -o " + output,
+          "transfer " + scene + " --order 9 -o " + output, "transfer " + scene + " --order 0 -o " + output,
+          "transfer " + scene + " --model glossy -o " + output,
+          "transfer " + scene + " --rays 0 -o " + output, "transfer " + scene + " --bounces 2 -o " + output,
+          "transfer " + scene + " -o " + scene}) {
+        const std::string before = read(scene);
+        EXPECT_NE(run(args), 0) << args;
+        EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << args << ": " << err_;
+        EXPECT_FALSE(fs::exists(output)) << args;
+        EXPECT_EQ(read(scene), before) << args;
+    }
+}
+
+// The .glb's JSON chunk and BIN chunk.
+struct Glb {
+    nlohmann::json json;
+    std::string bin;
+};
+Glb readGlb(const std::string& bytes) {
+    auto word = [&](size_t at) {
+        uint32_t w;
+        std::memcpy(&w, bytes.data() + at, 4);
+        return w;
+    };
+    const uint32_t jsonLength = word(12);
+    Glb glb{nlohmann::json::parse(bytes.substr(20, jsonLength)), {}};
+    const size_t binAt = 20 + jsonLength;
+    if (binAt + 8 <= bytes.size()) glb.bin = bytes.substr(binAt + 8, word(binAt));
+    return glb;
+}
+
+// The floats of attribute `name` of a primitive, read by the specification (tightly packed VEC4).
+std::vector<float> attributeFloats(const Glb& glb, const nlohmann::json& primitive, const std::string& name) {
+    const nlohmann::json& accessor = glb.json["accessors"][primitive["attributes"][name].get<size_t>()];
+    const nlohmann::json& view = glb.json["bufferViews"][accessor["bufferView"].get<size_t>()];
+    EXPECT_EQ(accessor["type"], "VEC4");
+    EXPECT_EQ(accessor["componentType"], 5126);
+    std::vector<float> values(accessor["count"].get<size_t>() * 4);
+    std::memcpy(values.data(), glb.bin.data() + view.value("byteOffset", 0) + accessor.value("byteOffset", 0),
+                values.size() * sizeof(float));
+    return values;
+}
+
+// What the program writes is what computeTransfer gives for the scene, placed primitive by placed
+// primitive, bit for bit; the same in the binary file; the same bytes from a second run.
+TEST_F(TransferProgram, AttributesAndBinaryFileRoundTrip) {
+    ASSERT_EQ(run("transfer " + path("scene.glb") + " --model interreflected --bounces 1 --rays 64 -o " +
+                  path("out.glb")),
+              0)
+        << err_;
+    ASSERT_EQ(run("transfer " + path("scene.glb") + " --model interreflected --bounces 1 --rays 64 -o " +
+                  path("again.glb")),
+              0);
+    ASSERT_EQ(run("transfer " + path("scene.glb") + " --model interreflected --bounces 1 --rays 64 -o " +
+                  path("out.shpt")),
+              0);
+    const std::string bytes = read(path("out.glb"));
+    EXPECT_EQ(bytes, read(path("again.glb")));
+
+    const GltfSceneSource source = loadGltfSceneSource(path("scene.glb"));
+    const VertexTransfer transfer = computeTransfer(
+        source.world, {.model = TransferModel::Interreflected, .order = 3, .rays = 64, .bounces = 1});
+    const std::vector<PrimitiveTransfer> expected = primitiveTransfers(source, transfer);
+    const int channels = transferChannels(transfer);
+    ASSERT_EQ(channels, 3);
+    const size_t floats = size_t(9 * channels);
+
+    const Glb glb = readGlb(bytes);
+    const nlohmann::json& extras = glb.json["asset"]["extras"]["shTransfer"];
+    EXPECT_EQ(extras["order"], 3);
+    EXPECT_EQ(extras["model"], "interreflected");
+    EXPECT_EQ(extras["channels"], 3);
+    EXPECT_EQ(extras["attributes"].size(), size_t(transferAttributeCount(3, 3)));
+    EXPECT_EQ(glb.json["meshes"].size(), 3u); // the block's mesh copied for its second node
+    std::set<int> meshes;
+    for (const PrimitiveTransfer& p : expected) {
+        const int mesh = glb.json["nodes"][size_t(p.node)]["mesh"];
+        EXPECT_TRUE(meshes.insert(mesh).second) << "node " << p.node << " shares mesh " << mesh;
+        const nlohmann::json& primitive = glb.json["meshes"][size_t(mesh)]["primitives"][size_t(p.primitive)];
+        std::vector<std::vector<float>> columns;
+        for (int a = 0; a < transferAttributeCount(3, channels); ++a)
+            columns.push_back(
+                attributeFloats(glb, primitive, std::string(kTransferAttributePrefix) + std::to_string(a)));
+        for (size_t v = 0; v < p.vertexCount; ++v)
+            for (size_t f = 0; f < floats; ++f)
+                ASSERT_EQ(columns[f / 4][v * 4 + f % 4], p.values[v * floats + f])
+                    << "vertex " << v << ", float " << f;
+    }
+
+    const std::string binary = read(path("out.shpt"));
+    ASSERT_GE(binary.size(), 32u);
+    EXPECT_EQ(binary.substr(0, 4), "SHPT");
+    uint32_t header[8];
+    std::memcpy(header, binary.data(), 32);
+    EXPECT_EQ(header[1], 1u);
+    EXPECT_EQ(header[2], 3u);
+    EXPECT_EQ(header[3], 3u);
+    EXPECT_EQ(header[4], 2u);
+    EXPECT_EQ(header[5], 1u);
+    EXPECT_EQ(header[6], 64u);
+    ASSERT_EQ(header[7], expected.size());
+    size_t at = 32 + 16 * expected.size();
+    for (const PrimitiveTransfer& p : expected) {
+        ASSERT_LE(at + p.values.size() * 4, binary.size());
+        EXPECT_EQ(std::memcmp(binary.data() + at, p.values.data(), p.values.size() * 4), 0);
+        at += p.values.size() * 4;
+    }
+    EXPECT_EQ(at, binary.size());
+}
+
+// The Khronos glTF validator (npm's gltf-validator, installed by scripts/test.sh) finds no error in
+// the .glb: the attributes' names, accessors, buffer views and the joined buffer are valid glTF 2.0.
+TEST_F(TransferProgram, ValidatorFindsNoError) {
+    const char* override = std::getenv("SHPROBE_NODE_MODULES");
+    const std::string modules = override ? override : SHPROBE_NODE_MODULES;
+    if (std::system("node --version > /dev/null 2>&1") != 0 ||
+        !fs::exists(fs::path(modules) / "gltf-validator"))
+        GTEST_SKIP() << "validator check skipped: node or " << modules << "/gltf-validator missing";
+    ASSERT_EQ(run("transfer " + path("scene.glb") + " --rays 16 -o " + path("out.glb")), 0) << err_;
+    ASSERT_EQ(run("transfer " + std::string(SHPROBE_GLTF_MODELS_DIR) +
+                  "/BoxTextured-glTF/BoxTextured.gltf --rays 16 -o " + path("textured.glb")),
+              0)
+        << err_;
+    for (const std::string& file : {path("out.glb"), path("textured.glb")}) {
+        const std::string command = "SHPROBE_NODE_MODULES=" + modules + " node " + SHPROBE_ENGINE_SCRIPTS +
+                                    "/gltf_validate.mjs " + file + " > " + path("report.json");
+        ASSERT_EQ(std::system(command.c_str()), 0) << file;
+        const nlohmann::json report = nlohmann::json::parse(read(path("report.json")));
+        EXPECT_EQ(report["numErrors"], 0) << report.dump();
+        EXPECT_EQ(report["numWarnings"], 0) << report.dump();
+    }
+}
+
+} // namespace
+} // namespace shprobe
