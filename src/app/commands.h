@@ -141,6 +141,7 @@ struct SceneOptions {
     int raysPerTexel = 0;          // cpu: 0 is 4; gpu: one, at the texel's centre
     double cacheSpacing = 0.0;     // cpu: 0 is the world's diagonal / 64
     int gatherRays = 64;           // cpu: per cache point
+    int cacheRefinement = 0;       // cpu: the most times a cache cell is halved
     double invalidBackFaces = 0.5; // a probe is invalid where more of its view meets back faces
     bool dilate = true;            // cpu: invalid probes filled from their valid neighbours
     double relocationLimit = 0.45; // cpu: the longest move out of geometry, in smallest cell sides

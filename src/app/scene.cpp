@@ -103,6 +103,10 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
         ->check(numberFrom(0.0, 1e30));
     addRangeOption(command, "--gather-rays", options.gatherRays,
                    "cpu: rays each surface point gathers a bounce with", 1, 1 << 20);
+    addRangeOption(command, "--cache-refinement", options.cacheRefinement,
+                   "cpu: the most times a cell of surface points is halved where a shadow's edge or a "
+                   "surface crosses it (0: never)",
+                   0, kMaxCacheRefinement);
     addDeviceOptions(command, options.device, options.validation);
     command.add_flag("-q,--quiet", options.quiet, "No report");
 }
@@ -190,6 +194,7 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
         settings["rays_per_texel"] = cpuRaysPerTexel(options);
         settings["cache_spacing"] = options.cacheSpacing;
         settings["gather_rays"] = options.gatherRays;
+        if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
         settings["dilation"] = options.dilate;
         if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
     }
@@ -277,6 +282,7 @@ RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid
             .bounces = options.bounces,
             .cacheSpacing = options.cacheSpacing,
             .gatherRays = options.gatherRays,
+            .cacheRefinement = options.cacheRefinement,
             .relocation = {.limit = options.relocationLimit * cell,
                            .minFrontDistance = kRelocationFrontCells * cell,
                            .invalidBackFaces = options.invalidBackFaces}};
@@ -522,8 +528,9 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         std::printf("backend  gpu: %s%s; probes inside geometry stay in place (relocation: cpu only)\n",
                     backend.context->info.name.c_str(), reason.c_str());
     } else {
-        std::printf("backend  cpu: rays, %d per texel, %s%s\n", cpuRaysPerTexel(options),
-                    counted(rays.counts.cachePoints, "cache point").c_str(), reason.c_str());
+        std::printf("backend  cpu: rays, %d per texel, %s (%s)%s\n", cpuRaysPerTexel(options),
+                    counted(rays.counts.cachePoints, "cache point").c_str(),
+                    counted(rays.counts.halvedCells, "cell halved", "cells halved").c_str(), reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
                     double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
                     double(rays.counts.cacheRays));

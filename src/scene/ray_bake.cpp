@@ -6,6 +6,7 @@
 #include "common/parallel.h"
 #include "scene/bvh.h"
 #include "scene/sampling.h"
+#include "scene/surface_cache.h"
 #include "scene/surface_shading.h"
 #include "scene/volume_sampling.h"
 #include "sh/basis.h"
@@ -44,6 +45,9 @@ void requireOptions(const RayBakeOptions& options) {
         refuse("rays per texel must be in 1..1024, got " + std::to_string(options.raysPerTexel));
     if (options.visibilitySize < 0 || options.visibilitySize > 64)
         refuse("the visibility map's size must be in 0..64, got " + std::to_string(options.visibilitySize));
+    if (options.cacheRefinement < 0 || options.cacheRefinement > kMaxCacheRefinement)
+        refuse("cache refinement must be in 0.." + std::to_string(kMaxCacheRefinement) + ", got " +
+               std::to_string(options.cacheRefinement));
     if (options.gatherRays < 1 || options.gatherRays > 1 << 20)
         refuse("gather rays must be in 1..1048576, got " + std::to_string(options.gatherRays));
     const ProbeRelocation& relocation = options.relocation;
@@ -52,67 +56,6 @@ void requireOptions(const RayBakeOptions& options) {
         refuse("the relocation's limit and front-face distance must be finite numbers of 0 or more");
     if (!(relocation.invalidBackFaces >= 0.0 && relocation.invalidBackFaces <= 1.0))
         refuse("the back-face share of a probe inside geometry must be in 0..1");
-}
-
-// Points of a lattice of m subdivisions: rows j = 0..m of m + 1 - j points.
-size_t latticePoints(int m) {
-    return size_t(m + 1) * size_t(m + 2) / 2;
-}
-
-// The index of lattice point (i, j), i + j <= m, row by row.
-size_t latticeIndex(int m, int i, int j) {
-    return size_t(j) * size_t(m + 1) - size_t(j) * size_t(j - 1) / 2 + size_t(i);
-}
-
-// A triangle's cache points: lattice side s starts at first + s * latticePoints(subdivisions).
-struct TriangleLattice {
-    size_t first = 0;
-    int subdivisions = 1;
-};
-
-// Three lattice points and their weights: the corners of the lattice triangle a point lies in.
-struct LatticeBlend {
-    std::array<size_t, 3> points{};
-    glm::dvec3 weights{0.0};
-};
-
-// Linear interpolation over the lattice triangles: (u, v) m falls in cell (i0, j0), whose lower
-// triangle has corners (i0, j0), (i0 + 1, j0), (i0, j0 + 1) and whose upper one, where it exists
-// (i0 + j0 + 2 <= m), (i0 + 1, j0 + 1), (i0, j0 + 1), (i0 + 1, j0).
-LatticeBlend blendAt(int m, const glm::dvec2& barycentric) {
-    const double x = std::clamp(barycentric.x, 0.0, 1.0) * m;
-    const double y = std::clamp(barycentric.y, 0.0, 1.0) * m;
-    int i0 = std::min(int(x), m - 1);
-    int j0 = std::min(int(y), m - 1);
-    while (i0 + j0 > m - 1) // u + v a rounding over 1
-        (i0 > 0 ? i0 : j0) -= 1;
-    const double fx = x - i0;
-    const double fy = y - j0;
-    if (fx + fy <= 1.0 || i0 + j0 + 2 > m) {
-        return {{latticeIndex(m, i0, j0), latticeIndex(m, i0 + 1, j0), latticeIndex(m, i0, j0 + 1)},
-                glm::dvec3(1.0 - fx - fy, fx, fy)};
-    }
-    return {{latticeIndex(m, i0 + 1, j0 + 1), latticeIndex(m, i0, j0 + 1), latticeIndex(m, i0 + 1, j0)},
-            glm::dvec3(fx + fy - 1.0, 1.0 - fx, 1.0 - fy)};
-}
-
-// The barycentrics (i / m, j / m) of lattice point `index`.
-glm::dvec2 latticeBarycentric(int m, size_t index) {
-    int j = 0;
-    while (latticeIndex(m, 0, j + 1) <= index)
-        ++j;
-    const int i = int(index - latticeIndex(m, 0, j));
-    return glm::dvec2(i, j) / double(m);
-}
-
-// Subdivisions so that each lattice edge is at most `spacing` long.
-int subdivisionsFor(const World& world, uint32_t triangle, double spacing) {
-    const glm::dvec3 p0(world.positions[world.indices[3 * size_t(triangle)]]);
-    const glm::dvec3 p1(world.positions[world.indices[3 * size_t(triangle) + 1]]);
-    const glm::dvec3 p2(world.positions[world.indices[3 * size_t(triangle) + 2]]);
-    const double longest = std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
-    const double cells = std::ceil(longest / spacing);
-    return int(std::clamp(cells, 1.0, double(kMaxCacheSubdivisions)));
 }
 
 double defaultSpacing(const World& world) {
@@ -202,26 +145,22 @@ struct RayBaker::State {
     RayBakeOptions options;
     SceneShading shading;
     Bvh bvh;
-    std::vector<TriangleLattice> lattices;
-    size_t pointCount = 0;
+    std::unique_ptr<SurfaceCache> cache;
     int gatherSide = 1;           // g: g x g gather rays per point
     int texelSide = 1;            // s: s x s rays per texel
     double visibilityRange = 1.0; // the farthest distance visibility records: the world's diagonal
-    std::vector<std::vector<glm::vec3>> irradiance;             // bounce k's at [k - 1], per point
-    std::vector<std::unique_ptr<std::atomic<uint8_t>[]>> state; // likewise: kEmpty, kGathering, kReady
     std::atomic<uint64_t> probeRays{0};
     std::atomic<uint64_t> cacheRays{0};
-    std::atomic<uint64_t> cachePoints{0};
 
     void layOutCache();
     std::optional<SurfaceHit> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
     bool occluded(const glm::dvec3& origin, const glm::dvec3& direction) const;
     Arrival arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, uint64_t& rays);
-    glm::dvec3 cachedIrradiance(int bounce, const SurfaceHit& hit);
-    glm::vec3 pointIrradiance(int bounce, uint32_t triangle, int side, int subdivisions, size_t index,
-                              size_t point);
     glm::dvec2 insideTriangle(uint32_t triangle, const glm::dvec2& barycentric) const;
-    glm::vec3 gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, size_t point);
+    SurfaceHit gatherPoint(uint32_t triangle, int side, const glm::dvec2& barycentric) const;
+    CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
+                      uint64_t index);
+    bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
     template <typename Ray, typename Texel> void forEachViewRay(Ray&& ray, Texel&& texel) const;
     ProbeView trace(const glm::dvec3& position, uint64_t& rays);
     NearestHits survey(const glm::dvec3& position, uint64_t& rays) const;
@@ -234,20 +173,21 @@ struct RayBaker::State {
 void RayBaker::State::layOutCache() {
     const World& world = shading.world();
     const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultSpacing(world);
-    lattices.resize(world.triangleCount());
-    for (uint32_t t = 0; t < uint32_t(lattices.size()); ++t) {
-        const int m = subdivisionsFor(world, t, spacing);
-        const int sides = world.materials[world.triangleMaterials[t]].doubleSided ? 2 : 1;
-        lattices[t] = {pointCount, m};
-        pointCount += sides * latticePoints(m);
-    }
+    CacheQueries queries{
+        .gather =
+            [this](int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
+                   uint64_t index) { return gather(bounce, triangle, side, barycentric, stream, index); },
+        .origin =
+            [this](uint32_t triangle, int side, const glm::dvec2& barycentric) {
+                return gatherPoint(triangle, side, barycentric).rayOrigin;
+            },
+        .blocked = [this](const glm::dvec3& from, const glm::dvec3& to) { return segmentBlocked(from, to); },
+    };
+    cache = std::make_unique<SurfaceCache>(world, spacing, options.bounces, options.cacheRefinement,
+                                           std::move(queries));
     gatherSide = int(std::ceil(std::sqrt(double(options.gatherRays))));
     texelSide = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
     visibilityRange = std::max(glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin)), 1e-30);
-    for (int k = 1; k <= options.bounces; ++k) {
-        irradiance.emplace_back(pointCount);
-        state.push_back(std::make_unique<std::atomic<uint8_t>[]>(pointCount));
-    }
 }
 
 std::optional<SurfaceHit> RayBaker::State::intersect(const glm::dvec3& origin,
@@ -274,22 +214,9 @@ Arrival RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const gl
     const glm::dvec3 direct =
         leavingWithoutBounce(shading.suns(), *hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
     if (bounce == 0 || hit->albedo == glm::dvec3(0.0)) return {direct, distance, false};
-    return {direct + hit->albedo * std::numbers::inv_pi * cachedIrradiance(bounce, *hit), distance, false};
-}
-
-glm::dvec3 RayBaker::State::cachedIrradiance(int bounce, const SurfaceHit& hit) {
-    const TriangleLattice& lattice = lattices[hit.triangle];
-    const int side = hit.frontSide ? 0 : 1;
-    const LatticeBlend blend = blendAt(lattice.subdivisions, hit.barycentric);
-    glm::dvec3 sum(0.0);
-    for (int c = 0; c < 3; ++c) {
-        if (blend.weights[c] == 0.0) continue;
-        const size_t point =
-            lattice.first + size_t(side) * latticePoints(lattice.subdivisions) + blend.points[c];
-        sum += blend.weights[c] * glm::dvec3(pointIrradiance(bounce, hit.triangle, side, lattice.subdivisions,
-                                                             blend.points[c], point));
-    }
-    return sum;
+    const glm::dvec3 bounced =
+        cache->irradiance(bounce, hit->triangle, hit->frontSide ? 0 : 1, hit->barycentric, hit->rayOrigin);
+    return {direct + hit->albedo * std::numbers::inv_pi * bounced, distance, false};
 }
 
 // A lattice point on an edge or a corner, where a wall meets the next, gathers from a point moved
@@ -310,35 +237,26 @@ glm::dvec2 RayBaker::State::insideTriangle(uint32_t triangle, const glm::dvec2& 
     return barycentric + fraction * (centroid - barycentric);
 }
 
-// A cache point's state: not gathered, being gathered by some thread, gathered.
-constexpr uint8_t kEmpty = 0;
-constexpr uint8_t kGathering = 1;
-constexpr uint8_t kReady = 2;
+// The point a cache point at `barycentric` gathers from (insideTriangle), on side 0 (front) or 1.
+SurfaceHit RayBaker::State::gatherPoint(uint32_t triangle, int side, const glm::dvec2& barycentric) const {
+    return shading.surfacePoint(triangle, insideTriangle(triangle, barycentric), side == 0);
+}
 
-// E_k at a cache point, gathered by the first thread that needs it and kept. Another that needs it
-// while it is being gathered gathers it too, rather than wait on a thread the system may not be
-// running: the same rays and numbers give the same value, so only time is lost, and rarely.
-glm::vec3 RayBaker::State::pointIrradiance(int bounce, uint32_t triangle, int side, int subdivisions,
-                                           size_t index, size_t point) {
-    std::atomic<uint8_t>& flag = state[size_t(bounce - 1)][point];
-    glm::vec3& value = irradiance[size_t(bounce - 1)][point];
-    uint8_t seen = flag.load(std::memory_order_acquire);
-    if (seen == kReady) return value;
-    const glm::vec3 gathered = gather(bounce, triangle, side, latticeBarycentric(subdivisions, index), point);
-    if (seen == kEmpty && flag.compare_exchange_strong(seen, kGathering, std::memory_order_acquire)) {
-        value = gathered;
-        flag.store(kReady, std::memory_order_release);
-        ++cachePoints;
-    }
-    return gathered;
+// A segment between two points just off the surfaces, counted as a cache ray.
+bool RayBaker::State::segmentBlocked(const glm::dvec3& from, const glm::dvec3& to) {
+    const glm::dvec3 path = to - from;
+    const double length = glm::length(path);
+    ++cacheRays;
+    if (!(length > 0.0)) return false;
+    return anyHit(bvh, {glm::vec3(from), glm::vec3(path / length), 0.0f, float(length)});
 }
 
 // E_k at a cache point: pi times the mean of L_{k-1} over g x g cosine-distributed rays, one in each
 // stratum of the unit square (jittered), about the point's shading normal.
-glm::vec3 RayBaker::State::gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric,
-                                  size_t point) {
-    const SurfaceHit at = shading.surfacePoint(triangle, insideTriangle(triangle, barycentric), side == 0);
-    RandomStream random(options.seed, uint64_t(bounce), uint64_t(point));
+CachePoint RayBaker::State::gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric,
+                                   uint64_t stream, uint64_t index) {
+    const SurfaceHit at = gatherPoint(triangle, side, barycentric);
+    RandomStream random(options.seed, stream, index);
     const int g = gatherSide;
     uint64_t rays = 0;
     glm::dvec3 sum(0.0);
@@ -351,7 +269,7 @@ glm::vec3 RayBaker::State::gather(int bounce, uint32_t triangle, int side, const
         }
     }
     cacheRays += rays;
-    return glm::vec3(sum * (std::numbers::pi / (double(g) * g)));
+    return {glm::vec3(sum * (std::numbers::pi / (double(g) * g)))};
 }
 
 // The random numbers of the rays through texel t of a view: the same for every probe.
@@ -519,7 +437,8 @@ double RayBaker::visibilityRange() const {
 }
 
 RayBakeCounts RayBaker::counts() const {
-    return {state_->probeRays.load(), state_->cacheRays.load(), state_->cachePoints.load()};
+    const CacheCounts cache = state_->cache->counts();
+    return {state_->probeRays.load(), state_->cacheRays.load(), cache.points, cache.halvedCells};
 }
 
 } // namespace shprobe

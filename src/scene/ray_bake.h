@@ -11,21 +11,22 @@
 // noise that falls faster, at s^2 the cost (docs/scene-probes.md measures both).
 //
 // The light the surfaces reflect is computed at the surfaces, not read from a probe grid. Each
-// triangle carries a lattice of cache points (barycentrics (i/m, j/m), i + j <= m, m chosen so that
-// neighbouring points lie at most `cacheSpacing` apart; one lattice per side of a double-sided
-// material). A point's irradiance at bounce k, E_k(x) = integral of L_{k-1}(x, w) max(0, n.w) dw,
-// is gathered by g x g stratified cosine-distributed rays about its shading normal, each ray
-// reading what the surface it meets leaves at bounce k - 1 (emission, the suns by shadow rays, and
-// E_{k-1} interpolated linearly between that triangle's points), or the sky. A probe at bounce k
-// sees surfaces leave emission + albedo / pi (E_sun + E_k). Points are gathered on first use and
-// kept, with their own random numbers (the seed, the bounce, the point's index): a bake gives the
-// same bits for any thread count and any subset of probes, so bricks merge into exactly the whole
-// bake. A probe inside geometry may be moved out before it is captured (ProbeRelocation), by its own
-// rays alone, so that this stays true. The estimate converges to the exact transport as the points grow
-// denser (interpolation) and the gather rays more (noise); docs/scene-probes.md measures both against the
-// path tracer.
+// triangle carries a lattice of cache points (scene/surface_cache.h: barycentrics (i/m, j/m),
+// i + j <= m, m chosen so that neighbouring points lie at most `cacheSpacing` apart; one lattice per
+// side of a double-sided material; cells halved where their corners disagree, cacheRefinement). A point's
+// irradiance at bounce k, E_k(x) = integral of L_{k-1}(x, w) max(0, n.w) dw, is gathered by g x g stratified
+// cosine-distributed rays about its shading normal, each ray reading what the surface it meets leaves at
+// bounce k - 1 (emission, the suns by shadow rays, and E_{k-1} interpolated linearly between that triangle's
+// points), or the sky. A probe at bounce k sees surfaces leave emission + albedo / pi (E_sun + E_k). Points
+// are gathered on first use and kept, with their own random numbers (the seed, the bounce, the point's
+// index): a bake gives the same bits for any thread count and any subset of probes, so bricks merge into
+// exactly the whole bake. A probe inside geometry may be moved out before it is captured (ProbeRelocation),
+// by its own rays alone, so that this stays true. The estimate converges to the exact transport as the points
+// grow denser (interpolation) and the gather rays more (noise); docs/scene-probes.md measures both against
+// the path tracer.
 #pragma once
 #include "scene/scene.h"
+#include "scene/surface_cache.h"
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 
@@ -67,6 +68,8 @@ struct RayBakeOptions {
     double cacheSpacing = 0.0; // the largest distance between neighbouring cache points; 0: the
                                // world's diagonal / kDefaultCacheCells
     int gatherRays = 64;       // per cache point, rounded up to a square (g x g strata)
+    int cacheRefinement = 0;   // the most times a cache cell is halved where its corners disagree
+                               // (scene/surface_cache.h), down to cacheSpacing / 2^levels; 0: never
     int visibilitySize = 16;   // each probe's visibility map: size x size octahedral texels; 0: none
     // Suns taken out of the sky (sh/lights.h extractSun): light too small for rays to find, so it
     // is sampled explicitly. They light the surfaces as the World's suns do (a shadow ray each),
@@ -78,8 +81,6 @@ struct RayBakeOptions {
 
 // Cache points per world diagonal when RayBakeOptions::cacheSpacing is 0.
 constexpr double kDefaultCacheCells = 64.0;
-// The most subdivisions of a triangle's edges: (m + 1)(m + 2) / 2 points per lattice at most.
-constexpr int kMaxCacheSubdivisions = 256;
 
 struct RayBakedProbe {
     ShCoefficients radiance;
@@ -101,6 +102,7 @@ struct RayBakeCounts {
     uint64_t cacheRays = 0;   // gathering cache points, with their shadow rays (a point two threads
                               // needed at once is gathered by both)
     uint64_t cachePoints = 0; // gathered, over all bounces
+    uint64_t halvedCells = 0; // cache cells halved, over all bounces and levels
 };
 
 // Called after each probe with the number done so far, from whichever thread finished it (one call
