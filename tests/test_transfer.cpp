@@ -140,14 +140,35 @@ double greenAt(const VertexTransfer& transfer, uint32_t vertex, int i) {
     return transfer.coefficients[size_t(vertex) * size_t(coefficientCount(transfer.order)) + size_t(i)].g;
 }
 
+// A square of half-side `half` at the origin, facing +y, as an n x n grid of vertices.
+void addGridSquare(FixtureMesh& mesh, float half, uint32_t n) {
+    for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t j = 0; j < n; ++j)
+            mesh.positions.push_back({half * (2.0f * float(i) / float(n - 1) - 1.0f), 0.0f,
+                                      half * (2.0f * float(j) / float(n - 1) - 1.0f)});
+    mesh.normals.assign(mesh.positions.size(), glm::vec3(0, 1, 0));
+    for (uint32_t i = 0; i + 1 < n; ++i)
+        for (uint32_t j = 0; j + 1 < n; ++j) { // counter-clockwise seen from +y
+            const uint32_t a = i * n + j, b = a + 1, c = a + n, d = c + 1;
+            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+        }
+}
+
+// Root mean square and largest difference of the green transfer of two runs over every coefficient.
+std::pair<double, double> rmsAndWorst(const VertexTransfer& a, const VertexTransfer& b) {
+    double squares = 0.0, worst = 0.0;
+    for (size_t k = 0; k < a.coefficients.size(); ++k) {
+        const double d = double(a.coefficients[k].g) - double(b.coefficients[k].g);
+        squares += d * d;
+        worst = std::max(worst, std::abs(d));
+    }
+    return {std::sqrt(squares / double(a.coefficients.size())), worst};
+}
+
 // Unshadowed transfer is rho / pi A_l y_lm(n), exact: at n = +y, by the hand values of
 // docs/conventions.md (y00 = 0.282094792, y1-1 = -0.488602512 y, A_0 = pi, A_1 = 2 pi / 3,
-// A_2 = pi / 4, y20 = 0.315391565 (3 z^2 - 1) with z = 0), to float's rounding. A vertex on a plane
-// that nothing lies above sees the whole hemisphere: its shadowed transfer is the same integral,
-// estimated by 32 x 32 jittered stratified cosine rays. That estimate's error, measured here with
-// rho = 0.6, is at most 1.3e-3 at order 3 and 3.0e-3 at order 8 (the higher bands oscillate within
-// a stratum); the tolerance, 6e-3, is twice the larger.
-TEST(Transfer, OpenPlaneShadowedEqualsUnshadowed) {
+// A_2 = pi / 4, y20 = 0.315391565 (3 z^2 - 1) with z = 0), to float's rounding.
+TEST(Transfer, UnshadowedHandValues) {
     const double rho = 0.6;
     FixtureMesh plane;
     addFannedSquare(plane, 1.0f);
@@ -161,20 +182,38 @@ TEST(Transfer, OpenPlaneShadowedEqualsUnshadowed) {
         EXPECT_NEAR(greenAt(exact, v, shIndex(2, 0)), rho * 0.25 * 0.315391565 * -1.0, kExact);
         EXPECT_NEAR(greenAt(exact, v, shIndex(3, 0)), 0.0, kExact); // A_3 = 0
     }
-    constexpr double kStratified = 6e-3;
-    for (int order : {3, 8}) {
-        const VertexTransfer shadowed =
-            computeTransfer(world, {.model = TransferModel::Shadowed, .order = order, .rays = 1024});
+}
+
+// A vertex on a plane that nothing lies above sees the whole hemisphere: its shadowed transfer is
+// the unshadowed integral, estimated by g x g jittered stratified cosine rays. That estimate is
+// unbiased, and for a smooth integrand of the unit square one jittered sample per stratum leaves a
+// variance of mean |grad f|^2 / (12 g^4) (each stratum's h^2/12 |grad f|^2, h = 1/g): its error
+// falls as 1/R, R = g^2 rays. The Malley map's sqrt(u1) at the axis and sqrt(1 - u1) at the horizon
+// only add a factor sqrt(log R). So the root mean square error over a 12 x 12 grid of vertices
+// (144 independent streams, rho = 0.6) must fall by at least 3 from 256 to 1024 rays (measured:
+// 3.9 at order 3, 3.8 at order 8; R^-1 gives 4, R^-0.5 gives 2). At 1024 rays it must stay within
+// 1.25 times its measured value, 3.2e-4 at order 3 and 9.0e-4 at order 8 (a deterministic seed:
+// the margin covers the arithmetic of another compiler), and the largest of the 1296 (order 3) or
+// 9216 (order 8) differences within 5 root mean squares (measured: 4.5 and 4.8).
+TEST(Transfer, OpenPlaneShadowedConvergesAsOneOverRays) {
+    const double rho = 0.6;
+    FixtureMesh plane;
+    addGridSquare(plane, 0.5f, 12);
+    const World world = testing::loadFixtureWorld(sceneOf({plane}, {{glm::vec3(float(rho))}}));
+    for (auto [order, kRms] : {std::pair{3, 3.2e-4}, std::pair{8, 9.0e-4}}) {
         const VertexTransfer unshadowed =
             computeTransfer(world, {.model = TransferModel::Unshadowed, .order = order});
-        double worst = 0.0;
-        for (uint32_t v = 0; v < 5; ++v)
-            for (int i = 0; i < coefficientCount(order); ++i) {
-                EXPECT_NEAR(greenAt(shadowed, v, i), greenAt(unshadowed, v, i), kStratified)
-                    << "order " << order << ", vertex " << v << ", i " << i;
-                worst = std::max(worst, std::abs(greenAt(shadowed, v, i) - greenAt(unshadowed, v, i)));
-            }
-        std::printf("open plane, order %d: largest difference %.3g\n", order, worst);
+        const auto [coarse, coarseWorst] = rmsAndWorst(
+            computeTransfer(world, {.model = TransferModel::Shadowed, .order = order, .rays = 256}),
+            unshadowed);
+        const auto [fine, worst] = rmsAndWorst(
+            computeTransfer(world, {.model = TransferModel::Shadowed, .order = order, .rays = 1024}),
+            unshadowed);
+        EXPECT_GE(coarse / fine, 3.0) << "order " << order;
+        EXPECT_LE(fine, 1.25 * kRms) << "order " << order;
+        EXPECT_LE(worst, 5.0 * 1.25 * kRms) << "order " << order;
+        std::printf("open plane, order %d: rms %.3g (256 rays), %.3g (1024), largest %.3g\n", order, coarse,
+                    fine, worst);
     }
 }
 

@@ -217,16 +217,20 @@ glm::dvec3 directlyLeaving(const ReferenceTracer& tracer, const SurfaceHit& hit,
 
 // The stream of a replica's rotation of the Fibonacci set: an index no path's stream has.
 constexpr uint64_t kRotationStream = ~uint64_t(0);
+// The streams of pathTraceSurfaces' paths: one per point, apart from every probe replica's.
+constexpr uint64_t kSurfaceStream = ~uint64_t(0) - 1;
 
-// Radiance arriving at `origin` from `direction` along a path of at most `bounces` bounces.
+// Radiance arriving at `origin` from `direction` along a path of at most `bounces` bounces, the
+// sky(direction) where it escapes.
+template <typename Sky>
 glm::dvec3 pathRadiance(const ReferenceTracer& tracer, int bounces, glm::dvec3 origin, glm::dvec3 direction,
-                        RandomStream& random, uint64_t& rays) {
+                        RandomStream& random, uint64_t& rays, const Sky& sky) {
     glm::dvec3 sum(0.0);
     glm::dvec3 throughput(1.0);
     for (int depth = 0;; ++depth) {
         ++rays;
         const std::optional<SurfaceHit> hit = tracer.intersect(origin, direction);
-        if (!hit) return sum + throughput * tracer.skyRadiance(direction);
+        if (!hit) return sum + throughput * sky(direction);
         if (hit->backFace) return sum;
         sum += throughput * directlyLeaving(tracer, *hit, rays);
         throughput *= hit->albedo;
@@ -278,7 +282,8 @@ ReplicaEstimate traceReplica(const ReferenceTracer& tracer, const glm::dvec3& po
         const glm::dvec3 direction = rotation * fibonacciDirection(k, m);
         RandomStream random(options.seed, uint64_t(replica), uint64_t(k));
         const glm::dvec3 weighted =
-            pathRadiance(tracer, options.bounces, position, direction, random, estimate.rays) *
+            pathRadiance(tracer, options.bounces, position, direction, random, estimate.rays,
+                         [&](const glm::dvec3& d) { return tracer.skyRadiance(d); }) *
             (4.0 * kPi / m);
         evalBasis(options.order, direction, basis);
         for (size_t i = 0; i < estimate.coefficients.size(); ++i)
@@ -303,6 +308,38 @@ void addSeenSuns(const ReferenceTracer& tracer, const glm::dvec3& position, cons
 }
 
 // The replicas' mean, and its standard error sqrt(sum (X_r - mean)^2 / (R (R - 1))).
+// One surface point's estimate: albedo times the mean of the paths' radiance, and its standard error.
+SurfaceRadiance traceSurface(const ReferenceTracer& tracer, const SurfacePoint& point,
+                             const ShCoefficients& sky, const SurfacePathOptions& options, uint64_t index) {
+    std::array<double, coefficientCount(kMaxOrder)> basis{};
+    const auto skyRadiance = [&](const glm::dvec3& direction) {
+        evalBasis(sky.order, direction, basis);
+        glm::dvec3 radiance(0.0);
+        for (size_t i = 0; i < sky.rgb.size(); ++i)
+            radiance += sky.rgb[i] * basis[i];
+        return radiance;
+    };
+    RandomStream random(options.seed, kSurfaceStream, index);
+    SurfaceRadiance estimate;
+    glm::dvec3 sum(0.0), squares(0.0);
+    for (int k = 0; k < options.samples; ++k) {
+        const double u1 = random.next();
+        const double u2 = random.next();
+        const glm::dvec3 radiance =
+            pathRadiance(tracer, options.bounces, point.origin, cosineDirection(point.normal, u1, u2), random,
+                         estimate.rays, skyRadiance);
+        sum += radiance;
+        squares += radiance * radiance;
+    }
+    const double n = double(options.samples);
+    const glm::dvec3 mean = sum / n;
+    const glm::dvec3 variance =
+        glm::max(squares / n - mean * mean, glm::dvec3(0.0)) * (n / std::max(n - 1.0, 1.0));
+    estimate.radiance = point.albedo * mean;
+    estimate.standardError = point.albedo * glm::sqrt(variance / n);
+    return estimate;
+}
+
 PathTracedProbe combineReplicas(std::span<const ReplicaEstimate> replicas, int order) {
     PathTracedProbe probe{makeCoefficients(order, Quantity::Radiance),
                           std::vector<glm::dvec3>(size_t(coefficientCount(order))), 0};
@@ -393,6 +430,23 @@ std::vector<PathTracedProbe> pathTraceProbes(const ReferenceTracer& tracer,
         addSeenSuns(tracer, positions[p], options, probes.back());
     }
     return probes;
+}
+
+std::vector<SurfaceRadiance> pathTraceSurfaces(const ReferenceTracer& tracer,
+                                               std::span<const SurfacePoint> points,
+                                               const ShCoefficients& sky, const SurfacePathOptions& options) {
+    if (options.bounces < 0)
+        throw Error(ErrorKind::Input, "bounces must be 0 or more, got " + std::to_string(options.bounces));
+    if (options.samples < 1)
+        throw Error(ErrorKind::Input, "samples must be 1 or more, got " + std::to_string(options.samples));
+    if (points.size() > size_t(INT_MAX))
+        throw Error(ErrorKind::Input, "too many surface points for one call");
+    std::vector<SurfaceRadiance> estimates(points.size());
+    const size_t rays = points.size() * size_t(options.samples) * size_t(options.bounces + 1);
+    forEachItem(int(points.size()), threadCount(rays, kRaysPerThread), [&](int p) {
+        estimates[size_t(p)] = traceSurface(tracer, points[size_t(p)], sky, options, uint64_t(p));
+    });
+    return estimates;
 }
 
 } // namespace shprobe

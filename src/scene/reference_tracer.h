@@ -104,4 +104,37 @@ std::vector<PathTracedProbe> pathTraceProbes(const ReferenceTracer& tracer,
                                              std::span<const glm::dvec3> positions,
                                              const PathTraceOptions& options);
 
+// A point of a Lambertian surface for pathTraceSurfaces: its paths leave from `origin` (already moved
+// off the surface) in cosine-distributed directions about the unit `normal`.
+struct SurfacePoint {
+    glm::dvec3 origin{0.0};
+    glm::dvec3 normal{0.0};
+    glm::dvec3 albedo{0.0};
+};
+
+struct SurfacePathOptions {
+    int bounces = 1;    // diffuse bounces between the sky and the point; 0: the sky it sees directly
+    int samples = 4096; // independent paths per point
+    uint64_t seed = 1;
+};
+
+// A path-traced outgoing radiance, the standard error of each channel, and the rays cast.
+struct SurfaceRadiance {
+    glm::dvec3 radiance{0.0};
+    glm::dvec3 standardError{0.0};
+    uint64_t rays = 0;
+};
+
+// The radiance each point leaves, albedo / pi times the cosine-weighted integral of the radiance
+// arriving with at most options.bounces bounces, under a distant sky given by its SH radiance
+// coefficients: band-limited, evaluated exactly where a path escapes, in place of the tracer's cube
+// map (emission and suns count as in pathTraceProbe). This is the path-traced counterpart of
+// interreflected transfer (scene/transfer.h), L_out = sum_i T_i L_i, for checking it. Each estimate
+// is albedo times the mean of `samples` independent paths' radiance (the cosine density cancels
+// the Lambertian BRDF), its standard error sqrt(sample variance / samples). On all cores; the same
+// bits for any thread count. Throws Error(Input) for bounces below 0 or samples below 1.
+std::vector<SurfaceRadiance> pathTraceSurfaces(const ReferenceTracer& tracer,
+                                               std::span<const SurfacePoint> points,
+                                               const ShCoefficients& sky, const SurfacePathOptions& options);
+
 } // namespace shprobe
