@@ -170,19 +170,5 @@ TEST(TransferReference, OpenCornellBoxOneBounce) {
         vertices.size(), c.worstZ, c.rmsZ, c.bias, c.biasSe, c.worstSe);
 }
 
-// Exploration only (run with --gtest_also_run_disabled_tests): 2CylinderEngine.glb, 301 vertices.
-TEST(TransferReference, DISABLED_Engine) {
-    const World& world = testing::engineWorld(SHPROBE_GLTF_MODELS_DIR);
-    const std::vector<uint32_t> vertices = everyNth(world, world.positions.size() / 300);
-    for (int bounces : {0, 1}) {
-        const Comparison c =
-            compare(world, vertices,
-                    {.model = TransferModel::Interreflected, .order = 3, .rays = 256, .bounces = bounces},
-                    {.bounces = bounces, .samples = 4096}, 1e300);
-        std::printf("engine, %d bounces, %zu vertices: worst z %.2f, rms z %.2f, bias %.2e +- %.2e\n",
-                    bounces, vertices.size(), c.worstZ, c.rmsZ, c.bias, c.biasSe);
-    }
-}
-
 } // namespace
 } // namespace shprobe
