@@ -7,6 +7,7 @@
 #include "scene_fixtures.h"
 #include "sh/basis.h"
 #include "sh/irradiance.h"
+#include "terminal_run.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -403,6 +404,28 @@ std::vector<float> attributeFloats(const Glb& glb, const nlohmann::json& primiti
 
 // What the program writes is what computeTransfer gives for the scene, placed primitive by placed
 // primitive, bit for bit; the same in the binary file; the same bytes from a second run.
+// A transfer draws a progress line on a terminal ("vertex passes 12/40, ... s left"), erased at the
+// end; nothing with -q, and the file is the same either way.
+TEST_F(TransferProgram, ProgressLineOnlyOnATerminal) {
+    const std::vector<std::string> transfer = {
+        "transfer", path("scene.glb"), "--model", "interreflected", "--bounces", "1", "--rays", "64"};
+    auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> args = transfer;
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    };
+    const testing::TerminalRun shown =
+        testing::runOnTerminal(with({"-o", path("shown.glb")}), path("shown.out"));
+    ASSERT_EQ(shown.exitCode, 0) << shown.terminal;
+    EXPECT_NE(shown.terminal.find("\rvertex passes "), std::string::npos) << shown.terminal;
+    EXPECT_TRUE(shown.terminal.ends_with("\r\033[K")) << "the line is erased at the end: " << shown.terminal;
+    const testing::TerminalRun quiet =
+        testing::runOnTerminal(with({"-q", "-o", path("quiet.glb")}), path("quiet.out"));
+    EXPECT_EQ(quiet.exitCode, 0) << quiet.terminal;
+    EXPECT_EQ(quiet.terminal, "");
+    EXPECT_EQ(read(path("shown.glb")), read(path("quiet.glb")));
+}
+
 TEST_F(TransferProgram, AttributesAndBinaryFileRoundTrip) {
     ASSERT_EQ(run("transfer " + path("scene.glb") + " --model interreflected --bounces 1 --rays 64 -o " +
                   path("out.glb")),
