@@ -69,6 +69,12 @@ struct LitSceneOptions {
     std::string volume;      // its probe volume (shprobe scene)
     std::string sky;         // the scene's sky; empty: the built-in sky
     bool showProbes = false; // the volume's probes as spheres (the viewer: initially; key P)
+    // --transfer: the scene's per-vertex transfer (shprobe transfer) relit by --sky or --probe,
+    // turned by the light's yaw (about +Y) and pitch (about +X), degrees: R = Ry(yaw) Rx(pitch).
+    bool transfer = false;
+    std::string probe;
+    float lightYaw = 0.0f;
+    float lightPitch = 0.0f;
     bool drawn() const { return !scene.empty() || !volume.empty(); }
 };
 
@@ -263,6 +269,13 @@ void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize
 void addRenderOptions(CLI::App& command, RenderOptions& options);
 // `shprobe render --scene SCENE --volume VOLUME`: the scene lit by its probe volume.
 void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height);
+// `shprobe render --scene OUT.glb --transfer`: the scene relit from its transfer (render_transfer.cpp).
+void runTransferRender(const RenderOptions& options, uint32_t width, uint32_t height);
+// The light of a relit scene: the radiance coefficients of --probe (cut or padded with zeros to
+// `order`) or of --sky (the built-in sky when neither), baked at `order` on the device.
+ShCoefficients loadTransferLight(const Context& context, const LitSceneOptions& options, int order);
+// The light's turn R = Ry(yaw) Rx(pitch), degrees (a light from d comes from R d).
+glm::dmat3 lightRotation(float yawDegrees, float pitchDegrees);
 // --scene, --volume, --sky and --show-probes of render and view; --scene excludes the options of the
 // sphere named in sphereOnly, and the others need --scene.
 void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,

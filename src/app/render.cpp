@@ -185,6 +185,7 @@ void runRender(const RenderOptions& options) {
     const uint32_t side = options.grid ? kDefaultGridCell : kDefaultSize;
     const ImageSize size = options.size.value_or(ImageSize{side, side});
     checkRenderOutputPath(options.output); // before any work
+    if (options.scene.transfer) return runTransferRender(options, size.width, size.height);
     if (options.scene.drawn()) return runSceneRender(options, size.width, size.height);
     checkOutputsAreNotInputs({&options.output, 1}, filesReadBy(options.input));
     RenderResult result = renderOnDevice(options, size);

@@ -8,7 +8,7 @@
 #include "common/output_file.h"
 #include "common/scope_exit.h"
 #include "formats/probe_volume.h"
-#include "render/gpu_image.h"
+#include "render/display_readback.h"
 #include "render/image_output.h"
 #include "render/lit_scene.h"
 #include "render/offscreen.h"
@@ -36,73 +36,18 @@ ProbeVolume readWholeVolume(const std::string& path) {
     return volume;
 }
 
-// Everything one picture allocates beside the capture.
-struct SceneFrame {
-    SceneViewTarget view;
-    Tonemapper tonemapper;
-    VkDescriptorSet tonemapInput = VK_NULL_HANDLE;
-    GpuImage display;
-    VkFramebuffer displayFramebuffer = VK_NULL_HANDLE;
-    Buffer colorReadback;
-    Buffer displayReadback;
-};
-
-void destroyFrame(const Device& device, SceneFrame& frame) {
-    destroyBuffer(device, frame.displayReadback);
-    destroyBuffer(device, frame.colorReadback);
-    if (frame.displayFramebuffer) vkDestroyFramebuffer(device.device, frame.displayFramebuffer, nullptr);
-    destroyImage(device, frame.display);
-    if (frame.tonemapInput) freeTonemapInput(device, frame.tonemapper, frame.tonemapInput);
-    destroyTonemapper(device, frame.tonemapper);
-    destroySceneViewTarget(device, frame.view);
-}
-
-SceneFrame createFrame(const Context& context, const SceneCapture& capture, VkExtent2D extent) {
-    SceneFrame frame;
-    OnFailure undo([&] { destroyFrame(context, frame); });
-    frame.view = createSceneViewTarget(context, capture, extent,
-                                       VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
-    frame.tonemapper = createTonemapper(context, kDisplayFormat, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-    frame.tonemapInput = createTonemapInput(context, frame.tonemapper, frame.view.color.view);
-    frame.display =
-        createImage(context, {.format = kDisplayFormat,
-                              .extent = extent,
-                              .usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                              .what = "display image"});
-    frame.displayFramebuffer =
-        createFramebuffer(context, frame.tonemapper.renderPass, {&frame.display.view, 1}, extent);
-    const VkDeviceSize pixels = VkDeviceSize(extent.width) * extent.height;
-    frame.colorReadback = createBuffer(context, pixels * 16, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                       MemoryUse::Readback, "colour readback");
-    frame.displayReadback = createBuffer(context, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                         MemoryUse::Readback, "display readback");
-    return frame;
-}
-
 RenderedImage renderFrame(const Context& context, const SceneCapture& capture, const SceneCamera& camera,
                           const SceneViewOptions& viewOptions, VkExtent2D extent, float exposure) {
-    SceneFrame frame = createFrame(context, capture, extent);
-    ScopeExit releaseFrame([&] { destroyFrame(context, frame); });
+    SceneViewTarget view = createSceneViewTarget(
+        context, capture, extent, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
+    ScopeExit releaseView([&] { destroySceneViewTarget(context, view); });
+    DisplayReadback readback = createDisplayReadback(context, view.color.view, extent);
+    ScopeExit releaseReadback([&] { destroyDisplayReadback(context, readback); });
     submitAndWait(context, [&](VkCommandBuffer commands) {
-        recordLitSceneView(commands, capture, frame.view, camera, viewOptions);
-        recordTonemap(commands, frame.tonemapper, frame.tonemapInput, frame.displayFramebuffer, extent,
-                      exposure);
-        changeLayout(commands, frame.view.color,
-                     {VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                      VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT,
-                      VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT});
-        copyImageToBuffer(commands, frame.view.color, frame.colorReadback);
-        copyImageToBuffer(commands, frame.display, frame.displayReadback);
+        recordLitSceneView(commands, capture, view, camera, viewOptions);
+        recordDisplayReadback(commands, readback, view.color, exposure);
     });
-    RenderedImage image;
-    invalidateBuffer(context, frame.colorReadback);
-    image.linear = makeImage(int(extent.width), int(extent.height));
-    std::memcpy(image.linear.texels.data(), frame.colorReadback.mapped,
-                image.linear.texels.size() * sizeof(glm::vec4));
-    invalidateBuffer(context, frame.displayReadback);
-    const auto* bytes = static_cast<const uint8_t*>(frame.displayReadback.mapped);
-    image.display.assign(bytes, bytes + frame.displayReadback.size);
-    return image;
+    return readRenderedImage(context, readback);
 }
 
 } // namespace
@@ -115,16 +60,36 @@ void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
         scene->excludes(command.get_option(name));
     command.add_option("--volume", options.volume, "The scene's probe volume (`shprobe scene`)")
         ->needs(scene);
-    command.add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)")->needs(scene);
+    CLI::Option* transfer =
+        command
+            .add_flag("--transfer", options.transfer,
+                      "Relight the scene's per-vertex transfer (shprobe transfer) by --sky or --probe")
+            ->needs(scene)
+            ->excludes(command.get_option("--volume"));
+    CLI::Option* sky =
+        command.add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)")->needs(scene);
+    command.add_option("--probe", options.probe, "With --transfer: the light's radiance coefficients (JSON)")
+        ->needs(transfer)
+        ->excludes(sky);
+    command
+        .add_option("--light-yaw", options.lightYaw, "With --transfer: the light's turn about +Y, degrees")
+        ->check(numberFrom(-360.0, 360.0))
+        ->needs(transfer);
+    command
+        .add_option("--light-pitch", options.lightPitch,
+                    "With --transfer: the light's turn about +X, degrees")
+        ->check(numberFrom(-360.0, 360.0))
+        ->needs(transfer);
     command
         .add_flag("--show-probes", options.showProbes,
                   "The volume's probes as spheres shaded by their own SH")
-        ->needs(scene);
+        ->needs(scene)
+        ->excludes(transfer);
 }
 
 std::vector<std::string> litSceneInputs(const LitSceneOptions& options) {
     std::vector<std::string> inputs = sceneInputs(options.scene, options.sky);
-    inputs.push_back(options.volume);
+    inputs.push_back(options.transfer ? options.probe : options.volume);
     return inputs;
 }
 

@@ -11,10 +11,17 @@
 #define SHPROBE_FOLDED_COUNT 25
 
 // Specialization constant ids of the render modules (id 1, SH order, as in gpu_interface.h).
-#define SHPROBE_SPEC_RENDER_ORDER 1 // 3 or 5 (4 works too)
-#define SHPROBE_SPEC_SHADING 2      // SHPROBE_SHADING_*
-#define SHPROBE_SPEC_BACKGROUND 3   // SHPROBE_BACKGROUND_*
-#define SHPROBE_SPEC_ENCODE_SRGB 4  // tonemap.frag: 1 = encode sRGB in the shader (UNORM target)
+#define SHPROBE_SPEC_RENDER_ORDER 1      // 3 or 5 (4 works too)
+#define SHPROBE_SPEC_SHADING 2           // SHPROBE_SHADING_*
+#define SHPROBE_SPEC_BACKGROUND 3        // SHPROBE_BACKGROUND_*
+#define SHPROBE_SPEC_ENCODE_SRGB 4       // tonemap.frag: 1 = encode sRGB in the shader (UNORM target)
+#define SHPROBE_SPEC_TRANSFER_CHANNELS 5 // relight.vert: 3 (RGB transfer) or 1 (grey)
+
+// The transfer attributes (vec4, docs/transfer.md) relight.vert and relight_wide.vert declare, after
+// the position: 15 fits Vulkan's guaranteed 16 vertex attributes, 31 a device with 32. A pipeline
+// gives the ones a file does not have from a zero buffer (stride 0); the shader never reads them.
+#define SHPROBE_RELIGHT_ATTRIBUTES 15
+#define SHPROBE_RELIGHT_WIDE_ATTRIBUTES 31
 
 // What a surface of normal n shows (scene.frag) and what the shading background shows.
 #define SHPROBE_SHADING_RADIANCE 0     // the SH reconstruction of the radiance, L(n); no albedo
@@ -68,6 +75,11 @@ struct ObjectConstants {
     vec4 albedo; // rgb: Lambertian albedo
 };
 
+// Push constants of relight.vert / relight_wide.vert.
+struct RelightConstants {
+    mat4 clipFromWorld; // world -> clip (Vulkan: y down, depth 0..1)
+};
+
 // Push constants of tonemap.frag.
 struct TonemapConstants {
     vec4 exposure; // x: linear scale applied before the curve
@@ -84,6 +96,7 @@ static_assert(offsetof(shprobe::glsl::RenderUniforms, sun) ==
               64 * 2 + 16 * 3 + 16 * (2 * SHPROBE_FOLDED_COUNT + 4));
 static_assert(sizeof(shprobe::glsl::ObjectConstants) == 80);
 static_assert(sizeof(shprobe::glsl::TonemapConstants) == 16);
+static_assert(sizeof(shprobe::glsl::RelightConstants) == 64);
 #endif
 
 #endif

@@ -8,6 +8,7 @@
 #include "vk/vulkan_commands.h"
 #include <shprobe/shprobe_spirv.h>
 
+#include <cstring>
 #include <glm/vec4.hpp>
 
 namespace shprobe {
@@ -126,6 +127,58 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
         rotated.push_back(std::move(result));
     }
     return rotated;
+}
+
+RotatedProbe createRotatedProbe(const Context& context, const Rotator& rotator, const ShCoefficients& probe) {
+    const ShRotation identity = makeShRotation(glm::dmat3(1.0), rotator.order);
+    checkInputs(rotator, {&identity, 1}, {&probe, 1});
+    RotatedProbe rotated;
+    OnFailure undo([&] { destroyRotatedProbe(context, rotated); });
+    const std::vector<glm::vec4> input = packProbes({&probe, 1});
+    const VkDeviceSize matrixBytes = matrixFloats(rotator.order) * sizeof(float);
+    const VkDeviceSize probeBytes = input.size() * sizeof(glm::vec4);
+    rotated.matrices = createBuffer(context, matrixBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                    MemoryUse::Upload, "rotation matrices");
+    rotated.probe = createBuffer(context, probeBytes,
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                 MemoryUse::Device, "probe to rotate");
+    uploadBuffer(context, rotated.probe, input.data(), probeBytes);
+    rotated.rotated = createBuffer(context, probeBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device,
+                                   "rotated probe");
+    rotated.pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 3});
+    const BindingTarget targets[] = {{rotated.matrices.buffer, 0, matrixBytes},
+                                     {rotated.probe.buffer, 0, probeBytes},
+                                     {rotated.rotated.buffer, 0, probeBytes}};
+    rotated.set = createDescriptorSet(context, rotated.pool, rotator.program, targets);
+    setProbeRotation(rotated, identity);
+    return rotated;
+}
+
+void destroyRotatedProbe(const Device& device, RotatedProbe& rotated) {
+    if (rotated.pool) vkDestroyDescriptorPool(device.device, rotated.pool, nullptr);
+    destroyBuffer(device, rotated.rotated);
+    destroyBuffer(device, rotated.probe);
+    destroyBuffer(device, rotated.matrices);
+    rotated = RotatedProbe{};
+}
+
+void setProbeRotation(const RotatedProbe& rotated, const ShRotation& rotation) {
+    const std::vector<float> matrices = packMatrices({&rotation, 1});
+    if (matrices.size() * sizeof(float) != rotated.matrices.size)
+        throw Error(ErrorKind::Input, "GPU rotation: a rotation of order " + std::to_string(rotation.order) +
+                                          " for a probe of another order");
+    std::memcpy(rotated.matrices.mapped, matrices.data(), rotated.matrices.size);
+}
+
+void recordProbeRotation(VkCommandBuffer commands, const Rotator& rotator, const RotatedProbe& rotated,
+                         VkPipelineStageFlags readers) {
+    const uint32_t coefficients = uint32_t(coefficientCount(rotator.order));
+    dispatch(commands, rotator.program, rotated.set, glsl::RotateParams{1u, 0u},
+             {(coefficients + kWorkgroupSize - 1) / kWorkgroupSize});
+    const VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_SHADER_WRITE_BIT,
+                                  VK_ACCESS_SHADER_READ_BIT};
+    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, readers, 0, 1, &barrier, 0, nullptr,
+                         0, nullptr);
 }
 
 } // namespace shprobe

@@ -18,17 +18,6 @@ namespace shprobe {
 
 namespace {
 
-// World -> clip of a camera: as faceProjection, with the camera's axes (y down, as Vulkan's clip
-// space is) scaled by the field of view.
-glm::mat4 cameraProjection(const SceneCamera& camera, VkExtent2D extent, float nearPlane) {
-    const glm::vec3 forward = glm::normalize(glm::vec3(camera.target - camera.eye));
-    const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(camera.up)));
-    const glm::vec3 down = glm::cross(forward, right);
-    const float f = 1.0f / std::tan(float(camera.verticalFovDegrees) * 0.5f * 3.14159265f / 180.0f);
-    const float aspect = float(extent.width) / float(extent.height);
-    return clipFromRows({right * (f / aspect), down * f, forward}, camera.eye, nearPlane);
-}
-
 VkPipeline createProbePipeline(const Device& device, const SceneCapture& capture,
                                const SceneViewTarget& target) {
     const uint32_t order = uint32_t(capture.options.order);
@@ -61,6 +50,15 @@ double defaultProbeRadius(const BounceGrid& grid) {
 }
 
 } // namespace
+
+glm::mat4 cameraProjection(const SceneCamera& camera, VkExtent2D extent, float nearPlane) {
+    const glm::vec3 forward = glm::normalize(glm::vec3(camera.target - camera.eye));
+    const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(camera.up)));
+    const glm::vec3 down = glm::cross(forward, right);
+    const float f = 1.0f / std::tan(float(camera.verticalFovDegrees) * 0.5f * 3.14159265f / 180.0f);
+    const float aspect = float(extent.width) / float(extent.height);
+    return clipFromRows({right * (f / aspect), down * f, forward}, camera.eye, nearPlane);
+}
 
 SceneViewTarget createSceneViewTarget(const Context& context, const SceneCapture& capture, VkExtent2D extent,
                                       VkImageUsageFlags colorUsage) {

@@ -9,6 +9,7 @@
 #include "vk/resources.h"
 
 #include <cstdint>
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 namespace shprobe {
@@ -21,6 +22,10 @@ struct SceneCamera {
     glm::dvec3 up{0.0, 1.0, 0.0};
     double verticalFovDegrees = 45.0;
 };
+
+// World -> clip of a camera: as faceProjection, with the camera's axes (y down, as Vulkan's clip
+// space is) scaled by the field of view; reversed depth, the near plane at 1, infinitely far at 0.
+glm::mat4 cameraProjection(const SceneCamera& camera, VkExtent2D extent, float nearPlane);
 
 struct SceneViewOptions {
     bool showProbes = false;  // each probe of the bounce source, shaded by its own SH (red: invalid)
