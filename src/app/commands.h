@@ -18,8 +18,9 @@
 
 namespace shprobe {
 
-struct Context;  // vk/context.h
-struct LitScene; // render/lit_scene.h
+struct Context;    // vk/context.h
+struct LitScene;   // render/lit_scene.h
+struct RelitLight; // render/relit_scene.h
 
 struct BakeOptions {
     std::vector<std::string> inputs; // files, folders or {face} patterns; none: the built-in sky
@@ -271,11 +272,9 @@ void addRenderOptions(CLI::App& command, RenderOptions& options);
 void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height);
 // `shprobe render --scene OUT.glb --transfer`: the scene relit from its transfer (render_transfer.cpp).
 void runTransferRender(const RenderOptions& options, uint32_t width, uint32_t height);
-// The light of a relit scene: the radiance coefficients of --probe (cut or padded with zeros to
-// `order`) or of --sky (the built-in sky when neither), baked at `order` on the device.
-ShCoefficients loadTransferLight(const Context& context, const LitSceneOptions& options, int order);
-// The light's turn R = Ry(yaw) Rx(pitch), degrees (a light from d comes from R d).
-glm::dmat3 lightRotation(float yawDegrees, float pitchDegrees);
+// The light of a relit scene: --probe's radiance coefficients (cut or padded with zeros to
+// `order`; Error(Input) for irradiance or a probe with a sun) or --sky (the built-in sky when neither).
+RelitLight loadRelitLight(const LitSceneOptions& options, int order);
 // --scene, --volume, --sky and --show-probes of render and view; --scene excludes the options of the
 // sphere named in sphereOnly, and the others need --scene.
 void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,

@@ -8,8 +8,6 @@
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
-#include "gpu/host_bake.h"
-#include "gpu/probe_baker.h"
 #include "render/display_readback.h"
 #include "render/image_output.h"
 #include "render/lit_scene.h"
@@ -22,8 +20,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <glm/ext/matrix_transform.hpp>
-#include <glm/trigonometric.hpp>
 
 namespace shprobe {
 
@@ -59,33 +55,21 @@ RenderedImage renderRelit(const Context& context, const RelitScene& relit, const
 
 } // namespace
 
-glm::dmat3 lightRotation(float yawDegrees, float pitchDegrees) {
-    const glm::dmat4 yaw =
-        glm::rotate(glm::dmat4(1.0), glm::radians(double(yawDegrees)), glm::dvec3(0, 1, 0));
-    const glm::dmat4 pitch =
-        glm::rotate(glm::dmat4(1.0), glm::radians(double(pitchDegrees)), glm::dvec3(1, 0, 0));
-    return glm::dmat3(yaw * pitch);
-}
-
-ShCoefficients loadTransferLight(const Context& context, const LitSceneOptions& options, int order) {
-    if (!options.probe.empty()) return probeLight(options.probe, order);
-    const Environment sky = loadSceneSky(options.sky, 0);
-    ProbeBaker baker =
-        createProbeBaker(context, {.order = order, .cubemaps = uploadBinding(context, TexelFormat::Rgba32F)});
-    ScopeExit releaseBaker([&] { destroyProbeBaker(context, baker); });
-    double milliseconds = 0.0;
-    return bakeRadiance(context, baker, sky.cubemap, milliseconds);
+RelitLight loadRelitLight(const LitSceneOptions& options, int order) {
+    if (!options.probe.empty()) return {options.probe, probeLight(options.probe, order), {}};
+    Environment sky = loadSceneSky(options.sky, 0);
+    return {options.sky.empty() ? std::string("the built-in sky") : options.sky, std::nullopt,
+            std::move(sky.cubemap)};
 }
 
 void runTransferRender(const RenderOptions& options, uint32_t width, uint32_t height) {
     checkOutputsAreNotInputs({&options.output, 1}, litSceneInputs(options.scene));
     const TransferMesh mesh = loadTransferMesh(options.scene.scene);
-    ShCoefficients light =
-        options.scene.probe.empty() ? ShCoefficients{} : probeLight(options.scene.probe, mesh.order);
+    const RelitLight source = loadRelitLight(options.scene, mesh.order);
 
     Context context = createGraphicsContext(options.device, options.validation);
     ScopeExit releaseContext([&] { destroyContext(context); });
-    if (options.scene.probe.empty()) light = loadTransferLight(context, options.scene, mesh.order);
+    const ShCoefficients light = relitLightCoefficients(context, source, mesh.order);
     RelitScene relit = createRelitScene(context, mesh, light);
     ScopeExit releaseRelit([&] { destroyRelitScene(context, relit); });
     setLightRotation(relit, lightRotation(options.scene.lightYaw, options.scene.lightPitch));
@@ -100,10 +84,7 @@ void runTransferRender(const RenderOptions& options, uint32_t width, uint32_t he
         throw Error(ErrorKind::Device, counted(messages, "Vulkan validation message") + " (above)");
     writeRenderedImage(options.output, image);
     std::printf("shprobe render: %s relit by %s -> %s (%ux%u)\n", mesh.world.description.c_str(),
-                !options.scene.probe.empty() ? options.scene.probe.c_str()
-                : options.scene.sky.empty()  ? "the built-in sky"
-                                             : options.scene.sky.c_str(),
-                options.output.c_str(), width, height);
+                source.name.c_str(), options.output.c_str(), width, height);
     std::printf(
         "  transfer order %d, %s, %d attributes; light turned yaw %.1f, pitch %.1f deg on the device\n",
         mesh.order, mesh.channels == 3 ? "RGB" : "grey", mesh.attributes, double(options.scene.lightYaw),

@@ -5,8 +5,10 @@
 #include "app/parsed_option.h"
 #include "common/output_file.h"
 #include "gpu/host_bake.h"
+#include "render/relit_scene.h"
 #include "render/render_input.h"
 #include "render/viewer.h"
+#include "scene/transfer_mesh.h"
 #include "vk/check.h"
 
 namespace shprobe {
@@ -54,7 +56,7 @@ void addViewOptions(CLI::App& command, ViewOptions& options) {
         ->check(CLI::Range(1, 1 << 30));
     addParsedOption<std::vector<std::string>>(
         command, "--keys", options.keys, scriptedKeys,
-        "Key presses to replay, one before each frame: 3 5 m b left right + - r q p")
+        "Key presses to replay, one before each frame: 3 5 m b left right up down j l i k + - r q p")
         ->delimiter(',');
     addExposureOption(command, options.exposure);
     addEnvironmentInputOptions(command, options.faceSize, options.sanitize, options.maxPixels);
@@ -71,10 +73,16 @@ void runView(const ViewOptions& options) {
         checkOutputsAreNotInputs({&options.screenshot, 1},
                                  showsScene ? litSceneInputs(options.scene) : filesReadBy(options.input));
     // Bad inputs are refused before a window opens (and where there is no display).
-    if (showsScene)
+    if (options.scene.transfer) {
+        viewer.relitMesh = loadTransferMesh(options.scene.scene);
+        viewer.relitLight = loadRelitLight(options.scene, viewer.relitMesh->order);
+        viewer.lightYaw = options.scene.lightYaw;
+        viewer.lightPitch = options.scene.lightPitch;
+    } else if (showsScene) {
         viewer.scene = loadLitScene(options.scene);
-    else if (isProbeFile(options.input))
+    } else if (isProbeFile(options.input)) {
         viewer.probe = readProbeInput(options.input);
+    }
     const std::string shown = showsScene              ? options.scene.scene
                               : options.input.empty() ? std::string("the built-in sky")
                                                       : options.input;

@@ -3,6 +3,9 @@
 #include "common/error.h"
 #include "common/scope_exit.h"
 #include "glsl/render_interface.h"
+#include "gpu/host_bake.h"
+#include "gpu/probe_baker.h"
+#include "render/render_input.h"
 #include "vk/graphics.h"
 #include "vk/pipeline.h"
 #include "vk/vulkan_commands.h"
@@ -10,7 +13,9 @@
 
 #include <algorithm>
 #include <array>
+#include <glm/ext/matrix_transform.hpp>
 #include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 #include <string>
 #include <vector>
 
@@ -123,6 +128,22 @@ void createPipeline(const Context& context, RelitScene& relit) {
 }
 
 } // namespace
+
+ShCoefficients relitLightCoefficients(const Context& context, const RelitLight& light, int order) {
+    if (light.probe) return *light.probe;
+    ProbeBaker baker =
+        createProbeBaker(context, {.order = order, .cubemaps = uploadBinding(context, TexelFormat::Rgba32F)});
+    ScopeExit releaseBaker([&] { destroyProbeBaker(context, baker); });
+    double milliseconds = 0.0;
+    return bakeRadiance(context, baker, light.sky, milliseconds);
+}
+
+glm::dmat3 lightRotation(float yawDegrees, float pitchDegrees) {
+    const glm::dvec3 y(0.0, 1.0, 0.0), x(1.0, 0.0, 0.0);
+    const glm::dmat4 yaw = glm::rotate(glm::dmat4(1.0), glm::radians(double(yawDegrees)), y);
+    const glm::dmat4 pitch = glm::rotate(glm::dmat4(1.0), glm::radians(double(pitchDegrees)), x);
+    return glm::dmat3(yaw * pitch);
+}
 
 int maxTransferAttributes(const Device& device) {
     const int beside = int(device.info.limits.maxVertexInputAttributes) - 1;

@@ -12,14 +12,29 @@
 #include "gpu/rotator.h"
 #include "scene/transfer_mesh.h"
 #include "sh/coefficients.h"
+#include "sh/cubemap.h"
 #include "vk/context.h"
 #include "vk/image.h"
 #include "vk/resources.h"
 
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
+#include <optional>
+#include <string>
 
 namespace shprobe {
+
+// What a relit scene is lit by: a probe's radiance coefficients (cut or padded with zeros to the
+// transfer's order by the caller) or a sky, baked on the device at the transfer's order.
+struct RelitLight {
+    std::string name; // the probe's or sky's path, or "the built-in sky"
+    std::optional<ShCoefficients> probe;
+    Cubemap sky; // when there is no probe
+};
+// The light's radiance coefficients at `order`.
+ShCoefficients relitLightCoefficients(const Context& context, const RelitLight& light, int order);
+// The light's turn R = Ry(yaw) Rx(pitch), degrees (a light from d comes from R d).
+glm::dmat3 lightRotation(float yawDegrees, float pitchDegrees);
 
 // The transfer attributes a device can give relight.vert (or relight_wide.vert): the largest of
 // their capacities that fits maxVertexInputAttributes beside the position.

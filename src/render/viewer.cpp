@@ -148,6 +148,16 @@ struct ScenePicture {
     bool showProbes = false;
 };
 
+// A scene with per-vertex transfer, relit by its light turned on the device each frame.
+struct RelitPicture {
+    TransferMesh mesh;
+    RelitScene relit;
+    RelitTarget target;
+    VkDescriptorSet tonemapInput = VK_NULL_HANDLE;
+    float yaw = 0.0f, pitch = 0.0f;
+    float initialYaw = 0.0f, initialPitch = 0.0f;
+};
+
 struct Session {
     // The probe's sphere and torus (unless a scene is shown).
     RenderInput input;
@@ -157,6 +167,8 @@ struct Session {
     int foldOrder = 3;
     // Or the scene.
     std::optional<ScenePicture> scene;
+    // Or the relit scene.
+    std::optional<RelitPicture> relit;
 
     ViewerFrames frames;
     ViewState initial;
@@ -179,7 +191,7 @@ bool shadingAvailable(const Session& session, ShadingMode mode) {
 // A starting view the input can show.
 ViewState usableView(const Session& session, ViewState view) {
     clampView(view);
-    if (session.scene) return view;
+    if (session.scene || session.relit) return view;
     if (!backgroundAvailable(session, view.background))
         view.background =
             backgroundAvailable(session, Background::Radiance) ? Background::Radiance : Background::Shading;
@@ -234,6 +246,10 @@ bool applyViewKey(GLFWwindow* window, Session& session, int key) {
     case GLFW_KEY_R:
         session.view = usableView(session, session.initial);
         if (session.scene) session.scene->showProbes = session.initialShowProbes;
+        if (session.relit) {
+            session.relit->yaw = session.relit->initialYaw;
+            session.relit->pitch = session.relit->initialPitch;
+        }
         return true;
     case GLFW_KEY_ESCAPE:
     case GLFW_KEY_Q:
@@ -269,8 +285,34 @@ void applyProbeKey(const Context& context, Session& session, int key) {
     }
 }
 
+// Turns the light: the turn's matrices are written here (once the last frame is done with them) and
+// rotate.comp turns the coefficients in every frame's commands.
+void applyRelitKey(RelitPicture& relit, int key) {
+    switch (key) {
+    case GLFW_KEY_LEFT:
+    case GLFW_KEY_J:
+        relit.yaw = std::remainder(relit.yaw - kRotationStep, 360.0f);
+        break;
+    case GLFW_KEY_RIGHT:
+    case GLFW_KEY_L:
+        relit.yaw = std::remainder(relit.yaw + kRotationStep, 360.0f);
+        break;
+    case GLFW_KEY_UP:
+    case GLFW_KEY_I:
+        relit.pitch = std::remainder(relit.pitch - kRotationStep, 360.0f);
+        break;
+    case GLFW_KEY_DOWN:
+    case GLFW_KEY_K:
+        relit.pitch = std::remainder(relit.pitch + kRotationStep, 360.0f);
+        break;
+    default:
+        break;
+    }
+}
+
 void applyKey(const Context& context, GLFWwindow* window, Session& session, int key) {
     if (applyViewKey(window, session, key)) return;
+    if (session.relit) return applyRelitKey(*session.relit, key);
     if (!session.scene) return applyProbeKey(context, session, key);
     if (key == GLFW_KEY_P) session.scene->showProbes = !session.scene->showProbes;
 }
@@ -297,7 +339,19 @@ std::string sceneSummary(const Session& session) {
     return text + session.device;
 }
 
+std::string relitSummary(const Session& session) {
+    const RelitPicture& relit = *session.relit;
+    char text[512];
+    std::snprintf(text, sizeof(text),
+                  "shprobe view: %s | transfer order %d %s | light yaw %.0f, pitch %.0f | %+.1f EV | ",
+                  relit.mesh.world.description.c_str(), relit.mesh.order,
+                  relit.mesh.channels == 3 ? "RGB" : "grey", double(relit.yaw), double(relit.pitch),
+                  double(session.view.exposureStops));
+    return text + session.device;
+}
+
 std::string sessionSummary(const Session& session) {
+    if (session.relit) return relitSummary(session);
     if (session.scene) return sceneSummary(session);
     return viewSummary(session.view, session.input.name, session.input.bakeMilliseconds, session.device);
 }
@@ -312,6 +366,10 @@ void updateTitle(GLFWwindow* window, const Session& session, std::string& shown)
 // The HDR image the picture is drawn into, at the swapchain's size.
 void destroyPictureTargets(const Device& device, Session& session) {
     const Tonemapper& tonemapper = session.frames.tonemapper;
+    if (session.relit) {
+        if (session.relit->tonemapInput) freeTonemapInput(device, tonemapper, session.relit->tonemapInput);
+        return destroyRelitTarget(device, session.relit->target);
+    }
     if (!session.scene) return destroySceneTargets(device, tonemapper, session.targets);
     freeTonemapInput(device, tonemapper, session.scene->tonemapInput);
     destroySceneViewTarget(device, session.scene->target);
@@ -321,6 +379,12 @@ void sizePictureTargets(const Context& context, Session& session) {
     destroyPictureTargets(context, session);
     const VkExtent2D extent = session.frames.swapchain.extent;
     const Tonemapper& tonemapper = session.frames.tonemapper;
+    if (session.relit) {
+        RelitPicture& relit = *session.relit;
+        relit.target = createRelitTarget(context, relit.relit, extent, VK_IMAGE_USAGE_SAMPLED_BIT);
+        relit.tonemapInput = createTonemapInput(context, tonemapper, relit.target.color.view);
+        return;
+    }
     if (!session.scene) {
         session.targets = createSceneTargets(context, *session.renderer, tonemapper, extent);
         return;
@@ -353,9 +417,21 @@ void startScene(const Context& context, const ViewerOptions& options, Session& s
     session.autoExposure = volumeExposure(session.scene->lit.volume);
 }
 
+void startRelit(const Context& context, const ViewerOptions& options, Session& session) {
+    RelitPicture& relit = session.relit.emplace();
+    relit.mesh = *options.relitMesh;
+    const ShCoefficients light = relitLightCoefficients(context, *options.relitLight, relit.mesh.order);
+    relit.relit = createRelitScene(context, relit.mesh, light);
+    relit.yaw = relit.initialYaw = options.lightYaw;
+    relit.pitch = relit.initialPitch = options.lightPitch;
+    session.autoExposure = autoExposure(light);
+}
+
 void startSession(const Context& context, const ViewerOptions& options, GLFWwindow* window,
                   Session& session) {
-    if (options.scene)
+    if (options.relitMesh)
+        startRelit(context, options, session);
+    else if (options.scene)
         startScene(context, options, session);
     else
         startProbe(context, options, session);
@@ -371,12 +447,25 @@ void endSession(const Context& context, Session& session) {
     destroyPictureTargets(context, session);
     destroyViewerFrames(context, session.frames);
     if (session.scene) destroySceneCapture(context, session.scene->capture);
+    if (session.relit) destroyRelitScene(context, session.relit->relit);
     if (session.renderer) destroySceneRenderer(context, *session.renderer);
     if (session.baker) destroyProbeBaker(context, *session.baker);
 }
 
 // Records the current view into the picture's HDR image.
+void recordRelitPicture(VkCommandBuffer commands, const Session& session) {
+    const RelitPicture& relit = *session.relit;
+    // The frame's fence has been waited for: the last rotation is done with the matrices.
+    setLightRotation(relit.relit, lightRotation(relit.yaw, relit.pitch));
+    const float zoom = session.view.distance / ViewState{}.distance;
+    const SceneCamera camera =
+        orbitSceneCamera(relit.mesh.world, session.view.yawDegrees, session.view.pitchDegrees, zoom);
+    recordRelitView(commands, relit.relit, relit.target,
+                    cameraProjection(camera, relit.target.extent, relit.relit.nearPlane));
+}
+
 void recordPicture(const Device& device, VkCommandBuffer commands, Session& session) {
+    if (session.relit) return recordRelitPicture(commands, session);
     if (!session.scene) {
         Scene scene = viewScene(session.view);
         return recordScene(device, commands, *session.renderer, session.targets, scene);
@@ -390,6 +479,7 @@ void recordPicture(const Device& device, VkCommandBuffer commands, Session& sess
 }
 
 VkDescriptorSet tonemapInput(const Session& session) {
+    if (session.relit) return session.relit->tonemapInput;
     return session.scene ? session.scene->tonemapInput : session.targets.tonemapInput;
 }
 
@@ -445,7 +535,10 @@ void runSession(const Context& context, const ViewerOptions& options, GLFWwindow
     ScopeExit end([&] { endSession(context, session); });
     startSession(context, options, window, session);
     std::printf("%s\n", sessionSummary(session).c_str());
-    if (session.scene)
+    if (session.relit)
+        std::printf("keys: Left/Right or J/L turn the light about +Y, Up/Down or I/K about +X, +/- exposure, "
+                    "R reset, Esc quit; drag to orbit, scroll to zoom\n");
+    else if (session.scene)
         std::printf("keys: P probes, +/- exposure, R reset, Esc quit; drag to orbit, scroll to zoom\n");
     else
         std::printf("keys: 3/5 order, M mode, B background, Left/Right rotate environment, +/- exposure, "
@@ -458,16 +551,19 @@ void runSession(const Context& context, const ViewerOptions& options, GLFWwindow
 
 std::vector<int> scriptedKeys(const std::vector<std::string>& names) {
     static const std::pair<const char*, int> kKeys[] = {
-        {"3", GLFW_KEY_3},       {"5", GLFW_KEY_5},         {"m", GLFW_KEY_M},     {"b", GLFW_KEY_B},
-        {"left", GLFW_KEY_LEFT}, {"right", GLFW_KEY_RIGHT}, {"+", GLFW_KEY_EQUAL}, {"-", GLFW_KEY_MINUS},
-        {"r", GLFW_KEY_R},       {"q", GLFW_KEY_Q},         {"p", GLFW_KEY_P}};
+        {"3", GLFW_KEY_3},       {"5", GLFW_KEY_5},         {"m", GLFW_KEY_M},   {"b", GLFW_KEY_B},
+        {"left", GLFW_KEY_LEFT}, {"right", GLFW_KEY_RIGHT}, {"up", GLFW_KEY_UP}, {"down", GLFW_KEY_DOWN},
+        {"j", GLFW_KEY_J},       {"l", GLFW_KEY_L},         {"i", GLFW_KEY_I},   {"k", GLFW_KEY_K},
+        {"+", GLFW_KEY_EQUAL},   {"-", GLFW_KEY_MINUS},     {"r", GLFW_KEY_R},   {"q", GLFW_KEY_Q},
+        {"p", GLFW_KEY_P}};
     std::vector<int> keys;
     for (const std::string& name : names) {
         auto found = std::find_if(std::begin(kKeys), std::end(kKeys),
                                   [&](const auto& key) { return name == key.first; });
         if (found == std::end(kKeys))
             throw Error(ErrorKind::Input,
-                        "unknown key '" + name + "' (3, 5, m, b, left, right, +, -, r, q, p)");
+                        "unknown key '" + name +
+                            "' (3, 5, m, b, left, right, up, down, j, l, i, k, +, -, r, q, p)");
         keys.push_back(found->second);
     }
     return keys;

@@ -6,10 +6,14 @@
 // or, instead, a glTF scene lit by its probe volume (the view of `shprobe render --scene`), with
 // the same camera, exposure, reset and quit keys and
 //   P         show or hide the probes (spheres shaded by their own SH)
+// or a scene written by `shprobe transfer` relit by a sky or probe (the view of `shprobe render
+// --scene --transfer`), the light turned on the device every frame, with
+//   Left/Right, J/L  turn the light about +Y by 15 degrees     Up/Down, I/K  about +X
 // The title shows the settings and the last bake time. The only file that includes GLFW is
 // viewer.cpp; the library's core never links it.
 #pragma once
 #include "render/lit_scene.h"
+#include "render/relit_scene.h"
 #include "render/render_input.h"
 #include "render/view_state.h"
 
@@ -27,7 +31,12 @@ struct ViewerOptions {
     RenderInputOptions inputOptions;
     std::optional<LitScene> scene; // shown instead of the probe's sphere and torus
     bool showProbes = false;       // the scene's probes, initially
-    uint32_t width = 960;          // window size (screen coordinates)
+    // Or a scene with per-vertex transfer and its light, turned initially by lightYaw, lightPitch.
+    std::optional<TransferMesh> relitMesh;
+    std::optional<RelitLight> relitLight;
+    float lightYaw = 0.0f;
+    float lightPitch = 0.0f;
+    uint32_t width = 960; // window size (screen coordinates)
     uint32_t height = 600;
     ViewState view;         // the initial view (order, mode, exposure...)
     std::string screenshot; // save the last frame (--frames) to this PNG
@@ -40,7 +49,8 @@ struct ViewerOptions {
 };
 
 // The GLFW key codes of key names as in the key list above, lower case ("3", "5", "m", "b", "left",
-// "right", "+", "-", "r", "q", "p"); throws Error(Input) for an unknown name.
+// "right", "up", "down", "j", "l", "i", "k", "+", "-", "r", "q", "p"); throws Error(Input) for an unknown
+// name.
 std::vector<int> scriptedKeys(const std::vector<std::string>& names);
 
 // What runViewer refuses before it opens a window: --screenshot without --frames, a screenshot that

@@ -164,6 +164,32 @@ TEST_F(Viewer, SceneScreenshotIsTheSceneRenderOfTheSameView) {
     EXPECT_GT(largestDifference(shot, plain), 10) << "the probes show";
 }
 
+// A scene relit from its transfer: the viewer's frame after L, L, K (the light turned by 30 degrees
+// about +Y and 15 about +X, on the device each frame) is `shprobe render --scene --transfer` with
+// --light-yaw 30 --light-pitch 15 of the same view byte for byte: the same relight pass and tonemap.
+// The unturned render differs, so the keys took effect.
+TEST_F(Viewer, RelitSceneKeysTurnTheLightAsRenderDoes) {
+    const std::string box = folder / "box.glb", scene = folder / "relit.glb", probe = folder / "probe.json";
+    writeBoxGltf(box, {.albedo = {0.8f, 0.6f, 0.4f}, .inwardFacing = false});
+    ShCoefficients light = testProbe(3);
+    light.rgb[1] = glm::dvec3(-2.0); // mostly from above, so that turning it shows
+    writeProbeFile(probe, light, {});
+    runOk({"transfer", box, "--model", "unshadowed", "-o", scene});
+    Screenshot shot =
+        runViewer({"--scene", scene, "--transfer", "--probe", probe, "--keys", "l,right,k", "--frames", "4"});
+    ASSERT_EQ(shot.width, 160);
+
+    const std::vector<std::string> render{"render", "--scene", scene,   "--transfer", "--probe", probe,
+                                          "--size", "160x120", "--yaw", "35",         "--pitch", "15"};
+    std::vector<std::string> turned = render, unturned = render;
+    turned.insert(turned.end(), {"--light-yaw", "30", "--light-pitch", "15", "-o", folder / "turned.png"});
+    unturned.insert(unturned.end(), {"-o", folder / "unturned.png"});
+    runOk(turned);
+    runOk(unturned);
+    EXPECT_EQ(largestDifference(shot, readScreenshot(folder / "turned.png")), 0);
+    EXPECT_GT(largestDifference(shot, readScreenshot(folder / "unturned.png")), 10) << "the turn shows";
+}
+
 // Scene inputs are checked before a window opens: a scene without its volume, a sphere option
 // with a scene, each one line and exit 2.
 TEST_F(Viewer, BadSceneInputsAreRefusedBeforeAWindowOpens) {
