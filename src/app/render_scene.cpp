@@ -21,7 +21,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <glm/geometric.hpp>
 
 namespace shprobe {

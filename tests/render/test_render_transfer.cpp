@@ -5,7 +5,8 @@
 //     tonemapped (PNG), at order 3 (relight.vert) and order 5 (relight_wide.vert);
 //   - the light turned by 90 degrees on the device equals the light turned on the CPU (`shprobe
 //     rotate`) and relit unturned, from a probe and from a sky;
-//   - refusals: a scene without transfer, more attributes than the device has, a bad turn.
+//   - refusals: a scene without transfer, more attributes than the device has, an irradiance
+//     probe, a bad turn, light options without --transfer.
 #include "render/lit_scene.h"
 #include "render/probe_shading.h"
 #include "run_program.h"
@@ -274,6 +275,10 @@ TEST_F(RenderTransfer, RefusesScenesWithoutTransferTooManyAttributesAndBadTurns)
                   {"order 7 RGB transfer needs 37 vertex attributes", "maxVertexInputAttributes"},
                   file("b.png"));
     const std::string scene = transferBox("box.glb", 3);
+    writeProbeFile(file("irradiance.json"), testProbe(3, Quantity::Irradiance), {});
+    expectRefused(
+        {"render", "--scene", scene, "--transfer", "--probe", file("irradiance.json"), "-o", file("f.png")},
+        {"irradiance.json", "holds irradiance"}, file("f.png"));
     expectRefused({"render", "--scene", scene, "--transfer", "--light-yaw", "400", "-o", file("c.png")},
                   {"--light-yaw"}, file("c.png"));
     expectRefused({"render", "--scene", scene, "--light-yaw", "10", "-o", file("d.png")}, {"--transfer"},
