@@ -221,9 +221,9 @@ TEST_F(RenderTransfer, LightTurnedOnTheDeviceEqualsLightTurnedOnTheCpu) {
     }
     const std::vector<std::string> base{"render",  "--scene", scene,    "--transfer",
                                         "--pitch", "35",      "--size", "48"};
-    auto render = [&](const std::string& output, std::vector<std::string> light) {
+    auto render = [&](const std::string& output, std::vector<std::string> lightOptions) {
         std::vector<std::string> args = base;
-        args.insert(args.end(), light.begin(), light.end());
+        args.insert(args.end(), lightOptions.begin(), lightOptions.end());
         args.insert(args.end(), {"-o", file(output)});
         RunResult result = run(args);
         EXPECT_EQ(result.exitCode, 0) << describe(result);
