@@ -5,7 +5,8 @@
 # on 1,000 and 10,000 probes at faces 32^2, bounce 0, in a Cornell box (36 triangles, written here)
 # and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels) and in ten
 # of it (1,214,960 triangles, cpu and reference: the cost per probe against the triangles); then one
-# bounce at 4^3 probes (the cpu backend's defaults against the reference's).
+# bounce at 4^3 probes (the cpu backend's defaults against the reference's); then relighting a 32^3
+# volume baked with its transfer.
 # Whole processes, timed by GNU time with their peak memory; memory per probe is the difference of
 # the 10,000- and 1,000-probe runs' peaks over the 9,000 probes between them.
 #   bash scripts/bench-scene.sh [BUILD_DIR] [OUT.json]
@@ -154,6 +155,12 @@ for scene in "$work/cornell.gltf" "$engine"; do
     run "reference, 1 bounce: $name" 64 "$build/shprobe-reference" "$scene" --grid 4,4,4 --bounces 1 -q \
         -o "$work/reference.shpv"
 done
+# Relighting a 32^3 volume at order 3 (scene/volume_bake.h), against reading its transfer's bytes in
+# the same process: its transfer baked at faces 2^2, one ray a texel, bounce 0 (what relighting costs
+# depends on the probes and the order alone).
+run "cpu, transfer: cornell box" 32768 "$build/shprobe" scene "$work/cornell.gltf" --grid 32,32,32 \
+    --face-size 2 --rays-per-texel 1 --bounces 0 --transfer -q -o "$work/transfer.shpv"
+"$build/shprobe" relight "$work/transfer.shpv" --timings -o "$work/relit.shpv" | grep '^time'
 
 # Memory per probe: (peak at 10,000 - peak at 1,000) / 9,000, per program.
 perProbe() {

@@ -10,6 +10,7 @@
 #include "sh/basis.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -63,6 +64,8 @@ void expectSameVolume(const ProbeVolume& a, const ProbeVolume& b) {
     EXPECT_TRUE(sameBits(a.irradiance, b.irradiance));
     EXPECT_EQ(a.valid, b.valid);
     EXPECT_TRUE(sameBits(a.offsets, b.offsets));
+    EXPECT_TRUE(sameBits(a.staticRadiance, b.staticRadiance));
+    EXPECT_TRUE(sameBits(a.transfer, b.transfer));
     EXPECT_EQ(a.bounces, b.bounces);
     EXPECT_EQ(a.source, b.source);
     EXPECT_EQ(a.sourceHash, b.sourceHash);
@@ -107,13 +110,15 @@ ProbeVolume sliceOf(const ProbeVolume& whole, ProbeRange range) {
     const size_t perProbe = size_t(coefficientCount(whole.order));
     brick.begin = range.begin;
     brick.end = range.end;
-    auto slice = [&](const std::vector<glm::vec3>& all) {
+    auto slice = [&](const std::vector<glm::vec3>& all, size_t valuesPerProbe = 0) {
         if (all.empty()) return std::vector<glm::vec3>();
-        return std::vector<glm::vec3>(all.begin() + range.begin * perProbe,
-                                      all.begin() + range.end * perProbe);
+        const size_t per = valuesPerProbe > 0 ? valuesPerProbe : perProbe;
+        return std::vector<glm::vec3>(all.begin() + range.begin * per, all.begin() + range.end * per);
     };
     brick.radiance = slice(whole.radiance);
     brick.irradiance = slice(whole.irradiance);
+    brick.staticRadiance = slice(whole.staticRadiance);
+    brick.transfer = slice(whole.transfer, perProbe * perProbe);
     brick.valid.assign(whole.valid.begin() + range.begin, whole.valid.begin() + range.end);
     if (!whole.offsets.empty())
         brick.offsets.assign(whole.offsets.begin() + range.begin, whole.offsets.begin() + range.end);
@@ -414,6 +419,19 @@ TEST(ProbeVolumeFile, LayoutIsTheDocumentedOne) {
 // visibility maps (none here) and the validity bytes, read back bit for bit; a volume without them
 // reads as no offsets (each zero); bricks with them merge to the whole volume byte for byte, and not
 // with bricks without them; a non-finite offset and a key that is not a boolean are refused.
+// The volume cut into three bricks, given to merge in `order`: the merged file is the whole file,
+// byte for byte. Returns the bricks in that order.
+std::vector<ProbeVolume> expectBricksMergeToTheWhole(const TempFolder& folder, const ProbeVolume& volume,
+                                                     std::array<uint32_t, 3> order) {
+    writeProbeVolume(folder.file("whole.shpv"), volume);
+    std::vector<ProbeVolume> bricks;
+    for (uint32_t index : order)
+        bricks.push_back(sliceOf(volume, brickRange(volume.grid, {index, 3})));
+    writeProbeVolume(folder.file("merged.shpv"), mergeProbeVolumes(bricks));
+    EXPECT_EQ(fileBytes(folder.file("merged.shpv")), fileBytes(folder.file("whole.shpv")));
+    return bricks;
+}
+
 TEST(ProbeVolumeFile, CaptureOffsetsAreAnOptionalSection) {
     TempFolder folder;
     ProbeVolume volume = sampleVolume(testGrid({3, 2, 2}), 3);
@@ -432,13 +450,7 @@ TEST(ProbeVolumeFile, CaptureOffsetsAreAnOptionalSection) {
     EXPECT_EQ(y, -0.25f); // probe 3's offset.y
     expectSameVolume(parseProbeVolume(bytes, "v"), volume);
 
-    const std::string wholeFile = folder.file("whole.shpv");
-    writeProbeVolume(wholeFile, volume);
-    std::vector<ProbeVolume> bricks;
-    for (uint32_t index : {2u, 0u, 1u})
-        bricks.push_back(sliceOf(volume, brickRange(volume.grid, {index, 3})));
-    writeProbeVolume(folder.file("merged.shpv"), mergeProbeVolumes(bricks));
-    EXPECT_EQ(fileBytes(folder.file("merged.shpv")), fileBytes(wholeFile));
+    std::vector<ProbeVolume> bricks = expectBricksMergeToTheWhole(folder, volume, {2u, 0u, 1u});
     bricks[1].offsets.clear();
     expectInputError([&] { mergeProbeVolumes(bricks); },
                      "capture offsets present in brick 1, absent in brick 2");
@@ -452,6 +464,48 @@ TEST(ProbeVolumeFile, CaptureOffsetsAreAnOptionalSection) {
     edited.replace(key, 23, "\"capture_offsets\": 1   ");
     expectInputError([&] { parseProbeVolume(edited, "v"); },
                      "field \"capture_offsets\" must be true or false");
+}
+
+// The transfer (static radiance, then order^4 values a probe) follows the capture offsets; bricks
+// with it merge to the whole file, and a brick without it is not of the same bake.
+TEST(ProbeVolumeFile, TransferIsAnOptionalSection) {
+    TempFolder folder;
+    ProbeVolume volume = sampleVolume(testGrid({3, 2, 2}), 2);
+    EXPECT_FALSE(headerOf(volumeBytes(volume)).contains("transfer"));
+    volume.staticRadiance = volume.radiance;
+    for (size_t i = 0; i < volume.radiance.size() * 4; ++i) {
+        const bool valid = volume.valid[i / 16];
+        volume.transfer.push_back(valid ? glm::vec3(0.01f * float(i), 1.0f / 7.0f, -float(i))
+                                        : glm::vec3(0.0f));
+    }
+    const std::string bytes = volumeBytes(volume);
+    const uint64_t header = headerLength(bytes);
+    EXPECT_EQ(headerOf(bytes)["transfer"], true);
+    EXPECT_EQ(bytes.size(), 16 + header + 12 * (2 * 4 * 12 + 4 * 12 + 16 * 12 + 1));
+    float red;
+    std::memcpy(&red, bytes.data() + 16 + header + 12 * (3 * 4 * 12) + (16 * 2 + 5) * 12, sizeof(red));
+    EXPECT_EQ(red, 0.01f * float(16 * 2 + 5)); // probe 2's T_11 (row 1, column 1)
+    expectSameVolume(parseProbeVolume(bytes, "v"), volume);
+
+    std::vector<ProbeVolume> bricks = expectBricksMergeToTheWhole(folder, volume, {1u, 2u, 0u});
+    bricks[2].transfer.clear();
+    bricks[2].staticRadiance.clear();
+    expectInputError([&] { mergeProbeVolumes(bricks); }, "transfer present in brick 1, absent in brick 3");
+
+    ProbeVolume broken = volume;
+    broken.transfer[17].g = INFINITY;
+    expectInputError([&] { writeProbeVolume(folder.file("broken.shpv"), broken); },
+                     "the transfer of probe 1 is not finite");
+    broken = volume;
+    broken.staticRadiance.clear();
+    expectInputError([&] { writeProbeVolume(folder.file("broken.shpv"), broken); },
+                     "holds a transfer without its static radiance");
+    std::string truncated = bytes;
+    truncated.resize(bytes.size() - 13);
+    expectInputError([&] { parseProbeVolume(truncated, "v"); }, "truncated");
+    std::string edited = bytes;
+    edited.replace(edited.find("\"transfer\": true"), 16, "\"transfer\": 1   ");
+    expectInputError([&] { parseProbeVolume(edited, "v"); }, "field \"transfer\" must be true or false");
 }
 
 // An invalid probe's coefficients are written as zeros (a NaN there is the bake's business, not

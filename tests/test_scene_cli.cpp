@@ -34,6 +34,13 @@ using testing::TerminalRun;
 
 class SceneCommand : public ProgramTest {
   protected:
+    // Runs `args` and `extra` writing to `output`; it must succeed.
+    void runWithOutput(std::vector<std::string> args, const std::vector<std::string>& extra,
+                       const std::string& output) const {
+        args.insert(args.end(), extra.begin(), extra.end());
+        args.insert(args.end(), {"-o", output});
+        runOk(args);
+    }
     std::string cornellBox() const {
         const std::string path = file("cornell.glb");
         testing::writeCornellBoxGltf(path, {.closed = true, .innerBoxes = true});
@@ -111,11 +118,8 @@ TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
     const std::vector<std::string> common{
         "scene", scene,       "--grid", "3,3,3", "--face-size", "16", "--probes-per-batch",
         "4",     "--backend", "gpu",    "-q"};
-    auto bake = [&](std::vector<std::string> extra, const std::string& output) {
-        std::vector<std::string> args = common;
-        args.insert(args.end(), extra.begin(), extra.end());
-        args.insert(args.end(), {"-o", output});
-        runOk(args);
+    auto bake = [&](const std::vector<std::string>& extra, const std::string& output) {
+        runWithOutput(common, extra, output);
     };
     bake({"--bounces", "0"}, file("whole0.shpv"));
     bake({"--bounces", "1"}, file("whole1.shpv"));
@@ -156,11 +160,8 @@ TEST_F(SceneCommand, RayBricksMergeToTheWholeBake) {
     const std::string scene = cornellBox();
     const std::vector<std::string> common{"scene",     scene, "--grid",    "3,3,3", "--face-size", "8",
                                           "--bounces", "2",   "--backend", "cpu",   "-q"};
-    auto bake = [&](std::vector<std::string> extra, const std::string& output) {
-        std::vector<std::string> args = common;
-        args.insert(args.end(), extra.begin(), extra.end());
-        args.insert(args.end(), {"-o", output});
-        runOk(args);
+    auto bake = [&](const std::vector<std::string>& extra, const std::string& output) {
+        runWithOutput(common, extra, output);
     };
     bake({}, file("whole.shpv"));
     bake({}, file("again.shpv"));
@@ -177,6 +178,53 @@ TEST_F(SceneCommand, RayBricksMergeToTheWholeBake) {
     const ProbeVolume volume = readProbeVolume(file("whole.shpv"));
     EXPECT_EQ(volume.bounces, 2);
     EXPECT_CONTAINS(volume.settings, "\"backend\":\"cpu\"");
+}
+
+// `scene --transfer` and `relight` (scene/volume_bake.h; the physics in test_volume_transfer): an open
+// Cornell box, whose probes see the sky. Bricks with transfer merge to the whole bake byte for byte;
+// relit by the sky it was baked under, a volume is its own bytes; relighting replaces the light (a
+// turned volume relit by the first sky is the first volume again, byte for byte); what cannot be
+// relit is refused in one line, leaving no file.
+TEST_F(SceneCommand, RelightableVolumesRelightWithoutACapture) {
+    const std::string scene = file("open.glb");
+    testing::writeCornellBoxGltf(scene, {.innerBoxes = true});
+    const std::vector<std::string> common{"scene", scene,       "--grid", "2,2,2",      "--face-size",
+                                          "8",     "--bounces", "1",      "--transfer", "-q"};
+    auto bake = [&](const std::vector<std::string>& extra, const std::string& output) {
+        runWithOutput(common, extra, output);
+    };
+    bake({}, file("whole.shpv"));
+    bake({"--brick", "1/2"}, file("b1.shpv"));
+    bake({"--brick", "0/2"}, file("b0.shpv"));
+    runOk({"merge", file("b1.shpv"), file("b0.shpv"), "-o", file("merged.shpv")});
+    EXPECT_EQ(bytesOf(file("merged.shpv")), bytesOf(file("whole.shpv")));
+    const ProbeVolume whole = readProbeVolume(file("whole.shpv"));
+    EXPECT_EQ(whole.transfer.size(), size_t(8 * 81));
+    EXPECT_CONTAINS(whole.settings, "\"transfer\":true");
+
+    runOk({"relight", file("whole.shpv"), "-q", "-o", file("same.shpv")});
+    EXPECT_EQ(bytesOf(file("same.shpv")), bytesOf(file("whole.shpv")));
+    const RunResult report =
+        runOk({"relight", file("whole.shpv"), "--yaw", "90", "--pitch", "-20", "-o", file("turned.shpv")});
+    EXPECT_CONTAINS(report.out, "turned yaw 90, pitch -20");
+    const ProbeVolume turned = readProbeVolume(file("turned.shpv"));
+    EXPECT_NE(turned.radiance, whole.radiance);
+    EXPECT_CONTAINS(turned.settings, "\"sky_turn\":[90.0,-20.0]");
+    runOk({"relight", file("turned.shpv"), "-q", "-o", file("back.shpv")});
+    EXPECT_EQ(bytesOf(file("back.shpv")), bytesOf(file("whole.shpv")));
+
+    runOk({"scene", scene, "--grid", "1,1,1", "--face-size", "4", "--backend", "cpu", "-q", "-o",
+           file("plain.shpv")});
+    expectFailure(
+        {{"relight", file("plain.shpv"), "-o", "OUT"}, 2, {"holds no transfer", "--transfer"}, "out.shpv"});
+    expectFailure({{"scene", scene, "--grid", "1,1,1", "--transfer", "--backend", "gpu", "-o", "OUT"},
+                   2,
+                   {"--transfer", "cpu"},
+                   "out.shpv"});
+    expectFailure({{"scene", scene, "--grid", "1,1,1", "--transfer", "--cache-refinement", "2", "-o", "OUT"},
+                   2,
+                   {"--cache-refinement", "linear"},
+                   "out.shpv"});
 }
 
 // Probe relocation on the cpu backend, in the closed Cornell box with its blocks: of a 4x3x3 grid

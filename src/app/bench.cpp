@@ -80,7 +80,8 @@ const char* formatName(TexelFormat format) {
     return format == TexelFormat::Rgba32F ? "RGBA32F" : "RGBA16F";
 }
 
-// Best wall time of `repeat` runs of f, in milliseconds.
+} // namespace
+
 double bestMilliseconds(int repeat, const std::function<void()>& f) {
     double best = INFINITY;
     for (int r = 0; r < repeat; ++r) {
@@ -90,6 +91,8 @@ double bestMilliseconds(int repeat, const std::function<void()>& f) {
     }
     return best;
 }
+
+namespace {
 
 // Sum of the 64-bit words of bytes, in eight independent sums (one cache line per step, which the
 // compiler turns into vector additions) so that the loads, not the additions, set the pace.
@@ -114,10 +117,10 @@ uint64_t sumWords(std::span<const std::byte> bytes) {
     return total;
 }
 
-// Reads the texel bytes (whole 64-bit words) once on all cores, repeating the pass until at least
-// 256 MiB were read so that starting the threads does not count; returns the time of one pass.
-// Nothing that reads the data can beat this here. The threads take 1 MiB parts in turn, as the fast
-// CPU path takes its blocks, so that a core lent to another process slows both alike.
+} // namespace
+
+// The threads take 1 MiB parts in turn, as the fast CPU path takes its blocks, so that a core lent
+// to another process slows both alike.
 double memoryReadMilliseconds(std::span<const std::byte> bytes, int repeat) {
     constexpr size_t kPartBytes = size_t(1) << 20;
     const size_t partsPerPass = (bytes.size() + kPartBytes - 1) / kPartBytes;
@@ -142,6 +145,8 @@ double memoryReadMilliseconds(std::span<const std::byte> bytes, int repeat) {
     (void)keep;
     return ms / double(passes);
 }
+
+namespace {
 
 double errorToReference(const ShCoefficients& coefficients, const ShCoefficients& reference) {
     double worst = 0.0;

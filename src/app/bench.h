@@ -4,6 +4,9 @@
 // in-process parts (bench_job.h), which read and write image files.
 #pragma once
 #include <CLI/CLI.hpp>
+#include <cstddef>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -26,5 +29,12 @@ void addBenchOptions(CLI::App& command, BenchOptions& options);
 // Prints a row per path, face size, format and order, then the pipeline creation times; --json
 // also writes them to a file.
 void runBench(const BenchOptions& options);
+
+// Best wall time of `repeat` runs of f, in milliseconds.
+double bestMilliseconds(int repeat, const std::function<void()>& f);
+// Reads `bytes` (whole 64-bit words) once on all cores, repeating the pass until at least 256 MiB
+// were read so that starting the threads does not count; the best time of one pass of `repeat`.
+// Nothing that reads the data can beat this here: the CPU rows' bound.
+double memoryReadMilliseconds(std::span<const std::byte> bytes, int repeat);
 
 } // namespace shprobe

@@ -152,6 +152,7 @@ struct SceneOptions {
     double invalidBackFaces = 0.5; // a probe is invalid where more of its view meets back faces
     bool dilate = true;            // cpu: invalid probes filled from their valid neighbours
     double relocationLimit = 0.45; // cpu: the longest move out of geometry, in smallest cell sides
+    bool transfer = false;         // cpu: the volume's radiance transfer (scene/volume_bake.h)
     std::string device;
     bool validation = false;
     bool quiet = false;
@@ -172,6 +173,18 @@ struct TransferCommandOptions {
     int rays = 256;
     int bounces = 1;    // interreflected only
     std::string format; // glb | binary; empty: binary for a .shpt output, else glb
+    bool quiet = false;
+};
+
+// `shprobe relight VOLUME -o NEW`: a volume baked with --transfer lit by another sky (relight.cpp).
+struct RelightOptions {
+    std::string volume;
+    std::string output;
+    std::string sky;   // any input bake takes; empty: the built-in sky (unless probe)
+    std::string probe; // a radiance probe file instead of a sky
+    double yaw = 0.0;  // the light's turn, degrees (sh/rotation.h lightRotation)
+    double pitch = 0.0;
+    bool timings = false; // relight timed against reading the transfer's bytes (the bound)
     bool quiet = false;
 };
 
@@ -248,6 +261,8 @@ void addTransferOptions(CLI::App& command, TransferCommandOptions& options);
 void runTransfer(const TransferCommandOptions& options, bool bouncesGiven);
 void addMergeOptions(CLI::App& command, MergeOptions& options);
 void runMerge(const MergeOptions& options);
+void addRelightOptions(CLI::App& command, RelightOptions& options);
+void runRelight(const RelightOptions& options);
 // The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize
 // (0: its own), or the built-in sky (128^2 faces by default).
 Environment loadSceneSky(const std::string& path, int faceSize);
@@ -270,6 +285,9 @@ void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize
 void addRenderOptions(CLI::App& command, RenderOptions& options);
 // `shprobe render --scene SCENE --volume VOLUME`: the scene lit by its probe volume.
 void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height);
+// A probe file's radiance at `order`: cut, or padded with zeros (the bands it has not); refused
+// for irradiance and for a probe with a sun apart (render_transfer.cpp).
+ShCoefficients probeFileRadiance(const std::string& path, int order);
 // `shprobe render --scene OUT.glb --transfer`: the scene relit from its transfer (render_transfer.cpp).
 void runTransferRender(const RenderOptions& options, uint32_t width, uint32_t height);
 // The light of a relit scene: --probe's radiance coefficients (cut or padded with zeros to

@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
     shprobe::LightCommandOptions light;
     shprobe::SceneOptions scene;
     shprobe::MergeOptions merge;
+    shprobe::RelightOptions relight;
     shprobe::TransferCommandOptions transfer;
     shprobe::BenchOptions bench;
     shprobe::BenchJobOptions benchJob;
@@ -130,6 +131,11 @@ int main(int argc, char** argv) {
         {"merge", "Join the bricks of one `shprobe scene` bake into its whole volume",
          [&](CLI::App& c) { shprobe::addMergeOptions(c, merge); },
          [&](const CLI::App&) { shprobe::runMerge(merge); }},
+        {"relight",
+         "Light a probe volume baked with `shprobe scene --transfer` by another sky, or its sky turned, "
+         "without a capture",
+         [&](CLI::App& c) { shprobe::addRelightOptions(c, relight); },
+         [&](const CLI::App&) { shprobe::runRelight(relight); }},
         {"bench", shprobe::kBenchSummary, [&](CLI::App& c) { addBench(c, bench, benchJob); },
          [&](const CLI::App&) { runBench(bench, benchJob); }},
     };

@@ -16,6 +16,7 @@
 #include "render/render_input.h"
 #include "render/scene_view.h"
 #include "scene/transfer_mesh.h"
+#include "sh/rotation.h"
 #include "vk/context.h"
 
 #include <cmath>
@@ -24,20 +25,6 @@
 namespace shprobe {
 
 namespace {
-
-// The probe file's radiance at `order`: cut, or padded with zeros (the bands it has not).
-ShCoefficients probeLight(const std::string& path, int order) {
-    const RenderInput input = readProbeInput(path);
-    if (input.probe.quantity != Quantity::Radiance)
-        throw Error(ErrorKind::Input, path + ": holds irradiance; relighting transfer needs radiance");
-    if (input.sun)
-        throw Error(ErrorKind::Input,
-                    path + ": has a sun apart from its coefficients; transfer relights SH only");
-    ShCoefficients light = makeCoefficients(order, Quantity::Radiance);
-    for (size_t i = 0; i < light.rgb.size() && i < input.probe.rgb.size(); ++i)
-        light.rgb[i] = input.probe.rgb[i];
-    return light;
-}
 
 RenderedImage renderRelit(const Context& context, const RelitScene& relit, const glm::mat4& clipFromWorld,
                           VkExtent2D extent, float exposure) {
@@ -55,8 +42,21 @@ RenderedImage renderRelit(const Context& context, const RelitScene& relit, const
 
 } // namespace
 
+ShCoefficients probeFileRadiance(const std::string& path, int order) {
+    const RenderInput input = readProbeInput(path);
+    if (input.probe.quantity != Quantity::Radiance)
+        throw Error(ErrorKind::Input, path + ": holds irradiance; relighting transfer needs radiance");
+    if (input.sun)
+        throw Error(ErrorKind::Input,
+                    path + ": has a sun apart from its coefficients; transfer relights SH only");
+    ShCoefficients light = makeCoefficients(order, Quantity::Radiance);
+    for (size_t i = 0; i < light.rgb.size() && i < input.probe.rgb.size(); ++i)
+        light.rgb[i] = input.probe.rgb[i];
+    return light;
+}
+
 RelitLight loadRelitLight(const LitSceneOptions& options, int order) {
-    if (!options.probe.empty()) return {options.probe, probeLight(options.probe, order), {}};
+    if (!options.probe.empty()) return {options.probe, probeFileRadiance(options.probe, order), {}};
     Environment sky = loadSceneSky(options.sky, 0);
     return {options.sky.empty() ? std::string("the built-in sky") : options.sky, std::nullopt,
             std::move(sky.cubemap)};

@@ -18,15 +18,14 @@
 #include "scene/gltf_scene.h"
 #include "scene/probe_grid.h"
 #include "scene/ray_bake.h"
-#include "sh/irradiance.h"
+#include "scene/volume_bake.h"
 #include "sh/lights.h"
+#include "sh/projection.h"
 #include "vk/context.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <map>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <unistd.h>
@@ -88,6 +87,10 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                     "0: not moved. At most 0.5, so that a probe stays nearest its own grid point")
         ->check(numberFrom(0.0, 0.5))
         ->capture_default_str();
+    command.add_flag("--transfer", options.transfer,
+                     "cpu: store each probe's radiance transfer, so that `shprobe relight` makes the volume "
+                     "for another sky, or the sky turned, without a capture (emission and the scene's suns "
+                     "stay as baked); the volume's light is the sky's band-limited to --order");
     command.add_flag("!--no-dilation", options.dilate,
                      "cpu: leave invalid probes empty, not filled from their valid neighbours");
     addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
@@ -148,12 +151,6 @@ std::vector<std::string> sceneInputs(const std::string& scene, const std::string
 
 namespace {
 
-// A probe is inside something when more than the --invalid-back-faces fraction of its texels see
-// back faces.
-bool insideGeometry(uint32_t backFaceTexels, const SceneOptions& options) {
-    return shprobe::insideGeometry(backFaceTexels, options.faceSize, options.invalidBackFaces);
-}
-
 // A relocated probe keeps this many smallest cell sides from the front faces near it (ProbeRelocation
 // in scene/ray_bake.h), and passes the back face it leaves through by half as much: the sampler's
 // normal bias (scene/volume_sampling.h), so that the surface it left lies behind the points a
@@ -164,11 +161,16 @@ int cpuRaysPerTexel(const SceneOptions& options) {
     return options.raysPerTexel > 0 ? options.raysPerTexel : 4;
 }
 
-// The face size of the sky as the probes' rays see it: a texel a ray (a texel of the probes' faces
-// on the gpu, one of the cpu's s x s jittered rays of a texel), never finer than the sky's own.
-int skyFaceSizeForProbes(const SceneOptions& options, bool rays, int skyFaceSize) {
+// The face size of a texel a ray: a texel of the probes' faces on the gpu, one of the cpu's s x s
+// jittered rays of a texel.
+int rayFootprintFaceSize(const SceneOptions& options, bool rays) {
     const int raysPerSide = rays ? int(std::sqrt(double(cpuRaysPerTexel(options)))) : 1;
-    return std::min(skyFaceSize, options.faceSize * raysPerSide);
+    return options.faceSize * raysPerSide;
+}
+
+// The face size of the sky as the probes' rays see it: a texel a ray, never finer than the sky's own.
+int skyFaceSizeForProbes(const SceneOptions& options, bool rays, int skyFaceSize) {
+    return std::min(skyFaceSize, rayFootprintFaceSize(options, rays));
 }
 
 // The sky averaged over the probes' ray footprints where it is finer (docs/scene-probes.md, "Small
@@ -197,6 +199,7 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
         if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
         settings["dilation"] = options.dilate;
         if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
+        if (options.transfer) settings["transfer"] = true;
     }
     return settings.dump();
 }
@@ -240,38 +243,14 @@ std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range) 
     return positions;
 }
 
-// Probes [range.begin, range.end) into a volume: coefficients of valid probes, zeros for those
-// inside geometry. Probe is gpu's SceneProbe or cpu's RayBakedProbe.
-template <typename Probe>
-ProbeVolume volumeOf(const std::vector<Probe>& probes, const SceneOptions& options, const ProbeGrid& grid,
-                     ProbeRange range) {
-    ProbeVolume volume;
-    volume.grid = grid;
-    volume.order = options.order;
-    volume.begin = range.begin;
-    volume.end = range.end;
-    const size_t perProbe = size_t(options.order) * options.order;
-    volume.radiance.assign(probes.size() * perProbe, glm::vec3(0.0f));
-    volume.irradiance.assign(probes.size() * perProbe, glm::vec3(0.0f));
-    volume.valid.assign(probes.size(), 0);
-    for (size_t p = 0; p < probes.size(); ++p) {
-        if (insideGeometry(probes[p].backFaceTexels, options)) continue;
-        volume.valid[p] = 1;
-        for (size_t i = 0; i < perProbe; ++i) {
-            volume.radiance[p * perProbe + i] = glm::vec3(probes[p].radiance.rgb[i]);
-            volume.irradiance[p * perProbe + i] = glm::vec3(probes[p].irradiance.rgb[i]);
-        }
-    }
-    return volume;
-}
-
 // One bounce of probes [range.begin, range.end) on the GPU.
 ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, const SceneOptions& options,
                        const ProbeGrid& grid, ProbeRange range) {
     const std::vector<SceneProbe> probes =
         bakeSceneProbes(context, capture, probePositions(grid, range),
                         {.order = options.order, .probesPerBatch = options.probesPerBatch});
-    return volumeOf(probes, options, grid, range);
+    return volumeOfProbes(std::span<const SceneProbe>(probes), options.order, options.faceSize,
+                          options.invalidBackFaces, grid, range);
 }
 
 RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid) {
@@ -288,114 +267,23 @@ RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid
                            .invalidBackFaces = options.invalidBackFaces}};
 }
 
-// A probe still invalid is filled from its valid neighbours (Unity's dilation): the mean of the
-// probes of its 3 x 3 x 3 block that are valid, weighed by the inverse of their distance in cells,
-// made valid, and given a visibility map that hides nothing (its own saw only the inside of a
-// wall). A brick bakes the neighbours it lacks, so that it is exactly its part of the whole bake.
-struct Dilation {
-    std::vector<uint32_t> probes; // flat indices of the probes filled
-};
-
-Dilation dilateInvalidProbes(RayBaker& baker, const SceneOptions& options, const ProbeGrid& grid,
-                             ProbeRange range, std::vector<RayBakedProbe>& probes) {
-    auto invalid = [&](const RayBakedProbe& probe) { return insideGeometry(probe.backFaceTexels, options); };
-    auto neighbours = [&](uint32_t index, const auto& visit) {
-        const glm::ivec3 cell = probeCell(grid, index);
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const glm::ivec3 next = cell + glm::ivec3(dx, dy, dz);
-                    if ((dx | dy | dz) == 0 || glm::any(glm::lessThan(next, glm::ivec3(0))) ||
-                        glm::any(glm::greaterThanEqual(next, grid.counts)))
-                        continue;
-                    visit(probeIndex(grid, next), std::sqrt(double(dx * dx + dy * dy + dz * dz)));
-                }
-    };
-    std::map<uint32_t, size_t> outside; // neighbours beyond the range, by flat index
-    std::vector<glm::dvec3> outsidePositions;
-    for (uint32_t p = range.begin; p < range.end; ++p) {
-        if (!invalid(probes[p - range.begin])) continue;
-        neighbours(p, [&](uint32_t q, double) {
-            if ((q >= range.begin && q < range.end) || outside.count(q)) return;
-            outside[q] = outsidePositions.size();
-            outsidePositions.push_back(probePosition(grid, probeCell(grid, q)));
-        });
-    }
-    const std::vector<RayBakedProbe> extra = baker.bakeProbes(outsidePositions);
-    auto probeAt = [&](uint32_t q) -> const RayBakedProbe& {
-        return q >= range.begin && q < range.end ? probes[q - range.begin] : extra[outside.at(q)];
-    };
-    std::vector<RayBakedProbe> filled = probes;
-    Dilation dilation;
-    for (uint32_t p = range.begin; p < range.end; ++p) {
-        RayBakedProbe& probe = filled[p - range.begin];
-        if (!invalid(probe)) continue;
-        double weights = 0.0;
-        ShCoefficients radiance = makeCoefficients(options.order, Quantity::Radiance);
-        neighbours(p, [&](uint32_t q, double distance) {
-            const RayBakedProbe& neighbour = probeAt(q);
-            if (invalid(neighbour)) return;
-            for (size_t i = 0; i < radiance.rgb.size(); ++i)
-                radiance.rgb[i] += neighbour.radiance.rgb[i] / distance;
-            weights += 1.0 / distance;
-        });
-        if (weights == 0.0) continue;
-        for (glm::dvec3& coefficient : radiance.rgb)
-            coefficient /= weights;
-        probe.radiance = radiance;
-        probe.irradiance = convolveIrradiance(radiance);
-        dilation.probes.push_back(p);
-    }
-    probes = std::move(filled);
-    return dilation;
-}
-
-// What a ray bake reports besides its volume.
-struct RayBakeReport {
-    RayBakeCounts counts;
-    size_t relocated = 0; // probes moved out of geometry, valid where they were captured
-    size_t filled = 0;    // invalid probes filled from their neighbours
-};
-
-// Every bounce of probes [range.begin, range.end) by rays: the surfaces' cache is gathered where
-// these probes need it, so a brick is exactly its part of the whole bake.
+// Every bounce of probes [range.begin, range.end) by rays (scene/volume_bake.h), the progress on a
+// terminal; with --transfer the volume's transfer, and its light the sky's band-limited to the order.
 ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
-                       const ProbeGrid& grid, ProbeRange range, RayBakeReport& report) {
-    const SplitSky split = splitSceneSky(sky);
-    RayBakeOptions bakeOptions = rayBakeOptions(options, grid);
-    bakeOptions.skySuns = split.suns;
-    RayBaker baker(world, skySeenByProbes(split.residual, options, true), bakeOptions);
-    ProgressLine line("probes", range.end - range.begin, options.quiet);
-    std::vector<RayBakedProbe> probes = baker.bakeProbes(probePositions(grid, range), [&](size_t done) {
-        const RayBakeCounts sofar = baker.counts();
-        line.update(done, double(sofar.probeRays + sofar.cacheRays), "rays");
-    });
-    const Dilation dilation =
-        options.dilate ? dilateInvalidProbes(baker, options, grid, range, probes) : Dilation{};
-    const size_t relocated =
-        size_t(std::count_if(probes.begin(), probes.end(),
-                             [](const RayBakedProbe& probe) { return probe.offset != glm::vec3(0.0f); }));
-    report = {baker.counts(), relocated, dilation.probes.size()};
-    ProbeVolume volume = volumeOf(probes, options, grid, range);
-    if (options.relocationLimit > 0.0)
-        for (const RayBakedProbe& probe : probes)
-            volume.offsets.push_back(probe.offset);
-    volume.bounces = options.bounces;
-    volume.visibilitySize = bakeOptions.visibilitySize;
-    for (const RayBakedProbe& probe : probes)
-        volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
-    const size_t perProbe = size_t(options.order) * options.order;
-    const size_t texels = size_t(bakeOptions.visibilitySize) * bakeOptions.visibilitySize;
-    const float far = float(baker.visibilityRange());
-    for (uint32_t p : dilation.probes) {
-        const size_t k = p - range.begin;
-        volume.valid[k] = 1;
-        for (size_t i = 0; i < perProbe; ++i) {
-            volume.radiance[k * perProbe + i] = glm::vec3(probes[k].radiance.rgb[i]);
-            volume.irradiance[k * perProbe + i] = glm::vec3(probes[k].irradiance.rgb[i]);
-        }
-        std::fill_n(volume.visibility.begin() + ptrdiff_t(k * texels), texels, glm::vec2(far, far * far));
+                       const ProbeGrid& grid, ProbeRange range, VolumeBakeReport& report) {
+    const VolumeBakeOptions bakeOptions{rayBakeOptions(options, grid), options.dilate};
+    const uint64_t probes =
+        options.transfer ? transferProbeCount(options.order, range) : range.end - range.begin;
+    ProgressLine line("probes", probes, options.quiet);
+    auto progress = [&](uint64_t done, uint64_t rays) { line.update(done, double(rays), "rays"); };
+    if (!options.transfer) {
+        const SplitSky split = splitSceneSky(sky);
+        const ProbeSky probeSky{skySeenByProbes(split.residual, options, true), split.suns};
+        return bakeVolumeByRays(world, probeSky, bakeOptions, grid, range, report, progress);
     }
+    ProbeVolume volume = bakeVolumeTransfer(world, rayFootprintFaceSize(options, true), bakeOptions, grid,
+                                            range, report, progress);
+    relightVolume(volume, projectCubemap(sky.cubemap, options.order));
     return volume;
 }
 
@@ -412,6 +300,7 @@ struct SceneBackend {
 SceneBackend chooseSceneBackend(const SceneOptions& options) {
     const bool asksForVulkan = !options.device.empty() || options.validation || !options.previous.empty();
     if (options.backend == "cpu") return {"cpu", "", std::nullopt};
+    if (options.transfer) return {"cpu", "--transfer bakes by rays on the cpu", std::nullopt};
     const bool automatic = options.backend == "auto" && !asksForVulkan;
     if (std::string reason = automatic ? cpuReasonWithoutVulkan() : ""; !reason.empty())
         return {"cpu", reason, std::nullopt};
@@ -441,6 +330,12 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     if (!options.previous.empty() && options.backend == "cpu")
         throw Error(ErrorKind::Input, "scene: --previous continues a gpu bake; the cpu backend bakes every "
                                       "bounce in one run (a --brick too)");
+    if (options.transfer && (options.backend == "gpu" || !options.previous.empty()))
+        throw Error(ErrorKind::Input, "scene: --transfer bakes every bounce by rays on the cpu backend "
+                                      "(not --backend gpu, not --previous)");
+    if (options.transfer && options.cacheRefinement > 0)
+        throw Error(ErrorKind::Input, "scene: --cache-refinement halves cells where their light differs, so "
+                                      "its bake is not linear in the sky; --transfer needs it off");
     if (options.raysPerTexel > 1 && options.backend == "gpu")
         throw Error(ErrorKind::Input, "scene: --rays-per-texel is for the cpu backend; the gpu rasterizes "
                                       "one sample per texel");
@@ -500,7 +395,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason +
                                           "), where --brick bakes one bounce; --bounces is for whole bakes");
     const std::string settings = bakeSettings(options, backend.name, sky);
-    RayBakeReport rays;
+    VolumeBakeReport rays;
     ProbeVolume volume = backend.context
                              ? bakeOnGpu(*backend.context, world, sky, options, grid, range, settings)
                              : bakeByRays(world, sky, options, grid, range, rays);
@@ -516,7 +411,12 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     const std::string averaged = skySeen < sky.faceSize() ? ", averaged to " + std::to_string(skySeen) +
                                                                 "^2 faces for the probes' rays"
                                                           : "";
-    std::printf("sky      %s%s\n", sky.description.c_str(), averaged.c_str());
+    if (options.transfer)
+        std::printf("sky      %s, band-limited to order %d: the volume holds its transfer (`shprobe relight` "
+                    "lights it anew; emission and the scene's suns stay as baked)\n",
+                    sky.description.c_str(), options.order);
+    else
+        std::printf("sky      %s%s\n", sky.description.c_str(), averaged.c_str());
     std::printf("probes   %u of a %dx%dx%d grid (%s), order %d, faces %d^2, bounce %d\n", volume.probeCount(),
                 grid.counts.x, grid.counts.y, grid.counts.z,
                 options.brick ? ("brick " + options.brick->text).c_str() : "whole", options.order,

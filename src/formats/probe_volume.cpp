@@ -1,6 +1,6 @@
 // The probe-volume file of docs/probe-volume.md: a 16-byte preamble (magic, header length), a JSON
 // header padded to a multiple of 16 bytes, then the payload: radiance, irradiance (those held), the
-// visibility maps (where held), one validity byte per probe.
+// visibility maps, capture offsets and transfer (where held), one validity byte per probe.
 #include "formats/probe_volume.h"
 
 #include "common/counted.h"
@@ -24,6 +24,7 @@
 #include <optional>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <utility>
 
 namespace shprobe {
 
@@ -167,6 +168,21 @@ void checkVisibility(const ProbeVolume& volume, const std::string& what) {
     }
 }
 
+// The transfer: none, or static radiance and transfer of every probe (zeros, and so finite, where invalid).
+void checkTransfer(const ProbeVolume& volume, const std::string& what) {
+    if (volume.staticRadiance.empty() && volume.transfer.empty()) return;
+    if (volume.staticRadiance.empty()) fail(what, "holds a transfer without its static radiance");
+    checkCoefficients(volume, volume.staticRadiance, "static radiance", what);
+    const size_t perProbe = coefficientsPerProbe(volume) * coefficientsPerProbe(volume);
+    if (volume.transfer.size() != size_t(volume.probeCount()) * perProbe)
+        fail(what, "the transfer holds " + text(volume.transfer.size()) + " entries, not " +
+                       text(size_t(volume.probeCount()) * perProbe) + " for " +
+                       counted(volume.probeCount(), "probe") + " of order " + text(uint64_t(volume.order)));
+    for (size_t t = 0; t < volume.transfer.size(); ++t)
+        if (volume.valid[t / perProbe] && !isFinite(volume.transfer[t]))
+            fail(what, "the transfer of probe " + text(volume.begin + t / perProbe) + " is not finite");
+}
+
 // Everything writeProbeVolume and mergeProbeVolumes rely on; throws Error(Input) "WHAT: PROBLEM".
 void checkVolume(const ProbeVolume& volume, const std::string& what) {
     checkProbeGrid(volume.grid, what);
@@ -187,6 +203,7 @@ void checkVolume(const ProbeVolume& volume, const std::string& what) {
     checkOffsets(volume, what);
     checkCoefficients(volume, volume.radiance, "radiance", what);
     checkCoefficients(volume, volume.irradiance, "irradiance", what);
+    checkTransfer(volume, what);
 }
 
 // ---- Writing -----------------------------------------------------------------------------------
@@ -217,6 +234,7 @@ nlohmann::ordered_json headerJson(const ProbeVolume& volume) {
     header["probes"] = probes;
     if (volume.visibilitySize > 0) header["visibility"] = volume.visibilitySize;
     if (!volume.offsets.empty()) header["capture_offsets"] = true;
+    if (!volume.transfer.empty()) header["transfer"] = true;
     header["bounces"] = volume.bounces;
     header["source"] = volume.source;
     if (!volume.sourceHash.empty()) header["source_hash"] = volume.sourceHash;
@@ -264,10 +282,10 @@ class BufferedOutput {
     std::string buffer_;
 };
 
-void writeCoefficients(BufferedOutput& out, const ProbeVolume& volume,
-                       const std::vector<glm::vec3>& coefficients) {
+// `perProbe` values a probe, zeros for an invalid one.
+void writePerProbe(BufferedOutput& out, const ProbeVolume& volume, const std::vector<glm::vec3>& coefficients,
+                   size_t perProbe) {
     if (coefficients.empty()) return;
-    const size_t perProbe = coefficientsPerProbe(volume);
     const std::vector<glm::vec3> zeros(perProbe, glm::vec3(0.0f));
     for (uint32_t p = 0; p < volume.probeCount(); ++p)
         out.append(volume.valid[p] ? &coefficients[p * perProbe] : zeros.data(),
@@ -288,7 +306,8 @@ struct VolumeHeader {
     ProbeVolume volume; // coefficients and validity not allocated yet
     bool radiance = false;
     bool irradiance = false;
-    bool offsets = false; // capture_offsets
+    bool offsets = false;  // capture_offsets
+    bool transfer = false; // static radiance and transfer
 };
 
 const json& requireField(const json& object, const char* field, const std::string& name) {
@@ -413,6 +432,10 @@ VolumeHeader parseHeader(std::string_view headerText, const std::string& name) {
             fail(name, "field \"capture_offsets\" must be true or false");
         header.offsets = root["capture_offsets"].get<bool>();
     }
+    if (root.contains("transfer")) {
+        if (!root["transfer"].is_boolean()) fail(name, "field \"transfer\" must be true or false");
+        header.transfer = root["transfer"].get<bool>();
+    }
     volume.bounces = int(requireInteger(requireField(root, "bounces", name), "bounces", 0, INT_MAX, name));
     volume.source = requireString(root, "source", name);
     if (root.contains("source_hash")) volume.sourceHash = requireString(root, "source_hash", name);
@@ -447,8 +470,10 @@ uint64_t payloadBytes(const VolumeHeader& header) {
     const uint64_t visibility =
         uint64_t(header.volume.visibilitySize) * header.volume.visibilitySize * 2 * sizeof(float);
     const uint64_t offsets = header.offsets ? 3 * sizeof(float) : 0;
+    const uint64_t transfer =
+        header.transfer ? floats * (1 + uint64_t(coefficientCount(header.volume.order))) : 0;
     return uint64_t(header.volume.probeCount()) *
-           ((int(header.radiance) + int(header.irradiance)) * floats + visibility + offsets + 1);
+           ((int(header.radiance) + int(header.irradiance)) * floats + visibility + offsets + transfer + 1);
 }
 
 template <class T>
@@ -480,17 +505,27 @@ ProbeVolume parseVolume(const VolumeBytes& bytes, const std::string& name) {
     if (header.irradiance) readSection(bytes, offset, volume.irradiance, coefficients);
     readSection(bytes, offset, volume.visibility, visibilityTexels(volume));
     readSection(bytes, offset, volume.offsets, header.offsets ? volume.probeCount() : 0);
+    readSection(bytes, offset, volume.staticRadiance, header.transfer ? coefficients : 0);
+    readSection(bytes, offset, volume.transfer,
+                header.transfer ? coefficients * coefficientsPerProbe(volume) : 0);
     readSection(bytes, offset, volume.valid, volume.probeCount());
     checkValidity(volume, name);
     checkVisibility(volume, name);
     checkOffsets(volume, name);
     // Invalid probes are written as zeros: a non-finite value there is damage as anywhere else.
-    for (const std::vector<glm::vec3>* quantity : {&volume.radiance, &volume.irradiance})
-        for (size_t i = 0; i < quantity->size(); ++i)
-            if (!isFinite((*quantity)[i]))
-                fail(name, std::string("the ") + (quantity == &volume.radiance ? "radiance" : "irradiance") +
-                               " of probe " + text(volume.begin + i / coefficientsPerProbe(volume)) +
-                               " is not finite");
+    const size_t perProbe = coefficientsPerProbe(volume);
+    const std::pair<const std::vector<glm::vec3>*, const char*> sections[] = {
+        {&volume.radiance, "radiance"},
+        {&volume.irradiance, "irradiance"},
+        {&volume.staticRadiance, "static radiance"},
+        {&volume.transfer, "transfer"}};
+    for (const auto& [values, section] : sections) {
+        const size_t valuesPerProbe = values == &volume.transfer ? perProbe * perProbe : perProbe;
+        for (size_t i = 0; i < values->size(); ++i)
+            if (!isFinite((*values)[i]))
+                fail(name, std::string("the ") + section + " of probe " +
+                               text(volume.begin + i / valuesPerProbe) + " is not finite");
+    }
     return std::move(header.volume);
 }
 
@@ -562,6 +597,9 @@ std::string bakeDifference(const ProbeVolume& a, const ProbeVolume& b, const std
     if (a.offsets.empty() != b.offsets.empty())
         return "capture offsets " +
                both(a.offsets.empty() ? "absent" : "present", b.offsets.empty() ? "absent" : "present");
+    if (a.transfer.empty() != b.transfer.empty())
+        return "transfer " +
+               both(a.transfer.empty() ? "absent" : "present", b.transfer.empty() ? "absent" : "present");
     if (a.bounces != b.bounces)
         return "bounces " + both(std::to_string(a.bounces), std::to_string(b.bounces));
     // One scene under two paths (bricks baked on several machines) is one source: the hashes say.
@@ -648,10 +686,13 @@ void writeProbeVolume(const std::string& path, const ProbeVolume& volume) {
     const std::string start = preamble(header.size());
     out.append(start.data(), start.size());
     out.append(header.data(), header.size());
-    writeCoefficients(out, volume, volume.radiance);
-    writeCoefficients(out, volume, volume.irradiance);
+    const size_t perProbe = coefficientsPerProbe(volume);
+    writePerProbe(out, volume, volume.radiance, perProbe);
+    writePerProbe(out, volume, volume.irradiance, perProbe);
     out.append(volume.visibility.data(), volume.visibility.size() * sizeof(glm::vec2));
     out.append(volume.offsets.data(), volume.offsets.size() * sizeof(glm::vec3));
+    writePerProbe(out, volume, volume.staticRadiance, perProbe);
+    writePerProbe(out, volume, volume.transfer, perProbe * perProbe);
     out.append(volume.valid.data(), volume.valid.size());
     out.flush();
     file.commit();
@@ -712,6 +753,8 @@ ProbeVolume mergeProbeVolumes(std::span<const ProbeVolume> bricks, std::span<con
         whole.visibility.insert(whole.visibility.end(), bricks[i].visibility.begin(),
                                 bricks[i].visibility.end());
         append(whole.offsets, bricks[i].offsets);
+        append(whole.staticRadiance, bricks[i].staticRadiance);
+        append(whole.transfer, bricks[i].transfer);
         whole.valid.insert(whole.valid.end(), bricks[i].valid.begin(), bricks[i].valid.end());
     }
     return whole;

@@ -1,6 +1,6 @@
 // Probe volumes (docs/probe-volume.md): a regular grid of SH light probes in one file, a JSON
-// header followed by little-endian float32 coefficients, optional visibility maps and capture
-// offsets, and one validity byte per probe. A volume
+// header followed by little-endian float32 coefficients, optional visibility maps, capture
+// offsets and radiance transfer, and one validity byte per probe. A volume
 // holds the whole grid or one brick of it, a contiguous range of the probes' flat indices; merging
 // the bricks of a bake gives the file the whole bake writes, byte for byte.
 //
@@ -62,6 +62,13 @@ struct ProbeVolume {
     // was moved out of geometry (probe relocation). A sampler weighs a probe's visibility from there.
     // Empty where the bake recorded none, which reads as every offset zero.
     std::vector<glm::vec3> offsets;
+    // Radiance transfer (docs/probe-volume.md, "Relighting"): what a probe's radiance is under any
+    // distant sky of SH coefficients S_j (RGB, the volume's order), L_i = static_i + sum_j T_ij S_j,
+    // channel by channel. staticRadiance holds order^2 coefficients per probe (the light that does not
+    // come from the sky: emission, the scene's suns), transfer order^4 (T_ij at [i * order^2 + j]).
+    // Both empty where the bake recorded no transfer; zeros for an invalid probe.
+    std::vector<glm::vec3> staticRadiance;
+    std::vector<glm::vec3> transfer;
     int bounces = 0;    // indirect bounces in the bake; 0: direct light only
     std::string source; // what was baked, in words, e.g. World::description
     // What was baked, by content, whatever its path: gltfSceneHash (scene/gltf_scene.h),

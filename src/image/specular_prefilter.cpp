@@ -5,6 +5,7 @@
 #include "image/environment.h"
 #include "image/texel_mean.h"
 #include "sh/irradiance.h"
+#include "sh/projection.h"
 
 #include <algorithm>
 #include <bit>
@@ -205,14 +206,9 @@ std::vector<Cubemap> prefilterSpecular(const Cubemap& environment, int size) {
 }
 
 Cubemap radianceCubemap(const ShCoefficients& radiance, int faceSize) {
-    Cubemap cubemap = makeCubemap(faceSize);
-    forEachItem(kFaceCount * faceSize, threadCount(cubemap.texels.size(), 4096), [&](int row) {
-        const int face = row / faceSize, j = row % faceSize;
-        for (int i = 0; i < faceSize; ++i) {
-            const glm::dvec3 value = glm::max(evaluate(radiance, texelDirection(face, i, j, faceSize)), 0.0);
-            cubemap.at(face, i, j) = glm::vec4(glm::vec3(value), 1.0f);
-        }
-    });
+    Cubemap cubemap = evaluateCubemap(radiance, faceSize);
+    for (glm::vec4& texel : cubemap.texels)
+        texel = glm::max(texel, glm::vec4(0.0f));
     return cubemap;
 }
 

@@ -13,9 +13,7 @@
 
 #include <algorithm>
 #include <array>
-#include <glm/ext/matrix_transform.hpp>
 #include <glm/geometric.hpp>
-#include <glm/trigonometric.hpp>
 #include <string>
 #include <vector>
 
@@ -136,13 +134,6 @@ ShCoefficients relitLightCoefficients(const Context& context, const RelitLight& 
     ScopeExit releaseBaker([&] { destroyProbeBaker(context, baker); });
     double milliseconds = 0.0;
     return bakeRadiance(context, baker, light.sky, milliseconds);
-}
-
-glm::dmat3 lightRotation(float yawDegrees, float pitchDegrees) {
-    const glm::dvec3 y(0.0, 1.0, 0.0), x(1.0, 0.0, 0.0);
-    const glm::dmat4 yaw = glm::rotate(glm::dmat4(1.0), glm::radians(double(yawDegrees)), y);
-    const glm::dmat4 pitch = glm::rotate(glm::dmat4(1.0), glm::radians(double(pitchDegrees)), x);
-    return glm::dmat3(yaw * pitch);
 }
 
 int maxTransferAttributes(const Device& device) {

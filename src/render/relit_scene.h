@@ -33,8 +33,6 @@ struct RelitLight {
 };
 // The light's radiance coefficients at `order`.
 ShCoefficients relitLightCoefficients(const Context& context, const RelitLight& light, int order);
-// The light's turn R = Ry(yaw) Rx(pitch), degrees (a light from d comes from R d).
-glm::dmat3 lightRotation(float yawDegrees, float pitchDegrees);
 
 // The transfer attributes a device can give relight.vert (or relight_wide.vert): the largest of
 // their capacities that fits maxVertexInputAttributes beside the position.

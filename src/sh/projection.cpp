@@ -4,7 +4,9 @@
 #include "sh/projection.h"
 
 #include "common/error.h"
+#include "common/parallel.h"
 #include "sh/basis.h"
+#include "sh/irradiance.h"
 
 #include <array>
 #include <string>
@@ -85,6 +87,17 @@ ShCoefficients projectEquirect(const Image& equirect, int order, WorkCounter* pr
         countWork(progress, 1);
     }
     return sum;
+}
+
+Cubemap evaluateCubemap(const ShCoefficients& coefficients, int faceSize) {
+    Cubemap cubemap = makeCubemap(faceSize);
+    forEachItem(kFaceCount * faceSize, threadCount(cubemap.texels.size(), 4096), [&](int row) {
+        const int face = row / faceSize, j = row % faceSize;
+        for (int i = 0; i < faceSize; ++i)
+            cubemap.at(face, i, j) =
+                glm::vec4(glm::vec3(evaluate(coefficients, texelDirection(face, i, j, faceSize))), 1.0f);
+    });
+    return cubemap;
 }
 
 } // namespace shprobe

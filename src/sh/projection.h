@@ -12,4 +12,8 @@ namespace shprobe {
 ShCoefficients projectCubemap(const Cubemap& cubemap, int order, WorkCounter* progress = nullptr);
 ShCoefficients projectEquirect(const Image& equirect, int order, WorkCounter* progress = nullptr);
 
+// The function the coefficients describe, sum_i c_i y_i(w), at each texel's centre, negative values
+// kept (alpha 1): projectCubemap's inverse for a band-limited function, up to its quadrature.
+Cubemap evaluateCubemap(const ShCoefficients& coefficients, int faceSize);
+
 } // namespace shprobe

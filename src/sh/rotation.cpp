@@ -9,6 +9,7 @@
 #include "sh/basis.h"
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
 
 #include <algorithm>
@@ -284,6 +285,13 @@ ShCoefficients rotate(const ShRotation& rotation, const ShCoefficients& coeffici
         }
     }
     return rotated;
+}
+
+glm::dmat3 lightRotation(double yawDegrees, double pitchDegrees) {
+    const glm::dvec3 y(0.0, 1.0, 0.0), x(1.0, 0.0, 0.0);
+    const glm::dmat4 yaw = glm::rotate(glm::dmat4(1.0), glm::radians(yawDegrees), y);
+    const glm::dmat4 pitch = glm::rotate(glm::dmat4(1.0), glm::radians(pitchDegrees), x);
+    return glm::dmat3(yaw * pitch);
 }
 
 } // namespace shprobe

@@ -50,6 +50,10 @@ glm::dmat3 rotationFromQuaternion(double w, double x, double y, double z);
 // "Algorithms for Spherical Harmonic Lighting", eq. 6).
 glm::dmat3 rotationFromEulerZYZ(double alphaDegrees, double betaDegrees, double gammaDegrees);
 
+// A light's turn R = Ry(yaw) Rx(pitch), degrees (a light from d comes from R d): what relighting
+// commands call turning the light.
+glm::dmat3 lightRotation(double yawDegrees, double pitchDegrees);
+
 // The band matrices of R (validated) for order 1..kMaxOrder. R may be improper (det -1): each
 // step of the recurrence is linear in R's entries, so D^l is homogeneous of degree l and
 // D^l(-R) = (-1)^l D^l(R), the parity y_lm(-w) = (-1)^l y_lm(w) asks for; g(w) = f(R^T w) then
