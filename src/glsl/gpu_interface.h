@@ -59,6 +59,12 @@ struct RotateParams {
     uint matrixStride;
 };
 
+// relight_volume.comp: relights probeCount probes of a probe volume; bandScale[l] is A_l.
+struct RelightVolumeParams {
+    vec4 bandScale[SHPROBE_MAX_ORDER / 4];
+    uint probeCount;
+};
+
 SHPROBE_END
 
 #ifdef __cplusplus
@@ -67,6 +73,7 @@ static_assert(sizeof(shprobe::glsl::EquirectParams) == 8);
 static_assert(sizeof(shprobe::glsl::ReduceParams) == 4);
 static_assert(sizeof(shprobe::glsl::ConvolveParams) == 36);
 static_assert(sizeof(shprobe::glsl::RotateParams) == 8);
+static_assert(sizeof(shprobe::glsl::RelightVolumeParams) == 36);
 #endif
 
 #endif
