@@ -29,10 +29,22 @@ layout(push_constant, std430) uniform Push {
 
 layout(location = 0) out vec3 radiance;
 
+// The sum walks the attributes and their components in order, so that once the loops are unrolled
+// (their bounds are constants) every attribute is read at a constant index: an input array indexed
+// at run time (shTransferCoefficient's i) costs lavapipe a copy of all of them per vertex, 14x the
+// time of the whole draw at order 5.
 void main() {
+    const uint floats = SH_ORDER * SH_ORDER * CHANNELS;
     vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < SH_ORDER * SH_ORDER; ++i)
-        sum += shTransferCoefficient(transfer, i, CHANNELS) * light[i].rgb;
+    for (uint k = 0u; k < SHPROBE_TRANSFER_ATTRIBUTES; ++k)
+        for (uint c = 0u; c < 4u; ++c) {
+            uint f = 4u * k + c; // float f of the transfer (sh_transfer.glsl's packing)
+            if (f >= floats) continue;
+            if (CHANNELS == 1u)
+                sum += transfer[k][c] * light[f].rgb;
+            else
+                sum[f % 3u] += transfer[k][c] * light[f / 3u][f % 3u];
+        }
     radiance = sum;
     gl_Position = draw.clipFromWorld * vec4(position, 1.0);
 }
