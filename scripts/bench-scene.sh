@@ -6,7 +6,8 @@
 # and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels) and in ten
 # of it (1,214,960 triangles, cpu and reference: the cost per probe against the triangles); then one
 # bounce at 4^3 probes (the cpu backend's defaults against the reference's); then relighting a 32^3
-# volume baked with its transfer.
+# volume baked with its transfer, and transfer vectors per second of `shprobe transfer` on both
+# backends in the Cornell box and the engine.
 # Whole processes, timed by GNU time with their peak memory; memory per probe is the difference of
 # the 10,000- and 1,000-probe runs' peaks over the 9,000 probes between them.
 #   bash scripts/bench-scene.sh [BUILD_DIR] [OUT.json]
@@ -162,6 +163,23 @@ run "cpu, transfer: cornell box" 32768 "$build/shprobe" scene "$work/cornell.glt
     --face-size 2 --rays-per-texel 1 --bounces 0 --transfer -q -o "$work/transfer.shpv"
 "$build/shprobe" relight "$work/transfer.shpv" --timings -o "$work/relit.shpv" | grep '^time'
 
+# Transfer vectors per second: `shprobe transfer` (interreflected, 1 bounce, order 3, 64 rays per
+# vertex and pass) on both backends on the same scenes, whole processes as above; a vector is one
+# vertex's (every side's) transfer.
+transferRows=()
+for scene in "$work/cornell.gltf" "$engine"; do
+    name=$(basename "$scene" | sed 's/\..*//')
+    for backend in gpu cpu; do
+        /usr/bin/time -f "%e %M" -o "$work/time" "$build/shprobe" transfer "$scene" --model interreflected \
+            --bounces 1 --rays 64 --backend "$backend" -o "$work/transfer.glb" >"$work/transfer.txt"
+        read -r seconds kib <"$work/time"
+        vertices=$(awk '$1 == "vertices" {print $2}' "$work/transfer.txt")
+        transferRows+=("$backend: transfer $name $vertices $seconds $kib")
+        awk -v name="$backend: transfer $name" -v n="$vertices" -v s="$seconds" -v k="$kib" \
+            'BEGIN { printf "%-28s %6d vectors %7.2f s %9.0f transfer vectors/s  peak %7.1f MiB\n", name, n, s, n / s, k / 1024 }'
+    done
+done
+
 # Memory per probe: (peak at 10,000 - peak at 1,000) / 9,000, per program.
 perProbe() {
     local small big
@@ -172,6 +190,7 @@ perProbe() {
 printf 'memory per probe: gpu %.0f bytes, cpu %.0f bytes, reference %.0f bytes\n' "$(perProbe 'gpu: cornell')" \
     "$(perProbe 'cpu: cornell')" "$(perProbe 'reference: cornell')"
 if [ -n "$json" ]; then
+    printf '%s\n' "${transferRows[@]}" >"$work/transfer_rows"
     printf '%s\n' "${rows[@]}" | python3 -c '
 import json, sys
 rows = []
@@ -179,5 +198,11 @@ for line in sys.stdin:
     *name, probes, seconds, kib = line.split()
     rows.append({"name": " ".join(name), "probes": int(probes), "seconds": float(seconds),
                  "probes_per_second": int(probes) / float(seconds), "peak_kib": int(kib)})
-json.dump({"face_size": 32, "bounces": 0, "rows": rows}, open(sys.argv[1], "w"), indent=1)' "$json"
+transfer = []
+for line in open(sys.argv[2]):
+    *name, vectors, seconds, kib = line.split()
+    transfer.append({"name": " ".join(name), "vectors": int(vectors), "seconds": float(seconds),
+                     "transfer_vectors_per_second": int(vectors) / float(seconds), "peak_kib": int(kib)})
+json.dump({"face_size": 32, "bounces": 0, "rows": rows, "transfer_rows": transfer}, open(sys.argv[1], "w"),
+          indent=1)' "$json" "$work/transfer_rows"
 fi

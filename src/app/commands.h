@@ -171,8 +171,11 @@ struct TransferCommandOptions {
     std::string model = "shadowed"; // unshadowed | shadowed | interreflected
     int order = 3;
     int rays = 256;
-    int bounces = 1;    // interreflected only
-    std::string format; // glb | binary; empty: binary for a .shpt output, else glb
+    int bounces = 1;              // interreflected only
+    std::string format;           // glb | binary; empty: binary for a .shpt output, else glb
+    std::string backend = "auto"; // auto | gpu | cpu
+    std::string device;
+    bool validation = false;
     bool quiet = false;
 };
 

@@ -1,13 +1,17 @@
-// `shprobe transfer`: per-vertex radiance transfer of a glTF scene (scene/transfer.h), on all cores,
-// written into the scene as vertex attributes or into the binary file (scene/transfer_gltf.h).
+// `shprobe transfer`: per-vertex radiance transfer of a glTF scene (scene/transfer.h), its rays cast
+// on all cores or on a Vulkan device (gpu/transfer_rays.h), written into the scene as vertex
+// attributes or into the binary file (scene/transfer_gltf.h).
 #include "app/commands.h"
 #include "app/program.h"
 
+#include "app/bake_steps.h"
 #include "app/progress_line.h"
 #include "app/stopwatch.h"
 #include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
+#include "common/scope_exit.h"
+#include "gpu/transfer_rays.h"
 #include "scene/gltf_scene.h"
 #include "scene/transfer.h"
 #include "scene/transfer_gltf.h"
@@ -42,11 +46,46 @@ void checkTransferOptions(const TransferCommandOptions& options, bool bouncesGiv
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
 }
 
+// Where the rays are cast: "gpu" with its context, or "cpu"; for auto, and for a model without
+// rays, why.
+struct TransferBackend {
+    std::string name;
+    std::string reason;
+    std::optional<Context> context;
+};
+
+// auto means gpu where the options ask for Vulkan (--device, --validation), cpu where no GPU can
+// be (no device file) or the Vulkan device is a CPU (lavapipe: the cores cast the same rays
+// faster than llvmpipe runs the shader, docs/benchmark.md), else gpu. Unshadowed transfer casts no
+// rays: always cpu.
+TransferBackend chooseTransferBackend(const TransferCommandOptions& options) {
+    if (options.backend == "cpu") return {"cpu", "", std::nullopt};
+    if (options.model == "unshadowed") return {"cpu", "the unshadowed model casts no rays", std::nullopt};
+    const bool automatic = options.backend == "auto" && options.device.empty() && !options.validation;
+    if (std::string reason = automatic ? cpuReasonWithoutVulkan() : ""; !reason.empty())
+        return {"cpu", reason, std::nullopt};
+    Context context;
+    try {
+        context = createContext({.device = options.device, .validation = options.validation});
+    } catch (const Error& error) {
+        if (!automatic || error.kind() != ErrorKind::Device) throw;
+        return {"cpu", cpuReasonForDevice(nullptr), std::nullopt};
+    }
+    if (std::string reason = automatic ? cpuReasonForDevice(&context.info) : ""; !reason.empty()) {
+        destroyContext(context);
+        return {"cpu", reason, std::nullopt};
+    }
+    return {"gpu", options.backend == "auto" ? "a GPU" : "", std::move(context)};
+}
+
 void report(const TransferCommandOptions& options, const GltfSceneSource& source,
-            const VertexTransfer& transfer, double seconds) {
+            const TransferBackend& backend, const VertexTransfer& transfer, double seconds) {
     FILE* out = reportStream(options.output);
     const int channels = transferChannels(transfer);
+    const std::string reason = backend.reason.empty() ? "" : " (" + backend.reason + ")";
     std::fprintf(out, "scene    %s\n", source.world.description.c_str());
+    std::fprintf(out, "backend  %s: %s%s\n", backend.name.c_str(),
+                 backend.context ? backend.context->info.name.c_str() : "all cores", reason.c_str());
     std::fprintf(
         out, "model    %s, order %d%s, %s\n", options.model.c_str(), options.order,
         options.model == "interreflected" ? (", " + counted(size_t(options.bounces), "bounce")).c_str() : "",
@@ -89,6 +128,13 @@ void addTransferOptions(CLI::App& command, TransferCommandOptions& options) {
                     "glb: the scene with the attributes; binary: the transfer alone (default: binary for a "
                     ".shpt output, else glb)")
         ->check(CLI::IsMember({"glb", "binary"}));
+    command
+        .add_option("--backend", options.backend,
+                    "gpu: rays cast on the Vulkan device; cpu: on all cores; auto: cpu where no GPU is "
+                    "(lavapipe), else gpu")
+        ->check(CLI::IsMember({"auto", "gpu", "cpu"}))
+        ->capture_default_str();
+    addDeviceOptions(command, options.device, options.validation);
     command.add_flag("-q,--quiet", options.quiet, "No report");
 }
 
@@ -102,19 +148,30 @@ void runTransfer(const TransferCommandOptions& options, bool bouncesGiven) {
                                           .rays = options.rays,
                                           .bounces =
                                               model == TransferModel::Interreflected ? options.bounces : 0};
+    TransferBackend backend = chooseTransferBackend(options);
+    ScopeExit release([&] {
+        if (backend.context) destroyContext(*backend.context);
+    });
     std::optional<ProgressLine> line; // made at the first pass, which knows the total
+    const TransferProgress progress = [&](uint64_t done, uint64_t total) {
+        if (!line) line.emplace("vertex passes", total, options.quiet).startedAt(start);
+        line->update(done);
+    };
     const VertexTransfer transfer =
-        computeTransfer(source.world, transferOptions, [&](uint64_t done, uint64_t total) {
-            if (!line) line.emplace("vertex passes", total, options.quiet).startedAt(start);
-            line->update(done);
-        });
+        backend.context ? computeTransferOnGpu(*backend.context, source.world, transferOptions, progress)
+                        : computeTransfer(source.world, transferOptions, progress);
     if (line) line->disable();
+    if (backend.context && backend.context->validationMessages() > 0)
+        throw Error(
+            ErrorKind::Device,
+            "transfer: " + counted(backend.context->validationMessages(), "Vulkan validation message") +
+                " (above)");
     const TransferDescription description{model, transferOptions.bounces};
     writeOutputFile(options.output,
                     writesBinary(options) ? transferBinary(source, transfer, description)
                                           : transferGlb(source, transfer, description),
                     OutputContent::Binary);
-    if (!options.quiet) report(options, source, transfer, millisecondsSince(start) / 1000.0);
+    if (!options.quiet) report(options, source, backend, transfer, millisecondsSince(start) / 1000.0);
 }
 
 } // namespace shprobe

@@ -29,6 +29,8 @@ class RandomStream {
         state_ += 0x9e3779b97f4a7c15ull;
         return double(mix64(state_) >> 11) * 0x1p-53;
     }
+    // The state before the next draw: a device continues the stream from it (glsl/transfer_rays.glsl).
+    uint64_t state() const { return state_; }
 
   private:
     uint64_t state_;

@@ -43,43 +43,48 @@ void requireOptions(const TransferOptions& options) {
 }
 
 using Basis = std::array<double, coefficientCount(kMaxOrder)>;
+using Side = glsl::TransferSide;
 
-// A vertex's side: the front (along its normal) or, for a vertex of a double-sided material, the back.
-struct Side {
-    uint32_t vertex = 0;
-    bool back = false;
-};
+uint32_t sideVertex(const Side& side) {
+    return side.ids.z;
+}
+bool isBack(const Side& side) {
+    return (side.ids.w & SHPROBE_SIDE_BACK) != 0;
+}
 
 class TransferBaker {
   public:
     TransferBaker(const World& world, const TransferOptions& options)
         : options_(options), shading_(world, makeCubemap(1)), bvh_(buildBvh(world)),
           count_(size_t(coefficientCount(options.order))),
-          strata_(int(std::ceil(std::sqrt(double(options.rays))))) {
+          strata_(int(std::ceil(std::sqrt(double(options.rays))))), scene_{.world = shading_.world(),
+                                                                           .bvh = bvh_,
+                                                                           .strata = strata_} {
         layOutSides();
     }
 
-    VertexTransfer run(const TransferProgress& progress);
+    // The passes cast by `caster`, or on all cores where it is empty.
+    VertexTransfer run(const TransferProgress& progress, const TransferCaster& caster);
 
   private:
     void layOutSides();
+    Side makeSide(uint32_t vertex, bool back) const;
     glm::dvec3 albedo(uint32_t vertex) const;
-    glm::dvec3 normal(const Side& side) const;
     glm::dvec3 rayOrigin(uint32_t vertex) const;
     template <typename Ray> void forEachRay(const Side& side, Ray&& ray) const;
     void direct(const Side& side, std::span<glm::vec3> out, uint64_t& rays) const;
     void bounce(const Side& side, std::span<const glm::vec3> previous, std::span<glm::vec3> out,
                 uint64_t& rays) const;
     template <typename Pass> void forEachSide(const Pass& pass);
+    void castOnCores(int k, std::span<const glm::vec3> previous, std::span<glm::vec3> current);
 
     const TransferOptions& options_;
     SceneShading shading_;
     Bvh bvh_;
     size_t count_;
     int strata_;
-    std::vector<int64_t> corner_;    // per vertex: 3 t + c of the first triangle t using it, -1: none
-    std::vector<uint32_t> backSlot_; // per vertex: its back side's index, 0 for none
-    std::vector<Side> sides_;        // fronts of every vertex (index = vertex), then the backs
+    TransferScene scene_;
+    std::vector<int64_t> corner_; // per vertex: 3 t + c of the first triangle t using it, -1: none
     std::atomic<uint64_t> rays_{0};
     std::atomic<uint64_t> done_{0};
     uint64_t total_ = 0;
@@ -92,17 +97,37 @@ void TransferBaker::layOutSides() {
     corner_.assign(world.positions.size(), -1);
     for (size_t i = world.indices.size(); i-- > 0;)
         corner_[world.indices[i]] = int64_t(i);
-    backSlot_.assign(world.positions.size(), 0);
+    scene_.backSides.assign(world.positions.size(), 0);
     for (uint32_t v = 0; v < world.positions.size(); ++v)
-        sides_.push_back({v, false});
+        scene_.sides.push_back(makeSide(v, false));
     if (options_.model == TransferModel::Unshadowed) return;
     for (uint32_t v = 0; v < world.positions.size(); ++v) {
         if (corner_[v] < 0) continue;
         const uint32_t material = world.triangleMaterials[size_t(corner_[v]) / 3];
         if (!world.materials[material].doubleSided) continue;
-        backSlot_[v] = uint32_t(sides_.size());
-        sides_.push_back({v, true});
+        scene_.backSides[v] = uint32_t(scene_.sides.size());
+        scene_.sides.push_back(makeSide(v, true));
     }
+}
+
+// Where the side's rays start (as a Ray takes it, in float), about which normal, and its random
+// stream (named by the seed, the side and the vertex).
+Side TransferBaker::makeSide(uint32_t vertex, bool back) const {
+    Side side{};
+    side.ids.z = vertex;
+    side.ids.w = back ? SHPROBE_SIDE_BACK : 0;
+    if (corner_[vertex] < 0) {
+        side.ids.w |= SHPROBE_SIDE_UNUSED;
+        return side;
+    }
+    const glm::dvec3 n(shading_.world().normals[vertex]);
+    const glm::dvec3 normal = back ? -n : n;
+    side.origin = glm::vec4(glm::vec3(rayOrigin(vertex) + shading_.offset() * normal), 0.0f);
+    side.normal = glm::vec4(glm::vec3(normal), 0.0f);
+    const uint64_t state = RandomStream(options_.seed, back ? 1 : 0, vertex).state();
+    side.ids.x = uint32_t(state);
+    side.ids.y = uint32_t(state >> 32);
+    return side;
 }
 
 // The material's albedo at the vertex (factor times texture at its TEXCOORD_0).
@@ -129,16 +154,11 @@ glm::dvec3 TransferBaker::rayOrigin(uint32_t vertex) const {
     return p + towards * (std::min(4.0 * shading_.offset(), 0.5 * distance) / distance);
 }
 
-glm::dvec3 TransferBaker::normal(const Side& side) const {
-    const glm::dvec3 n(shading_.world().normals[side.vertex]);
-    return side.back ? -n : n;
-}
-
 // Calls ray(origin, direction) for the side's g x g stratified cosine-distributed rays.
 template <typename Ray> void TransferBaker::forEachRay(const Side& side, Ray&& ray) const {
-    const glm::dvec3 n = normal(side);
-    const glm::dvec3 origin = rayOrigin(side.vertex) + shading_.offset() * n;
-    RandomStream random(options_.seed, side.back ? 1 : 0, side.vertex);
+    const glm::dvec3 n(side.normal);
+    const glm::vec3 origin(side.origin);
+    RandomStream random(options_.seed, isBack(side) ? 1 : 0, sideVertex(side));
     const int g = strata_;
     for (int a = 0; a < g; ++a) {
         for (int b = 0; b < g; ++b) {
@@ -153,9 +173,9 @@ template <typename Ray> void TransferBaker::forEachRay(const Side& side, Ray&& r
 void TransferBaker::direct(const Side& side, std::span<glm::vec3> out, uint64_t& rays) const {
     std::array<double, coefficientCount(kMaxOrder)> sum{};
     Basis basis{};
-    forEachRay(side, [&](const glm::dvec3& origin, const glm::dvec3& direction) {
+    forEachRay(side, [&](const glm::vec3& origin, const glm::dvec3& direction) {
         ++rays;
-        if (anyHit(bvh_, {glm::vec3(origin), glm::vec3(direction)})) return;
+        if (anyHit(bvh_, {origin, glm::vec3(direction)})) return;
         evalBasis(options_.order, direction, basis);
         for (size_t i = 0; i < count_; ++i)
             sum[i] += basis[i];
@@ -171,9 +191,9 @@ void TransferBaker::bounce(const Side& side, std::span<const glm::vec3> previous
                            uint64_t& rays) const {
     const World& world = shading_.world();
     std::array<glm::dvec3, coefficientCount(kMaxOrder)> sum{};
-    forEachRay(side, [&](const glm::dvec3& origin, const glm::dvec3& direction) {
+    forEachRay(side, [&](const glm::vec3& origin, const glm::dvec3& direction) {
         ++rays;
-        const std::optional<RayHit> found = closestHit(bvh_, {glm::vec3(origin), glm::vec3(direction)});
+        const std::optional<RayHit> found = closestHit(bvh_, {origin, glm::vec3(direction)});
         if (!found) return;
         const SurfaceHit hit =
             shading_.describe(found->triangle, glm::dvec2(found->hit.u, found->hit.v), direction);
@@ -182,7 +202,7 @@ void TransferBaker::bounce(const Side& side, std::span<const glm::vec3> previous
         const double weights[3] = {1.0 - hit.barycentric.x - hit.barycentric.y, hit.barycentric.x,
                                    hit.barycentric.y};
         for (int c = 0; c < 3; ++c) {
-            const size_t slot = hit.frontSide ? corners[c] : backSlot_[corners[c]];
+            const size_t slot = hit.frontSide ? corners[c] : scene_.backSides[corners[c]];
             const glm::vec3* from = &previous[slot * count_];
             for (size_t i = 0; i < count_; ++i)
                 sum[i] += weights[c] * hit.albedo * glm::dvec3(from[i]);
@@ -195,14 +215,15 @@ void TransferBaker::bounce(const Side& side, std::span<const glm::vec3> previous
 
 // pass(side index) for every side on all cores, progress counted.
 template <typename Pass> void TransferBaker::forEachSide(const Pass& pass) {
-    const size_t items = (sides_.size() + kSidesPerItem - 1) / kSidesPerItem;
-    const size_t rays = sides_.size() * size_t(strata_) * size_t(strata_);
+    const std::vector<Side>& sides = scene_.sides;
+    const size_t items = (sides.size() + kSidesPerItem - 1) / kSidesPerItem;
+    const size_t rays = sides.size() * size_t(strata_) * size_t(strata_);
     forEachItem(int(items), threadCount(rays, kRaysPerThread), [&](int item) {
         const size_t first = size_t(item) * kSidesPerItem;
-        const size_t last = std::min(first + kSidesPerItem, sides_.size());
+        const size_t last = std::min(first + kSidesPerItem, sides.size());
         uint64_t cast = 0;
         for (size_t s = first; s < last; ++s)
-            if (corner_[sides_[s].vertex] >= 0) pass(s, cast);
+            if (corner_[sideVertex(sides[s])] >= 0) pass(s, cast);
         rays_ += cast;
         const uint64_t finished = done_ += last - first;
         if (!*progress_) return;
@@ -211,7 +232,17 @@ template <typename Pass> void TransferBaker::forEachSide(const Pass& pass) {
     });
 }
 
-VertexTransfer TransferBaker::run(const TransferProgress& progress) {
+void TransferBaker::castOnCores(int k, std::span<const glm::vec3> previous, std::span<glm::vec3> current) {
+    forEachSide([&](size_t s, uint64_t& rays) {
+        const std::span<glm::vec3> out = current.subspan(s * count_, count_);
+        if (k == 0)
+            direct(scene_.sides[s], out, rays);
+        else
+            bounce(scene_.sides[s], previous, out, rays);
+    });
+}
+
+VertexTransfer TransferBaker::run(const TransferProgress& progress, const TransferCaster& caster) {
     const World& world = shading_.world();
     const size_t vertices = world.positions.size();
     VertexTransfer transfer;
@@ -223,7 +254,7 @@ VertexTransfer TransferBaker::run(const TransferProgress& progress) {
         for (uint32_t v = 0; v < vertices; ++v) {
             if (corner_[v] < 0) continue;
             const glm::dvec3 rho = albedo(v) * std::numbers::inv_pi;
-            evalBasis(options_.order, normal({v, false}), basis);
+            evalBasis(options_.order, glm::dvec3(world.normals[v]), basis);
             for (size_t i = 0; i < count_; ++i)
                 transfer.coefficients[v * count_ + i] =
                     glm::vec3(rho * (irradianceBandFactor(shBand(int(i))) * basis[i]));
@@ -231,17 +262,17 @@ VertexTransfer TransferBaker::run(const TransferProgress& progress) {
         return transfer;
     }
     const int bounces = options_.model == TransferModel::Interreflected ? options_.bounces : 0;
-    total_ = uint64_t(sides_.size()) * uint64_t(bounces + 1);
-    std::vector<glm::vec3> previous(sides_.size() * count_), current(previous.size());
+    const size_t sides = scene_.sides.size();
+    total_ = uint64_t(sides) * uint64_t(bounces + 1);
+    std::vector<glm::vec3> previous(sides * count_), current(previous.size());
     std::vector<glm::dvec3> sum(vertices * count_, glm::dvec3(0.0));
     for (int k = 0; k <= bounces; ++k) {
-        forEachSide([&](size_t s, uint64_t& rays) {
-            const std::span<glm::vec3> out(&current[s * count_], count_);
-            if (k == 0)
-                direct(sides_[s], out, rays);
-            else
-                bounce(sides_[s], previous, out, rays);
-        });
+        if (caster) {
+            rays_ += caster(scene_, k, previous, current);
+            if (progress) progress(uint64_t(sides) * uint64_t(k + 1), total_);
+        } else {
+            castOnCores(k, previous, current);
+        }
         for (size_t i = 0; i < sum.size(); ++i)
             sum[i] += glm::dvec3(current[i]); // the fronts come first: index v * count + i
         std::swap(previous, current);
@@ -287,7 +318,13 @@ bool VertexTransfer::coloured() const {
 VertexTransfer computeTransfer(const World& world, const TransferOptions& options,
                                const TransferProgress& progress) {
     requireOptions(options);
-    return TransferBaker(world, options).run(progress);
+    return TransferBaker(world, options).run(progress, {});
+}
+
+VertexTransfer computeTransfer(const World& world, const TransferOptions& options,
+                               const TransferCaster& caster, const TransferProgress& progress) {
+    requireOptions(options);
+    return TransferBaker(world, options).run(progress, caster);
 }
 
 } // namespace shprobe

@@ -23,6 +23,8 @@
 // rays (the seed, the vertex and its side name them) are cast again for each bounce, so that a
 // vertex's transfer depends on nothing else: the same bits for any thread count.
 #pragma once
+#include "glsl/transfer_interface.h"
+#include "scene/bvh.h"
 #include "scene/scene.h"
 
 #include <glm/vec3.hpp>
@@ -30,6 +32,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -78,5 +81,27 @@ using TransferProgress = std::function<void(uint64_t done, uint64_t total)>;
 // or for a world SceneShading or buildBvh refuses.
 VertexTransfer computeTransfer(const World& world, const TransferOptions& options,
                                const TransferProgress& progress = {});
+
+// What the passes with rays read, laid out as computeTransfer casts them, for another ray caster
+// (gpu/transfer_rays.h): the world as SceneShading checked it, its hierarchy, and the vertex sides.
+struct TransferScene {
+    const World& world;
+    const Bvh& bvh;
+    int strata = 1; // g: each side casts g x g rays
+    // The fronts of every vertex (side v is vertex v's), then the backs of the double-sided ones.
+    std::vector<glsl::TransferSide> sides;
+    std::vector<uint32_t> backSides; // per vertex: its back side, 0 for none
+};
+
+// One pass over every side into `current` (side s's coefficient i at s * order^2 + i): U_0 when
+// `bounce` is 0, else U_bounce from `previous` (U_{bounce-1}, the same layout). Returns the rays cast.
+using TransferCaster =
+    std::function<uint64_t(const TransferScene& scene, int bounce, std::span<const glm::vec3> previous,
+                           std::span<glm::vec3> current)>;
+
+// computeTransfer with the passes cast by `caster` (progress: after each pass). The unshadowed
+// model casts nothing and never calls it.
+VertexTransfer computeTransfer(const World& world, const TransferOptions& options,
+                               const TransferCaster& caster, const TransferProgress& progress = {});
 
 } // namespace shprobe

@@ -1,0 +1,45 @@
+// What the two transfer modules (shaders/transfer_direct.comp.glsl, transfer_bounce.comp.glsl)
+// share: their specialization constants, bindings 0-4 and push constants, and the traversal, the
+// basis and the rays they cast. The includer adds its further bindings after including this.
+//   set 0, bindings 0-2: readonly buffers, the hierarchy (glsl/bvh_traversal.glsl)
+//   set 0, binding 3: readonly buffer, TransferSide sides[] (glsl/transfer_interface.h)
+//   set 0, binding 4: writeonly buffer, vec4 transfer[]: side s's coefficient i at s * SH_COEFFICIENTS + i
+//   push constants: TransferParams; specialization: 0 = workgroup width, 1 = SH order (1..8);
+//   dispatch ceil(sideCount / width) workgroups, one invocation per side.
+#ifndef SHPROBE_TRANSFER_PASS_GLSL
+#define SHPROBE_TRANSFER_PASS_GLSL
+#include "bvh_interface.h"
+#include "gpu_interface.h"
+#include "transfer_interface.h"
+
+layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
+layout(constant_id = SHPROBE_SPEC_ORDER) const uint SH_ORDER = 3;
+
+layout(set = 0, binding = 0, std430) readonly buffer Nodes { BvhNode bvhNodes[]; };
+layout(set = 0, binding = 1, std430) readonly buffer Triangles { BvhTriangle bvhTriangles[]; };
+layout(set = 0, binding = 2, std430) readonly buffer TriangleIds { uint bvhTriangleIds[]; };
+layout(set = 0, binding = 3, std430) readonly buffer Sides { TransferSide sides[]; };
+layout(set = 0, binding = 4, std430) writeonly buffer Transfer { vec4 transfer[]; };
+layout(push_constant, std430) uniform Push { TransferParams params; };
+
+#include "bvh_traversal.glsl"
+#include "sh_basis.glsl"
+#include "transfer_rays.glsl"
+
+// A ray's tMax: +infinity (a bit pattern: GLSL has no infinite literal).
+float transferNoLimit() {
+    return uintBitsToFloat(0x7f800000u);
+}
+
+// The invocation's side index, or false past the chunk.
+bool transferSideIndex(out uint s) {
+    s = params.firstSide + gl_GlobalInvocationID.x;
+    return gl_GlobalInvocationID.x < params.sideCount;
+}
+
+// Whether the side casts rays: a vertex no triangle uses casts none, and its transfer is 0.
+bool transferCasts(TransferSide side) {
+    return (side.ids.w & SHPROBE_SIDE_UNUSED) == 0u;
+}
+
+#endif
