@@ -54,9 +54,10 @@ bool isBack(const Side& side) {
 
 class TransferBaker {
   public:
-    TransferBaker(const World& world, const TransferOptions& options)
-        : options_(options), shading_(world, makeCubemap(1)), bvh_(buildBvh(world)),
-          count_(size_t(coefficientCount(options.order))),
+    // `sky`: the vertices' radiance under it (one RGB value per side and pass), not their transfer.
+    TransferBaker(const World& world, const TransferOptions& options, const SkyRadiance* sky = nullptr)
+        : options_(options), sky_(sky), shading_(world, makeCubemap(1)), bvh_(buildBvh(world)),
+          count_(sky ? 1 : size_t(coefficientCount(options.order))),
           strata_(int(std::ceil(std::sqrt(double(options.rays))))), scene_{.world = shading_.world(),
                                                                            .bvh = bvh_,
                                                                            .strata = strata_} {
@@ -79,6 +80,7 @@ class TransferBaker {
     void castOnCores(int k, std::span<const glm::vec3> previous, std::span<glm::vec3> current);
 
     const TransferOptions& options_;
+    const SkyRadiance* sky_;
     SceneShading shading_;
     Bvh bvh_;
     size_t count_;
@@ -169,19 +171,25 @@ template <typename Ray> void TransferBaker::forEachRay(const Side& side, Ray&& r
     }
 }
 
-// U_0: pi / g^2 times the sum of y(w) over the rays that meet nothing.
+// U_0: pi / g^2 times the sum of y(w) (or of the sky's radiance) over the rays that meet nothing.
 void TransferBaker::direct(const Side& side, std::span<glm::vec3> out, uint64_t& rays) const {
     std::array<double, coefficientCount(kMaxOrder)> sum{};
+    glm::dvec3 radiance(0.0);
     Basis basis{};
     forEachRay(side, [&](const glm::vec3& origin, const glm::dvec3& direction) {
         ++rays;
         if (anyHit(bvh_, {origin, glm::vec3(direction)})) return;
+        if (sky_) {
+            radiance += (*sky_)(direction);
+            return;
+        }
         evalBasis(options_.order, direction, basis);
         for (size_t i = 0; i < count_; ++i)
             sum[i] += basis[i];
     });
     const double scale = std::numbers::pi / (double(strata_) * strata_);
-    for (size_t i = 0; i < count_; ++i)
+    if (sky_) out[0] = glm::vec3(radiance * scale);
+    for (size_t i = 0; !sky_ && i < count_; ++i)
         out[i] = glm::vec3(float(sum[i] * scale));
 }
 
@@ -246,7 +254,7 @@ VertexTransfer TransferBaker::run(const TransferProgress& progress, const Transf
     const World& world = shading_.world();
     const size_t vertices = world.positions.size();
     VertexTransfer transfer;
-    transfer.order = options_.order;
+    transfer.order = sky_ ? 1 : options_.order; // under a sky: one value per vertex
     transfer.coefficients.assign(vertices * count_, glm::vec3(0.0f));
     progress_ = &progress;
     if (options_.model == TransferModel::Unshadowed) {
@@ -319,6 +327,15 @@ VertexTransfer computeTransfer(const World& world, const TransferOptions& option
                                const TransferProgress& progress) {
     requireOptions(options);
     return TransferBaker(world, options).run(progress, {});
+}
+
+std::vector<glm::vec3> computeVertexRadiance(const World& world, const TransferOptions& options,
+                                             const SkyRadiance& sky) {
+    requireOptions(options);
+    if (options.model == TransferModel::Unshadowed)
+        throw Error(ErrorKind::Input,
+                    "vertex radiance: the unshadowed model casts no rays; relight its transfer");
+    return TransferBaker(world, options, &sky).run({}, {}).coefficients;
 }
 
 VertexTransfer computeTransfer(const World& world, const TransferOptions& options,

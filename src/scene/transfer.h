@@ -82,6 +82,17 @@ using TransferProgress = std::function<void(uint64_t done, uint64_t total)>;
 VertexTransfer computeTransfer(const World& world, const TransferOptions& options,
                                const TransferProgress& progress = {});
 
+// A distant sky's radiance arriving from `direction` (unit, pointing away from the surface).
+using SkyRadiance = std::function<glm::dvec3(const glm::dvec3& direction)>;
+
+// The radiance each vertex's diffuse surface leaves under `sky`, estimated by computeTransfer's rays
+// with the sky's radiance in place of the basis y(w): for a sky band-limited to the order, equal to
+// sum_i T_i L_i up to rounding (relighting is baking, Sloan et al. 2002), which tests check. A vertex
+// no triangle uses gets 0. Throws as computeTransfer does, and Error(Input) for the unshadowed
+// model, which casts no rays.
+std::vector<glm::vec3> computeVertexRadiance(const World& world, const TransferOptions& options,
+                                             const SkyRadiance& sky);
+
 // What the passes with rays read, laid out as computeTransfer casts them, for another ray caster
 // (gpu/transfer_rays.h): the world as SceneShading checked it, its hierarchy, and the vertex sides.
 struct TransferScene {
