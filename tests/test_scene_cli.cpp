@@ -290,11 +290,13 @@ TEST_F(SceneCommand, ProbesInsideGeometryAreMovedOut) {
 // The two rooms of scene_fixtures.h (a lit room, a closed one, a 2 cm wall between them) with 5^3
 // probes, 25 of them inside the wall (x = 0; cells 0.9 x 0.4 x 0.4), faces 16^2, one bounce: what the
 // closed room's floor, back wall and ceiling receive as a share of the lit room's, with each measure
-// against leaks on and off (docs/scene-probes.md's table). Measured with visibility: 1.8% whatever
-// else is on (the closed room's own probes' share: none of its light comes through the sampler), but
-// 13.5% where the wall's probes are filled from their neighbours, the lit room's among them, and not
-// moved. Checks: relocation moves the 25 probes out of the wall; with every measure on the share is
-// under 2.5%, and under a quarter of dilation's without relocation.
+// against leaks on and off (docs/scene-probes.md's table). No light reaches the closed room: its own
+// probes give it 0.0035% (the cache's cells across the wall's foot), and with visibility 0.010% with
+// every measure on (one wall probe moved into the lit room), but 11.6% where the wall's probes are
+// filled from their neighbours, the lit room's among them, and not moved. Checks: relocation moves
+// the 25 probes out of the wall; with every measure on the share is under the 1% a renderer cannot
+// show (the closed room's probes seeing the sun through the room's edges gave 1.8%), and under a
+// quarter of dilation's without relocation.
 TEST_F(SceneCommand, LeakMeasuresInTheTwoRooms) {
     const std::string scene = file("rooms.glb");
     testing::writeGltf(scene, testing::twoRoomsScene(), testing::GltfContainer::Glb);
@@ -329,15 +331,16 @@ TEST_F(SceneCommand, LeakMeasuresInTheTwoRooms) {
         const size_t moved =
             size_t(std::count_if(volume.offsets.begin(), volume.offsets.end(),
                                  [](const glm::vec3& offset) { return offset != glm::vec3(0.0f); }));
-        std::printf("%-34s %zu invalid, %2zu moved: the closed room receives %.4f, %.4f with visibility\n",
-                    bake.name, size_t(std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0))),
-                    moved, blind, seeing);
+        std::printf(
+            "%-34s %zu invalid, %2zu moved: the closed room receives %.4f%%, %.4f%% with visibility\n",
+            bake.name, size_t(std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0))), moved,
+            100.0 * blind, 100.0 * seeing);
         if (!bake.options.empty() && bake.options[0] == "--no-dilation") {
             EXPECT_EQ(moved, 25u);
         }
         shares.push_back(seeing);
     }
-    EXPECT_LT(shares[4], 0.025);
+    EXPECT_LT(shares[4], 0.01);
     EXPECT_LT(shares[4], 0.25 * shares[3]);
 }
 

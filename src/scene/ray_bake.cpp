@@ -32,6 +32,11 @@ namespace {
 // A thread should cast at least this many rays, so that starting it stays a small part of its run.
 constexpr size_t kRaysPerThread = 4096;
 
+// How far in from its triangle's edges a point whose rays leave is moved (insideTriangle): surface
+// offsets, and the least share of the way to the centroid for a cache point.
+constexpr double kInwardOffsets = 4.0;
+constexpr double kLatticeInwardFraction = 0.01;
+
 void requireOptions(const RayBakeOptions& options) {
     auto refuse = [](const std::string& what) { throw Error(ErrorKind::Input, "scene: " + what); };
     if (options.order < 1 || options.order > kMaxOrder)
@@ -156,7 +161,9 @@ struct RayBaker::State {
     std::optional<SurfaceHit> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
     bool occluded(const glm::dvec3& origin, const glm::dvec3& direction) const;
     Arrival arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, uint64_t& rays);
-    glm::dvec2 insideTriangle(uint32_t triangle, const glm::dvec2& barycentric) const;
+    std::array<glm::dvec3, 3> corners(uint32_t triangle) const;
+    double edgeDistance(uint32_t triangle, const glm::dvec2& barycentric) const;
+    glm::dvec2 insideTriangle(uint32_t triangle, const glm::dvec2& barycentric, double leastFraction) const;
     SurfaceHit gatherPoint(uint32_t triangle, int side, const glm::dvec2& barycentric) const;
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
@@ -190,11 +197,19 @@ void RayBaker::State::layOutCache() {
     visibilityRange = std::max(glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin)), 1e-30);
 }
 
+// The surface a ray meets; a hit nearer its triangle's edges than kInwardOffsets surface offsets is
+// described moved in (insideTriangle). A ray that meets the edge where a wall meets the ceiling lies on
+// the ceiling's plane, and the shadow rays of a point there, started off the wall but on that plane,
+// slip out between the two: in the two rooms of docs/scene-probes.md, texel centres of probes as far
+// from the floor as from a wall met such edges, and the closed room's probes saw the sun.
 std::optional<SurfaceHit> RayBaker::State::intersect(const glm::dvec3& origin,
                                                      const glm::dvec3& direction) const {
     const std::optional<RayHit> hit = closestHit(bvh, {glm::vec3(origin), glm::vec3(direction)});
     if (!hit) return std::nullopt;
-    return shading.describe(hit->triangle, glm::dvec2(hit->hit.u, hit->hit.v), direction);
+    glm::dvec2 barycentric(hit->hit.u, hit->hit.v);
+    if (!(edgeDistance(hit->triangle, barycentric) >= kInwardOffsets * shading.offset()))
+        barycentric = insideTriangle(hit->triangle, barycentric, 0.0);
+    return shading.describe(hit->triangle, barycentric, direction);
 }
 
 bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direction) const {
@@ -219,27 +234,44 @@ Arrival RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const gl
     return {direct + hit->albedo * std::numbers::inv_pi * bounced, distance, false};
 }
 
-// A lattice point on an edge or a corner, where a wall meets the next, gathers from a point moved
-// towards the triangle's centroid: by 1% of the way, or 4 surface offsets where that is more (at most
-// half the way), so that its rays start inside the room and not on the plane of the next wall, where
-// a ray along that wall could slip out between the two.
-glm::dvec2 RayBaker::State::insideTriangle(uint32_t triangle, const glm::dvec2& barycentric) const {
+std::array<glm::dvec3, 3> RayBaker::State::corners(uint32_t triangle) const {
     const World& world = shading.world();
-    const glm::dvec3 p0(world.positions[world.indices[3 * size_t(triangle)]]);
-    const glm::dvec3 p1(world.positions[world.indices[3 * size_t(triangle) + 1]]);
-    const glm::dvec3 p2(world.positions[world.indices[3 * size_t(triangle) + 2]]);
+    const uint32_t* vertex = &world.indices[3 * size_t(triangle)];
+    return {glm::dvec3(world.positions[vertex[0]]), glm::dvec3(world.positions[vertex[1]]),
+            glm::dvec3(world.positions[vertex[2]])};
+}
+
+// The distance from the point at `barycentric` to its triangle's nearest edge: each barycentric
+// weight times the triangle's height over the opposite edge (0 or NaN for a triangle of no area,
+// which intersect then counts as near an edge).
+double RayBaker::State::edgeDistance(uint32_t triangle, const glm::dvec2& barycentric) const {
+    const auto [p0, p1, p2] = corners(triangle);
+    const double twiceArea = glm::length(glm::cross(p1 - p0, p2 - p0));
+    const glm::dvec3 weights(1.0 - barycentric.x - barycentric.y, barycentric.x, barycentric.y);
+    return twiceArea * std::min({weights[0] / glm::length(p2 - p1), weights[1] / glm::length(p2 - p0),
+                                 weights[2] / glm::length(p1 - p0)});
+}
+
+// A point on an edge or a corner, where a wall meets the next, moved towards the triangle's
+// centroid: by `leastFraction` of the way (1% for a lattice point, 0 for a hit), or kInwardOffsets
+// surface offsets where that is more (at most half the way), so that its rays start inside the room
+// and not on the plane of the next wall, where a ray along that wall could slip out between the two.
+glm::dvec2 RayBaker::State::insideTriangle(uint32_t triangle, const glm::dvec2& barycentric,
+                                           double leastFraction) const {
+    const auto [p0, p1, p2] = corners(triangle);
     const glm::dvec2 centroid(1.0 / 3.0);
     const glm::dvec3 point =
         (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
     const double distance = glm::length((p0 + p1 + p2) / 3.0 - point);
     if (distance == 0.0) return barycentric;
-    const double fraction = std::clamp(4.0 * shading.offset() / distance, 0.01, 0.5);
+    const double fraction = std::clamp(kInwardOffsets * shading.offset() / distance, leastFraction, 0.5);
     return barycentric + fraction * (centroid - barycentric);
 }
 
 // The point a cache point at `barycentric` gathers from (insideTriangle), on side 0 (front) or 1.
 SurfaceHit RayBaker::State::gatherPoint(uint32_t triangle, int side, const glm::dvec2& barycentric) const {
-    return shading.surfacePoint(triangle, insideTriangle(triangle, barycentric), side == 0);
+    return shading.surfacePoint(triangle, insideTriangle(triangle, barycentric, kLatticeInwardFraction),
+                                side == 0);
 }
 
 // A segment between two points just off the surfaces, counted as a cache ray.
