@@ -179,6 +179,9 @@ for scene in "$work/cornell.gltf" "$engine"; do
             'BEGIN { printf "%-28s %6d vectors %7.2f s %9.0f transfer vectors/s  peak %7.1f MiB\n", name, n, s, n / s, k / 1024 }'
     done
 done
+# The shadowed transfer's rays through shprobe's hierarchy against Embree's rtcOccluded1 on the same
+# rays, in one process (shprobe-reference --transfer-rate).
+"$build/shprobe-reference" "$engine" --transfer-rate 64
 
 # Memory per probe: (peak at 10,000 - peak at 1,000) / 9,000, per program.
 perProbe() {

@@ -1,6 +1,8 @@
 // Per-vertex transfer (scene/transfer.h) against closed forms, and `shprobe transfer`'s files
 // (scene/transfer_gltf.h): refusals, the attributes read back from the .glb, the binary file, and the
 // Khronos glTF validator's report.
+#include "common/error.h"
+#include "scene/bvh.h"
 #include "scene/gltf_scene.h"
 #include "scene/transfer.h"
 #include "scene/transfer_gltf.h"
@@ -368,6 +370,45 @@ TEST(Transfer, DeterministicAndColoured) {
         0);
     EXPECT_TRUE(a.coloured());
     EXPECT_EQ(transferChannels(a), 3);
+}
+
+// Another occlusion test on the same rays (what shprobe-reference --transfer-rate times Embree with):
+// answered by the scene's own hierarchy it is computeTransfer bit for bit; a test that blocks every
+// ray leaves nothing; one that blocks none gives the plane's vertices what the unshadowed model gives
+// a plane under nothing (the same closed form as above, to the rays' noise: 64 rays, 3e-2); and
+// only the shadowed model takes one.
+TEST(Transfer, AnotherOcclusionTestAnswersTheSameRays) {
+    FixtureMesh box, plane;
+    testing::addBox(box, glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.5f), false);
+    addFannedSquare(plane, 2.0f);
+    const World world = testing::loadFixtureWorld(sceneOf({plane, box}, {{glm::vec3(0.5f)}}));
+    const TransferOptions options{.model = TransferModel::Shadowed, .order = 3, .rays = 64};
+    const Bvh bvh = buildBvh(world);
+    const VertexTransfer own =
+        computeShadowedTransfer(world, options, [&](const glm::vec3& o, const glm::vec3& d) {
+            return anyHit(bvh, {o, d});
+        });
+    const VertexTransfer reference = computeTransfer(world, options);
+    ASSERT_EQ(own.coefficients.size(), reference.coefficients.size());
+    EXPECT_EQ(std::memcmp(own.coefficients.data(), reference.coefficients.data(),
+                          own.coefficients.size() * sizeof(glm::vec3)),
+              0);
+    const VertexTransfer dark =
+        computeShadowedTransfer(world, options, [](const glm::vec3&, const glm::vec3&) { return true; });
+    for (const glm::vec3& value : dark.coefficients)
+        ASSERT_EQ(value, glm::vec3(0.0f));
+    const VertexTransfer open =
+        computeShadowedTransfer(world, options, [](const glm::vec3&, const glm::vec3&) { return false; });
+    const VertexTransfer unshadowed =
+        computeTransfer(world, {.model = TransferModel::Unshadowed, .order = 3});
+    double worst = 0.0;
+    for (size_t i = 0; i < open.coefficients.size(); ++i)
+        worst = std::max(worst, double(std::abs(open.coefficients[i].g - unshadowed.coefficients[i].g)));
+    EXPECT_LT(worst, 3e-2);
+    EXPECT_GT(worst, 0.0); // noise: the rays are random, the closed form is not
+    EXPECT_THROW(computeShadowedTransfer(world, {.model = TransferModel::Interreflected, .order = 3},
+                                         [](const glm::vec3&, const glm::vec3&) { return false; }),
+                 Error);
 }
 
 // ---- The program ---------------------------------------------------------------------------------

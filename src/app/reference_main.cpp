@@ -15,6 +15,7 @@
 #include "scene/gltf_scene.h"
 #include "scene/probe_grid.h"
 #include "scene/reference_tracer.h"
+#include "scene/transfer.h"
 #include "sh/irradiance.h"
 
 #include <algorithm>
@@ -37,13 +38,15 @@ struct ReferenceOptions {
     int samples = 6144;     // 6 x 32^2: as many directions as a capture at faces 32^2 has texels
     int validityFaces = 16; // the texel rays that decide which probes are inside geometry
     std::string sky;
+    int transferRays = 0; // > 0: time transfer's rays instead of tracing a volume
     bool quiet = false;
 };
 
 void addOptions(CLI::App& app, ReferenceOptions& options) {
     app.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
     app.add_option("-o,--output", options.output, "Probe volume to write")->capture_default_str();
-    addParsedOption(app, "--grid", options.grid, parseGridCounts, "Probes per axis, NX,NY,NZ")->required();
+    addParsedOption(app, "--grid", options.grid, parseGridCounts,
+                    "Probes per axis, NX,NY,NZ (required for a volume)");
     addParsedOption(app, "--bounds", options.bounds, parseGridBounds,
                     "Grid box X0,Y0,Z0,X1,Y1,Z1 (default: as shprobe scene)");
     addRangeOption(app, "--order", options.order, "SH order", 1, 8);
@@ -54,7 +57,52 @@ void addOptions(CLI::App& app, ReferenceOptions& options) {
                    "than half of them on back faces)",
                    1, 256);
     app.add_option("--sky", options.sky, "Environment seen where no geometry is (default: the built-in sky)");
+    addRangeOption(
+        app, "--transfer-rate", options.transferRays,
+        "Instead of a volume: time `shprobe transfer --model shadowed` at --order with this many rays "
+        "a vertex, its rays cast through shprobe's hierarchy and then through Embree, and compare",
+        1, 1 << 20);
     app.add_flag("-q,--quiet", options.quiet, "No report");
+}
+
+// The shadowed transfer's rays through scene/bvh.h (computeTransfer as `shprobe transfer` runs it)
+// and through Embree's rtcOccluded1 (behind a std::function: a call more per ray), each on all
+// cores, with everything else the same: the rates of the two and how far their transfers differ.
+void measureTransferRate(const ReferenceOptions& options, const World& world) {
+    const TransferOptions transfer{
+        .model = TransferModel::Shadowed, .order = options.order, .rays = options.transferRays};
+    Clock::time_point start = Clock::now();
+    const VertexTransfer ours = computeTransfer(world, transfer);
+    const double oursSeconds = millisecondsSince(start) / 1000.0;
+    const ReferenceTracer tracer(world, makeCubemap(1));
+    start = Clock::now();
+    const VertexTransfer embree =
+        computeShadowedTransfer(world, transfer, [&](const glm::vec3& origin, const glm::vec3& direction) {
+            return tracer.occluded(glm::dvec3(origin), glm::dvec3(direction));
+        });
+    const double embreeSeconds = millisecondsSince(start) / 1000.0;
+    const size_t count = size_t(options.order) * size_t(options.order);
+    double largest = 0.0, worst = 0.0;
+    size_t differing = 0;
+    for (size_t v = 0; v < ours.vertexCount(); ++v) {
+        bool differs = false;
+        for (size_t i = 0; i < count; ++i) {
+            const glm::vec3 a = ours.coefficients[v * count + i], b = embree.coefficients[v * count + i];
+            largest = std::max(largest, double(std::abs(a.g)));
+            worst = std::max(worst, double(std::abs(a.g - b.g)));
+            differs = differs || a != b;
+        }
+        differing += differs;
+    }
+    const double rays = double(ours.raysCast);
+    std::printf("transfer  %s, shadowed, order %d, %d rays a vertex: %.3g rays, %zu vectors\n",
+                world.description.c_str(), options.order, ours.rays, rays, ours.vertexCount());
+    std::printf("hierarchy %.2f s, %.3g Mrays/s, %.0f vectors/s\n", oursSeconds, rays / oursSeconds / 1e6,
+                double(ours.vertexCount()) / oursSeconds);
+    std::printf("embree    %.2f s, %.3g Mrays/s, %.0f vectors/s (the same rays)\n", embreeSeconds,
+                rays / embreeSeconds / 1e6, double(embree.vertexCount()) / embreeSeconds);
+    std::printf("ratio     %.2f of Embree's rate; %zu vectors differ, by %.2g of the largest |T| at most\n",
+                embreeSeconds / oursSeconds, differing, worst / std::max(largest, 1e-30));
 }
 
 ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, const ProbeGrid& grid,
@@ -112,7 +160,9 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
     return volume;
 }
 
-void run(const ReferenceOptions& options) {
+void run(const ReferenceOptions& options, bool gridGiven) {
+    if (options.transferRays > 0) return measureTransferRate(options, loadGltfScene(options.scene));
+    if (!gridGiven) throw Error(ErrorKind::Input, "--grid is required (unless --transfer-rate)");
     checkOutputPath(options.output, OutputContent::Binary);
     checkOutputsAreNotInputs({&options.output, 1}, sceneInputs(options.scene, options.sky));
     const Clock::time_point start = Clock::now();
@@ -140,5 +190,6 @@ int main(int argc, char** argv) {
     shprobe::addVersionFlag(app, "shprobe-reference");
     shprobe::ReferenceOptions options;
     addOptions(app, options);
-    return shprobe::runProgram(app, "shprobe-reference", argc, argv, [&] { run(options); });
+    return shprobe::runProgram(app, "shprobe-reference", argc, argv,
+                               [&] { run(options, app.count("--grid") > 0); });
 }

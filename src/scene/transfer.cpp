@@ -55,9 +55,11 @@ bool isBack(const Side& side) {
 class TransferBaker {
   public:
     // `sky`: the vertices' radiance under it (one RGB value per side and pass), not their transfer.
-    TransferBaker(const World& world, const TransferOptions& options, const SkyRadiance* sky = nullptr)
-        : options_(options), sky_(sky), shading_(world, makeCubemap(1)), bvh_(buildBvh(world)),
-          count_(sky ? 1 : size_t(coefficientCount(options.order))),
+    // `occlusion`: what answers the shadowed pass's rays instead of the hierarchy.
+    TransferBaker(const World& world, const TransferOptions& options, const SkyRadiance* sky = nullptr,
+                  const OcclusionTest* occlusion = nullptr)
+        : options_(options), sky_(sky), occlusion_(occlusion), shading_(world, makeCubemap(1)),
+          bvh_(buildBvh(world)), count_(sky ? 1 : size_t(coefficientCount(options.order))),
           strata_(int(std::ceil(std::sqrt(double(options.rays))))), scene_{.world = shading_.world(),
                                                                            .bvh = bvh_,
                                                                            .strata = strata_} {
@@ -81,6 +83,7 @@ class TransferBaker {
 
     const TransferOptions& options_;
     const SkyRadiance* sky_;
+    const OcclusionTest* occlusion_;
     SceneShading shading_;
     Bvh bvh_;
     size_t count_;
@@ -178,7 +181,9 @@ void TransferBaker::direct(const Side& side, std::span<glm::vec3> out, uint64_t&
     Basis basis{};
     forEachRay(side, [&](const glm::vec3& origin, const glm::dvec3& direction) {
         ++rays;
-        if (anyHit(bvh_, {origin, glm::vec3(direction)})) return;
+        if (occlusion_ ? (*occlusion_)(origin, glm::vec3(direction))
+                       : anyHit(bvh_, {origin, glm::vec3(direction)}))
+            return;
         if (sky_) {
             radiance += (*sky_)(direction);
             return;
@@ -336,6 +341,15 @@ std::vector<glm::vec3> computeVertexRadiance(const World& world, const TransferO
         throw Error(ErrorKind::Input,
                     "vertex radiance: the unshadowed model casts no rays; relight its transfer");
     return TransferBaker(world, options, &sky).run({}, {}).coefficients;
+}
+
+VertexTransfer computeShadowedTransfer(const World& world, const TransferOptions& options,
+                                       const OcclusionTest& occluded) {
+    requireOptions(options);
+    if (options.model != TransferModel::Shadowed)
+        throw Error(ErrorKind::Input,
+                    "transfer: another occlusion test answers the shadowed model's rays only");
+    return TransferBaker(world, options, nullptr, &occluded).run({}, {});
 }
 
 VertexTransfer computeTransfer(const World& world, const TransferOptions& options,

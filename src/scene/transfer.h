@@ -93,6 +93,17 @@ using SkyRadiance = std::function<glm::dvec3(const glm::dvec3& direction)>;
 std::vector<glm::vec3> computeVertexRadiance(const World& world, const TransferOptions& options,
                                              const SkyRadiance& sky);
 
+// Whether anything lies along origin + t direction, t >= 0 (direction unit): all the shadowed model
+// asks of the scene.
+using OcclusionTest = std::function<bool(const glm::vec3& origin, const glm::vec3& direction)>;
+
+// The shadowed model's transfer by computeTransfer's rays on all cores, each answered by `occluded`
+// instead of the scene's hierarchy: so that another ray caster (Embree, in shprobe-reference's
+// --transfer-rate) is timed and checked on the same rays. Throws as computeTransfer does, and
+// Error(Input) for another model.
+VertexTransfer computeShadowedTransfer(const World& world, const TransferOptions& options,
+                                       const OcclusionTest& occluded);
+
 // What the passes with rays read, laid out as computeTransfer casts them, for another ray caster
 // (gpu/transfer_rays.h): the world as SceneShading checked it, its hierarchy, and the vertex sides.
 struct TransferScene {
