@@ -119,13 +119,13 @@ int main(int argc, char** argv) {
          [&](CLI::App& c) { shprobe::addLightOptions(c, light); },
          [&](const CLI::App&) { shprobe::runLight(light); }},
         {"scene",
-         "Bake a grid of light probes inside a glTF scene on the GPU into a probe volume "
-         "(docs/scene-probes.md)",
+         "Bake a grid of light probes inside a glTF scene, by rays on the CPU or on a Vulkan device, into a "
+         "probe volume (docs/scene-probes.md)",
          [&](CLI::App& c) { shprobe::addSceneOptions(c, scene); },
          [&](const CLI::App& c) { shprobe::runScene(scene, c.count("--bounces") > 0); }},
         {"transfer",
          "Bake per-vertex radiance transfer of a glTF scene (any sky relights it) into the scene's "
-         "vertex attributes, on the CPU (docs/transfer.md)",
+         "vertex attributes, by rays on the CPU or a Vulkan device (docs/transfer.md)",
          [&](CLI::App& c) { shprobe::addTransferOptions(c, transfer); },
          [&](const CLI::App& c) { shprobe::runTransfer(transfer, c.count("--bounces") > 0); }},
         {"merge", "Join the bricks of one `shprobe scene` bake into its whole volume",
