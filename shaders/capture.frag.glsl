@@ -10,9 +10,6 @@ layout(constant_id = SHPROBE_SPEC_ORDER) const uint SH_ORDER = 3u; // the previo
 #include "capture_volume.glsl"
 #include "probe_volume.glsl"
 
-layout(std430, set = 0, binding = SHPROBE_CAPTURE_SUNS) readonly buffer Suns {
-    CaptureSun suns[];
-};
 layout(std430, set = 0, binding = SHPROBE_CAPTURE_SHADOWS) readonly buffer Shadows {
     float shadowDepths[];
 };
@@ -60,12 +57,10 @@ void main() {
     }
     vec3 n = normalize(shadingNormal) * (front ? 1.0 : -1.0);
     vec3 faceNormal = normalize(geometricNormal) * (front ? 1.0 : -1.0);
-    vec3 albedo = material.albedo.rgb * textureColor(material.albedo.w, uv);
-    vec3 emission = material.emission.rgb * textureColor(material.emission.w, uv);
     vec3 irradiance = sunIrradiance(worldPosition, n, faceNormal);
     if (volume.counts.w != 0u) {
         ProbeVolumeGrid grid = ProbeVolumeGrid(volume.boundsMin.xyz, volume.boundsMax.xyz, volume.counts.xyz);
         irradiance += probeVolumeIrradiance(grid, worldPosition, n);
     }
-    radiance = vec4(emission + albedo * (1.0 / 3.14159265358979) * irradiance, 0.0);
+    radiance = vec4(surfaceLeaving(material, uv, irradiance), 0.0);
 }

@@ -108,9 +108,10 @@ TEST_F(SceneCommand, InfoSaysWhatAutoRuns) {
     }
 }
 
-// On the gpu backend, bricks bake one bounce each: bounce 0 in three bricks, merged, must be the whole
-// bounce-0 bake byte for byte (each probe's capture and bake do not depend on which probes share its batch);
-// so must bounce 1 in bricks reading the merged bounce 0 (--previous), against the whole --bounces 1 bake.
+// On the gpu backend a brick bakes every bounce of its probes, the surface cache gathered whole:
+// bounce 0 in three bricks, merged, must be the whole bounce-0 bake byte for byte (each probe's
+// capture and bake do not depend on which probes share its batch); so must bounce 1 in bricks after
+// the merged bounce 0 (--previous), against the whole --bounces 1 bake.
 // The grid is 3x3x3 inside the box, faces 16^2: small enough for lavapipe, and the bricks cut through batches
 // of 4 probes.
 TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
@@ -126,7 +127,7 @@ TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
     std::vector<std::string> merge0{"merge"}, merge1{"merge"};
     for (const char* brick : {"2/3", "0/3", "1/3"}) {
         const std::string name = file(std::string("b0_") + brick[0] + ".shpv");
-        bake({"--brick", brick}, name);
+        bake({"--brick", brick, "--bounces", "0"}, name);
         merge0.push_back(name);
     }
     std::vector<std::string> args = merge0;
@@ -371,10 +372,11 @@ double largestDifference(const ProbeVolume& a, const ProbeVolume& b) {
 // coordinate) and everything computed from them, so hits, shadows and sums differ in their last
 // bits: the bound, 1e-4 of the largest L00, is some 100 times that rounding summed over a probe's
 // texels, and far below any real change (a surface lost to a near plane changes L00 by 10-100%).
-// One texel of a probe, towards -X, passes exactly through the tall block's top front edge, where
-// its top and its front face (seen from behind) tie in depth: the gpu capture draws back faces a
-// little farther, or rounding lets the back win at some scales (on lavapipe 1e-6, 1e-2 and 1e3;
-// 0.46% of the largest L00 at 1e-6).
+// The gpu shades its hits in float, where the cpu uses double: a texel-centre ray that meets the
+// room's corner exactly (probes of a regular grid in an axis-aligned room do) takes the floor or the
+// wall as rounding decides, and with them different cached light (measured 1.0% and 1.2% of the
+// largest L00 at 1e-6 and 1e6; bound 2%). Its shadow rays leave from the hit moved back along the
+// ray too, or rounding let a corner's shadow ray leave the room at 1e-6 (a sunlit texel lost: 10%).
 TEST_F(SceneCommand, ScaledScenesBakeTheSameVolume) {
     for (const char* backend : {"cpu", "gpu"}) {
         const std::array<float, 3> scales{1e-6f, 1.0f, 1e6f};
@@ -399,7 +401,7 @@ TEST_F(SceneCommand, ScaledScenesBakeTheSameVolume) {
             const double difference = largestDifference(unit, scaled);
             std::printf("%s, scale %g: largest coefficient difference %.3g of the largest L00\n", backend,
                         double(scales[s]), difference);
-            EXPECT_LT(difference, 1e-4);
+            EXPECT_LT(difference, std::string(backend) == "cpu" ? 1e-4 : 0.02);
         }
     }
 }
@@ -675,17 +677,17 @@ TEST_F(SceneCommand, BrokenScenesAreRefused) {
 }
 
 // Bad options get one line each before any work: a grid that is not three counts, bricks without a
-// whole previous bounce's volume, --bounces with --brick.
+// whole previous bounce's volume, the cpu's options for the gpu.
 TEST_F(SceneCommand, BadOptionsAreRefused) {
     const std::string scene = cornellBox();
     expectFailure({{"scene", scene, "--grid", "3,3", "-o", "OUT"}, 2, {"--grid"}, "out.shpv"});
     expectFailure(
         {{"scene", scene, "--grid", "2,2,2", "--brick", "2/2", "-o", "OUT"}, 2, {"--brick"}, "out.shpv"});
-    expectFailure({{"scene", scene, "--grid", "2,2,2", "--brick", "0/2", "--bounces", "2", "--backend", "gpu",
-                    "-o", "OUT"},
-                   2,
-                   {"--bounces"},
-                   "out.shpv"});
+    expectFailure(
+        {{"scene", scene, "--grid", "2,2,2", "--cache-refinement", "2", "--backend", "gpu", "-o", "OUT"},
+         2,
+         {"--cache-refinement"},
+         "out.shpv"});
     expectFailure(
         {{"scene", scene, "--grid", "2,2,2", "--previous", scene, "-o", "OUT"}, 2, {scene}, "out.shpv"});
     expectFailure({{"scene", scene, "--grid", "2,2,2", "--previous", scene, "--backend", "cpu", "-o", "OUT"},

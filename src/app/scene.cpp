@@ -1,6 +1,6 @@
-// `shprobe scene`: a grid of light probes baked inside a glTF scene on the GPU (capture, bake and
-// bounces: gpu/scene_capture.h) into a probe volume (formats/probe_volume.h); `shprobe merge` joins the
-// bricks of one bake (docs/scene-probes.md).
+// `shprobe scene`: a grid of light probes baked inside a glTF scene by rays, on the GPU
+// (gpu/ray_capture.h) or the CPU (scene/ray_bake.h), into a probe volume (formats/probe_volume.h); `shprobe
+// merge` joins the bricks of one bake (docs/scene-probes.md).
 #include "app/commands.h"
 #include "app/parsed_option.h"
 #include "app/program.h"
@@ -13,6 +13,7 @@
 #include "common/output_file.h"
 #include "common/scope_exit.h"
 #include "formats/probe_volume.h"
+#include "gpu/ray_capture.h"
 #include "gpu/scene_capture.h"
 #include "image/environment.h"
 #include "scene/gltf_scene.h"
@@ -63,15 +64,15 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                     "Face size the sky is resampled to (0: its own; 128 for the built-in sky)")
         ->check(CLI::Range(0, 4096));
     addParsedOption(command, "--brick", options.brick, parseBrickOption,
-                    "Bake only brick I of N (0 <= I < N) of the grid, one bounce: with --previous the "
-                    "bounce after that volume's, else bounce 0; `shprobe merge` joins the bricks");
+                    "Bake only brick I of N (0 <= I < N) of the grid, every bounce of its probes; "
+                    "`shprobe merge` joins the bricks");
     command.add_option("--previous", options.previous,
-                       "The whole volume of the previous bounce: bake the one bounce after it");
+                       "gpu: the whole volume of the previous bounce: bake the bounce after it (the whole "
+                       "transport again, the volume checked to be this bake's)");
     command
         .add_option("--backend", options.backend,
-                    "gpu: captures rasterized on the Vulkan device, bounces through the probe grid; "
-                    "cpu: rays on all cores, bounces at the surfaces; auto: cpu where no GPU is "
-                    "(lavapipe), else gpu")
+                    "gpu: rays on the Vulkan device; cpu: rays on all cores; both gather bounces at "
+                    "the surfaces; auto: cpu where no GPU is (lavapipe), else gpu")
         ->check(CLI::IsMember({"auto", "gpu", "cpu"}))
         ->capture_default_str();
     command
@@ -97,15 +98,15 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                    "gpu: probes captured per command buffer", 1, 4096);
     addRangeOption(command, "--rays-per-texel", options.raysPerTexel,
                    "cpu: jittered rays per cube-map texel, rounded up to a square (0: 4; 1: the "
-                   "texel's centre, as the gpu backend sees it)",
+                   "texel's centre, as the gpu backend casts them)",
                    0, 1024);
     command
         .add_option("--cache-spacing", options.cacheSpacing,
-                    "cpu: the largest distance between the surface points that gather bounced light "
+                    "The largest distance between the surface points that gather bounced light "
                     "(0: the scene's diagonal / 64)")
         ->check(numberFrom(0.0, 1e30));
     addRangeOption(command, "--gather-rays", options.gatherRays,
-                   "cpu: rays each surface point gathers a bounce with", 1, 1 << 20);
+                   "Rays each surface point gathers a bounce with", 1, 1 << 20);
     addRangeOption(command, "--cache-refinement", options.cacheRefinement,
                    "cpu: the most times a cell of surface points is halved where a shadow's edge or a "
                    "surface crosses it (0: never)",
@@ -192,10 +193,10 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
                             {"face_size", options.faceSize},
                             {"invalid_back_faces", options.invalidBackFaces},
                             {"sky", sky.description}};
+    settings["cache_spacing"] = options.cacheSpacing;
+    settings["gather_rays"] = options.gatherRays;
     if (backend == "cpu") {
         settings["rays_per_texel"] = cpuRaysPerTexel(options);
-        settings["cache_spacing"] = options.cacheSpacing;
-        settings["gather_rays"] = options.gatherRays;
         if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
         settings["dilation"] = options.dilate;
         if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
@@ -204,9 +205,8 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
     return settings.dump();
 }
 
-// The previous bounce as the capture reads it: the whole grid, the same grid and order.
-// The previous bounce as the capture reads it: the whole volume of this very bake (the same scene,
-// grid, order and settings), with irradiance.
+// The previous bounce: the whole volume of this very bake (the same scene, grid, order and
+// settings), with irradiance.
 ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& grid, const World& world,
                                const std::string& settings) {
     ProbeVolume previous = readProbeVolume(options.previous);
@@ -230,12 +230,6 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
     return previous;
 }
 
-BounceSource bounceSourceOf(const ProbeVolume& volume, std::vector<glm::dvec3>& irradiance) {
-    irradiance.assign(volume.irradiance.begin(), volume.irradiance.end());
-    return {volume.grid.boundsMin, volume.grid.boundsMax, volume.grid.counts, volume.order, irradiance,
-            volume.valid};
-}
-
 std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range) {
     std::vector<glm::dvec3> positions;
     for (uint32_t p = range.begin; p < range.end; ++p)
@@ -243,15 +237,6 @@ std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range) 
     return positions;
 }
 
-// One bounce of probes [range.begin, range.end) on the GPU.
-ProbeVolume bakeBounce(const Context& context, const SceneCapture& capture, const SceneOptions& options,
-                       const ProbeGrid& grid, ProbeRange range) {
-    const std::vector<SceneProbe> probes =
-        bakeSceneProbes(context, capture, probePositions(grid, range),
-                        {.order = options.order, .probesPerBatch = options.probesPerBatch});
-    return volumeOfProbes(std::span<const SceneProbe>(probes), options.order, options.faceSize,
-                          options.invalidBackFaces, grid, range);
-}
 
 RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid) {
     const double cell = smallestCellEdge(grid);
@@ -324,9 +309,6 @@ SceneBackend chooseSceneBackend(const SceneOptions& options) {
 void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     if (bouncesGiven && !options.previous.empty())
         throw Error(ErrorKind::Input, "scene: --previous bakes one bounce; --bounces is for whole bakes");
-    if (bouncesGiven && options.brick && options.backend == "gpu")
-        throw Error(ErrorKind::Input,
-                    "scene: --brick bakes one bounce on the gpu backend; --bounces is for whole bakes");
     if (!options.previous.empty() && options.backend == "cpu")
         throw Error(ErrorKind::Input, "scene: --previous continues a gpu bake; the cpu backend bakes every "
                                       "bounce in one run (a --brick too)");
@@ -337,8 +319,11 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
         throw Error(ErrorKind::Input, "scene: --cache-refinement halves cells where their light differs, so "
                                       "its bake is not linear in the sky; --transfer needs it off");
     if (options.raysPerTexel > 1 && options.backend == "gpu")
-        throw Error(ErrorKind::Input, "scene: --rays-per-texel is for the cpu backend; the gpu rasterizes "
-                                      "one sample per texel");
+        throw Error(ErrorKind::Input, "scene: --rays-per-texel is for the cpu backend; the gpu casts one ray "
+                                      "through each texel's centre");
+    if (options.cacheRefinement > 0 && options.backend == "gpu")
+        throw Error(ErrorKind::Input, "scene: --cache-refinement is for the cpu backend; the gpu gathers "
+                                      "every lattice point, unrefined");
     if (options.bounds) makeProbeGrid(options.grid, *options.bounds);
     if (options.brick) brickRange(ProbeGrid{.counts = options.grid}, options.brick->brick);
     checkOutputPath(options.output, OutputContent::Binary);
@@ -347,29 +332,35 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
 }
 
-// Bounces on the GPU, each through the previous one's probe grid: a whole bake, one brick of one
-// bounce, or the bounce after --previous.
+// Every bounce of probes [range.begin, range.end) by rays on the GPU, as the cpu backend bakes
+// them (the sky's sun taken out as a sun, the sky averaged to the rays' footprints), the cache
+// gathered whole: a brick is exactly its part of the whole bake. After --previous, the bounce after
+// that volume's.
 ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environment& sky,
                       const SceneOptions& options, const ProbeGrid& grid, ProbeRange range,
                       const std::string& settings) {
-    const std::optional<ProbeVolume> previous =
-        options.previous.empty() ? std::nullopt
-                                 : std::optional(readPreviousBounce(options, grid, world, settings));
-    SceneCapture capture = createSceneCapture(context, world, skySeenByProbes(sky.cubemap, options, false),
-                                              {.faceSize = options.faceSize, .order = options.order});
+    const int bounces = options.previous.empty()
+                            ? options.bounces
+                            : readPreviousBounce(options, grid, world, settings).bounces + 1;
+    const SplitSky split = splitSceneSky(sky);
+    const World lit = withSuns(world, split.suns);
+    const Cubemap seen = skySeenByProbes(split.residual, options, false);
+    // The rays cast shadow rays: the raster capture's shadow maps are not read.
+    SceneCapture capture = createSceneCapture(
+        context, lit, seen, {.faceSize = options.faceSize, .order = options.order, .shadowMapSize = 1});
     ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });
-    std::vector<glm::dvec3> irradiance;
-    const int first = previous ? previous->bounces + 1 : 0;
-    const int last = !options.brick && !previous ? options.bounces : first;
-    if (previous) setBounceSource(context, capture, bounceSourceOf(*previous, irradiance));
-    ProbeVolume volume;
-    for (int bounce = first; bounce <= last; ++bounce) {
-        const bool whole = bounce < last; // an earlier bounce of a whole bake lights the next one
-        volume =
-            bakeBounce(context, capture, options, grid, whole ? ProbeRange{0, grid.probeCount()} : range);
-        volume.bounces = bounce;
-        if (bounce < last) setBounceSource(context, capture, bounceSourceOf(volume, irradiance));
-    }
+    RayCapture rays = createRayCapture(context, capture, SceneShading(lit, seen),
+                                       {.bounces = bounces,
+                                        .cacheSpacing = options.cacheSpacing,
+                                        .gatherRays = options.gatherRays,
+                                        .skySuns = split.suns});
+    ScopeExit releaseRays([&] { destroyRayCapture(context, rays); });
+    const std::vector<SceneProbe> probes =
+        bakeRayProbes(context, capture, rays, probePositions(grid, range),
+                      {.order = options.order, .probesPerBatch = options.probesPerBatch});
+    ProbeVolume volume = volumeOfProbes(std::span<const SceneProbe>(probes), options.order, options.faceSize,
+                                        options.invalidBackFaces, grid, range);
+    volume.bounces = bounces;
     if (context.validationMessages() > 0)
         throw Error(ErrorKind::Device, "scene: the Vulkan validation layer reported " +
                                            counted(context.validationMessages(), "message"));
@@ -391,9 +382,11 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     ScopeExit releaseContext([&] {
         if (backend.context) destroyContext(*backend.context);
     });
-    if (backend.name == "gpu" && bouncesGiven && options.brick)
-        throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason +
-                                          "), where --brick bakes one bounce; --bounces is for whole bakes");
+    if (backend.name == "gpu" && options.cacheRefinement > 0)
+        throw Error(ErrorKind::Input,
+                    "scene: auto chose the gpu backend (" + backend.reason +
+                        "), which gathers every lattice point unrefined; --cache-refinement "
+                        "is for the cpu backend");
     const std::string settings = bakeSettings(options, backend.name, sky);
     VolumeBakeReport rays;
     ProbeVolume volume = backend.context
@@ -425,7 +418,8 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                 inside + rays.relocated, options.invalidBackFaces);
     const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
     if (backend.context) {
-        std::printf("backend  gpu: %s%s; probes inside geometry stay in place (relocation: cpu only)\n",
+        std::printf("backend  gpu: %s%s: rays, 1 per texel, every cache point gathered; probes inside "
+                    "geometry stay in place (relocation: cpu only)\n",
                     backend.context->info.name.c_str(), reason.c_str());
     } else {
         std::printf("backend  cpu: rays, %d per texel, %s (%s)%s\n", cpuRaysPerTexel(options),

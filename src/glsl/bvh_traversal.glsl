@@ -177,8 +177,10 @@ uint bvhCount(BvhNode node) {
 // The walk of scene/bvh.cpp, nearer child first, with a stack of the farther children and where
 // the ray enters them. With anyHit, it stops at the first hit; otherwise it keeps the hit of
 // smallest t and, of hits at the same t, the one of the lowest World index, whatever the leaf
-// order. `nodeCount` 0: an empty hierarchy.
-bool bvhTrace(uint nodeCount, vec3 origin, vec3 direction, float tMin, float tMax, bool anyHit, out BvhHit best) {
+// order; a hit on a triangle's back counts as at t (1 + backShift) (0: as at t, exactly).
+// `nodeCount` 0: an empty hierarchy.
+bool bvhTrace(uint nodeCount, vec3 origin, vec3 direction, float tMin, float tMax, bool anyHit, float backShift,
+              out BvhHit best) {
     best.triangle = 0u;
     best.t = 0.0;
     best.u = 0.0;
@@ -211,11 +213,12 @@ bool bvhTrace(uint nodeCount, vec3 origin, vec3 direction, float tMin, float tMa
                     best = hit;
                     return true;
                 }
-                if (!found || hit.t < best.t || (hit.t == best.t && id < best.triangle)) {
+                float key = hit.frontFace ? hit.t : hit.t * (1.0 + backShift);
+                if (!found || key < prepared.tMax || (key == prepared.tMax && id < best.triangle)) {
                     hit.triangle = id;
                     best = hit;
                     found = true;
-                    prepared.tMax = hit.t;
+                    prepared.tMax = key;
                 }
             }
         } else {
@@ -253,13 +256,22 @@ bool bvhTrace(uint nodeCount, vec3 origin, vec3 direction, float tMin, float tMa
 
 // The hit of smallest t in [tMin, tMax], if any (scene/bvh.h's closestHit).
 bool bvhClosestHit(uint nodeCount, vec3 origin, vec3 direction, float tMin, float tMax, out BvhHit hit) {
-    return bvhTrace(nodeCount, origin, direction, tMin, tMax, false, hit);
+    return bvhTrace(nodeCount, origin, direction, tMin, tMax, false, 0.0, hit);
+}
+
+// bvhClosestHit with hits on a triangle's back counted as at t (1 + 2^-16): where a ray passes
+// through an edge joining a front and a back face, both at the same t but for rounding, it enters
+// the solid through the front one, whatever the rounding (the raster capture draws back faces as
+// much farther, capture.vert). A back face meant to be in front of a front face is hidden only
+// when the two lie within 2^-16 of the distance.
+bool bvhClosestHitFrontFirst(uint nodeCount, vec3 origin, vec3 direction, float tMin, float tMax, out BvhHit hit) {
+    return bvhTrace(nodeCount, origin, direction, tMin, tMax, false, 1.0 / 65536.0, hit);
 }
 
 // Whether any triangle, front or back, is hit with t in [tMin, tMax] (scene/bvh.h's anyHit).
 bool bvhAnyHit(uint nodeCount, vec3 origin, vec3 direction, float tMin, float tMax) {
     BvhHit hit;
-    return bvhTrace(nodeCount, origin, direction, tMin, tMax, true, hit);
+    return bvhTrace(nodeCount, origin, direction, tMin, tMax, true, 0.0, hit);
 }
 
 #endif

@@ -46,21 +46,6 @@ void checkStorageRange(const Device& device, VkDeviceSize bytes, const char* wha
                                       " MiB a storage buffer of the device may hold");
 }
 
-// A storage buffer holding `bytes` of data; at least 16 bytes, since a binding may not be empty.
-Buffer createStorage(const Context& context, const void* data, size_t bytes, const char* what) {
-    checkStorageRange(context, bytes, what);
-    const VkDeviceSize size = std::max<VkDeviceSize>(bytes, 16);
-    Buffer buffer = createBuffer(context, size, kStorageUpload, MemoryUse::Device, what);
-    OnFailure undo([&] { destroyBuffer(context, buffer); });
-    if (bytes > 0) uploadBuffer(context, buffer, data, bytes);
-    return buffer;
-}
-
-template <typename T>
-Buffer createStorage(const Context& context, const std::vector<T>& values, const char* what) {
-    return createStorage(context, values.data(), values.size() * sizeof(T), what);
-}
-
 void checkWorld(const World& world) {
     if (world.indices.size() % 3 != 0 || world.triangleMaterials.size() != world.triangleCount())
         throw Error(ErrorKind::Input, "scene capture: the triangle lists of " + world.description +
@@ -160,7 +145,7 @@ std::vector<glm::vec4> packBounce(const BounceSource& bounce) {
 // the sun's direction (square texels over the larger extent), depth along it, larger nearer the
 // sun, the box's ends 1% inside (0, 1) so that no surface ties with the cleared depth 0.
 glsl::CaptureSun sunView(const SceneSun& sun, const World& world, uint32_t mapSize) {
-    const glm::vec3 l = glm::normalize(sun.direction);
+    const glm::vec3 l = sun.direction / glm::length(sun.direction); // the bits SceneShading gives it
     const glm::vec3 helper = std::abs(l.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
     const glm::vec3 u = glm::normalize(glm::cross(helper, l));
     const glm::vec3 v = glm::cross(l, u);
@@ -423,10 +408,26 @@ void drawShadowMaps(const Context& context, const SceneCapture& capture) {
     });
 }
 
-// probesPerBatch, within the device's image layers (6 per probe) and 256 MiB of capture images.
-// Every batch is baked at this size, a partial last one too: the bake's workgroup split depends on
-// the probe count, and a probe's sums must not depend on how many probes share its batch (a brick
-// equals the same probes of the whole bake, bit for bit).
+} // namespace
+
+Buffer createStorage(const Context& context, const void* data, size_t bytes, const char* what) {
+    checkStorageRange(context, bytes, what);
+    const VkDeviceSize size = std::max<VkDeviceSize>(bytes, 16);
+    Buffer buffer = createBuffer(context, size, kStorageUpload, MemoryUse::Device, what);
+    OnFailure undo([&] { destroyBuffer(context, buffer); });
+    if (bytes > 0) uploadBuffer(context, buffer, data, bytes);
+    return buffer;
+}
+
+// The target's layers into GENERAL, what they held dropped, before the capture writes them: as
+// attachments (recordSceneCapture) or storage (the capture by rays).
+void layersToGeneral(VkCommandBuffer commands, const CaptureTarget& target) {
+    changeLayout(commands, target.cubemaps,
+                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                  VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                  VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT});
+}
+
 uint32_t capturesPerBatch(const Device& device, const SceneCapture& capture, uint32_t probesPerBatch) {
     const uint64_t probeBytes =
         6 * uint64_t(capture.options.faceSize) * uint64_t(capture.options.faceSize) * 16;
@@ -434,8 +435,6 @@ uint32_t capturesPerBatch(const Device& device, const SceneCapture& capture, uin
     const uint64_t byLayers = std::max<uint64_t>(1, device.info.limits.maxImageArrayLayers / 6);
     return uint32_t(std::max<uint64_t>(1, std::min({uint64_t(probesPerBatch), byMemory, byLayers})));
 }
-
-} // namespace
 
 namespace {
 constexpr VkSpecializationMapEntry kOrderEntry{SHPROBE_SPEC_ORDER, 0, sizeof(uint32_t)};
@@ -609,12 +608,10 @@ void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, c
         }
 }
 
-std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCapture& capture,
-                                        std::span<const glm::dvec3> positions,
-                                        const SceneBakeOptions& options) {
-    const uint32_t batch = capturesPerBatch(context, capture, options.probesPerBatch);
-    CaptureTarget target = createCaptureTarget(context, capture, batch);
-    ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
+std::vector<SceneProbe> bakeCapturedProbes(const Context& context, const SceneCapture& capture,
+                                           const CaptureTarget& target, std::span<const glm::dvec3> positions,
+                                           const SceneBakeOptions& options, const RecordCapture& record) {
+    const uint32_t batch = target.probeCount;
     ProbeBaker baker =
         createProbeBaker(context, {.order = options.order, .cubemaps = CubemapBinding::StorageRgba32F});
     ScopeExit releaseBaker([&] { destroyProbeBaker(context, baker); });
@@ -637,13 +634,8 @@ std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCaptu
         submitAndWait(context, [&](VkCommandBuffer commands) {
             // The layers no capture of a partial batch draws are baked too (see capturesPerBatch):
             // in GENERAL from the start, whatever they hold.
-            if (first == 0)
-                changeLayout(
-                    commands, target.cubemaps,
-                    {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                     VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                     0});
-            recordSceneCapture(commands, capture, target, members);
+            if (first == 0) layersToGeneral(commands, target);
+            record(commands, members);
             recordProbeBake(commands, baker, set);
             const uint32_t faceSize = uint32_t(capture.options.faceSize);
             dispatch(commands, count.program, count.set, faceSize, {uint32_t(members.size()), 1});
@@ -660,20 +652,33 @@ std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCaptu
     return probes;
 }
 
-Cubemap captureProbeCubemap(const Context& context, const SceneCapture& capture, const glm::dvec3& position) {
-    CaptureTarget target = createCaptureTarget(context, capture, 1);
+std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCapture& capture,
+                                        std::span<const glm::dvec3> positions,
+                                        const SceneBakeOptions& options) {
+    CaptureTarget target =
+        createCaptureTarget(context, capture, capturesPerBatch(context, capture, options.probesPerBatch));
     ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
-    Cubemap cubemap = makeCubemap(capture.options.faceSize);
+    return bakeCapturedProbes(context, capture, target, positions, options,
+                              [&](VkCommandBuffer commands, std::span<const glm::dvec3> members) {
+                                  recordSceneCapture(commands, capture, target, members);
+                              });
+}
+
+Cubemap readCapturedCubemap(const Context& context, const CaptureTarget& target, const glm::dvec3& position,
+                            const RecordCapture& record) {
+    Cubemap cubemap = makeCubemap(int(target.cubemaps.extent.width));
     const VkDeviceSize bytes = cubemap.texels.size() * sizeof(glm::vec4);
     Buffer readback = createBuffer(context, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback,
                                    "captured cube map");
     ScopeExit releaseReadback([&] { destroyBuffer(context, readback); });
     submitAndWait(context, [&](VkCommandBuffer commands) {
-        recordSceneCapture(commands, capture, target, {&position, 1}); // visible to transfers
+        layersToGeneral(commands, target);
+        record(commands, {&position, 1}); // visible to transfers
         // GENERAL would do, but the validation layer reports a copy from it (a performance warning).
         changeLayout(commands, target.cubemaps,
                      {VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                      VK_PIPELINE_STAGE_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                      VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
                       VK_ACCESS_TRANSFER_READ_BIT});
         VkBufferImageCopy region{};
         region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 6};
@@ -685,6 +690,15 @@ Cubemap captureProbeCubemap(const Context& context, const SceneCapture& capture,
     invalidateBuffer(context, readback);
     std::memcpy(cubemap.texels.data(), readback.mapped, bytes);
     return cubemap;
+}
+
+Cubemap captureProbeCubemap(const Context& context, const SceneCapture& capture, const glm::dvec3& position) {
+    CaptureTarget target = createCaptureTarget(context, capture, 1);
+    ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
+    return readCapturedCubemap(context, target, position,
+                               [&](VkCommandBuffer commands, std::span<const glm::dvec3> members) {
+                                   recordSceneCapture(commands, capture, target, members);
+                               });
 }
 
 } // namespace shprobe

@@ -20,6 +20,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 #include <span>
@@ -118,6 +119,22 @@ void recordSkyAndSurfaces(VkCommandBuffer commands, const SceneCapture& capture)
 glm::mat4 clipFromRows(const std::array<glm::vec3, 3>& rows, const glm::dvec3& origin, float nearPlane);
 VkSpecializationInfo orderSpecialization(const uint32_t& order);
 
+// A storage buffer (device memory) holding `bytes` of data, at least 16 bytes since a binding may
+// not be empty. Throws Error(Input) where the bytes exceed what one binding may span on the device:
+// the shaders bind each buffer whole.
+Buffer createStorage(const Context& context, const void* data, size_t bytes, const char* what);
+template <typename T>
+Buffer createStorage(const Context& context, const std::vector<T>& values, const char* what) {
+    return createStorage(context, values.data(), values.size() * sizeof(T), what);
+}
+
+// The probes a capture target holds for bakeSceneProbes: probesPerBatch, within the device's image
+// layers (6 per probe) and 256 MiB of capture images. Every batch is baked at this size, a partial
+// last one too: the bake's workgroup split depends on the probe count, and a probe's sums must not
+// depend on how many probes share its batch (a brick equals the same probes of the whole bake, bit
+// for bit).
+uint32_t capturesPerBatch(const Device& device, const SceneCapture& capture, uint32_t probesPerBatch);
+
 // What bakeSceneProbes gives for each probe.
 struct SceneProbe {
     ShCoefficients radiance;
@@ -136,8 +153,21 @@ std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCaptu
                                         std::span<const glm::dvec3> positions,
                                         const SceneBakeOptions& options);
 
+// Records the capture of up to target.probeCount positions into the target's layers (6 per probe),
+// leaving them written for compute-shader reads: recordSceneCapture, or the capture by rays
+// (gpu/ray_capture.h).
+using RecordCapture = std::function<void(VkCommandBuffer commands, std::span<const glm::dvec3> positions)>;
+
+// bakeSceneProbes with the captures `record` makes into `target`, target.probeCount per batch.
+std::vector<SceneProbe> bakeCapturedProbes(const Context& context, const SceneCapture& capture,
+                                           const CaptureTarget& target, std::span<const glm::dvec3> positions,
+                                           const SceneBakeOptions& options, const RecordCapture& record);
+
 // A cube map captured for one probe, read back (for tests and pictures): radiance in rgb, alpha
 // as recordSceneCapture leaves it.
 Cubemap captureProbeCubemap(const Context& context, const SceneCapture& capture, const glm::dvec3& position);
+// The same of a one-probe target, captured by `record`.
+Cubemap readCapturedCubemap(const Context& context, const CaptureTarget& target, const glm::dvec3& position,
+                            const RecordCapture& record);
 
 } // namespace shprobe

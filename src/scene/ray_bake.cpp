@@ -63,11 +63,6 @@ void requireOptions(const RayBakeOptions& options) {
         refuse("the back-face share of a probe inside geometry must be in 0..1");
 }
 
-double defaultSpacing(const World& world) {
-    const double diagonal = glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin));
-    return diagonal > 0.0 ? diagonal / kDefaultCacheCells : 1.0;
-}
-
 // What a ray brings back: the radiance, how far it went (kFar where it met nothing) and whether it
 // met the back of a one-sided material.
 constexpr double kFar = std::numeric_limits<double>::infinity();
@@ -129,7 +124,41 @@ class DistanceMoments {
     std::vector<uint32_t> counts_;
 };
 
-// The World lit by the sky's suns too.
+std::array<glm::dvec3, 3> triangleCorners(const World& world, uint32_t triangle) {
+    const uint32_t* vertex = &world.indices[3 * size_t(triangle)];
+    return {glm::dvec3(world.positions[vertex[0]]), glm::dvec3(world.positions[vertex[1]]),
+            glm::dvec3(world.positions[vertex[2]])};
+}
+
+// The distance from the point at `barycentric` to its triangle's nearest edge: each barycentric
+// weight times the triangle's height over the opposite edge (0 or NaN for a triangle of no area,
+// which intersect then counts as near an edge).
+double edgeDistance(const World& world, uint32_t triangle, const glm::dvec2& barycentric) {
+    const auto [p0, p1, p2] = triangleCorners(world, triangle);
+    const double twiceArea = glm::length(glm::cross(p1 - p0, p2 - p0));
+    const glm::dvec3 weights(1.0 - barycentric.x - barycentric.y, barycentric.x, barycentric.y);
+    return twiceArea * std::min({weights[0] / glm::length(p2 - p1), weights[1] / glm::length(p2 - p0),
+                                 weights[2] / glm::length(p1 - p0)});
+}
+
+// A point on an edge or a corner, where a wall meets the next, moved towards the triangle's
+// centroid: by `leastFraction` of the way (1% for a lattice point, 0 for a hit), or kInwardOffsets
+// surface offsets where that is more (at most half the way), so that its rays start inside the room
+// and not on the plane of the next wall, where a ray along that wall could slip out between the two.
+glm::dvec2 insideTriangle(const SceneShading& shading, uint32_t triangle, const glm::dvec2& barycentric,
+                          double leastFraction) {
+    const auto [p0, p1, p2] = triangleCorners(shading.world(), triangle);
+    const glm::dvec2 centroid(1.0 / 3.0);
+    const glm::dvec3 point =
+        (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
+    const double distance = glm::length((p0 + p1 + p2) / 3.0 - point);
+    if (distance == 0.0) return barycentric;
+    const double fraction = std::clamp(kInwardOffsets * shading.offset() / distance, leastFraction, 0.5);
+    return barycentric + fraction * (centroid - barycentric);
+}
+
+} // namespace
+
 World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
     if (skySuns.empty()) return world;
     World lit = world;
@@ -137,7 +166,28 @@ World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
     return lit;
 }
 
-} // namespace
+double defaultCacheSpacing(const World& world) {
+    const double diagonal = glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin));
+    return diagonal > 0.0 ? diagonal / kDefaultCacheCells : 1.0;
+}
+
+SurfaceHit cacheGatherPoint(const SceneShading& shading, uint32_t triangle, int side,
+                            const glm::dvec2& barycentric) {
+    return shading.surfacePoint(triangle, insideTriangle(shading, triangle, barycentric, kLatticeInwardFraction),
+                                side == 0);
+}
+
+void addSeenSuns(const Bvh& bvh, std::span<const SceneSun> suns, const glm::dvec3& position,
+                 ShCoefficients& radiance) {
+    std::array<double, coefficientCount(kMaxOrder)> basis{};
+    for (const SceneSun& sun : suns) {
+        const glm::dvec3 direction = glm::normalize(glm::dvec3(sun.direction));
+        if (anyHit(bvh, {glm::vec3(position), glm::vec3(direction)})) continue;
+        evalBasis(radiance.order, direction, basis);
+        for (size_t i = 0; i < radiance.rgb.size(); ++i)
+            radiance.rgb[i] += glm::dvec3(sun.irradiance) * basis[i];
+    }
+}
 
 bool insideGeometry(uint32_t backFaceTexels, int faceSize, double share) {
     return double(backFaceTexels) > share * 6.0 * double(faceSize) * faceSize;
@@ -161,10 +211,6 @@ struct RayBaker::State {
     std::optional<SurfaceHit> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
     bool occluded(const glm::dvec3& origin, const glm::dvec3& direction) const;
     Arrival arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, uint64_t& rays);
-    std::array<glm::dvec3, 3> corners(uint32_t triangle) const;
-    double edgeDistance(uint32_t triangle, const glm::dvec2& barycentric) const;
-    glm::dvec2 insideTriangle(uint32_t triangle, const glm::dvec2& barycentric, double leastFraction) const;
-    SurfaceHit gatherPoint(uint32_t triangle, int side, const glm::dvec2& barycentric) const;
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
@@ -179,14 +225,14 @@ struct RayBaker::State {
 
 void RayBaker::State::layOutCache() {
     const World& world = shading.world();
-    const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultSpacing(world);
+    const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world);
     CacheQueries queries{
         .gather =
             [this](int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                    uint64_t index) { return gather(bounce, triangle, side, barycentric, stream, index); },
         .origin =
             [this](uint32_t triangle, int side, const glm::dvec2& barycentric) {
-                return gatherPoint(triangle, side, barycentric).rayOrigin;
+                return cacheGatherPoint(shading, triangle, side, barycentric).rayOrigin;
             },
         .blocked = [this](const glm::dvec3& from, const glm::dvec3& to) { return segmentBlocked(from, to); },
     };
@@ -207,8 +253,8 @@ std::optional<SurfaceHit> RayBaker::State::intersect(const glm::dvec3& origin,
     const std::optional<RayHit> hit = closestHit(bvh, {glm::vec3(origin), glm::vec3(direction)});
     if (!hit) return std::nullopt;
     glm::dvec2 barycentric(hit->hit.u, hit->hit.v);
-    if (!(edgeDistance(hit->triangle, barycentric) >= kInwardOffsets * shading.offset()))
-        barycentric = insideTriangle(hit->triangle, barycentric, 0.0);
+    if (!(edgeDistance(shading.world(), hit->triangle, barycentric) >= kInwardOffsets * shading.offset()))
+        barycentric = insideTriangle(shading, hit->triangle, barycentric, 0.0);
     return shading.describe(hit->triangle, barycentric, direction);
 }
 
@@ -234,46 +280,6 @@ Arrival RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const gl
     return {direct + hit->albedo * std::numbers::inv_pi * bounced, distance, false};
 }
 
-std::array<glm::dvec3, 3> RayBaker::State::corners(uint32_t triangle) const {
-    const World& world = shading.world();
-    const uint32_t* vertex = &world.indices[3 * size_t(triangle)];
-    return {glm::dvec3(world.positions[vertex[0]]), glm::dvec3(world.positions[vertex[1]]),
-            glm::dvec3(world.positions[vertex[2]])};
-}
-
-// The distance from the point at `barycentric` to its triangle's nearest edge: each barycentric
-// weight times the triangle's height over the opposite edge (0 or NaN for a triangle of no area,
-// which intersect then counts as near an edge).
-double RayBaker::State::edgeDistance(uint32_t triangle, const glm::dvec2& barycentric) const {
-    const auto [p0, p1, p2] = corners(triangle);
-    const double twiceArea = glm::length(glm::cross(p1 - p0, p2 - p0));
-    const glm::dvec3 weights(1.0 - barycentric.x - barycentric.y, barycentric.x, barycentric.y);
-    return twiceArea * std::min({weights[0] / glm::length(p2 - p1), weights[1] / glm::length(p2 - p0),
-                                 weights[2] / glm::length(p1 - p0)});
-}
-
-// A point on an edge or a corner, where a wall meets the next, moved towards the triangle's
-// centroid: by `leastFraction` of the way (1% for a lattice point, 0 for a hit), or kInwardOffsets
-// surface offsets where that is more (at most half the way), so that its rays start inside the room
-// and not on the plane of the next wall, where a ray along that wall could slip out between the two.
-glm::dvec2 RayBaker::State::insideTriangle(uint32_t triangle, const glm::dvec2& barycentric,
-                                           double leastFraction) const {
-    const auto [p0, p1, p2] = corners(triangle);
-    const glm::dvec2 centroid(1.0 / 3.0);
-    const glm::dvec3 point =
-        (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
-    const double distance = glm::length((p0 + p1 + p2) / 3.0 - point);
-    if (distance == 0.0) return barycentric;
-    const double fraction = std::clamp(kInwardOffsets * shading.offset() / distance, leastFraction, 0.5);
-    return barycentric + fraction * (centroid - barycentric);
-}
-
-// The point a cache point at `barycentric` gathers from (insideTriangle), on side 0 (front) or 1.
-SurfaceHit RayBaker::State::gatherPoint(uint32_t triangle, int side, const glm::dvec2& barycentric) const {
-    return shading.surfacePoint(triangle, insideTriangle(triangle, barycentric, kLatticeInwardFraction),
-                                side == 0);
-}
-
 // A segment between two points just off the surfaces, counted as a cache ray.
 bool RayBaker::State::segmentBlocked(const glm::dvec3& from, const glm::dvec3& to) {
     const glm::dvec3 path = to - from;
@@ -287,7 +293,7 @@ bool RayBaker::State::segmentBlocked(const glm::dvec3& from, const glm::dvec3& t
 // stratum of the unit square (jittered), about the point's shading normal.
 CachePoint RayBaker::State::gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric,
                                    uint64_t stream, uint64_t index) {
-    const SurfaceHit at = gatherPoint(triangle, side, barycentric);
+    const SurfaceHit at = cacheGatherPoint(shading, triangle, side, barycentric);
     RandomStream random(options.seed, stream, index);
     const int g = gatherSide;
     uint64_t rays = 0;
@@ -413,19 +419,11 @@ RayBakedProbe RayBaker::State::bake(const glm::dvec3& position, uint64_t& rays) 
     return probe;
 }
 
-// The sky's suns a probe sees: each a delta of irradiance E in direction l, whose projection is
-// E y_lm(l) exactly.
+// Each sun counts a shadow ray.
 void RayBaker::State::addSeenSuns(const glm::dvec3& position, ShCoefficients& radiance,
                                   uint64_t& rays) const {
-    std::array<double, coefficientCount(kMaxOrder)> basis{};
-    for (const SceneSun& sun : options.skySuns) {
-        const glm::dvec3 direction = glm::normalize(glm::dvec3(sun.direction));
-        ++rays;
-        if (occluded(position, direction)) continue;
-        evalBasis(options.order, direction, basis);
-        for (size_t i = 0; i < radiance.rgb.size(); ++i)
-            radiance.rgb[i] += glm::dvec3(sun.irradiance) * basis[i];
-    }
+    rays += options.skySuns.size();
+    shprobe::addSeenSuns(bvh, options.skySuns, position, radiance);
 }
 
 RayBaker::RayBaker(const World& world, const Cubemap& sky, const RayBakeOptions& options) {

@@ -25,8 +25,10 @@
 // grow denser (interpolation) and the gather rays more (noise); docs/scene-probes.md measures both against
 // the path tracer.
 #pragma once
+#include "scene/bvh.h"
 #include "scene/scene.h"
 #include "scene/surface_cache.h"
+#include "scene/surface_shading.h"
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 
@@ -81,6 +83,24 @@ struct RayBakeOptions {
 
 // Cache points per world diagonal when RayBakeOptions::cacheSpacing is 0.
 constexpr double kDefaultCacheCells = 64.0;
+
+// The World lit by the sky's suns too (RayBakeOptions::skySuns).
+World withSuns(const World& world, const std::vector<SceneSun>& skySuns);
+
+// The cache spacing of RayBakeOptions::cacheSpacing 0: the world's diagonal / kDefaultCacheCells.
+double defaultCacheSpacing(const World& world);
+
+// Where the cache point of `triangle` at `barycentric` on side 0 (front) or 1 gathers from: there,
+// or, on an edge or a corner where a wall meets the next, moved towards the triangle's centroid (1%
+// of the way, or 4 surface offsets where that is more), so that its rays start inside the room and
+// not on the plane of the next wall, where a ray along that wall could slip out between the two.
+SurfaceHit cacheGatherPoint(const SceneShading& shading, uint32_t triangle, int side,
+                            const glm::dvec2& barycentric);
+
+// Adds to a probe's radiance at `position` each sun it sees (no surface on the way to it): a delta of
+// irradiance E in direction l, whose projection is E y_lm(l) exactly.
+void addSeenSuns(const Bvh& bvh, std::span<const SceneSun> suns, const glm::dvec3& position,
+                 ShCoefficients& radiance);
 
 struct RayBakedProbe {
     ShCoefficients radiance;

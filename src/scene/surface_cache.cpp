@@ -13,11 +13,6 @@ namespace shprobe {
 
 namespace {
 
-// Points of a lattice of m subdivisions: rows j = 0..m of m + 1 - j points.
-size_t latticePoints(int m) {
-    return size_t(m + 1) * size_t(m + 2) / 2;
-}
-
 // The index of lattice point (i, j), i + j <= m, row by row.
 size_t latticeIndex(int m, int i, int j) {
     return size_t(j) * size_t(m + 1) - size_t(j) * size_t(j - 1) / 2 + size_t(i);
@@ -51,25 +46,6 @@ LatticeBlend blendAt(int m, const glm::dvec2& barycentric) {
     return {{latticeIndex(m, i0 + 1, j0 + 1), latticeIndex(m, i0, j0 + 1), latticeIndex(m, i0 + 1, j0)},
             glm::dvec3(fx + fy - 1.0, 1.0 - fx, 1.0 - fy),
             latticePoints(m - 1) + latticeIndex(m - 2, i0, j0)};
-}
-
-// The barycentrics (i / m, j / m) of lattice point `index`.
-glm::dvec2 latticeBarycentric(int m, size_t index) {
-    int j = 0;
-    while (latticeIndex(m, 0, j + 1) <= index)
-        ++j;
-    const int i = int(index - latticeIndex(m, 0, j));
-    return glm::dvec2(i, j) / double(m);
-}
-
-// Subdivisions so that each lattice edge is at most `spacing` long.
-int subdivisionsFor(const World& world, uint32_t triangle, double spacing) {
-    const glm::dvec3 p0(world.positions[world.indices[3 * size_t(triangle)]]);
-    const glm::dvec3 p1(world.positions[world.indices[3 * size_t(triangle) + 1]]);
-    const glm::dvec3 p2(world.positions[world.indices[3 * size_t(triangle) + 2]]);
-    const double longest = std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
-    const double cells = std::ceil(longest / spacing);
-    return int(std::clamp(cells, 1.0, double(kMaxCacheSubdivisions)));
 }
 
 // A point's state: not gathered, being gathered by some thread, gathered.
@@ -133,6 +109,27 @@ constexpr std::array<unsigned, 4> kChildMidpoints{0b101, 0b011, 0b110, 0b111};
 
 } // namespace
 
+size_t latticePoints(int m) {
+    return size_t(m + 1) * size_t(m + 2) / 2;
+}
+
+glm::dvec2 latticeBarycentric(int m, size_t index) {
+    int j = 0;
+    while (latticeIndex(m, 0, j + 1) <= index)
+        ++j;
+    const int i = int(index - latticeIndex(m, 0, j));
+    return glm::dvec2(i, j) / double(m);
+}
+
+int latticeSubdivisions(const World& world, uint32_t triangle, double spacing) {
+    const glm::dvec3 p0(world.positions[world.indices[3 * size_t(triangle)]]);
+    const glm::dvec3 p1(world.positions[world.indices[3 * size_t(triangle) + 1]]);
+    const glm::dvec3 p2(world.positions[world.indices[3 * size_t(triangle) + 2]]);
+    const double longest = std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
+    const double cells = std::ceil(longest / spacing);
+    return int(std::clamp(cells, 1.0, double(kMaxCacheSubdivisions)));
+}
+
 // The edges' midpoints (AB, BC, CA) of a halved cell and its four children.
 struct SurfaceCache::Halves {
     std::array<std::atomic<uint8_t>, 3> states{};
@@ -145,7 +142,7 @@ SurfaceCache::SurfaceCache(const World& world, double spacing, int bounces, int 
     : queries_(std::move(queries)), refinement_(refinement) {
     lattices_.resize(world.triangleCount());
     for (uint32_t t = 0; t < uint32_t(lattices_.size()); ++t) {
-        const int m = subdivisionsFor(world, t, spacing);
+        const int m = latticeSubdivisions(world, t, spacing);
         const int sides = world.materials[world.triangleMaterials[t]].doubleSided ? 2 : 1;
         lattices_[t] = {pointCount_, cellCount_, m};
         pointCount_ += sides * latticePoints(m);

@@ -45,6 +45,14 @@ constexpr int kMaxCacheRefinement = 6;
 // (docs/scene-probes.md), and far less than across an overhang's or a wall's edge.
 constexpr double kCacheContrast = 0.5;
 
+// Points of a lattice of m subdivisions: rows j = 0..m of m + 1 - j points, (m + 1)(m + 2) / 2.
+size_t latticePoints(int m);
+// The barycentrics (i / m, j / m) of lattice point `index`, row by row.
+glm::dvec2 latticeBarycentric(int m, size_t index);
+// The subdivisions m of `triangle`'s lattice: each lattice edge at most `spacing` long, m in
+// 1..kMaxCacheSubdivisions.
+int latticeSubdivisions(const World& world, uint32_t triangle, double spacing);
+
 // One bounce's irradiance at a point.
 struct CachePoint {
     glm::vec3 irradiance{0.0f};

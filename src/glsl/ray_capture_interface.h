@@ -1,0 +1,55 @@
+// Buffers and push constants of the capture by rays (capture_rays.comp, cache_gather.comp), shared
+// by C++ and GLSL. Set 0 holds the scene capture's bindings (capture_interface.h, 0 to 9), then the
+// scene's hierarchy (bvh_interface.h), the surface cache's lattices and the cache a pass reads, then
+// what each module reads and writes of its own. The transport is src/scene/scene.h's, with bounces
+// gathered at the surfaces as the cpu backend gathers them (scene/ray_bake.h, scene/surface_cache.h).
+#ifndef SHPROBE_RAY_CAPTURE_INTERFACE_H
+#define SHPROBE_RAY_CAPTURE_INTERFACE_H
+#include "shared.h"
+
+#define SHPROBE_RAYS_BVH_NODES 10     // BvhNode[]
+#define SHPROBE_RAYS_BVH_TRIANGLES 11 // BvhTriangle[]
+#define SHPROBE_RAYS_BVH_IDS 12       // uint[]: the World index of each
+#define SHPROBE_RAYS_LATTICES 13      // CacheLattice[]: one per World triangle
+#define SHPROBE_RAYS_CACHE 14         // vec4[]: the irradiance (rgb) of each cache point, as read
+#define SHPROBE_RAYS_INPUT 15         // capture_rays: vec4[] probe positions; cache_gather: CachePoint[]
+#define SHPROBE_RAYS_OUTPUT                                                                                  \
+    16 // capture_rays: the rgba32f 2D-array image of 6 layers per probe;
+       // cache_gather: vec4[], the irradiance gathered per point
+#define SHPROBE_RAYS_BINDINGS 17
+
+SHPROBE_BEGIN
+
+// A triangle's lattice of cache points (scene/surface_cache.h): barycentrics (i/m, j/m),
+// i + j <= m, row by row; side s (1: the back of a double-sided material) starts at
+// first + s (m + 1)(m + 2) / 2.
+struct CacheLattice {
+    uvec4 points; // x: the first point, y: m
+};
+
+// Where a cache point gathers from: just off its surface, on its side, moved into the triangle at
+// its edges (scene/surface_cache.h cacheGatherPoint), and the shading normal there.
+struct CacheGatherPoint {
+    vec4 origin; // xyz
+    vec4 normal; // xyz: unit, on the point's side
+};
+
+// Push constants of both modules.
+struct RayCaptureConstants {
+    uvec4 sizes; // x: probe face size N; y: sky face size; z: sun count; w: BVH node count
+    uvec4 work;  // x: the probes (capture_rays) or points (cache_gather) of the pass; y: the first
+                 // point (cache_gather); z: the bounce the cache holds (0: none, reflect no bounce);
+                 // w: g, the gather's g x g rays per point
+    vec4 scale;  // x: how far leaving rays start off a surface (scene/surface_shading.h offset())
+    uvec4 seed;  // x: the random numbers' seed; y: the bounce gathered
+};
+
+SHPROBE_END
+
+#ifdef __cplusplus
+static_assert(sizeof(shprobe::glsl::CacheLattice) == 16);
+static_assert(sizeof(shprobe::glsl::CacheGatherPoint) == 32);
+static_assert(sizeof(shprobe::glsl::RayCaptureConstants) == 64);
+#endif
+
+#endif

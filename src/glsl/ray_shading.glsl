@@ -1,0 +1,115 @@
+// The transport of scene/scene.h by rays on the scene's hierarchy, as the cpu backend follows it
+// (scene/ray_bake.cpp arriving, scene/surface_shading.cpp describe): what arrives along a ray is
+// the sky where it meets nothing, nothing from the back of a one-sided material, else what the
+// front face leaves: emission + albedo / pi (suns by shadow rays + the cached bounce at the hit).
+// Declares set 0 of ray_capture_interface.h up to SHPROBE_RAYS_CACHE and the push constants `rc`;
+// the includer declares its own input and output.
+#ifndef SHPROBE_RAY_SHADING_GLSL
+#define SHPROBE_RAY_SHADING_GLSL
+#include "bvh_interface.h"
+#include "capture_world.glsl"
+#include "ray_capture_interface.h"
+
+layout(std430, set = 0, binding = SHPROBE_RAYS_BVH_NODES) readonly buffer BvhNodes {
+    BvhNode bvhNodes[];
+};
+layout(std430, set = 0, binding = SHPROBE_RAYS_BVH_TRIANGLES) readonly buffer BvhTriangles {
+    BvhTriangle bvhTriangles[];
+};
+layout(std430, set = 0, binding = SHPROBE_RAYS_BVH_IDS) readonly buffer BvhTriangleIds {
+    uint bvhTriangleIds[];
+};
+layout(std430, set = 0, binding = SHPROBE_RAYS_LATTICES) readonly buffer Lattices {
+    CacheLattice lattices[];
+};
+layout(std430, set = 0, binding = SHPROBE_RAYS_CACHE) readonly buffer Cache {
+    vec4 cache[];
+};
+layout(push_constant, std430) uniform Push {
+    RayCaptureConstants rc;
+};
+
+#include "bvh_traversal.glsl"
+
+#define RAY_FAR uintBitsToFloat(0x7f800000u) // +infinity: rays without a limit
+
+// Index of lattice point (i, j), i + j <= m, row by row (scene/surface_cache.cpp latticeIndex).
+uint latticeIndex(int m, int i, int j) {
+    return uint(j * (m + 1) - j * (j - 1) / 2 + i);
+}
+
+// The cached irradiance on `side` of `triangle` at barycentrics (u, v): linear over the lattice
+// cell holding the point (scene/surface_cache.cpp blendAt, without refinement).
+vec3 cachedIrradiance(uint triangle, uint side, vec2 barycentric) {
+    uvec4 lattice = lattices[triangle].points;
+    int m = int(lattice.y);
+    uint first = lattice.x + side * uint((m + 1) * (m + 2) / 2);
+    float x = clamp(barycentric.x, 0.0, 1.0) * float(m);
+    float y = clamp(barycentric.y, 0.0, 1.0) * float(m);
+    int i0 = min(int(x), m - 1);
+    int j0 = min(int(y), m - 1);
+    while (i0 + j0 > m - 1) { // u + v a rounding over 1
+        if (i0 > 0) --i0;
+        else --j0;
+    }
+    float fx = x - float(i0);
+    float fy = y - float(j0);
+    if (fx + fy <= 1.0 || i0 + j0 + 2 > m)
+        return (1.0 - fx - fy) * cache[first + latticeIndex(m, i0, j0)].rgb +
+               fx * cache[first + latticeIndex(m, i0 + 1, j0)].rgb +
+               fy * cache[first + latticeIndex(m, i0, j0 + 1)].rgb;
+    return (fx + fy - 1.0) * cache[first + latticeIndex(m, i0 + 1, j0 + 1)].rgb +
+           (1.0 - fx) * cache[first + latticeIndex(m, i0, j0 + 1)].rgb +
+           (1.0 - fy) * cache[first + latticeIndex(m, i0 + 1, j0)].rgb;
+}
+
+// The suns' irradiance at a point whose leaving rays start at `origin`, of shading normal n: a
+// shadow ray to each sun above the surface (scene/surface_shading.h leavingWithoutBounce).
+vec3 sunIrradiance(vec3 origin, vec3 n) {
+    vec3 e = vec3(0.0);
+    for (uint s = 0u; s < rc.sizes.z; ++s) {
+        CaptureSun sun = suns[s];
+        float cosine = dot(n, sun.direction.xyz);
+        if (cosine <= 0.0) continue;
+        if (!bvhAnyHit(rc.sizes.w, origin, sun.direction.xyz, 0.0, RAY_FAR)) e += sun.irradiance.rgb * cosine;
+    }
+    return e;
+}
+
+// What arrives along a ray, and whether it met the back of a one-sided material.
+struct RayArrival {
+    vec3 radiance;
+    bool backFace;
+};
+
+// The radiance arriving at `origin` from unit `direction`, the surfaces reflecting the cached
+// bounce when `cached` (the cache holds it), none otherwise.
+RayArrival arriving(vec3 origin, vec3 direction, bool cached) {
+    BvhHit hit;
+    if (!bvhClosestHitFrontFirst(rc.sizes.w, origin, direction, 0.0, RAY_FAR, hit))
+        return RayArrival(skyTexel(direction, rc.sizes.y), false);
+    uint corner0 = indices[3u * hit.triangle], corner1 = indices[3u * hit.triangle + 1u],
+         corner2 = indices[3u * hit.triangle + 2u];
+    CaptureVertex v0 = vertices[corner0], v1 = vertices[corner1], v2 = vertices[corner2];
+    vec3 normal = normalize(cross(v1.positionU.xyz - v0.positionU.xyz, v2.positionU.xyz - v0.positionU.xyz));
+    bool front = dot(normal, direction) < 0.0;
+    CaptureMaterial material = materials[triangleMaterials[hit.triangle]];
+    if (!front && material.sides.x < 0.5) return RayArrival(vec3(0.0), true);
+    float side = front ? 1.0 : -1.0;
+    vec3 weights = vec3(1.0 - hit.u - hit.v, hit.u, hit.v);
+    vec3 position = weights.x * v0.positionU.xyz + weights.y * v1.positionU.xyz + weights.z * v2.positionU.xyz;
+    vec3 interpolated = weights.x * v0.normalV.xyz + weights.y * v1.normalV.xyz + weights.z * v2.normalV.xyz;
+    vec3 shading = side * (length(interpolated) > 0.0 ? normalize(interpolated) : normal);
+    vec2 uv = weights.x * vec2(v0.positionU.w, v0.normalV.w) + weights.y * vec2(v1.positionU.w, v1.normalV.w) +
+              weights.z * vec2(v2.positionU.w, v2.normalV.w);
+    // Shadow rays leave from the point moved off the surface and back along the ray: a ray through a
+    // texel centre may meet a room's corner exactly, on both walls' planes, and a point moved off one
+    // of them alone lies on the other, where rounding (the scene's scale) decides whether its shadow
+    // ray leaves the room.
+    vec3 leaving = position + rc.scale.x * (side * normal - direction);
+    vec3 irradiance = sunIrradiance(leaving, shading);
+    if (cached) irradiance += cachedIrradiance(hit.triangle, front ? 0u : 1u, vec2(hit.u, hit.v));
+    return RayArrival(surfaceLeaving(material, uv, irradiance), false);
+}
+
+#endif

@@ -1,0 +1,267 @@
+// RayCapture (ray_capture.h): the surface cache laid out on the host and gathered on the device,
+// then probes captured by rays into the raster capture's target and baked as it bakes them.
+#include "gpu/ray_capture.h"
+
+#include "common/error.h"
+#include "common/scope_exit.h"
+#include "glsl/capture_interface.h"
+#include "glsl/ray_capture_interface.h"
+#include "scene/ray_bake.h"
+#include "scene/surface_cache.h"
+#include "sh/irradiance.h"
+#include "vk/vulkan_commands.h"
+#include <shprobe/shprobe_scene_spirv.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+namespace shprobe {
+
+namespace {
+
+// RayCapture::buffers, in this order.
+enum RayBuffer : size_t {
+    kNodes,
+    kTriangles,
+    kIds,
+    kLattices,
+    kGatherPoints,
+    kCacheA,
+    kCacheB,
+    kRayBufferCount
+};
+
+constexpr uint32_t kLocalSize = 64;
+// Rays per gather submission: a bounded time per command buffer on any device (lavapipe: about 1 s).
+constexpr uint64_t kRaysPerSubmission = uint64_t(1) << 22;
+// Workgroups per dispatch dimension that every device allows (maxComputeWorkGroupCount >= 65535);
+// the modules loop over what lies beyond.
+constexpr uint32_t kMaxGroups = 65535;
+
+uint32_t groupsFor(uint64_t threads) {
+    return uint32_t(std::clamp<uint64_t>((threads + kLocalSize - 1) / kLocalSize, 1, kMaxGroups));
+}
+
+// Every cache point of the world's lattices at `spacing`, side by side (scene/surface_cache.h's
+// order), and each triangle's first point and m. A zero-area triangle's points have no normal: no
+// ray meets such a triangle, so they gather nothing (normal 0, which cache_gather.comp skips).
+struct CacheLayout {
+    std::vector<glsl::CacheLattice> lattices;
+    std::vector<glsl::CacheGatherPoint> points;
+};
+
+CacheLayout layOutCache(const SceneShading& shading, double spacing) {
+    const World& world = shading.world();
+    CacheLayout layout;
+    for (uint32_t t = 0; t < uint32_t(world.triangleCount()); ++t) {
+        const int m = latticeSubdivisions(world, t, spacing);
+        const int sides = world.materials[world.triangleMaterials[t]].doubleSided ? 2 : 1;
+        const size_t count = latticePoints(m);
+        if (layout.points.size() + sides * count > UINT32_MAX)
+            throw Error(ErrorKind::Input, "scene: the surface cache would hold more than 2^32 points; raise "
+                                          "the cache spacing");
+        layout.lattices.push_back({glm::uvec4(uint32_t(layout.points.size()), uint32_t(m), 0u, 0u)});
+        for (int side = 0; side < sides; ++side)
+            for (size_t index = 0; index < count; ++index) {
+                const SurfaceHit at = cacheGatherPoint(shading, t, side, latticeBarycentric(m, index));
+                const bool solid = std::isfinite(at.shadingNormal.x) && std::isfinite(at.rayOrigin.x);
+                layout.points.push_back(
+                    {glm::vec4(solid ? glm::vec3(at.rayOrigin) : glm::vec3(0.0f), 0.0f),
+                     glm::vec4(solid ? glm::vec3(at.shadingNormal) : glm::vec3(0.0f), 0.0f)});
+            }
+    }
+    return layout;
+}
+
+ComputeProgram createRayProgram(const Device& device, bool probes) {
+    std::array<VkDescriptorType, SHPROBE_RAYS_BINDINGS> bindings;
+    bindings.fill(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    if (probes) bindings[SHPROBE_RAYS_OUTPUT] = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+    return createComputeProgram(device,
+                                {.name = probes ? "capture_rays" : "cache_gather",
+                                 .spirv = probes ? std::span<const uint32_t>(spirv::capture_rays_comp)
+                                                 : std::span<const uint32_t>(spirv::cache_gather_comp),
+                                 .bindings = bindings,
+                                 .pushConstantSize = sizeof(glsl::RayCaptureConstants),
+                                 .localSize = kLocalSize});
+}
+
+// The bindings of a ray program's set: the capture's buffers, the hierarchy, the lattices, the
+// cache read (bounce `cacheBounce`; none: either), then the program's input and output.
+std::array<BindingTarget, SHPROBE_RAYS_BINDINGS> rayTargets(const SceneCapture& capture,
+                                                            const RayCapture& rays, int cacheBounce,
+                                                            BindingTarget input, BindingTarget output) {
+    std::array<BindingTarget, SHPROBE_RAYS_BINDINGS> targets;
+    for (size_t b = 0; b < SHPROBE_CAPTURE_BINDINGS; ++b)
+        targets[b] = {capture.buffers[b].buffer};
+    targets[SHPROBE_RAYS_BVH_NODES] = {rays.buffers[kNodes].buffer};
+    targets[SHPROBE_RAYS_BVH_TRIANGLES] = {rays.buffers[kTriangles].buffer};
+    targets[SHPROBE_RAYS_BVH_IDS] = {rays.buffers[kIds].buffer};
+    targets[SHPROBE_RAYS_LATTICES] = {rays.buffers[kLattices].buffer};
+    const size_t cache = cacheBounce > 0 && (cacheBounce - 1) % 2 == 1 ? kCacheB : kCacheA;
+    targets[SHPROBE_RAYS_CACHE] = {rays.buffers[cache].buffer};
+    targets[SHPROBE_RAYS_INPUT] = input;
+    targets[SHPROBE_RAYS_OUTPUT] = output;
+    return targets;
+}
+
+glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCapture& rays) {
+    glsl::RayCaptureConstants constants{};
+    constants.sizes = glm::uvec4(uint32_t(capture.options.faceSize), capture.skyFaceSize,
+                                 uint32_t(capture.suns.size()), uint32_t(rays.bvh.nodes.size()));
+    constants.scale = glm::vec4(rays.surfaceOffset, 0.0f, 0.0f, 0.0f);
+    constants.seed = glm::uvec4(uint32_t(rays.options.seed), 0u, 0u, 0u);
+    return constants;
+}
+
+// Bounce k of every cache point into cache (k - 1) % 2, from the other (bounce k - 1).
+void gatherBounce(const Context& context, const SceneCapture& capture, const RayCapture& rays, int bounce) {
+    const uint64_t raysPerPoint = uint64_t(rays.gatherSide) * rays.gatherSide;
+    const uint32_t chunk = uint32_t(std::max<uint64_t>(1, kRaysPerSubmission / raysPerPoint));
+    glsl::RayCaptureConstants constants = rayConstants(capture, rays);
+    constants.seed.y = uint32_t(bounce);
+    for (uint32_t first = 0; first < rays.cachePoints; first += chunk) {
+        const uint32_t count = std::min(chunk, rays.cachePoints - first);
+        constants.work = glm::uvec4(count, first, bounce > 1 ? 1u : 0u, rays.gatherSide);
+        submitAndWait(context, [&](VkCommandBuffer commands) {
+            dispatch(commands, rays.gather, rays.gatherSets[size_t(bounce - 1) % 2], constants,
+                     {groupsFor(count)});
+            computeWriteBarrier(commands);
+        });
+    }
+}
+
+void requireOptions(const RayCaptureOptions& options) {
+    if (options.bounces < 0) throw Error(ErrorKind::Input, "scene: bounces must be 0 or more");
+    if (!(options.cacheSpacing >= 0.0) || !std::isfinite(options.cacheSpacing))
+        throw Error(ErrorKind::Input, "scene: the cache spacing must be a finite number of 0 or more");
+    if (options.gatherRays < 1 || options.gatherRays > 1 << 20)
+        throw Error(ErrorKind::Input,
+                    "scene: gather rays must be in 1..1048576, got " + std::to_string(options.gatherRays));
+}
+
+// What the probes' program binds for one target: the positions (host-written, one vec4 per probe)
+// and the target's image.
+struct ProbeRaySet {
+    Buffer positions;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+};
+
+void destroyProbeRaySet(const Device& device, ProbeRaySet& set) {
+    if (set.pool) vkDestroyDescriptorPool(device.device, set.pool, nullptr);
+    destroyBuffer(device, set.positions);
+    set = ProbeRaySet{};
+}
+
+ProbeRaySet createProbeRaySet(const Context& context, const SceneCapture& capture, const RayCapture& rays,
+                              const CaptureTarget& target) {
+    ProbeRaySet set;
+    OnFailure undo([&] { destroyProbeRaySet(context, set); });
+    set.positions = createBuffer(context, sizeof(glm::vec4) * target.probeCount,
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Upload, "probe positions");
+    set.pool = createDescriptorPool(
+        context, {.sets = 1, .storageBuffers = SHPROBE_RAYS_BINDINGS - 1, .storageImages = 1});
+    set.set = createDescriptorSet(context, set.pool, rays.probes,
+                                  rayTargets(capture, rays, rays.options.bounces, {set.positions.buffer},
+                                             {.imageView = target.cubemaps.view}));
+    return set;
+}
+
+// The capture of `positions` into layers 6p..6p+5, visible to the bake's reads.
+void recordProbeRays(VkCommandBuffer commands, const SceneCapture& capture, const RayCapture& rays,
+                     const ProbeRaySet& set, std::span<const glm::dvec3> positions) {
+    auto* mapped = static_cast<glm::vec4*>(set.positions.mapped);
+    for (size_t p = 0; p < positions.size(); ++p)
+        mapped[p] = glm::vec4(glm::vec3(positions[p]), 1.0f);
+    glsl::RayCaptureConstants constants = rayConstants(capture, rays);
+    constants.work = glm::uvec4(uint32_t(positions.size()), 0u, rays.options.bounces > 0 ? 1u : 0u, 0u);
+    const uint64_t texels = 6 * uint64_t(capture.options.faceSize) * uint64_t(capture.options.faceSize);
+    dispatch(commands, rays.probes, set.set, constants, {groupsFor(texels), uint32_t(positions.size())});
+    computeWriteBarrier(commands);
+}
+
+} // namespace
+
+RayCapture createRayCapture(const Context& context, const SceneCapture& capture, const SceneShading& shading,
+                            const RayCaptureOptions& options) {
+    requireOptions(options);
+    RayCapture rays;
+    OnFailure undo([&] { destroyRayCapture(context, rays); });
+    rays.options = options;
+    const World& world = shading.world();
+    rays.bvh = buildBvh(world);
+    rays.surfaceOffset = float(shading.offset());
+    rays.gatherSide = uint32_t(std::ceil(std::sqrt(double(options.gatherRays))));
+    const CacheLayout cache =
+        layOutCache(shading, options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world));
+    rays.cachePoints = uint32_t(cache.points.size());
+    rays.buffers.resize(kRayBufferCount);
+    rays.buffers[kNodes] = createStorage(context, rays.bvh.nodes, "BVH nodes");
+    rays.buffers[kTriangles] = createStorage(context, rays.bvh.triangles, "BVH triangles");
+    rays.buffers[kIds] = createStorage(context, rays.bvh.triangleIds, "BVH triangle ids");
+    rays.buffers[kLattices] = createStorage(context, cache.lattices, "cache lattices");
+    rays.buffers[kGatherPoints] = createStorage(context, cache.points, "cache points");
+    const std::vector<glm::vec4> zeros(options.bounces > 0 ? cache.points.size() : 0, glm::vec4(0.0f));
+    rays.buffers[kCacheA] = createStorage(context, zeros, "surface cache");
+    rays.buffers[kCacheB] = createStorage(context, zeros, "surface cache");
+    rays.probes = createRayProgram(context, true);
+    rays.gather = createRayProgram(context, false);
+    rays.pool = createDescriptorPool(context, {.sets = 2, .storageBuffers = 2 * SHPROBE_RAYS_BINDINGS});
+    for (int parity = 0; parity < 2; ++parity) {
+        const size_t written = parity == 0 ? kCacheA : kCacheB;
+        rays.gatherSets[size_t(parity)] = createDescriptorSet(context, rays.pool, rays.gather,
+                                                              rayTargets(capture, rays, parity == 0 ? 2 : 1,
+                                                                         {rays.buffers[kGatherPoints].buffer},
+                                                                         {rays.buffers[written].buffer}));
+    }
+    for (int bounce = 1; bounce <= options.bounces; ++bounce)
+        gatherBounce(context, capture, rays, bounce);
+    return rays;
+}
+
+void destroyRayCapture(const Device& device, RayCapture& rays) {
+    if (rays.pool) vkDestroyDescriptorPool(device.device, rays.pool, nullptr);
+    destroyComputeProgram(device, rays.gather);
+    destroyComputeProgram(device, rays.probes);
+    for (Buffer& buffer : rays.buffers)
+        destroyBuffer(device, buffer);
+    rays = RayCapture{};
+}
+
+std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture& capture,
+                                      const RayCapture& rays, std::span<const glm::dvec3> positions,
+                                      const SceneBakeOptions& options) {
+    CaptureTarget target =
+        createCaptureTarget(context, capture, capturesPerBatch(context, capture, options.probesPerBatch));
+    ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
+    ProbeRaySet set = createProbeRaySet(context, capture, rays, target);
+    ScopeExit releaseSet([&] { destroyProbeRaySet(context, set); });
+    std::vector<SceneProbe> probes =
+        bakeCapturedProbes(context, capture, target, positions, options,
+                           [&](VkCommandBuffer commands, std::span<const glm::dvec3> members) {
+                               recordProbeRays(commands, capture, rays, set, members);
+                           });
+    if (rays.options.skySuns.empty()) return probes;
+    for (size_t p = 0; p < probes.size(); ++p) {
+        addSeenSuns(rays.bvh, rays.options.skySuns, positions[p], probes[p].radiance);
+        probes[p].irradiance = convolveIrradiance(probes[p].radiance);
+    }
+    return probes;
+}
+
+Cubemap traceRayCubemap(const Context& context, const SceneCapture& capture, const RayCapture& rays,
+                        const glm::dvec3& position) {
+    CaptureTarget target = createCaptureTarget(context, capture, 1);
+    ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
+    ProbeRaySet set = createProbeRaySet(context, capture, rays, target);
+    ScopeExit releaseSet([&] { destroyProbeRaySet(context, set); });
+    return readCapturedCubemap(context, target, position,
+                               [&](VkCommandBuffer commands, std::span<const glm::dvec3> members) {
+                                   recordProbeRays(commands, capture, rays, set, members);
+                               });
+}
+
+} // namespace shprobe

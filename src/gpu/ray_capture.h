@@ -1,0 +1,69 @@
+// Light probes inside a scene by rays on the GPU: the cpu backend's transport (scene/ray_bake.h) in
+// compute shaders on the scene's hierarchy (glsl/bvh_traversal.glsl), writing the same 2D-array
+// image the raster capture writes (gpu/scene_capture.h), which recordProbeBake then bakes.
+//
+//   SceneCapture capture = createSceneCapture(context, world, sky, {.faceSize = 32});
+//   RayCapture rays = createRayCapture(context, capture, SceneShading(world, sky), {.bounces = 2});
+//   std::vector<SceneProbe> probes = bakeRayProbes(context, capture, rays, positions, {.order = 3});
+//
+// A probe's texel holds what arrives along the ray from the probe through the texel's centre
+// (capture_rays.comp): the sky (its texel, nearest), nothing from the back of a one-sided material
+// (marked, for the validity count), else the front's emission + albedo / pi times the suns'
+// irradiance (a shadow ray each) and the last bounce's irradiance. Bounces are gathered at the
+// surfaces, as the cpu gathers them: every point of every triangle's lattice (scene/surface_cache.h,
+// without refinement) gathers E_k by g x g stratified cosine rays reading E_{k-1} at their hits
+// (cache_gather.comp), bounce after bounce, when the capture is created. All points are gathered,
+// none lazily, so every probe reads the same cache: a brick is exactly its part of the whole bake.
+#pragma once
+#include "gpu/scene_capture.h"
+#include "scene/bvh.h"
+#include "scene/surface_shading.h"
+#include "vk/pipeline.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace shprobe {
+
+struct RayCaptureOptions {
+    int bounces = 0;               // k: the probes see the surfaces reflect bounce k (0: none)
+    double cacheSpacing = 0.0;     // the largest distance between cache points; 0: defaultCacheSpacing
+    int gatherRays = 64;           // per cache point and bounce, rounded up to a square (g x g strata)
+    uint64_t seed = 1;             // of the gather's random numbers
+    std::vector<SceneSun> skySuns; // suns taken out of the sky (RayBakeOptions::skySuns): a probe
+                                   // that sees one adds its delta; the capture's world lights with them
+};
+
+// The hierarchy and the surface cache on the device, with the two compute programs.
+struct RayCapture {
+    RayCaptureOptions options;
+    Bvh bvh;                     // on the host too: the sky's suns a probe sees
+    float surfaceOffset = 0.0f;  // SceneShading::offset()
+    uint32_t cachePoints = 0;    // over all lattices and sides
+    uint32_t gatherSide = 1;     // g
+    std::vector<Buffer> buffers; // the hierarchy's three arrays, the lattices, the gather points, two caches
+    ComputeProgram probes;       // capture_rays.comp
+    ComputeProgram gather;       // cache_gather.comp
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    std::array<VkDescriptorSet, 2> gatherSets{}; // bounce k gathers with set (k - 1) % 2
+};
+
+// Lays out and gathers the cache, options.bounces bounces (submissions of a bounded number of rays
+// each). `shading` is of the world and sky the capture holds. Throws Error(Input) for options out of
+// range, a cache past 2^32 points or buffers past the device's limits.
+RayCapture createRayCapture(const Context& context, const SceneCapture& capture, const SceneShading& shading,
+                            const RayCaptureOptions& options);
+void destroyRayCapture(const Device& device, RayCapture& rays);
+
+// bakeSceneProbes by rays: every position, probesPerBatch per command buffer, results in input order.
+std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture& capture,
+                                      const RayCapture& rays, std::span<const glm::dvec3> positions,
+                                      const SceneBakeOptions& options);
+
+// What a probe at `position` sees through its texel centres (alpha as bakeRayProbes captures it),
+// for tests and pictures.
+Cubemap traceRayCubemap(const Context& context, const SceneCapture& capture, const RayCapture& rays,
+                        const glm::dvec3& position);
+
+} // namespace shprobe
