@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Scene probes per second and memory per probe: `shprobe scene` on both backends (gpu: capture and
-# bake; cpu: rays through the texel centres, one per texel as the capture has) and
+# Scene probes per second and memory per probe: `shprobe scene` on both backends (gpu and cpu: rays
+# through the texel centres, one per texel) and
 # `shprobe-reference` (Embree path tracing, as many directions per probe as a capture has texels)
 # on 1,000 and 10,000 probes at faces 32^2, bounce 0, in a Cornell box (36 triangles, written here)
 # and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels) and in ten
 # of it (1,214,960 triangles, cpu and reference: the cost per probe against the triangles); then one
-# bounce at 4^3 probes (the cpu backend's defaults against the reference's); then relighting a 32^3
+# bounce at 4^3 probes (each backend's defaults against the reference's); then relighting a 32^3
 # volume baked with its transfer, and transfer vectors per second of `shprobe transfer` on both
 # backends in the Cornell box and the engine.
 # Whole processes, timed by GNU time with their peak memory; memory per probe is the difference of
@@ -151,6 +151,8 @@ run "reference: 10 x 2CylinderEngine" 1000 "$build/shprobe-reference" "$work/eng
     --bounces 0 -q -o "$work/reference.shpv"
 for scene in "$work/cornell.gltf" "$engine"; do
     name=$(basename "$scene" | sed 's/\..*//')
+    run "gpu, 1 bounce: $name" 64 "$build/shprobe" scene "$scene" --grid 4,4,4 --bounces 1 --backend gpu -q \
+        -o "$work/gpu.shpv"
     run "cpu, 1 bounce: $name" 64 "$build/shprobe" scene "$scene" --grid 4,4,4 --bounces 1 --backend cpu -q \
         -o "$work/cpu.shpv"
     run "reference, 1 bounce: $name" 64 "$build/shprobe-reference" "$scene" --grid 4,4,4 --bounces 1 -q \

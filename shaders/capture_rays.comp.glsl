@@ -5,7 +5,8 @@
 // one-sided material, as capture.frag writes it for recordProbeBake and count_back_faces.comp.
 //
 //   set 0: ray_capture_interface.h; SHPROBE_RAYS_INPUT: vec4 probes[] (xyz: position);
-//          SHPROBE_RAYS_OUTPUT: rgba32f image2DArray, 6 layers per probe, in GENERAL
+//          SHPROBE_RAYS_OUTPUT: rgba32f image2DArray, 6 layers per probe, in GENERAL;
+//          SHPROBE_RAYS_DISTANCES: float distances[], each texel's hit distance (visibility maps)
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce)
 //   specialization: 0 = workgroup width; dispatch (texel groups, probes, 1): each invocation takes
 //   texels x, x + width * groups, ... of probe y.
@@ -19,6 +20,9 @@ layout(std430, set = 0, binding = SHPROBE_RAYS_INPUT) readonly buffer Probes {
     vec4 probes[];
 };
 layout(set = 0, binding = SHPROBE_RAYS_OUTPUT, rgba32f) uniform writeonly image2DArray cubemaps;
+layout(std430, set = 0, binding = SHPROBE_RAYS_DISTANCES) writeonly buffer Distances {
+    float distances[];
+};
 
 void main() {
     uint probe = gl_GlobalInvocationID.y;
@@ -33,5 +37,6 @@ void main() {
         RayArrival arrival = arriving(probes[probe].xyz, direction, rc.work.z != 0u);
         imageStore(cubemaps, ivec3(i, j, 6u * probe + face),
                    vec4(arrival.radiance, arrival.backFace ? SHPROBE_CAPTURE_BACK_FACE : 0.0));
+        distances[6u * faceTexels * probe + texel] = arrival.distance;
     }
 }

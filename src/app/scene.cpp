@@ -361,6 +361,9 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
     ProbeVolume volume = volumeOfProbes(std::span<const SceneProbe>(probes), options.order, options.faceSize,
                                         options.invalidBackFaces, grid, range);
     volume.bounces = bounces;
+    volume.visibilitySize = rays.options.visibilitySize;
+    for (const SceneProbe& probe : probes)
+        volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
     if (context.validationMessages() > 0)
         throw Error(ErrorKind::Device, "scene: the Vulkan validation layer reported " +
                                            counted(context.validationMessages(), "message"));

@@ -14,9 +14,12 @@
 #define SHPROBE_RAYS_CACHE 14         // vec4[]: the irradiance (rgb) of each cache point, as read
 #define SHPROBE_RAYS_INPUT 15         // capture_rays: vec4[] probe positions; cache_gather: CachePoint[]
 #define SHPROBE_RAYS_OUTPUT                                                                                  \
-    16 // capture_rays: the rgba32f 2D-array image of 6 layers per probe;
-       // cache_gather: vec4[], the irradiance gathered per point
-#define SHPROBE_RAYS_BINDINGS 17
+    16                           // capture_rays: the rgba32f 2D-array image of 6 layers per probe;
+                                 // cache_gather: vec4[], the irradiance gathered per point
+#define SHPROBE_RAYS_BINDINGS 17 // of cache_gather; capture_rays has one more:
+#define SHPROBE_RAYS_DISTANCES                                                                               \
+    17 // float[]: each texel's hit distance (infinity: none), probe
+       // p's 6 N^2 texels from 6 N^2 p, faces and rows in order
 
 SHPROBE_BEGIN
 

@@ -76,10 +76,12 @@ vec3 sunIrradiance(vec3 origin, vec3 n) {
     return e;
 }
 
-// What arrives along a ray, and whether it met the back of a one-sided material.
+// What arrives along a ray, whether it met the back of a one-sided material, and how far it went
+// (t along the unit direction; infinity where it met nothing).
 struct RayArrival {
     vec3 radiance;
     bool backFace;
+    float distance;
 };
 
 // The radiance arriving at `origin` from unit `direction`, the surfaces reflecting the cached
@@ -87,14 +89,14 @@ struct RayArrival {
 RayArrival arriving(vec3 origin, vec3 direction, bool cached) {
     BvhHit hit;
     if (!bvhClosestHitFrontFirst(rc.sizes.w, origin, direction, 0.0, RAY_FAR, hit))
-        return RayArrival(skyTexel(direction, rc.sizes.y), false);
+        return RayArrival(skyTexel(direction, rc.sizes.y), false, RAY_FAR);
     uint corner0 = indices[3u * hit.triangle], corner1 = indices[3u * hit.triangle + 1u],
          corner2 = indices[3u * hit.triangle + 2u];
     CaptureVertex v0 = vertices[corner0], v1 = vertices[corner1], v2 = vertices[corner2];
     vec3 normal = normalize(cross(v1.positionU.xyz - v0.positionU.xyz, v2.positionU.xyz - v0.positionU.xyz));
     bool front = dot(normal, direction) < 0.0;
     CaptureMaterial material = materials[triangleMaterials[hit.triangle]];
-    if (!front && material.sides.x < 0.5) return RayArrival(vec3(0.0), true);
+    if (!front && material.sides.x < 0.5) return RayArrival(vec3(0.0), true, hit.t);
     float side = front ? 1.0 : -1.0;
     vec3 weights = vec3(1.0 - hit.u - hit.v, hit.u, hit.v);
     vec3 position = weights.x * v0.positionU.xyz + weights.y * v1.positionU.xyz + weights.z * v2.positionU.xyz;
@@ -109,7 +111,7 @@ RayArrival arriving(vec3 origin, vec3 direction, bool cached) {
     vec3 leaving = position + rc.scale.x * (side * normal - direction);
     vec3 irradiance = sunIrradiance(leaving, shading);
     if (cached) irradiance += cachedIrradiance(hit.triangle, front ? 0u : 1u, vec2(hit.u, hit.v));
-    return RayArrival(surfaceLeaving(material, uv, irradiance), false);
+    return RayArrival(surfaceLeaving(material, uv, irradiance), false, hit.t);
 }
 
 #endif

@@ -8,6 +8,7 @@
 #include "glsl/ray_capture_interface.h"
 #include "scene/ray_bake.h"
 #include "scene/surface_cache.h"
+#include "sh/cubemap.h"
 #include "sh/irradiance.h"
 #include "vk/vulkan_commands.h"
 #include <shprobe/shprobe_scene_spirv.h>
@@ -76,8 +77,8 @@ CacheLayout layOutCache(const SceneShading& shading, double spacing) {
 }
 
 ComputeProgram createRayProgram(const Device& device, bool probes) {
-    std::array<VkDescriptorType, SHPROBE_RAYS_BINDINGS> bindings;
-    bindings.fill(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    std::vector<VkDescriptorType> bindings(SHPROBE_RAYS_BINDINGS + (probes ? 1 : 0),
+                                           VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     if (probes) bindings[SHPROBE_RAYS_OUTPUT] = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
     return createComputeProgram(device,
                                 {.name = probes ? "capture_rays" : "cache_gather",
@@ -90,10 +91,9 @@ ComputeProgram createRayProgram(const Device& device, bool probes) {
 
 // The bindings of a ray program's set: the capture's buffers, the hierarchy, the lattices, the
 // cache read (bounce `cacheBounce`; none: either), then the program's input and output.
-std::array<BindingTarget, SHPROBE_RAYS_BINDINGS> rayTargets(const SceneCapture& capture,
-                                                            const RayCapture& rays, int cacheBounce,
-                                                            BindingTarget input, BindingTarget output) {
-    std::array<BindingTarget, SHPROBE_RAYS_BINDINGS> targets;
+std::vector<BindingTarget> rayTargets(const SceneCapture& capture, const RayCapture& rays, int cacheBounce,
+                                      BindingTarget input, BindingTarget output) {
+    std::vector<BindingTarget> targets(SHPROBE_RAYS_BINDINGS);
     for (size_t b = 0; b < SHPROBE_CAPTURE_BINDINGS; ++b)
         targets[b] = {capture.buffers[b].buffer};
     targets[SHPROBE_RAYS_BVH_NODES] = {rays.buffers[kNodes].buffer};
@@ -140,12 +140,16 @@ void requireOptions(const RayCaptureOptions& options) {
     if (options.gatherRays < 1 || options.gatherRays > 1 << 20)
         throw Error(ErrorKind::Input,
                     "scene: gather rays must be in 1..1048576, got " + std::to_string(options.gatherRays));
+    if (options.visibilitySize < 0 || options.visibilitySize > 64)
+        throw Error(ErrorKind::Input, "scene: the visibility map's size must be in 0..64, got " +
+                                          std::to_string(options.visibilitySize));
 }
 
-// What the probes' program binds for one target: the positions (host-written, one vec4 per probe)
-// and the target's image.
+// What the probes' program binds for one target: the positions (host-written, one vec4 per probe),
+// the target's image and its texels' hit distances.
 struct ProbeRaySet {
     Buffer positions;
+    Buffer distances;
     VkDescriptorPool pool = VK_NULL_HANDLE;
     VkDescriptorSet set = VK_NULL_HANDLE;
 };
@@ -153,6 +157,7 @@ struct ProbeRaySet {
 void destroyProbeRaySet(const Device& device, ProbeRaySet& set) {
     if (set.pool) vkDestroyDescriptorPool(device.device, set.pool, nullptr);
     destroyBuffer(device, set.positions);
+    destroyBuffer(device, set.distances);
     set = ProbeRaySet{};
 }
 
@@ -162,11 +167,16 @@ ProbeRaySet createProbeRaySet(const Context& context, const SceneCapture& captur
     OnFailure undo([&] { destroyProbeRaySet(context, set); });
     set.positions = createBuffer(context, sizeof(glm::vec4) * target.probeCount,
                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Upload, "probe positions");
-    set.pool = createDescriptorPool(
-        context, {.sets = 1, .storageBuffers = SHPROBE_RAYS_BINDINGS - 1, .storageImages = 1});
-    set.set = createDescriptorSet(context, set.pool, rays.probes,
-                                  rayTargets(capture, rays, rays.options.bounces, {set.positions.buffer},
-                                             {.imageView = target.cubemaps.view}));
+    const VkDeviceSize texels =
+        6 * VkDeviceSize(capture.options.faceSize) * VkDeviceSize(capture.options.faceSize);
+    set.distances = createBuffer(context, sizeof(float) * texels * target.probeCount,
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "hit distances");
+    set.pool = createDescriptorPool(context,
+                                    {.sets = 1, .storageBuffers = SHPROBE_RAYS_BINDINGS, .storageImages = 1});
+    std::vector<BindingTarget> targets = rayTargets(
+        capture, rays, rays.options.bounces, {set.positions.buffer}, {.imageView = target.cubemaps.view});
+    targets.push_back({set.distances.buffer});
+    set.set = createDescriptorSet(context, set.pool, rays.probes, targets);
     return set;
 }
 
@@ -183,6 +193,20 @@ void recordProbeRays(VkCommandBuffer commands, const SceneCapture& capture, cons
     computeWriteBarrier(commands);
 }
 
+// Probe k's visibility map of a batch (DistanceMoments), from its texels' hit distances in the
+// directions the cpu's one ray per texel casts.
+std::vector<glm::vec2> visibilityOf(const RayCapture& rays, const ProbeRaySet& set, int faceSize, size_t k) {
+    DistanceMoments moments(rays.options.visibilitySize, rays.visibilityRange);
+    const float* distances =
+        static_cast<const float*>(set.distances.mapped) + 6 * size_t(faceSize) * faceSize * k;
+    auto centre = [faceSize](int i) { return 2.0 * (i + 0.5) / faceSize - 1.0; };
+    for (int face = 0; face < kFaceCount; ++face)
+        for (int j = 0; j < faceSize; ++j)
+            for (int i = 0; i < faceSize; ++i)
+                moments.add(faceDirection(face, centre(i), centre(j)), double(*distances++));
+    return moments.texels();
+}
+
 } // namespace
 
 RayCapture createRayCapture(const Context& context, const SceneCapture& capture, const SceneShading& shading,
@@ -195,6 +219,7 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.bvh = buildBvh(world);
     rays.surfaceOffset = float(shading.offset());
     rays.gatherSide = uint32_t(std::ceil(std::sqrt(double(options.gatherRays))));
+    rays.visibilityRange = visibilityRangeOf(world);
     const CacheLayout cache =
         layOutCache(shading, options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world));
     rays.cachePoints = uint32_t(cache.points.size());
@@ -239,11 +264,17 @@ std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture
     ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
     ProbeRaySet set = createProbeRaySet(context, capture, rays, target);
     ScopeExit releaseSet([&] { destroyProbeRaySet(context, set); });
-    std::vector<SceneProbe> probes =
-        bakeCapturedProbes(context, capture, target, positions, options,
-                           [&](VkCommandBuffer commands, std::span<const glm::dvec3> members) {
-                               recordProbeRays(commands, capture, rays, set, members);
-                           });
+    std::vector<SceneProbe> probes = bakeCapturedProbes(
+        context, capture, target, positions, options,
+        [&](VkCommandBuffer commands, std::span<const glm::dvec3> members) {
+            recordProbeRays(commands, capture, rays, set, members);
+        },
+        [&](size_t, std::span<SceneProbe> batch) {
+            if (rays.options.visibilitySize == 0) return;
+            invalidateBuffer(context, set.distances);
+            for (size_t k = 0; k < batch.size(); ++k)
+                batch[k].visibility = visibilityOf(rays, set, capture.options.faceSize, k);
+        });
     if (rays.options.skySuns.empty()) return probes;
     for (size_t p = 0; p < probes.size(); ++p) {
         addSeenSuns(rays.bvh, rays.options.skySuns, positions[p], probes[p].radiance);

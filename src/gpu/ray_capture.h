@@ -31,6 +31,8 @@ struct RayCaptureOptions {
     double cacheSpacing = 0.0;     // the largest distance between cache points; 0: defaultCacheSpacing
     int gatherRays = 64;           // per cache point and bounce, rounded up to a square (g x g strata)
     uint64_t seed = 1;             // of the gather's random numbers
+    int visibilitySize = 16;       // each probe's visibility map (RayBakedProbe's): size x size
+                                   // octahedral texels of its rays' hit distances; 0: none
     std::vector<SceneSun> skySuns; // suns taken out of the sky (RayBakeOptions::skySuns): a probe
                                    // that sees one adds its delta; the capture's world lights with them
 };
@@ -38,13 +40,14 @@ struct RayCaptureOptions {
 // The hierarchy and the surface cache on the device, with the two compute programs.
 struct RayCapture {
     RayCaptureOptions options;
-    Bvh bvh;                     // on the host too: the sky's suns a probe sees
-    float surfaceOffset = 0.0f;  // SceneShading::offset()
-    uint32_t cachePoints = 0;    // over all lattices and sides
-    uint32_t gatherSide = 1;     // g
-    std::vector<Buffer> buffers; // the hierarchy's three arrays, the lattices, the gather points, two caches
-    ComputeProgram probes;       // capture_rays.comp
-    ComputeProgram gather;       // cache_gather.comp
+    Bvh bvh;                      // on the host too: the sky's suns a probe sees
+    float surfaceOffset = 0.0f;   // SceneShading::offset()
+    uint32_t cachePoints = 0;     // over all lattices and sides
+    uint32_t gatherSide = 1;      // g
+    double visibilityRange = 1.0; // the farthest distance a visibility map records (visibilityRangeOf)
+    std::vector<Buffer> buffers;  // the hierarchy's three arrays, the lattices, the gather points, two caches
+    ComputeProgram probes;        // capture_rays.comp
+    ComputeProgram gather;        // cache_gather.comp
     VkDescriptorPool pool = VK_NULL_HANDLE;
     std::array<VkDescriptorSet, 2> gatherSets{}; // bounce k gathers with set (k - 1) % 2
 };
@@ -56,7 +59,9 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
                             const RayCaptureOptions& options);
 void destroyRayCapture(const Device& device, RayCapture& rays);
 
-// bakeSceneProbes by rays: every position, probesPerBatch per command buffer, results in input order.
+// bakeSceneProbes by rays: every position, probesPerBatch per command buffer, results in input order,
+// each with its visibility map, from its texels' hit distances as the cpu's one ray per texel
+// gathers them.
 std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture& capture,
                                       const RayCapture& rays, std::span<const glm::dvec3> positions,
                                       const SceneBakeOptions& options);

@@ -610,7 +610,8 @@ void recordSceneCapture(VkCommandBuffer commands, const SceneCapture& capture, c
 
 std::vector<SceneProbe> bakeCapturedProbes(const Context& context, const SceneCapture& capture,
                                            const CaptureTarget& target, std::span<const glm::dvec3> positions,
-                                           const SceneBakeOptions& options, const RecordCapture& record) {
+                                           const SceneBakeOptions& options, const RecordCapture& record,
+                                           const FinishBatch& finish) {
     const uint32_t batch = target.probeCount;
     ProbeBaker baker =
         createProbeBaker(context, {.order = options.order, .cubemaps = CubemapBinding::StorageRgba32F});
@@ -646,8 +647,9 @@ std::vector<SceneProbe> bakeCapturedProbes(const Context& context, const SceneCa
             reinterpret_cast<const uint32_t*>(static_cast<const char*>(output.mapped) + coefficientBytes);
         for (size_t k = 0; k < members.size(); ++k) {
             GpuBake bake = readBakeOutput(output, 0, options.order, batch, uint32_t(k));
-            probes.push_back({std::move(bake.radiance), std::move(bake.irradiance), counts[k]});
+            probes.push_back({std::move(bake.radiance), std::move(bake.irradiance), counts[k], {}});
         }
+        if (finish) finish(first, std::span(probes).subspan(first));
     }
     return probes;
 }

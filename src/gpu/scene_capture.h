@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <functional>
 #include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <span>
 #include <vector>
@@ -139,7 +140,9 @@ uint32_t capturesPerBatch(const Device& device, const SceneCapture& capture, uin
 struct SceneProbe {
     ShCoefficients radiance;
     ShCoefficients irradiance;
-    uint32_t backFaceTexels = 0; // of the 6 N^2 texels of its cube map
+    uint32_t backFaceTexels = 0;       // of the 6 N^2 texels of its cube map
+    std::vector<glm::vec2> visibility; // the capture by rays' visibility map (gpu/ray_capture.h);
+                                       // empty for the raster capture
 };
 
 struct SceneBakeOptions {
@@ -158,10 +161,14 @@ std::vector<SceneProbe> bakeSceneProbes(const Context& context, const SceneCaptu
 // (gpu/ray_capture.h).
 using RecordCapture = std::function<void(VkCommandBuffer commands, std::span<const glm::dvec3> positions)>;
 
+// Called after each batch is read back with its probes, those of positions first, first + 1, ...
+using FinishBatch = std::function<void(size_t first, std::span<SceneProbe> probes)>;
+
 // bakeSceneProbes with the captures `record` makes into `target`, target.probeCount per batch.
 std::vector<SceneProbe> bakeCapturedProbes(const Context& context, const SceneCapture& capture,
                                            const CaptureTarget& target, std::span<const glm::dvec3> positions,
-                                           const SceneBakeOptions& options, const RecordCapture& record);
+                                           const SceneBakeOptions& options, const RecordCapture& record,
+                                           const FinishBatch& finish = {});
 
 // A cube map captured for one probe, read back (for tests and pictures): radiance in rgb, alpha
 // as recordSceneCapture leaves it.

@@ -95,35 +95,6 @@ struct ProbeView {
     NearestHits nearest;
 };
 
-// Hit distances of a view gathered per octahedral texel (scene/volume_sampling.h) into their mean
-// and mean square, each distance clamped to `range` (rays that meet nothing count as `range`). A
-// texel no ray fell in holds range, range^2: nothing near.
-class DistanceMoments {
-  public:
-    DistanceMoments(int size, double range)
-        : size_(size), range_(range), sums_(size_t(size) * size, glm::dvec2(0.0)), counts_(sums_.size(), 0) {}
-    void add(const glm::dvec3& direction, double distance) {
-        if (size_ == 0) return;
-        const size_t texel = size_t(octahedralTexel(direction, size_));
-        const double d = std::min(distance, range_);
-        sums_[texel] += glm::dvec2(d, d * d);
-        ++counts_[texel];
-    }
-    std::vector<glm::vec2> texels() const {
-        std::vector<glm::vec2> moments(sums_.size());
-        for (size_t t = 0; t < moments.size(); ++t)
-            moments[t] = counts_[t] > 0 ? glm::vec2(sums_[t] / double(counts_[t]))
-                                        : glm::vec2(range_, range_ * range_);
-        return moments;
-    }
-
-  private:
-    int size_;
-    double range_;
-    std::vector<glm::dvec2> sums_;
-    std::vector<uint32_t> counts_;
-};
-
 std::array<glm::dvec3, 3> triangleCorners(const World& world, uint32_t triangle) {
     const uint32_t* vertex = &world.indices[3 * size_t(triangle)];
     return {glm::dvec3(world.positions[vertex[0]]), glm::dvec3(world.positions[vertex[1]]),
@@ -158,6 +129,29 @@ glm::dvec2 insideTriangle(const SceneShading& shading, uint32_t triangle, const 
 }
 
 } // namespace
+
+DistanceMoments::DistanceMoments(int size, double range)
+    : size_(size), range_(range), sums_(size_t(size) * size, glm::dvec2(0.0)), counts_(sums_.size(), 0) {}
+
+void DistanceMoments::add(const glm::dvec3& direction, double distance) {
+    if (size_ == 0) return;
+    const size_t texel = size_t(octahedralTexel(direction, size_));
+    const double d = std::min(distance, range_);
+    sums_[texel] += glm::dvec2(d, d * d);
+    ++counts_[texel];
+}
+
+std::vector<glm::vec2> DistanceMoments::texels() const {
+    std::vector<glm::vec2> moments(sums_.size());
+    for (size_t t = 0; t < moments.size(); ++t)
+        moments[t] =
+            counts_[t] > 0 ? glm::vec2(sums_[t] / double(counts_[t])) : glm::vec2(range_, range_ * range_);
+    return moments;
+}
+
+double visibilityRangeOf(const World& world) {
+    return std::max(glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin)), 1e-30);
+}
 
 World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
     if (skySuns.empty()) return world;
@@ -240,7 +234,7 @@ void RayBaker::State::layOutCache() {
                                            std::move(queries));
     gatherSide = int(std::ceil(std::sqrt(double(options.gatherRays))));
     texelSide = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
-    visibilityRange = std::max(glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin)), 1e-30);
+    visibilityRange = visibilityRangeOf(world);
 }
 
 // The surface a ray meets; a hit nearer its triangle's edges than kInwardOffsets surface offsets is

@@ -97,6 +97,25 @@ double defaultCacheSpacing(const World& world);
 SurfaceHit cacheGatherPoint(const SceneShading& shading, uint32_t triangle, int side,
                             const glm::dvec2& barycentric);
 
+// Hit distances of a view gathered per octahedral texel (scene/volume_sampling.h) into their mean
+// and mean square, each distance clamped to `range` (rays that meet nothing count as `range`): the
+// visibility map of RayBakedProbe. A texel no ray fell in holds range, range^2: nothing near.
+class DistanceMoments {
+  public:
+    DistanceMoments(int size, double range);
+    void add(const glm::dvec3& direction, double distance);
+    std::vector<glm::vec2> texels() const;
+
+  private:
+    int size_;
+    double range_;
+    std::vector<glm::dvec2> sums_;
+    std::vector<uint32_t> counts_;
+};
+
+// The farthest distance a visibility map records: the world's diagonal (RayBaker::visibilityRange).
+double visibilityRangeOf(const World& world);
+
 // Adds to a probe's radiance at `position` each sun it sees (no surface on the way to it): a delta of
 // irradiance E in direction l, whose projection is E y_lm(l) exactly.
 void addSeenSuns(const Bvh& bvh, std::span<const SceneSun> suns, const glm::dvec3& position,
