@@ -6,7 +6,8 @@
 //
 //   set 0: ray_capture_interface.h; SHPROBE_RAYS_INPUT: vec4 probes[] (xyz: position);
 //          SHPROBE_RAYS_OUTPUT: rgba32f image2DArray, 6 layers per probe, in GENERAL;
-//          SHPROBE_RAYS_DISTANCES: float distances[], each texel's hit distance (visibility maps)
+//          SHPROBE_RAYS_DISTANCES: float distances[], each texel's hit distance, negative for a back
+//          face of a one-sided material (visibility maps, relocation)
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce)
 //   specialization: 0 = workgroup width; dispatch (texel groups, probes, 1): each invocation takes
 //   texels x, x + width * groups, ... of probe y.
@@ -37,6 +38,6 @@ void main() {
         RayArrival arrival = arriving(probes[probe].xyz, direction, rc.work.z != 0u);
         imageStore(cubemaps, ivec3(i, j, 6u * probe + face),
                    vec4(arrival.radiance, arrival.backFace ? SHPROBE_CAPTURE_BACK_FACE : 0.0));
-        distances[6u * faceTexels * probe + texel] = arrival.distance;
+        distances[6u * faceTexels * probe + texel] = arrival.backFace ? -arrival.distance : arrival.distance;
     }
 }

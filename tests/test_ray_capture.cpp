@@ -130,6 +130,39 @@ TEST_F(RayCaptureTest, VisibilityMapsEqualTheCpus) {
     EXPECT_LT(worstSquare, 1e-5);
 }
 
+// Probes inside geometry are moved out as the cpu moves them (ProbeRelocation, scene/ray_bake.h):
+// in the closed Cornell box with its blocks, with cells of 0.24 (a limit of 0.108, a front distance
+// of 0.024), a probe at (-0.1, 1, -0.3), inside the tall block 0.06 from its +x face, leaves through
+// that face and is pushed off it; one at the block's centre (-0.34, 0.6, -0.3), 0.3 from any face,
+// stays. Both backends cast one ray per texel here, so they meet the same nearest faces along the
+// same texel directions; distances differ by float rounding (the gpu's t against the cpu's double
+// length), which decides between the four texel rays about the face's normal that meet it at the
+// same distance: the offsets agree to 1e-6 up to the signs across that normal (measured: (0.083907,
+// 0.00375, 0.005244) and (0.083907, -0.00375, -0.005244)). The moved probe is, bit for bit, a probe
+// baked there.
+TEST_F(RayCaptureTest, ProbesInsideGeometryAreMovedOutAsOnTheCpu) {
+    const World world = testing::loadCornellBoxWorld({.lightSide = 1.0f, .closed = true, .innerBoxes = true});
+    const Cubemap sky = testing::directionalSky(4);
+    const ProbeRelocation rule{.limit = 0.108, .minFrontDistance = 0.024};
+    const std::vector<glm::dvec3> positions{{-0.1, 1.0, -0.3}, {-0.34, 0.6, -0.3}};
+    const std::vector<SceneProbe> gpu = bakeOnGpu(world, sky, positions, 16, {.relocation = rule});
+    RayBaker baker(world, sky, {.faceSize = 16, .raysPerTexel = 1, .bounces = 0, .relocation = rule});
+    const std::vector<RayBakedProbe> cpu = baker.bakeProbes(positions);
+    for (size_t p = 0; p < positions.size(); ++p) {
+        std::printf("probe %zu: gpu offset (%.6f, %.6f, %.6f), cpu (%.6f, %.6f, %.6f)\n", p, gpu[p].offset.x,
+                    gpu[p].offset.y, gpu[p].offset.z, cpu[p].offset.x, cpu[p].offset.y, cpu[p].offset.z);
+        for (int a = 0; a < 3; ++a)
+            EXPECT_NEAR(std::abs(gpu[p].offset[a]), std::abs(cpu[p].offset[a]), 1e-6) << "probe " << p;
+        EXPECT_NEAR(gpu[p].offset.x, cpu[p].offset.x, 1e-6) << "probe " << p;
+    }
+    EXPECT_GT(glm::length(gpu[0].offset), 0.05f);
+    EXPECT_EQ(gpu[1].offset, glm::vec3(0.0f));
+    const glm::dvec3 moved = positions[0] + glm::dvec3(gpu[0].offset);
+    const std::vector<SceneProbe> there = bakeOnGpu(world, sky, {&moved, 1}, 16, {});
+    EXPECT_EQ(there[0].radiance.rgb, gpu[0].radiance.rgb);
+    EXPECT_EQ(there[0].backFaceTexels, gpu[0].backFaceTexels);
+}
+
 // A closed box of uniform emission E = 1 and albedo 1/2, double-sided: every ray meets a wall
 // leaving E (1 + a + ... + a^k) at bounce k, whatever the cache's points or rays, so L00 is
 // 2 sqrt(pi) times that and the other coefficients 0, to float sums over 6 N^2 texels and g^2 rays

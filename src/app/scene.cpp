@@ -83,7 +83,7 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
         ->capture_default_str();
     command
         .add_option("--relocation-limit", options.relocationLimit,
-                    "cpu: a probe inside geometry is moved out (through the nearest back face its rays "
+                    "A probe inside geometry is moved out (through the nearest back face its rays "
                     "meet) by at most this fraction of the grid's smallest cell side, and captured there; "
                     "0: not moved. At most 0.5, so that a probe stays nearest its own grid point")
         ->check(numberFrom(0.0, 0.5))
@@ -195,11 +195,11 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
                             {"sky", sky.description}};
     settings["cache_spacing"] = options.cacheSpacing;
     settings["gather_rays"] = options.gatherRays;
+    if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
     if (backend == "cpu") {
         settings["rays_per_texel"] = cpuRaysPerTexel(options);
         if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
         settings["dilation"] = options.dilate;
-        if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
         if (options.transfer) settings["transfer"] = true;
     }
     return settings.dump();
@@ -353,6 +353,7 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
                                        {.bounces = bounces,
                                         .cacheSpacing = options.cacheSpacing,
                                         .gatherRays = options.gatherRays,
+                                        .relocation = rayBakeOptions(options, grid).relocation,
                                         .skySuns = split.suns});
     ScopeExit releaseRays([&] { destroyRayCapture(context, rays); });
     const std::vector<SceneProbe> probes =
@@ -362,8 +363,10 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
                                         options.invalidBackFaces, grid, range);
     volume.bounces = bounces;
     volume.visibilitySize = rays.options.visibilitySize;
-    for (const SceneProbe& probe : probes)
+    for (const SceneProbe& probe : probes) {
         volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
+        if (options.relocationLimit > 0.0) volume.offsets.push_back(probe.offset);
+    }
     if (context.validationMessages() > 0)
         throw Error(ErrorKind::Device, "scene: the Vulkan validation layer reported " +
                                            counted(context.validationMessages(), "message"));
@@ -421,8 +424,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                 inside + rays.relocated, options.invalidBackFaces);
     const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
     if (backend.context) {
-        std::printf("backend  gpu: %s%s: rays, 1 per texel, every cache point gathered; probes inside "
-                    "geometry stay in place (relocation: cpu only)\n",
+        std::printf("backend  gpu: %s%s: rays, 1 per texel, every cache point gathered\n",
                     backend.context->info.name.c_str(), reason.c_str());
     } else {
         std::printf("backend  cpu: rays, %d per texel, %s (%s)%s\n", cpuRaysPerTexel(options),

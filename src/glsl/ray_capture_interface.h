@@ -7,19 +7,24 @@
 #define SHPROBE_RAY_CAPTURE_INTERFACE_H
 #include "shared.h"
 
-#define SHPROBE_RAYS_BVH_NODES 10     // BvhNode[]
-#define SHPROBE_RAYS_BVH_TRIANGLES 11 // BvhTriangle[]
-#define SHPROBE_RAYS_BVH_IDS 12       // uint[]: the World index of each
-#define SHPROBE_RAYS_LATTICES 13      // CacheLattice[]: one per World triangle
-#define SHPROBE_RAYS_CACHE 14         // vec4[]: the irradiance (rgb) of each cache point, as read
-#define SHPROBE_RAYS_INPUT 15         // capture_rays: vec4[] probe positions; cache_gather: CachePoint[]
-#define SHPROBE_RAYS_OUTPUT                                                                                  \
-    16                           // capture_rays: the rgba32f 2D-array image of 6 layers per probe;
-                                 // cache_gather: vec4[], the irradiance gathered per point
-#define SHPROBE_RAYS_BINDINGS 17 // of cache_gather; capture_rays has one more:
-#define SHPROBE_RAYS_DISTANCES                                                                               \
-    17 // float[]: each texel's hit distance (infinity: none), probe
-       // p's 6 N^2 texels from 6 N^2 p, faces and rows in order
+// BvhNode[], BvhTriangle[], uint[] (the World index of each): the hierarchy (bvh_interface.h).
+#define SHPROBE_RAYS_BVH_NODES 10
+#define SHPROBE_RAYS_BVH_TRIANGLES 11
+#define SHPROBE_RAYS_BVH_IDS 12
+// CacheLattice[]: one per World triangle.
+#define SHPROBE_RAYS_LATTICES 13
+// vec4[]: the irradiance (rgb) of each cache point, as read.
+#define SHPROBE_RAYS_CACHE 14
+// capture_rays: vec4[], the probes' positions; cache_gather: CacheGatherPoint[].
+#define SHPROBE_RAYS_INPUT 15
+// capture_rays: the rgba32f 2D-array image of 6 layers per probe; cache_gather: vec4[], the
+// irradiance gathered per point.
+#define SHPROBE_RAYS_OUTPUT 16
+// The bindings of cache_gather; capture_rays has one more.
+#define SHPROBE_RAYS_BINDINGS 17
+// capture_rays: float[], each texel's hit distance (infinity: none; negative: the back of a
+// one-sided material), probe p's 6 N^2 texels from 6 N^2 p, faces and rows in order.
+#define SHPROBE_RAYS_DISTANCES 17
 
 SHPROBE_BEGIN
 

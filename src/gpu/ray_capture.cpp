@@ -193,18 +193,61 @@ void recordProbeRays(VkCommandBuffer commands, const SceneCapture& capture, cons
     computeWriteBarrier(commands);
 }
 
-// Probe k's visibility map of a batch (DistanceMoments), from its texels' hit distances in the
-// directions the cpu's one ray per texel casts.
-std::vector<glm::vec2> visibilityOf(const RayCapture& rays, const ProbeRaySet& set, int faceSize, size_t k) {
+// Probe k's visibility map of a batch (DistanceMoments) and the nearest faces its rays met, from
+// its texels' hit distances (negative: a back face) in the directions the cpu's one ray per texel
+// casts, in its order.
+void readDistances(const RayCapture& rays, const ProbeRaySet& set, int faceSize, size_t k, SceneProbe& probe,
+                   NearestHits& nearest) {
     DistanceMoments moments(rays.options.visibilitySize, rays.visibilityRange);
     const float* distances =
         static_cast<const float*>(set.distances.mapped) + 6 * size_t(faceSize) * faceSize * k;
     auto centre = [faceSize](int i) { return 2.0 * (i + 0.5) / faceSize - 1.0; };
     for (int face = 0; face < kFaceCount; ++face)
         for (int j = 0; j < faceSize; ++j)
-            for (int i = 0; i < faceSize; ++i)
-                moments.add(faceDirection(face, centre(i), centre(j)), double(*distances++));
-    return moments.texels();
+            for (int i = 0; i < faceSize; ++i) {
+                const glm::dvec3 direction = faceDirection(face, centre(i), centre(j));
+                const float distance = *distances++;
+                moments.add(direction, std::abs(double(distance)));
+                nearest.add(direction, std::abs(double(distance)), std::signbit(distance));
+            }
+    probe.visibility = moments.texels();
+}
+
+// The probes seen from `positions`, without relocation, and the nearest faces each saw.
+std::vector<SceneProbe> bakeViews(const Context& context, const SceneCapture& capture, const RayCapture& rays,
+                                  std::span<const glm::dvec3> positions, const SceneBakeOptions& options,
+                                  std::vector<NearestHits>& nearest) {
+    CaptureTarget target =
+        createCaptureTarget(context, capture, capturesPerBatch(context, capture, options.probesPerBatch));
+    ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
+    ProbeRaySet set = createProbeRaySet(context, capture, rays, target);
+    ScopeExit releaseSet([&] { destroyProbeRaySet(context, set); });
+    nearest.assign(positions.size(), NearestHits{});
+    std::vector<SceneProbe> probes = bakeCapturedProbes(
+        context, capture, target, positions, options,
+        [&](VkCommandBuffer commands, std::span<const glm::dvec3> members) {
+            recordProbeRays(commands, capture, rays, set, members);
+        },
+        [&](size_t first, std::span<SceneProbe> batch) {
+            invalidateBuffer(context, set.distances);
+            for (size_t k = 0; k < batch.size(); ++k)
+                readDistances(rays, set, capture.options.faceSize, k, batch[k], nearest[first + k]);
+        });
+    if (rays.options.skySuns.empty()) return probes;
+    for (size_t p = 0; p < probes.size(); ++p) {
+        addSeenSuns(rays.bvh, rays.options.skySuns, positions[p], probes[p].radiance);
+        probes[p].irradiance = convolveIrradiance(probes[p].radiance);
+    }
+    return probes;
+}
+
+// The probe seen from `position` alone, and the nearest faces it saw.
+SceneProbe bakeView(const Context& context, const SceneCapture& capture, const RayCapture& rays,
+                    const glm::dvec3& position, const SceneBakeOptions& options, NearestHits& nearest) {
+    std::vector<NearestHits> seen;
+    SceneProbe probe = std::move(bakeViews(context, capture, rays, {&position, 1}, options, seen).front());
+    nearest = seen.front();
+    return probe;
 }
 
 } // namespace
@@ -259,26 +302,25 @@ void destroyRayCapture(const Device& device, RayCapture& rays) {
 std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture& capture,
                                       const RayCapture& rays, std::span<const glm::dvec3> positions,
                                       const SceneBakeOptions& options) {
-    CaptureTarget target =
-        createCaptureTarget(context, capture, capturesPerBatch(context, capture, options.probesPerBatch));
-    ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
-    ProbeRaySet set = createProbeRaySet(context, capture, rays, target);
-    ScopeExit releaseSet([&] { destroyProbeRaySet(context, set); });
-    std::vector<SceneProbe> probes = bakeCapturedProbes(
-        context, capture, target, positions, options,
-        [&](VkCommandBuffer commands, std::span<const glm::dvec3> members) {
-            recordProbeRays(commands, capture, rays, set, members);
-        },
-        [&](size_t, std::span<SceneProbe> batch) {
-            if (rays.options.visibilitySize == 0) return;
-            invalidateBuffer(context, set.distances);
-            for (size_t k = 0; k < batch.size(); ++k)
-                batch[k].visibility = visibilityOf(rays, set, capture.options.faceSize, k);
-        });
-    if (rays.options.skySuns.empty()) return probes;
+    std::vector<NearestHits> nearest;
+    std::vector<SceneProbe> probes = bakeViews(context, capture, rays, positions, options, nearest);
+    const ProbeRelocation& rule = rays.options.relocation;
+    auto inside = [&](const SceneProbe& probe) {
+        return insideGeometry(probe.backFaceTexels, capture.options.faceSize, rule.invalidBackFaces);
+    };
     for (size_t p = 0; p < probes.size(); ++p) {
-        addSeenSuns(rays.bvh, rays.options.skySuns, positions[p], probes[p].radiance);
-        probes[p].irradiance = convolveIrradiance(probes[p].radiance);
+        if (!inside(probes[p])) continue;
+        NearestHits seen;
+        const std::optional<glm::vec3> moved =
+            relocationOffset(rule, nearest[p], [&](const glm::dvec3& offset) {
+                bakeView(context, capture, rays, positions[p] + offset, options, seen);
+                return seen;
+            });
+        if (!moved) continue;
+        SceneProbe there = bakeView(context, capture, rays, positions[p] + glm::dvec3(*moved), options, seen);
+        if (inside(there)) continue;
+        probes[p] = std::move(there);
+        probes[p].offset = *moved;
     }
     return probes;
 }

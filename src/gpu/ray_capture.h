@@ -17,6 +17,7 @@
 #pragma once
 #include "gpu/scene_capture.h"
 #include "scene/bvh.h"
+#include "scene/ray_bake.h"
 #include "scene/surface_shading.h"
 #include "vk/pipeline.h"
 
@@ -33,6 +34,7 @@ struct RayCaptureOptions {
     uint64_t seed = 1;             // of the gather's random numbers
     int visibilitySize = 16;       // each probe's visibility map (RayBakedProbe's): size x size
                                    // octahedral texels of its rays' hit distances; 0: none
+    ProbeRelocation relocation;    // probes inside geometry moved out as the cpu moves them
     std::vector<SceneSun> skySuns; // suns taken out of the sky (RayBakeOptions::skySuns): a probe
                                    // that sees one adds its delta; the capture's world lights with them
 };
@@ -61,7 +63,8 @@ void destroyRayCapture(const Device& device, RayCapture& rays);
 
 // bakeSceneProbes by rays: every position, probesPerBatch per command buffer, results in input order,
 // each with its visibility map, from its texels' hit distances as the cpu's one ray per texel
-// gathers them.
+// gathers them; a probe inside geometry moved out by options.relocation (each view of it, where it
+// is and where it may go, a capture of its own), its offset in SceneProbe::offset.
 std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture& capture,
                                       const RayCapture& rays, std::span<const glm::dvec3> positions,
                                       const SceneBakeOptions& options);

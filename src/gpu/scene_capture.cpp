@@ -647,7 +647,8 @@ std::vector<SceneProbe> bakeCapturedProbes(const Context& context, const SceneCa
             reinterpret_cast<const uint32_t*>(static_cast<const char*>(output.mapped) + coefficientBytes);
         for (size_t k = 0; k < members.size(); ++k) {
             GpuBake bake = readBakeOutput(output, 0, options.order, batch, uint32_t(k));
-            probes.push_back({std::move(bake.radiance), std::move(bake.irradiance), counts[k], {}});
+            probes.push_back(
+                {std::move(bake.radiance), std::move(bake.irradiance), counts[k], {}, glm::vec3(0.0f)});
         }
         if (finish) finish(first, std::span(probes).subspan(first));
     }

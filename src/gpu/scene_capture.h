@@ -143,6 +143,8 @@ struct SceneProbe {
     uint32_t backFaceTexels = 0;       // of the 6 N^2 texels of its cube map
     std::vector<glm::vec2> visibility; // the capture by rays' visibility map (gpu/ray_capture.h);
                                        // empty for the raster capture
+    glm::vec3 offset{0.0f};            // where the capture by rays moved it out of geometry, from
+                                       // the position asked for (ProbeRelocation); zero otherwise
 };
 
 struct SceneBakeOptions {

@@ -72,21 +72,6 @@ struct Arrival {
     bool backFace = false;
 };
 
-// The nearest back face and the nearest front face a view's rays met: their directions (unit) and
-// distances, kFar where none was met. Of rays at one distance, the first cast counts.
-struct NearestHits {
-    glm::dvec3 backDirection{0.0};
-    double back = kFar;
-    glm::dvec3 frontDirection{0.0};
-    double front = kFar;
-    void add(const glm::dvec3& direction, double distance, bool backFace) {
-        double& nearest = backFace ? back : front;
-        if (!(distance < nearest)) return;
-        nearest = distance;
-        (backFace ? backDirection : frontDirection) = direction;
-    }
-};
-
 // A probe's view and the visibility it gives (RayBakedProbe).
 struct ProbeView {
     Cubemap radiance;
@@ -147,6 +132,27 @@ std::vector<glm::vec2> DistanceMoments::texels() const {
         moments[t] =
             counts_[t] > 0 ? glm::vec2(sums_[t] / double(counts_[t])) : glm::vec2(range_, range_ * range_);
     return moments;
+}
+
+void NearestHits::add(const glm::dvec3& direction, double distance, bool backFace) {
+    double& nearest = backFace ? back : front;
+    if (!(distance < nearest)) return;
+    nearest = distance;
+    (backFace ? backDirection : frontDirection) = direction;
+}
+
+std::optional<glm::vec3>
+relocationOffset(const ProbeRelocation& rule, const NearestHits& seen,
+                 const std::function<NearestHits(const glm::dvec3& offset)>& survey) {
+    if (!(rule.limit > 0.0) || seen.back == kFar) return std::nullopt;
+    glm::dvec3 offset = seen.backDirection * (seen.back + 0.5 * rule.minFrontDistance);
+    if (glm::length(offset) > rule.limit) return std::nullopt;
+    const NearestHits there = survey(offset);
+    if (there.front < rule.minFrontDistance) {
+        const glm::dvec3 away = offset - there.frontDirection * (rule.minFrontDistance - there.front);
+        if (glm::length(away) <= rule.limit) offset = away;
+    }
+    return glm::vec3(offset);
 }
 
 double visibilityRangeOf(const World& world) {
@@ -371,20 +377,11 @@ NearestHits RayBaker::State::survey(const glm::dvec3& position, uint64_t& rays) 
     return nearest;
 }
 
-// Where a probe inside geometry that saw `seen` would be captured, from `position` (ProbeRelocation):
-// through the nearest back face, then off the nearest front face there; none beyond the limit.
+// Where a probe inside geometry that saw `seen` would be captured, from `position` (relocationOffset).
 std::optional<glm::vec3> RayBaker::State::relocation(const glm::dvec3& position, const NearestHits& seen,
                                                      uint64_t& rays) const {
-    const ProbeRelocation& rule = options.relocation;
-    if (!(rule.limit > 0.0) || seen.back == kFar) return std::nullopt;
-    glm::dvec3 offset = seen.backDirection * (seen.back + 0.5 * rule.minFrontDistance);
-    if (glm::length(offset) > rule.limit) return std::nullopt;
-    const NearestHits there = survey(position + offset, rays);
-    if (there.front < rule.minFrontDistance) {
-        const glm::dvec3 away = offset - there.frontDirection * (rule.minFrontDistance - there.front);
-        if (glm::length(away) <= rule.limit) offset = away;
-    }
-    return glm::vec3(offset);
+    return relocationOffset(options.relocation, seen,
+                            [&](const glm::dvec3& offset) { return survey(position + offset, rays); });
 }
 
 // A probe at `position`, or where relocation takes it out of geometry.

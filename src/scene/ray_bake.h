@@ -38,7 +38,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -96,6 +98,23 @@ double defaultCacheSpacing(const World& world);
 // not on the plane of the next wall, where a ray along that wall could slip out between the two.
 SurfaceHit cacheGatherPoint(const SceneShading& shading, uint32_t triangle, int side,
                             const glm::dvec2& barycentric);
+
+// The nearest back face and the nearest front face a view's rays met: their directions (unit) and
+// distances, infinity where none was met. Of rays at one distance, the first added counts.
+struct NearestHits {
+    glm::dvec3 backDirection{0.0};
+    double back = std::numeric_limits<double>::infinity();
+    glm::dvec3 frontDirection{0.0};
+    double front = std::numeric_limits<double>::infinity();
+    void add(const glm::dvec3& direction, double distance, bool backFace);
+};
+
+// Where a probe inside geometry that saw `seen` is captured, as an offset from its position
+// (ProbeRelocation): through the nearest back face, then off the nearest front face that
+// survey(offset), the view from there, finds; none where the rule's limit is 0, nothing was seen
+// behind, or the offset would pass the limit.
+std::optional<glm::vec3> relocationOffset(const ProbeRelocation& rule, const NearestHits& seen,
+                                          const std::function<NearestHits(const glm::dvec3& offset)>& survey);
 
 // Hit distances of a view gathered per octahedral texel (scene/volume_sampling.h) into their mean
 // and mean square, each distance clamped to `range` (rays that meet nothing count as `range`): the
