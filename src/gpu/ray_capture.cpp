@@ -241,15 +241,6 @@ std::vector<SceneProbe> bakeViews(const Context& context, const SceneCapture& ca
     return probes;
 }
 
-// The probe seen from `position` alone, and the nearest faces it saw.
-SceneProbe bakeView(const Context& context, const SceneCapture& capture, const RayCapture& rays,
-                    const glm::dvec3& position, const SceneBakeOptions& options, NearestHits& nearest) {
-    std::vector<NearestHits> seen;
-    SceneProbe probe = std::move(bakeViews(context, capture, rays, {&position, 1}, options, seen).front());
-    nearest = seen.front();
-    return probe;
-}
-
 } // namespace
 
 RayCapture createRayCapture(const Context& context, const SceneCapture& capture, const SceneShading& shading,
@@ -308,19 +299,30 @@ std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture
     auto inside = [&](const SceneProbe& probe) {
         return insideGeometry(probe.backFaceTexels, capture.options.faceSize, rule.invalidBackFaces);
     };
-    for (size_t p = 0; p < probes.size(); ++p) {
-        if (!inside(probes[p])) continue;
-        NearestHits seen;
-        const std::optional<glm::vec3> moved =
-            relocationOffset(rule, nearest[p], [&](const glm::dvec3& offset) {
-                bakeView(context, capture, rays, positions[p] + offset, options, seen);
-                return seen;
-            });
-        if (!moved) continue;
-        SceneProbe there = bakeView(context, capture, rays, positions[p] + glm::dvec3(*moved), options, seen);
-        if (inside(there)) continue;
-        probes[p] = std::move(there);
-        probes[p].offset = *moved;
+    // The probes inside that may move, and the view from through their back face, all in one bake.
+    std::vector<size_t> moving;
+    std::vector<glm::dvec3> through, at;
+    for (size_t p = 0; p < probes.size(); ++p)
+        if (inside(probes[p]))
+            if (const std::optional<glm::dvec3> offset = throughBackFace(rule, nearest[p])) {
+                moving.push_back(p);
+                through.push_back(*offset);
+                at.push_back(positions[p] + *offset);
+            }
+    if (moving.empty()) return probes;
+    std::vector<NearestHits> there;
+    bakeViews(context, capture, rays, at, options, there);
+    // Then, off the front face seen from there, the probes where they are captured.
+    std::vector<glm::vec3> moved(moving.size());
+    for (size_t k = 0; k < moving.size(); ++k) {
+        moved[k] = offFrontFace(rule, through[k], there[k]);
+        at[k] = positions[moving[k]] + glm::dvec3(moved[k]);
+    }
+    std::vector<SceneProbe> captured = bakeViews(context, capture, rays, at, options, there);
+    for (size_t k = 0; k < moving.size(); ++k) {
+        if (inside(captured[k])) continue;
+        probes[moving[k]] = std::move(captured[k]);
+        probes[moving[k]].offset = moved[k];
     }
     return probes;
 }

@@ -63,8 +63,8 @@ void destroyRayCapture(const Device& device, RayCapture& rays);
 
 // bakeSceneProbes by rays: every position, probesPerBatch per command buffer, results in input order,
 // each with its visibility map, from its texels' hit distances as the cpu's one ray per texel
-// gathers them; a probe inside geometry moved out by options.relocation (each view of it, where it
-// is and where it may go, a capture of its own), its offset in SceneProbe::offset.
+// gathers them; probes inside geometry moved out by options.relocation (their views from where they
+// may go, then from where they go, two more bakes of them all), the offset in SceneProbe::offset.
 std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture& capture,
                                       const RayCapture& rays, std::span<const glm::dvec3> positions,
                                       const SceneBakeOptions& options);

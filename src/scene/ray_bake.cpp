@@ -141,16 +141,17 @@ void NearestHits::add(const glm::dvec3& direction, double distance, bool backFac
     (backFace ? backDirection : frontDirection) = direction;
 }
 
-std::optional<glm::vec3>
-relocationOffset(const ProbeRelocation& rule, const NearestHits& seen,
-                 const std::function<NearestHits(const glm::dvec3& offset)>& survey) {
+std::optional<glm::dvec3> throughBackFace(const ProbeRelocation& rule, const NearestHits& seen) {
     if (!(rule.limit > 0.0) || seen.back == kFar) return std::nullopt;
-    glm::dvec3 offset = seen.backDirection * (seen.back + 0.5 * rule.minFrontDistance);
+    const glm::dvec3 offset = seen.backDirection * (seen.back + 0.5 * rule.minFrontDistance);
     if (glm::length(offset) > rule.limit) return std::nullopt;
-    const NearestHits there = survey(offset);
+    return offset;
+}
+
+glm::vec3 offFrontFace(const ProbeRelocation& rule, const glm::dvec3& offset, const NearestHits& there) {
     if (there.front < rule.minFrontDistance) {
         const glm::dvec3 away = offset - there.frontDirection * (rule.minFrontDistance - there.front);
-        if (glm::length(away) <= rule.limit) offset = away;
+        if (glm::length(away) <= rule.limit) return glm::vec3(away);
     }
     return glm::vec3(offset);
 }
@@ -377,11 +378,12 @@ NearestHits RayBaker::State::survey(const glm::dvec3& position, uint64_t& rays) 
     return nearest;
 }
 
-// Where a probe inside geometry that saw `seen` would be captured, from `position` (relocationOffset).
+// Where a probe inside geometry that saw `seen` would be captured, from `position`.
 std::optional<glm::vec3> RayBaker::State::relocation(const glm::dvec3& position, const NearestHits& seen,
                                                      uint64_t& rays) const {
-    return relocationOffset(options.relocation, seen,
-                            [&](const glm::dvec3& offset) { return survey(position + offset, rays); });
+    const std::optional<glm::dvec3> offset = throughBackFace(options.relocation, seen);
+    if (!offset) return std::nullopt;
+    return offFrontFace(options.relocation, *offset, survey(position + *offset, rays));
 }
 
 // A probe at `position`, or where relocation takes it out of geometry.

@@ -109,12 +109,12 @@ struct NearestHits {
     void add(const glm::dvec3& direction, double distance, bool backFace);
 };
 
-// Where a probe inside geometry that saw `seen` is captured, as an offset from its position
-// (ProbeRelocation): through the nearest back face, then off the nearest front face that
-// survey(offset), the view from there, finds; none where the rule's limit is 0, nothing was seen
-// behind, or the offset would pass the limit.
-std::optional<glm::vec3> relocationOffset(const ProbeRelocation& rule, const NearestHits& seen,
-                                          const std::function<NearestHits(const glm::dvec3& offset)>& survey);
+// Where a probe inside geometry is captured, as an offset from its position (ProbeRelocation), in
+// two steps: through the nearest back face it saw (none where the rule's limit is 0, nothing was
+// seen behind, or the offset would pass the limit), then, from the view `there` at that offset, off
+// the nearest front face, where that stays within the limit; rounded to float, as volumes hold it.
+std::optional<glm::dvec3> throughBackFace(const ProbeRelocation& rule, const NearestHits& seen);
+glm::vec3 offFrontFace(const ProbeRelocation& rule, const glm::dvec3& offset, const NearestHits& there);
 
 // Hit distances of a view gathered per octahedral texel (scene/volume_sampling.h) into their mean
 // and mean square, each distance clamped to `range` (rays that meet nothing count as `range`): the
