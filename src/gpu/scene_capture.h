@@ -7,7 +7,9 @@
 //   recordSceneCapture(commands, capture, target, positions);                // <= 32 positions
 //   recordProbeBake(commands, baker, set);  // a ProbeBakeSet of target.cubemaps.view (probe_baker.h)
 //
-// bakeSceneProbes does all of it for a list of positions: batches, bakes, reads back.
+// bakeSceneProbes does all of it for a list of positions: batches, bakes, reads back. The scene's
+// views (render/scene_view.h) draw with these pipelines; `shprobe scene` captures its probes by rays
+// instead (gpu/ray_capture.h), on this capture's buffers and target.
 #pragma once
 #include "glsl/capture_interface.h"
 #include "gpu/probe_baker.h"
