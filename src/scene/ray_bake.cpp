@@ -63,6 +63,12 @@ void requireOptions(const RayBakeOptions& options) {
         refuse("the back-face share of a probe inside geometry must be in 0..1");
 }
 
+// The surface a ray meets (described where it is shaded) and how far along the ray it lies.
+struct Meeting {
+    SurfaceHit surface;
+    double distance = 0.0;
+};
+
 // What a ray brings back: the radiance, how far it went (kFar where it met nothing) and whether it
 // met the back of a one-sided material.
 constexpr double kFar = std::numeric_limits<double>::infinity();
@@ -174,8 +180,8 @@ double defaultCacheSpacing(const World& world) {
 
 SurfaceHit cacheGatherPoint(const SceneShading& shading, uint32_t triangle, int side,
                             const glm::dvec2& barycentric) {
-    return shading.surfacePoint(triangle, insideTriangle(shading, triangle, barycentric, kLatticeInwardFraction),
-                                side == 0);
+    return shading.surfacePoint(
+        triangle, insideTriangle(shading, triangle, barycentric, kLatticeInwardFraction), side == 0);
 }
 
 void addSeenSuns(const Bvh& bvh, std::span<const SceneSun> suns, const glm::dvec3& position,
@@ -209,7 +215,7 @@ struct RayBaker::State {
     std::atomic<uint64_t> cacheRays{0};
 
     void layOutCache();
-    std::optional<SurfaceHit> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
+    std::optional<Meeting> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
     bool occluded(const glm::dvec3& origin, const glm::dvec3& direction) const;
     Arrival arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, uint64_t& rays);
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
@@ -244,19 +250,23 @@ void RayBaker::State::layOutCache() {
     visibilityRange = visibilityRangeOf(world);
 }
 
-// The surface a ray meets; a hit nearer its triangle's edges than kInwardOffsets surface offsets is
-// described moved in (insideTriangle). A ray that meets the edge where a wall meets the ceiling lies on
-// the ceiling's plane, and the shadow rays of a point there, started off the wall but on that plane,
-// slip out between the two: in the two rooms of docs/scene-probes.md, texel centres of probes as far
-// from the floor as from a wall met such edges, and the closed room's probes saw the sun.
-std::optional<SurfaceHit> RayBaker::State::intersect(const glm::dvec3& origin,
-                                                     const glm::dvec3& direction) const {
+// The surface a ray meets and how far it went; a hit nearer its triangle's edges than kInwardOffsets
+// surface offsets is described moved in (insideTriangle), its distance kept. A ray that meets the edge
+// where a wall meets the ceiling lies on the ceiling's plane, and the shadow rays of a point there,
+// started off the wall but on that plane, slip out between the two: in the two rooms of
+// docs/scene-probes.md, texel centres of probes as far from the floor as from a wall met such edges,
+// and the closed room's probes saw the sun.
+std::optional<Meeting> RayBaker::State::intersect(const glm::dvec3& origin,
+                                                  const glm::dvec3& direction) const {
     const std::optional<RayHit> hit = closestHit(bvh, {glm::vec3(origin), glm::vec3(direction)});
     if (!hit) return std::nullopt;
-    glm::dvec2 barycentric(hit->hit.u, hit->hit.v);
+    const glm::dvec2 barycentric(hit->hit.u, hit->hit.v);
+    Meeting meeting{shading.describe(hit->triangle, barycentric, direction), 0.0};
+    meeting.distance = glm::length(meeting.surface.position - origin);
     if (!(edgeDistance(shading.world(), hit->triangle, barycentric) >= kInwardOffsets * shading.offset()))
-        barycentric = insideTriangle(shading, hit->triangle, barycentric, 0.0);
-    return shading.describe(hit->triangle, barycentric, direction);
+        meeting.surface = shading.describe(
+            hit->triangle, insideTriangle(shading, hit->triangle, barycentric, 0.0), direction);
+    return meeting;
 }
 
 bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direction) const {
@@ -269,9 +279,10 @@ bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direc
 Arrival RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction,
                                   uint64_t& rays) {
     ++rays;
-    const std::optional<SurfaceHit> hit = intersect(origin, direction);
-    if (!hit) return {shading.skyRadiance(direction), kFar, false};
-    const double distance = glm::length(hit->position - origin);
+    const std::optional<Meeting> meeting = intersect(origin, direction);
+    if (!meeting) return {shading.skyRadiance(direction), kFar, false};
+    const SurfaceHit* hit = &meeting->surface;
+    const double distance = meeting->distance;
     if (hit->backFace) return {glm::dvec3(0.0), distance, true};
     const glm::dvec3 direct =
         leavingWithoutBounce(shading.suns(), *hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
@@ -371,8 +382,8 @@ NearestHits RayBaker::State::survey(const glm::dvec3& position, uint64_t& rays) 
     forEachViewRay(
         [&](const glm::dvec3& direction) {
             ++rays;
-            if (const std::optional<SurfaceHit> hit = intersect(position, direction))
-                nearest.add(direction, glm::length(hit->position - position), hit->backFace);
+            if (const std::optional<Meeting> meeting = intersect(position, direction))
+                nearest.add(direction, meeting->distance, meeting->surface.backFace);
         },
         [](int, int, int) {});
     return nearest;
