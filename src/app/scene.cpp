@@ -237,7 +237,6 @@ std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range) 
     return positions;
 }
 
-
 RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid) {
     const double cell = smallestCellEdge(grid);
     return {.order = options.order,
