@@ -399,4 +399,21 @@ ProbeMetadata metadataFor(const Backend& backend, const BakeOptions& options, co
     return metadata;
 }
 
+RayBackend chooseRayBackend(bool automatic, const std::function<Context()>& create) {
+    if (std::string reason = automatic ? cpuReasonWithoutVulkan() : ""; !reason.empty())
+        return {"cpu", reason, std::nullopt};
+    Context context;
+    try {
+        context = create();
+    } catch (const Error& error) {
+        if (!automatic || error.kind() != ErrorKind::Device) throw;
+        return {"cpu", cpuReasonForDevice(nullptr), std::nullopt};
+    }
+    if (std::string reason = automatic ? cpuReasonForDevice(&context.info) : ""; !reason.empty()) {
+        destroyContext(context);
+        return {"cpu", reason, std::nullopt};
+    }
+    return {"gpu", automatic ? "a GPU" : "", std::move(context)};
+}
+
 } // namespace shprobe

@@ -14,6 +14,7 @@
 #include "vk/context.h"
 #include "vk/pipeline_cache.h"
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -92,6 +93,16 @@ double smallJobWork();
 // use, nullptr where none is usable); else the GPU. Each returns why the CPU, or "" for the GPU.
 std::string cpuReasonWithoutVulkan();
 std::string cpuReasonForDevice(const DeviceInfo* device);
+// The device a job of rays (`scene`, `transfer`) runs on, and why where auto chose: cpu (no
+// context) or gpu (its context).
+struct RayBackend {
+    std::string name;
+    std::string reason;
+    std::optional<Context> context;
+};
+// auto's rule for it (`automatic`; else the gpu asked for): cpu where no GPU can be, where Vulkan
+// has no usable device or the device is a CPU, else gpu on the context `create` makes.
+RayBackend chooseRayBackend(bool automatic, const std::function<Context()>& create);
 // Whether a Vulkan device here may be a GPU: false where none can be (then any is a CPU, where the
 // CPU paths are faster), without starting Vulkan.
 bool mayHaveGpu();

@@ -271,35 +271,15 @@ ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOp
     return volume;
 }
 
-// The device a scene bakes on and, for auto, why: cpu (no context) or gpu (its context).
-struct SceneBackend {
-    std::string name;
-    std::string reason;
-    std::optional<Context> context;
-};
-
 // auto means gpu where the options ask for Vulkan (--device, --validation) or continue a gpu bake
 // (--previous), cpu where no GPU can be (no device file) or the Vulkan device is a CPU (lavapipe:
-// rays on the cores are faster than llvmpipe's rasterizer), else gpu.
-SceneBackend chooseSceneBackend(const SceneOptions& options) {
+// rays on the cores are faster than llvmpipe's), else gpu.
+RayBackend chooseSceneBackend(const SceneOptions& options) {
     const bool asksForVulkan = !options.device.empty() || options.validation || !options.previous.empty();
     if (options.backend == "cpu") return {"cpu", "", std::nullopt};
     if (options.transfer) return {"cpu", "--transfer bakes by rays on the cpu", std::nullopt};
-    const bool automatic = options.backend == "auto" && !asksForVulkan;
-    if (std::string reason = automatic ? cpuReasonWithoutVulkan() : ""; !reason.empty())
-        return {"cpu", reason, std::nullopt};
-    Context context;
-    try {
-        context = createGraphicsContext(options.device, options.validation);
-    } catch (const Error& error) {
-        if (!automatic || error.kind() != ErrorKind::Device) throw;
-        return {"cpu", cpuReasonForDevice(nullptr), std::nullopt};
-    }
-    if (std::string reason = automatic ? cpuReasonForDevice(&context.info) : ""; !reason.empty()) {
-        destroyContext(context);
-        return {"cpu", reason, std::nullopt};
-    }
-    return {"gpu", options.backend == "auto" ? "a GPU" : "", std::move(context)};
+    return chooseRayBackend(options.backend == "auto" && !asksForVulkan,
+                            [&] { return createGraphicsContext(options.device, options.validation); });
 }
 
 // What the options ask for that no scene can give, before the scene is read: a bounce count with
@@ -383,7 +363,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         options.brick ? brickRange(grid, options.brick->brick) : ProbeRange{0, grid.probeCount()};
     const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
 
-    SceneBackend backend = chooseSceneBackend(options);
+    RayBackend backend = chooseSceneBackend(options);
     ScopeExit releaseContext([&] {
         if (backend.context) destroyContext(*backend.context);
     });

@@ -46,40 +46,20 @@ void checkTransferOptions(const TransferCommandOptions& options, bool bouncesGiv
     checkOutputsAreNotInputs({&options.output, 1}, inputs);
 }
 
-// Where the rays are cast: "gpu" with its context, or "cpu"; for auto, and for a model without
-// rays, why.
-struct TransferBackend {
-    std::string name;
-    std::string reason;
-    std::optional<Context> context;
-};
-
 // auto means gpu where the options ask for Vulkan (--device, --validation), cpu where no GPU can
 // be (no device file) or the Vulkan device is a CPU (lavapipe: the cores cast the same rays
 // faster than llvmpipe runs the shader, docs/benchmark.md), else gpu. Unshadowed transfer casts no
 // rays: always cpu.
-TransferBackend chooseTransferBackend(const TransferCommandOptions& options) {
+RayBackend chooseTransferBackend(const TransferCommandOptions& options) {
     if (options.backend == "cpu") return {"cpu", "", std::nullopt};
     if (options.model == "unshadowed") return {"cpu", "the unshadowed model casts no rays", std::nullopt};
-    const bool automatic = options.backend == "auto" && options.device.empty() && !options.validation;
-    if (std::string reason = automatic ? cpuReasonWithoutVulkan() : ""; !reason.empty())
-        return {"cpu", reason, std::nullopt};
-    Context context;
-    try {
-        context = createContext({.device = options.device, .validation = options.validation});
-    } catch (const Error& error) {
-        if (!automatic || error.kind() != ErrorKind::Device) throw;
-        return {"cpu", cpuReasonForDevice(nullptr), std::nullopt};
-    }
-    if (std::string reason = automatic ? cpuReasonForDevice(&context.info) : ""; !reason.empty()) {
-        destroyContext(context);
-        return {"cpu", reason, std::nullopt};
-    }
-    return {"gpu", options.backend == "auto" ? "a GPU" : "", std::move(context)};
+    return chooseRayBackend(options.backend == "auto" && options.device.empty() && !options.validation, [&] {
+        return createContext({.device = options.device, .validation = options.validation});
+    });
 }
 
-void report(const TransferCommandOptions& options, const GltfSceneSource& source,
-            const TransferBackend& backend, const VertexTransfer& transfer, double seconds) {
+void report(const TransferCommandOptions& options, const GltfSceneSource& source, const RayBackend& backend,
+            const VertexTransfer& transfer, double seconds) {
     FILE* out = reportStream(options.output);
     const int channels = transferChannels(transfer);
     const std::string reason = backend.reason.empty() ? "" : " (" + backend.reason + ")";
@@ -148,7 +128,7 @@ void runTransfer(const TransferCommandOptions& options, bool bouncesGiven) {
                                           .rays = options.rays,
                                           .bounces =
                                               model == TransferModel::Interreflected ? options.bounces : 0};
-    TransferBackend backend = chooseTransferBackend(options);
+    RayBackend backend = chooseTransferBackend(options);
     ScopeExit release([&] {
         if (backend.context) destroyContext(*backend.context);
     });
