@@ -30,7 +30,7 @@ RenderedImage renderRelit(const Context& context, const RelitScene& relit, const
                           VkExtent2D extent, float exposure) {
     RelitTarget target = createRelitTarget(context, relit, extent,
                                            VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
-    ScopeExit releaseTarget([&] { destroyRelitTarget(context, target); });
+    ScopeExit releaseTarget([&] { destroyColorDepthTarget(context, target); });
     DisplayReadback readback = createDisplayReadback(context, target.color.view, extent);
     ScopeExit releaseReadback([&] { destroyDisplayReadback(context, readback); });
     submitAndWait(context, [&](VkCommandBuffer commands) {

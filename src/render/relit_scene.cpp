@@ -182,27 +182,13 @@ void setLightRotation(const RelitScene& relit, const glm::dmat3& R) {
 
 RelitTarget createRelitTarget(const Context& context, const RelitScene& relit, VkExtent2D extent,
                               VkImageUsageFlags colorUsage) {
-    RelitTarget target;
-    OnFailure undo([&] { destroyRelitTarget(context, target); });
-    target.extent = extent;
-    target.color = createImage(context, {.format = kColorFormat,
-                                         .extent = extent,
-                                         .usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | colorUsage,
-                                         .what = "relit view"});
-    target.depth = createImage(context, {.format = kDepthFormat,
-                                         .extent = extent,
-                                         .usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                                         .what = "relit view depth"});
-    const std::array<VkImageView, 2> views{target.color.view, target.depth.view};
-    target.framebuffer = createFramebuffer(context, relit.renderPass, views, extent);
-    return target;
-}
-
-void destroyRelitTarget(const Device& device, RelitTarget& target) {
-    if (target.framebuffer) vkDestroyFramebuffer(device.device, target.framebuffer, nullptr);
-    destroyImage(device, target.depth);
-    destroyImage(device, target.color);
-    target = RelitTarget{};
+    return createColorDepthTarget(context, {.renderPass = relit.renderPass,
+                                            .extent = extent,
+                                            .colorFormat = kColorFormat,
+                                            .depthFormat = kDepthFormat,
+                                            .colorUsage = colorUsage,
+                                            .what = "relit view",
+                                            .depthWhat = "relit view depth"});
 }
 
 void recordRelitView(VkCommandBuffer commands, const RelitScene& relit, const RelitTarget& target,

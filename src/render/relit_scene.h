@@ -14,7 +14,7 @@
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
 #include "vk/context.h"
-#include "vk/image.h"
+#include "vk/graphics.h"
 #include "vk/resources.h"
 
 #include <glm/mat3x3.hpp>
@@ -68,15 +68,9 @@ void destroyRelitScene(const Device& device, RelitScene& relit);
 void setLightRotation(const RelitScene& relit, const glm::dmat3& R);
 
 // The picture: colour (RGBA32F, linear, ending in SHADER_READ_ONLY_OPTIMAL) and depth.
-struct RelitTarget {
-    VkExtent2D extent{};
-    GpuImage color;
-    GpuImage depth;
-    VkFramebuffer framebuffer = VK_NULL_HANDLE;
-};
+using RelitTarget = ColorDepthTarget;
 RelitTarget createRelitTarget(const Context& context, const RelitScene& relit, VkExtent2D extent,
                               VkImageUsageFlags colorUsage);
-void destroyRelitTarget(const Device& device, RelitTarget& target);
 
 // Records the light's rotation and the draw (background black) into target.color.
 void recordRelitView(VkCommandBuffer commands, const RelitScene& relit, const RelitTarget& target,

@@ -64,17 +64,14 @@ SceneViewTarget createSceneViewTarget(const Context& context, const SceneCapture
                                       VkImageUsageFlags colorUsage) {
     SceneViewTarget target;
     OnFailure undo([&] { destroySceneViewTarget(context, target); });
-    target.extent = extent;
-    target.color = createImage(context, {.format = kCaptureFormat,
+    static_cast<ColorDepthTarget&>(target) =
+        createColorDepthTarget(context, {.renderPass = capture.renderPass,
                                          .extent = extent,
-                                         .usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | colorUsage,
-                                         .what = "scene view"});
-    target.depth = createImage(context, {.format = capture.depthFormat,
-                                         .extent = extent,
-                                         .usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                                         .what = "scene view depth"});
-    const std::array<VkImageView, 2> views{target.color.view, target.depth.view};
-    target.framebuffer = createFramebuffer(context, capture.renderPass, views, extent);
+                                         .colorFormat = kCaptureFormat,
+                                         .depthFormat = capture.depthFormat,
+                                         .colorUsage = colorUsage,
+                                         .what = "scene view",
+                                         .depthWhat = "scene view depth"});
     target.probeVertex = createShaderModule(context, spirv::capture_probe_vert);
     target.probeFragment = createShaderModule(context, spirv::capture_probe_frag);
     target.probes = createProbePipeline(context, capture, target);
@@ -98,9 +95,7 @@ void destroySceneViewTarget(const Device& device, SceneViewTarget& target) {
     if (target.probes) vkDestroyPipeline(device.device, target.probes, nullptr);
     for (VkShaderModule module : {target.probeVertex, target.probeFragment})
         if (module) vkDestroyShaderModule(device.device, module, nullptr);
-    if (target.framebuffer) vkDestroyFramebuffer(device.device, target.framebuffer, nullptr);
-    destroyImage(device, target.depth);
-    destroyImage(device, target.color);
+    destroyColorDepthTarget(device, target);
     target = SceneViewTarget{};
 }
 

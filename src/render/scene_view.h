@@ -5,7 +5,7 @@
 #pragma once
 #include "gpu/scene_capture.h"
 #include "vk/context.h"
-#include "vk/image.h"
+#include "vk/graphics.h"
 #include "vk/resources.h"
 
 #include <cstdint>
@@ -34,11 +34,7 @@ struct SceneViewOptions {
 
 // The view's colour (RGBA32F, left in GENERAL) and depth, its framebuffer, and the pipeline and
 // sphere mesh of the probes.
-struct SceneViewTarget {
-    VkExtent2D extent{};
-    GpuImage color;
-    GpuImage depth;
-    VkFramebuffer framebuffer = VK_NULL_HANDLE;
+struct SceneViewTarget : ColorDepthTarget {
     VkShaderModule probeVertex = VK_NULL_HANDLE;
     VkShaderModule probeFragment = VK_NULL_HANDLE;
     VkPipeline probes = VK_NULL_HANDLE;

@@ -368,7 +368,7 @@ void destroyPictureTargets(const Device& device, Session& session) {
     const Tonemapper& tonemapper = session.frames.tonemapper;
     if (session.relit) {
         if (session.relit->tonemapInput) freeTonemapInput(device, tonemapper, session.relit->tonemapInput);
-        return destroyRelitTarget(device, session.relit->target);
+        return destroyColorDepthTarget(device, session.relit->target);
     }
     if (!session.scene) return destroySceneTargets(device, tonemapper, session.targets);
     freeTonemapInput(device, tonemapper, session.scene->tonemapInput);

@@ -1,5 +1,6 @@
 #include "vk/graphics.h"
 
+#include "common/scope_exit.h"
 #include "vk/check.h"
 #include "vk/vulkan_commands.h"
 
@@ -146,6 +147,30 @@ void beginRenderPass(VkCommandBuffer commands, VkRenderPass renderPass, VkFrameb
     VkRect2D scissor{{0, 0}, extent};
     vkCmdSetViewport(commands, 0, 1, &viewport);
     vkCmdSetScissor(commands, 0, 1, &scissor);
+}
+
+ColorDepthTarget createColorDepthTarget(const Device& device, const ColorDepthTargetDesc& desc) {
+    ColorDepthTarget target;
+    OnFailure undo([&] { destroyColorDepthTarget(device, target); });
+    target.extent = desc.extent;
+    target.color = createImage(device, {.format = desc.colorFormat,
+                                        .extent = desc.extent,
+                                        .usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | desc.colorUsage,
+                                        .what = desc.what});
+    target.depth = createImage(device, {.format = desc.depthFormat,
+                                        .extent = desc.extent,
+                                        .usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                                        .what = desc.depthWhat});
+    const std::array<VkImageView, 2> views{target.color.view, target.depth.view};
+    target.framebuffer = createFramebuffer(device, desc.renderPass, views, desc.extent);
+    return target;
+}
+
+void destroyColorDepthTarget(const Device& device, ColorDepthTarget& target) {
+    if (target.framebuffer) vkDestroyFramebuffer(device.device, target.framebuffer, nullptr);
+    destroyImage(device, target.depth);
+    destroyImage(device, target.color);
+    target = ColorDepthTarget{};
 }
 
 } // namespace shprobe

@@ -3,6 +3,7 @@
 // shader modules and descriptor sets come from vk/pipeline.h, as compute programs' do.
 #pragma once
 #include "vk/context.h"
+#include "vk/image.h"
 
 #include <array>
 #include <cstdint>
@@ -32,6 +33,26 @@ VkRenderPass createRenderPass(const Device& device, const RenderPassDesc& desc);
 // One layer of `views`, in attachment order, for passes of renderPass.
 VkFramebuffer createFramebuffer(const Device& device, VkRenderPass renderPass,
                                 std::span<const VkImageView> views, VkExtent2D extent);
+
+// A colour and a depth image of one size and their framebuffer, for a render pass whose attachments
+// are that colour and that depth.
+struct ColorDepthTarget {
+    VkExtent2D extent{};
+    GpuImage color;
+    GpuImage depth;
+    VkFramebuffer framebuffer = VK_NULL_HANDLE;
+};
+struct ColorDepthTargetDesc {
+    VkRenderPass renderPass = VK_NULL_HANDLE;
+    VkExtent2D extent{};
+    VkFormat colorFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+    VkFormat depthFormat = VK_FORMAT_D32_SFLOAT;
+    VkImageUsageFlags colorUsage = 0; // besides COLOR_ATTACHMENT (e.g. SAMPLED, TRANSFER_SRC)
+    const char* what = "";            // the colour image, for error messages
+    const char* depthWhat = "";
+};
+ColorDepthTarget createColorDepthTarget(const Device& device, const ColorDepthTargetDesc& desc);
+void destroyColorDepthTarget(const Device& device, ColorDepthTarget& target);
 
 // What varies between the graphics pipelines here; the rest is fixed: triangle lists, filled,
 // counter-clockwise front faces, one sample, no blending (every colour attachment written whole),
