@@ -230,13 +230,6 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
     return previous;
 }
 
-std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range) {
-    std::vector<glm::dvec3> positions;
-    for (uint32_t p = range.begin; p < range.end; ++p)
-        positions.push_back(probePosition(grid, probeCell(grid, p)));
-    return positions;
-}
-
 RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid) {
     const double cell = smallestCellEdge(grid);
     return {.order = options.order,

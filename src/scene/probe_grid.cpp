@@ -173,4 +173,11 @@ ProbeRange brickRange(const ProbeGrid& grid, const Brick& brick) {
             uint32_t((brick.index + 1ull) * total / brick.count)};
 }
 
+std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range) {
+    std::vector<glm::dvec3> positions;
+    for (uint32_t p = range.begin; p < range.end; ++p)
+        positions.push_back(probePosition(grid, probeCell(grid, p)));
+    return positions;
+}
+
 } // namespace shprobe

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <glm/vec3.hpp>
 #include <string>
+#include <vector>
 
 namespace shprobe {
 
@@ -76,5 +77,8 @@ struct ProbeRange {
 // most, so that merging is concatenation in brick order. More bricks than probes would leave some
 // empty, which no bake needs: refused with Error(Input) naming the largest N the grid allows.
 ProbeRange brickRange(const ProbeGrid& grid, const Brick& brick);
+
+// The positions of probes [range.begin, range.end), in flat-index order.
+std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range);
 
 } // namespace shprobe

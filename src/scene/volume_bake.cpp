@@ -14,13 +14,6 @@ namespace shprobe {
 
 namespace {
 
-std::vector<glm::dvec3> probePositions(const ProbeGrid& grid, ProbeRange range) {
-    std::vector<glm::dvec3> positions;
-    for (uint32_t p = range.begin; p < range.end; ++p)
-        positions.push_back(probePosition(grid, probeCell(grid, p)));
-    return positions;
-}
-
 bool invalid(const RayBakedProbe& probe, const RayBakeOptions& options) {
     return insideGeometry(probe.backFaceTexels, options.faceSize, options.relocation.invalidBackFaces);
 }
