@@ -45,6 +45,8 @@
 #                                              the first EXR file is read or written
 #   lib/shprobe/libshprobe_oiio.so             the OpenImageIO plugin (image/oiio_plugin.h), loaded
 #                                              only for formats shprobe does not read itself
+#   lib/shprobe/libshprobe_embree.so           the Embree plugin (scene/embree_rays.h), loaded when
+#                                              rays are first cast on the CPU
 #   share/doc/shprobe/LICENSE                  the license
 #   share/doc/shprobe/conventions.md           the SH, cube-map and coefficient-file conventions
 #
@@ -151,7 +153,8 @@ install(TARGETS ${shprobe_export_targets}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} ${SHPROBE_INSTALL_INCLUDEDIR})
 install(TARGETS ${shprobe_programs} shprobe_bench_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(TARGETS shprobe_exr shprobe_oiio LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/shprobe) # image/*_plugin.h
+install(TARGETS shprobe_exr shprobe_oiio shprobe_embree # image/*_plugin.h, scene/embree_rays.h
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/shprobe)
 
 # --- headers -------------------------------------------------------------------------------------
 # The public API: the headers of the floors the installed libraries hold, laid out as in src/ under

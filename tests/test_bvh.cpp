@@ -5,9 +5,9 @@
 
 #include "common/error.h"
 #include "scene/gltf_scene.h"
+#include "scene/ray_caster.h"
 #include "scene_fixtures.h"
 
-#include <embree3/rtcore.h>
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <random>
 #include <unistd.h>
 #include <vector>
@@ -451,74 +452,7 @@ TEST(Bvh, TraversalsEqualTestingEveryTriangle) {
     }
 }
 
-// --- Against Embree ----------------------------------------------------------------------------
-
-// Embree 3 on the World's triangles in one geometry (primID = World index), robust mode and high
-// build quality, as the reference tracer builds it.
-class EmbreeScene {
-  public:
-    explicit EmbreeScene(const World& world) : device_(rtcNewDevice(nullptr)), scene_(rtcNewScene(device_)) {
-        RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                                     RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                                     world.positions.size()));
-        for (size_t i = 0; i < world.positions.size(); ++i)
-            for (int c = 0; c < 3; ++c)
-                vertices[3 * i + c] = world.positions[i][c];
-        auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
-                                                                       RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
-                                                                       world.triangleCount()));
-        std::copy(world.indices.begin(), world.indices.end(), indices);
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(scene_, geometry);
-        rtcReleaseGeometry(geometry);
-        rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
-        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
-        rtcCommitScene(scene_);
-    }
-    ~EmbreeScene() {
-        rtcReleaseScene(scene_);
-        rtcReleaseDevice(device_);
-    }
-    EmbreeScene(const EmbreeScene&) = delete;
-    EmbreeScene& operator=(const EmbreeScene&) = delete;
-
-    // The closest hit's triangle and t, if any.
-    std::optional<std::pair<uint32_t, float>> intersect(const Ray& ray) const {
-        RTCRayHit query = {};
-        setRay(query.ray, ray);
-        query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        rtcIntersect1(scene_, &context, &query);
-        if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-        return std::pair{query.hit.primID, query.ray.tfar};
-    }
-    bool occluded(const Ray& ray) const {
-        RTCRay query = {};
-        setRay(query, ray);
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        rtcOccluded1(scene_, &context, &query);
-        return query.tfar < 0.0f;
-    }
-
-  private:
-    static void setRay(RTCRay& query, const Ray& ray) {
-        query.org_x = ray.origin.x;
-        query.org_y = ray.origin.y;
-        query.org_z = ray.origin.z;
-        query.dir_x = ray.direction.x;
-        query.dir_y = ray.direction.y;
-        query.dir_z = ray.direction.z;
-        query.tnear = ray.tMin;
-        query.tfar = ray.tMax;
-        query.mask = ~0u;
-    }
-
-    RTCDevice device_;
-    RTCScene scene_;
-};
+// --- Against Embree (the cpu's RayCaster, scene/ray_caster.h) --------------------------------------
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -537,13 +471,16 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 // triangle at the same t (within 1e-5 of the scene's extent) for one in 100 (the overlaps). Both
 // compute t in float from the same coordinates: on the same triangle the mean relative difference
 // is held to 1e-5, and the worst to 2e-5 of the scene's extent (relative to t alone, a ray starting
-// a hair from a surface would show the coordinates' rounding as a large fraction of a tiny t).
+// a hair from a surface would show the coordinates' rounding as a large fraction of a tiny t). On
+// the same triangle the points the barycentrics name lie within the same 2e-5 of the extent (u and v
+// alone may differ more on a sliver, whose edges are short) and the face always agrees: the cpu
+// backends shade what the gpu's walk of the hierarchy would.
 TEST(Bvh, AgreesWithEmbree) {
     for (const World* world : {&engineWorld(SHPROBE_GLTF_MODELS_DIR), &openCornellBoxWithBlocks()}) {
         const auto buildStart = std::chrono::steady_clock::now();
         const Bvh bvh = buildBvh(*world);
         const double buildSeconds = secondsSince(buildStart);
-        const EmbreeScene embree(*world);
+        const std::unique_ptr<RayCaster> embree = makeRayCaster(*world); // the cpu's caster, the plugin
         constexpr size_t kRays = 500'000;
         RandomRays random(11);
         std::vector<Ray> rays(kRays);
@@ -556,30 +493,37 @@ TEST(Bvh, AgreesWithEmbree) {
         for (size_t k = 0; k < kRays; ++k)
             ours[k] = closestHit(bvh, rays[k]);
         const double oursSeconds = secondsSince(oursStart);
-        std::vector<std::optional<std::pair<uint32_t, float>>> theirs(kRays);
+        std::vector<std::optional<RayHit>> theirs(kRays);
         const auto theirsStart = std::chrono::steady_clock::now();
         for (size_t k = 0; k < kRays; ++k)
-            theirs[k] = embree.intersect(rays[k]);
+            theirs[k] = embree->closestHit(rays[k]);
         const double theirsSeconds = secondsSince(theirsStart);
 
         // Hit distances compared in units of the scene's size: both t carry the rounding of the
         // coordinates, an ulp of the scene's extent divided by the cosine of the incidence.
         const double extent = glm::length(world->boundsMax - world->boundsMin);
-        size_t hitMiss = 0, tie = 0, triangle = 0, occluded = 0, sameTriangle = 0;
-        double worstRelative = 0.0, sumRelative = 0.0, worstOfExtent = 0.0;
+        size_t hitMiss = 0, tie = 0, triangle = 0, occluded = 0, sameTriangle = 0, face = 0;
+        double worstRelative = 0.0, sumRelative = 0.0, worstOfExtent = 0.0, worstBarycentric = 0.0;
         for (size_t k = 0; k < kRays; ++k) {
             if (ours[k].has_value() != theirs[k].has_value()) {
                 ++hitMiss;
                 continue;
             }
-            if (k % 10 == 0) occluded += anyHit(bvh, rays[k]) != embree.occluded(rays[k]);
+            if (k % 10 == 0) occluded += anyHit(bvh, rays[k]) != embree->anyHit(rays[k]);
             if (!ours[k]) continue;
-            const double difference = std::abs(double(ours[k]->hit.t) - theirs[k]->second);
-            if (ours[k]->triangle != theirs[k]->first) {
+            const double difference = std::abs(double(ours[k]->hit.t) - theirs[k]->hit.t);
+            if (ours[k]->triangle != theirs[k]->triangle) {
                 ++(difference <= 1e-5 * extent ? tie : triangle);
                 continue;
             }
-            const double relative = difference / theirs[k]->second;
+            face += ours[k]->hit.frontFace != theirs[k]->hit.frontFace;
+            const uint32_t* corner = &world->indices[3 * size_t(ours[k]->triangle)];
+            const glm::dvec3 p0(world->positions[corner[0]]), p1(world->positions[corner[1]]),
+                p2(world->positions[corner[2]]);
+            const glm::dvec3 apart = double(ours[k]->hit.u - theirs[k]->hit.u) * (p1 - p0) +
+                                     double(ours[k]->hit.v - theirs[k]->hit.v) * (p2 - p0);
+            worstBarycentric = std::max(worstBarycentric, glm::length(apart) / extent);
+            const double relative = difference / theirs[k]->hit.t;
             worstRelative = std::max(worstRelative, relative);
             worstOfExtent = std::max(worstOfExtent, difference / extent);
             sumRelative += relative;
@@ -588,9 +532,9 @@ TEST(Bvh, AgreesWithEmbree) {
         const double n = double(kRays);
         std::printf("%s: BVH built in %.3f s, %zu nodes, depth %d\n", world->description.c_str(),
                     buildSeconds, bvh.nodes.size(), bvh.depth);
-        std::printf(
-            "  %zu rays: closestHit %.2f Mrays/s, Embree rtcIntersect1 %.2f Mrays/s (one thread each)\n",
-            kRays, n / oursSeconds * 1e-6, n / theirsSeconds * 1e-6);
+        std::printf("  %zu rays: closestHit %.2f Mrays/s, Embree (the cpu's RayCaster) %.2f Mrays/s (one "
+                    "thread each)\n",
+                    kRays, n / oursSeconds * 1e-6, n / theirsSeconds * 1e-6);
         std::printf("  hit/miss differ %.2e; another triangle at the same t %.2e, at another t %.2e; "
                     "occluded differs %.2e (of %zu)\n",
                     double(hitMiss) / n, double(tie) / n, double(triangle) / n, double(occluded) / (n / 10),
@@ -598,12 +542,17 @@ TEST(Bvh, AgreesWithEmbree) {
         std::printf(
             "  t on the same triangle: relative difference mean %.2e, worst %.2e (%.2e of the extent)\n",
             sumRelative / double(std::max<size_t>(sameTriangle, 1)), worstRelative, worstOfExtent);
+        std::printf("  on the same triangle: the points u, v name %.2e of the extent apart at most, the face "
+                    "differs for %zu rays\n",
+                    worstBarycentric, face);
         EXPECT_LT(double(hitMiss) / n, 1e-4);
         EXPECT_LT(double(triangle) / n, 1e-4);
         EXPECT_LT(double(tie) / n, 1e-2);
         EXPECT_LT(double(occluded) / (n / 10), 1e-4);
         EXPECT_LT(sumRelative / double(std::max<size_t>(sameTriangle, 1)), 1e-5);
         EXPECT_LT(worstOfExtent, 2e-5);
+        EXPECT_LT(worstBarycentric, 2e-5);
+        EXPECT_EQ(face, 0u);
     }
 }
 

@@ -689,6 +689,28 @@ TEST_F(SceneCommand, BrokenScenesAreRefused) {
             {{"scene", models + broken, "--grid", "2,2,2", "-o", "OUT"}, 2, {models + broken}, "out.shpv"});
 }
 
+// The cpu backends cast their rays through Embree, a plugin loaded on first use
+// (scene/ray_caster.h): where it cannot be loaded, `scene` and `transfer` stop with one line naming
+// it and why (exit 4, as for a missing device) and write nothing; the gpu backend never loads it.
+TEST_F(SceneCommand, AnEmbreePluginThatCannotBeLoadedIsNamed) {
+    const std::string scene = cornellBox();
+    const std::string missing = file("no-such-plugin.so");
+    const testing::EnvironmentChanges noEmbree{{"SHPROBE_EMBREE_PLUGIN", missing}};
+    const std::vector<std::string> says{
+        "casting rays on the CPU needs Embree, and its plugin libshprobe_embree.so",
+        "(SHPROBE_EMBREE_PLUGIN: loading " + missing + " failed"};
+    expectFailure({{"scene", scene, "--grid", "2,2,2", "--backend", "cpu", "-o", "OUT"},
+                   4,
+                   says,
+                   "out.shpv",
+                   noEmbree});
+    expectFailure({{"transfer", scene, "--backend", "cpu", "-o", "OUT"}, 4, says, "out.glb", noEmbree});
+    const RunResult gpu = run({"scene", scene, "--grid", "2,2,2", "--face-size", "4", "--backend", "gpu",
+                               "-q", "-o", file("gpu.shpv")},
+                              {.environment = noEmbree});
+    EXPECT_EQ(gpu.exitCode, 0) << gpu.err;
+}
+
 // Bad options get one line each before any work: a grid that is not three counts, bricks without a
 // whole previous bounce's volume, the cpu's options for the gpu.
 TEST_F(SceneCommand, BadOptionsAreRefused) {

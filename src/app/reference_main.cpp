@@ -11,7 +11,9 @@
 #include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
+#include "common/parallel.h"
 #include "formats/probe_volume.h"
+#include "scene/bvh.h"
 #include "scene/gltf_scene.h"
 #include "scene/probe_grid.h"
 #include "scene/reference_tracer.h"
@@ -19,7 +21,9 @@
 #include "sh/irradiance.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -60,49 +64,87 @@ void addOptions(CLI::App& app, ReferenceOptions& options) {
     addRangeOption(
         app, "--transfer-rate", options.transferRays,
         "Instead of a volume: time `shprobe transfer --model shadowed` at --order with this many rays "
-        "a vertex, its rays cast through shprobe's hierarchy and then through Embree, and compare",
+        "a vertex against Embree's own rate for the same rays, and the GPU's hierarchy on the cores",
         1, 1 << 20);
     app.add_flag("-q,--quiet", options.quiet, "No report");
 }
 
-// The shadowed transfer's rays through scene/bvh.h (computeTransfer as `shprobe transfer` runs it)
-// and through Embree's rtcOccluded1 (behind a std::function: a call more per ray), each on all
-// cores, with everything else the same: the rates of the two and how far their transfers differ.
+// The largest difference between two transfers, relative to the largest |T| (green channel), and
+// how many vectors differ at all.
+struct TransferDifference {
+    double relative = 0.0;
+    size_t vectors = 0;
+};
+TransferDifference compareTransfers(const VertexTransfer& a, const VertexTransfer& b) {
+    const size_t count = size_t(a.order) * size_t(a.order);
+    double largest = 0.0, worst = 0.0;
+    TransferDifference difference;
+    for (size_t v = 0; v < a.vertexCount(); ++v) {
+        bool differs = false;
+        for (size_t i = v * count; i < (v + 1) * count; ++i) {
+            largest = std::max(largest, double(std::abs(a.coefficients[i].g)));
+            worst = std::max(worst, double(std::abs(a.coefficients[i].g - b.coefficients[i].g)));
+            differs = differs || a.coefficients[i] != b.coefficients[i];
+        }
+        difference.vectors += differs;
+    }
+    difference.relative = worst / std::max(largest, 1e-30);
+    return difference;
+}
+
+// Embree's own rate on the shadowed transfer's rays: the rays collected (in no particular order) and
+// then cast by rtcOccluded1 alone on all cores, nothing else done per ray.
+double embreeRaysPerSecond(const World& world, const TransferOptions& transfer,
+                           const ReferenceTracer& tracer) {
+    std::mutex mutex;
+    std::vector<std::array<glm::vec3, 2>> rays;
+    computeShadowedTransfer(world, transfer, [&](const glm::vec3& origin, const glm::vec3& direction) {
+        const std::lock_guard lock(mutex);
+        rays.push_back({origin, direction});
+        return false;
+    });
+    constexpr int kParts = 1024;
+    std::array<uint32_t, kParts> blocked{};
+    const Clock::time_point start = Clock::now();
+    forEachItem(kParts, threadCount(rays.size(), 4096), [&](int part) {
+        const size_t first = rays.size() * part / kParts, end = rays.size() * (part + 1) / kParts;
+        for (size_t r = first; r < end; ++r)
+            blocked[part] += tracer.occluded(glm::dvec3(rays[r][0]), glm::dvec3(rays[r][1]));
+    });
+    const double seconds = millisecondsSince(start) / 1000.0;
+    return double(rays.size()) / seconds;
+}
+
+// The shadowed transfer as `shprobe transfer` casts it (Embree through its plugin), as the GPU's
+// hierarchy (scene/bvh.h) would answer it on the cores, and Embree's own rate for the same rays:
+// the rates and how far the transfers differ.
 void measureTransferRate(const ReferenceOptions& options, const World& world) {
     const TransferOptions transfer{
         .model = TransferModel::Shadowed, .order = options.order, .rays = options.transferRays};
     Clock::time_point start = Clock::now();
     const VertexTransfer ours = computeTransfer(world, transfer);
     const double oursSeconds = millisecondsSince(start) / 1000.0;
-    const ReferenceTracer tracer(world, makeCubemap(1));
+    const Bvh bvh = buildBvh(world);
     start = Clock::now();
-    const VertexTransfer embree =
+    const VertexTransfer walked =
         computeShadowedTransfer(world, transfer, [&](const glm::vec3& origin, const glm::vec3& direction) {
-            return tracer.occluded(glm::dvec3(origin), glm::dvec3(direction));
+            return anyHit(bvh, {origin, direction});
         });
-    const double embreeSeconds = millisecondsSince(start) / 1000.0;
-    const size_t count = size_t(options.order) * size_t(options.order);
-    double largest = 0.0, worst = 0.0;
-    size_t differing = 0;
-    for (size_t v = 0; v < ours.vertexCount(); ++v) {
-        bool differs = false;
-        for (size_t i = 0; i < count; ++i) {
-            const glm::vec3 a = ours.coefficients[v * count + i], b = embree.coefficients[v * count + i];
-            largest = std::max(largest, double(std::abs(a.g)));
-            worst = std::max(worst, double(std::abs(a.g - b.g)));
-            differs = differs || a != b;
-        }
-        differing += differs;
-    }
+    const double walkedSeconds = millisecondsSince(start) / 1000.0;
+    const double embreeRate = embreeRaysPerSecond(world, transfer, ReferenceTracer(world, makeCubemap(1)));
     const double rays = double(ours.raysCast);
+    const auto row = [&](const char* name, double seconds, const VertexTransfer& other) {
+        const TransferDifference difference = compareTransfers(ours, other);
+        std::printf("%-9s %.2f s, %.3g Mrays/s, %.0f vectors/s, %.2f of Embree's rate; %zu vectors differ, "
+                    "by %.2g of the largest |T| at most\n",
+                    name, seconds, rays / seconds / 1e6, double(ours.vertexCount()) / seconds,
+                    rays / seconds / embreeRate, difference.vectors, difference.relative);
+    };
     std::printf("transfer  %s, shadowed, order %d, %d rays a vertex: %.3g rays, %zu vectors\n",
                 world.description.c_str(), options.order, ours.rays, rays, ours.vertexCount());
-    std::printf("hierarchy %.2f s, %.3g Mrays/s, %.0f vectors/s\n", oursSeconds, rays / oursSeconds / 1e6,
-                double(ours.vertexCount()) / oursSeconds);
-    std::printf("embree    %.2f s, %.3g Mrays/s, %.0f vectors/s (the same rays)\n", embreeSeconds,
-                rays / embreeSeconds / 1e6, double(embree.vertexCount()) / embreeSeconds);
-    std::printf("ratio     %.2f of Embree's rate; %zu vectors differ, by %.2g of the largest |T| at most\n",
-                embreeSeconds / oursSeconds, differing, worst / std::max(largest, 1e-30));
+    std::printf("embree    %.3g Mrays/s: rtcOccluded1 alone on the same rays, all cores\n", embreeRate / 1e6);
+    row("transfer", oursSeconds, ours);
+    row("hierarchy", walkedSeconds, walked);
 }
 
 ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, const ProbeGrid& grid,

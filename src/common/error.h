@@ -9,7 +9,7 @@ namespace shprobe {
 enum class ErrorKind {
     Input,  // a file, an option or data given by the user is unusable
     Output, // an output file could not be written
-    Device, // no usable Vulkan device, or the device failed
+    Device, // no usable Vulkan device or Embree, or the device failed
 };
 
 class Error : public std::runtime_error {

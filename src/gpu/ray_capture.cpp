@@ -235,7 +235,7 @@ std::vector<SceneProbe> bakeViews(const Context& context, const SceneCapture& ca
         });
     if (rays.options.skySuns.empty()) return probes;
     for (size_t p = 0; p < probes.size(); ++p) {
-        addSeenSuns(rays.bvh, rays.options.skySuns, positions[p], probes[p].radiance);
+        addSeenSuns(BvhRayCaster(rays.bvh), rays.options.skySuns, positions[p], probes[p].radiance);
         probes[p].irradiance = convolveIrradiance(probes[p].radiance);
     }
     return probes;

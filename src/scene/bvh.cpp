@@ -74,19 +74,6 @@ void checkOptions(const BvhOptions& options) {
         fail("traversalCost " + std::to_string(options.traversalCost) + " is not a positive number");
 }
 
-void checkWorld(const World& world) {
-    if (world.indices.size() % 3 != 0)
-        fail(std::to_string(world.indices.size()) + " indices are not a multiple of 3");
-    if (world.indices.size() / 3 >= std::numeric_limits<uint32_t>::max()) fail("too many triangles");
-    for (uint32_t index : world.indices)
-        if (index >= world.positions.size())
-            fail("index " + std::to_string(index) + " past the " + std::to_string(world.positions.size()) +
-                 " positions");
-    for (const glm::vec3& p : world.positions)
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-            fail("a position is not finite");
-}
-
 std::array<glm::vec3, 3> corners(const World& world, size_t triangle) {
     return {world.positions[world.indices[3 * triangle]], world.positions[world.indices[3 * triangle + 1]],
             world.positions[world.indices[3 * triangle + 2]]};
@@ -419,9 +406,22 @@ float edgeFunction(const Sheared& a, const Sheared& b) {
 
 } // namespace
 
+void checkBvhWorld(const World& world) {
+    if (world.indices.size() % 3 != 0)
+        fail(std::to_string(world.indices.size()) + " indices are not a multiple of 3");
+    if (world.indices.size() / 3 >= std::numeric_limits<uint32_t>::max()) fail("too many triangles");
+    for (uint32_t index : world.indices)
+        if (index >= world.positions.size())
+            fail("index " + std::to_string(index) + " past the " + std::to_string(world.positions.size()) +
+                 " positions");
+    for (const glm::vec3& p : world.positions)
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            fail("a position is not finite");
+}
+
 Bvh buildBvh(const World& world, const BvhOptions& options) {
     checkOptions(options);
-    checkWorld(world);
+    checkBvhWorld(world);
     Bvh bvh;
     if (world.triangleCount() == 0) return bvh;
     Builder builder(world, options);

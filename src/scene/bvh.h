@@ -65,6 +65,10 @@ struct Bvh {
 // maxLeafTriangles). Throws Error(Input) for options out of range, an index count not a multiple of
 // 3, an index past the positions or a position that is not finite.
 Bvh buildBvh(const World& world, const BvhOptions& options = {});
+// What buildBvh refuses in a World, and every caster of rays (scene/ray_caster.h) too: Error(Input)
+// "BVH: ..." for an index count not a multiple of 3, an index past the positions or a position that
+// is not finite.
+void checkBvhWorld(const World& world);
 
 // How much of the hierarchy traversals visited, summed over calls.
 struct TraversalCounts {

@@ -4,7 +4,7 @@
 
 #include "common/error.h"
 #include "common/parallel.h"
-#include "scene/bvh.h"
+#include "scene/ray_caster.h"
 #include "scene/sampling.h"
 #include "scene/surface_cache.h"
 #include "scene/surface_shading.h"
@@ -140,9 +140,13 @@ std::vector<glm::vec2> DistanceMoments::texels() const {
     return moments;
 }
 
+// A hit must be nearer by a relative 1e-5 to replace the nearest: rays that meet a face at the same
+// distance (texel directions symmetric about its normal) then keep the first, whichever caster
+// rounded their t (Embree's and the hierarchy's differ in the last bits).
 void NearestHits::add(const glm::dvec3& direction, double distance, bool backFace) {
+    constexpr double kSameDistance = 1e-5;
     double& nearest = backFace ? back : front;
-    if (!(distance < nearest)) return;
+    if (!(distance < nearest * (1.0 - kSameDistance))) return;
     nearest = distance;
     (backFace ? backDirection : frontDirection) = direction;
 }
@@ -184,12 +188,12 @@ SurfaceHit cacheGatherPoint(const SceneShading& shading, uint32_t triangle, int 
         triangle, insideTriangle(shading, triangle, barycentric, kLatticeInwardFraction), side == 0);
 }
 
-void addSeenSuns(const Bvh& bvh, std::span<const SceneSun> suns, const glm::dvec3& position,
+void addSeenSuns(const RayCaster& caster, std::span<const SceneSun> suns, const glm::dvec3& position,
                  ShCoefficients& radiance) {
     std::array<double, coefficientCount(kMaxOrder)> basis{};
     for (const SceneSun& sun : suns) {
         const glm::dvec3 direction = glm::normalize(glm::dvec3(sun.direction));
-        if (anyHit(bvh, {glm::vec3(position), glm::vec3(direction)})) continue;
+        if (caster.anyHit({glm::vec3(position), glm::vec3(direction)})) continue;
         evalBasis(radiance.order, direction, basis);
         for (size_t i = 0; i < radiance.rgb.size(); ++i)
             radiance.rgb[i] += glm::dvec3(sun.irradiance) * basis[i];
@@ -202,11 +206,12 @@ bool insideGeometry(uint32_t backFaceTexels, int faceSize, double share) {
 
 struct RayBaker::State {
     State(const World& world, const Cubemap& sky, const RayBakeOptions& bakeOptions)
-        : options(bakeOptions), shading(withSuns(world, bakeOptions.skySuns), sky), bvh(buildBvh(world)) {}
+        : options(bakeOptions), shading(withSuns(world, bakeOptions.skySuns), sky),
+          caster(makeRayCaster(world)) {}
 
     RayBakeOptions options;
     SceneShading shading;
-    Bvh bvh;
+    std::unique_ptr<RayCaster> caster;
     std::unique_ptr<SurfaceCache> cache;
     int gatherSide = 1;           // g: g x g gather rays per point
     int texelSide = 1;            // s: s x s rays per texel
@@ -258,7 +263,7 @@ void RayBaker::State::layOutCache() {
 // and the closed room's probes saw the sun.
 std::optional<Meeting> RayBaker::State::intersect(const glm::dvec3& origin,
                                                   const glm::dvec3& direction) const {
-    const std::optional<RayHit> hit = closestHit(bvh, {glm::vec3(origin), glm::vec3(direction)});
+    const std::optional<RayHit> hit = caster->closestHit({glm::vec3(origin), glm::vec3(direction)});
     if (!hit) return std::nullopt;
     const glm::dvec2 barycentric(hit->hit.u, hit->hit.v);
     Meeting meeting{shading.describe(hit->triangle, barycentric, direction), 0.0};
@@ -270,7 +275,7 @@ std::optional<Meeting> RayBaker::State::intersect(const glm::dvec3& origin,
 }
 
 bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direction) const {
-    return anyHit(bvh, {glm::vec3(origin), glm::vec3(direction)});
+    return caster->anyHit({glm::vec3(origin), glm::vec3(direction)});
 }
 
 // The radiance arriving at `origin` from `direction` with `bounce` bounces (scene.h): the sky, or
@@ -298,7 +303,7 @@ bool RayBaker::State::segmentBlocked(const glm::dvec3& from, const glm::dvec3& t
     const double length = glm::length(path);
     ++cacheRays;
     if (!(length > 0.0)) return false;
-    return anyHit(bvh, {glm::vec3(from), glm::vec3(path / length), 0.0f, float(length)});
+    return caster->anyHit({glm::vec3(from), glm::vec3(path / length), 0.0f, float(length)});
 }
 
 // E_k at a cache point: pi times the mean of L_{k-1} over g x g cosine-distributed rays, one in each
@@ -427,7 +432,7 @@ RayBakedProbe RayBaker::State::bake(const glm::dvec3& position, uint64_t& rays) 
 void RayBaker::State::addSeenSuns(const glm::dvec3& position, ShCoefficients& radiance,
                                   uint64_t& rays) const {
     rays += options.skySuns.size();
-    shprobe::addSeenSuns(bvh, options.skySuns, position, radiance);
+    shprobe::addSeenSuns(*caster, options.skySuns, position, radiance);
 }
 
 RayBaker::RayBaker(const World& world, const Cubemap& sky, const RayBakeOptions& options) {

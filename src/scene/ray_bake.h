@@ -1,4 +1,4 @@
-// Light probes inside a scene by rays on the CPU (scene/bvh.h casts them, scene/surface_shading.h
+// Light probes inside a scene by rays on the CPU (scene/ray_caster.h casts them, scene/surface_shading.h
 // shades what they hit), following the transport of scene.h:
 //
 //   RayBaker baker(world, sky, {.order = 3, .faceSize = 32, .bounces = 2});
@@ -25,7 +25,7 @@
 // grow denser (interpolation) and the gather rays more (noise); docs/scene-probes.md measures both against
 // the path tracer.
 #pragma once
-#include "scene/bvh.h"
+#include "scene/ray_caster.h"
 #include "scene/scene.h"
 #include "scene/surface_cache.h"
 #include "scene/surface_shading.h"
@@ -137,7 +137,7 @@ double visibilityRangeOf(const World& world);
 
 // Adds to a probe's radiance at `position` each sun it sees (no surface on the way to it): a delta of
 // irradiance E in direction l, whose projection is E y_lm(l) exactly.
-void addSeenSuns(const Bvh& bvh, std::span<const SceneSun> suns, const glm::dvec3& position,
+void addSeenSuns(const RayCaster& caster, std::span<const SceneSun> suns, const glm::dvec3& position,
                  ShCoefficients& radiance);
 
 struct RayBakedProbe {
@@ -167,12 +167,13 @@ struct RayBakeCounts {
 // at a time).
 using BakeProgress = std::function<void(size_t probesDone)>;
 
-// The hierarchy, the shading and the cache of one world, sky and options. Bakes may run one after
+// The ray caster, the shading and the cache of one world, sky and options. Bakes may run one after
 // another on the same baker (the cache is kept); not two at once.
 class RayBaker {
   public:
     // Throws Error(Input) for a world, sky or options it cannot bake (surface_shading.h, bvh.h;
-    // order, face size, bounces, spacing or gather rays out of range).
+    // order, face size, bounces, spacing or gather rays out of range), Error(Device) where Embree
+    // cannot be loaded (ray_caster.h).
     RayBaker(const World& world, const Cubemap& sky, const RayBakeOptions& options);
     ~RayBaker();
     RayBaker(RayBaker&&) noexcept;

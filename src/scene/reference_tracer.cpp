@@ -20,10 +20,10 @@
 
 #include "common/error.h"
 #include "common/parallel.h"
+#include "scene/embree_rays.h"
 #include "scene/sampling.h"
 #include "sh/basis.h"
 
-#include <embree3/rtcore.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 
@@ -48,127 +48,18 @@ constexpr double kPi = std::numbers::pi;
 // microseconds) stays a small part of its run.
 constexpr size_t kRaysPerThread = 4096;
 
-// --- Embree ------------------------------------------------------------------------------------
-
-const char* embreeErrorName(RTCError code) {
-    switch (code) {
-    case RTC_ERROR_NONE:
-        return "no error";
-    case RTC_ERROR_UNKNOWN:
-        return "unknown error";
-    case RTC_ERROR_INVALID_ARGUMENT:
-        return "invalid argument";
-    case RTC_ERROR_INVALID_OPERATION:
-        return "invalid operation";
-    case RTC_ERROR_OUT_OF_MEMORY:
-        return "out of memory";
-    case RTC_ERROR_UNSUPPORTED_CPU:
-        return "unsupported CPU";
-    case RTC_ERROR_CANCELLED:
-        return "cancelled";
-    }
-    return "unknown error";
-}
-
-// The first error Embree reports through its callback, which may run on its build threads and must
-// not throw through Embree: it is kept here and thrown after the call that caused it.
-struct EmbreeErrors {
-    std::mutex mutex;
-    RTCError code = RTC_ERROR_NONE;
-    std::string message;
-};
-
-void recordEmbreeError(void* userPtr, RTCError code, const char* message) {
-    auto& errors = *static_cast<EmbreeErrors*>(userPtr);
-    const std::lock_guard lock(errors.mutex);
-    if (errors.code != RTC_ERROR_NONE) return;
-    errors.code = code;
-    errors.message = std::string(embreeErrorName(code)) + (message ? std::string(": ") + message : "");
-}
-
-// A refused argument is the scene's fault; anything else (memory, processor) the machine's.
-void throwIfFailed(EmbreeErrors& errors, const char* what) {
-    const std::lock_guard lock(errors.mutex);
-    if (errors.code == RTC_ERROR_NONE) return;
-    const ErrorKind kind = errors.code == RTC_ERROR_INVALID_ARGUMENT ? ErrorKind::Input : ErrorKind::Device;
-    throw Error(kind, std::string("Embree failed ") + what + ": " + errors.message);
-}
-
-RTCDevice newDevice(EmbreeErrors& errors) {
-    RTCDevice device = rtcNewDevice(nullptr);
-    if (!device) {
-        throw Error(ErrorKind::Device,
-                    std::string("Embree could not start: ") + embreeErrorName(rtcGetDeviceError(nullptr)));
-    }
-    rtcSetDeviceErrorFunction(device, recordEmbreeError, &errors);
-    return device;
-}
-
-// Embree's own buffers (padded as its vector loads need), filled with the kept triangles.
-void attachTriangles(RTCDevice device, RTCScene scene, const SceneShading& shading, EmbreeErrors& errors) {
-    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    throwIfFailed(errors, "creating the triangle geometry");
-    const World& world = shading.world();
-    const std::span<const uint32_t> triangles = shading.solidTriangles();
-    auto* vertices = static_cast<glm::vec3*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, sizeof(glm::vec3), world.positions.size()));
-    auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), triangles.size()));
-    if (vertices && indices) {
-        std::copy(world.positions.begin(), world.positions.end(), vertices);
-        for (size_t k = 0; k < triangles.size(); ++k)
-            std::copy_n(&world.indices[3 * size_t(triangles[k])], 3, &indices[3 * k]);
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(scene, geometry);
-    }
-    rtcReleaseGeometry(geometry); // the scene holds it now
-    throwIfFailed(errors, "storing the triangles");
-}
-
-RTCRay makeRay(const glm::dvec3& origin, const glm::dvec3& direction) {
-    RTCRay ray{};
-    ray.org_x = float(origin.x);
-    ray.org_y = float(origin.y);
-    ray.org_z = float(origin.z);
-    ray.dir_x = float(direction.x);
-    ray.dir_y = float(direction.y);
-    ray.dir_z = float(direction.z);
-    ray.tnear = 0.0f;
-    ray.tfar = std::numeric_limits<float>::infinity();
-    ray.mask = ~0u;
-    return ray;
-}
-
 } // namespace
 
 struct ReferenceTracer::State {
-    explicit State(const World& world, const Cubemap& sky) : shading(world, sky) {}
+    explicit State(const World& world, const Cubemap& sky)
+        : shading(world, sky), rays(makeEmbreeRayCaster(world, shading.solidTriangles())) {}
 
-    EmbreeErrors errors;
     SceneShading shading;
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
-
-    ~State() {
-        if (scene) rtcReleaseScene(scene);
-        if (device) rtcReleaseDevice(device);
-    }
+    std::unique_ptr<RayCaster> rays;
 };
 
 ReferenceTracer::ReferenceTracer(const World& world, const Cubemap& sky)
-    : state_(std::make_unique<State>(world, sky)) {
-    State& state = *state_;
-    state.device = newDevice(state.errors);
-    state.scene = rtcNewScene(state.device);
-    throwIfFailed(state.errors, "creating the scene");
-    // Robust mode: watertight edges, so that no ray slips between two triangles sharing an edge.
-    rtcSetSceneFlags(state.scene, RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(state.scene, RTC_BUILD_QUALITY_HIGH);
-    if (!state.shading.solidTriangles().empty())
-        attachTriangles(state.device, state.scene, state.shading, state.errors);
-    rtcCommitScene(state.scene);
-    throwIfFailed(state.errors, "building the scene");
-}
+    : state_(std::make_unique<State>(world, sky)) {}
 
 ReferenceTracer::~ReferenceTracer() = default;
 ReferenceTracer::ReferenceTracer(ReferenceTracer&&) noexcept = default;
@@ -176,24 +67,13 @@ ReferenceTracer& ReferenceTracer::operator=(ReferenceTracer&&) noexcept = defaul
 
 std::optional<SurfaceHit> ReferenceTracer::intersect(const glm::dvec3& origin,
                                                      const glm::dvec3& direction) const {
-    RTCRayHit query{};
-    query.ray = makeRay(origin, direction);
-    query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcIntersect1(state_->scene, &context, &query);
-    if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-    return state_->shading.describe(state_->shading.solidTriangles()[query.hit.primID],
-                                    glm::dvec2(query.hit.u, query.hit.v), direction);
+    const std::optional<RayHit> hit = state_->rays->closestHit({glm::vec3(origin), glm::vec3(direction)});
+    if (!hit) return std::nullopt;
+    return state_->shading.describe(hit->triangle, glm::dvec2(hit->hit.u, hit->hit.v), direction);
 }
 
 bool ReferenceTracer::occluded(const glm::dvec3& origin, const glm::dvec3& direction) const {
-    RTCRay ray = makeRay(origin, direction);
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    rtcOccluded1(state_->scene, &context, &ray);
-    return ray.tfar < 0.0f; // Embree marks an occluded ray with tfar = -inf
+    return state_->rays->anyHit({glm::vec3(origin), glm::vec3(direction)});
 }
 
 glm::dvec3 ReferenceTracer::skyRadiance(const glm::dvec3& direction) const {

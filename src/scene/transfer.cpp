@@ -4,7 +4,7 @@
 
 #include "common/error.h"
 #include "common/parallel.h"
-#include "scene/bvh.h"
+#include "scene/ray_caster.h"
 #include "scene/sampling.h"
 #include "scene/surface_shading.h"
 #include "sh/basis.h"
@@ -15,6 +15,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <memory>
 #include <mutex>
 #include <numbers>
 #include <optional>
@@ -59,7 +60,7 @@ class TransferBaker {
     TransferBaker(const World& world, const TransferOptions& options, const SkyRadiance* sky = nullptr,
                   const OcclusionTest* occlusion = nullptr)
         : options_(options), sky_(sky), occlusion_(occlusion), shading_(world, makeCubemap(1)),
-          bvh_(buildBvh(world)), count_(sky ? 1 : size_t(coefficientCount(options.order))),
+          count_(sky ? 1 : size_t(coefficientCount(options.order))),
           strata_(int(std::ceil(std::sqrt(double(options.rays))))), scene_{.world = shading_.world(),
                                                                            .bvh = bvh_,
                                                                            .strata = strata_} {
@@ -85,7 +86,8 @@ class TransferBaker {
     const SkyRadiance* sky_;
     const OcclusionTest* occlusion_;
     SceneShading shading_;
-    Bvh bvh_;
+    Bvh bvh_;                            // built for a caster of the passes (the GPU's)
+    std::unique_ptr<RayCaster> cpuRays_; // built for the passes on the cores
     size_t count_;
     int strata_;
     TransferScene scene_;
@@ -182,7 +184,7 @@ void TransferBaker::direct(const Side& side, std::span<glm::vec3> out, uint64_t&
     forEachRay(side, [&](const glm::vec3& origin, const glm::dvec3& direction) {
         ++rays;
         if (occlusion_ ? (*occlusion_)(origin, glm::vec3(direction))
-                       : anyHit(bvh_, {origin, glm::vec3(direction)}))
+                       : cpuRays_->anyHit({origin, glm::vec3(direction)}))
             return;
         if (sky_) {
             radiance += (*sky_)(direction);
@@ -206,7 +208,7 @@ void TransferBaker::bounce(const Side& side, std::span<const glm::vec3> previous
     std::array<glm::dvec3, coefficientCount(kMaxOrder)> sum{};
     forEachRay(side, [&](const glm::vec3& origin, const glm::dvec3& direction) {
         ++rays;
-        const std::optional<RayHit> found = closestHit(bvh_, {origin, glm::vec3(direction)});
+        const std::optional<RayHit> found = cpuRays_->closestHit({origin, glm::vec3(direction)});
         if (!found) return;
         const SurfaceHit hit =
             shading_.describe(found->triangle, glm::dvec2(found->hit.u, found->hit.v), direction);
@@ -275,6 +277,10 @@ VertexTransfer TransferBaker::run(const TransferProgress& progress, const Transf
         return transfer;
     }
     const int bounces = options_.model == TransferModel::Interreflected ? options_.bounces : 0;
+    if (caster)
+        bvh_ = buildBvh(world);
+    else if (!occlusion_)
+        cpuRays_ = makeRayCaster(world);
     const size_t sides = scene_.sides.size();
     total_ = uint64_t(sides) * uint64_t(bounces + 1);
     std::vector<glm::vec3> previous(sides * count_), current(previous.size());

@@ -1,7 +1,5 @@
-// Finding and loading the codec plugins (image/exr_plugin.h, image/oiio_plugin.h) on first use, and
-// the EXR codec of image/codec.h through its plugin.
-#include "image/exr_plugin.h"
-#include "image/oiio_plugin.h"
+// Finding and loading the plugins (common/plugin_loader.h).
+#include "common/plugin_loader.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -19,19 +17,6 @@ namespace shprobe {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A plugin: its file, the function it exports, the variable that names another file, and the
-// library it wraps (for the message when it cannot be loaded).
-struct PluginName {
-    const char* file;
-    const char* entry;
-    const char* environment;
-    const char* library;
-};
-
-constexpr PluginName kExr{"libshprobe_exr.so", SHPROBE_EXR_PLUGIN_ENTRY, "SHPROBE_EXR_PLUGIN", "OpenEXR"};
-constexpr PluginName kOiio{"libshprobe_oiio.so", SHPROBE_OIIO_PLUGIN_ENTRY, "SHPROBE_OIIO_PLUGIN",
-                           "OpenImageIO"};
 
 // The folder of the file holding this code: libshprobe.so when the library is shared, else the
 // program. For the program the loader's name is its argv[0] ("shprobe" when run through PATH),
@@ -106,11 +91,6 @@ std::vector<fs::path> candidates(const PluginName& plugin) {
     return places;
 }
 
-struct Found {
-    void* entry = nullptr; // the plugin's entry function
-    std::string failure;   // why none, with the places looked in
-};
-
 // The dynamic loader's reason for the last failure.
 std::string loaderReason() {
     const char* reason = dlerror();
@@ -118,7 +98,7 @@ std::string loaderReason() {
 }
 
 // Loads the plugin at `place` (an absolute path, checked by `refusal`) and finds its entry.
-Found load(const fs::path& place, const PluginName& plugin) {
+PluginFound load(const fs::path& place, const PluginName& plugin) {
     if (std::string why = refusal(place); !why.empty())
         return {nullptr, "refusing " + place.string() + ": " + why};
     dlerror();
@@ -129,14 +109,16 @@ Found load(const fs::path& place, const PluginName& plugin) {
     return {entry, {}};
 }
 
-Found find(const PluginName& plugin) {
+} // namespace
+
+PluginFound findPlugin(const PluginName& plugin) {
     // The variable, when set (empty is not set), names the one file to load, by its absolute path:
     // a relative one would be looked up in the working folder or the loader's search path.
     if (const char* named = std::getenv(plugin.environment); named && *named) {
         if (named[0] != '/')
             return {nullptr, std::string(plugin.environment) + "=" + named +
                                  " is not an absolute path; name the plugin by its absolute path"};
-        Found found = load(named, plugin);
+        PluginFound found = load(named, plugin);
         if (!found.entry) found.failure = std::string(plugin.environment) + ": " + found.failure;
         return found;
     }
@@ -150,44 +132,6 @@ Found find(const PluginName& plugin) {
         return load(place, plugin);
     }
     return {nullptr, "looked in " + tried};
-}
-
-// The plugin's entry points, loaded once per kind of plugin (thread-safe). The entry function is
-// called through its own type, `const EntryPoints* ()`.
-template <class EntryPoints>
-const EntryPoints& entryPointsOf(const PluginName& plugin, ErrorKind kind, const std::string& what) {
-    static std::once_flag once;
-    static const EntryPoints* entryPoints = nullptr;
-    static std::string failure;
-    std::call_once(once, [&] {
-        Found found = find(plugin);
-        if (found.entry)
-            entryPoints = reinterpret_cast<const EntryPoints* (*)()>(found.entry)();
-        else
-            failure = std::move(found.failure);
-    });
-    if (!entryPoints)
-        throw Error(kind, what + ": this format needs " + plugin.library + ", and its plugin " + plugin.file +
-                              " could not be loaded (" + failure + ")");
-    return *entryPoints;
-}
-
-} // namespace
-
-const ExrPlugin& exrPlugin(ErrorKind kind, const std::string& what) {
-    return entryPointsOf<ExrPlugin>(kExr, kind, what);
-}
-
-const OiioPlugin& oiioPlugin(ErrorKind kind, const std::string& what) {
-    return entryPointsOf<OiioPlugin>(kOiio, kind, what);
-}
-
-std::unique_ptr<ImageDecoder> openExrDecoder(const std::string& path) {
-    return exrPlugin(ErrorKind::Input, path).openDecoder(path);
-}
-
-std::string encodeExr(const FloatPixels& pixels, const std::string& what) {
-    return exrPlugin(ErrorKind::Output, "cannot write " + what).encode(pixels, what);
 }
 
 } // namespace shprobe
