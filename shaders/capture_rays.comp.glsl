@@ -1,18 +1,21 @@
 #version 450
-// A probe's cube map by rays (ray_shading.glsl): each texel holds what arrives along the ray from the
-// probe through its centre (the directions of sh/cubemap.h, as the raster capture and the cpu's
-// one ray per texel see them), alpha SHPROBE_CAPTURE_BACK_FACE where that ray met the back of a
-// one-sided material, as capture.frag writes it for recordProbeBake and count_back_faces.comp.
+// A probe's cube map by rays (ray_shading.glsl): each texel holds the mean of what arrives along its
+// s x s rays from the probe (scene/view_rays.h: through its centre where s is 1, the directions of
+// sh/cubemap.h as the raster capture sees them; else one jittered in each stratum, the cpu's rays),
+// alpha SHPROBE_CAPTURE_BACK_FACE where most of them met the back of a one-sided material, as
+// capture.frag writes it for recordProbeBake and count_back_faces.comp.
 //
 //   set 0: ray_capture_interface.h; SHPROBE_RAYS_INPUT: vec4 probes[] (xyz: position);
 //          SHPROBE_RAYS_OUTPUT: rgba32f image2DArray, 6 layers per probe, in GENERAL;
-//          SHPROBE_RAYS_DISTANCES: float distances[], each texel's hit distance, negative for a back
+//          SHPROBE_RAYS_DISTANCES: float distances[], each ray's hit distance, negative for a back
 //          face of a one-sided material (visibility maps, relocation)
-//   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce)
+//   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce;
+//          work.w: s; seed.zw: the view's stream base)
 //   specialization: 0 = workgroup width; dispatch (texel groups, probes, 1): each invocation takes
 //   texels x, x + width * groups, ... of probe y.
 #extension GL_GOOGLE_include_directive : require
 #include "gpu_interface.h"
+#include "random_words.h"
 #include "ray_shading.glsl"
 #include "texel_geometry.h"
 
@@ -29,15 +32,30 @@ void main() {
     uint probe = gl_GlobalInvocationID.y;
     if (probe >= rc.work.x) return;
     uint n = rc.sizes.x;
+    uint s = rc.work.w;
     uint faceTexels = n * n;
     for (uint texel = gl_GlobalInvocationID.x; texel < 6u * faceTexels; texel += gl_NumWorkGroups.x * gl_WorkGroupSize.x) {
         uint face = texel / faceTexels;
         uint i = texel % faceTexels % n;
         uint j = texel % faceTexels / n;
-        vec3 direction = normalize(unnormalizedFaceDirection(face, texelCenterCoord(i, n), texelCenterCoord(j, n)));
-        RayArrival arrival = arriving(probes[probe].xyz, direction, rc.work.z != 0u);
+        uvec2 stream = mix64Words(add64(rc.seed.zw, uvec2(texel, 0u)));
+        uint ray = (6u * faceTexels * probe + texel) * s * s;
+        vec3 sum = vec3(0.0);
+        uint backFaces = 0u;
+        for (uint sb = 0u; sb < s; ++sb) {
+            for (uint sa = 0u; sa < s; ++sa) {
+                float ja = s == 1u ? 0.5 : nextRandom(stream);
+                float jb = s == 1u ? 0.5 : nextRandom(stream);
+                vec3 direction = normalize(unnormalizedFaceDirection(face, stratumCoord(i, sa, s, ja, n),
+                                                                     stratumCoord(j, sb, s, jb, n)));
+                RayArrival arrival = arriving(probes[probe].xyz, direction, rc.work.z != 0u);
+                sum += arrival.radiance;
+                backFaces += arrival.backFace ? 1u : 0u;
+                distances[ray++] = arrival.backFace ? -arrival.distance : arrival.distance;
+            }
+        }
+        bool mostlyBack = 2u * backFaces > s * s;
         imageStore(cubemaps, ivec3(i, j, 6u * probe + face),
-                   vec4(arrival.radiance, arrival.backFace ? SHPROBE_CAPTURE_BACK_FACE : 0.0));
-        distances[6u * faceTexels * probe + texel] = arrival.backFace ? -arrival.distance : arrival.distance;
+                   vec4(sum / float(s * s), mostlyBack ? SHPROBE_CAPTURE_BACK_FACE : 0.0));
     }
 }

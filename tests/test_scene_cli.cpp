@@ -344,8 +344,8 @@ TEST_F(SceneCommand, LeakMeasuresInTheTwoRooms) {
     EXPECT_LT(shares[4], 0.01);
     EXPECT_LT(shares[4], 0.25 * shares[3]);
 
-    // The gpu backend shades the same hits by the same rules, its invalid probes relocated (not
-    // filled: dilation is the cpu's): the same bound.
+    // The gpu backend shades the same hits by the same rules, its invalid probes relocated and
+    // filled as the cpu's: the same bound.
     std::vector<std::string> gpu = common;
     std::replace(gpu.begin(), gpu.end(), std::string("cpu"), std::string("gpu"));
     gpu.insert(gpu.end(), {"-o", file("rooms_gpu.shpv")});
@@ -712,7 +712,7 @@ TEST_F(SceneCommand, AnEmbreePluginThatCannotBeLoadedIsNamed) {
 }
 
 // Bad options get one line each before any work: a grid that is not three counts, bricks without a
-// whole previous bounce's volume, the cpu's options for the gpu.
+// whole previous bounce's volume, the cpu's cache refinement for the gpu.
 TEST_F(SceneCommand, BadOptionsAreRefused) {
     const std::string scene = cornellBox();
     expectFailure({{"scene", scene, "--grid", "3,3", "-o", "OUT"}, 2, {"--grid"}, "out.shpv"});
@@ -729,11 +729,6 @@ TEST_F(SceneCommand, BadOptionsAreRefused) {
                    2,
                    {"--previous", "cpu"},
                    "out.shpv"});
-    expectFailure(
-        {{"scene", scene, "--grid", "2,2,2", "--rays-per-texel", "4", "--backend", "gpu", "-o", "OUT"},
-         2,
-         {"--rays-per-texel"},
-         "out.shpv"});
     expectFailure({{"scene", scene, "--grid", "2,2,2", "--backend", "rays", "-o", "OUT"},
                    2,
                    {"--backend"},

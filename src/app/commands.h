@@ -145,12 +145,12 @@ struct SceneOptions {
     std::string previous;             // the previous bounce's whole volume
     uint32_t probesPerBatch = 32;
     std::string backend = "auto";  // auto | gpu (rasterized captures) | cpu (rays: scene/ray_bake.h)
-    int raysPerTexel = 0;          // cpu: 0 is 4; gpu: one, at the texel's centre
+    int raysPerTexel = 0;          // 0: 4 on the cpu, 1 (the texel's centre) on the gpu
     double cacheSpacing = 0.0;     // cpu: 0 is the world's diagonal / 64
     int gatherRays = 64;           // cpu: per cache point
     int cacheRefinement = 0;       // cpu: the most times a cache cell is halved
     double invalidBackFaces = 0.5; // a probe is invalid where more of its view meets back faces
-    bool dilate = true;            // cpu: invalid probes filled from their valid neighbours
+    bool dilate = true;            // invalid probes filled from their valid neighbours
     double relocationLimit = 0.45; // cpu: the longest move out of geometry, in smallest cell sides
     bool transfer = false;         // cpu: the volume's radiance transfer (scene/volume_bake.h)
     std::string device;

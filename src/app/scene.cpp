@@ -93,12 +93,12 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                      "for another sky, or the sky turned, without a capture (emission and the scene's suns "
                      "stay as baked); the volume's light is the sky's band-limited to --order");
     command.add_flag("!--no-dilation", options.dilate,
-                     "cpu: leave invalid probes empty, not filled from their valid neighbours");
+                     "Leave invalid probes empty, not filled from their valid neighbours");
     addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
                    "gpu: probes captured per command buffer", 1, 4096);
     addRangeOption(command, "--rays-per-texel", options.raysPerTexel,
-                   "cpu: jittered rays per cube-map texel, rounded up to a square (0: 4; 1: the "
-                   "texel's centre, as the gpu backend casts them)",
+                   "Jittered rays per cube-map texel, rounded up to a square (0: 4 on the cpu, 1 on "
+                   "the gpu; 1: the texel's centre)",
                    0, 1024);
     command
         .add_option("--cache-spacing", options.cacheSpacing,
@@ -158,27 +158,26 @@ namespace {
 // sampler tests it against.
 constexpr double kRelocationFrontCells = 0.1;
 
-int cpuRaysPerTexel(const SceneOptions& options) {
-    return options.raysPerTexel > 0 ? options.raysPerTexel : 4;
+// The gpu's default casts one ray through each texel's centre, as fast as the raster capture's view.
+int raysPerTexel(const SceneOptions& options, bool gpu) {
+    return options.raysPerTexel > 0 ? options.raysPerTexel : gpu ? 1 : 4;
 }
 
-// The face size of a texel a ray: a texel of the probes' faces on the gpu, one of the cpu's s x s
-// jittered rays of a texel.
-int rayFootprintFaceSize(const SceneOptions& options, bool rays) {
-    const int raysPerSide = rays ? int(std::sqrt(double(cpuRaysPerTexel(options)))) : 1;
-    return options.faceSize * raysPerSide;
+// The face size of a texel a ray: one of the s x s jittered rays of a texel.
+int rayFootprintFaceSize(const SceneOptions& options, bool gpu) {
+    return options.faceSize * int(std::sqrt(double(raysPerTexel(options, gpu))));
 }
 
 // The face size of the sky as the probes' rays see it: a texel a ray, never finer than the sky's own.
-int skyFaceSizeForProbes(const SceneOptions& options, bool rays, int skyFaceSize) {
-    return std::min(skyFaceSize, rayFootprintFaceSize(options, rays));
+int skyFaceSizeForProbes(const SceneOptions& options, bool gpu, int skyFaceSize) {
+    return std::min(skyFaceSize, rayFootprintFaceSize(options, gpu));
 }
 
 // The sky averaged over the probes' ray footprints where it is finer (docs/scene-probes.md, "Small
 // bright patches of a sky"): a patch smaller than a ray's share of the sphere counts by its area,
 // not by whether a ray happened to meet it.
-Cubemap skySeenByProbes(const Cubemap& sky, const SceneOptions& options, bool rays) {
-    return averageCubemap(sky, skyFaceSizeForProbes(options, rays, sky.faceSize));
+Cubemap skySeenByProbes(const Cubemap& sky, const SceneOptions& options, bool gpu) {
+    return averageCubemap(sky, skyFaceSizeForProbes(options, gpu, sky.faceSize));
 }
 
 ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
@@ -196,10 +195,10 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
     settings["cache_spacing"] = options.cacheSpacing;
     settings["gather_rays"] = options.gatherRays;
     if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
+    settings["rays_per_texel"] = raysPerTexel(options, backend == "gpu");
+    settings["dilation"] = options.dilate;
     if (backend == "cpu") {
-        settings["rays_per_texel"] = cpuRaysPerTexel(options);
         if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
-        settings["dilation"] = options.dilate;
         if (options.transfer) settings["transfer"] = true;
     }
     return settings.dump();
@@ -234,7 +233,7 @@ RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid
     const double cell = smallestCellEdge(grid);
     return {.order = options.order,
             .faceSize = options.faceSize,
-            .raysPerTexel = cpuRaysPerTexel(options),
+            .raysPerTexel = raysPerTexel(options, false),
             .bounces = options.bounces,
             .cacheSpacing = options.cacheSpacing,
             .gatherRays = options.gatherRays,
@@ -255,10 +254,10 @@ ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOp
     auto progress = [&](uint64_t done, uint64_t rays) { line.update(done, double(rays), "rays"); };
     if (!options.transfer) {
         const SplitSky split = splitSceneSky(sky);
-        const ProbeSky probeSky{skySeenByProbes(split.residual, options, true), split.suns};
+        const ProbeSky probeSky{skySeenByProbes(split.residual, options, false), split.suns};
         return bakeVolumeByRays(world, probeSky, bakeOptions, grid, range, report, progress);
     }
-    ProbeVolume volume = bakeVolumeTransfer(world, rayFootprintFaceSize(options, true), bakeOptions, grid,
+    ProbeVolume volume = bakeVolumeTransfer(world, rayFootprintFaceSize(options, false), bakeOptions, grid,
                                             range, report, progress);
     relightVolume(volume, projectCubemap(sky.cubemap, options.order));
     return volume;
@@ -290,9 +289,6 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     if (options.transfer && options.cacheRefinement > 0)
         throw Error(ErrorKind::Input, "scene: --cache-refinement halves cells where their light differs, so "
                                       "its bake is not linear in the sky; --transfer needs it off");
-    if (options.raysPerTexel > 1 && options.backend == "gpu")
-        throw Error(ErrorKind::Input, "scene: --rays-per-texel is for the cpu backend; the gpu casts one ray "
-                                      "through each texel's centre");
     if (options.cacheRefinement > 0 && options.backend == "gpu")
         throw Error(ErrorKind::Input, "scene: --cache-refinement is for the cpu backend; the gpu gathers "
                                       "every lattice point, unrefined");
@@ -306,39 +302,54 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
 
 // Every bounce of probes [range.begin, range.end) by rays on the GPU, as the cpu backend bakes
 // them (the sky's sun taken out as a sun, the sky averaged to the rays' footprints), the cache
-// gathered whole: a brick is exactly its part of the whole bake. After --previous, the bounce after
-// that volume's.
+// gathered whole: a brick is exactly its part of the whole bake. Probes still inside geometry are
+// filled as the cpu fills them (dilateInvalidProbes), the counts in `report`. After --previous, the
+// bounce after that volume's.
 ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environment& sky,
                       const SceneOptions& options, const ProbeGrid& grid, ProbeRange range,
-                      const std::string& settings) {
+                      const std::string& settings, VolumeBakeReport& report) {
     const int bounces = options.previous.empty()
                             ? options.bounces
                             : readPreviousBounce(options, grid, world, settings).bounces + 1;
     const SplitSky split = splitSceneSky(sky);
     const World lit = withSuns(world, split.suns);
-    const Cubemap seen = skySeenByProbes(split.residual, options, false);
+    const Cubemap seen = skySeenByProbes(split.residual, options, true);
     // The rays cast shadow rays: the raster capture's shadow maps are not read.
     SceneCapture capture = createSceneCapture(
         context, lit, seen, {.faceSize = options.faceSize, .order = options.order, .shadowMapSize = 1});
     ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });
     RayCapture rays = createRayCapture(context, capture, SceneShading(lit, seen),
                                        {.bounces = bounces,
+                                        .raysPerTexel = raysPerTexel(options, true),
                                         .cacheSpacing = options.cacheSpacing,
                                         .gatherRays = options.gatherRays,
                                         .relocation = rayBakeOptions(options, grid).relocation,
                                         .skySuns = split.suns});
     ScopeExit releaseRays([&] { destroyRayCapture(context, rays); });
-    const std::vector<SceneProbe> probes =
-        bakeRayProbes(context, capture, rays, probePositions(grid, range),
-                      {.order = options.order, .probesPerBatch = options.probesPerBatch});
-    ProbeVolume volume = volumeOfProbes(std::span<const SceneProbe>(probes), options.order, options.faceSize,
-                                        options.invalidBackFaces, grid, range);
+    const SceneBakeOptions bakeOptions{.order = options.order, .probesPerBatch = options.probesPerBatch};
+    std::vector<SceneProbe> probes =
+        bakeRayProbes(context, capture, rays, probePositions(grid, range), bakeOptions);
+    report.relocated = size_t(std::count_if(probes.begin(), probes.end(), [](const SceneProbe& probe) {
+        return probe.offset != glm::vec3(0.0f);
+    }));
+    const std::vector<uint32_t> filled =
+        options.dilate
+            ? dilateInvalidProbes(probes, options.faceSize, options.invalidBackFaces, grid, range,
+                                  [&](std::span<const glm::dvec3> beyond) {
+                                      return bakeRayProbes(context, capture, rays, beyond, bakeOptions);
+                                  })
+            : std::vector<uint32_t>{};
+    report.filled = filled.size();
+    const std::span<const SceneProbe> baked(probes);
+    ProbeVolume volume =
+        volumeOfProbes(baked, options.order, options.faceSize, options.invalidBackFaces, grid, range);
     volume.bounces = bounces;
     volume.visibilitySize = rays.options.visibilitySize;
     for (const SceneProbe& probe : probes) {
         volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
         if (options.relocationLimit > 0.0) volume.offsets.push_back(probe.offset);
     }
+    storeFilledProbes(volume, baked, filled, float(rays.visibilityRange));
     if (context.validationMessages() > 0)
         throw Error(ErrorKind::Device, "scene: the Vulkan validation layer reported " +
                                            counted(context.validationMessages(), "message"));
@@ -368,7 +379,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     const std::string settings = bakeSettings(options, backend.name, sky);
     VolumeBakeReport rays;
     ProbeVolume volume = backend.context
-                             ? bakeOnGpu(*backend.context, world, sky, options, grid, range, settings)
+                             ? bakeOnGpu(*backend.context, world, sky, options, grid, range, settings, rays)
                              : bakeByRays(world, sky, options, grid, range, rays);
     volume.source = world.description;
     volume.sourceHash = gltfSceneHash(options.scene);
@@ -378,7 +389,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     const double seconds = millisecondsSince(start) / 1000.0;
     const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0)) + rays.filled;
     std::printf("scene    %s\n", world.description.c_str());
-    const int skySeen = skyFaceSizeForProbes(options, !backend.context, sky.faceSize());
+    const int skySeen = skyFaceSizeForProbes(options, backend.context.has_value(), sky.faceSize());
     const std::string averaged = skySeen < sky.faceSize() ? ", averaged to " + std::to_string(skySeen) +
                                                                 "^2 faces for the probes' rays"
                                                           : "";
@@ -396,21 +407,21 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                 inside + rays.relocated, options.invalidBackFaces);
     const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
     if (backend.context) {
-        std::printf("backend  gpu: %s%s: rays, 1 per texel, every cache point gathered\n",
-                    backend.context->info.name.c_str(), reason.c_str());
+        std::printf("backend  gpu: %s%s: rays, %d per texel, every cache point gathered\n",
+                    backend.context->info.name.c_str(), reason.c_str(), raysPerTexel(options, true));
     } else {
-        std::printf("backend  cpu: rays, %d per texel, %s (%s)%s\n", cpuRaysPerTexel(options),
+        std::printf("backend  cpu: rays, %d per texel, %s (%s)%s\n", raysPerTexel(options, false),
                     counted(rays.counts.cachePoints, "cache point").c_str(),
                     counted(rays.counts.halvedCells, "cell halved", "cells halved").c_str(), reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
                     double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
                     double(rays.counts.cacheRays));
-        if (options.relocationLimit > 0.0)
-            std::printf("moved    %zu out of geometry (by at most %g of the smallest cell side), %zu stayed "
-                        "inside\n",
-                        rays.relocated, options.relocationLimit, inside);
-        std::printf("filled   %s from valid neighbours\n", counted(rays.filled, "invalid probe").c_str());
     }
+    if (options.relocationLimit > 0.0)
+        std::printf("moved    %zu out of geometry (by at most %g of the smallest cell side), %zu stayed "
+                    "inside\n",
+                    rays.relocated, options.relocationLimit, inside);
+    std::printf("filled   %s from valid neighbours\n", counted(rays.filled, "invalid probe").c_str());
     std::printf("wrote    %s in %.2f s\n", options.output.c_str(), seconds);
 }
 

@@ -22,8 +22,9 @@
 #define SHPROBE_RAYS_OUTPUT 16
 // The bindings of cache_gather; capture_rays has one more.
 #define SHPROBE_RAYS_BINDINGS 17
-// capture_rays: float[], each texel's hit distance (infinity: none; negative: the back of a
-// one-sided material), probe p's 6 N^2 texels from 6 N^2 p, faces and rows in order.
+// capture_rays: float[], each ray's hit distance (infinity: none; negative: the back of a
+// one-sided material), probe p's 6 N^2 texels from 6 N^2 p, faces and rows in order, each texel's
+// s^2 rays from s^2 times its index, strata row by row (scene/view_rays.h).
 #define SHPROBE_RAYS_DISTANCES 17
 
 SHPROBE_BEGIN
@@ -47,9 +48,10 @@ struct RayCaptureConstants {
     uvec4 sizes; // x: probe face size N; y: sky face size; z: sun count; w: BVH node count
     uvec4 work;  // x: the probes (capture_rays) or points (cache_gather) of the pass; y: the first
                  // point (cache_gather); z: the bounce the cache holds (0: none, reflect no bounce);
-                 // w: g, the gather's g x g rays per point
+                 // w: g, the gather's g x g rays per point, or s, the probes' s x s rays per texel
     vec4 scale;  // x: how far leaving rays start off a surface (scene/surface_shading.h offset())
-    uvec4 seed;  // x: the random numbers' seed; y: the bounce gathered
+    uvec4 seed;  // x: the random numbers' seed; y: the bounce gathered; zw: the words (low, high)
+                 // of the probes' view stream base (scene/view_rays.h viewStreamBase)
 };
 
 SHPROBE_END

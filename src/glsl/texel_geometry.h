@@ -40,6 +40,13 @@ SHPROBE_FN vec3 orientToFace(uint face, vec3 v) {
     }
 }
 
+// Face-local coordinate of ray `stratum` of s across texel i (or row j) of an N-wide face, at
+// `jitter` in [0, 1) of its stratum: a probe's view by rays (scene/view_rays.h, capture_rays.comp).
+// s = 1 at jitter 1/2 is the texel's centre.
+SHPROBE_FN float stratumCoord(uint i, uint stratum, uint s, float jitter, uint faceSize) {
+    return 2.0f * (float(i) + (float(stratum) + jitter) / float(s)) / float(faceSize) - 1.0f;
+}
+
 // The GPU projection visits the positions (i, j) with i, j < ceil(N / 2), each with its mirror
 // images (N - 1 - i, j), (i, N - 1 - j) and (N - 1 - i, N - 1 - j): four texels per face.
 SHPROBE_FN uint quadrantSize(uint faceSize) {

@@ -8,6 +8,7 @@
 #include "glsl/ray_capture_interface.h"
 #include "scene/ray_bake.h"
 #include "scene/surface_cache.h"
+#include "scene/view_rays.h"
 #include "sh/cubemap.h"
 #include "sh/irradiance.h"
 #include "vk/vulkan_commands.h"
@@ -35,6 +36,9 @@ enum RayBuffer : size_t {
 };
 
 constexpr uint32_t kLocalSize = 64;
+// The most bytes of ray distances a batch of probes reads back: with s x s rays per texel a probe
+// holds 4 * 6 N^2 s^2 (25 MB at N = 32, s = 32), so large s bakes fewer probes per batch.
+constexpr uint64_t kRayDistanceBytes = uint64_t(256) << 20;
 // Rays per gather submission: a bounded time per command buffer on any device (lavapipe: about 1 s).
 constexpr uint64_t kRaysPerSubmission = uint64_t(1) << 22;
 // Workgroups per dispatch dimension that every device allows (maxComputeWorkGroupCount >= 65535);
@@ -112,7 +116,9 @@ glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCap
     constants.sizes = glm::uvec4(uint32_t(capture.options.faceSize), capture.skyFaceSize,
                                  uint32_t(capture.suns.size()), uint32_t(rays.bvh.nodes.size()));
     constants.scale = glm::vec4(rays.surfaceOffset, 0.0f, 0.0f, 0.0f);
-    constants.seed = glm::uvec4(uint32_t(rays.options.seed), 0u, 0u, 0u);
+    const uint64_t viewStream = viewStreamBase(rays.options.seed);
+    constants.seed =
+        glm::uvec4(uint32_t(rays.options.seed), 0u, uint32_t(viewStream), uint32_t(viewStream >> 32));
     return constants;
 }
 
@@ -135,6 +141,9 @@ void gatherBounce(const Context& context, const SceneCapture& capture, const Ray
 
 void requireOptions(const RayCaptureOptions& options) {
     if (options.bounces < 0) throw Error(ErrorKind::Input, "scene: bounces must be 0 or more");
+    if (options.raysPerTexel < 1 || options.raysPerTexel > 1024)
+        throw Error(ErrorKind::Input,
+                    "scene: rays per texel must be in 1..1024, got " + std::to_string(options.raysPerTexel));
     if (!(options.cacheSpacing >= 0.0) || !std::isfinite(options.cacheSpacing))
         throw Error(ErrorKind::Input, "scene: the cache spacing must be a finite number of 0 or more");
     if (options.gatherRays < 1 || options.gatherRays > 1 << 20)
@@ -143,6 +152,12 @@ void requireOptions(const RayCaptureOptions& options) {
     if (options.visibilitySize < 0 || options.visibilitySize > 64)
         throw Error(ErrorKind::Input, "scene: the visibility map's size must be in 0..64, got " +
                                           std::to_string(options.visibilitySize));
+}
+
+// The bytes of one probe's ray distances: 6 N^2 s^2 floats.
+uint64_t rayDistanceBytes(const SceneCapture& capture, const RayCapture& rays) {
+    const uint64_t n = uint64_t(capture.options.faceSize);
+    return sizeof(float) * 6 * n * n * rays.texelSide * rays.texelSide;
 }
 
 // What the probes' program binds for one target: the positions (host-written, one vec4 per probe),
@@ -167,9 +182,7 @@ ProbeRaySet createProbeRaySet(const Context& context, const SceneCapture& captur
     OnFailure undo([&] { destroyProbeRaySet(context, set); });
     set.positions = createBuffer(context, sizeof(glm::vec4) * target.probeCount,
                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Upload, "probe positions");
-    const VkDeviceSize texels =
-        6 * VkDeviceSize(capture.options.faceSize) * VkDeviceSize(capture.options.faceSize);
-    set.distances = createBuffer(context, sizeof(float) * texels * target.probeCount,
+    set.distances = createBuffer(context, rayDistanceBytes(capture, rays) * target.probeCount,
                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "hit distances");
     set.pool = createDescriptorPool(context,
                                     {.sets = 1, .storageBuffers = SHPROBE_RAYS_BINDINGS, .storageImages = 1});
@@ -187,29 +200,29 @@ void recordProbeRays(VkCommandBuffer commands, const SceneCapture& capture, cons
     for (size_t p = 0; p < positions.size(); ++p)
         mapped[p] = glm::vec4(glm::vec3(positions[p]), 1.0f);
     glsl::RayCaptureConstants constants = rayConstants(capture, rays);
-    constants.work = glm::uvec4(uint32_t(positions.size()), 0u, rays.options.bounces > 0 ? 1u : 0u, 0u);
+    constants.work =
+        glm::uvec4(uint32_t(positions.size()), 0u, rays.options.bounces > 0 ? 1u : 0u, rays.texelSide);
     const uint64_t texels = 6 * uint64_t(capture.options.faceSize) * uint64_t(capture.options.faceSize);
     dispatch(commands, rays.probes, set.set, constants, {groupsFor(texels), uint32_t(positions.size())});
     computeWriteBarrier(commands);
 }
 
 // Probe k's visibility map of a batch (DistanceMoments) and the nearest faces its rays met, from
-// its texels' hit distances (negative: a back face) in the directions the cpu's one ray per texel
-// casts, in its order.
+// its rays' hit distances (negative: a back face) in the directions the cpu casts them, in its order.
 void readDistances(const RayCapture& rays, const ProbeRaySet& set, int faceSize, size_t k, SceneProbe& probe,
                    NearestHits& nearest) {
     DistanceMoments moments(rays.options.visibilitySize, rays.visibilityRange);
-    const float* distances =
-        static_cast<const float*>(set.distances.mapped) + 6 * size_t(faceSize) * faceSize * k;
-    auto centre = [faceSize](int i) { return 2.0 * (i + 0.5) / faceSize - 1.0; };
-    for (int face = 0; face < kFaceCount; ++face)
-        for (int j = 0; j < faceSize; ++j)
-            for (int i = 0; i < faceSize; ++i) {
-                const glm::dvec3 direction = faceDirection(face, centre(i), centre(j));
-                const float distance = *distances++;
-                moments.add(direction, std::abs(double(distance)));
-                nearest.add(direction, std::abs(double(distance)), std::signbit(distance));
-            }
+    const uint64_t raysPerProbe =
+        6 * uint64_t(faceSize) * uint64_t(faceSize) * rays.texelSide * rays.texelSide;
+    const float* distances = static_cast<const float*>(set.distances.mapped) + raysPerProbe * k;
+    forEachViewRay(
+        faceSize, int(rays.texelSide), rays.options.seed,
+        [&](const glm::dvec3& direction) {
+            const float distance = *distances++;
+            moments.add(direction, std::abs(double(distance)));
+            nearest.add(direction, std::abs(double(distance)), std::signbit(distance));
+        },
+        [](int, int, int) {});
     probe.visibility = moments.texels();
 }
 
@@ -217,8 +230,10 @@ void readDistances(const RayCapture& rays, const ProbeRaySet& set, int faceSize,
 std::vector<SceneProbe> bakeViews(const Context& context, const SceneCapture& capture, const RayCapture& rays,
                                   std::span<const glm::dvec3> positions, const SceneBakeOptions& options,
                                   std::vector<NearestHits>& nearest) {
-    CaptureTarget target =
-        createCaptureTarget(context, capture, capturesPerBatch(context, capture, options.probesPerBatch));
+    const uint32_t byDistances =
+        uint32_t(std::max<uint64_t>(1, kRayDistanceBytes / rayDistanceBytes(capture, rays)));
+    CaptureTarget target = createCaptureTarget(
+        context, capture, std::min(byDistances, capturesPerBatch(context, capture, options.probesPerBatch)));
     ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
     ProbeRaySet set = createProbeRaySet(context, capture, rays, target);
     ScopeExit releaseSet([&] { destroyProbeRaySet(context, set); });
@@ -253,6 +268,7 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.bvh = buildBvh(world);
     rays.surfaceOffset = float(shading.offset());
     rays.gatherSide = uint32_t(std::ceil(std::sqrt(double(options.gatherRays))));
+    rays.texelSide = uint32_t(std::ceil(std::sqrt(double(options.raysPerTexel))));
     rays.visibilityRange = visibilityRangeOf(world);
     const CacheLayout cache =
         layOutCache(shading, options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world));

@@ -6,9 +6,10 @@
 //   RayCapture rays = createRayCapture(context, capture, SceneShading(world, sky), {.bounces = 2});
 //   std::vector<SceneProbe> probes = bakeRayProbes(context, capture, rays, positions, {.order = 3});
 //
-// A probe's texel holds what arrives along the ray from the probe through the texel's centre
-// (capture_rays.comp): the sky (its texel, nearest), nothing from the back of a one-sided material
-// (marked, for the validity count), else the front's emission + albedo / pi times the suns'
+// A probe's texel holds the mean of what arrives along its rays from the probe (capture_rays.comp),
+// through the texel's centre, or s x s jittered as the cpu's (scene/view_rays.h): the sky (its
+// texel, nearest), nothing from the back of a one-sided material (marked, for the validity count,
+// where most of its rays met one), else the front's emission + albedo / pi times the suns'
 // irradiance (a shadow ray each) and the last bounce's irradiance. Bounces are gathered at the
 // surfaces, as the cpu gathers them: every point of every triangle's lattice (scene/surface_cache.h,
 // without refinement) gathers E_k by g x g stratified cosine rays reading E_{k-1} at their hits
@@ -29,6 +30,8 @@ namespace shprobe {
 
 struct RayCaptureOptions {
     int bounces = 0;               // k: the probes see the surfaces reflect bounce k (0: none)
+    int raysPerTexel = 1;          // 1: through the texel's centre; more, rounded up to a square
+                                   // s x s: the cpu's jittered rays (RayBakeOptions::raysPerTexel)
     double cacheSpacing = 0.0;     // the largest distance between cache points; 0: defaultCacheSpacing
     int gatherRays = 64;           // per cache point and bounce, rounded up to a square (g x g strata)
     uint64_t seed = 1;             // of the gather's random numbers
@@ -46,6 +49,7 @@ struct RayCapture {
     float surfaceOffset = 0.0f;   // SceneShading::offset()
     uint32_t cachePoints = 0;     // over all lattices and sides
     uint32_t gatherSide = 1;      // g
+    uint32_t texelSide = 1;       // s
     double visibilityRange = 1.0; // the farthest distance a visibility map records (visibilityRangeOf)
     std::vector<Buffer> buffers;  // the hierarchy's three arrays, the lattices, the gather points, two caches
     ComputeProgram probes;        // capture_rays.comp
@@ -61,16 +65,17 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
                             const RayCaptureOptions& options);
 void destroyRayCapture(const Device& device, RayCapture& rays);
 
-// bakeSceneProbes by rays: every position, probesPerBatch per command buffer, results in input order,
-// each with its visibility map, from its texels' hit distances as the cpu's one ray per texel
-// gathers them; probes inside geometry moved out by options.relocation (their views from where they
-// may go, then from where they go, two more bakes of them all), the offset in SceneProbe::offset.
+// bakeSceneProbes by rays: every position, probesPerBatch per command buffer (fewer where the rays'
+// distances would pass kRayDistanceBytes), results in input order, each with its visibility map,
+// from its rays' hit distances as the cpu's rays gather them; probes inside geometry moved out by
+// options.relocation (their views from where they may go, then from where they go, two more bakes
+// of them all), the offset in SceneProbe::offset.
 std::vector<SceneProbe> bakeRayProbes(const Context& context, const SceneCapture& capture,
                                       const RayCapture& rays, std::span<const glm::dvec3> positions,
                                       const SceneBakeOptions& options);
 
-// What a probe at `position` sees through its texel centres (alpha as bakeRayProbes captures it),
-// for tests and pictures.
+// What a probe at `position` sees through its texels (alpha as bakeRayProbes captures it), for tests
+// and pictures.
 Cubemap traceRayCubemap(const Context& context, const SceneCapture& capture, const RayCapture& rays,
                         const glm::dvec3& position);
 

@@ -8,6 +8,7 @@
 #include "scene/sampling.h"
 #include "scene/surface_cache.h"
 #include "scene/surface_shading.h"
+#include "scene/view_rays.h"
 #include "scene/volume_sampling.h"
 #include "sh/basis.h"
 #include "sh/irradiance.h"
@@ -226,7 +227,6 @@ struct RayBaker::State {
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
-    template <typename Ray, typename Texel> void forEachViewRay(Ray&& ray, Texel&& texel) const;
     ProbeView trace(const glm::dvec3& position, uint64_t& rays);
     NearestHits survey(const glm::dvec3& position, uint64_t& rays) const;
     std::optional<glm::vec3> relocation(const glm::dvec3& position, const NearestHits& seen,
@@ -327,33 +327,7 @@ CachePoint RayBaker::State::gather(int bounce, uint32_t triangle, int side, cons
     return {glm::vec3(sum * (std::numbers::pi / (double(g) * g)))};
 }
 
-// The random numbers of the rays through texel t of a view: the same for every probe.
-constexpr uint64_t kViewStream = ~uint64_t(0);
-
-// Calls ray(direction) for each ray of a view, s x s through each texel of the cube map (through the
-// centre where s is 1, else jittered in each stratum), and texel(face, i, j) after each texel's.
-template <typename Ray, typename Texel> void RayBaker::State::forEachViewRay(Ray&& ray, Texel&& texel) const {
-    const int n = options.faceSize;
-    const int s = texelSide;
-    for (int face = 0; face < kFaceCount; ++face) {
-        for (int j = 0; j < n; ++j) {
-            for (int i = 0; i < n; ++i) {
-                RandomStream random(options.seed, kViewStream, (uint64_t(face) * n + j) * n + i);
-                for (int sb = 0; sb < s; ++sb) {
-                    for (int sa = 0; sa < s; ++sa) {
-                        const double ja = s == 1 ? 0.5 : random.next();
-                        const double jb = s == 1 ? 0.5 : random.next();
-                        ray(faceDirection(face, 2.0 * (i + (sa + ja) / s) / n - 1.0,
-                                          2.0 * (j + (sb + jb) / s) / n - 1.0));
-                    }
-                }
-                texel(face, i, j);
-            }
-        }
-    }
-}
-
-// A view's rays through the texels of a cube map (forEachViewRay); the hit distances into
+// A view's rays through the texels of a cube map (scene/view_rays.h); the hit distances into
 // octahedral texels of visibilitySize^2.
 ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
     const int s = texelSide;
@@ -362,6 +336,7 @@ ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
     glm::dvec3 sum(0.0);
     int backFacing = 0;
     forEachViewRay(
+        options.faceSize, texelSide, options.seed,
         [&](const glm::dvec3& direction) {
             const Arrival arrival = arriving(options.bounces, position, direction, rays);
             sum += arrival.radiance;
@@ -385,6 +360,7 @@ ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
 NearestHits RayBaker::State::survey(const glm::dvec3& position, uint64_t& rays) const {
     NearestHits nearest;
     forEachViewRay(
+        options.faceSize, texelSide, options.seed,
         [&](const glm::dvec3& direction) {
             ++rays;
             if (const std::optional<Meeting> meeting = intersect(position, direction))

@@ -29,6 +29,11 @@ class RandomStream {
         state_ += 0x9e3779b97f4a7c15ull;
         return double(mix64(state_) >> 11) * 0x1p-53;
     }
+    // Uniform in [0, 1), next()'s top 24 bits: the number a device draws (glsl/random_words.h).
+    float nextFloat() {
+        state_ += 0x9e3779b97f4a7c15ull;
+        return float(mix64(state_) >> 40) * 0x1p-24f;
+    }
     // The state before the next draw: a device continues the stream from it (glsl/transfer_rays.glsl).
     uint64_t state() const { return state_; }
 

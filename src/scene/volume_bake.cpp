@@ -7,74 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <glm/vector_relational.hpp>
-#include <map>
 
 namespace shprobe {
 
 namespace {
-
-bool invalid(const RayBakedProbe& probe, const RayBakeOptions& options) {
-    return insideGeometry(probe.backFaceTexels, options.faceSize, options.relocation.invalidBackFaces);
-}
-
-// Visits the probes of the 3 x 3 x 3 block around `index` (not itself) with their distance in cells.
-template <typename Visit> void forEachNeighbour(const ProbeGrid& grid, uint32_t index, const Visit& visit) {
-    const glm::ivec3 cell = probeCell(grid, index);
-    for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                const glm::ivec3 next = cell + glm::ivec3(dx, dy, dz);
-                if ((dx | dy | dz) == 0 || glm::any(glm::lessThan(next, glm::ivec3(0))) ||
-                    glm::any(glm::greaterThanEqual(next, grid.counts)))
-                    continue;
-                visit(probeIndex(grid, next), std::sqrt(double(dx * dx + dy * dy + dz * dz)));
-            }
-}
-
-// Fills the probes of `probes` (the range's) still inside geometry from their valid neighbours;
-// returns the flat indices of those filled.
-std::vector<uint32_t> dilateInvalidProbes(RayBaker& baker, const RayBakeOptions& options,
-                                          const ProbeGrid& grid, ProbeRange range,
-                                          std::vector<RayBakedProbe>& probes) {
-    std::map<uint32_t, size_t> outside; // neighbours beyond the range, by flat index
-    std::vector<glm::dvec3> outsidePositions;
-    for (uint32_t p = range.begin; p < range.end; ++p) {
-        if (!invalid(probes[p - range.begin], options)) continue;
-        forEachNeighbour(grid, p, [&](uint32_t q, double) {
-            if ((q >= range.begin && q < range.end) || outside.count(q)) return;
-            outside[q] = outsidePositions.size();
-            outsidePositions.push_back(probePosition(grid, probeCell(grid, q)));
-        });
-    }
-    const std::vector<RayBakedProbe> extra = baker.bakeProbes(outsidePositions);
-    auto probeAt = [&](uint32_t q) -> const RayBakedProbe& {
-        return q >= range.begin && q < range.end ? probes[q - range.begin] : extra[outside.at(q)];
-    };
-    std::vector<RayBakedProbe> filled = probes;
-    std::vector<uint32_t> filledIndices;
-    for (uint32_t p = range.begin; p < range.end; ++p) {
-        RayBakedProbe& probe = filled[p - range.begin];
-        if (!invalid(probe, options)) continue;
-        double weights = 0.0;
-        ShCoefficients radiance = makeCoefficients(options.order, Quantity::Radiance);
-        forEachNeighbour(grid, p, [&](uint32_t q, double distance) {
-            const RayBakedProbe& neighbour = probeAt(q);
-            if (invalid(neighbour, options)) return;
-            for (size_t i = 0; i < radiance.rgb.size(); ++i)
-                radiance.rgb[i] += neighbour.radiance.rgb[i] / distance;
-            weights += 1.0 / distance;
-        });
-        if (weights == 0.0) continue;
-        for (glm::dvec3& coefficient : radiance.rgb)
-            coefficient /= weights;
-        probe.radiance = radiance;
-        probe.irradiance = convolveIrradiance(radiance);
-        filledIndices.push_back(p);
-    }
-    probes = std::move(filled);
-    return filledIndices;
-}
 
 // The world lit by nothing but its sky: no emission, no suns.
 World skyLitOnly(const World& world) {
@@ -111,7 +47,10 @@ ProbeVolume bakeVolumeByRays(const World& world, const ProbeSky& sky, const Volu
         progress(done, sofar.probeRays + sofar.cacheRays);
     });
     const std::vector<uint32_t> filled =
-        options.dilate ? dilateInvalidProbes(baker, rays, grid, range, probes) : std::vector<uint32_t>{};
+        options.dilate ? dilateInvalidProbes(
+                             probes, rays.faceSize, rays.relocation.invalidBackFaces, grid, range,
+                             [&](std::span<const glm::dvec3> beyond) { return baker.bakeProbes(beyond); })
+                       : std::vector<uint32_t>{};
     report = {
         baker.counts(),
         size_t(std::count_if(probes.begin(), probes.end(),
@@ -128,18 +67,7 @@ ProbeVolume bakeVolumeByRays(const World& world, const ProbeSky& sky, const Volu
     volume.visibilitySize = rays.visibilitySize;
     for (const RayBakedProbe& probe : probes)
         volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
-    const size_t texels = size_t(rays.visibilitySize) * size_t(rays.visibilitySize);
-    const float far = float(baker.visibilityRange());
-    const size_t perProbe = size_t(rays.order) * size_t(rays.order);
-    for (uint32_t p : filled) {
-        const size_t k = p - range.begin;
-        volume.valid[k] = 1;
-        for (size_t i = 0; i < perProbe; ++i) {
-            volume.radiance[k * perProbe + i] = glm::vec3(probes[k].radiance.rgb[i]);
-            volume.irradiance[k * perProbe + i] = glm::vec3(probes[k].irradiance.rgb[i]);
-        }
-        std::fill_n(volume.visibility.begin() + ptrdiff_t(k * texels), texels, glm::vec2(far, far * far));
-    }
+    storeFilledProbes(volume, baked, filled, float(baker.visibilityRange()));
     return volume;
 }
 

@@ -19,9 +19,15 @@
 #include "scene/ray_bake.h"
 #include "sh/coefficients.h"
 #include "sh/cubemap.h"
+#include "sh/irradiance.h"
 
+#include <glm/vector_relational.hpp>
+
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <span>
 #include <vector>
 
@@ -66,6 +72,89 @@ ProbeVolume volumeOfProbes(std::span<const Probe> probes, int order, int faceSiz
     return volume;
 }
 
+// Visits the probes of the 3 x 3 x 3 block around `index` (not itself) with their distance in cells.
+template <typename Visit> void forEachNeighbour(const ProbeGrid& grid, uint32_t index, const Visit& visit) {
+    const glm::ivec3 cell = probeCell(grid, index);
+    for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const glm::ivec3 next = cell + glm::ivec3(dx, dy, dz);
+                if ((dx | dy | dz) == 0 || glm::any(glm::lessThan(next, glm::ivec3(0))) ||
+                    glm::any(glm::greaterThanEqual(next, grid.counts)))
+                    continue;
+                visit(probeIndex(grid, next), std::sqrt(double(dx * dx + dy * dy + dz * dz)));
+            }
+}
+
+// Fills the probes [range.begin, range.end) of `probes` still inside geometry (as volumeOfProbes
+// tells) from their valid neighbours, as Unity's dilation does: the mean of the valid probes of its
+// 3 x 3 x 3 block weighed by the inverse of their distance in cells. bake(positions) gives the
+// neighbours beyond the range (a brick's), so that a brick is exactly its part of the whole bake.
+// Probe as volumeOfProbes's; returns the flat indices of those filled, in order.
+template <typename Probe, typename Bake>
+std::vector<uint32_t> dilateInvalidProbes(std::vector<Probe>& probes, int faceSize, double invalidBackFaces,
+                                          const ProbeGrid& grid, ProbeRange range, const Bake& bake) {
+    auto invalid = [&](const Probe& probe) {
+        return insideGeometry(probe.backFaceTexels, faceSize, invalidBackFaces);
+    };
+    std::map<uint32_t, size_t> beyond; // neighbours beyond the range, by flat index
+    std::vector<glm::dvec3> beyondPositions;
+    for (uint32_t p = range.begin; p < range.end; ++p) {
+        if (!invalid(probes[p - range.begin])) continue;
+        forEachNeighbour(grid, p, [&](uint32_t q, double) {
+            if ((q >= range.begin && q < range.end) || beyond.count(q)) return;
+            beyond[q] = beyondPositions.size();
+            beyondPositions.push_back(probePosition(grid, probeCell(grid, q)));
+        });
+    }
+    const std::vector<Probe> extra = beyondPositions.empty() ? std::vector<Probe>{} : bake(beyondPositions);
+    auto probeAt = [&](uint32_t q) -> const Probe& {
+        return q >= range.begin && q < range.end ? probes[q - range.begin] : extra[beyond.at(q)];
+    };
+    std::vector<Probe> filled = probes;
+    std::vector<uint32_t> filledIndices;
+    for (uint32_t p = range.begin; p < range.end; ++p) {
+        Probe& probe = filled[p - range.begin];
+        if (!invalid(probe)) continue;
+        double weights = 0.0;
+        ShCoefficients radiance = makeCoefficients(probe.radiance.order, Quantity::Radiance);
+        forEachNeighbour(grid, p, [&](uint32_t q, double distance) {
+            const Probe& neighbour = probeAt(q);
+            if (invalid(neighbour)) return;
+            for (size_t i = 0; i < radiance.rgb.size(); ++i)
+                radiance.rgb[i] += neighbour.radiance.rgb[i] / distance;
+            weights += 1.0 / distance;
+        });
+        if (weights == 0.0) continue;
+        for (glm::dvec3& coefficient : radiance.rgb)
+            coefficient /= weights;
+        probe.radiance = radiance;
+        probe.irradiance = convolveIrradiance(radiance);
+        filledIndices.push_back(p);
+    }
+    probes = std::move(filled);
+    return filledIndices;
+}
+
+// Makes the probes of `filled` (dilateInvalidProbes's, flat indices) valid in a volume of
+// volumeOfProbes, with their coefficients and a visibility map that hides nothing: every texel
+// (far, far^2), far the range the maps record.
+template <typename Probe>
+void storeFilledProbes(ProbeVolume& volume, std::span<const Probe> probes, std::span<const uint32_t> filled,
+                       float far) {
+    const size_t texels = size_t(volume.visibilitySize) * size_t(volume.visibilitySize);
+    const size_t perProbe = size_t(volume.order) * size_t(volume.order);
+    for (uint32_t p : filled) {
+        const size_t k = p - volume.begin;
+        volume.valid[k] = 1;
+        for (size_t i = 0; i < perProbe; ++i) {
+            volume.radiance[k * perProbe + i] = glm::vec3(probes[k].radiance.rgb[i]);
+            volume.irradiance[k * perProbe + i] = glm::vec3(probes[k].irradiance.rgb[i]);
+        }
+        std::fill_n(volume.visibility.begin() + ptrdiff_t(k * texels), texels, glm::vec2(far, far * far));
+    }
+}
+
 // Called with the probes done so far (of as many as the bake reports), and the rays cast.
 using VolumeProgress = std::function<void(uint64_t probesDone, uint64_t rays)>;
 
@@ -75,10 +164,7 @@ uint64_t transferProbeCount(int order, ProbeRange range);
 // Probes [range.begin, range.end) of the grid, every bounce, into a volume (grid, order, range,
 // radiance, irradiance, validity, visibility, capture offsets where options.rays.relocation moves
 // probes, bounces; source and settings are the caller's). A probe still inside geometry is filled
-// from its valid neighbours (options.dilate), as Unity's dilation does: the mean of the valid probes
-// of its 3 x 3 x 3 block weighed by the inverse of their distance in cells, made valid, with a
-// visibility map that hides nothing. A brick bakes the neighbours it lacks, so that it is exactly its
-// part of the whole bake.
+// from its valid neighbours (options.dilate: dilateInvalidProbes, storeFilledProbes).
 ProbeVolume bakeVolumeByRays(const World& world, const ProbeSky& sky, const VolumeBakeOptions& options,
                              const ProbeGrid& grid, ProbeRange range, VolumeBakeReport& report,
                              const VolumeProgress& progress = {});
