@@ -128,7 +128,8 @@ run() {
     read -r seconds kib <"$work/time"
     rows+=("$name $probes $seconds $kib")
     awk -v name="$name" -v p="$probes" -v s="$seconds" -v k="$kib" \
-        'BEGIN { printf "%-28s %6d probes %8.2f s %9.0f probes/s  peak %7.1f MiB\n", name, p, s, p / s, k / 1024 }'
+        'BEGIN { r = s > 0 ? sprintf("%9.0f", p / s) : "        -"
+                 printf "%-28s %6d probes %8.2f s %s probes/s  peak %7.1f MiB\n", name, p, s, r, k / 1024 }'
 }
 for grid in 10,10,10 25,20,20; do
     probes=$(( ${grid//,/*} ))
@@ -178,11 +179,12 @@ for scene in "$work/cornell.gltf" "$engine"; do
         vertices=$(awk '$1 == "vertices" {print $2}' "$work/transfer.txt")
         transferRows+=("$backend: transfer $name $vertices $seconds $kib")
         awk -v name="$backend: transfer $name" -v n="$vertices" -v s="$seconds" -v k="$kib" \
-            'BEGIN { printf "%-28s %6d vectors %7.2f s %9.0f transfer vectors/s  peak %7.1f MiB\n", name, n, s, n / s, k / 1024 }'
+            'BEGIN { r = s > 0 ? sprintf("%9.0f", n / s) : "        -"
+                     printf "%-28s %6d vectors %7.2f s %s transfer vectors/s  peak %7.1f MiB\n", name, n, s, r, k / 1024 }'
     done
 done
-# The shadowed transfer's rays through shprobe's hierarchy against Embree's rtcOccluded1 on the same
-# rays, in one process (shprobe-reference --transfer-rate).
+# `shprobe transfer`'s shadowed rays against Embree's own rate on the same rays, and the GPU's
+# hierarchy on the cores, in one process (shprobe-reference --transfer-rate).
 "$build/shprobe-reference" "$engine" --transfer-rate 64
 
 # Memory per probe: (peak at 10,000 - peak at 1,000) / 9,000, per program.
@@ -198,16 +200,19 @@ if [ -n "$json" ]; then
     printf '%s\n' "${transferRows[@]}" >"$work/transfer_rows"
     printf '%s\n' "${rows[@]}" | python3 -c '
 import json, sys
+# GNU time counts hundredths: a process shorter than that has no rate (null).
+def rate(count, seconds):
+    return count / seconds if seconds > 0 else None
 rows = []
 for line in sys.stdin:
     *name, probes, seconds, kib = line.split()
     rows.append({"name": " ".join(name), "probes": int(probes), "seconds": float(seconds),
-                 "probes_per_second": int(probes) / float(seconds), "peak_kib": int(kib)})
+                 "probes_per_second": rate(int(probes), float(seconds)), "peak_kib": int(kib)})
 transfer = []
 for line in open(sys.argv[2]):
     *name, vectors, seconds, kib = line.split()
     transfer.append({"name": " ".join(name), "vectors": int(vectors), "seconds": float(seconds),
-                     "transfer_vectors_per_second": int(vectors) / float(seconds), "peak_kib": int(kib)})
+                     "transfer_vectors_per_second": rate(int(vectors), float(seconds)), "peak_kib": int(kib)})
 json.dump({"face_size": 32, "bounces": 0, "rows": rows, "transfer_rows": transfer}, open(sys.argv[1], "w"),
           indent=1)' "$json" "$work/transfer_rows"
 fi

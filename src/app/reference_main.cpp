@@ -23,6 +23,8 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <limits>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -92,45 +94,60 @@ TransferDifference compareTransfers(const VertexTransfer& a, const VertexTransfe
     return difference;
 }
 
-// Embree's own rate on the shadowed transfer's rays: the rays collected (in no particular order) and
-// then cast by rtcOccluded1 alone on all cores, nothing else done per ray.
+// The least time of three runs of `work`: the run least disturbed by the rest of the machine.
+template <typename Work> double bestSeconds(const Work& work) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int run = 0; run < 3; ++run) {
+        const Clock::time_point start = Clock::now();
+        work();
+        best = std::min(best, millisecondsSince(start) / 1000.0);
+    }
+    return best;
+}
+
+// Embree's own rate on the shadowed transfer's rays: the rays collected, each thread's in the order
+// it cast them (a side's rays together, as the transfer casts them), then cast by rtcOccluded1 alone
+// on all cores, nothing else done per ray.
 double embreeRaysPerSecond(const World& world, const TransferOptions& transfer,
                            const ReferenceTracer& tracer) {
     std::mutex mutex;
-    std::vector<std::array<glm::vec3, 2>> rays;
+    std::map<std::thread::id, std::vector<std::array<glm::vec3, 2>>> byThread;
     computeShadowedTransfer(world, transfer, [&](const glm::vec3& origin, const glm::vec3& direction) {
         const std::lock_guard lock(mutex);
-        rays.push_back({origin, direction});
+        byThread[std::this_thread::get_id()].push_back({origin, direction});
         return false;
     });
+    std::vector<std::array<glm::vec3, 2>> rays;
+    for (const auto& [thread, cast] : byThread)
+        rays.insert(rays.end(), cast.begin(), cast.end());
     constexpr int kParts = 1024;
     std::array<uint32_t, kParts> blocked{};
-    const Clock::time_point start = Clock::now();
-    forEachItem(kParts, threadCount(rays.size(), 4096), [&](int part) {
-        const size_t first = rays.size() * part / kParts, end = rays.size() * (part + 1) / kParts;
-        for (size_t r = first; r < end; ++r)
-            blocked[part] += tracer.occluded(glm::dvec3(rays[r][0]), glm::dvec3(rays[r][1]));
+    const double seconds = bestSeconds([&] {
+        forEachItem(kParts, threadCount(rays.size(), 4096), [&](int part) {
+            const size_t first = rays.size() * part / kParts, end = rays.size() * (part + 1) / kParts;
+            for (size_t r = first; r < end; ++r)
+                blocked[part] += tracer.occluded(glm::dvec3(rays[r][0]), glm::dvec3(rays[r][1]));
+        });
     });
-    const double seconds = millisecondsSince(start) / 1000.0;
     return double(rays.size()) / seconds;
 }
 
-// The shadowed transfer as `shprobe transfer` casts it (Embree through its plugin), as the GPU's
-// hierarchy (scene/bvh.h) would answer it on the cores, and Embree's own rate for the same rays:
-// the rates and how far the transfers differ.
+// The shadowed transfer as `shprobe transfer` casts it (Embree through its plugin, set-up included),
+// as the GPU's hierarchy (scene/bvh.h) would answer it on the cores, and Embree's own rate for the
+// same rays, each the best of three runs: the rates and how far the transfers differ.
 void measureTransferRate(const ReferenceOptions& options, const World& world) {
     const TransferOptions transfer{
         .model = TransferModel::Shadowed, .order = options.order, .rays = options.transferRays};
-    Clock::time_point start = Clock::now();
-    const VertexTransfer ours = computeTransfer(world, transfer);
-    const double oursSeconds = millisecondsSince(start) / 1000.0;
+    VertexTransfer ours;
+    const double oursSeconds = bestSeconds([&] { ours = computeTransfer(world, transfer); });
     const Bvh bvh = buildBvh(world);
-    start = Clock::now();
-    const VertexTransfer walked =
-        computeShadowedTransfer(world, transfer, [&](const glm::vec3& origin, const glm::vec3& direction) {
-            return anyHit(bvh, {origin, direction});
-        });
-    const double walkedSeconds = millisecondsSince(start) / 1000.0;
+    VertexTransfer walked;
+    const double walkedSeconds = bestSeconds([&] {
+        walked = computeShadowedTransfer(world, transfer,
+                                         [&](const glm::vec3& origin, const glm::vec3& direction) {
+                                             return anyHit(bvh, {origin, direction});
+                                         });
+    });
     const double embreeRate = embreeRaysPerSecond(world, transfer, ReferenceTracer(world, makeCubemap(1)));
     const double rays = double(ours.raysCast);
     const auto row = [&](const char* name, double seconds, const VertexTransfer& other) {
