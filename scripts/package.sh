@@ -4,7 +4,7 @@
 # its path. The build is Release with prefix /usr, in ./build-package, configured without tests the
 # first time. SHPROBE_BUILD_DIR=build makes it from ./build instead, tests and all (they are not
 # installed, so the package is the same), which CI configures for /usr before its tests so that no
-# file is built twice; another prefix there would rebuild the image floor and relink every program.
+# file is built twice; another prefix there would rebuild the common floor (its plugin places) and relink every program.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${SHPROBE_BUILD_DIR:-build-package}

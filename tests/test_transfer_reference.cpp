@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <utility>
 
 namespace shprobe {
 namespace {
@@ -97,44 +99,50 @@ std::vector<uint32_t> everyNth(const World& world, size_t step) {
 }
 
 struct Comparison {
-    double worstZ = 0.0;  // largest |T . L - reference| over the reference's standard error
-    double rmsZ = 0.0;    // root mean square of the same
-    double bias = 0.0;    // sum (T . L - reference) over sum reference
-    double biasSe = 0.0;  // the reference's standard error of that ratio
-    double worstSe = 0.0; // largest standard error over the radiance
+    double worstZ = 0.0;      // largest |T . L - reference| over the reference's standard error
+    double rmsZ = 0.0;        // root mean square of the same
+    double bias = 0.0;        // sum (T . L - reference) over sum reference
+    double biasSe = 0.0;      // the reference's standard error of that ratio
+    double worstOfMean = 0.0; // largest |T . L - reference| over the mean reference
 };
 
 // Green channel: T . L against the path tracer at each vertex, in units of the reference's standard
-// error; each vertex within `limit` of them.
+// error; each vertex within `limit` of them. Where every path gave the same (the black light, the
+// ceiling it hides, a cavity no path leaves), the two must differ by at most `sameSlack` of the mean
+// radiance: a cavity's few escaping transfer rays are what 4096 paths may miss.
 Comparison compare(const World& world, std::span<const uint32_t> vertices,
                    const TransferOptions& transferOptions, const SurfacePathOptions& pathOptions,
-                   double limit) {
+                   double limit, double sameSlack = 0.0) {
     const ShCoefficients sky = smoothSky();
     const VertexTransfer transfer = computeTransfer(world, transferOptions);
     const ReferenceTracer tracer(world, makeCubemap(1));
     const std::vector<SurfacePoint> points = vertexPoints(world, vertices);
     const std::vector<SurfaceRadiance> reference = pathTraceSurfaces(tracer, points, sky, pathOptions);
+    std::vector<double> lOut(vertices.size(), 0.0);
+    double meanReference = 0.0;
+    for (size_t k = 0; k < vertices.size(); ++k) {
+        for (int i = 0; i < 9; ++i)
+            lOut[k] +=
+                double(transfer.coefficients[size_t(vertices[k]) * 9 + size_t(i)].g) * sky.rgb[size_t(i)].g;
+        meanReference += reference[k].radiance.g / double(vertices.size());
+    }
     Comparison result;
     double difference = 0.0, total = 0.0, variance = 0.0;
     size_t compared = 0;
     for (size_t k = 0; k < vertices.size(); ++k) {
-        double lOut = 0.0;
-        for (int i = 0; i < 9; ++i)
-            lOut +=
-                double(transfer.coefficients[size_t(vertices[k]) * 9 + size_t(i)].g) * sky.rgb[size_t(i)].g;
         const double ref = reference[k].radiance.g, se = reference[k].standardError.g;
-        if (se == 0.0) { // every path the same: the black light, or the ceiling it hides
-            EXPECT_EQ(lOut, ref) << "vertex " << vertices[k];
+        result.worstOfMean = std::max(result.worstOfMean, std::abs(lOut[k] - ref) / meanReference);
+        if (se == 0.0) {
+            EXPECT_LE(std::abs(lOut[k] - ref), sameSlack * meanReference) << "vertex " << vertices[k];
             continue;
         }
-        const double z = (lOut - ref) / se;
-        EXPECT_LE(std::abs(z), limit)
-            << "vertex " << vertices[k] << ": transfer " << lOut << ", path tracer " << ref << " +- " << se;
+        const double z = (lOut[k] - ref) / se;
+        EXPECT_LE(std::abs(z), limit) << "vertex " << vertices[k] << ": transfer " << lOut[k]
+                                      << ", path tracer " << ref << " +- " << se;
         result.worstZ = std::max(result.worstZ, std::abs(z));
         ++compared;
         result.rmsZ += z * z;
-        result.worstSe = std::max(result.worstSe, se / ref);
-        difference += lOut - ref;
+        difference += lOut[k] - ref;
         total += ref;
         variance += se * se;
     }
@@ -165,9 +173,37 @@ TEST(TransferReference, OpenCornellBoxOneBounce) {
         {.bounces = 1, .samples = 16384}, 5.0);
     EXPECT_LE(c.rmsZ, 1.5);
     EXPECT_LE(std::abs(c.bias), 3.0 * c.biasSe);
-    std::printf(
-        "open Cornell box, %zu vertices: worst z %.2f, rms z %.2f, bias %.2e +- %.2e, worst se %.2e\n",
-        vertices.size(), c.worstZ, c.rmsZ, c.bias, c.biasSe, c.worstSe);
+    std::printf("open Cornell box, %zu vertices: worst z %.2f, rms z %.2f, bias %.2e +- %.2e\n",
+                vertices.size(), c.worstZ, c.rmsZ, c.bias, c.biasSe);
+}
+
+// 2CylinderEngine.glb (121,496 triangles, smoothed normals), every 283rd vertex (300), under
+// smoothSky: the transfer with 16 x 16 rays against 4096 paths per vertex. Vertices in cavities that
+// no path leaves may keep a few escaping transfer rays: at most the mean radiance (measured 0.26 at
+// one vertex). Shadowed, the transfer agrees within its noise: each vertex within 10 of the
+// reference's standard errors (the transfer's own noise is not in them; measured 6.4, rms 2.1) and
+// the sum within 3 (measured +0.24% against 0.15%). With one bounce per-vertex transfer is biased
+// here, not noisy: a bounce ray reads the direct term interpolated between the corners of the
+// triangle it meets, and the engine's long triangles' corners see more sky than their insides
+// (docs/transfer.md): the sum is 2.3% high (bound 4%) and single vertices are off by up to 0.64 of
+// the mean radiance (bound 1), where their own paths are few.
+TEST(TransferReference, EngineShadowedAndOneBounce) {
+    const World& world = testing::engineWorld(SHPROBE_GLTF_MODELS_DIR);
+    const std::vector<uint32_t> vertices = everyNth(world, 283);
+    const Comparison shadowed =
+        compare(world, vertices, {.model = TransferModel::Shadowed, .order = 3, .rays = 256},
+                {.bounces = 0, .samples = 4096}, 10.0, 1.0);
+    EXPECT_LE(std::abs(shadowed.bias), 3.0 * shadowed.biasSe);
+    const Comparison bounced = compare(
+        world, vertices, {.model = TransferModel::Interreflected, .order = 3, .rays = 256, .bounces = 1},
+        {.bounces = 1, .samples = 4096}, std::numeric_limits<double>::infinity(), 1.0);
+    EXPECT_LE(std::abs(bounced.bias), 0.04);
+    EXPECT_LE(bounced.worstOfMean, 1.0);
+    for (const auto& [name, c] : {std::pair{"shadowed", shadowed}, std::pair{"one bounce", bounced}})
+        std::printf(
+            "engine, %s, %zu vertices: worst z %.2f, rms z %.2f, bias %.2e +- %.2e, worst %.2f of the "
+            "mean\n",
+            name, vertices.size(), c.worstZ, c.rmsZ, c.bias, c.biasSe, c.worstOfMean);
 }
 
 } // namespace
