@@ -159,7 +159,7 @@ install(TARGETS shprobe_exr shprobe_oiio shprobe_embree # image/*_plugin.h, scen
 # --- headers -------------------------------------------------------------------------------------
 # The public API: the headers of the floors the installed libraries hold, laid out as in src/ under
 # include/shprobe/, less those of the libraries' insides (their Vulkan commands, the glTF reader's
-# tinygltf side, their JSON reading), the Embree reference and the viewer's window-system headers. glsl/ holds the
+# tinygltf side, their JSON reading), the Embree reference and plugin and the viewer's window-system headers. glsl/ holds the
 # C++/GLSL shared headers and the GLSL includes.
 foreach(folder common glsl sh vk image formats scene gpu render)
     install(DIRECTORY ${PROJECT_SOURCE_DIR}/src/${folder}/
@@ -170,6 +170,7 @@ foreach(folder common glsl sh vk image formats scene gpu render)
         PATTERN "gltf_geometry.h" EXCLUDE
         PATTERN "gltf_schema.h" EXCLUDE
         PATTERN "reference_tracer.h" EXCLUDE
+        PATTERN "embree_rays.h" EXCLUDE # the plugin's and the reference's own, not in the libraries
         PATTERN "swapchain.h" EXCLUDE
         PATTERN "viewer.h" EXCLUDE
         PATTERN "viewer_frames.h" EXCLUDE)

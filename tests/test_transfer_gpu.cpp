@@ -190,7 +190,7 @@ TEST(TransferProgram, BackendChoiceAndSameLayout) {
     };
     const std::string automatic = run("", "auto");
     const std::string gpu = run("--backend gpu --validation", "gpu");
-    EXPECT_NE(automatic.find("backend  cpu: all cores ("), std::string::npos) << automatic;
+    EXPECT_NE(automatic.find("backend  cpu: all cores, rays by Embree ("), std::string::npos) << automatic;
     EXPECT_NE(gpu.find("backend  gpu: llvmpipe"), std::string::npos) << gpu;
     const TransferMesh cpuMesh = loadTransferMesh((folder / "auto.glb").string());
     const TransferMesh gpuMesh = loadTransferMesh((folder / "gpu.glb").string());

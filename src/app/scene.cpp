@@ -70,9 +70,10 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                        "gpu: the whole volume of the previous bounce: bake the bounce after it (the whole "
                        "transport again, the volume checked to be this bake's)");
     command
-        .add_option("--backend", options.backend,
-                    "gpu: rays on the Vulkan device; cpu: rays on all cores; both gather bounces at "
-                    "the surfaces; auto: cpu where no GPU is (lavapipe), else gpu")
+        .add_option(
+            "--backend", options.backend,
+            "gpu: rays on the Vulkan device; cpu: rays on all cores, by Embree; both gather bounces at "
+            "the surfaces; auto: cpu where no GPU is (lavapipe), else gpu")
         ->check(CLI::IsMember({"auto", "gpu", "cpu"}))
         ->capture_default_str();
     command
@@ -410,7 +411,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         std::printf("backend  gpu: %s%s: rays, %d per texel, every cache point gathered\n",
                     backend.context->info.name.c_str(), reason.c_str(), raysPerTexel(options, true));
     } else {
-        std::printf("backend  cpu: rays, %d per texel, %s (%s)%s\n", raysPerTexel(options, false),
+        std::printf("backend  cpu: rays by Embree, %d per texel, %s (%s)%s\n", raysPerTexel(options, false),
                     counted(rays.counts.cachePoints, "cache point").c_str(),
                     counted(rays.counts.halvedCells, "cell halved", "cells halved").c_str(), reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",

@@ -65,7 +65,8 @@ void report(const TransferCommandOptions& options, const GltfSceneSource& source
     const std::string reason = backend.reason.empty() ? "" : " (" + backend.reason + ")";
     std::fprintf(out, "scene    %s\n", source.world.description.c_str());
     std::fprintf(out, "backend  %s: %s%s\n", backend.name.c_str(),
-                 backend.context ? backend.context->info.name.c_str() : "all cores", reason.c_str());
+                 backend.context ? backend.context->info.name.c_str() : "all cores, rays by Embree",
+                 reason.c_str());
     std::fprintf(
         out, "model    %s, order %d%s, %s\n", options.model.c_str(), options.order,
         options.model == "interreflected" ? (", " + counted(size_t(options.bounces), "bounce")).c_str() : "",
