@@ -372,11 +372,12 @@ TEST(Transfer, DeterministicAndColoured) {
     EXPECT_EQ(transferChannels(a), 3);
 }
 
-// Another occlusion test on the same rays (what shprobe-reference --transfer-rate times Embree with):
-// answered by the scene's own hierarchy it is computeTransfer bit for bit; a test that blocks every
-// ray leaves nothing; one that blocks none gives the plane's vertices what the unshadowed model gives
-// a plane under nothing (the same closed form as above, to the rays' noise: 64 rays, 3e-2); and
-// only the shadowed model takes one.
+// Another occlusion test on the same rays (what shprobe-reference --transfer-rate times the GPU's
+// hierarchy with): answered by scene/bvh.h's hierarchy it is computeTransfer (Embree) bit for bit
+// here, a box and a plane where no ray grazes an edge (docs/scene-probes.md, "On the CPU"); a test that
+// blocks every ray leaves nothing; one that blocks none gives the plane's vertices what the unshadowed model
+// gives a plane under nothing (the same closed form as above, to the rays' noise: 64 rays, 3e-2); and only
+// the shadowed model takes one.
 TEST(Transfer, AnotherOcclusionTestAnswersTheSameRays) {
     FixtureMesh box, plane;
     testing::addBox(box, glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.5f), false);

@@ -33,7 +33,8 @@ if(NOT TARGET tinygltf::headers)
     set_target_properties(tinygltf::headers PROPERTIES
         INTERFACE_INCLUDE_DIRECTORIES "${TINYGLTF_INCLUDE_DIR};${NLOHMANN_INCLUDE_DIR}")
 endif()
-# Embree 3 (libembree-dev) casts the rays of the scene probes' reference (target `embree`).
+# Embree 3 (libembree-dev) casts the rays of the cpu backends (its plugin, scene/ray_caster.h) and of
+# the scene probes' reference (target `embree`).
 find_package(embree 3 CONFIG REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)
 if(SHPROBE_BUILD_TESTS)

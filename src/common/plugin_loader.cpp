@@ -18,9 +18,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The folder of the file holding this code: libshprobe.so when the library is shared, else the
-// program. For the program the loader's name is its argv[0] ("shprobe" when run through PATH),
-// so the program's own file is taken from /proc/self/exe.
+// The folder of the file holding this code: libshprobe_sh.so (which holds the common floor) when the
+// libraries are shared, else the program. For the program the loader's name is its argv[0] ("shprobe" when
+// run through PATH), so the program's own file is taken from /proc/self/exe.
 fs::path folderOfThisCode() {
     Dl_info info{};
     link_map* module = nullptr;
@@ -70,7 +70,7 @@ fs::path withoutTail(const fs::path& folder, const fs::path& tail) {
 }
 
 // Where the plugin may be, in order, each an absolute path of the program's own tree: beside the
-// code (the build tree's program); shprobe/ beside it (an installed libshprobe.so); for a program
+// code (the build tree's program); shprobe/ beside it (an installed shared library); for a program
 // installed in <prefix>/bin, <prefix>/lib/shprobe; the configured install location; and for code
 // inside the build tree it was built in (its tests), that build tree. Never a folder above.
 std::vector<fs::path> candidates(const PluginName& plugin) {

@@ -1,7 +1,8 @@
-// Ray casting against a World's triangles on the CPU: a bounding volume hierarchy built once per
-// scene with the binned surface area heuristic, and the closest-hit and any-hit traversals over it.
-// The node and triangle arrays are those of glsl/bvh_interface.h, so that a compute shader can walk
-// the same hierarchy. docs/scene-probes.md, "Ray casting", says how it is built and tested.
+// Ray casting against a World's triangles: a bounding volume hierarchy built once per scene on the
+// CPU with the binned surface area heuristic, and the closest-hit and any-hit traversals over it.
+// The node and triangle arrays are those of glsl/bvh_interface.h, so that a compute shader walks the
+// same hierarchy; the traversals here are that walk's bit-exact model (the CPU's own rays go through
+// Embree, scene/ray_caster.h). docs/scene-probes.md, "Ray casting", says how it is built and tested.
 //
 // The ray/triangle test is the watertight one of Woop, Benthin and Wald, "Watertight Ray/Triangle
 // Intersection" (JCGT 2013): a ray through an edge or a vertex shared by triangles hits at least one

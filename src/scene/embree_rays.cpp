@@ -87,12 +87,17 @@ class EmbreeRayCaster final : public RayCaster {
         for (uint32_t t : triangles_)
             if (t >= world.triangleCount())
                 throw Error(ErrorKind::Input, "Embree: triangle " + std::to_string(t) + " past the World's " +
-                                                  std::to_string(world.triangleCount()));
+                                                  std::to_string(world.triangleCount()) + " triangles");
         device_.reset(rtcNewDevice(nullptr));
         if (!device_)
             throw Error(ErrorKind::Device, std::string("Embree could not start: ") +
                                                embreeErrorName(rtcGetDeviceError(nullptr)));
         rtcSetDeviceErrorFunction(device_.get(), recordEmbreeError, &errors_);
+        // Validity and relocation count the back faces rays meet: an Embree built to cull them
+        // would find every probe outside geometry.
+        if (rtcGetDeviceProperty(device_.get(), RTC_DEVICE_PROPERTY_BACKFACE_CULLING_ENABLED) != 0)
+            throw Error(ErrorKind::Device, "Embree was built with back-face culling, which hides the back "
+                                           "faces shprobe counts; use a build without it");
         scene_.reset(rtcNewScene(device_.get()));
         throwIfFailed(errors_, "creating the scene");
         // Robust mode: watertight edges, so that no ray slips between two triangles sharing an edge.

@@ -12,7 +12,8 @@
 namespace shprobe {
 
 // A caster for the World's triangles `triangles` (indices into it): hits name the World's index.
-// Throws Error(Input) for an index past the positions, Error(Device) where Embree cannot run.
+// The World must have passed checkBvhWorld (scene/bvh.h). Throws Error(Input) for a triangle past
+// the World's, Error(Device) where Embree cannot run or was built culling back faces.
 std::unique_ptr<RayCaster> makeEmbreeRayCaster(const World& world, std::span<const uint32_t> triangles);
 
 // The plugin's entry point, makeEmbreeRayCaster.

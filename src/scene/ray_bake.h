@@ -100,7 +100,8 @@ SurfaceHit cacheGatherPoint(const SceneShading& shading, uint32_t triangle, int 
                             const glm::dvec2& barycentric);
 
 // The nearest back face and the nearest front face a view's rays met: their directions (unit) and
-// distances, infinity where none was met. Of rays at one distance, the first added counts.
+// distances, infinity where none was met. Of rays within a relative 1e-5 of one distance, the first
+// added counts.
 struct NearestHits {
     glm::dvec3 backDirection{0.0};
     double back = std::numeric_limits<double>::infinity();

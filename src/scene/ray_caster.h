@@ -29,6 +29,7 @@ class RayCaster {
 class BvhRayCaster final : public RayCaster {
   public:
     explicit BvhRayCaster(const Bvh& bvh) : bvh_(bvh) {}
+    explicit BvhRayCaster(Bvh&&) = delete; // it would outlive a temporary
     std::optional<RayHit> closestHit(const Ray& ray) const override { return shprobe::closestHit(bvh_, ray); }
     bool anyHit(const Ray& ray) const override { return shprobe::anyHit(bvh_, ray); }
 

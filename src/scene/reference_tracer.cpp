@@ -31,8 +31,6 @@
 #include <array>
 #include <climits>
 #include <cmath>
-#include <limits>
-#include <mutex>
 #include <numbers>
 #include <numeric>
 #include <string>

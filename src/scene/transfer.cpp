@@ -56,7 +56,7 @@ bool isBack(const Side& side) {
 class TransferBaker {
   public:
     // `sky`: the vertices' radiance under it (one RGB value per side and pass), not their transfer.
-    // `occlusion`: what answers the shadowed pass's rays instead of the hierarchy.
+    // `occlusion`: what answers the shadowed pass's rays instead of Embree.
     TransferBaker(const World& world, const TransferOptions& options, const SkyRadiance* sky = nullptr,
                   const OcclusionTest* occlusion = nullptr)
         : options_(options), sky_(sky), occlusion_(occlusion), shading_(world, makeCubemap(1)),

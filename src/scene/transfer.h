@@ -77,8 +77,9 @@ struct VertexTransfer {
 // whichever thread finished one (one call at a time).
 using TransferProgress = std::function<void(uint64_t done, uint64_t total)>;
 
-// The transfer of the world's vertices on all cores. Throws Error(Input) for options out of range,
-// or for a world SceneShading or buildBvh refuses.
+// The transfer of the world's vertices on all cores, its rays cast by Embree (scene/ray_caster.h).
+// Throws Error(Input) for options out of range, or for a world SceneShading or buildBvh refuses;
+// Error(Device) where Embree's plugin cannot be loaded.
 VertexTransfer computeTransfer(const World& world, const TransferOptions& options,
                                const TransferProgress& progress = {});
 
@@ -98,9 +99,9 @@ std::vector<glm::vec3> computeVertexRadiance(const World& world, const TransferO
 using OcclusionTest = std::function<bool(const glm::vec3& origin, const glm::vec3& direction)>;
 
 // The shadowed model's transfer by computeTransfer's rays on all cores, each answered by `occluded`
-// instead of the scene's hierarchy: so that another ray caster (Embree, in shprobe-reference's
-// --transfer-rate) is timed and checked on the same rays. Throws as computeTransfer does, and
-// Error(Input) for another model.
+// instead of Embree: so that another ray caster (the GPU's hierarchy on the cores, in
+// shprobe-reference's --transfer-rate) is timed and checked on the same rays. Throws as computeTransfer does,
+// and Error(Input) for another model.
 VertexTransfer computeShadowedTransfer(const World& world, const TransferOptions& options,
                                        const OcclusionTest& occluded);
 
