@@ -25,7 +25,6 @@
 #include "sh/basis.h"
 
 #include <glm/geometric.hpp>
-#include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
 #include <array>
@@ -118,30 +117,6 @@ glm::dvec3 pathRadiance(const ReferenceTracer& tracer, int bounces, glm::dvec3 o
         origin = hit->rayOrigin;
         direction = cosineDirection(hit->shadingNormal, u1, u2);
     }
-}
-
-// A uniformly distributed rotation, from the unit quaternion of three uniforms (Shoemake, "Uniform
-// Random Rotations", Graphics Gems III, 1992).
-glm::dmat3 randomRotation(RandomStream& random) {
-    const double u1 = random.next();
-    const double u2 = random.next();
-    const double u3 = random.next();
-    const double a = std::sqrt(1.0 - u1);
-    const double b = std::sqrt(u1);
-    const glm::dquat q(b * std::cos(2.0 * kPi * u3), a * std::sin(2.0 * kPi * u2),
-                       a * std::cos(2.0 * kPi * u2), b * std::sin(2.0 * kPi * u3));
-    return glm::mat3_cast(q);
-}
-
-// Direction k of m of the spherical Fibonacci set: z at the centre of stratum k of [-1, 1], the
-// azimuth advancing by the golden ratio (Marques et al.).
-glm::dvec3 fibonacciDirection(int k, int m) {
-    constexpr double kInverseGoldenRatio = 0.6180339887498948482;
-    const double z = 1.0 - (2.0 * k + 1.0) / m;
-    const double turn = k * kInverseGoldenRatio;
-    const double phi = 2.0 * kPi * (turn - std::floor(turn));
-    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
 // One replica's estimate L_lm = (4 pi / m) sum_k L(w_k) y_lm(w_k), and the rays it cast.

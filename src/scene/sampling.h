@@ -1,6 +1,8 @@
 // Random numbers and directions for the scene's Monte-Carlo integrals (scene/reference_tracer.h,
 // scene/ray_bake.h): counter-based, so that a result never depends on which thread drew it.
 #pragma once
+#include <glm/gtc/quaternion.hpp>
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <algorithm>
@@ -54,6 +56,32 @@ inline glm::dvec3 cosineDirection(const glm::dvec3& n, double u1, double u2) {
     const double r = std::sqrt(u1);
     const double phi = 2.0 * std::numbers::pi * u2;
     return r * std::cos(phi) * t + r * std::sin(phi) * bitangent + std::sqrt(std::max(0.0, 1.0 - u1)) * n;
+}
+
+// A uniformly distributed rotation, from the unit quaternion of three uniforms (Shoemake, "Uniform
+// Random Rotations", Graphics Gems III, 1992).
+inline glm::dmat3 randomRotation(RandomStream& random) {
+    constexpr double kTwoPi = 2.0 * std::numbers::pi;
+    const double u1 = random.next();
+    const double u2 = random.next();
+    const double u3 = random.next();
+    const double a = std::sqrt(1.0 - u1);
+    const double b = std::sqrt(u1);
+    const glm::dquat q(b * std::cos(kTwoPi * u3), a * std::sin(kTwoPi * u2), a * std::cos(kTwoPi * u2),
+                       b * std::sin(kTwoPi * u3));
+    return glm::mat3_cast(q);
+}
+
+// Direction k of m of the spherical Fibonacci set (Marques et al., "Spherical Fibonacci Point Sets
+// for Illumination Integrals", 2013): z at the centre of stratum k of [-1, 1], the azimuth
+// advancing by the golden ratio.
+inline glm::dvec3 fibonacciDirection(int k, int m) {
+    constexpr double kInverseGoldenRatio = 0.6180339887498948482;
+    const double z = 1.0 - (2.0 * k + 1.0) / m;
+    const double turn = k * kInverseGoldenRatio;
+    const double phi = 2.0 * std::numbers::pi * (turn - std::floor(turn));
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
 } // namespace shprobe
