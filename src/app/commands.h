@@ -156,6 +156,8 @@ struct SceneOptions {
     std::string device;
     bool validation = false;
     bool quiet = false;
+    // cpu: texels | sphere, the directions of a probe's view (scene/ray_bake.h ProbeDirections)
+    std::string probeDirections = "texels";
 };
 
 // `shprobe merge BRICKS... -o VOLUME` (scene.cpp).

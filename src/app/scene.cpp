@@ -102,6 +102,12 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                    "the gpu; 1: the texel's centre)",
                    0, 1024);
     command
+        .add_option("--probe-directions", options.probeDirections,
+                    "cpu: a probe's view as rays through its cube map's texels, or as many directions "
+                    "stratified over the sphere (6 N^2 s^2, N the face size, s^2 the rays per texel)")
+        ->check(CLI::IsMember({"texels", "sphere"}))
+        ->capture_default_str();
+    command
         .add_option("--cache-spacing", options.cacheSpacing,
                     "The largest distance between the surface points that gather bounced light "
                     "(0: the scene's diagonal / 64)")
@@ -201,6 +207,7 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
     if (backend == "cpu") {
         if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
         if (options.transfer) settings["transfer"] = true;
+        if (options.probeDirections != "texels") settings["probe_directions"] = options.probeDirections;
     }
     return settings.dump();
 }
@@ -241,7 +248,9 @@ RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid
             .cacheRefinement = options.cacheRefinement,
             .relocation = {.limit = options.relocationLimit * cell,
                            .minFrontDistance = kRelocationFrontCells * cell,
-                           .invalidBackFaces = options.invalidBackFaces}};
+                           .invalidBackFaces = options.invalidBackFaces},
+            .directions =
+                options.probeDirections == "sphere" ? ProbeDirections::Sphere : ProbeDirections::Texels};
 }
 
 // Every bounce of probes [range.begin, range.end) by rays (scene/volume_bake.h), the progress on a
@@ -293,6 +302,9 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     if (options.cacheRefinement > 0 && options.backend == "gpu")
         throw Error(ErrorKind::Input, "scene: --cache-refinement is for the cpu backend; the gpu gathers "
                                       "every lattice point, unrefined");
+    if (options.probeDirections != "texels" && options.backend == "gpu")
+        throw Error(ErrorKind::Input, "scene: --probe-directions sphere is for the cpu backend; the gpu "
+                                      "captures through texels");
     if (options.bounds) makeProbeGrid(options.grid, *options.bounds);
     if (options.brick) brickRange(ProbeGrid{.counts = options.grid}, options.brick->brick);
     checkOutputPath(options.output, OutputContent::Binary);
@@ -377,6 +389,10 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                     "scene: auto chose the gpu backend (" + backend.reason +
                         "), which gathers every lattice point unrefined; --cache-refinement "
                         "is for the cpu backend");
+    if (backend.name == "gpu" && options.probeDirections != "texels")
+        throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason +
+                                          "), which captures through texels; --probe-directions sphere "
+                                          "is for the cpu backend");
     const std::string settings = bakeSettings(options, backend.name, sky);
     VolumeBakeReport rays;
     ProbeVolume volume = backend.context
@@ -411,7 +427,8 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         std::printf("backend  gpu: %s%s: rays, %d per texel, every cache point gathered\n",
                     backend.context->info.name.c_str(), reason.c_str(), raysPerTexel(options, true));
     } else {
-        std::printf("backend  cpu: rays by Embree, %d per texel, %s (%s)%s\n", raysPerTexel(options, false),
+        std::printf("backend  cpu: rays by Embree, %d per texel%s, %s (%s)%s\n", raysPerTexel(options, false),
+                    options.probeDirections == "sphere" ? "'s worth over the sphere" : "",
                     counted(rays.counts.cachePoints, "cache point").c_str(),
                     counted(rays.counts.halvedCells, "cell halved", "cells halved").c_str(), reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",

@@ -1,5 +1,5 @@
-// RayBaker (ray_bake.h): probes by rays through texel centres, bounces from a lazily gathered
-// irradiance cache on the surfaces.
+// RayBaker (ray_bake.h): probes by rays through texels or over the sphere, bounces from a lazily
+// gathered irradiance cache on the surfaces.
 #include "scene/ray_bake.h"
 
 #include "common/error.h"
@@ -81,10 +81,16 @@ struct Arrival {
 
 // A probe's view and the visibility it gives (RayBakedProbe).
 struct ProbeView {
-    Cubemap radiance;
+    ShCoefficients radiance;
     uint32_t backFaceTexels = 0;
-    std::vector<glm::vec2> visibility;
+    DistanceMoments moments;
     NearestHits nearest;
+
+    // Each ray's direction and what it brought back, in the order they were cast.
+    void met(const glm::dvec3& direction, const Arrival& arrival) {
+        moments.add(direction, arrival.distance);
+        nearest.add(direction, arrival.distance, arrival.backFace);
+    }
 };
 
 std::array<glm::dvec3, 3> triangleCorners(const World& world, uint32_t triangle) {
@@ -227,6 +233,10 @@ struct RayBaker::State {
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
+    template <typename Ray> void forEachProbeRay(const glm::dvec3& position, Ray&& ray) const;
+    int sphereRayCount() const;
+    Cubemap traceTexels(const glm::dvec3& position, ProbeView& view, uint64_t& rays);
+    void traceSphere(const glm::dvec3& position, ProbeView& view, uint64_t& rays);
     ProbeView trace(const glm::dvec3& position, uint64_t& rays);
     NearestHits survey(const glm::dvec3& position, uint64_t& rays) const;
     std::optional<glm::vec3> relocation(const glm::dvec3& position, const NearestHits& seen,
@@ -327,12 +337,23 @@ CachePoint RayBaker::State::gather(int bounce, uint32_t triangle, int side, cons
     return {glm::vec3(sum * (std::numbers::pi / (double(g) * g)))};
 }
 
-// A view's rays through the texels of a cube map (scene/view_rays.h); the hit distances into
-// octahedral texels of visibilitySize^2.
-ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
+// The directions of a probe's view from `position` (RayBakeOptions::directions), in order.
+template <typename Ray> void RayBaker::State::forEachProbeRay(const glm::dvec3& position, Ray&& ray) const {
+    if (options.directions == ProbeDirections::Sphere)
+        forEachSphereRay(sphereRayCount(), options.seed, position, ray);
+    else
+        forEachViewRay(options.faceSize, texelSide, options.seed, ray, [](int, int, int) {});
+}
+
+// R = 6 N^2 s^2: as many as a texel view casts.
+int RayBaker::State::sphereRayCount() const {
+    return kFaceCount * options.faceSize * options.faceSize * texelSide * texelSide;
+}
+
+// A view's rays through the texels of a cube map (scene/view_rays.h): each texel their mean.
+Cubemap RayBaker::State::traceTexels(const glm::dvec3& position, ProbeView& view, uint64_t& rays) {
     const int s = texelSide;
-    ProbeView view{makeCubemap(options.faceSize), 0, {}, {}};
-    DistanceMoments moments(options.visibilitySize, visibilityRange);
+    Cubemap radiance = makeCubemap(options.faceSize);
     glm::dvec3 sum(0.0);
     int backFacing = 0;
     forEachViewRay(
@@ -341,32 +362,58 @@ ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
             const Arrival arrival = arriving(options.bounces, position, direction, rays);
             sum += arrival.radiance;
             backFacing += arrival.backFace ? 1 : 0;
-            moments.add(direction, arrival.distance);
-            view.nearest.add(direction, arrival.distance, arrival.backFace);
+            view.met(direction, arrival);
         },
         [&](int face, int i, int j) {
             const bool mostlyBack = 2 * backFacing > s * s;
-            view.radiance.at(face, i, j) =
-                glm::vec4(glm::vec3(sum / double(s * s)), mostlyBack ? 1.0f : 0.0f);
+            radiance.at(face, i, j) = glm::vec4(glm::vec3(sum / double(s * s)), mostlyBack ? 1.0f : 0.0f);
             view.backFaceTexels += mostlyBack ? 1 : 0;
             sum = glm::dvec3(0.0);
             backFacing = 0;
         });
-    view.visibility = moments.texels();
+    return radiance;
+}
+
+// A view's rays over the sphere, each projected with the weight 4 pi / R (Monte-Carlo projection);
+// its back-face rays counted in texels' worth, s^2 rays each.
+void RayBaker::State::traceSphere(const glm::dvec3& position, ProbeView& view, uint64_t& rays) {
+    const int count = sphereRayCount();
+    const double weight = 4.0 * std::numbers::pi / count;
+    std::array<double, coefficientCount(kMaxOrder)> basis{};
+    uint64_t backFacing = 0;
+    forEachSphereRay(count, options.seed, position, [&](const glm::dvec3& direction) {
+        const Arrival arrival = arriving(options.bounces, position, direction, rays);
+        backFacing += arrival.backFace ? 1 : 0;
+        view.met(direction, arrival);
+        evalBasis(options.order, direction, basis);
+        for (size_t i = 0; i < view.radiance.rgb.size(); ++i)
+            view.radiance.rgb[i] += arrival.radiance * (weight * basis[i]);
+    });
+    view.backFaceTexels = uint32_t(backFacing / uint64_t(texelSide * texelSide));
+}
+
+// A probe's view from `position`, its radiance projected to SH, and the hit distances into
+// octahedral texels of visibilitySize^2.
+ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
+    ProbeView view{makeCoefficients(options.order, Quantity::Radiance),
+                   0,
+                   DistanceMoments(options.visibilitySize, visibilityRange),
+                   {}};
+    if (options.directions == ProbeDirections::Sphere)
+        traceSphere(position, view, rays);
+    else
+        view.radiance = projectCubemap(traceTexels(position, view, rays), options.order);
     return view;
 }
 
 // The faces a view's rays meet from `position`, without shading them.
 NearestHits RayBaker::State::survey(const glm::dvec3& position, uint64_t& rays) const {
     NearestHits nearest;
-    forEachViewRay(
-        options.faceSize, texelSide, options.seed,
-        [&](const glm::dvec3& direction) {
-            ++rays;
-            if (const std::optional<Meeting> meeting = intersect(position, direction))
-                nearest.add(direction, meeting->distance, meeting->surface.backFace);
-        },
-        [](int, int, int) {});
+    forEachProbeRay(position, [&](const glm::dvec3& direction) {
+        ++rays;
+        if (const std::optional<Meeting> meeting = intersect(position, direction))
+            nearest.add(direction, meeting->distance, meeting->surface.backFace);
+    });
     return nearest;
 }
 
@@ -395,10 +442,10 @@ RayBakedProbe RayBaker::State::bake(const glm::dvec3& position, uint64_t& rays) 
         }
     }
     RayBakedProbe probe;
-    probe.radiance = projectCubemap(view.radiance, options.order);
+    probe.radiance = std::move(view.radiance);
     addSeenSuns(position + glm::dvec3(offset), probe.radiance, rays);
     probe.backFaceTexels = view.backFaceTexels;
-    probe.visibility = std::move(view.visibility);
+    probe.visibility = view.moments.texels();
     probe.irradiance = convolveIrradiance(probe.radiance);
     probe.offset = offset;
     return probe;
@@ -442,9 +489,10 @@ std::vector<RayBakedProbe> RayBaker::bakeProbes(std::span<const glm::dvec3> posi
 
 Cubemap RayBaker::traceProbe(const glm::dvec3& position) {
     uint64_t rays = 0;
-    ProbeView view = state_->trace(position, rays);
+    ProbeView view{{}, 0, DistanceMoments(0, 1.0), {}};
+    Cubemap radiance = state_->traceTexels(position, view, rays);
     state_->probeRays += rays;
-    return std::move(view.radiance);
+    return radiance;
 }
 
 double RayBaker::visibilityRange() const {

@@ -8,7 +8,9 @@
 // (sh/projection.h). One ray through each texel centre sees what the GPU capture
 // (gpu/scene_capture.h) rasterizes, texel for texel; sharp edges (a bright opening, the rim of a
 // light) then alias, an error falling as 1 / N. s x s jittered rays per texel turn that error into
-// noise that falls faster, at s^2 the cost (docs/scene-probes.md measures both).
+// noise that falls faster, at s^2 the cost. Or the view is R = 6 N^2 s^2 directions stratified
+// over the sphere (ProbeDirections::Sphere, scene/view_rays.h forEachSphereRay), each projected with
+// the weight 4 pi / R: no texels, the same cost (docs/scene-probes.md measures all three).
 //
 // The light the surfaces reflect is computed at the surfaces, not read from a probe grid. Each
 // triangle carries a lattice of cache points (scene/surface_cache.h: barycentrics (i/m, j/m),
@@ -63,6 +65,11 @@ struct ProbeRelocation {
     double invalidBackFaces = 0.5; // insideGeometry's share
 };
 
+// The directions of a probe's view: s x s rays through each texel of a 6 x N x N cube map, or as
+// many stratified over the sphere (R = 6 N^2 s^2), which its validity, visibility map and relocation
+// read as well.
+enum class ProbeDirections { Texels, Sphere };
+
 struct RayBakeOptions {
     int order = 3;             // SH order of the probes, 1..kMaxOrder
     int faceSize = 32;         // N: a probe's view is a 6 x N x N cube map
@@ -80,6 +87,7 @@ struct RayBakeOptions {
     // and a probe that sees one adds its delta to its radiance, E y_lm(l).
     std::vector<SceneSun> skySuns;
     ProbeRelocation relocation;
+    ProbeDirections directions = ProbeDirections::Texels;
     uint64_t seed = 1;
 };
 
@@ -144,7 +152,8 @@ void addSeenSuns(const RayCaster& caster, std::span<const SceneSun> suns, const 
 struct RayBakedProbe {
     ShCoefficients radiance;
     ShCoefficients irradiance;
-    uint32_t backFaceTexels = 0; // of the 6 N^2 texels, those whose rays met mostly back faces
+    uint32_t backFaceTexels = 0; // of the 6 N^2 texels, those whose rays met mostly back faces; of
+                                 // a sphere view, its back-face rays / s^2 (rounded down)
     // Per octahedral texel (volume_sampling.h), the mean and mean square distance to the first
     // surface its rays met, at most the world's diagonal (which rays that meet nothing count as):
     // the depth moments of Majercik et al., "Dynamic Diffuse Global Illumination with Ray-Traced
@@ -184,8 +193,8 @@ class RayBaker {
     // cores; entry k depends on positions[k] alone.
     std::vector<RayBakedProbe> bakeProbes(std::span<const glm::dvec3> positions,
                                           const BakeProgress& progress = {});
-    // What a probe at `position` sees through its texel centres (alpha: 1 where a ray met the back
-    // of a one-sided material, else 0).
+    // What a probe at `position` sees through its texels, whatever options.directions (alpha: 1
+    // where a ray met the back of a one-sided material, else 0).
     Cubemap traceProbe(const glm::dvec3& position);
     RayBakeCounts counts() const;
     // The distance the visibility maps record for rays that meet nothing: the world's diagonal. A

@@ -8,6 +8,9 @@
 #include "scene/sampling.h"
 #include "sh/cubemap.h"
 
+#include <glm/vec3.hpp>
+
+#include <bit>
 #include <cstdint>
 
 namespace shprobe {
@@ -39,6 +42,30 @@ void forEachViewRay(int faceSize, int s, uint64_t seed, Ray&& ray, Texel&& texel
                     }
                 texel(face, int(i), int(j));
             }
+}
+
+// The stream of a sphere view's rotation, (seed, kSphereViewStream, the probe's position's bits):
+// one no texel's stream is.
+constexpr uint64_t kSphereViewStream = ~uint64_t(0) - 1;
+
+// The index of the stream of a view from `position`: its coordinates' bits, mixed.
+inline uint64_t positionIndex(const glm::dvec3& position) {
+    uint64_t index = 0;
+    for (int axis = 0; axis < 3; ++axis)
+        index = mix64(index + std::bit_cast<uint64_t>(position[axis]));
+    return index;
+}
+
+// Calls ray(direction) for each of `count` directions stratified over the sphere: the spherical
+// Fibonacci set (sampling.h) under a uniformly random rotation of its own for each position, so that
+// each direction is uniform on the sphere and (4 pi / count) sum L(w) y_lm(w) is an unbiased
+// projection whose error falls faster than independent directions' (Marques et al.).
+template <typename Ray>
+void forEachSphereRay(int count, uint64_t seed, const glm::dvec3& position, Ray&& ray) {
+    RandomStream random(seed, kSphereViewStream, positionIndex(position));
+    const glm::dmat3 rotation = randomRotation(random);
+    for (int k = 0; k < count; ++k)
+        ray(rotation * fibonacciDirection(k, count));
 }
 
 } // namespace shprobe
