@@ -733,6 +733,11 @@ TEST_F(SceneCommand, BadOptionsAreRefused) {
                    2,
                    {"--backend"},
                    "out.shpv"});
+    expectFailure(
+        {{"scene", scene, "--grid", "2,2,2", "--probe-directions", "sphere", "--backend", "gpu", "-o", "OUT"},
+         2,
+         {"--probe-directions sphere is for the cpu backend"},
+         "out.shpv"});
 }
 
 // The regular files under `folder` and their bytes, to tell that a refused run changed none.

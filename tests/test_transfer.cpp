@@ -4,6 +4,7 @@
 #include "common/error.h"
 #include "scene/bvh.h"
 #include "scene/gltf_scene.h"
+#include "scene/sampling.h"
 #include "scene/transfer.h"
 #include "scene/transfer_gltf.h"
 #include "scene_fixtures.h"
@@ -167,6 +168,41 @@ std::pair<double, double> rmsAndWorst(const VertexTransfer& a, const VertexTrans
         worst = std::max(worst, std::abs(d));
     }
     return {std::sqrt(squares / double(a.coefficients.size())), worst};
+}
+
+// The stratified cosine directions that transfer and the cache's gathers cast
+// (forEachStratifiedCosineDirection) are cosineDirection's for the same numbers: exactly below 8 x 8
+// strata, from 8 x 8 up to 2e-15 (a few units of the last place of an azimuth near 2 pi, 8.9e-16,
+// which rounds in either), where the azimuth comes by angle addition and a Taylor series
+// (smallAngleCosSin, itself within 2.3e-16 of cos and sin over [-pi/4, pi/4]).
+TEST(Transfer, StratifiedDirectionsAreCosineDirections) {
+    double worstSeries = 0.0;
+    for (int i = -1000; i <= 1000; ++i) {
+        const double x = std::numbers::pi / 4.0 * i / 1000.0;
+        const glm::dvec2 cosSin = smallAngleCosSin(x);
+        worstSeries =
+            std::max({worstSeries, std::abs(cosSin.x - std::cos(x)), std::abs(cosSin.y - std::sin(x))});
+    }
+    EXPECT_LT(worstSeries, 2.3e-16);
+    for (const glm::dvec3& n :
+         {glm::dvec3(0, 0, 1), glm::dvec3(0, 0, -1), glm::normalize(glm::dvec3(0.3, -0.8, 0.2))}) {
+        for (int g : {1, 2, 7, 8, 9, 16, 33}) {
+            RandomStream random(5, 6, uint64_t(g)), again(5, 6, uint64_t(g));
+            double worst = 0.0;
+            int a = 0, b = 0;
+            forEachStratifiedCosineDirection(n, g, random, [&](const glm::dvec3& direction) {
+                const double u1 = (a + again.next()) / g, u2 = (b + again.next()) / g;
+                const glm::dvec3 expected = cosineDirection(n, u1, u2);
+                worst = std::max(worst, glm::length(direction - expected));
+                if (++b == g) b = 0, ++a;
+            });
+            EXPECT_EQ(a, g) << "g " << g;
+            if (g < 8)
+                EXPECT_EQ(worst, 0.0) << "g " << g;
+            else
+                EXPECT_LT(worst, 2e-15) << "g " << g;
+        }
+    }
 }
 
 // Unshadowed transfer is rho / pi A_l y_lm(n), exact: at n = +y, by the hand values of

@@ -325,14 +325,9 @@ CachePoint RayBaker::State::gather(int bounce, uint32_t triangle, int side, cons
     const int g = gatherSide;
     uint64_t rays = 0;
     glm::dvec3 sum(0.0);
-    for (int a = 0; a < g; ++a) {
-        for (int b = 0; b < g; ++b) {
-            const double u1 = (a + random.next()) / g;
-            const double u2 = (b + random.next()) / g;
-            sum +=
-                arriving(bounce - 1, at.rayOrigin, cosineDirection(at.shadingNormal, u1, u2), rays).radiance;
-        }
-    }
+    forEachStratifiedCosineDirection(at.shadingNormal, g, random, [&](const glm::dvec3& direction) {
+        sum += arriving(bounce - 1, at.rayOrigin, direction, rays).radiance;
+    });
     cacheRays += rays;
     return {glm::vec3(sum * (std::numbers::pi / (double(g) * g)))};
 }

@@ -166,14 +166,8 @@ template <typename Ray> void TransferBaker::forEachRay(const Side& side, Ray&& r
     const glm::dvec3 n(side.normal);
     const glm::vec3 origin(side.origin);
     RandomStream random(options_.seed, isBack(side) ? 1 : 0, sideVertex(side));
-    const int g = strata_;
-    for (int a = 0; a < g; ++a) {
-        for (int b = 0; b < g; ++b) {
-            const double u1 = (a + random.next()) / g;
-            const double u2 = (b + random.next()) / g;
-            ray(origin, cosineDirection(n, u1, u2));
-        }
-    }
+    forEachStratifiedCosineDirection(n, strata_, random,
+                                     [&](const glm::dvec3& direction) { ray(origin, direction); });
 }
 
 // U_0: pi / g^2 times the sum of y(w) (or of the sky's radiance) over the rays that meet nothing.
