@@ -171,7 +171,7 @@ std::pair<double, double> rmsAndWorst(const VertexTransfer& a, const VertexTrans
 }
 
 // The stratified cosine directions that transfer and the cache's gathers cast
-// (forEachStratifiedCosineDirection) are cosineDirection's for the same numbers: exactly below 8 x 8
+// (StratifiedCosineDirections) are cosineDirection's for the same numbers: exactly below 8 x 8
 // strata, from 8 x 8 up to 2e-15 (a few units of the last place of an azimuth near 2 pi, 8.9e-16,
 // which rounds in either), where the azimuth comes by angle addition and a Taylor series
 // (smallAngleCosSin, itself within 2.3e-16 of cos and sin over [-pi/4, pi/4]).
@@ -190,7 +190,7 @@ TEST(Transfer, StratifiedDirectionsAreCosineDirections) {
             RandomStream random(5, 6, uint64_t(g)), again(5, 6, uint64_t(g));
             double worst = 0.0;
             int a = 0, b = 0;
-            forEachStratifiedCosineDirection(n, g, random, [&](const glm::dvec3& direction) {
+            StratifiedCosineDirections(g).forEach(n, random, [&](const glm::dvec3& direction) {
                 const double u1 = (a + again.next()) / g, u2 = (b + again.next()) / g;
                 const glm::dvec3 expected = cosineDirection(n, u1, u2);
                 worst = std::max(worst, glm::length(direction - expected));

@@ -14,9 +14,9 @@
 #include "common/parallel.h"
 #include "formats/probe_volume.h"
 #include "scene/bvh.h"
-#include "scene/embree_rays.h"
 #include "scene/gltf_scene.h"
 #include "scene/probe_grid.h"
+#include "scene/ray_caster.h"
 #include "scene/reference_tracer.h"
 #include "scene/transfer.h"
 #include "sh/irradiance.h"
@@ -28,7 +28,6 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
-#include <numeric>
 #include <optional>
 #include <span>
 #include <thread>
@@ -121,9 +120,7 @@ double embreeRaysPerSecond(const World& world, const TransferOptions& transfer) 
     std::vector<Ray> rays;
     for (const auto& [thread, cast] : byThread)
         rays.insert(rays.end(), cast.begin(), cast.end());
-    std::vector<uint32_t> triangles(world.triangleCount());
-    std::iota(triangles.begin(), triangles.end(), 0u);
-    const std::unique_ptr<RayCaster> embree = makeEmbreeRayCaster(world, triangles);
+    const std::unique_ptr<RayCaster> embree = makeRayCaster(world);
     constexpr int kParts = 1024;
     std::vector<uint32_t> blocked(kParts); // written once per part: no cache line shared per ray
     const double seconds = bestSeconds([&] {

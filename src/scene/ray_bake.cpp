@@ -220,8 +220,8 @@ struct RayBaker::State {
     SceneShading shading;
     std::unique_ptr<RayCaster> caster;
     std::unique_ptr<SurfaceCache> cache;
-    int gatherSide = 1;           // g: g x g gather rays per point
-    int texelSide = 1;            // s: s x s rays per texel
+    StratifiedCosineDirections gatherDirections{1}; // g x g gather rays per point
+    int texelSide = 1;                              // s: s x s rays per texel
     double visibilityRange = 1.0; // the farthest distance visibility records: the world's diagonal
     std::atomic<uint64_t> probeRays{0};
     std::atomic<uint64_t> cacheRays{0};
@@ -260,7 +260,7 @@ void RayBaker::State::layOutCache() {
     };
     cache = std::make_unique<SurfaceCache>(world, spacing, options.bounces, options.cacheRefinement,
                                            std::move(queries));
-    gatherSide = int(std::ceil(std::sqrt(double(options.gatherRays))));
+    gatherDirections = StratifiedCosineDirections(int(std::ceil(std::sqrt(double(options.gatherRays)))));
     texelSide = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
     visibilityRange = visibilityRangeOf(world);
 }
@@ -322,10 +322,10 @@ CachePoint RayBaker::State::gather(int bounce, uint32_t triangle, int side, cons
                                    uint64_t stream, uint64_t index) {
     const SurfaceHit at = cacheGatherPoint(shading, triangle, side, barycentric);
     RandomStream random(options.seed, stream, index);
-    const int g = gatherSide;
+    const int g = gatherDirections.side();
     uint64_t rays = 0;
     glm::dvec3 sum(0.0);
-    forEachStratifiedCosineDirection(at.shadingNormal, g, random, [&](const glm::dvec3& direction) {
+    gatherDirections.forEach(at.shadingNormal, random, [&](const glm::dvec3& direction) {
         sum += arriving(bounce - 1, at.rayOrigin, direction, rays).radiance;
     });
     cacheRays += rays;

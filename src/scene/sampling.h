@@ -102,35 +102,44 @@ inline glm::dvec2 smallAngleCosSin(double x) {
     return {1.0 + cosine, x * (1.0 + sine)};
 }
 
-// Calls direction(w) for g x g cosine-distributed directions about unit n, one in each stratum of
-// the unit square, row by row, jittered by `random` (two numbers a stratum): cosineDirection(n,
-// (a + u1) / g, (b + u2) / g) to rounding. Where g >= 8 the azimuth 2 pi (b + u2) / g is taken apart
-// by angle addition: the column's start once per column, the jitter's angle (at most pi / 4) by
+// g x g cosine-distributed directions about a unit normal, one in each stratum of the unit square,
+// row by row, jittered by a RandomStream (two numbers a stratum): cosineDirection(n, (a + u1) / g,
+// (b + u2) / g) to rounding. Where g >= 8 the azimuth 2 pi (b + u2) / g is taken apart by angle
+// addition: the columns' starts once, when made, and the jitter's angle (at most pi / 4) by
 // smallAngleCosSin. sincos on every ray was 9% of the shadowed transfer's time.
-template <typename Direction>
-void forEachStratifiedCosineDirection(const glm::dvec3& n, int g, RandomStream& random,
-                                      Direction&& direction) {
-    constexpr double kTwoPi = 2.0 * std::numbers::pi;
-    const CosineFrame frame(n);
-    const bool series = g >= 8;
-    std::vector<glm::dvec2> starts; // the columns' cos, sin
-    for (int b = 0; series && b < g; ++b)
-        starts.emplace_back(std::cos(kTwoPi * b / g), std::sin(kTwoPi * b / g));
-    for (int a = 0; a < g; ++a) {
-        for (int b = 0; b < g; ++b) {
-            const double u1 = (a + random.next()) / g;
-            const double jitter = random.next();
-            if (!series) {
-                const double phi = kTwoPi * ((b + jitter) / g);
-                direction(frame.direction(u1, std::cos(phi), std::sin(phi)));
-                continue;
+class StratifiedCosineDirections {
+  public:
+    explicit StratifiedCosineDirections(int g) : g_(g) {
+        for (int b = 0; g >= 8 && b < g; ++b)
+            starts_.emplace_back(std::cos(kTwoPi * b / g), std::sin(kTwoPi * b / g));
+    }
+    int side() const { return g_; }
+
+    // Calls direction(w) for each direction about n, in order.
+    template <typename Direction>
+    void forEach(const glm::dvec3& n, RandomStream& random, Direction&& direction) const {
+        const CosineFrame frame(n);
+        for (int a = 0; a < g_; ++a) {
+            for (int b = 0; b < g_; ++b) {
+                const double u1 = (a + random.next()) / g_;
+                const double jitter = random.next();
+                if (starts_.empty()) {
+                    const double phi = kTwoPi * ((b + jitter) / g_);
+                    direction(frame.direction(u1, std::cos(phi), std::sin(phi)));
+                    continue;
+                }
+                const glm::dvec2 turn = smallAngleCosSin(kTwoPi * jitter / g_), start = starts_[size_t(b)];
+                direction(frame.direction(u1, start.x * turn.x - start.y * turn.y,
+                                          start.y * turn.x + start.x * turn.y));
             }
-            const glm::dvec2 turn = smallAngleCosSin(kTwoPi * jitter / g), start = starts[size_t(b)];
-            direction(frame.direction(u1, start.x * turn.x - start.y * turn.y,
-                                      start.y * turn.x + start.x * turn.y));
         }
     }
-}
+
+  private:
+    static constexpr double kTwoPi = 2.0 * std::numbers::pi;
+    int g_;
+    std::vector<glm::dvec2> starts_; // the columns' cos, sin where g >= 8, else none
+};
 
 // A uniformly distributed rotation, from the unit quaternion of three uniforms (Shoemake, "Uniform
 // Random Rotations", Graphics Gems III, 1992).

@@ -90,6 +90,7 @@ class TransferBaker {
     std::unique_ptr<RayCaster> cpuRays_; // built for the passes on the cores
     size_t count_;
     int strata_;
+    StratifiedCosineDirections directions_{strata_};
     TransferScene scene_;
     std::vector<int64_t> corner_; // per vertex: 3 t + c of the first triangle t using it, -1: none
     std::atomic<uint64_t> rays_{0};
@@ -166,8 +167,7 @@ template <typename Ray> void TransferBaker::forEachRay(const Side& side, Ray&& r
     const glm::dvec3 n(side.normal);
     const glm::vec3 origin(side.origin);
     RandomStream random(options_.seed, isBack(side) ? 1 : 0, sideVertex(side));
-    forEachStratifiedCosineDirection(n, strata_, random,
-                                     [&](const glm::dvec3& direction) { ray(origin, direction); });
+    directions_.forEach(n, random, [&](const glm::dvec3& direction) { ray(origin, direction); });
 }
 
 // U_0: pi / g^2 times the sum of y(w) (or of the sky's radiance) over the rays that meet nothing.
