@@ -158,6 +158,8 @@ struct SceneOptions {
     bool quiet = false;
     // cpu: texels | sphere, the directions of a probe's view (scene/ray_bake.h ProbeDirections)
     std::string probeDirections = "texels";
+    // cpu: auto | cache | paths, where bounced light comes from (scene/ray_bake.h BounceLight)
+    std::string bounceLight = "auto";
 };
 
 // `shprobe merge BRICKS... -o VOLUME` (scene.cpp).

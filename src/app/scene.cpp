@@ -118,6 +118,13 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                    "cpu: the most times a cell of surface points is halved where a shadow's edge or a "
                    "surface crosses it (0: never)",
                    0, kMaxCacheRefinement);
+    command
+        .add_option("--bounce-light", options.bounceLight,
+                    "cpu: where a surface's bounced light comes from: the cache of surface points, "
+                    "or a path from each probe ray's hit; auto: whichever casts fewer rays for the "
+                    "grid (paths for small grids)")
+        ->check(CLI::IsMember({"auto", "cache", "paths"}))
+        ->capture_default_str();
     addDeviceOptions(command, options.device, options.validation);
     command.add_flag("-q,--quiet", options.quiet, "No report");
 }
@@ -192,9 +199,41 @@ ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
                           : probeGridInWorld(options.grid, world);
 }
 
+// The cpu's options as the command line gives them, the cache for bounced light.
+RayBakeOptions rayOptionsAsked(const SceneOptions& options, const ProbeGrid& grid) {
+    const double cell = smallestCellEdge(grid);
+    return {.order = options.order,
+            .faceSize = options.faceSize,
+            .raysPerTexel = raysPerTexel(options, false),
+            .bounces = options.bounces,
+            .cacheSpacing = options.cacheSpacing,
+            .gatherRays = options.gatherRays,
+            .cacheRefinement = options.cacheRefinement,
+            .relocation = {.limit = options.relocationLimit * cell,
+                           .minFrontDistance = kRelocationFrontCells * cell,
+                           .invalidBackFaces = options.invalidBackFaces},
+            .directions =
+                options.probeDirections == "sphere" ? ProbeDirections::Sphere : ProbeDirections::Texels};
+}
+
+const char* bounceLightName(BounceLight light) {
+    return light == BounceLight::Paths ? "paths" : "cache";
+}
+
+// The cpu's options; auto's bounce light is the cache where refinement asks for it, else whichever
+// casts fewer rays for the whole grid (not the brick's probes, so that bricks agree).
+RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid, const World& world) {
+    RayBakeOptions rays = rayOptionsAsked(options, grid);
+    if (options.bounceLight == "paths") rays.bounceLight = BounceLight::Paths;
+    if (options.bounceLight == "auto" && options.cacheRefinement == 0)
+        rays.bounceLight = cheaperBounceLight(world, rays, grid.probeCount());
+    return rays;
+}
+
 // What decides the probes' values besides the grid, order and bounces: bricks merge only when it
 // is the same.
-std::string bakeSettings(const SceneOptions& options, const std::string& backend, const Environment& sky) {
+std::string bakeSettings(const SceneOptions& options, const std::string& backend, const Environment& sky,
+                         BounceLight bounceLight) {
     nlohmann::json settings{{"backend", backend},
                             {"face_size", options.faceSize},
                             {"invalid_back_faces", options.invalidBackFaces},
@@ -208,6 +247,7 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
         if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
         if (options.transfer) settings["transfer"] = true;
         if (options.probeDirections != "texels") settings["probe_directions"] = options.probeDirections;
+        if (options.bounces > 0) settings["bounce_light"] = bounceLightName(bounceLight);
     }
     return settings.dump();
 }
@@ -237,27 +277,12 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
     return previous;
 }
 
-RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid) {
-    const double cell = smallestCellEdge(grid);
-    return {.order = options.order,
-            .faceSize = options.faceSize,
-            .raysPerTexel = raysPerTexel(options, false),
-            .bounces = options.bounces,
-            .cacheSpacing = options.cacheSpacing,
-            .gatherRays = options.gatherRays,
-            .cacheRefinement = options.cacheRefinement,
-            .relocation = {.limit = options.relocationLimit * cell,
-                           .minFrontDistance = kRelocationFrontCells * cell,
-                           .invalidBackFaces = options.invalidBackFaces},
-            .directions =
-                options.probeDirections == "sphere" ? ProbeDirections::Sphere : ProbeDirections::Texels};
-}
-
 // Every bounce of probes [range.begin, range.end) by rays (scene/volume_bake.h), the progress on a
 // terminal; with --transfer the volume's transfer, and its light the sky's band-limited to the order.
 ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
-                       const ProbeGrid& grid, ProbeRange range, VolumeBakeReport& report) {
-    const VolumeBakeOptions bakeOptions{rayBakeOptions(options, grid), options.dilate};
+                       const RayBakeOptions& rayOptions, const ProbeGrid& grid, ProbeRange range,
+                       VolumeBakeReport& report) {
+    const VolumeBakeOptions bakeOptions{rayOptions, options.dilate};
     const uint64_t probes =
         options.transfer ? transferProbeCount(options.order, range) : range.end - range.begin;
     ProgressLine line("probes", probes, options.quiet);
@@ -271,6 +296,21 @@ ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOp
                                             range, report, progress);
     relightVolume(volume, projectCubemap(sky.cubemap, options.order));
     return volume;
+}
+
+// An option only the cpu backend bakes (none: option null), and what the gpu does instead.
+struct CpuOnly {
+    const char* option = nullptr;
+    const char* gpu = "";
+};
+CpuOnly cpuOnlyOption(const SceneOptions& options) {
+    if (options.cacheRefinement > 0)
+        return {"--cache-refinement", "the gpu gathers every lattice point, unrefined"};
+    if (options.probeDirections != "texels")
+        return {"--probe-directions sphere", "the gpu captures through texels"};
+    if (options.bounceLight == "paths")
+        return {"--bounce-light paths", "the gpu gathers bounces in the cache"};
+    return {};
 }
 
 // auto means gpu where the options ask for Vulkan (--device, --validation) or continue a gpu bake
@@ -299,12 +339,12 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     if (options.transfer && options.cacheRefinement > 0)
         throw Error(ErrorKind::Input, "scene: --cache-refinement halves cells where their light differs, so "
                                       "its bake is not linear in the sky; --transfer needs it off");
-    if (options.cacheRefinement > 0 && options.backend == "gpu")
-        throw Error(ErrorKind::Input, "scene: --cache-refinement is for the cpu backend; the gpu gathers "
-                                      "every lattice point, unrefined");
-    if (options.probeDirections != "texels" && options.backend == "gpu")
-        throw Error(ErrorKind::Input, "scene: --probe-directions sphere is for the cpu backend; the gpu "
-                                      "captures through texels");
+    if (options.cacheRefinement > 0 && options.bounceLight == "paths")
+        throw Error(ErrorKind::Input, "scene: --cache-refinement halves the cache's cells; --bounce-light "
+                                      "paths keeps no cache");
+    if (const CpuOnly asked = cpuOnlyOption(options); asked.option && options.backend == "gpu")
+        throw Error(ErrorKind::Input,
+                    std::string("scene: ") + asked.option + " is for the cpu backend; " + asked.gpu);
     if (options.bounds) makeProbeGrid(options.grid, *options.bounds);
     if (options.brick) brickRange(ProbeGrid{.counts = options.grid}, options.brick->brick);
     checkOutputPath(options.output, OutputContent::Binary);
@@ -336,7 +376,7 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
                                         .raysPerTexel = raysPerTexel(options, true),
                                         .cacheSpacing = options.cacheSpacing,
                                         .gatherRays = options.gatherRays,
-                                        .relocation = rayBakeOptions(options, grid).relocation,
+                                        .relocation = rayOptionsAsked(options, grid).relocation,
                                         .skySuns = split.suns});
     ScopeExit releaseRays([&] { destroyRayCapture(context, rays); });
     const SceneBakeOptions bakeOptions{.order = options.order, .probesPerBatch = options.probesPerBatch};
@@ -384,20 +424,15 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     ScopeExit releaseContext([&] {
         if (backend.context) destroyContext(*backend.context);
     });
-    if (backend.name == "gpu" && options.cacheRefinement > 0)
-        throw Error(ErrorKind::Input,
-                    "scene: auto chose the gpu backend (" + backend.reason +
-                        "), which gathers every lattice point unrefined; --cache-refinement "
-                        "is for the cpu backend");
-    if (backend.name == "gpu" && options.probeDirections != "texels")
-        throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason +
-                                          "), which captures through texels; --probe-directions sphere "
-                                          "is for the cpu backend");
-    const std::string settings = bakeSettings(options, backend.name, sky);
+    if (const CpuOnly asked = cpuOnlyOption(options); asked.option && backend.name == "gpu")
+        throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason + "), where " +
+                                          asked.gpu + "; " + asked.option + " is for the cpu backend");
+    const RayBakeOptions cpuOptions = rayBakeOptions(options, grid, world);
+    const std::string settings = bakeSettings(options, backend.name, sky, cpuOptions.bounceLight);
     VolumeBakeReport rays;
     ProbeVolume volume = backend.context
                              ? bakeOnGpu(*backend.context, world, sky, options, grid, range, settings, rays)
-                             : bakeByRays(world, sky, options, grid, range, rays);
+                             : bakeByRays(world, sky, options, cpuOptions, grid, range, rays);
     volume.source = world.description;
     volume.sourceHash = gltfSceneHash(options.scene);
     volume.settings = settings;
@@ -427,10 +462,14 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         std::printf("backend  gpu: %s%s: rays, %d per texel, every cache point gathered\n",
                     backend.context->info.name.c_str(), reason.c_str(), raysPerTexel(options, true));
     } else {
-        std::printf("backend  cpu: rays by Embree, %d per texel%s, %s (%s)%s\n", raysPerTexel(options, false),
-                    options.probeDirections == "sphere" ? "'s worth over the sphere" : "",
-                    counted(rays.counts.cachePoints, "cache point").c_str(),
-                    counted(rays.counts.halvedCells, "cell halved", "cells halved").c_str(), reason.c_str());
+        const std::string bounced =
+            cpuOptions.bounceLight == BounceLight::Paths
+                ? std::string("bounces by paths from the probes' hits")
+                : counted(rays.counts.cachePoints, "cache point") + " (" +
+                      counted(rays.counts.halvedCells, "cell halved", "cells halved") + ")";
+        std::printf("backend  cpu: rays by Embree, %d per texel%s, %s%s\n", raysPerTexel(options, false),
+                    options.probeDirections == "sphere" ? "'s worth over the sphere" : "", bounced.c_str(),
+                    reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
                     double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
                     double(rays.counts.cacheRays));

@@ -30,6 +30,38 @@ namespace shprobe {
 
 namespace {
 
+// The stream of a probe's paths, (seed, kProbePathStream, its view's placeIndex): one no view's is.
+constexpr uint64_t kProbePathStream = kSphereViewStream - 1;
+
+// The random numbers of a probe's paths (BounceLight::Paths), named by its place in the world. The first
+// bounce of the probe's ray k leaves by point k of the R2 sequence (Roberts, "The Unreasonable
+// Effectiveness of Quasirandom Sequences", 2018) shifted by the probe's own random offset (a
+// Cranley-Patterson rotation: each point stays uniform, so the estimate stays unbiased): neighbouring
+// rays' bounces spread over the hemisphere instead of clumping, which halves the bounce's error on
+// the engine (docs/scene-probes.md). Deeper bounces draw from the stream.
+class ProbePaths {
+  public:
+    ProbePaths(uint64_t seed, uint64_t viewIndex)
+        : random_(seed, kProbePathStream, viewIndex), shift_(random_.next(), random_.next()) {}
+    // The probe ray whose path is traced next.
+    void startRay(uint64_t ray) { ray_ = ray; }
+    // The unit square's point for the first bounce of that ray.
+    glm::dvec2 firstBounce() const {
+        constexpr double g = 1.32471795724474602596; // the plastic number: x^3 = x + 1
+        const glm::dvec2 point = shift_ + double(ray_) * glm::dvec2(1.0 / g, 1.0 / (g * g));
+        return point - glm::floor(point);
+    }
+    glm::dvec2 deeperBounce() {
+        const double u1 = random_.next();
+        return {u1, random_.next()};
+    }
+
+  private:
+    RandomStream random_;
+    glm::dvec2 shift_;
+    uint64_t ray_ = 0;
+};
+
 // A thread should cast at least this many rays, so that starting it stays a small part of its run.
 constexpr size_t kRaysPerThread = 4096;
 
@@ -54,6 +86,8 @@ void requireOptions(const RayBakeOptions& options) {
     if (options.cacheRefinement < 0 || options.cacheRefinement > kMaxCacheRefinement)
         refuse("cache refinement must be in 0.." + std::to_string(kMaxCacheRefinement) + ", got " +
                std::to_string(options.cacheRefinement));
+    if (options.cacheRefinement > 0 && options.bounceLight == BounceLight::Paths)
+        refuse("cache refinement halves the cache's cells; bounces by paths keep no cache");
     if (options.gatherRays < 1 || options.gatherRays > 1 << 20)
         refuse("gather rays must be in 1..1048576, got " + std::to_string(options.gatherRays));
     const ProbeRelocation& relocation = options.relocation;
@@ -70,27 +104,22 @@ struct Meeting {
     double distance = 0.0;
 };
 
-// What a ray brings back: the radiance, how far it went (kFar where it met nothing) and whether it
-// met the back of a one-sided material.
 constexpr double kFar = std::numeric_limits<double>::infinity();
-struct Arrival {
-    glm::dvec3 radiance{0.0};
-    double distance = kFar;
-    bool backFace = false;
+
+// One of a probe's rays and the surface it met, if any, before it is shaded.
+struct ViewRay {
+    glm::dvec3 direction{0.0};
+    std::optional<Meeting> meeting;
+    bool backFace() const { return meeting && meeting->surface.backFace; }
 };
 
-// A probe's view and the visibility it gives (RayBakedProbe).
-struct ProbeView {
-    ShCoefficients radiance;
+// A probe's view before it is shaded: its rays in the order they were cast (texel by texel, s x s
+// each, or over the sphere), and the visibility they give (RayBakedProbe).
+struct ProbeLook {
+    std::vector<ViewRay> rays;
     uint32_t backFaceTexels = 0;
     DistanceMoments moments;
     NearestHits nearest;
-
-    // Each ray's direction and what it brought back, in the order they were cast.
-    void met(const glm::dvec3& direction, const Arrival& arrival) {
-        moments.add(direction, arrival.distance);
-        nearest.add(direction, arrival.distance, arrival.backFace);
-    }
 };
 
 std::array<glm::dvec3, 3> triangleCorners(const World& world, uint32_t triangle) {
@@ -184,6 +213,15 @@ World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
     return lit;
 }
 
+BounceLight cheaperBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes) {
+    const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world);
+    const int s = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
+    const int g = int(std::ceil(std::sqrt(double(options.gatherRays))));
+    const double pathRays = double(probes) * kFaceCount * options.faceSize * options.faceSize * s * s;
+    const double cacheRays = double(cachePointCount(world, spacing)) * g * g;
+    return pathRays <= cacheRays ? BounceLight::Paths : BounceLight::Cache;
+}
+
 double defaultCacheSpacing(const World& world) {
     const double diagonal = glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin));
     return diagonal > 0.0 ? diagonal / kDefaultCacheCells : 1.0;
@@ -229,16 +267,22 @@ struct RayBaker::State {
     void layOutCache();
     std::optional<Meeting> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
     bool occluded(const glm::dvec3& origin, const glm::dvec3& direction) const;
-    Arrival arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, uint64_t& rays);
+    glm::dvec3 arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, ProbePaths* paths,
+                        uint64_t& rays);
+    glm::dvec3 leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
+    glm::dvec3 bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
-    template <typename Ray> void forEachProbeRay(const glm::dvec3& position, Ray&& ray) const;
+    template <typename Ray>
+    void forEachProbeRay(const glm::dvec3& position, ProbeDirections directions, Ray&& ray) const;
     int sphereRayCount() const;
-    Cubemap traceTexels(const glm::dvec3& position, ProbeView& view, uint64_t& rays);
-    void traceSphere(const glm::dvec3& position, ProbeView& view, uint64_t& rays);
-    ProbeView trace(const glm::dvec3& position, uint64_t& rays);
-    NearestHits survey(const glm::dvec3& position, uint64_t& rays) const;
+    uint64_t viewIndex(const glm::dvec3& position) const;
+    ProbeLook look(const glm::dvec3& position, ProbeDirections directions, uint64_t& rays) const;
+    uint32_t backFaceTexels(std::span<const ViewRay> rays, ProbeDirections directions) const;
+    glm::dvec3 shadeRay(const ViewRay& ray, size_t index, ProbePaths& paths, uint64_t& rays);
+    Cubemap shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays);
+    ShCoefficients shadeSphere(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays);
     std::optional<glm::vec3> relocation(const glm::dvec3& position, const NearestHits& seen,
                                         uint64_t& rays) const;
     RayBakedProbe bake(const glm::dvec3& position, uint64_t& rays);
@@ -247,6 +291,10 @@ struct RayBaker::State {
 
 void RayBaker::State::layOutCache() {
     const World& world = shading.world();
+    gatherDirections = StratifiedCosineDirections(int(std::ceil(std::sqrt(double(options.gatherRays)))));
+    texelSide = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
+    visibilityRange = visibilityRangeOf(world);
+    if (options.bounceLight == BounceLight::Paths) return;
     const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world);
     CacheQueries queries{
         .gather =
@@ -260,9 +308,6 @@ void RayBaker::State::layOutCache() {
     };
     cache = std::make_unique<SurfaceCache>(world, spacing, options.bounces, options.cacheRefinement,
                                            std::move(queries));
-    gatherDirections = StratifiedCosineDirections(int(std::ceil(std::sqrt(double(options.gatherRays)))));
-    texelSide = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
-    visibilityRange = visibilityRangeOf(world);
 }
 
 // The surface a ray meets and how far it went; a hit nearer its triangle's edges than kInwardOffsets
@@ -289,22 +334,35 @@ bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direc
 }
 
 // The radiance arriving at `origin` from `direction` with `bounce` bounces (scene.h): the sky, or
-// what the surface met leaves: nothing from a back face, else emission and the suns' light plus
-// bounce's cached irradiance, reflected.
-Arrival RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction,
-                                  uint64_t& rays) {
+// what the surface met leaves.
+glm::dvec3 RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction,
+                                     ProbePaths* paths, uint64_t& rays) {
     ++rays;
     const std::optional<Meeting> meeting = intersect(origin, direction);
-    if (!meeting) return {shading.skyRadiance(direction), kFar, false};
-    const SurfaceHit* hit = &meeting->surface;
-    const double distance = meeting->distance;
-    if (hit->backFace) return {glm::dvec3(0.0), distance, true};
+    if (!meeting) return shading.skyRadiance(direction);
+    return leaving(bounce, meeting->surface, paths, rays);
+}
+
+// What a surface leaves towards the ray that met it with `bounce` bounces: nothing from a back face,
+// else emission and the suns' light plus bounce's irradiance, reflected. `paths` continues the
+// probe's paths (BounceLight::Paths; none for the cache's gathers).
+glm::dvec3 RayBaker::State::leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays) {
+    if (hit.backFace) return glm::dvec3(0.0);
     const glm::dvec3 direct =
-        leavingWithoutBounce(shading.suns(), *hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
-    if (bounce == 0 || hit->albedo == glm::dvec3(0.0)) return {direct, distance, false};
-    const glm::dvec3 bounced =
-        cache->irradiance(bounce, hit->triangle, hit->frontSide ? 0 : 1, hit->barycentric, hit->rayOrigin);
-    return {direct + hit->albedo * std::numbers::inv_pi * bounced, distance, false};
+        leavingWithoutBounce(shading.suns(), hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
+    if (bounce == 0 || hit.albedo == glm::dvec3(0.0)) return direct;
+    return direct + hit.albedo * std::numbers::inv_pi * bouncedIrradiance(bounce, hit, paths, rays);
+}
+
+// E_bounce at a hit: the cache's, interpolated, or pi times the radiance of bounce - 1 along one
+// cosine-distributed direction (an unbiased estimate: the cosine density cancels the cosine).
+glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths,
+                                              uint64_t& rays) {
+    if (options.bounceLight == BounceLight::Cache)
+        return cache->irradiance(bounce, hit.triangle, hit.frontSide ? 0 : 1, hit.barycentric, hit.rayOrigin);
+    const glm::dvec2 u = bounce == options.bounces ? paths->firstBounce() : paths->deeperBounce();
+    const glm::dvec3 direction = cosineDirection(hit.shadingNormal, u.x, u.y);
+    return std::numbers::pi * arriving(bounce - 1, hit.rayOrigin, direction, paths, rays);
 }
 
 // A segment between two points just off the surfaces, counted as a cache ray.
@@ -326,18 +384,25 @@ CachePoint RayBaker::State::gather(int bounce, uint32_t triangle, int side, cons
     uint64_t rays = 0;
     glm::dvec3 sum(0.0);
     gatherDirections.forEach(at.shadingNormal, random, [&](const glm::dvec3& direction) {
-        sum += arriving(bounce - 1, at.rayOrigin, direction, rays).radiance;
+        sum += arriving(bounce - 1, at.rayOrigin, direction, nullptr, rays);
     });
     cacheRays += rays;
     return {glm::vec3(sum * (std::numbers::pi / (double(g) * g)))};
 }
 
-// The directions of a probe's view from `position` (RayBakeOptions::directions), in order.
-template <typename Ray> void RayBaker::State::forEachProbeRay(const glm::dvec3& position, Ray&& ray) const {
-    if (options.directions == ProbeDirections::Sphere)
-        forEachSphereRay(sphereRayCount(), options.seed, position, ray);
+// The directions of a probe's view from `position`, in order.
+template <typename Ray>
+void RayBaker::State::forEachProbeRay(const glm::dvec3& position, ProbeDirections directions,
+                                      Ray&& ray) const {
+    if (directions == ProbeDirections::Sphere)
+        forEachSphereRay(sphereRayCount(), options.seed, viewIndex(position), ray);
     else
         forEachViewRay(options.faceSize, texelSide, options.seed, ray, [](int, int, int) {});
+}
+
+// The index of the random streams of a view from `position` (view_rays.h placeIndex).
+uint64_t RayBaker::State::viewIndex(const glm::dvec3& position) const {
+    return placeIndex(position, glm::dvec3(shading.world().boundsMin), visibilityRange);
 }
 
 // R = 6 N^2 s^2: as many as a texel view casts.
@@ -345,71 +410,79 @@ int RayBaker::State::sphereRayCount() const {
     return kFaceCount * options.faceSize * options.faceSize * texelSide * texelSide;
 }
 
-// A view's rays through the texels of a cube map (scene/view_rays.h): each texel their mean.
-Cubemap RayBaker::State::traceTexels(const glm::dvec3& position, ProbeView& view, uint64_t& rays) {
-    const int s = texelSide;
+// A probe's rays from `position` and what they meet, unshaded, with the hit distances gathered into
+// octahedral texels of visibilitySize^2: all that tells whether the probe is inside geometry, so
+// that a probe left inside is never shaded.
+ProbeLook RayBaker::State::look(const glm::dvec3& position, ProbeDirections directions,
+                                uint64_t& rays) const {
+    ProbeLook look{{}, 0, DistanceMoments(options.visibilitySize, visibilityRange), {}};
+    look.rays.reserve(size_t(sphereRayCount()));
+    forEachProbeRay(position, directions, [&](const glm::dvec3& direction) {
+        ++rays;
+        ViewRay ray{direction, intersect(position, direction)};
+        const double distance = ray.meeting ? ray.meeting->distance : kFar;
+        look.moments.add(direction, distance);
+        look.nearest.add(direction, distance, ray.backFace());
+        look.rays.push_back(std::move(ray));
+    });
+    look.backFaceTexels = backFaceTexels(look.rays, directions);
+    return look;
+}
+
+// The texels whose s x s rays met mostly back faces; over the sphere, the back-face rays / s^2.
+uint32_t RayBaker::State::backFaceTexels(std::span<const ViewRay> rays, ProbeDirections directions) const {
+    const size_t perTexel = size_t(texelSide) * size_t(texelSide);
+    auto backFacing = [](auto first, auto last) {
+        return size_t(std::count_if(first, last, [](const ViewRay& ray) { return ray.backFace(); }));
+    };
+    if (directions == ProbeDirections::Sphere)
+        return uint32_t(backFacing(rays.begin(), rays.end()) / perTexel);
+    uint32_t texels = 0;
+    for (size_t t = 0; t < rays.size(); t += perTexel)
+        texels += 2 * backFacing(rays.begin() + t, rays.begin() + t + perTexel) > perTexel ? 1 : 0;
+    return texels;
+}
+
+// The radiance view ray `index` brings back: the sky, or what its surface leaves.
+glm::dvec3 RayBaker::State::shadeRay(const ViewRay& ray, size_t index, ProbePaths& paths, uint64_t& rays) {
+    if (!ray.meeting) return shading.skyRadiance(ray.direction);
+    paths.startRay(index);
+    return leaving(options.bounces, ray.meeting->surface, &paths, rays);
+}
+
+// A texel view's cube map: each texel the mean of its s x s rays (alpha: 1 where they met mostly
+// the back of a one-sided material).
+Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays) {
+    const size_t perTexel = size_t(texelSide) * size_t(texelSide);
+    ProbePaths paths(options.seed, viewIndex(position));
     Cubemap radiance = makeCubemap(options.faceSize);
-    glm::dvec3 sum(0.0);
-    int backFacing = 0;
-    forEachViewRay(
-        options.faceSize, texelSide, options.seed,
-        [&](const glm::dvec3& direction) {
-            const Arrival arrival = arriving(options.bounces, position, direction, rays);
-            sum += arrival.radiance;
-            backFacing += arrival.backFace ? 1 : 0;
-            view.met(direction, arrival);
-        },
-        [&](int face, int i, int j) {
-            const bool mostlyBack = 2 * backFacing > s * s;
-            radiance.at(face, i, j) = glm::vec4(glm::vec3(sum / double(s * s)), mostlyBack ? 1.0f : 0.0f);
-            view.backFaceTexels += mostlyBack ? 1 : 0;
-            sum = glm::dvec3(0.0);
-            backFacing = 0;
-        });
+    for (size_t t = 0; t < radiance.texels.size(); ++t) {
+        glm::dvec3 sum(0.0);
+        size_t backFacing = 0;
+        for (size_t k = t * perTexel; k < (t + 1) * perTexel; ++k) {
+            sum += shadeRay(look.rays[k], k, paths, rays);
+            backFacing += look.rays[k].backFace() ? 1 : 0;
+        }
+        radiance.texels[t] =
+            glm::vec4(glm::vec3(sum / double(perTexel)), 2 * backFacing > perTexel ? 1.0f : 0.0f);
+    }
     return radiance;
 }
 
-// A view's rays over the sphere, each projected with the weight 4 pi / R (Monte-Carlo projection);
-// its back-face rays counted in texels' worth, s^2 rays each.
-void RayBaker::State::traceSphere(const glm::dvec3& position, ProbeView& view, uint64_t& rays) {
-    const int count = sphereRayCount();
-    const double weight = 4.0 * std::numbers::pi / count;
+// A sphere view's radiance, each ray projected with the weight 4 pi / R (Monte-Carlo projection).
+ShCoefficients RayBaker::State::shadeSphere(const glm::dvec3& position, const ProbeLook& look,
+                                            uint64_t& rays) {
+    const double weight = 4.0 * std::numbers::pi / double(look.rays.size());
+    ProbePaths paths(options.seed, viewIndex(position));
+    ShCoefficients radiance = makeCoefficients(options.order, Quantity::Radiance);
     std::array<double, coefficientCount(kMaxOrder)> basis{};
-    uint64_t backFacing = 0;
-    forEachSphereRay(count, options.seed, position, [&](const glm::dvec3& direction) {
-        const Arrival arrival = arriving(options.bounces, position, direction, rays);
-        backFacing += arrival.backFace ? 1 : 0;
-        view.met(direction, arrival);
-        evalBasis(options.order, direction, basis);
-        for (size_t i = 0; i < view.radiance.rgb.size(); ++i)
-            view.radiance.rgb[i] += arrival.radiance * (weight * basis[i]);
-    });
-    view.backFaceTexels = uint32_t(backFacing / uint64_t(texelSide * texelSide));
-}
-
-// A probe's view from `position`, its radiance projected to SH, and the hit distances into
-// octahedral texels of visibilitySize^2.
-ProbeView RayBaker::State::trace(const glm::dvec3& position, uint64_t& rays) {
-    ProbeView view{makeCoefficients(options.order, Quantity::Radiance),
-                   0,
-                   DistanceMoments(options.visibilitySize, visibilityRange),
-                   {}};
-    if (options.directions == ProbeDirections::Sphere)
-        traceSphere(position, view, rays);
-    else
-        view.radiance = projectCubemap(traceTexels(position, view, rays), options.order);
-    return view;
-}
-
-// The faces a view's rays meet from `position`, without shading them.
-NearestHits RayBaker::State::survey(const glm::dvec3& position, uint64_t& rays) const {
-    NearestHits nearest;
-    forEachProbeRay(position, [&](const glm::dvec3& direction) {
-        ++rays;
-        if (const std::optional<Meeting> meeting = intersect(position, direction))
-            nearest.add(direction, meeting->distance, meeting->surface.backFace);
-    });
-    return nearest;
+    for (size_t k = 0; k < look.rays.size(); ++k) {
+        const glm::dvec3 weighted = shadeRay(look.rays[k], k, paths, rays) * weight;
+        evalBasis(options.order, look.rays[k].direction, basis);
+        for (size_t i = 0; i < radiance.rgb.size(); ++i)
+            radiance.rgb[i] += weighted * basis[i];
+    }
+    return radiance;
 }
 
 // Where a probe inside geometry that saw `seen` would be captured, from `position`.
@@ -417,30 +490,38 @@ std::optional<glm::vec3> RayBaker::State::relocation(const glm::dvec3& position,
                                                      uint64_t& rays) const {
     const std::optional<glm::dvec3> offset = throughBackFace(options.relocation, seen);
     if (!offset) return std::nullopt;
-    return offFrontFace(options.relocation, *offset, survey(position + *offset, rays));
+    return offFrontFace(options.relocation, *offset,
+                        look(position + *offset, options.directions, rays).nearest);
 }
 
-// A probe at `position`, or where relocation takes it out of geometry.
+// A probe at `position`, or where relocation takes it out of geometry; shaded only where it is not
+// inside geometry.
 RayBakedProbe RayBaker::State::bake(const glm::dvec3& position, uint64_t& rays) {
-    auto inside = [&](const ProbeView& view) {
-        return insideGeometry(view.backFaceTexels, options.faceSize, options.relocation.invalidBackFaces);
+    auto inside = [&](const ProbeLook& look) {
+        return insideGeometry(look.backFaceTexels, options.faceSize, options.relocation.invalidBackFaces);
     };
-    ProbeView view = trace(position, rays);
+    ProbeLook seen = look(position, options.directions, rays);
     glm::vec3 offset(0.0f);
-    if (inside(view)) {
-        if (const std::optional<glm::vec3> moved = relocation(position, view.nearest, rays)) {
-            ProbeView there = trace(position + glm::dvec3(*moved), rays);
+    if (inside(seen)) {
+        if (const std::optional<glm::vec3> moved = relocation(position, seen.nearest, rays)) {
+            ProbeLook there = look(position + glm::dvec3(*moved), options.directions, rays);
             if (!inside(there)) {
-                view = std::move(there);
+                seen = std::move(there);
                 offset = *moved;
             }
         }
     }
+    const glm::dvec3 at = position + glm::dvec3(offset);
     RayBakedProbe probe;
-    probe.radiance = std::move(view.radiance);
-    addSeenSuns(position + glm::dvec3(offset), probe.radiance, rays);
-    probe.backFaceTexels = view.backFaceTexels;
-    probe.visibility = view.moments.texels();
+    probe.radiance = makeCoefficients(options.order, Quantity::Radiance);
+    if (!inside(seen)) {
+        probe.radiance = options.directions == ProbeDirections::Sphere
+                             ? shadeSphere(at, seen, rays)
+                             : projectCubemap(shadeTexels(at, seen, rays), options.order);
+        addSeenSuns(at, probe.radiance, rays);
+    }
+    probe.backFaceTexels = seen.backFaceTexels;
+    probe.visibility = seen.moments.texels();
     probe.irradiance = convolveIrradiance(probe.radiance);
     probe.offset = offset;
     return probe;
@@ -484,8 +565,8 @@ std::vector<RayBakedProbe> RayBaker::bakeProbes(std::span<const glm::dvec3> posi
 
 Cubemap RayBaker::traceProbe(const glm::dvec3& position) {
     uint64_t rays = 0;
-    ProbeView view{{}, 0, DistanceMoments(0, 1.0), {}};
-    Cubemap radiance = state_->traceTexels(position, view, rays);
+    Cubemap radiance =
+        state_->shadeTexels(position, state_->look(position, ProbeDirections::Texels, rays), rays);
     state_->probeRays += rays;
     return radiance;
 }
@@ -495,7 +576,7 @@ double RayBaker::visibilityRange() const {
 }
 
 RayBakeCounts RayBaker::counts() const {
-    const CacheCounts cache = state_->cache->counts();
+    const CacheCounts cache = state_->cache ? state_->cache->counts() : CacheCounts{};
     return {state_->probeRays.load(), state_->cacheRays.load(), cache.points, cache.halvedCells};
 }
 

@@ -25,7 +25,10 @@
 // exactly the whole bake. A probe inside geometry may be moved out before it is captured (ProbeRelocation),
 // by its own rays alone, so that this stays true. The estimate converges to the exact transport as the points
 // grow denser (interpolation) and the gather rays more (noise); docs/scene-probes.md measures both against
-// the path tracer.
+// the path tracer. With BounceLight::Paths no cache is kept: each probe ray that meets a surface goes on
+// in one cosine-distributed direction a bounce, with the probe's own random numbers (named by its
+// position), and the suns by shadow rays at every hit: no interpolation, noise that falls with the
+// probe's rays, the same bits for any thread count and any subset of probes.
 #pragma once
 #include "scene/ray_caster.h"
 #include "scene/scene.h"
@@ -70,6 +73,12 @@ struct ProbeRelocation {
 // read as well.
 enum class ProbeDirections { Texels, Sphere };
 
+// Where the light a surface reflects at bounce k comes from: the irradiance cache on the surfaces
+// (interpolated, gathered once for every probe), or a path from each probe ray's hit, continued in
+// one cosine-distributed direction a bounce (unbiased, paid per probe ray). Which costs fewer rays
+// depends on the grid: cheaperBounceLight.
+enum class BounceLight { Cache, Paths };
+
 struct RayBakeOptions {
     int order = 3;             // SH order of the probes, 1..kMaxOrder
     int faceSize = 32;         // N: a probe's view is a 6 x N x N cube map
@@ -88,8 +97,14 @@ struct RayBakeOptions {
     std::vector<SceneSun> skySuns;
     ProbeRelocation relocation;
     ProbeDirections directions = ProbeDirections::Texels;
+    BounceLight bounceLight = BounceLight::Cache;
     uint64_t seed = 1;
 };
+
+// Paths where a probe's rays times `probes` (the whole grid's, so that its bricks agree) are no more
+// than the cache's lattice points times their gather rays, else the cache. Either casts that many
+// rays a bounce (with their shadow rays); the cache then reads its points for every probe.
+BounceLight cheaperBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes);
 
 // Cache points per world diagonal when RayBakeOptions::cacheSpacing is 0.
 constexpr double kDefaultCacheCells = 64.0;
@@ -150,7 +165,7 @@ void addSeenSuns(const RayCaster& caster, std::span<const SceneSun> suns, const 
                  ShCoefficients& radiance);
 
 struct RayBakedProbe {
-    ShCoefficients radiance;
+    ShCoefficients radiance; // zero where the probe is still inside geometry: its rays are not shaded
     ShCoefficients irradiance;
     uint32_t backFaceTexels = 0; // of the 6 N^2 texels, those whose rays met mostly back faces; of
                                  // a sphere view, its back-face rays / s^2 (rounded down)
@@ -190,7 +205,7 @@ class RayBaker {
     RayBaker& operator=(RayBaker&&) noexcept;
 
     // The probes at `positions` (each moved out of geometry where options.relocation says), on all
-    // cores; entry k depends on positions[k] alone.
+    // cores; entry k depends on positions[k] (its place in the world's box) alone.
     std::vector<RayBakedProbe> bakeProbes(std::span<const glm::dvec3> positions,
                                           const BakeProgress& progress = {});
     // What a probe at `position` sees through its texels, whatever options.directions (alpha: 1

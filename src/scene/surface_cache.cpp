@@ -137,13 +137,24 @@ struct SurfaceCache::Halves {
     std::array<std::atomic<uintptr_t>, 4> children{};
 };
 
+int cacheSides(const World& world, uint32_t triangle) {
+    return world.materials[world.triangleMaterials[triangle]].doubleSided ? 2 : 1;
+}
+
+size_t cachePointCount(const World& world, double spacing) {
+    size_t points = 0;
+    for (uint32_t t = 0; t < world.triangleCount(); ++t)
+        points += size_t(cacheSides(world, t)) * latticePoints(latticeSubdivisions(world, t, spacing));
+    return points;
+}
+
 SurfaceCache::SurfaceCache(const World& world, double spacing, int bounces, int refinement,
                            CacheQueries queries)
     : queries_(std::move(queries)), refinement_(refinement) {
     lattices_.resize(world.triangleCount());
     for (uint32_t t = 0; t < uint32_t(lattices_.size()); ++t) {
         const int m = latticeSubdivisions(world, t, spacing);
-        const int sides = world.materials[world.triangleMaterials[t]].doubleSided ? 2 : 1;
+        const int sides = cacheSides(world, t);
         lattices_[t] = {pointCount_, cellCount_, m};
         pointCount_ += sides * latticePoints(m);
         cellCount_ += sides * size_t(m) * size_t(m);

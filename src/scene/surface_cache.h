@@ -53,6 +53,11 @@ glm::dvec2 latticeBarycentric(int m, size_t index);
 // 1..kMaxCacheSubdivisions.
 int latticeSubdivisions(const World& world, uint32_t triangle, double spacing);
 
+// The sides a triangle's cache covers: two for a double-sided material, else one.
+int cacheSides(const World& world, uint32_t triangle);
+// The points of every lattice at `spacing`, each side's, before any cell is halved.
+size_t cachePointCount(const World& world, double spacing);
+
 // One bounce's irradiance at a point.
 struct CachePoint {
     glm::vec3 irradiance{0.0f};

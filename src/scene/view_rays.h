@@ -10,7 +10,7 @@
 
 #include <glm/vec3.hpp>
 
-#include <bit>
+#include <cmath>
 #include <cstdint>
 
 namespace shprobe {
@@ -44,25 +44,29 @@ void forEachViewRay(int faceSize, int s, uint64_t seed, Ray&& ray, Texel&& texel
             }
 }
 
-// The stream of a sphere view's rotation, (seed, kSphereViewStream, the probe's position's bits):
-// one no texel's stream is.
+// The stream of a sphere view's rotation, (seed, kSphereViewStream, the view's placeIndex): one no
+// texel's stream is.
 constexpr uint64_t kSphereViewStream = ~uint64_t(0) - 1;
 
-// The index of the stream of a view from `position`: its coordinates' bits, mixed.
-inline uint64_t positionIndex(const glm::dvec3& position) {
+// The index of the streams of a view from `position` in a world whose box starts at `boundsMin` and
+// whose diagonal is `size`: its place in that box, (position - boundsMin) / size rounded to 2^-16,
+// mixed. A probe at the same place in a scaled scene draws the same random numbers, so that scenes
+// scaled about the origin bake to the same volume (docs/scene-probes.md, "Scale").
+inline uint64_t placeIndex(const glm::dvec3& position, const glm::dvec3& boundsMin, double size) {
     uint64_t index = 0;
-    for (int axis = 0; axis < 3; ++axis)
-        index = mix64(index + std::bit_cast<uint64_t>(position[axis]));
+    for (int axis = 0; axis < 3; ++axis) {
+        const double place = std::nearbyint((position[axis] - boundsMin[axis]) / size * 0x1p16);
+        index = mix64(index + uint64_t(int64_t(place)));
+    }
     return index;
 }
 
 // Calls ray(direction) for each of `count` directions stratified over the sphere: the spherical
-// Fibonacci set (sampling.h) under a uniformly random rotation of its own for each position, so that
-// each direction is uniform on the sphere and (4 pi / count) sum L(w) y_lm(w) is an unbiased
-// projection whose error falls faster than independent directions' (Marques et al.).
-template <typename Ray>
-void forEachSphereRay(int count, uint64_t seed, const glm::dvec3& position, Ray&& ray) {
-    RandomStream random(seed, kSphereViewStream, positionIndex(position));
+// Fibonacci set (sampling.h) under a uniformly random rotation of its own for each view (named by its
+// placeIndex), so that each direction is uniform on the sphere and (4 pi / count) sum L(w) y_lm(w) is
+// an unbiased projection whose error falls faster than independent directions' (Marques et al.).
+template <typename Ray> void forEachSphereRay(int count, uint64_t seed, uint64_t viewIndex, Ray&& ray) {
+    RandomStream random(seed, kSphereViewStream, viewIndex);
     const glm::dmat3 rotation = randomRotation(random);
     for (int k = 0; k < count; ++k)
         ray(rotation * fibonacciDirection(k, count));
