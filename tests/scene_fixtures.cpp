@@ -285,6 +285,16 @@ World loadCornellBoxWorld(const CornellBoxOptions& options) {
     return loadFixtureWorld(cornellBoxScene(options));
 }
 
+World furnaceWorld() {
+    World furnace = loadCornellBoxWorld({.closed = true});
+    for (SceneMaterial& material : furnace.materials) { // the light's back too
+        material.albedo = glm::vec3(0.5f);
+        material.emission = glm::vec3(1.0f);
+        material.doubleSided = true;
+    }
+    return furnace;
+}
+
 const World& engineWorld(const std::string& modelsFolder) {
     static const World world =
         loadGltfScene(modelsFolder + "/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");

@@ -118,6 +118,9 @@ void writeCornellBoxGltf(const std::string& path, const CornellBoxOptions& optio
 // A scene as loadGltfScene reads it (written to a temporary .glb, read, removed).
 World loadFixtureWorld(const FixtureScene& scene);
 World loadCornellBoxWorld(const CornellBoxOptions& options = {});
+// The closed Cornell box as a furnace: every material double-sided, albedo 1/2 and emission 1, so
+// that every ray meets a wall leaving 1 + 1/2 + ... + 1/2^k at bounce k.
+World furnaceWorld();
 
 // Loaded once per process and kept, for tests that cast many rays at one scene: 2CylinderEngine.glb
 // (121,496 triangles) from the glTF2 folder of Debian's assimp-testmodels, and the Cornell box with

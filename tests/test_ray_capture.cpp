@@ -241,12 +241,7 @@ TEST_F(RayCaptureTest, ProbesInsideGeometryAreMovedOutAsOnTheCpu) {
 // 2 sqrt(pi) times that and the other coefficients 0, to float sums over 6 N^2 texels and g^2 rays
 // (1e-4 of L00's 3.5 to 5.3).
 TEST_F(RayCaptureTest, FurnaceFollowsTheGeometricSeries) {
-    World furnace = testing::loadCornellBoxWorld({.closed = true});
-    for (SceneMaterial& material : furnace.materials) {
-        material.albedo = glm::vec3(0.5f);
-        material.emission = glm::vec3(1.0f);
-        material.doubleSided = true;
-    }
+    const World furnace = testing::furnaceWorld();
     const std::vector<glm::dvec3> positions{{0.0, 1.0, 0.0}, {0.5, 0.3, -0.7}};
     for (int bounces : {0, 1, 2}) {
         const std::vector<SceneProbe> probes = bakeOnGpu(furnace, testing::directionalSky(4), positions, 8,

@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "common/parallel.h"
+#include "scene/emitters.h"
 #include "scene/ray_caster.h"
 #include "scene/sampling.h"
 #include "scene/surface_cache.h"
@@ -54,6 +55,12 @@ class ProbePaths {
     glm::dvec2 deeperBounce() {
         const double u1 = random_.next();
         return {u1, random_.next()};
+    }
+    // Three numbers for a point on the emitters (EmitterSampler::sample).
+    glm::dvec3 emitterPoint() {
+        const double u0 = random_.next();
+        const double u1 = random_.next();
+        return {u0, u1, random_.next()};
     }
 
   private:
@@ -252,11 +259,12 @@ bool insideGeometry(uint32_t backFaceTexels, int faceSize, double share) {
 struct RayBaker::State {
     State(const World& world, const Cubemap& sky, const RayBakeOptions& bakeOptions)
         : options(bakeOptions), shading(withSuns(world, bakeOptions.skySuns), sky),
-          caster(makeRayCaster(world)) {}
+          caster(makeRayCaster(world)), emitters(shading.world()) {}
 
     RayBakeOptions options;
     SceneShading shading;
     std::unique_ptr<RayCaster> caster;
+    EmitterSampler emitters; // for the paths' next-event estimation (BounceLight::Paths)
     std::unique_ptr<SurfaceCache> cache;
     StratifiedCosineDirections gatherDirections{1}; // g x g gather rays per point
     int texelSide = 1;                              // s: s x s rays per texel
@@ -268,9 +276,12 @@ struct RayBaker::State {
     std::optional<Meeting> intersect(const glm::dvec3& origin, const glm::dvec3& direction) const;
     bool occluded(const glm::dvec3& origin, const glm::dvec3& direction) const;
     glm::dvec3 arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, ProbePaths* paths,
-                        uint64_t& rays);
-    glm::dvec3 leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
+                        uint64_t& rays, std::optional<double> cosineDensity = std::nullopt);
+    glm::dvec3 leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays,
+                       double emissionShare = 1.0);
+    double emissionShare(const Meeting& meeting, const glm::dvec3& direction, double cosineDensity) const;
     glm::dvec3 bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
+    glm::dvec3 emitterIrradiance(const SurfaceHit& hit, ProbePaths& paths, uint64_t& rays) const;
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
@@ -334,35 +345,77 @@ bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direc
 }
 
 // The radiance arriving at `origin` from `direction` with `bounce` bounces (scene.h): the sky, or
-// what the surface met leaves.
+// what the surface met leaves. `cosineDensity`: the density with which a path's bounce drew
+// `direction`, against which emission met is weighted (emissionShare); none for a probe's or a
+// gather's ray, which count it whole.
 glm::dvec3 RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction,
-                                     ProbePaths* paths, uint64_t& rays) {
+                                     ProbePaths* paths, uint64_t& rays, std::optional<double> cosineDensity) {
     ++rays;
     const std::optional<Meeting> meeting = intersect(origin, direction);
     if (!meeting) return shading.skyRadiance(direction);
-    return leaving(bounce, meeting->surface, paths, rays);
+    const double share = cosineDensity ? emissionShare(*meeting, direction, *cosineDensity) : 1.0;
+    return leaving(bounce, meeting->surface, paths, rays, share);
 }
 
 // What a surface leaves towards the ray that met it with `bounce` bounces: nothing from a back face,
-// else emission and the suns' light plus bounce's irradiance, reflected. `paths` continues the
-// probe's paths (BounceLight::Paths; none for the cache's gathers).
-glm::dvec3 RayBaker::State::leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays) {
+// else `emissionShare` of its emission and the suns' light plus bounce's irradiance, reflected.
+// `paths` continues the probe's paths (BounceLight::Paths; none for the cache's gathers).
+glm::dvec3 RayBaker::State::leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays,
+                                    double emissionShare) {
     if (hit.backFace) return glm::dvec3(0.0);
     const glm::dvec3 direct =
-        leavingWithoutBounce(shading.suns(), hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
+        emissionShare * hit.emission +
+        reflectedSunLight(shading.suns(), hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
     if (bounce == 0 || hit.albedo == glm::dvec3(0.0)) return direct;
     return direct + hit.albedo * std::numbers::inv_pi * bouncedIrradiance(bounce, hit, paths, rays);
 }
 
-// E_bounce at a hit: the cache's, interpolated, or pi times the radiance of bounce - 1 along one
-// cosine-distributed direction (an unbiased estimate: the cosine density cancels the cosine).
+// The share of an emitter's light a path's bounce keeps where it meets it: the power heuristic
+// against the emitters' own sampling (emitterIrradiance), which finds the same light too.
+double RayBaker::State::emissionShare(const Meeting& meeting, const glm::dvec3& direction,
+                                      double cosineDensity) const {
+    const double area = emitters.areaDensity(meeting.surface.triangle);
+    const double cosine = std::abs(glm::dot(meeting.surface.normal, direction));
+    if (!(area > 0.0) || !(cosine > 0.0)) return 1.0;
+    return powerHeuristic(cosineDensity, area * meeting.distance * meeting.distance / cosine);
+}
+
+// E_bounce at a hit: the cache's, interpolated, or a path's: pi times the radiance of bounce - 1
+// along one cosine-distributed direction (the cosine density cancels the cosine), and the emitters'
+// light by a point sampled on them, the two weighted by the power heuristic.
 glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths,
                                               uint64_t& rays) {
     if (options.bounceLight == BounceLight::Cache)
         return cache->irradiance(bounce, hit.triangle, hit.frontSide ? 0 : 1, hit.barycentric, hit.rayOrigin);
     const glm::dvec2 u = bounce == options.bounces ? paths->firstBounce() : paths->deeperBounce();
     const glm::dvec3 direction = cosineDirection(hit.shadingNormal, u.x, u.y);
-    return std::numbers::pi * arriving(bounce - 1, hit.rayOrigin, direction, paths, rays);
+    const double density = std::max(glm::dot(hit.shadingNormal, direction), 0.0) * std::numbers::inv_pi;
+    return emitterIrradiance(hit, *paths, rays) +
+           std::numbers::pi * arriving(bounce - 1, hit.rayOrigin, direction, paths, rays, density);
+}
+
+// The emitters' irradiance at a hit from one point sampled on them (EmitterSampler), seen by a
+// shadow ray: L_e max(0, n.w) / p(w), p the point's density per solid angle, weighted by the power
+// heuristic against the cosine rays' density.
+glm::dvec3 RayBaker::State::emitterIrradiance(const SurfaceHit& hit, ProbePaths& paths,
+                                              uint64_t& rays) const {
+    if (emitters.empty()) return glm::dvec3(0.0);
+    const glm::dvec3 u = paths.emitterPoint();
+    const EmitterPoint point = emitters.sample(u.x, u.y, u.z);
+    const glm::dvec3 toLight = point.position - hit.rayOrigin;
+    const double distance = glm::length(toLight);
+    if (!(distance > 0.0)) return glm::dvec3(0.0);
+    const glm::dvec3 direction = toLight / distance;
+    const double cosine = glm::dot(hit.shadingNormal, direction);
+    if (!(cosine > 0.0)) return glm::dvec3(0.0);
+    const SurfaceHit light = shading.describe(point.triangle, point.barycentric, direction);
+    const double lightCosine = std::abs(glm::dot(light.normal, direction));
+    if (light.backFace || !(lightCosine > 0.0)) return glm::dvec3(0.0);
+    ++rays;
+    const float reach = float(distance - 2.0 * shading.offset());
+    if (caster->anyHit({glm::vec3(hit.rayOrigin), glm::vec3(direction), 0.0f, reach})) return glm::dvec3(0.0);
+    const double density = point.areaDensity * distance * distance / lightCosine;
+    return light.emission * (cosine / density * powerHeuristic(density, cosine * std::numbers::inv_pi));
 }
 
 // A segment between two points just off the surfaces, counted as a cache ray.

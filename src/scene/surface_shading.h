@@ -78,12 +78,12 @@ class SceneShading {
     double offset_ = 0.0;
 };
 
-// What a front face leaves towards the ray with no bounced light (scene.h): emission + albedo / pi
-// times sum_suns E_sun max(0, n.l) V(x, l), n the shading normal; one shadow ray per sun above the
-// surface, occluded(origin, direction) saying whether anything blocks it, counted in rays.
+// What a front face reflects of the suns (scene.h): albedo / pi times sum_suns E_sun max(0, n.l)
+// V(x, l), n the shading normal; one shadow ray per sun above the surface, occluded(origin,
+// direction) saying whether anything blocks it, counted in rays.
 template <typename Occluded>
-glm::dvec3 leavingWithoutBounce(std::span<const SceneSun> suns, const SurfaceHit& hit, uint64_t& rays,
-                                const Occluded& occluded) {
+glm::dvec3 reflectedSunLight(std::span<const SceneSun> suns, const SurfaceHit& hit, uint64_t& rays,
+                             const Occluded& occluded) {
     glm::dvec3 sunLight(0.0);
     for (const SceneSun& sun : suns) {
         const glm::dvec3 toSun(sun.direction);
@@ -92,7 +92,15 @@ glm::dvec3 leavingWithoutBounce(std::span<const SceneSun> suns, const SurfaceHit
         ++rays;
         if (!occluded(hit.rayOrigin, toSun)) sunLight += glm::dvec3(sun.irradiance) * cosine;
     }
-    return hit.emission + hit.albedo * std::numbers::inv_pi * sunLight;
+    return hit.albedo * std::numbers::inv_pi * sunLight;
+}
+
+// What a front face leaves towards the ray with no bounced light (scene.h): its emission and the
+// suns' light it reflects.
+template <typename Occluded>
+glm::dvec3 leavingWithoutBounce(std::span<const SceneSun> suns, const SurfaceHit& hit, uint64_t& rays,
+                                const Occluded& occluded) {
+    return hit.emission + reflectedSunLight(suns, hit, rays, occluded);
 }
 
 } // namespace shprobe
