@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -34,39 +35,34 @@ namespace {
 // The stream of a probe's paths, (seed, kProbePathStream, its view's placeIndex): one no view's is.
 constexpr uint64_t kProbePathStream = kSphereViewStream - 1;
 
-// The random numbers of a probe's paths (BounceLight::Paths), named by its place in the world. The first
-// bounce of the probe's ray k leaves by point k of the R2 sequence (Roberts, "The Unreasonable
-// Effectiveness of Quasirandom Sequences", 2018) shifted by the probe's own random offset (a
-// Cranley-Patterson rotation: each point stays uniform, so the estimate stays unbiased): neighbouring
-// rays' bounces spread over the hemisphere instead of clumping, which halves the bounce's error on
-// the engine (docs/scene-probes.md). Deeper bounces draw from the stream.
+// The numbers of a probe's paths (BounceLight::Paths), named by its place in the world: the path of
+// the probe's ray k draws point k of Owen-scrambled Sobol' sets (sampling.h), a set per bounce and
+// use, scrambled by the probe's own seed. The rays are numbered along a Morton curve over each face
+// (viewRayIndex), so the first bounces of any block of neighbouring rays, which meet nearly the
+// same surface, are stratified over its hemisphere at every scale (Ahmed and Wonka, "Screen-Space
+// Blue-Noise Diffusion of Monte Carlo Sampling Error via Hierarchical Ordering of Pixels", 2020);
+// the other sets are shuffled, so that no two uses draw alike. Each point stays uniform: the
+// estimate stays unbiased.
 class ProbePaths {
   public:
     ProbePaths(uint64_t seed, uint64_t viewIndex)
-        : random_(seed, kProbePathStream, viewIndex), shift_(random_.next(), random_.next()) {}
+        : seed_(mix64(mix64(seed) + kProbePathStream) + viewIndex) {}
     // The probe ray whose path is traced next.
-    void startRay(uint64_t ray) { ray_ = ray; }
-    // The unit square's point for the first bounce of that ray.
-    glm::dvec2 firstBounce() const {
-        constexpr double g = 1.32471795724474602596; // the plastic number: x^3 = x + 1
-        const glm::dvec2 point = shift_ + double(ray_) * glm::dvec2(1.0 / g, 1.0 / (g * g));
-        return point - glm::floor(point);
-    }
-    glm::dvec2 deeperBounce() {
-        const double u1 = random_.next();
-        return {u1, random_.next()};
-    }
-    // Three numbers for a point on the emitters (EmitterSampler::sample).
-    glm::dvec3 emitterPoint() {
-        const double u0 = random_.next();
-        const double u1 = random_.next();
-        return {u0, u1, random_.next()};
+    void startRay(uint32_t ray) { ray_ = ray; }
+    // The unit square's point for that path's bounce `level` (0: the first) direction.
+    glm::dvec2 bounceDirection(int level) const { return set(3 * level, level > 0); }
+    // Three numbers for the point on the emitters at bounce `level` (EmitterSampler::sample).
+    glm::dvec3 emitterPoint(int level) const {
+        const glm::dvec2 triangle = set(3 * level + 1, true), point = set(3 * level + 2, true);
+        return {triangle.x, point.x, point.y};
     }
 
   private:
-    RandomStream random_;
-    glm::dvec2 shift_;
-    uint64_t ray_ = 0;
+    glm::dvec2 set(int use, bool shuffled) const {
+        return owenScrambledSobol(ray_, mix64(seed_ + uint64_t(use)), shuffled);
+    }
+    uint64_t seed_;
+    uint32_t ray_ = 0;
 };
 
 // A thread should cast at least this many rays, so that starting it stays a small part of its run.
@@ -281,7 +277,7 @@ struct RayBaker::State {
                        double emissionShare = 1.0);
     double emissionShare(const Meeting& meeting, const glm::dvec3& direction, double cosineDensity) const;
     glm::dvec3 bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
-    glm::dvec3 emitterIrradiance(const SurfaceHit& hit, ProbePaths& paths, uint64_t& rays) const;
+    glm::dvec3 emitterIrradiance(const SurfaceHit& hit, const glm::dvec3& u, uint64_t& rays) const;
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
@@ -291,7 +287,7 @@ struct RayBaker::State {
     uint64_t viewIndex(const glm::dvec3& position) const;
     ProbeLook look(const glm::dvec3& position, ProbeDirections directions, uint64_t& rays) const;
     uint32_t backFaceTexels(std::span<const ViewRay> rays, ProbeDirections directions) const;
-    glm::dvec3 shadeRay(const ViewRay& ray, size_t index, ProbePaths& paths, uint64_t& rays);
+    glm::dvec3 shadeRay(const ViewRay& ray, uint32_t index, ProbePaths& paths, uint64_t& rays);
     Cubemap shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays);
     ShCoefficients shadeSphere(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays);
     std::optional<glm::vec3> relocation(const glm::dvec3& position, const NearestHits& seen,
@@ -387,20 +383,19 @@ glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit,
                                               uint64_t& rays) {
     if (options.bounceLight == BounceLight::Cache)
         return cache->irradiance(bounce, hit.triangle, hit.frontSide ? 0 : 1, hit.barycentric, hit.rayOrigin);
-    const glm::dvec2 u = bounce == options.bounces ? paths->firstBounce() : paths->deeperBounce();
+    const glm::dvec2 u = paths->bounceDirection(options.bounces - bounce);
     const glm::dvec3 direction = cosineDirection(hit.shadingNormal, u.x, u.y);
     const double density = std::max(glm::dot(hit.shadingNormal, direction), 0.0) * std::numbers::inv_pi;
-    return emitterIrradiance(hit, *paths, rays) +
+    return emitterIrradiance(hit, paths->emitterPoint(options.bounces - bounce), rays) +
            std::numbers::pi * arriving(bounce - 1, hit.rayOrigin, direction, paths, rays, density);
 }
 
 // The emitters' irradiance at a hit from one point sampled on them (EmitterSampler), seen by a
 // shadow ray: L_e max(0, n.w) / p(w), p the point's density per solid angle, weighted by the power
 // heuristic against the cosine rays' density.
-glm::dvec3 RayBaker::State::emitterIrradiance(const SurfaceHit& hit, ProbePaths& paths,
+glm::dvec3 RayBaker::State::emitterIrradiance(const SurfaceHit& hit, const glm::dvec3& u,
                                               uint64_t& rays) const {
     if (emitters.empty()) return glm::dvec3(0.0);
-    const glm::dvec3 u = paths.emitterPoint();
     const EmitterPoint point = emitters.sample(u.x, u.y, u.z);
     const glm::dvec3 toLight = point.position - hit.rayOrigin;
     const double distance = glm::length(toLight);
@@ -496,25 +491,31 @@ uint32_t RayBaker::State::backFaceTexels(std::span<const ViewRay> rays, ProbeDir
     return texels;
 }
 
-// The radiance view ray `index` brings back: the sky, or what its surface leaves.
-glm::dvec3 RayBaker::State::shadeRay(const ViewRay& ray, size_t index, ProbePaths& paths, uint64_t& rays) {
+// The radiance a view's ray brings back, its path numbered `index` (ProbePaths): the sky, or what
+// its surface leaves.
+glm::dvec3 RayBaker::State::shadeRay(const ViewRay& ray, uint32_t index, ProbePaths& paths, uint64_t& rays) {
     if (!ray.meeting) return shading.skyRadiance(ray.direction);
     paths.startRay(index);
     return leaving(options.bounces, ray.meeting->surface, &paths, rays);
 }
 
 // A texel view's cube map: each texel the mean of its s x s rays (alpha: 1 where they met mostly
-// the back of a one-sided material).
+// the back of a one-sided material). Paths are numbered face by face along a Morton curve over the
+// texels, each texel's rays in a row (ProbePaths).
 Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays) {
-    const size_t perTexel = size_t(texelSide) * size_t(texelSide);
+    const uint32_t n = uint32_t(options.faceSize), perTexel = uint32_t(texelSide * texelSide);
+    const uint32_t faceCodes = std::bit_ceil(n) * std::bit_ceil(n);
     ProbePaths paths(options.seed, viewIndex(position));
     Cubemap radiance = makeCubemap(options.faceSize);
-    for (size_t t = 0; t < radiance.texels.size(); ++t) {
+    for (uint32_t t = 0; t < uint32_t(radiance.texels.size()); ++t) {
+        const uint32_t face = t / (n * n), j = t % (n * n) / n, i = t % n;
+        const uint32_t first = (face * faceCodes + mortonCode(i, j)) * perTexel;
         glm::dvec3 sum(0.0);
         size_t backFacing = 0;
-        for (size_t k = t * perTexel; k < (t + 1) * perTexel; ++k) {
-            sum += shadeRay(look.rays[k], k, paths, rays);
-            backFacing += look.rays[k].backFace() ? 1 : 0;
+        for (uint32_t k = 0; k < perTexel; ++k) {
+            const ViewRay& ray = look.rays[size_t(t) * perTexel + k];
+            sum += shadeRay(ray, first + k, paths, rays);
+            backFacing += ray.backFace() ? 1 : 0;
         }
         radiance.texels[t] =
             glm::vec4(glm::vec3(sum / double(perTexel)), 2 * backFacing > perTexel ? 1.0f : 0.0f);
@@ -530,7 +531,7 @@ ShCoefficients RayBaker::State::shadeSphere(const glm::dvec3& position, const Pr
     ShCoefficients radiance = makeCoefficients(options.order, Quantity::Radiance);
     std::array<double, coefficientCount(kMaxOrder)> basis{};
     for (size_t k = 0; k < look.rays.size(); ++k) {
-        const glm::dvec3 weighted = shadeRay(look.rays[k], k, paths, rays) * weight;
+        const glm::dvec3 weighted = shadeRay(look.rays[k], uint32_t(k), paths, rays) * weight;
         evalBasis(options.order, look.rays[k].direction, basis);
         for (size_t i = 0; i < radiance.rgb.size(); ++i)
             radiance.rgb[i] += weighted * basis[i];
