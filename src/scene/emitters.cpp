@@ -16,38 +16,62 @@ double triangleArea(const World& world, uint32_t triangle) {
     return 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
 }
 
-double emissionWeight(const World& world, uint32_t triangle) {
-    const glm::vec3 emission = world.materials[world.triangleMaterials[triangle]].emission;
-    return double(std::max({emission.r, emission.g, emission.b}));
+// Each triangle's area times its emission factor's largest channel.
+std::vector<double> emittedPower(const World& world) {
+    std::vector<double> weights(world.triangleCount());
+    for (uint32_t t = 0; t < uint32_t(weights.size()); ++t) {
+        const glm::vec3 emission = world.materials[world.triangleMaterials[t]].emission;
+        weights[t] = triangleArea(world, t) * double(std::max({emission.r, emission.g, emission.b}));
+    }
+    return weights;
+}
+
+// Each texel's largest channel times its solid angle.
+std::vector<double> skyPower(const Cubemap& sky) {
+    const uint32_t n = uint32_t(sky.faceSize);
+    std::vector<double> weights(sky.texels.size());
+    for (uint32_t t = 0; t < uint32_t(weights.size()); ++t) {
+        const glm::vec4 texel = sky.texels[t];
+        weights[t] = double(std::max({texel.r, texel.g, texel.b})) *
+                     texelSolidAngle(int(t % n), int(t / n % n), int(n));
+    }
+    return weights;
+}
+
+// The area of face points per unit solid angle at (a, b): (1 + a^2 + b^2)^(3/2).
+double faceAreaPerSolidAngle(double a, double b) {
+    const double r2 = 1.0 + a * a + b * b;
+    return r2 * std::sqrt(r2);
 }
 
 } // namespace
 
-EmitterSampler::EmitterSampler(const World& world)
-    : world_(&world), areaDensities_(world.triangleCount(), 0.0) {
-    std::vector<double> weights;
+DiscreteDistribution::DiscreteDistribution(const std::vector<double>& weights)
+    : probabilities_(weights.size(), 0.0) {
     double total = 0.0;
-    for (uint32_t t = 0; t < uint32_t(world.triangleCount()); ++t) {
-        const double weight = triangleArea(world, t) * emissionWeight(world, t);
-        if (!(weight > 0.0) || !std::isfinite(weight)) continue;
-        triangles_.push_back(t);
-        weights.push_back(weight);
-        total += weight;
+    for (uint32_t i = 0; i < uint32_t(weights.size()); ++i) {
+        if (!(weights[i] > 0.0) || !std::isfinite(weights[i])) continue;
+        picked_.push_back(i);
+        total += weights[i];
     }
     double sum = 0.0;
-    for (size_t k = 0; k < triangles_.size(); ++k) {
-        sum += weights[k];
-        cumulative_.push_back(sum / total);
-        areaDensities_[triangles_[k]] = weights[k] / total / triangleArea(world, triangles_[k]);
+    for (const uint32_t i : picked_) {
+        probabilities_[i] = weights[i] / total;
+        cumulative_.push_back((sum += weights[i]) / total);
     }
     if (!cumulative_.empty()) cumulative_.back() = 1.0;
 }
 
-EmitterPoint EmitterSampler::sample(double u0, double u1, double u2) const {
+uint32_t DiscreteDistribution::pick(double u) const {
     const size_t k =
-        std::min(size_t(std::upper_bound(cumulative_.begin(), cumulative_.end(), u0) - cumulative_.begin()),
-                 triangles_.size() - 1);
-    const uint32_t triangle = triangles_[k];
+        size_t(std::upper_bound(cumulative_.begin(), cumulative_.end(), u) - cumulative_.begin());
+    return picked_[std::min(k, picked_.size() - 1)];
+}
+
+EmitterSampler::EmitterSampler(const World& world) : world_(&world), triangles_(emittedPower(world)) {}
+
+EmitterPoint EmitterSampler::sample(double u0, double u1, double u2) const {
+    const uint32_t triangle = triangles_.pick(u0);
     const double root = std::sqrt(u1);
     const glm::dvec2 barycentric(root * (1.0 - u2), root * u2);
     const uint32_t* vertex = &world_->indices[3 * size_t(triangle)];
@@ -55,11 +79,35 @@ EmitterPoint EmitterSampler::sample(double u0, double u1, double u2) const {
         p2(world_->positions[vertex[2]]);
     const glm::dvec3 position =
         (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
-    return {triangle, barycentric, position, areaDensities_[triangle]};
+    return {triangle, barycentric, position, areaDensity(triangle)};
 }
 
 double EmitterSampler::areaDensity(uint32_t triangle) const {
-    return areaDensities_[triangle];
+    const double probability = triangles_.probability(triangle);
+    return probability > 0.0 ? probability / triangleArea(*world_, triangle) : 0.0;
+}
+
+SkySampler::SkySampler(const Cubemap& sky) : faceSize_(sky.faceSize), texels_(skyPower(sky)) {}
+
+SkyDirection SkySampler::sample(double u0, double u1, double u2) const {
+    const uint32_t texel = texels_.pick(u0);
+    const uint32_t n = uint32_t(faceSize_);
+    const int face = int(texel / (n * n));
+    const double a = 2.0 * (double(texel % n) + u1) / n - 1.0;
+    const double b = 2.0 * (double(texel / n % n) + u2) / n - 1.0;
+    const double texelArea = 4.0 / (double(n) * n);
+    return {faceDirection(face, a, b), texels_.probability(texel) / texelArea * faceAreaPerSolidAngle(a, b)};
+}
+
+double SkySampler::density(const glm::dvec3& direction) const {
+    const FacePoint point = directionToFace(direction);
+    const int n = faceSize_;
+    const auto texel = [n](double coordinate) {
+        return std::clamp(int(std::floor((coordinate + 1.0) * 0.5 * n)), 0, n - 1);
+    };
+    const uint32_t index = uint32_t((point.face * n + texel(point.b)) * n + texel(point.a));
+    const double texelArea = 4.0 / (double(n) * n);
+    return texels_.probability(index) / texelArea * faceAreaPerSolidAngle(point.a, point.b);
 }
 
 } // namespace shprobe

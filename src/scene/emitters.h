@@ -1,9 +1,11 @@
-// Points on a world's emissive triangles for next-event estimation: light that paths find only by
-// chance (a small bright lamp) sampled where it is, each sample weighted against the cosine rays'
-// own chance of meeting it by the power heuristic (Veach and Guibas, "Optimally Combining Sampling
-// Techniques for Monte Carlo Rendering", 1995), so that neither estimate counts it twice.
+// Points on a world's emissive triangles and directions towards its sky's bright texels, for
+// next-event estimation: light that paths find only by chance (a small bright lamp, a gap in a
+// canopy) sampled where it is, each sample weighted against the cosine rays' own chance of meeting
+// it by the power heuristic (Veach and Guibas, "Optimally Combining Sampling Techniques for Monte
+// Carlo Rendering", 1995), so that neither estimate counts it twice.
 #pragma once
 #include "scene/scene.h"
+#include "sh/cubemap.h"
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -12,6 +14,22 @@
 #include <vector>
 
 namespace shprobe {
+
+// Indices picked with probability proportional to their weights (an index of weight 0, or of a weight
+// that is not finite, never).
+class DiscreteDistribution {
+  public:
+    explicit DiscreteDistribution(const std::vector<double>& weights);
+    bool empty() const { return picked_.empty(); }
+    // The index for a number uniform in [0, 1).
+    uint32_t pick(double u) const;
+    double probability(uint32_t index) const { return probabilities_[index]; }
+
+  private:
+    std::vector<uint32_t> picked_;      // the indices of positive weight
+    std::vector<double> cumulative_;    // their probabilities' running sums, the last one 1
+    std::vector<double> probabilities_; // per index
+};
 
 // A point on an emissive triangle and its probability density per unit area.
 struct EmitterPoint {
@@ -35,9 +53,31 @@ class EmitterSampler {
 
   private:
     const World* world_;
-    std::vector<uint32_t> triangles_;   // the emissive ones
-    std::vector<double> cumulative_;    // their weights' running sums, the last one 1
-    std::vector<double> areaDensities_; // per World triangle
+    DiscreteDistribution triangles_;
+};
+
+// A direction towards the sky and its probability density per unit solid angle.
+struct SkyDirection {
+    glm::dvec3 direction{0.0};
+    double density = 0.0;
+};
+
+// A texel of a sky cube map is picked with probability proportional to its largest channel times
+// its solid angle, and a point uniformly in it on its face: the density per solid angle is then
+// that probability times (N / 2)^2 (1 + a^2 + b^2)^(3/2) at face point (a, b), the second factor the
+// area a unit solid angle covers on the face. Texels read as SceneShading::skyRadiance reads them.
+class SkySampler {
+  public:
+    explicit SkySampler(const Cubemap& sky);
+    bool empty() const { return texels_.empty(); }
+    // The direction for three numbers uniform in [0, 1).
+    SkyDirection sample(double u0, double u1, double u2) const;
+    // sample()'s density per unit solid angle at `direction` (unit): 0 towards a black texel.
+    double density(const glm::dvec3& direction) const;
+
+  private:
+    int faceSize_ = 0;
+    DiscreteDistribution texels_; // face after face, rows top to bottom
 };
 
 // The power heuristic's weight (exponent 2) of a sample drawn with density `chosen` where another

@@ -50,14 +50,23 @@ class ProbePaths {
     // The probe ray whose path is traced next.
     void startRay(uint32_t ray) { ray_ = ray; }
     // The unit square's point for that path's bounce `level` (0: the first) direction.
-    glm::dvec2 bounceDirection(int level) const { return set(3 * level, level > 0); }
+    glm::dvec2 bounceDirection(int level) const { return set(kSetsPerBounce * level, level > 0); }
     // Three numbers for the point on the emitters at bounce `level` (EmitterSampler::sample).
     glm::dvec3 emitterPoint(int level) const {
-        const glm::dvec2 triangle = set(3 * level + 1, true), point = set(3 * level + 2, true);
-        return {triangle.x, point.x, point.y};
+        const glm::dvec2 picks = set(kSetsPerBounce * level + 1, true),
+                         point = set(kSetsPerBounce * level + 2, true);
+        return {picks.x, point.x, point.y};
+    }
+    // Three numbers for the direction towards the sky at bounce `level` (SkySampler::sample).
+    glm::dvec3 skyPoint(int level) const {
+        const glm::dvec2 picks = set(kSetsPerBounce * level + 1, true),
+                         point = set(kSetsPerBounce * level + 3, true);
+        return {picks.y, point.x, point.y};
     }
 
   private:
+    // The direction; the emitter's and the sky texel's picks; the point on the emitter; in the texel.
+    static constexpr int kSetsPerBounce = 4;
     glm::dvec2 set(int use, bool shuffled) const {
         return owenScrambledSobol(ray_, mix64(seed_ + uint64_t(use)), shuffled);
     }
@@ -255,12 +264,13 @@ bool insideGeometry(uint32_t backFaceTexels, int faceSize, double share) {
 struct RayBaker::State {
     State(const World& world, const Cubemap& sky, const RayBakeOptions& bakeOptions)
         : options(bakeOptions), shading(withSuns(world, bakeOptions.skySuns), sky),
-          caster(makeRayCaster(world)), emitters(shading.world()) {}
+          caster(makeRayCaster(world)), emitters(shading.world()), skyDirections(shading.sky()) {}
 
     RayBakeOptions options;
     SceneShading shading;
     std::unique_ptr<RayCaster> caster;
-    EmitterSampler emitters; // for the paths' next-event estimation (BounceLight::Paths)
+    EmitterSampler emitters; // the paths' next-event estimation (BounceLight::Paths)
+    SkySampler skyDirections;
     std::unique_ptr<SurfaceCache> cache;
     StratifiedCosineDirections gatherDirections{1}; // g x g gather rays per point
     int texelSide = 1;                              // s: s x s rays per texel
@@ -278,6 +288,7 @@ struct RayBaker::State {
     double emissionShare(const Meeting& meeting, const glm::dvec3& direction, double cosineDensity) const;
     glm::dvec3 bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
     glm::dvec3 emitterIrradiance(const SurfaceHit& hit, const glm::dvec3& u, uint64_t& rays) const;
+    glm::dvec3 skyIrradiance(const SurfaceHit& hit, const glm::dvec3& u, uint64_t& rays) const;
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
@@ -342,13 +353,18 @@ bool RayBaker::State::occluded(const glm::dvec3& origin, const glm::dvec3& direc
 
 // The radiance arriving at `origin` from `direction` with `bounce` bounces (scene.h): the sky, or
 // what the surface met leaves. `cosineDensity`: the density with which a path's bounce drew
-// `direction`, against which emission met is weighted (emissionShare); none for a probe's or a
-// gather's ray, which count it whole.
+// `direction`, against which the sky or emission met is weighted (the power heuristic against
+// skyIrradiance's and emitterIrradiance's densities); none for a probe's or a gather's ray, which
+// count them whole.
 glm::dvec3 RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction,
                                      ProbePaths* paths, uint64_t& rays, std::optional<double> cosineDensity) {
     ++rays;
     const std::optional<Meeting> meeting = intersect(origin, direction);
-    if (!meeting) return shading.skyRadiance(direction);
+    if (!meeting) {
+        const double share =
+            cosineDensity ? powerHeuristic(*cosineDensity, skyDirections.density(direction)) : 1.0;
+        return share * shading.skyRadiance(direction);
+    }
     const double share = cosineDensity ? emissionShare(*meeting, direction, *cosineDensity) : 1.0;
     return leaving(bounce, meeting->surface, paths, rays, share);
 }
@@ -378,7 +394,8 @@ double RayBaker::State::emissionShare(const Meeting& meeting, const glm::dvec3& 
 
 // E_bounce at a hit: the cache's, interpolated, or a path's: pi times the radiance of bounce - 1
 // along one cosine-distributed direction (the cosine density cancels the cosine), and the emitters'
-// light by a point sampled on them, the two weighted by the power heuristic.
+// and the sky's light by a point sampled on them and a direction sampled towards it, each weighted
+// against the cosine ray by the power heuristic.
 glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths,
                                               uint64_t& rays) {
     if (options.bounceLight == BounceLight::Cache)
@@ -386,7 +403,9 @@ glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit,
     const glm::dvec2 u = paths->bounceDirection(options.bounces - bounce);
     const glm::dvec3 direction = cosineDirection(hit.shadingNormal, u.x, u.y);
     const double density = std::max(glm::dot(hit.shadingNormal, direction), 0.0) * std::numbers::inv_pi;
-    return emitterIrradiance(hit, paths->emitterPoint(options.bounces - bounce), rays) +
+    const int level = options.bounces - bounce;
+    return emitterIrradiance(hit, paths->emitterPoint(level), rays) +
+           skyIrradiance(hit, paths->skyPoint(level), rays) +
            std::numbers::pi * arriving(bounce - 1, hit.rayOrigin, direction, paths, rays, density);
 }
 
@@ -411,6 +430,20 @@ glm::dvec3 RayBaker::State::emitterIrradiance(const SurfaceHit& hit, const glm::
     if (caster->anyHit({glm::vec3(hit.rayOrigin), glm::vec3(direction), 0.0f, reach})) return glm::dvec3(0.0);
     const double density = point.areaDensity * distance * distance / lightCosine;
     return light.emission * (cosine / density * powerHeuristic(density, cosine * std::numbers::inv_pi));
+}
+
+// The sky's irradiance at a hit from one direction sampled towards its bright texels (SkySampler),
+// seen by a shadow ray: L max(0, n.w) / p(w), weighted by the power heuristic against the cosine
+// rays' density.
+glm::dvec3 RayBaker::State::skyIrradiance(const SurfaceHit& hit, const glm::dvec3& u, uint64_t& rays) const {
+    if (skyDirections.empty()) return glm::dvec3(0.0);
+    const SkyDirection sky = skyDirections.sample(u.x, u.y, u.z);
+    const double cosine = glm::dot(hit.shadingNormal, sky.direction);
+    if (!(cosine > 0.0)) return glm::dvec3(0.0);
+    ++rays;
+    if (occluded(hit.rayOrigin, sky.direction)) return glm::dvec3(0.0);
+    return shading.skyRadiance(sky.direction) *
+           (cosine / sky.density * powerHeuristic(sky.density, cosine * std::numbers::inv_pi));
 }
 
 // A segment between two points just off the surfaces, counted as a cache ray.

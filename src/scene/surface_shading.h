@@ -65,6 +65,7 @@ class SceneShading {
     glm::dvec3 skyRadiance(const glm::dvec3& direction) const;
 
     const World& world() const { return world_; }
+    const Cubemap& sky() const { return sky_; }
     std::span<const SceneSun> suns() const { return world_.suns; }
     // The triangles of non-zero area: the others cover no solid angle and have no normal.
     std::span<const uint32_t> solidTriangles() const { return solidTriangles_; }
