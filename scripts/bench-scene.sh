@@ -5,7 +5,8 @@
 # on 1,000 and 10,000 probes at faces 32^2, bounce 0, in a Cornell box (36 triangles, written here)
 # and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels) and in ten
 # of it (1,214,960 triangles, cpu and reference: the cost per probe against the triangles); then one
-# bounce at 4^3 probes (each backend's defaults against the reference's); then relighting a 32^3
+# bounce at 4^3 probes (each backend's defaults, the cpu's bounces from its cache and by paths, against
+# the reference's); then relighting a 32^3
 # volume baked with its transfer, and transfer vectors per second of `shprobe transfer` on both
 # backends in the Cornell box and the engine.
 # Whole processes, timed by GNU time with their peak memory; memory per probe is the difference of
@@ -154,8 +155,10 @@ for scene in "$work/cornell.gltf" "$engine"; do
     name=$(basename "$scene" | sed 's/\..*//')
     run "gpu, 1 bounce: $name" 64 "$build/shprobe" scene "$scene" --grid 4,4,4 --bounces 1 --backend gpu -q \
         -o "$work/gpu.shpv"
-    run "cpu, 1 bounce: $name" 64 "$build/shprobe" scene "$scene" --grid 4,4,4 --bounces 1 --backend cpu -q \
-        -o "$work/cpu.shpv"
+    for light in cache paths; do
+        run "cpu, 1 bounce ($light): $name" 64 "$build/shprobe" scene "$scene" --grid 4,4,4 --bounces 1 \
+            --backend cpu --bounce-light "$light" -q -o "$work/cpu.shpv"
+    done
     run "reference, 1 bounce: $name" 64 "$build/shprobe-reference" "$scene" --grid 4,4,4 --bounces 1 -q \
         -o "$work/reference.shpv"
 done

@@ -246,7 +246,7 @@ TEST(RayBake, CornellBoxApproachesThePathTracer) {
 // path tracer at 262,144 directions (standard error of L00 up to 0.58% of the mean). Measured (mean /
 // worst L00 error, worst coefficient): bounce 1 0.37% / 1.5% / 1.7%, bounce 2 0.39% / 1.4% / 1.7%,
 // where the cache leaves 5.1% worst at bounce 1. Now (the paths' numbers Owen-scrambled Sobol'):
-// 0.39% / 1.3% / 1.5% and 0.38% / 1.4% / 1.4%. Bounds: the 0.5% mean and 2% worst asked of a bake.
+// 0.39% / 1.3% / 1.5% and 0.38% / 1.4% / 1.5%. Bounds: the 0.5% mean and 2% worst asked of a bake.
 TEST(RayBake, CornellBoxBouncesByPathsApproachThePathTracer) {
     for (int bounces : {1, 2}) {
         const Agreement agreement =
