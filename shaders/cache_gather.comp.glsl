@@ -36,19 +36,6 @@ float uniformAt(uint key) {
     return float(pcgHash(key) >> 8u) * (1.0 / 16777216.0);
 }
 
-// A cosine-distributed direction about unit n (scene/sampling.h cosineDirection): the frame of
-// Duff et al., "Building an Orthonormal Basis, Revisited" (2017), and Malley's method.
-vec3 cosineDirection(vec3 n, float u1, float u2) {
-    float sign = n.z >= 0.0 ? 1.0 : -1.0;
-    float a = -1.0 / (sign + n.z);
-    float b = n.x * n.y * a;
-    vec3 t = vec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-    vec3 bitangent = vec3(b, sign + n.y * n.y * a, -n.y);
-    float r = sqrt(u1);
-    float phi = 6.28318530717959 * u2;
-    return normalize(r * cos(phi) * t + r * sin(phi) * bitangent + sqrt(max(0.0, 1.0 - u1)) * n);
-}
-
 void main() {
     uint g = rc.work.w;
     for (uint k = gl_GlobalInvocationID.x; k < rc.work.x; k += gl_NumWorkGroups.x * gl_WorkGroupSize.x) {

@@ -3,25 +3,27 @@
 // s x s rays from the probe (scene/view_rays.h: through its centre where s is 1, the directions of
 // sh/cubemap.h as the raster capture sees them; else one jittered in each stratum, the cpu's rays),
 // alpha SHPROBE_CAPTURE_BACK_FACE where most of them met the back of a one-sided material, as
-// capture.frag writes it for recordProbeBake and count_back_faces.comp.
+// capture.frag writes it for recordProbeBake and count_back_faces.comp. Bounces come from the cache,
+// or from each ray's hit continued as a path (ray_paths.glsl).
 //
-//   set 0: ray_capture_interface.h; SHPROBE_RAYS_INPUT: vec4 probes[] (xyz: position);
+//   set 0: ray_capture_interface.h; SHPROBE_RAYS_INPUT: RayProbe probes[];
 //          SHPROBE_RAYS_OUTPUT: rgba32f image2DArray, 6 layers per probe, in GENERAL;
 //          SHPROBE_RAYS_DISTANCES: float distances[], each ray's hit distance, negative for a back
-//          face of a one-sided material (visibility maps, relocation)
+//          face of a one-sided material (visibility maps, relocation); SHPROBE_RAYS_EMITTERS and
+//          SHPROBE_RAYS_EMITTER_DENSITIES: the paths' emitters
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce;
-//          work.w: s; seed.zw: the view's stream base)
+//          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths, emitters, R2 step)
 //   specialization: 0 = workgroup width; dispatch (texel groups, probes, 1): each invocation takes
 //   texels x, x + width * groups, ... of probe y.
 #extension GL_GOOGLE_include_directive : require
 #include "gpu_interface.h"
 #include "random_words.h"
-#include "ray_shading.glsl"
+#include "ray_paths.glsl"
 #include "texel_geometry.h"
 
 layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
 layout(std430, set = 0, binding = SHPROBE_RAYS_INPUT) readonly buffer Probes {
-    vec4 probes[];
+    RayProbe probes[];
 };
 layout(set = 0, binding = SHPROBE_RAYS_OUTPUT, rgba32f) uniform writeonly image2DArray cubemaps;
 layout(std430, set = 0, binding = SHPROBE_RAYS_DISTANCES) writeonly buffer Distances {
@@ -34,12 +36,14 @@ void main() {
     uint n = rc.sizes.x;
     uint s = rc.work.w;
     uint faceTexels = n * n;
+    RayProbe at = probes[probe];
     for (uint texel = gl_GlobalInvocationID.x; texel < 6u * faceTexels; texel += gl_NumWorkGroups.x * gl_WorkGroupSize.x) {
         uint face = texel / faceTexels;
         uint i = texel % faceTexels % n;
         uint j = texel % faceTexels / n;
         uvec2 stream = mix64Words(add64(rc.seed.zw, uvec2(texel, 0u)));
-        uint ray = (6u * faceTexels * probe + texel) * s * s;
+        uint viewRay = texel * s * s; // the ray's index in the probe's view (scene/view_rays.h's order)
+        uint firstRay = 6u * faceTexels * s * s * probe;
         vec3 sum = vec3(0.0);
         uint backFaces = 0u;
         for (uint sb = 0u; sb < s; ++sb) {
@@ -48,10 +52,12 @@ void main() {
                 float jb = s == 1u ? 0.5 : nextRandom(stream);
                 vec3 direction = normalize(unnormalizedFaceDirection(face, stratumCoord(i, sa, s, ja, n),
                                                                      stratumCoord(j, sb, s, jb, n)));
-                RayArrival arrival = arriving(probes[probe].xyz, direction, rc.work.z != 0u);
+                PathRandom random = probeRayRandom(at.paths, viewRay);
+                RayArrival arrival = rc.paths.x > 0u ? pathArriving(at.position.xyz, direction, random)
+                                                     : arriving(at.position.xyz, direction, rc.work.z != 0u);
                 sum += arrival.radiance;
                 backFaces += arrival.backFace ? 1u : 0u;
-                distances[ray++] = arrival.backFace ? -arrival.distance : arrival.distance;
+                distances[firstRay + viewRay++] = arrival.backFace ? -arrival.distance : arrival.distance;
             }
         }
         bool mostlyBack = 2u * backFaces > s * s;

@@ -108,7 +108,8 @@ TEST_F(SceneCommand, InfoSaysWhatAutoRuns) {
     }
 }
 
-// On the gpu backend a brick bakes every bounce of its probes, the surface cache gathered whole:
+// On the gpu backend a brick bakes every bounce of its probes, the surface cache gathered whole
+// (--bounce-light cache: auto takes paths for so few probes, GpuBricksByPathsMergeToTheWholeBake):
 // bounce 0 in three bricks, merged, must be the whole bounce-0 bake byte for byte (each probe's
 // capture and bake do not depend on which probes share its batch); so must bounce 1 in bricks after
 // the merged bounce 0 (--previous), against the whole --bounces 1 bake.
@@ -117,8 +118,8 @@ TEST_F(SceneCommand, InfoSaysWhatAutoRuns) {
 TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
     const std::string scene = cornellBox();
     const std::vector<std::string> common{
-        "scene", scene,       "--grid", "3,3,3", "--face-size", "16", "--probes-per-batch",
-        "4",     "--backend", "gpu",    "-q"};
+        "scene", scene,       "--grid", "3,3,3", "--face-size",    "16",   "--probes-per-batch",
+        "4",     "--backend", "gpu",    "-q",    "--bounce-light", "cache"};
     auto bake = [&](const std::vector<std::string>& extra, const std::string& output) {
         runWithOutput(common, extra, output);
     };
@@ -152,6 +153,36 @@ TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
         if (!zero.valid[p]) continue; // inside an inner block
         EXPECT_GT(one.radiance[p * 9].g, zero.radiance[p * 9].g) << "probe " << p;
     }
+}
+
+// On the gpu backend bounces by paths (--bounce-light paths) name each probe's random numbers by its
+// place in the world: bricks of a two-bounce bake merge to the whole bake byte for byte, the volume
+// records the bounce light, and the report says it. For this grid (27 probes of 6 x 8^2 rays against
+// the cache's thousands of points of 64 rays) auto takes paths too, the same bytes.
+TEST_F(SceneCommand, GpuBricksByPathsMergeToTheWholeBake) {
+    const std::string scene = cornellBox();
+    const std::vector<std::string> common{
+        "scene",     scene, "--grid",    "3,3,3", "--face-size",        "8",
+        "--bounces", "2",   "--backend", "gpu",   "--probes-per-batch", "4"};
+    std::vector<std::string> reported = common;
+    reported.insert(reported.end(), {"--bounce-light", "paths", "-o", file("whole.shpv")});
+    const RunResult whole = runOk(reported);
+    EXPECT_CONTAINS(whole.out, "bounces by paths from the probes' hits");
+    std::vector<std::string> merge{"merge"};
+    for (const char* brick : {"1/2", "0/2"}) {
+        const std::string name = file(std::string("b_") + brick[0] + ".shpv");
+        runWithOutput(common, {"--brick", brick, "--bounce-light", "paths", "-q"}, name);
+        merge.push_back(name);
+    }
+    merge.insert(merge.end(), {"-o", file("merged.shpv")});
+    runOk(merge);
+    EXPECT_EQ(bytesOf(file("merged.shpv")), bytesOf(file("whole.shpv")));
+    runWithOutput(common, {"-q"}, file("auto.shpv"));
+    EXPECT_EQ(bytesOf(file("auto.shpv")), bytesOf(file("whole.shpv")));
+    const ProbeVolume volume = readProbeVolume(file("whole.shpv"));
+    EXPECT_EQ(volume.bounces, 2);
+    EXPECT_CONTAINS(volume.settings, "\"bounce_light\":\"paths\"");
+    EXPECT_CONTAINS(volume.settings, "\"backend\":\"gpu\"");
 }
 
 // On the cpu backend every run bakes all bounces of its probes, the surfaces' cache gathered where

@@ -120,7 +120,7 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                    0, kMaxCacheRefinement);
     command
         .add_option("--bounce-light", options.bounceLight,
-                    "cpu: where a surface's bounced light comes from: the cache of surface points, "
+                    "Where a surface's bounced light comes from: the cache of surface points, "
                     "or a path from each probe ray's hit; auto: whichever casts fewer rays for the "
                     "grid (paths for small grids)")
         ->check(CLI::IsMember({"auto", "cache", "paths"}))
@@ -220,13 +220,23 @@ const char* bounceLightName(BounceLight light) {
     return light == BounceLight::Paths ? "paths" : "cache";
 }
 
-// The cpu's options; auto's bounce light is the cache where refinement asks for it, else whichever
-// casts fewer rays for the whole grid (not the brick's probes, so that bricks agree).
+// The bounce light of either backend; auto's is the cache where refinement asks for it, else
+// whichever casts fewer rays for the whole grid (not the brick's probes, so that bricks agree) with
+// the backend's rays per texel.
+BounceLight chosenBounceLight(const SceneOptions& options, const ProbeGrid& grid, const World& world,
+                              bool gpu) {
+    if (options.bounceLight != "auto")
+        return options.bounceLight == "paths" ? BounceLight::Paths : BounceLight::Cache;
+    if (options.cacheRefinement > 0) return BounceLight::Cache;
+    RayBakeOptions rays = rayOptionsAsked(options, grid);
+    rays.raysPerTexel = raysPerTexel(options, gpu);
+    return cheaperBounceLight(world, rays, grid.probeCount());
+}
+
+// The cpu's options.
 RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid, const World& world) {
     RayBakeOptions rays = rayOptionsAsked(options, grid);
-    if (options.bounceLight == "paths") rays.bounceLight = BounceLight::Paths;
-    if (options.bounceLight == "auto" && options.cacheRefinement == 0)
-        rays.bounceLight = cheaperBounceLight(world, rays, grid.probeCount());
+    rays.bounceLight = chosenBounceLight(options, grid, world, false);
     return rays;
 }
 
@@ -247,8 +257,9 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
         if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
         if (options.transfer) settings["transfer"] = true;
         if (options.probeDirections != "texels") settings["probe_directions"] = options.probeDirections;
-        if (options.bounces > 0) settings["bounce_light"] = bounceLightName(bounceLight);
     }
+    // The gpu's at bounce 0 too: a --previous bounce continues it with the same settings.
+    if (options.bounces > 0 || backend == "gpu") settings["bounce_light"] = bounceLightName(bounceLight);
     return settings.dump();
 }
 
@@ -308,8 +319,6 @@ CpuOnly cpuOnlyOption(const SceneOptions& options) {
         return {"--cache-refinement", "the gpu gathers every lattice point, unrefined"};
     if (options.probeDirections != "texels")
         return {"--probe-directions sphere", "the gpu captures through texels"};
-    if (options.bounceLight == "paths")
-        return {"--bounce-light paths", "the gpu gathers bounces in the cache"};
     return {};
 }
 
@@ -355,12 +364,12 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
 
 // Every bounce of probes [range.begin, range.end) by rays on the GPU, as the cpu backend bakes
 // them (the sky's sun taken out as a sun, the sky averaged to the rays' footprints), the cache
-// gathered whole: a brick is exactly its part of the whole bake. Probes still inside geometry are
-// filled as the cpu fills them (dilateInvalidProbes), the counts in `report`. After --previous, the
-// bounce after that volume's.
+// gathered whole or bounces by paths (`bounceLight`): a brick is exactly its part of the whole
+// bake. Probes still inside geometry are filled as the cpu fills them (dilateInvalidProbes), the
+// counts in `report`. After --previous, the bounce after that volume's.
 ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environment& sky,
                       const SceneOptions& options, const ProbeGrid& grid, ProbeRange range,
-                      const std::string& settings, VolumeBakeReport& report) {
+                      BounceLight bounceLight, const std::string& settings, VolumeBakeReport& report) {
     const int bounces = options.previous.empty()
                             ? options.bounces
                             : readPreviousBounce(options, grid, world, settings).bounces + 1;
@@ -377,7 +386,8 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
                                         .cacheSpacing = options.cacheSpacing,
                                         .gatherRays = options.gatherRays,
                                         .relocation = rayOptionsAsked(options, grid).relocation,
-                                        .skySuns = split.suns});
+                                        .skySuns = split.suns,
+                                        .bounceLight = bounceLight});
     ScopeExit releaseRays([&] { destroyRayCapture(context, rays); });
     const SceneBakeOptions bakeOptions{.order = options.order, .probesPerBatch = options.probesPerBatch};
     std::vector<SceneProbe> probes =
@@ -428,11 +438,12 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
         throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason + "), where " +
                                           asked.gpu + "; " + asked.option + " is for the cpu backend");
     const RayBakeOptions cpuOptions = rayBakeOptions(options, grid, world);
-    const std::string settings = bakeSettings(options, backend.name, sky, cpuOptions.bounceLight);
+    const BounceLight bounceLight = chosenBounceLight(options, grid, world, backend.context.has_value());
+    const std::string settings = bakeSettings(options, backend.name, sky, bounceLight);
     VolumeBakeReport rays;
-    ProbeVolume volume = backend.context
-                             ? bakeOnGpu(*backend.context, world, sky, options, grid, range, settings, rays)
-                             : bakeByRays(world, sky, options, cpuOptions, grid, range, rays);
+    ProbeVolume volume = backend.context ? bakeOnGpu(*backend.context, world, sky, options, grid, range,
+                                                     bounceLight, settings, rays)
+                                         : bakeByRays(world, sky, options, cpuOptions, grid, range, rays);
     volume.source = world.description;
     volume.sourceHash = gltfSceneHash(options.scene);
     volume.settings = settings;
@@ -458,13 +469,15 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     std::printf("invalid  %zu inside geometry (more than %g of their view is back faces)\n",
                 inside + rays.relocated, options.invalidBackFaces);
     const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
+    const char* byPaths = "bounces by paths from the probes' hits";
     if (backend.context) {
-        std::printf("backend  gpu: %s%s: rays, %d per texel, every cache point gathered\n",
-                    backend.context->info.name.c_str(), reason.c_str(), raysPerTexel(options, true));
+        std::printf("backend  gpu: %s%s: rays, %d per texel, %s\n", backend.context->info.name.c_str(),
+                    reason.c_str(), raysPerTexel(options, true),
+                    bounceLight == BounceLight::Paths ? byPaths : "every cache point gathered");
     } else {
         const std::string bounced =
-            cpuOptions.bounceLight == BounceLight::Paths
-                ? std::string("bounces by paths from the probes' hits")
+            bounceLight == BounceLight::Paths
+                ? std::string(byPaths)
                 : counted(rays.counts.cachePoints, "cache point") + " (" +
                       counted(rays.counts.halvedCells, "cell halved", "cells halved") + ")";
         std::printf("backend  cpu: rays by Embree, %d per texel%s, %s%s\n", raysPerTexel(options, false),

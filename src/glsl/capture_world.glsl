@@ -68,12 +68,19 @@ vec3 textureColor(float index, vec2 uv) {
     return mix(top, bottom, f.y);
 }
 
+// A material's albedo and emission at texture coordinate uv.
+vec3 surfaceAlbedo(CaptureMaterial material, vec2 uv) {
+    return material.albedo.rgb * textureColor(material.albedo.w, uv);
+}
+vec3 surfaceEmission(CaptureMaterial material, vec2 uv) {
+    return material.emission.rgb * textureColor(material.emission.w, uv);
+}
+
 // What a front face leaves (scene/scene.h): its emission, plus the irradiance it receives
 // reflected by its albedo (Lambert: albedo / pi); both at texture coordinate uv.
 vec3 surfaceLeaving(CaptureMaterial material, vec2 uv, vec3 irradiance) {
-    vec3 albedo = material.albedo.rgb * textureColor(material.albedo.w, uv);
-    vec3 emission = material.emission.rgb * textureColor(material.emission.w, uv);
-    return emission + albedo * (1.0 / 3.14159265358979) * irradiance;
+    vec3 reflected = surfaceAlbedo(material, uv) * (1.0 / 3.14159265358979) * irradiance;
+    return surfaceEmission(material, uv) + reflected;
 }
 
 #endif

@@ -2,7 +2,8 @@
 // by C++ and GLSL. Set 0 holds the scene capture's bindings (capture_interface.h, 0 to 9), then the
 // scene's hierarchy (bvh_interface.h), the surface cache's lattices and the cache a pass reads, then
 // what each module reads and writes of its own. The transport is src/scene/scene.h's, with bounces
-// gathered at the surfaces as the cpu backend gathers them (scene/ray_bake.h, scene/surface_cache.h).
+// gathered at the surfaces as the cpu backend gathers them (scene/ray_bake.h, scene/surface_cache.h),
+// or continued as paths from the probes' hits (BounceLight::Paths).
 #ifndef SHPROBE_RAY_CAPTURE_INTERFACE_H
 #define SHPROBE_RAY_CAPTURE_INTERFACE_H
 #include "shared.h"
@@ -15,7 +16,7 @@
 #define SHPROBE_RAYS_LATTICES 13
 // vec4[]: the irradiance (rgb) of each cache point, as read.
 #define SHPROBE_RAYS_CACHE 14
-// capture_rays: vec4[], the probes' positions; cache_gather: CacheGatherPoint[].
+// capture_rays: RayProbe[]; cache_gather: CacheGatherPoint[].
 #define SHPROBE_RAYS_INPUT 15
 // capture_rays: the rgba32f 2D-array image of 6 layers per probe; cache_gather: vec4[], the
 // irradiance gathered per point.
@@ -26,6 +27,14 @@
 // one-sided material), probe p's 6 N^2 texels from 6 N^2 p, faces and rows in order, each texel's
 // s^2 rays from s^2 times its index, strata row by row (scene/view_rays.h).
 #define SHPROBE_RAYS_DISTANCES 17
+// capture_rays: EmitterTriangle[], the emissive triangles the paths' next-event estimation picks
+// from (scene/emitters.h EmitterSampler), in its order.
+#define SHPROBE_RAYS_EMITTERS 18
+// capture_rays: float[], per World triangle, the density per unit area of the emitters' points on it
+// (EmitterSampler::areaDensity; 0: never picked).
+#define SHPROBE_RAYS_EMITTER_DENSITIES 19
+// The bindings of capture_rays.
+#define SHPROBE_RAYS_PROBE_BINDINGS 20
 
 SHPROBE_BEGIN
 
@@ -43,6 +52,19 @@ struct CacheGatherPoint {
     vec4 normal; // xyz: unit, on the point's side
 };
 
+// A probe capture_rays captures: where, and the start of its paths (scene/probe_paths.h ProbePaths):
+// its stream's state before the next draw, and the R2 sequence's shift in 32-bit fixed point.
+struct RayProbe {
+    vec4 position; // xyz
+    uvec4 paths;   // xy: the stream state's words (low, high); zw: the shift, times 2^32
+};
+
+// An emissive triangle and the running sum of the emitters' weights up to it (EmitterSampler).
+struct EmitterTriangle {
+    uint triangle; // the World's index
+    float cumulative;
+};
+
 // Push constants of both modules.
 struct RayCaptureConstants {
     uvec4 sizes; // x: probe face size N; y: sky face size; z: sun count; w: BVH node count
@@ -52,6 +74,8 @@ struct RayCaptureConstants {
     vec4 scale;  // x: how far leaving rays start off a surface (scene/surface_shading.h offset())
     uvec4 seed;  // x: the random numbers' seed; y: the bounce gathered; zw: the words (low, high)
                  // of the probes' view stream base (scene/view_rays.h viewStreamBase)
+    uvec4 paths; // capture_rays: x: the bounces continued as paths from each ray's hit (0: none, the
+                 // cache's if work.z); y: emitter triangles; zw: the R2 sequence's step, times 2^32
 };
 
 SHPROBE_END
@@ -59,7 +83,9 @@ SHPROBE_END
 #ifdef __cplusplus
 static_assert(sizeof(shprobe::glsl::CacheLattice) == 16);
 static_assert(sizeof(shprobe::glsl::CacheGatherPoint) == 32);
-static_assert(sizeof(shprobe::glsl::RayCaptureConstants) == 64);
+static_assert(sizeof(shprobe::glsl::RayProbe) == 32);
+static_assert(sizeof(shprobe::glsl::EmitterTriangle) == 8);
+static_assert(sizeof(shprobe::glsl::RayCaptureConstants) == 80);
 #endif
 
 #endif

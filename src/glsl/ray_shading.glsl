@@ -84,34 +84,69 @@ struct RayArrival {
     float distance;
 };
 
+// A triangle's point at barycentrics (u, v), seen along `direction` (scene/surface_shading.cpp
+// describe): its material, geometric and shading normals on the side seen, texture coordinate, and
+// where the rays that leave it start.
+struct RaySurface {
+    CaptureMaterial material;
+    vec3 normal;
+    vec3 shading;
+    vec2 uv;
+    vec3 leaving;
+    bool front;
+};
+
+// Whether the ray met the back of a one-sided material, which leaves nothing.
+bool oneSidedBack(RaySurface surface) {
+    return !surface.front && surface.material.sides.x < 0.5;
+}
+
+RaySurface describeSurface(uint triangle, vec2 barycentric, vec3 direction) {
+    uint corner0 = indices[3u * triangle], corner1 = indices[3u * triangle + 1u],
+         corner2 = indices[3u * triangle + 2u];
+    CaptureVertex v0 = vertices[corner0], v1 = vertices[corner1], v2 = vertices[corner2];
+    vec3 normal = normalize(cross(v1.positionU.xyz - v0.positionU.xyz, v2.positionU.xyz - v0.positionU.xyz));
+    bool front = dot(normal, direction) < 0.0;
+    float side = front ? 1.0 : -1.0;
+    CaptureMaterial material = materials[triangleMaterials[triangle]];
+    vec3 weights = vec3(1.0 - barycentric.x - barycentric.y, barycentric);
+    vec3 position = weights.x * v0.positionU.xyz + weights.y * v1.positionU.xyz + weights.z * v2.positionU.xyz;
+    vec3 interpolated = weights.x * v0.normalV.xyz + weights.y * v1.normalV.xyz + weights.z * v2.normalV.xyz;
+    vec2 uv = weights.x * vec2(v0.positionU.w, v0.normalV.w) + weights.y * vec2(v1.positionU.w, v1.normalV.w) +
+              weights.z * vec2(v2.positionU.w, v2.normalV.w);
+    // Leaving rays start from the point moved off the surface and back along the ray: a ray through a
+    // texel centre may meet a room's corner exactly, on both walls' planes, and a point moved off one
+    // of them alone lies on the other, where rounding (the scene's scale) decides whether its shadow
+    // ray leaves the room.
+    vec3 shading = side * (length(interpolated) > 0.0 ? normalize(interpolated) : normal);
+    return RaySurface(material, side * normal, shading, uv, position + rc.scale.x * (side * normal - direction),
+                      front);
+}
+
 // The radiance arriving at `origin` from unit `direction`, the surfaces reflecting the cached
 // bounce when `cached` (the cache holds it), none otherwise.
 RayArrival arriving(vec3 origin, vec3 direction, bool cached) {
     BvhHit hit;
     if (!bvhClosestHitFrontFirst(rc.sizes.w, origin, direction, 0.0, RAY_FAR, hit))
         return RayArrival(skyTexel(direction, rc.sizes.y), false, RAY_FAR);
-    uint corner0 = indices[3u * hit.triangle], corner1 = indices[3u * hit.triangle + 1u],
-         corner2 = indices[3u * hit.triangle + 2u];
-    CaptureVertex v0 = vertices[corner0], v1 = vertices[corner1], v2 = vertices[corner2];
-    vec3 normal = normalize(cross(v1.positionU.xyz - v0.positionU.xyz, v2.positionU.xyz - v0.positionU.xyz));
-    bool front = dot(normal, direction) < 0.0;
-    CaptureMaterial material = materials[triangleMaterials[hit.triangle]];
-    if (!front && material.sides.x < 0.5) return RayArrival(vec3(0.0), true, hit.t);
-    float side = front ? 1.0 : -1.0;
-    vec3 weights = vec3(1.0 - hit.u - hit.v, hit.u, hit.v);
-    vec3 position = weights.x * v0.positionU.xyz + weights.y * v1.positionU.xyz + weights.z * v2.positionU.xyz;
-    vec3 interpolated = weights.x * v0.normalV.xyz + weights.y * v1.normalV.xyz + weights.z * v2.normalV.xyz;
-    vec3 shading = side * (length(interpolated) > 0.0 ? normalize(interpolated) : normal);
-    vec2 uv = weights.x * vec2(v0.positionU.w, v0.normalV.w) + weights.y * vec2(v1.positionU.w, v1.normalV.w) +
-              weights.z * vec2(v2.positionU.w, v2.normalV.w);
-    // Shadow rays leave from the point moved off the surface and back along the ray: a ray through a
-    // texel centre may meet a room's corner exactly, on both walls' planes, and a point moved off one
-    // of them alone lies on the other, where rounding (the scene's scale) decides whether its shadow
-    // ray leaves the room.
-    vec3 leaving = position + rc.scale.x * (side * normal - direction);
-    vec3 irradiance = sunIrradiance(leaving, shading);
-    if (cached) irradiance += cachedIrradiance(hit.triangle, front ? 0u : 1u, vec2(hit.u, hit.v));
-    return RayArrival(surfaceLeaving(material, uv, irradiance), false, hit.t);
+    RaySurface surface = describeSurface(hit.triangle, vec2(hit.u, hit.v), direction);
+    if (oneSidedBack(surface)) return RayArrival(vec3(0.0), true, hit.t);
+    vec3 irradiance = sunIrradiance(surface.leaving, surface.shading);
+    if (cached) irradiance += cachedIrradiance(hit.triangle, surface.front ? 0u : 1u, vec2(hit.u, hit.v));
+    return RayArrival(surfaceLeaving(surface.material, surface.uv, irradiance), false, hit.t);
+}
+
+// A cosine-distributed direction about unit n (scene/sampling.h cosineDirection): the frame of
+// Duff et al., "Building an Orthonormal Basis, Revisited" (2017), and Malley's method.
+vec3 cosineDirection(vec3 n, float u1, float u2) {
+    float sign = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (sign + n.z);
+    float b = n.x * n.y * a;
+    vec3 t = vec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    vec3 bitangent = vec3(b, sign + n.y * n.y * a, -n.y);
+    float r = sqrt(u1);
+    float phi = 6.28318530717959 * u2;
+    return normalize(r * cos(phi) * t + r * sin(phi) * bitangent + sqrt(max(0.0, 1.0 - u1)) * n);
 }
 
 #endif

@@ -6,6 +6,8 @@
 #include "common/scope_exit.h"
 #include "glsl/capture_interface.h"
 #include "glsl/ray_capture_interface.h"
+#include "scene/emitters.h"
+#include "scene/probe_paths.h"
 #include "scene/ray_bake.h"
 #include "scene/surface_cache.h"
 #include "scene/view_rays.h"
@@ -32,6 +34,8 @@ enum RayBuffer : size_t {
     kGatherPoints,
     kCacheA,
     kCacheB,
+    kEmitters,
+    kEmitterDensities,
     kRayBufferCount
 };
 
@@ -80,8 +84,25 @@ CacheLayout layOutCache(const SceneShading& shading, double spacing) {
     return layout;
 }
 
+// The emitters' table (EmitterSampler's) as the paths read it on the device.
+struct EmitterTable {
+    std::vector<glsl::EmitterTriangle> triangles;
+    std::vector<float> densities; // per World triangle
+};
+
+EmitterTable emitterTable(const World& world) {
+    const EmitterSampler sampler(world);
+    EmitterTable table;
+    const DiscreteDistribution& triangles = sampler.triangles();
+    for (size_t k = 0; k < triangles.picked().size(); ++k)
+        table.triangles.push_back({triangles.picked()[k], float(triangles.cumulative()[k])});
+    for (uint32_t t = 0; t < uint32_t(world.triangleCount()); ++t)
+        table.densities.push_back(float(sampler.areaDensity(t)));
+    return table;
+}
+
 ComputeProgram createRayProgram(const Device& device, bool probes) {
-    std::vector<VkDescriptorType> bindings(SHPROBE_RAYS_BINDINGS + (probes ? 1 : 0),
+    std::vector<VkDescriptorType> bindings(probes ? SHPROBE_RAYS_PROBE_BINDINGS : SHPROBE_RAYS_BINDINGS,
                                            VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     if (probes) bindings[SHPROBE_RAYS_OUTPUT] = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
     return createComputeProgram(device,
@@ -111,6 +132,11 @@ std::vector<BindingTarget> rayTargets(const SceneCapture& capture, const RayCapt
     return targets;
 }
 
+// A point of [0, 1)^2 in 32-bit fixed point (times 2^32).
+glm::uvec2 fixedPoint(const glm::dvec2& unit) {
+    return glm::uvec2(glm::u64vec2(unit * 0x1p32));
+}
+
 glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCapture& rays) {
     glsl::RayCaptureConstants constants{};
     constants.sizes = glm::uvec4(uint32_t(capture.options.faceSize), capture.skyFaceSize,
@@ -119,6 +145,9 @@ glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCap
     const uint64_t viewStream = viewStreamBase(rays.options.seed);
     constants.seed =
         glm::uvec4(uint32_t(rays.options.seed), 0u, uint32_t(viewStream), uint32_t(viewStream >> 32));
+    const uint32_t pathBounces = rays.options.bounceLight == BounceLight::Paths ? rays.options.bounces : 0;
+    const glm::uvec2 r2Step = fixedPoint(kR2Step);
+    constants.paths = glm::uvec4(uint32_t(pathBounces), rays.emitters, r2Step.x, r2Step.y);
     return constants;
 }
 
@@ -160,8 +189,8 @@ uint64_t rayDistanceBytes(const SceneCapture& capture, const RayCapture& rays) {
     return sizeof(float) * 6 * n * n * rays.texelSide * rays.texelSide;
 }
 
-// What the probes' program binds for one target: the positions (host-written, one vec4 per probe),
-// the target's image and its texels' hit distances.
+// What the probes' program binds for one target: the probes (host-written, RayProbe), the target's
+// image and its texels' hit distances.
 struct ProbeRaySet {
     Buffer positions;
     Buffer distances;
@@ -180,28 +209,40 @@ ProbeRaySet createProbeRaySet(const Context& context, const SceneCapture& captur
                               const CaptureTarget& target) {
     ProbeRaySet set;
     OnFailure undo([&] { destroyProbeRaySet(context, set); });
-    set.positions = createBuffer(context, sizeof(glm::vec4) * target.probeCount,
+    set.positions = createBuffer(context, sizeof(glsl::RayProbe) * target.probeCount,
                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Upload, "probe positions");
     set.distances = createBuffer(context, rayDistanceBytes(capture, rays) * target.probeCount,
                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "hit distances");
-    set.pool = createDescriptorPool(context,
-                                    {.sets = 1, .storageBuffers = SHPROBE_RAYS_BINDINGS, .storageImages = 1});
+    set.pool = createDescriptorPool(
+        context, {.sets = 1, .storageBuffers = SHPROBE_RAYS_PROBE_BINDINGS, .storageImages = 1});
     std::vector<BindingTarget> targets = rayTargets(
         capture, rays, rays.options.bounces, {set.positions.buffer}, {.imageView = target.cubemaps.view});
     targets.push_back({set.distances.buffer});
+    targets.push_back({rays.buffers[kEmitters].buffer});
+    targets.push_back({rays.buffers[kEmitterDensities].buffer});
     set.set = createDescriptorSet(context, set.pool, rays.probes, targets);
     return set;
+}
+
+// A probe at `position` and the start of its paths, named by its place in the world's box as the
+// cpu names them (RayBaker's viewIndex): the same wherever it is baked, with whichever probes.
+glsl::RayProbe rayProbe(const RayCapture& rays, const glm::dvec3& position) {
+    const DeviceProbePaths paths(rays.options.seed,
+                                 placeIndex(position, glm::dvec3(rays.boundsMin), rays.visibilityRange));
+    const uint64_t state = paths.state();
+    const glm::uvec2 shift = fixedPoint(paths.shift());
+    return {glm::vec4(glm::vec3(position), 1.0f), glm::uvec4(uint32_t(state), uint32_t(state >> 32), shift)};
 }
 
 // The capture of `positions` into layers 6p..6p+5, visible to the bake's reads.
 void recordProbeRays(VkCommandBuffer commands, const SceneCapture& capture, const RayCapture& rays,
                      const ProbeRaySet& set, std::span<const glm::dvec3> positions) {
-    auto* mapped = static_cast<glm::vec4*>(set.positions.mapped);
+    auto* mapped = static_cast<glsl::RayProbe*>(set.positions.mapped);
     for (size_t p = 0; p < positions.size(); ++p)
-        mapped[p] = glm::vec4(glm::vec3(positions[p]), 1.0f);
+        mapped[p] = rayProbe(rays, positions[p]);
     glsl::RayCaptureConstants constants = rayConstants(capture, rays);
-    constants.work =
-        glm::uvec4(uint32_t(positions.size()), 0u, rays.options.bounces > 0 ? 1u : 0u, rays.texelSide);
+    const bool cachedBounce = rays.options.bounces > 0 && rays.options.bounceLight == BounceLight::Cache;
+    constants.work = glm::uvec4(uint32_t(positions.size()), 0u, cachedBounce ? 1u : 0u, rays.texelSide);
     const uint64_t texels = 6 * uint64_t(capture.options.faceSize) * uint64_t(capture.options.faceSize);
     dispatch(commands, rays.probes, set.set, constants, {groupsFor(texels), uint32_t(positions.size())});
     computeWriteBarrier(commands);
@@ -270,9 +311,15 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.gatherSide = uint32_t(std::ceil(std::sqrt(double(options.gatherRays))));
     rays.texelSide = uint32_t(std::ceil(std::sqrt(double(options.raysPerTexel))));
     rays.visibilityRange = visibilityRangeOf(world);
+    rays.boundsMin = world.boundsMin;
+    const bool cached = options.bounceLight == BounceLight::Cache;
     const CacheLayout cache =
-        layOutCache(shading, options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world));
+        cached ? layOutCache(shading,
+                             options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world))
+               : CacheLayout{};
     rays.cachePoints = uint32_t(cache.points.size());
+    const EmitterTable emitters = emitterTable(world);
+    rays.emitters = uint32_t(emitters.triangles.size());
     rays.buffers.resize(kRayBufferCount);
     rays.buffers[kNodes] = createStorage(context, rays.bvh.nodes, "BVH nodes");
     rays.buffers[kTriangles] = createStorage(context, rays.bvh.triangles, "BVH triangles");
@@ -282,6 +329,8 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     const std::vector<glm::vec4> zeros(options.bounces > 0 ? cache.points.size() : 0, glm::vec4(0.0f));
     rays.buffers[kCacheA] = createStorage(context, zeros, "surface cache");
     rays.buffers[kCacheB] = createStorage(context, zeros, "surface cache");
+    rays.buffers[kEmitters] = createStorage(context, emitters.triangles, "emitters");
+    rays.buffers[kEmitterDensities] = createStorage(context, emitters.densities, "emitter densities");
     rays.probes = createRayProgram(context, true);
     rays.gather = createRayProgram(context, false);
     rays.pool = createDescriptorPool(context, {.sets = 2, .storageBuffers = 2 * SHPROBE_RAYS_BINDINGS});
@@ -292,7 +341,7 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
                                                                          {rays.buffers[kGatherPoints].buffer},
                                                                          {rays.buffers[written].buffer}));
     }
-    for (int bounce = 1; bounce <= options.bounces; ++bounce)
+    for (int bounce = 1; cached && bounce <= options.bounces; ++bounce)
         gatherBounce(context, capture, rays, bounce);
     return rays;
 }

@@ -15,6 +15,9 @@
 // without refinement) gathers E_k by g x g stratified cosine rays reading E_{k-1} at their hits
 // (cache_gather.comp), bounce after bounce, when the capture is created. All points are gathered,
 // none lazily, so every probe reads the same cache: a brick is exactly its part of the whole bake.
+// Or, with BounceLight::Paths, no cache: each ray's hit continues as a path, as the cpu's do
+// (glsl/ray_paths.glsl), its random numbers named by the probe's place in the world, so that a
+// probe's result does not depend on the probes baked with it either.
 #pragma once
 #include "gpu/scene_capture.h"
 #include "scene/bvh.h"
@@ -34,12 +37,13 @@ struct RayCaptureOptions {
                                    // s x s: the cpu's jittered rays (RayBakeOptions::raysPerTexel)
     double cacheSpacing = 0.0;     // the largest distance between cache points; 0: defaultCacheSpacing
     int gatherRays = 64;           // per cache point and bounce, rounded up to a square (g x g strata)
-    uint64_t seed = 1;             // of the gather's random numbers
+    uint64_t seed = 1;             // of the gather's and the paths' random numbers
     int visibilitySize = 16;       // each probe's visibility map (RayBakedProbe's): size x size
                                    // octahedral texels of its rays' hit distances; 0: none
     ProbeRelocation relocation;    // probes inside geometry moved out as the cpu moves them
     std::vector<SceneSun> skySuns; // suns taken out of the sky (RayBakeOptions::skySuns): a probe
                                    // that sees one adds its delta; the capture's world lights with them
+    BounceLight bounceLight = BounceLight::Cache; // where the bounces come from (RayBakeOptions's)
 };
 
 // The hierarchy and the surface cache on the device, with the two compute programs.
@@ -47,20 +51,24 @@ struct RayCapture {
     RayCaptureOptions options;
     Bvh bvh;                      // on the host too: the sky's suns a probe sees
     float surfaceOffset = 0.0f;   // SceneShading::offset()
-    uint32_t cachePoints = 0;     // over all lattices and sides
+    uint32_t cachePoints = 0;     // over all lattices and sides; 0 with paths
+    uint32_t emitters = 0;        // emissive triangles the paths sample (EmitterSampler)
     uint32_t gatherSide = 1;      // g
     uint32_t texelSide = 1;       // s
     double visibilityRange = 1.0; // the farthest distance a visibility map records (visibilityRangeOf)
-    std::vector<Buffer> buffers;  // the hierarchy's three arrays, the lattices, the gather points, two caches
+    glm::vec3 boundsMin{0.0f};    // the world's lower corner, where the probes' paths are named from
+    std::vector<Buffer> buffers;  // the hierarchy's three arrays, the lattices, the gather points, two
+                                  // caches, the emitters and their densities
     ComputeProgram probes;        // capture_rays.comp
     ComputeProgram gather;        // cache_gather.comp
     VkDescriptorPool pool = VK_NULL_HANDLE;
     std::array<VkDescriptorSet, 2> gatherSets{}; // bounce k gathers with set (k - 1) % 2
 };
 
-// Lays out and gathers the cache, options.bounces bounces (submissions of a bounded number of rays
-// each). `shading` is of the world and sky the capture holds. Throws Error(Input) for options out of
-// range, a cache past 2^32 points or buffers past the device's limits.
+// Lays out and gathers the cache, options.bounces bounces, where options.bounceLight asks for it
+// (submissions of a bounded number of rays each). `shading` is of the world and sky the capture
+// holds. Throws Error(Input) for options out of range, a cache past 2^32 points or buffers past the
+// device's limits.
 RayCapture createRayCapture(const Context& context, const SceneCapture& capture, const SceneShading& shading,
                             const RayCaptureOptions& options);
 void destroyRayCapture(const Device& device, RayCapture& rays);

@@ -24,6 +24,9 @@ class DiscreteDistribution {
     // The index for a number uniform in [0, 1).
     uint32_t pick(double u) const;
     double probability(uint32_t index) const { return probabilities_[index]; }
+    // The indices of positive weight, and their probabilities' running sums (the last 1).
+    const std::vector<uint32_t>& picked() const { return picked_; }
+    const std::vector<double>& cumulative() const { return cumulative_; }
 
   private:
     std::vector<uint32_t> picked_;      // the indices of positive weight
@@ -50,6 +53,8 @@ class EmitterSampler {
     EmitterPoint sample(double u0, double u1, double u2) const;
     // The density per unit area of sample()'s points on `triangle`: 0 where it is never picked.
     double areaDensity(uint32_t triangle) const;
+    // The triangles' distribution sample() picks from, for a device that samples as it does.
+    const DiscreteDistribution& triangles() const { return triangles_; }
 
   private:
     const World* world_;

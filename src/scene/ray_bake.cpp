@@ -5,6 +5,7 @@
 #include "common/error.h"
 #include "common/parallel.h"
 #include "scene/emitters.h"
+#include "scene/probe_paths.h"
 #include "scene/ray_caster.h"
 #include "scene/sampling.h"
 #include "scene/surface_cache.h"
@@ -31,9 +32,6 @@
 namespace shprobe {
 
 namespace {
-
-// The stream of a probe's paths, (seed, kProbePathStream, its view's placeIndex): one no view's is.
-constexpr uint64_t kProbePathStream = kSphereViewStream - 1;
 
 // The numbers of a probe's paths (BounceLight::Paths), named by its place in the world: the path of
 // the probe's ray k draws point k of Owen-scrambled Sobol' sets (sampling.h), a set per bounce and
