@@ -230,7 +230,7 @@ BounceLight chosenBounceLight(const SceneOptions& options, const ProbeGrid& grid
     if (options.cacheRefinement > 0) return BounceLight::Cache;
     RayBakeOptions rays = rayOptionsAsked(options, grid);
     rays.raysPerTexel = raysPerTexel(options, gpu);
-    return cheaperBounceLight(world, rays, grid.probeCount());
+    return autoBounceLight(world, rays, grid.probeCount());
 }
 
 // The cpu's options.

@@ -36,7 +36,7 @@ namespace {
 // The numbers of a probe's paths (BounceLight::Paths), named by its place in the world: the path of
 // the probe's ray k draws point k of Owen-scrambled Sobol' sets (sampling.h), a set per bounce and
 // use, scrambled by the probe's own seed. The rays are numbered along a Morton curve over each face
-// (viewRayIndex), so the first bounces of any block of neighbouring rays, which meet nearly the
+// (shadeTexels), so the first bounces of any block of neighbouring rays, which meet nearly the
 // same surface, are stratified over its hemisphere at every scale (Ahmed and Wonka, "Screen-Space
 // Blue-Noise Diffusion of Monte Carlo Sampling Error via Hierarchical Ordering of Pixels", 2020);
 // the other sets are shuffled, so that no two uses draw alike. Each point stays uniform: the
@@ -223,13 +223,14 @@ World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
     return lit;
 }
 
-BounceLight cheaperBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes) {
+BounceLight autoBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes) {
     const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world);
     const int s = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
     const int g = int(std::ceil(std::sqrt(double(options.gatherRays))));
     const double pathRays = double(probes) * kFaceCount * options.faceSize * options.faceSize * s * s;
     const double cacheRays = double(cachePointCount(world, spacing)) * g * g;
-    return pathRays <= cacheRays ? BounceLight::Paths : BounceLight::Cache;
+    constexpr double kCacheShare = 0.25;
+    return cacheRays >= kCacheShare * pathRays ? BounceLight::Paths : BounceLight::Cache;
 }
 
 double defaultCacheSpacing(const World& world) {

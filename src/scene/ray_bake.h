@@ -76,7 +76,7 @@ enum class ProbeDirections { Texels, Sphere };
 // Where the light a surface reflects at bounce k comes from: the irradiance cache on the surfaces
 // (interpolated, gathered once for every probe), or a path from each probe ray's hit, continued in
 // one cosine-distributed direction a bounce (unbiased, paid per probe ray). Which costs fewer rays
-// depends on the grid: cheaperBounceLight.
+// depends on the grid: autoBounceLight chooses.
 enum class BounceLight { Cache, Paths };
 
 struct RayBakeOptions {
@@ -101,10 +101,11 @@ struct RayBakeOptions {
     uint64_t seed = 1;
 };
 
-// Paths where a probe's rays times `probes` (the whole grid's, so that its bricks agree) are no more
-// than the cache's lattice points times their gather rays, else the cache. Either casts that many
-// rays a bounce (with their shadow rays); the cache then reads its points for every probe.
-BounceLight cheaperBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes);
+// Paths unless the cache casts fewer than a quarter of their rays: a probe's rays times `probes` (the
+// whole grid's, so that its bricks agree) against the lattice points times their gather rays, each
+// ray a bounce with its shadow rays. Paths are unbiased where the cache interpolates, and cost about
+// as much per ray (docs/scene-probes.md measures both).
+BounceLight autoBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes);
 
 // Cache points per world diagonal when RayBakeOptions::cacheSpacing is 0.
 constexpr double kDefaultCacheCells = 64.0;
