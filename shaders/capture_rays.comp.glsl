@@ -4,21 +4,24 @@
 // sh/cubemap.h as the raster capture sees them; else one jittered in each stratum, the cpu's rays),
 // alpha SHPROBE_CAPTURE_BACK_FACE where most of them met the back of a one-sided material, as
 // capture.frag writes it for recordProbeBake and count_back_faces.comp. Bounces come from the cache,
-// or from each ray's hit continued as a path (ray_paths.glsl).
+// or from each ray's hit continued as a path (ray_paths.glsl), the paths numbered as the cpu numbers
+// them (scene/ray_bake.cpp shadeTexels): face by face along a Morton curve over the texels, each
+// texel's s^2 rays in a row, so that neighbouring rays' bounces are stratified together.
 //
 //   set 0: ray_capture_interface.h; SHPROBE_RAYS_INPUT: RayProbe probes[];
 //          SHPROBE_RAYS_OUTPUT: rgba32f image2DArray, 6 layers per probe, in GENERAL;
 //          SHPROBE_RAYS_DISTANCES: float distances[], each ray's hit distance, negative for a back
-//          face of a one-sided material (visibility maps, relocation); SHPROBE_RAYS_EMITTERS and
-//          SHPROBE_RAYS_EMITTER_DENSITIES: the paths' emitters
+//          face of a one-sided material (visibility maps, relocation); SHPROBE_RAYS_PICKS and
+//          SHPROBE_RAYS_PICK_DENSITIES: the paths' emitters and sky texels
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce;
-//          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths, emitters, R2 step)
+//          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths and their tables)
 //   specialization: 0 = workgroup width; dispatch (texel groups, probes, 1): each invocation takes
 //   texels x, x + width * groups, ... of probe y.
 #extension GL_GOOGLE_include_directive : require
 #include "gpu_interface.h"
 #include "random_words.h"
 #include "ray_paths.glsl"
+#include "sobol_words.h"
 #include "texel_geometry.h"
 
 layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
@@ -36,6 +39,7 @@ void main() {
     uint n = rc.sizes.x;
     uint s = rc.work.w;
     uint faceTexels = n * n;
+    uint mortonSide = 1u << uint(findMSB(n - 1u) + 1); // bit_ceil(n): a face's Morton codes fit its square
     RayProbe at = probes[probe];
     for (uint texel = gl_GlobalInvocationID.x; texel < 6u * faceTexels; texel += gl_NumWorkGroups.x * gl_WorkGroupSize.x) {
         uint face = texel / faceTexels;
@@ -44,6 +48,7 @@ void main() {
         uvec2 stream = mix64Words(add64(rc.seed.zw, uvec2(texel, 0u)));
         uint viewRay = texel * s * s; // the ray's index in the probe's view (scene/view_rays.h's order)
         uint firstRay = 6u * faceTexels * s * s * probe;
+        uint path = (face * mortonSide * mortonSide + mortonCode(i, j)) * s * s;
         vec3 sum = vec3(0.0);
         uint backFaces = 0u;
         for (uint sb = 0u; sb < s; ++sb) {
@@ -52,8 +57,8 @@ void main() {
                 float jb = s == 1u ? 0.5 : nextRandom(stream);
                 vec3 direction = normalize(unnormalizedFaceDirection(face, stratumCoord(i, sa, s, ja, n),
                                                                      stratumCoord(j, sb, s, jb, n)));
-                PathRandom random = probeRayRandom(at.paths, viewRay);
-                RayArrival arrival = rc.paths.x > 0u ? pathArriving(at.position.xyz, direction, random)
+                PathNumbers numbers = PathNumbers(at.paths.xy, path++);
+                RayArrival arrival = rc.paths.x > 0u ? pathArriving(at.position.xyz, direction, numbers)
                                                      : arriving(at.position.xyz, direction, rc.work.z != 0u);
                 sum += arrival.radiance;
                 backFaces += arrival.backFace ? 1u : 0u;

@@ -31,12 +31,12 @@ layout(std430, set = 0, binding = SHPROBE_CAPTURE_SUNS) readonly buffer Suns {
     CaptureSun suns[];
 };
 
-// The sky texel a direction falls in (faces n x n), no filtering (sh/cubemap.h directionToFace,
-// then the texel holding face-local point (a, b)).
-vec3 skyTexel(vec3 d, uint n) {
+// The index of the sky texel a direction falls in (faces n x n, face after face, rows in order),
+// no filtering, and the face-local point (a, b) in [-1, 1]^2 where it falls (sh/cubemap.h
+// directionToFace, then the texel holding that point).
+uint skyTexelIndex(vec3 d, uint n, out vec2 ab) {
     vec3 m = abs(d);
     uint face;
-    vec2 ab;
     if (m.x >= m.y && m.x >= m.z) {
         face = d.x >= 0.0 ? 0u : 1u;
         ab = d.x >= 0.0 ? vec2(-d.z, -d.y) / m.x : vec2(d.z, -d.y) / m.x;
@@ -48,7 +48,12 @@ vec3 skyTexel(vec3 d, uint n) {
         ab = d.z >= 0.0 ? vec2(d.x, -d.y) / m.z : vec2(-d.x, -d.y) / m.z;
     }
     uvec2 texel = uvec2(clamp(floor((ab + 1.0) * 0.5 * float(n)), 0.0, float(n - 1u)));
-    return sky[(face * n + texel.y) * n + texel.x].rgb;
+    return (face * n + texel.y) * n + texel.x;
+}
+
+vec3 skyTexel(vec3 d, uint n) {
+    vec2 ab;
+    return sky[skyTexelIndex(d, n, ab)].rgb;
 }
 
 // Bilinear with repeat, texel centres at (i + 0.5) / width, row 0 at v = 0 (glTF's default

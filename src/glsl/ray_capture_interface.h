@@ -27,12 +27,14 @@
 // one-sided material), probe p's 6 N^2 texels from 6 N^2 p, faces and rows in order, each texel's
 // s^2 rays from s^2 times its index, strata row by row (scene/view_rays.h).
 #define SHPROBE_RAYS_DISTANCES 17
-// capture_rays: EmitterTriangle[], the emissive triangles the paths' next-event estimation picks
-// from (scene/emitters.h EmitterSampler), in its order.
-#define SHPROBE_RAYS_EMITTERS 18
-// capture_rays: float[], per World triangle, the density per unit area of the emitters' points on it
-// (EmitterSampler::areaDensity; 0: never picked).
-#define SHPROBE_RAYS_EMITTER_DENSITIES 19
+// capture_rays: PickedIndex[], what the paths' next-event estimation picks from: the emissive
+// triangles (scene/emitters.h EmitterSampler; paths.y of them), then the sky's texels (SkySampler;
+// paths.z of them), each in its sampler's order.
+#define SHPROBE_RAYS_PICKS 18
+// capture_rays: float[], per sky texel (6 sizes.y^2 of them, face after face, rows in order) the
+// probability SkySampler picks it with, then per World triangle the density per unit area of the
+// emitters' points on it (EmitterSampler::areaDensity; 0: never picked).
+#define SHPROBE_RAYS_PICK_DENSITIES 19
 // The bindings of capture_rays.
 #define SHPROBE_RAYS_PROBE_BINDINGS 20
 
@@ -52,16 +54,16 @@ struct CacheGatherPoint {
     vec4 normal; // xyz: unit, on the point's side
 };
 
-// A probe capture_rays captures: where, and the start of its paths (scene/probe_paths.h ProbePaths):
-// its stream's state before the next draw, and the R2 sequence's shift in 32-bit fixed point.
+// A probe capture_rays captures: where, and the seed of its paths' Owen-scrambled Sobol' sets
+// (scene/view_rays.h probePathSeed).
 struct RayProbe {
     vec4 position; // xyz
-    uvec4 paths;   // xy: the stream state's words (low, high); zw: the shift, times 2^32
+    uvec4 paths;   // xy: the seed's words (low, high)
 };
 
-// An emissive triangle and the running sum of the emitters' weights up to it (EmitterSampler).
-struct EmitterTriangle {
-    uint triangle; // the World's index
+// An index a sampler picks and the running sum of the probabilities up to it (DiscreteDistribution).
+struct PickedIndex {
+    uint index;
     float cumulative;
 };
 
@@ -75,7 +77,7 @@ struct RayCaptureConstants {
     uvec4 seed;  // x: the random numbers' seed; y: the bounce gathered; zw: the words (low, high)
                  // of the probes' view stream base (scene/view_rays.h viewStreamBase)
     uvec4 paths; // capture_rays: x: the bounces continued as paths from each ray's hit (0: none, the
-                 // cache's if work.z); y: emitter triangles; zw: the R2 sequence's step, times 2^32
+                 // cache's if work.z); y: emitter triangles; z: sky texels picked
 };
 
 SHPROBE_END
@@ -84,7 +86,7 @@ SHPROBE_END
 static_assert(sizeof(shprobe::glsl::CacheLattice) == 16);
 static_assert(sizeof(shprobe::glsl::CacheGatherPoint) == 32);
 static_assert(sizeof(shprobe::glsl::RayProbe) == 32);
-static_assert(sizeof(shprobe::glsl::EmitterTriangle) == 8);
+static_assert(sizeof(shprobe::glsl::PickedIndex) == 8);
 static_assert(sizeof(shprobe::glsl::RayCaptureConstants) == 80);
 #endif
 

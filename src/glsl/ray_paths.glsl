@@ -1,40 +1,60 @@
 // Bounces by paths (scene/ray_bake.cpp, BounceLight::Paths): a probe ray's hit continues in one
-// cosine-distributed direction a bounce, the suns by shadow rays at every hit, and the emissive
-// triangles by a point sampled on them (next-event estimation), weighted against the cosine rays'
-// chance of meeting them by the power heuristic (Veach and Guibas, "Optimally Combining Sampling
-// Techniques for Monte Carlo Rendering", 1995). The first bounce of the view's ray k leaves by point
-// k of the probe's shifted R2 sequence, deeper bounces and the emitters' points by the ray's own
-// stream. Declares capture_rays' emitter bindings (ray_capture_interface.h).
+// cosine-distributed direction a bounce, the suns by shadow rays at every hit, the emissive
+// triangles by a point sampled on them and the sky by a direction sampled towards its bright texels
+// (next-event estimation), each weighted against the cosine rays' chance of meeting the same light
+// by the power heuristic (Veach and Guibas, "Optimally Combining Sampling Techniques for Monte Carlo
+// Rendering", 1995). Every number of a path is the cpu's: point k of the probe's Owen-scrambled
+// Sobol' sets for its view ray k (ProbePaths), to a float's 24 bits. Declares capture_rays'
+// next-event bindings (ray_capture_interface.h).
 #ifndef SHPROBE_RAY_PATHS_GLSL
 #define SHPROBE_RAY_PATHS_GLSL
-#include "random_words.h"
 #include "ray_shading.glsl"
+#include "sobol_words.h"
+#include "texel_geometry.h"
 
-layout(std430, set = 0, binding = SHPROBE_RAYS_EMITTERS) readonly buffer Emitters {
-    EmitterTriangle emitters[];
+layout(std430, set = 0, binding = SHPROBE_RAYS_PICKS) readonly buffer Picks {
+    PickedIndex picks[];
 };
-layout(std430, set = 0, binding = SHPROBE_RAYS_EMITTER_DENSITIES) readonly buffer EmitterDensities {
-    float emitterDensities[];
+layout(std430, set = 0, binding = SHPROBE_RAYS_PICK_DENSITIES) readonly buffer PickDensities {
+    float pickDensities[];
 };
 
 #define INV_PI 0.318309886183791
 
-// The random numbers of one probe ray's path.
-struct PathRandom {
-    uvec2 firstBounce; // the R2 point, times 2^32
-    uvec2 state;       // the ray's stream (random_words.h)
+// The numbers of one probe ray's path (scene/ray_bake.cpp ProbePaths): point `ray` of the
+// Owen-scrambled Sobol' sets named by mix64(seed + use), four uses a bounce level: the direction
+// (shuffled below the first level), the emitter's and the sky texel's picks, the point on the
+// emitter, the point in the texel.
+struct PathNumbers {
+    uvec2 seed; // the probe's (view_rays.h probePathSeed), words (low, high)
+    uint ray;
 };
 
-// View ray k of a probe: point k of its R2 sequence (the step and shift in 32-bit fixed point, so
-// that wrapping sums are the sequence's fractional parts), and a stream of its own, the probe's
-// continued by k as a texel's view stream is.
-PathRandom probeRayRandom(uvec4 probePaths, uint k) {
-    return PathRandom(probePaths.zw + k * rc.paths.zw, mix64Words(add64(probePaths.xy, uvec2(k, 0u))));
+#define SETS_PER_BOUNCE 4u
+
+// Set `use`'s point, its top 24 bits in [0, 1) as floats.
+vec2 pathSet(PathNumbers numbers, uint use, bool shuffled) {
+    uvec2 set = mix64Words(add64(numbers.seed, uvec2(use, 0u)));
+    uvec2 point = owenScrambledSobolWords(numbers.ray, set, shuffled);
+    return vec2(point >> 8u) * (1.0 / 16777216.0);
 }
 
-// A 32-bit fixed-point number's top 24 bits: in [0, 1) as a float.
-vec2 unitOfFixed(uvec2 fixedPoint) {
-    return vec2(fixedPoint >> 8u) * (1.0 / 16777216.0);
+// The unit square's point for the direction at bounce `level` (0: the first), unshuffled there so
+// that neighbouring rays' first bounces keep their stratification.
+vec2 bounceNumbers(PathNumbers numbers, uint level) {
+    return pathSet(numbers, SETS_PER_BOUNCE * level, level > 0u);
+}
+
+// Three numbers for the point on the emitters (EmitterSampler::sample).
+vec3 emitterNumbers(PathNumbers numbers, uint level) {
+    return vec3(pathSet(numbers, SETS_PER_BOUNCE * level + 1u, true).x,
+                pathSet(numbers, SETS_PER_BOUNCE * level + 2u, true));
+}
+
+// Three numbers for the direction towards the sky (SkySampler::sample).
+vec3 skyNumbers(PathNumbers numbers, uint level) {
+    return vec3(pathSet(numbers, SETS_PER_BOUNCE * level + 1u, true).y,
+                pathSet(numbers, SETS_PER_BOUNCE * level + 3u, true));
 }
 
 // emitters.h powerHeuristic, as a ratio that no density's square overflows.
@@ -44,29 +64,32 @@ float powerHeuristic(float chosen, float other) {
     return 1.0 / (1.0 + ratio * ratio);
 }
 
-// The emitter whose running sum first passes u0 (EmitterSampler::sample's upper_bound), the last
-// one where rounding leaves none.
-uint pickedEmitter(float u0) {
-    uint low = 0u, high = rc.paths.y - 1u;
+// The index of picks[first, first + count) whose running sum first passes u
+// (DiscreteDistribution::pick's upper_bound), the last one where rounding leaves none.
+uint pickedIndex(uint first, uint count, float u) {
+    uint low = first, high = first + count - 1u;
     while (low < high) {
         uint middle = (low + high) / 2u;
-        if (emitters[middle].cumulative > u0) high = middle;
+        if (picks[middle].cumulative > u) high = middle;
         else low = middle + 1u;
     }
-    return emitters[low].triangle;
+    return picks[low].index;
+}
+
+// EmitterSampler::areaDensity, after the sky texels' probabilities.
+float emitterAreaDensity(uint triangle) {
+    return pickDensities[6u * rc.sizes.y * rc.sizes.y + triangle];
 }
 
 // The emitters' irradiance at `at` from one point sampled on them (scene/ray_bake.cpp
 // emitterIrradiance): L_e max(0, n.w) / p(w) where a shadow ray reaches the point, p its density per
 // solid angle, weighted by the power heuristic against the cosine rays' density.
-vec3 emitterIrradiance(RaySurface at, inout uvec2 random) {
+vec3 emitterIrradiance(RaySurface at, PathNumbers numbers, uint level) {
     if (rc.paths.y == 0u) return vec3(0.0);
-    float u0 = nextRandom(random);
-    float u1 = nextRandom(random);
-    float u2 = nextRandom(random);
-    uint triangle = pickedEmitter(u0);
-    float root = sqrt(u1);
-    vec2 barycentric = vec2(root * (1.0 - u2), root * u2);
+    vec3 u = emitterNumbers(numbers, level);
+    uint triangle = pickedIndex(0u, rc.paths.y, u.x);
+    float root = sqrt(u.y);
+    vec2 barycentric = vec2(root * (1.0 - u.z), root * u.z);
     vec3 p0 = vertices[indices[3u * triangle]].positionU.xyz;
     vec3 p1 = vertices[indices[3u * triangle + 1u]].positionU.xyz;
     vec3 p2 = vertices[indices[3u * triangle + 2u]].positionU.xyz;
@@ -81,15 +104,48 @@ vec3 emitterIrradiance(RaySurface at, inout uvec2 random) {
     float lightCosine = abs(dot(light.normal, direction));
     if (oneSidedBack(light) || !(lightCosine > 0.0)) return vec3(0.0);
     if (bvhAnyHit(rc.sizes.w, at.leaving, direction, 0.0, distance - 2.0 * rc.scale.x)) return vec3(0.0);
-    float density = emitterDensities[triangle] * distance * distance / lightCosine;
+    float density = emitterAreaDensity(triangle) * distance * distance / lightCosine;
     float weight = powerHeuristic(density, cosine * INV_PI);
     return surfaceEmission(light.material, light.uv) * (cosine / density * weight);
+}
+
+// SkySampler's density per solid angle at face point ab of a sky texel: its probability over the
+// texel's area on the face, (2 / n)^2, times the face's area per solid angle, (1 + a^2 + b^2)^(3/2).
+float skyPointDensity(uint texel, vec2 ab) {
+    float n = float(rc.sizes.y);
+    float r2 = 1.0 + dot(ab, ab);
+    return pickDensities[texel] * (0.25 * n * n) * r2 * sqrt(r2);
+}
+
+// SkySampler::density: 0 towards a black texel, or where the sky is black.
+float skyDensity(vec3 direction) {
+    if (rc.paths.z == 0u) return 0.0;
+    vec2 ab;
+    uint texel = skyTexelIndex(direction, rc.sizes.y, ab);
+    return skyPointDensity(texel, ab);
+}
+
+// The sky's irradiance at `at` from one direction sampled towards its bright texels (scene/ray_bake.cpp
+// skyIrradiance): a texel picked, a uniform point in it on its face; L max(0, n.w) / p(w) where a
+// shadow ray escapes, weighted by the power heuristic against the cosine rays' density.
+vec3 skyIrradiance(RaySurface at, PathNumbers numbers, uint level) {
+    if (rc.paths.z == 0u) return vec3(0.0);
+    vec3 u = skyNumbers(numbers, level);
+    uint texel = pickedIndex(rc.paths.y, rc.paths.z, u.x);
+    uint n = rc.sizes.y;
+    vec2 ab = 2.0 * (vec2(texel % n, texel / n % n) + u.yz) / float(n) - 1.0;
+    vec3 direction = normalize(unnormalizedFaceDirection(texel / (n * n), ab.x, ab.y));
+    float cosine = dot(at.shading, direction);
+    if (!(cosine > 0.0)) return vec3(0.0);
+    if (bvhAnyHit(rc.sizes.w, at.leaving, direction, 0.0, RAY_FAR)) return vec3(0.0);
+    float density = skyPointDensity(texel, ab);
+    return skyTexel(direction, n) * (cosine / density * powerHeuristic(density, cosine * INV_PI));
 }
 
 // The share of an emitter's light a path's bounce keeps where it meets it at `distance`: the power
 // heuristic against the emitters' own sampling (emitterIrradiance), which finds the same light too.
 float emissionShare(uint triangle, RaySurface met, vec3 direction, float distance, float cosineDensity) {
-    float area = emitterDensities[triangle];
+    float area = emitterAreaDensity(triangle);
     float cosine = abs(dot(met.normal, direction));
     if (!(area > 0.0) || !(cosine > 0.0)) return 1.0;
     return powerHeuristic(cosineDensity, area * distance * distance / cosine);
@@ -97,9 +153,10 @@ float emissionShare(uint triangle, RaySurface met, vec3 direction, float distanc
 
 // What arrives at `origin` along a probe's ray, the light its hit leaves followed as a path of
 // rc.paths.x bounces: at each hit emission (its share) and the suns reflected, then, while bounces
-// are left and the surface reflects, the emitters' point and the next cosine direction, whose
-// density cancels the cosine (the throughput gains the albedo alone).
-RayArrival pathArriving(vec3 origin, vec3 direction, PathRandom random) {
+// are left and the surface reflects, the emitters' point, the sky's direction and the next cosine
+// direction, whose density cancels the cosine (the throughput gains the albedo alone); the sky it
+// escapes to is weighted against the sky's sampling, as the emitters it meets are.
+RayArrival pathArriving(vec3 origin, vec3 direction, PathNumbers numbers) {
     BvhHit hit;
     if (!bvhClosestHitFrontFirst(rc.sizes.w, origin, direction, 0.0, RAY_FAR, hit))
         return RayArrival(skyTexel(direction, rc.sizes.y), false, RAY_FAR);
@@ -109,19 +166,19 @@ RayArrival pathArriving(vec3 origin, vec3 direction, PathRandom random) {
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     float share = 1.0;
-    for (uint bounce = rc.paths.x;; --bounce) {
+    for (uint level = 0u;; ++level) {
         vec3 reflectance = surfaceAlbedo(surface.material, surface.uv) * INV_PI;
         radiance += throughput * (share * surfaceEmission(surface.material, surface.uv) +
                                   reflectance * sunIrradiance(surface.leaving, surface.shading));
-        if (bounce == 0u || reflectance == vec3(0.0)) break;
-        radiance += throughput * reflectance * emitterIrradiance(surface, random.state);
-        vec2 u = bounce == rc.paths.x ? unitOfFixed(random.firstBounce)
-                                      : vec2(nextRandom(random.state), nextRandom(random.state));
+        if (level == rc.paths.x || reflectance == vec3(0.0)) break;
+        radiance += throughput * reflectance *
+                    (emitterIrradiance(surface, numbers, level) + skyIrradiance(surface, numbers, level));
+        vec2 u = bounceNumbers(numbers, level);
         vec3 next = cosineDirection(surface.shading, u.x, u.y);
         float density = max(dot(surface.shading, next), 0.0) * INV_PI;
         throughput *= reflectance * 3.14159265358979;
         if (!bvhClosestHitFrontFirst(rc.sizes.w, surface.leaving, next, 0.0, RAY_FAR, hit)) {
-            radiance += throughput * skyTexel(next, rc.sizes.y);
+            radiance += throughput * powerHeuristic(density, skyDensity(next)) * skyTexel(next, rc.sizes.y);
             break;
         }
         RaySurface met = describeSurface(hit.triangle, vec2(hit.u, hit.v), next);

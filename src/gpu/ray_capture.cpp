@@ -7,7 +7,6 @@
 #include "glsl/capture_interface.h"
 #include "glsl/ray_capture_interface.h"
 #include "scene/emitters.h"
-#include "scene/probe_paths.h"
 #include "scene/ray_bake.h"
 #include "scene/surface_cache.h"
 #include "scene/view_rays.h"
@@ -34,8 +33,8 @@ enum RayBuffer : size_t {
     kGatherPoints,
     kCacheA,
     kCacheB,
-    kEmitters,
-    kEmitterDensities,
+    kPicks,
+    kPickDensities,
     kRayBufferCount
 };
 
@@ -84,20 +83,32 @@ CacheLayout layOutCache(const SceneShading& shading, double spacing) {
     return layout;
 }
 
-// The emitters' table (EmitterSampler's) as the paths read it on the device.
-struct EmitterTable {
-    std::vector<glsl::EmitterTriangle> triangles;
-    std::vector<float> densities; // per World triangle
+// The paths' next-event tables (EmitterSampler's, SkySampler's) as ray_paths.glsl reads them.
+struct NextEventTable {
+    std::vector<glsl::PickedIndex> picks; // the emitters', then the sky texels'
+    std::vector<float> densities;         // per sky texel, then per World triangle
+    uint32_t emitters = 0;
+    uint32_t skyTexels = 0;
 };
 
-EmitterTable emitterTable(const World& world) {
-    const EmitterSampler sampler(world);
-    EmitterTable table;
-    const DiscreteDistribution& triangles = sampler.triangles();
-    for (size_t k = 0; k < triangles.picked().size(); ++k)
-        table.triangles.push_back({triangles.picked()[k], float(triangles.cumulative()[k])});
+void appendPicks(const DiscreteDistribution& distribution, std::vector<glsl::PickedIndex>& picks) {
+    for (size_t k = 0; k < distribution.picked().size(); ++k)
+        picks.push_back({distribution.picked()[k], float(distribution.cumulative()[k])});
+}
+
+NextEventTable nextEventTable(const SceneShading& shading) {
+    const World& world = shading.world();
+    const EmitterSampler emitters(world);
+    const SkySampler sky(shading.sky());
+    NextEventTable table;
+    appendPicks(emitters.triangles(), table.picks);
+    table.emitters = uint32_t(table.picks.size());
+    appendPicks(sky.texels(), table.picks);
+    table.skyTexels = uint32_t(table.picks.size()) - table.emitters;
+    for (uint32_t t = 0; t < uint32_t(shading.sky().texels.size()); ++t)
+        table.densities.push_back(float(sky.texels().probability(t)));
     for (uint32_t t = 0; t < uint32_t(world.triangleCount()); ++t)
-        table.densities.push_back(float(sampler.areaDensity(t)));
+        table.densities.push_back(float(emitters.areaDensity(t)));
     return table;
 }
 
@@ -132,11 +143,6 @@ std::vector<BindingTarget> rayTargets(const SceneCapture& capture, const RayCapt
     return targets;
 }
 
-// A point of [0, 1)^2 in 32-bit fixed point (times 2^32).
-glm::uvec2 fixedPoint(const glm::dvec2& unit) {
-    return glm::uvec2(glm::u64vec2(unit * 0x1p32));
-}
-
 glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCapture& rays) {
     glsl::RayCaptureConstants constants{};
     constants.sizes = glm::uvec4(uint32_t(capture.options.faceSize), capture.skyFaceSize,
@@ -146,8 +152,7 @@ glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCap
     constants.seed =
         glm::uvec4(uint32_t(rays.options.seed), 0u, uint32_t(viewStream), uint32_t(viewStream >> 32));
     const uint32_t pathBounces = rays.options.bounceLight == BounceLight::Paths ? rays.options.bounces : 0;
-    const glm::uvec2 r2Step = fixedPoint(kR2Step);
-    constants.paths = glm::uvec4(uint32_t(pathBounces), rays.emitters, r2Step.x, r2Step.y);
+    constants.paths = glm::uvec4(uint32_t(pathBounces), rays.emitters, rays.skyTexels, 0u);
     return constants;
 }
 
@@ -218,20 +223,18 @@ ProbeRaySet createProbeRaySet(const Context& context, const SceneCapture& captur
     std::vector<BindingTarget> targets = rayTargets(
         capture, rays, rays.options.bounces, {set.positions.buffer}, {.imageView = target.cubemaps.view});
     targets.push_back({set.distances.buffer});
-    targets.push_back({rays.buffers[kEmitters].buffer});
-    targets.push_back({rays.buffers[kEmitterDensities].buffer});
+    targets.push_back({rays.buffers[kPicks].buffer});
+    targets.push_back({rays.buffers[kPickDensities].buffer});
     set.set = createDescriptorSet(context, set.pool, rays.probes, targets);
     return set;
 }
 
-// A probe at `position` and the start of its paths, named by its place in the world's box as the
+// A probe at `position` and the seed of its paths, named by its place in the world's box as the
 // cpu names them (RayBaker's viewIndex): the same wherever it is baked, with whichever probes.
 glsl::RayProbe rayProbe(const RayCapture& rays, const glm::dvec3& position) {
-    const DeviceProbePaths paths(rays.options.seed,
-                                 placeIndex(position, glm::dvec3(rays.boundsMin), rays.visibilityRange));
-    const uint64_t state = paths.state();
-    const glm::uvec2 shift = fixedPoint(paths.shift());
-    return {glm::vec4(glm::vec3(position), 1.0f), glm::uvec4(uint32_t(state), uint32_t(state >> 32), shift)};
+    const uint64_t seed = probePathSeed(
+        rays.options.seed, placeIndex(position, glm::dvec3(rays.boundsMin), rays.visibilityRange));
+    return {glm::vec4(glm::vec3(position), 1.0f), glm::uvec4(uint32_t(seed), uint32_t(seed >> 32), 0u, 0u)};
 }
 
 // The capture of `positions` into layers 6p..6p+5, visible to the bake's reads.
@@ -318,8 +321,9 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
                              options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world))
                : CacheLayout{};
     rays.cachePoints = uint32_t(cache.points.size());
-    const EmitterTable emitters = emitterTable(world);
-    rays.emitters = uint32_t(emitters.triangles.size());
+    const NextEventTable nextEvents = nextEventTable(shading);
+    rays.emitters = nextEvents.emitters;
+    rays.skyTexels = nextEvents.skyTexels;
     rays.buffers.resize(kRayBufferCount);
     rays.buffers[kNodes] = createStorage(context, rays.bvh.nodes, "BVH nodes");
     rays.buffers[kTriangles] = createStorage(context, rays.bvh.triangles, "BVH triangles");
@@ -329,8 +333,8 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     const std::vector<glm::vec4> zeros(options.bounces > 0 ? cache.points.size() : 0, glm::vec4(0.0f));
     rays.buffers[kCacheA] = createStorage(context, zeros, "surface cache");
     rays.buffers[kCacheB] = createStorage(context, zeros, "surface cache");
-    rays.buffers[kEmitters] = createStorage(context, emitters.triangles, "emitters");
-    rays.buffers[kEmitterDensities] = createStorage(context, emitters.densities, "emitter densities");
+    rays.buffers[kPicks] = createStorage(context, nextEvents.picks, "next-event picks");
+    rays.buffers[kPickDensities] = createStorage(context, nextEvents.densities, "next-event densities");
     rays.probes = createRayProgram(context, true);
     rays.gather = createRayProgram(context, false);
     rays.pool = createDescriptorPool(context, {.sets = 2, .storageBuffers = 2 * SHPROBE_RAYS_BINDINGS});

@@ -79,6 +79,8 @@ class SkySampler {
     SkyDirection sample(double u0, double u1, double u2) const;
     // sample()'s density per unit solid angle at `direction` (unit): 0 towards a black texel.
     double density(const glm::dvec3& direction) const;
+    // The texels' distribution sample() picks from, for a device that samples as it does.
+    const DiscreteDistribution& texels() const { return texels_; }
 
   private:
     int faceSize_ = 0;

@@ -5,7 +5,6 @@
 #include "common/error.h"
 #include "common/parallel.h"
 #include "scene/emitters.h"
-#include "scene/probe_paths.h"
 #include "scene/ray_caster.h"
 #include "scene/sampling.h"
 #include "scene/surface_cache.h"
@@ -43,8 +42,7 @@ namespace {
 // estimate stays unbiased.
 class ProbePaths {
   public:
-    ProbePaths(uint64_t seed, uint64_t viewIndex)
-        : seed_(mix64(mix64(seed) + kProbePathStream) + viewIndex) {}
+    ProbePaths(uint64_t seed, uint64_t viewIndex) : seed_(probePathSeed(seed, viewIndex)) {}
     // The probe ray whose path is traced next.
     void startRay(uint32_t ray) { ray_ = ray; }
     // The unit square's point for that path's bounce `level` (0: the first) direction.

@@ -1,6 +1,8 @@
 // Random numbers and directions for the scene's Monte-Carlo integrals (scene/reference_tracer.h,
 // scene/ray_bake.h): counter-based, so that a result never depends on which thread drew it.
 #pragma once
+#include "glsl/sobol_words.h"
+
 #include <glm/gtc/quaternion.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/vec2.hpp>
@@ -141,67 +143,19 @@ class StratifiedCosineDirections {
     std::vector<glm::dvec2> starts_; // the columns' cos, sin where g >= 8, else none
 };
 
-// Owen-scrambled Sobol' points in 2D (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020):
-// Sobol's first two dimensions, each scrambled by a hash that acts as Owen's nested uniform
-// scrambling (Laine and Karras's permutation on reversed bits). Every aligned block of 2^m
-// consecutive indices is then a (0, m, 2)-net, stratified at every scale, and each point is uniform
-// over the seeds, so an estimate stays unbiased.
-inline uint32_t reverseBits(uint32_t x) {
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-    return (x >> 16) | (x << 16);
-}
-
-// Flips each bit by a hash of the bits below it (Laine and Karras, "Stratified Sampling for
-// Stochastic Transparency", 2011).
-inline uint32_t laineKarrasPermutation(uint32_t x, uint32_t seed) {
-    x += seed;
-    x ^= x * 0x6c50b47cu;
-    x ^= x * 0xb82f1e52u;
-    x ^= x * 0xc7afe638u;
-    x ^= x * 0x8d22f6e6u;
-    return x;
-}
-
-// Owen's scrambling of a 0.32 fixed-point number: each bit flipped by a hash of the bits above it.
-inline uint32_t nestedUniformScramble(uint32_t x, uint32_t seed) {
-    return reverseBits(laineKarrasPermutation(reverseBits(x), seed));
-}
-
-// Sobol's second dimension: the index's bits through the generator matrix of x + 1 (Pascal's
-// triangle mod 2); the first is the index's bits reversed.
-inline uint32_t sobolSecondDimension(uint32_t index) {
-    uint32_t result = 0;
-    for (uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1)
-        if (index & 1u) result ^= v;
-    return result;
-}
-
-// Point `index` of the Owen-scrambled Sobol' set named by `seed`. `shuffled` scrambles the index too,
-// which keeps the set but decorrelates it from other dimensions drawn at the same index (Burley's
-// padding); unshuffled, consecutive indices keep their stratification.
+// Owen-scrambled Sobol' points in 2D (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020;
+// glsl/sobol_words.h, shared with the gpu's paths): Sobol's first two dimensions, each scrambled by
+// a hash that acts as Owen's nested uniform scrambling. Every aligned block of 2^m consecutive
+// indices is then a (0, m, 2)-net, stratified at every scale, and each point is uniform over the
+// seeds, so an estimate stays unbiased. Point `index` of the set named by `seed`; `shuffled`
+// scrambles the index too (Burley's padding).
 inline glm::dvec2 owenScrambledSobol(uint32_t index, uint64_t seed, bool shuffled) {
-    const uint64_t hash = mix64(seed);
-    const uint32_t i = shuffled ? nestedUniformScramble(index, uint32_t(mix64(hash + 1))) : index;
-    const uint32_t x = nestedUniformScramble(reverseBits(i), uint32_t(hash));
-    const uint32_t y = nestedUniformScramble(sobolSecondDimension(i), uint32_t(hash >> 32));
-    return {double(x) * 0x1p-32, double(y) * 0x1p-32};
+    const glm::uvec2 point =
+        glsl::owenScrambledSobolWords(index, glm::uvec2(uint32_t(seed), uint32_t(seed >> 32)), shuffled);
+    return {double(point.x) * 0x1p-32, double(point.y) * 0x1p-32};
 }
 
-// The Morton code of (i, j): their bits interleaved, i's in the even places, so that texels near
-// each other get indices near each other, at every scale.
-inline uint32_t mortonCode(uint32_t i, uint32_t j) {
-    auto spread = [](uint32_t v) {
-        v &= 0xffffu;
-        v = (v | (v << 8)) & 0x00ff00ffu;
-        v = (v | (v << 4)) & 0x0f0f0f0fu;
-        v = (v | (v << 2)) & 0x33333333u;
-        return (v | (v << 1)) & 0x55555555u;
-    };
-    return spread(i) | (spread(j) << 1);
-}
+using glsl::mortonCode;
 
 // A uniformly distributed rotation, from the unit quaternion of three uniforms (Shoemake, "Uniform
 // Random Rotations", Graphics Gems III, 1992).

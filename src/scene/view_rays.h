@@ -61,6 +61,15 @@ inline uint64_t placeIndex(const glm::dvec3& position, const glm::dvec3& boundsM
     return index;
 }
 
+// The stream of a probe's paths, (seed, kProbePathStream, its view's placeIndex): one no view's is.
+constexpr uint64_t kProbePathStream = kSphereViewStream - 1;
+
+// The seed of the Owen-scrambled Sobol' sets a probe's paths draw from, set `use` named by
+// mix64(probePathSeed + use) (scene/ray_bake.cpp ProbePaths, glsl/ray_paths.glsl).
+inline uint64_t probePathSeed(uint64_t seed, uint64_t viewIndex) {
+    return mix64(mix64(seed) + kProbePathStream) + viewIndex;
+}
+
 // Calls ray(direction) for each of `count` directions stratified over the sphere: the spherical
 // Fibonacci set (sampling.h) under a uniformly random rotation of its own for each view (named by its
 // placeIndex), so that each direction is uniform on the sphere and (4 pi / count) sum L(w) y_lm(w) is
