@@ -538,7 +538,9 @@ TEST(RayBake, LightDoesNotLeakThroughAThinWall) {
         EXPECT_LT(leak, 0.01) << name;
         if (light == BounceLight::Cache) continue;
         for (size_t p = 0; p < positions.size(); ++p)
-            if (positions[p].x > 0.0) EXPECT_EQ(probes[p].radiance.rgb[0], glm::dvec3(0.0)) << p;
+            if (positions[p].x > 0.0) {
+                EXPECT_EQ(probes[p].radiance.rgb[0], glm::dvec3(0.0)) << p;
+            }
     }
 }
 
