@@ -15,7 +15,7 @@
 //          SHPROBE_RAYS_PICK_DENSITIES: the paths' emitters and sky texels
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce;
 //          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths and their tables)
-//   specialization: 0 = workgroup width; dispatch (texel groups, probes, 1): each invocation takes
+//   specialization: 0 = workgroup width, 2 = SHPROBE_RAYS_BY_PATHS for bounces by paths; dispatch (texel groups, probes, 1): each invocation takes
 //   texels x, x + width * groups, ... of probe y.
 #extension GL_GOOGLE_include_directive : require
 #include "gpu_interface.h"
@@ -25,6 +25,10 @@
 #include "texel_geometry.h"
 
 layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
+// Bounces by paths, or from the cache (or none): a pipeline of each, so that the other's code is not
+// compiled in (lavapipe ran the bounce-0 capture at half speed with both behind a branch).
+layout(constant_id = SHPROBE_SPEC_VARIANT) const uint kVariant = 0u;
+const bool kByPaths = kVariant == SHPROBE_RAYS_BY_PATHS;
 layout(std430, set = 0, binding = SHPROBE_RAYS_INPUT) readonly buffer Probes {
     RayProbe probes[];
 };
@@ -58,7 +62,7 @@ void main() {
                 vec3 direction = normalize(unnormalizedFaceDirection(face, stratumCoord(i, sa, s, ja, n),
                                                                      stratumCoord(j, sb, s, jb, n)));
                 PathNumbers numbers = PathNumbers(at.paths.xy, path++);
-                RayArrival arrival = rc.paths.x > 0u ? pathArriving(at.position.xyz, direction, numbers)
+                RayArrival arrival = kByPaths ? pathArriving(at.position.xyz, direction, numbers)
                                                      : arriving(at.position.xyz, direction, rc.work.z != 0u);
                 sum += arrival.radiance;
                 backFaces += arrival.backFace ? 1u : 0u;

@@ -15,6 +15,7 @@
 // Specialization constant ids, the same in every module that uses them.
 #define SHPROBE_SPEC_LOCAL_SIZE 0 // workgroup width (x); 1D workgroups
 #define SHPROBE_SPEC_ORDER 1      // SH order 1..SHPROBE_MAX_ORDER
+#define SHPROBE_SPEC_VARIANT 2    // a module's own switch between code paths (0: its default)
 
 SHPROBE_BEGIN
 

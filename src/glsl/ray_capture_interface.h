@@ -37,6 +37,8 @@
 #define SHPROBE_RAYS_PICK_DENSITIES 19
 // The bindings of capture_rays.
 #define SHPROBE_RAYS_PROBE_BINDINGS 20
+// capture_rays' SHPROBE_SPEC_VARIANT for bounces by paths (the default, 0: from the cache).
+#define SHPROBE_RAYS_BY_PATHS 1u
 
 SHPROBE_BEGIN
 

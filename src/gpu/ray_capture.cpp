@@ -112,7 +112,8 @@ NextEventTable nextEventTable(const SceneShading& shading) {
     return table;
 }
 
-ComputeProgram createRayProgram(const Device& device, bool probes) {
+// capture_rays (probes: its variant, SHPROBE_RAYS_BY_PATHS or 0) or cache_gather.
+ComputeProgram createRayProgram(const Device& device, bool probes, uint32_t variant = 0) {
     std::vector<VkDescriptorType> bindings(probes ? SHPROBE_RAYS_PROBE_BINDINGS : SHPROBE_RAYS_BINDINGS,
                                            VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     if (probes) bindings[SHPROBE_RAYS_OUTPUT] = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
@@ -122,7 +123,8 @@ ComputeProgram createRayProgram(const Device& device, bool probes) {
                                                  : std::span<const uint32_t>(spirv::cache_gather_comp),
                                  .bindings = bindings,
                                  .pushConstantSize = sizeof(glsl::RayCaptureConstants),
-                                 .localSize = kLocalSize});
+                                 .localSize = kLocalSize,
+                                 .variant = variant});
 }
 
 // The bindings of a ray program's set: the capture's buffers, the hierarchy, the lattices, the
@@ -335,7 +337,8 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.buffers[kCacheB] = createStorage(context, zeros, "surface cache");
     rays.buffers[kPicks] = createStorage(context, nextEvents.picks, "next-event picks");
     rays.buffers[kPickDensities] = createStorage(context, nextEvents.densities, "next-event densities");
-    rays.probes = createRayProgram(context, true);
+    rays.probes =
+        createRayProgram(context, true, cached || options.bounces == 0 ? 0u : SHPROBE_RAYS_BY_PATHS);
     rays.gather = createRayProgram(context, false);
     rays.pool = createDescriptorPool(context, {.sets = 2, .storageBuffers = 2 * SHPROBE_RAYS_BINDINGS});
     for (int parity = 0; parity < 2; ++parity) {

@@ -14,9 +14,9 @@ namespace {
 
 VkPipeline createPipeline(const Device& device, VkShaderModule module, VkPipelineLayout layout,
                           const ComputeProgramDesc& desc) {
-    std::array<uint32_t, 2> values{desc.localSize, desc.order};
-    std::array<VkSpecializationMapEntry, 2> entries{
-        {{SHPROBE_SPEC_LOCAL_SIZE, 0, 4}, {SHPROBE_SPEC_ORDER, 4, 4}}};
+    std::array<uint32_t, 3> values{desc.localSize, desc.order, desc.variant};
+    std::array<VkSpecializationMapEntry, 3> entries{
+        {{SHPROBE_SPEC_LOCAL_SIZE, 0, 4}, {SHPROBE_SPEC_ORDER, 4, 4}, {SHPROBE_SPEC_VARIANT, 8, 4}}};
     VkSpecializationInfo specialization{uint32_t(entries.size()), entries.data(), sizeof(values),
                                         values.data()};
 

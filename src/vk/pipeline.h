@@ -20,6 +20,7 @@ struct ComputeProgramDesc {
     uint32_t pushConstantSize = 0;               // bytes
     uint32_t localSize = 64;                     // specialization constant SHPROBE_SPEC_LOCAL_SIZE
     uint32_t order = 3;                          // specialization constant SHPROBE_SPEC_ORDER
+    uint32_t variant = 0;                        // specialization constant SHPROBE_SPEC_VARIANT
 };
 
 struct ComputeProgram {
