@@ -168,6 +168,9 @@ TEST(VolumeTransfer, RefusesWhatCannotBeRelit) {
     VolumeBakeReport report;
     EXPECT_THROW(bakeVolumeTransfer(world, kFootprintFaceSize, options, grid, {0, 1}, report), Error);
     options = bakeOptions(grid, 1);
+    options.rays.bounceLight = BounceLight::Paths; // its sky samples follow the sky's brightness
+    EXPECT_THROW(bakeVolumeTransfer(world, kFootprintFaceSize, options, grid, {0, 1}, report), Error);
+    options = bakeOptions(grid, 1);
     ProbeVolume plain = bakeVolumeByRays(world, {makeDefaultSky(8), {}}, options, grid, {0, 1}, report);
     EXPECT_THROW(relightVolume(plain, testSky()), Error);
     ProbeVolume relightable = bakeVolumeTransfer(world, kFootprintFaceSize, options, grid, {0, 1}, report);

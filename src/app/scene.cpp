@@ -220,14 +220,15 @@ const char* bounceLightName(BounceLight light) {
     return light == BounceLight::Paths ? "paths" : "cache";
 }
 
-// The bounce light of either backend; auto's is the cache where refinement asks for it, else
-// whichever casts fewer rays for the whole grid (not the brick's probes, so that bricks agree) with
-// the backend's rays per texel.
+// The bounce light of either backend; auto's is the cache where refinement or --transfer asks for it
+// (paths sample the sky where it is bright, so that their bake is not linear in it), else whichever
+// casts fewer rays for the whole grid (not the brick's probes, so that bricks agree) with the
+// backend's rays per texel.
 BounceLight chosenBounceLight(const SceneOptions& options, const ProbeGrid& grid, const World& world,
                               bool gpu) {
     if (options.bounceLight != "auto")
         return options.bounceLight == "paths" ? BounceLight::Paths : BounceLight::Cache;
-    if (options.cacheRefinement > 0) return BounceLight::Cache;
+    if (options.cacheRefinement > 0 || options.transfer) return BounceLight::Cache;
     RayBakeOptions rays = rayOptionsAsked(options, grid);
     rays.raysPerTexel = raysPerTexel(options, gpu);
     return autoBounceLight(world, rays, grid.probeCount());
@@ -348,6 +349,9 @@ void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
     if (options.transfer && options.cacheRefinement > 0)
         throw Error(ErrorKind::Input, "scene: --cache-refinement halves cells where their light differs, so "
                                       "its bake is not linear in the sky; --transfer needs it off");
+    if (options.transfer && options.bounceLight == "paths")
+        throw Error(ErrorKind::Input, "scene: --bounce-light paths samples the sky where it is bright, so "
+                                      "its bake is not linear in the sky; --transfer bakes from the cache");
     if (options.cacheRefinement > 0 && options.bounceLight == "paths")
         throw Error(ErrorKind::Input, "scene: --cache-refinement halves the cache's cells; --bounce-light "
                                       "paths keeps no cache");

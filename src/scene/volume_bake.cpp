@@ -79,6 +79,10 @@ ProbeVolume bakeVolumeTransfer(const World& world, int skyFaceSize, const Volume
                                       "its bake is not linear in the sky; bake transfer without it");
     if (!options.rays.skySuns.empty())
         throw Error(ErrorKind::Input, "transfer: a sun taken out of the sky would not turn with it");
+    if (options.rays.bounceLight == BounceLight::Paths)
+        throw Error(ErrorKind::Input,
+                    "transfer: bounces by paths sample the sky where it is bright, so their "
+                    "bake is not linear in the sky; bake transfer from the cache");
     const int order = options.rays.order;
     const size_t columns = size_t(order) * size_t(order);
     const uint64_t probes = range.end - range.begin;
