@@ -26,9 +26,10 @@
 // by its own rays alone, so that this stays true. The estimate converges to the exact transport as the points
 // grow denser (interpolation) and the gather rays more (noise); docs/scene-probes.md measures both against
 // the path tracer. With BounceLight::Paths no cache is kept: each probe ray that meets a surface goes on
-// in one cosine-distributed direction a bounce, with the probe's own random numbers (named by its
-// position), and the suns by shadow rays at every hit: no interpolation, noise that falls with the
-// probe's rays, the same bits for any thread count and any subset of probes.
+// in one cosine-distributed direction a bounce, with the probe's own numbers (named by its place in
+// the world), the suns by shadow rays and a point on the lamps and a direction towards the sky's
+// bright texels at every hit (scene/emitters.h): no interpolation, noise that falls with the probe's
+// rays, the same bits for any thread count and any subset of probes.
 #pragma once
 #include "scene/ray_caster.h"
 #include "scene/scene.h"
