@@ -44,6 +44,7 @@ void main() {
     uint s = rc.work.w;
     uint faceTexels = n * n;
     uint mortonSide = 1u << uint(findMSB(n - 1u) + 1); // bit_ceil(n): a face's Morton codes fit its square
+    uint pathStride = 1u << uint(findMSB(s * s - 1u) + 1); // bit_ceil(s^2): a texel's paths from an aligned block
     RayProbe at = probes[probe];
     for (uint texel = gl_GlobalInvocationID.x; texel < 6u * faceTexels; texel += gl_NumWorkGroups.x * gl_WorkGroupSize.x) {
         uint face = texel / faceTexels;
@@ -52,7 +53,7 @@ void main() {
         uvec2 stream = mix64Words(add64(rc.seed.zw, uvec2(texel, 0u)));
         uint viewRay = texel * s * s; // the ray's index in the probe's view (scene/view_rays.h's order)
         uint firstRay = 6u * faceTexels * s * s * probe;
-        uint path = (face * mortonSide * mortonSide + mortonCode(i, j)) * s * s;
+        uint path = (face * mortonSide * mortonSide + mortonCode(i, j)) * pathStride;
         vec3 sum = vec3(0.0);
         uint backFaces = 0u;
         for (uint sb = 0u; sb < s; ++sb) {

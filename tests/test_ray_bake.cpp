@@ -6,6 +6,7 @@
 #include "scene/probe_grid.h"
 #include "scene/ray_bake.h"
 #include "scene/reference_tracer.h"
+#include "scene/surface_cache.h"
 #include "scene/volume_sampling.h"
 #include "scene_fixtures.h"
 #include "sh/lights.h"
@@ -61,6 +62,19 @@ TEST(RayBake, FurnaceByPathsFollowsTheGeometricSeries) {
             EXPECT_NEAR(probe.radiance.rgb[0].g, l00, 0.005 * l00) << bounces;
         }
     }
+}
+
+// auto's choice (docs/scene-probes.md): paths until the grid's probe rays pass four times the cache's
+// gather rays (every lattice point's 64), then the cache; the threshold from the lattices' size.
+TEST(RayBake, AutoTakesPathsUnlessTheCacheCastsUnderAQuarterOfTheirRays) {
+    const World world = testing::loadCornellBoxWorld({.closed = true, .innerBoxes = true});
+    const RayBakeOptions options{.faceSize = 8, .raysPerTexel = 4, .bounces = 1};
+    const double cacheRays = double(cachePointCount(world, cacheSpacingFor(world, 0.0))) * 64.0;
+    const uint64_t last = uint64_t(std::floor(4.0 * cacheRays / (6.0 * 8 * 8 * 4)));
+    ASSERT_GT(last, 1u);
+    EXPECT_EQ(autoBounceLight(world, options, 1), BounceLight::Paths);
+    EXPECT_EQ(autoBounceLight(world, options, last), BounceLight::Paths);
+    EXPECT_EQ(autoBounceLight(world, options, last + 1), BounceLight::Cache);
 }
 
 // The closed Cornell box with its light off and a bright sky outside: no light reaches a probe at

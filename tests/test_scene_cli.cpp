@@ -261,6 +261,11 @@ TEST_F(SceneCommand, RelightableVolumesRelightWithoutACapture) {
                    2,
                    {"--bounce-light paths", "linear"},
                    "out.shpv"});
+    expectFailure({{"scene", scene, "--grid", "1,1,1", "--cache-refinement", "2", "--bounce-light", "paths",
+                    "-o", "OUT"},
+                   2,
+                   {"--cache-refinement", "keeps no cache"},
+                   "out.shpv"});
 }
 
 // Probe relocation on the cpu backend, in the closed Cornell box with its blocks: of a 4x3x3 grid

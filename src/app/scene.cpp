@@ -121,8 +121,8 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
     command
         .add_option("--bounce-light", options.bounceLight,
                     "Where a surface's bounced light comes from: the cache of surface points, "
-                    "or a path from each probe ray's hit; auto: whichever casts fewer rays for the "
-                    "grid (paths for small grids)")
+                    "or a path from each probe ray's hit; auto: paths unless the cache would cast under "
+                    "a quarter of their rays for the grid, the cache with --transfer or --cache-refinement")
         ->check(CLI::IsMember({"auto", "cache", "paths"}))
         ->capture_default_str();
     addDeviceOptions(command, options.device, options.validation);
@@ -221,8 +221,8 @@ const char* bounceLightName(BounceLight light) {
 }
 
 // The bounce light of either backend; auto's is the cache where refinement or --transfer asks for it
-// (paths sample the sky where it is bright, so that their bake is not linear in it), else whichever
-// casts fewer rays for the whole grid (not the brick's probes, so that bricks agree) with the
+// (paths sample the sky where it is bright, so that their bake is not linear in it), else
+// autoBounceLight's for the whole grid (not the brick's probes, so that bricks agree) with the
 // backend's rays per texel.
 BounceLight chosenBounceLight(const SceneOptions& options, const ProbeGrid& grid, const World& world,
                               bool gpu) {
@@ -232,13 +232,6 @@ BounceLight chosenBounceLight(const SceneOptions& options, const ProbeGrid& grid
     RayBakeOptions rays = rayOptionsAsked(options, grid);
     rays.raysPerTexel = raysPerTexel(options, gpu);
     return autoBounceLight(world, rays, grid.probeCount());
-}
-
-// The cpu's options.
-RayBakeOptions rayBakeOptions(const SceneOptions& options, const ProbeGrid& grid, const World& world) {
-    RayBakeOptions rays = rayOptionsAsked(options, grid);
-    rays.bounceLight = chosenBounceLight(options, grid, world, false);
-    return rays;
 }
 
 // What decides the probes' values besides the grid, order and bounces: bricks merge only when it
@@ -292,8 +285,10 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
 // Every bounce of probes [range.begin, range.end) by rays (scene/volume_bake.h), the progress on a
 // terminal; with --transfer the volume's transfer, and its light the sky's band-limited to the order.
 ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
-                       const RayBakeOptions& rayOptions, const ProbeGrid& grid, ProbeRange range,
+                       BounceLight bounceLight, const ProbeGrid& grid, ProbeRange range,
                        VolumeBakeReport& report) {
+    RayBakeOptions rayOptions = rayOptionsAsked(options, grid);
+    rayOptions.bounceLight = bounceLight;
     const VolumeBakeOptions bakeOptions{rayOptions, options.dilate};
     const uint64_t probes =
         options.transfer ? transferProbeCount(options.order, range) : range.end - range.begin;
@@ -441,13 +436,12 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     if (const CpuOnly asked = cpuOnlyOption(options); asked.option && backend.name == "gpu")
         throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason + "), where " +
                                           asked.gpu + "; " + asked.option + " is for the cpu backend");
-    const RayBakeOptions cpuOptions = rayBakeOptions(options, grid, world);
     const BounceLight bounceLight = chosenBounceLight(options, grid, world, backend.context.has_value());
     const std::string settings = bakeSettings(options, backend.name, sky, bounceLight);
     VolumeBakeReport rays;
     ProbeVolume volume = backend.context ? bakeOnGpu(*backend.context, world, sky, options, grid, range,
                                                      bounceLight, settings, rays)
-                                         : bakeByRays(world, sky, options, cpuOptions, grid, range, rays);
+                                         : bakeByRays(world, sky, options, bounceLight, grid, range, rays);
     volume.source = world.description;
     volume.sourceHash = gltfSceneHash(options.scene);
     volume.settings = settings;

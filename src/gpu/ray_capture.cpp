@@ -261,14 +261,11 @@ void readDistances(const RayCapture& rays, const ProbeRaySet& set, int faceSize,
     const uint64_t raysPerProbe =
         6 * uint64_t(faceSize) * uint64_t(faceSize) * rays.texelSide * rays.texelSide;
     const float* distances = static_cast<const float*>(set.distances.mapped) + raysPerProbe * k;
-    forEachViewRay(
-        faceSize, int(rays.texelSide), rays.options.seed,
-        [&](const glm::dvec3& direction) {
-            const float distance = *distances++;
-            moments.add(direction, std::abs(double(distance)));
-            nearest.add(direction, std::abs(double(distance)), std::signbit(distance));
-        },
-        [](int, int, int) {});
+    forEachViewRay(faceSize, int(rays.texelSide), rays.options.seed, [&](const glm::dvec3& direction) {
+        const float distance = *distances++;
+        moments.add(direction, std::abs(double(distance)));
+        nearest.add(direction, std::abs(double(distance)), std::signbit(distance));
+    });
     probe.visibility = moments.texels();
 }
 
@@ -307,21 +304,20 @@ std::vector<SceneProbe> bakeViews(const Context& context, const SceneCapture& ca
 RayCapture createRayCapture(const Context& context, const SceneCapture& capture, const SceneShading& shading,
                             const RayCaptureOptions& options) {
     requireOptions(options);
+    requireViewRays(capture.options.faceSize, options.raysPerTexel);
     RayCapture rays;
     OnFailure undo([&] { destroyRayCapture(context, rays); });
     rays.options = options;
     const World& world = shading.world();
     rays.bvh = buildBvh(world);
     rays.surfaceOffset = float(shading.offset());
-    rays.gatherSide = uint32_t(std::ceil(std::sqrt(double(options.gatherRays))));
-    rays.texelSide = uint32_t(std::ceil(std::sqrt(double(options.raysPerTexel))));
+    rays.gatherSide = uint32_t(squareSide(options.gatherRays));
+    rays.texelSide = uint32_t(squareSide(options.raysPerTexel));
     rays.visibilityRange = visibilityRangeOf(world);
     rays.boundsMin = world.boundsMin;
     const bool cached = options.bounceLight == BounceLight::Cache;
     const CacheLayout cache =
-        cached ? layOutCache(shading,
-                             options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world))
-               : CacheLayout{};
+        cached ? layOutCache(shading, cacheSpacingFor(world, options.cacheSpacing)) : CacheLayout{};
     rays.cachePoints = uint32_t(cache.points.size());
     const NextEventTable nextEvents = nextEventTable(shading);
     rays.emitters = nextEvents.emitters;
@@ -339,6 +335,7 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.buffers[kPickDensities] = createStorage(context, nextEvents.densities, "next-event densities");
     rays.probes =
         createRayProgram(context, true, cached || options.bounces == 0 ? 0u : SHPROBE_RAYS_BY_PATHS);
+    if (!cached || options.bounces == 0) return rays;
     rays.gather = createRayProgram(context, false);
     rays.pool = createDescriptorPool(context, {.sets = 2, .storageBuffers = 2 * SHPROBE_RAYS_BINDINGS});
     for (int parity = 0; parity < 2; ++parity) {
@@ -348,7 +345,7 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
                                                                          {rays.buffers[kGatherPoints].buffer},
                                                                          {rays.buffers[written].buffer}));
     }
-    for (int bounce = 1; cached && bounce <= options.bounces; ++bounce)
+    for (int bounce = 1; bounce <= options.bounces; ++bounce)
         gatherBounce(context, capture, rays, bounce);
     return rays;
 }

@@ -35,7 +35,7 @@ struct RayCaptureOptions {
     int bounces = 0;               // k: the probes see the surfaces reflect bounce k (0: none)
     int raysPerTexel = 1;          // 1: through the texel's centre; more, rounded up to a square
                                    // s x s: the cpu's jittered rays (RayBakeOptions::raysPerTexel)
-    double cacheSpacing = 0.0;     // the largest distance between cache points; 0: defaultCacheSpacing
+    double cacheSpacing = 0.0;     // the largest distance between cache points; 0: cacheSpacingFor's
     int gatherRays = 64;           // per cache point and bounce, rounded up to a square (g x g strata)
     uint64_t seed = 1;             // of the gather's and the paths' random numbers
     int visibilitySize = 16;       // each probe's visibility map (RayBakedProbe's): size x size

@@ -95,8 +95,14 @@ SkyDirection SkySampler::sample(double u0, double u1, double u2) const {
     const int face = int(texel / (n * n));
     const double a = 2.0 * (double(texel % n) + u1) / n - 1.0;
     const double b = 2.0 * (double(texel / n % n) + u2) / n - 1.0;
-    const double texelArea = 4.0 / (double(n) * n);
-    return {faceDirection(face, a, b), texels_.probability(texel) / texelArea * faceAreaPerSolidAngle(a, b)};
+    return {faceDirection(face, a, b), densityAt(texel, a, b)};
+}
+
+// Texel `texel`'s probability per unit face area (each texel (2 / N)^2 of it) per unit solid angle at
+// face point (a, b).
+double SkySampler::densityAt(uint32_t texel, double a, double b) const {
+    const double texelArea = 4.0 / (double(faceSize_) * faceSize_);
+    return texels_.probability(texel) / texelArea * faceAreaPerSolidAngle(a, b);
 }
 
 double SkySampler::density(const glm::dvec3& direction) const {
@@ -105,9 +111,7 @@ double SkySampler::density(const glm::dvec3& direction) const {
     const auto texel = [n](double coordinate) {
         return std::clamp(int(std::floor((coordinate + 1.0) * 0.5 * n)), 0, n - 1);
     };
-    const uint32_t index = uint32_t((point.face * n + texel(point.b)) * n + texel(point.a));
-    const double texelArea = 4.0 / (double(n) * n);
-    return texels_.probability(index) / texelArea * faceAreaPerSolidAngle(point.a, point.b);
+    return densityAt(uint32_t((point.face * n + texel(point.b)) * n + texel(point.a)), point.a, point.b);
 }
 
 } // namespace shprobe

@@ -83,6 +83,7 @@ class SkySampler {
     const DiscreteDistribution& texels() const { return texels_; }
 
   private:
+    double densityAt(uint32_t texel, double a, double b) const;
     int faceSize_ = 0;
     DiscreteDistribution texels_; // face after face, rows top to bottom
 };

@@ -89,6 +89,7 @@ void requireOptions(const RayBakeOptions& options) {
         refuse("the cache spacing must be a finite number of 0 or more");
     if (options.raysPerTexel < 1 || options.raysPerTexel > 1024)
         refuse("rays per texel must be in 1..1024, got " + std::to_string(options.raysPerTexel));
+    requireViewRays(options.faceSize, options.raysPerTexel);
     if (options.visibilitySize < 0 || options.visibilitySize > 64)
         refuse("the visibility map's size must be in 0..64, got " + std::to_string(options.visibilitySize));
     if (options.cacheRefinement < 0 || options.cacheRefinement > kMaxCacheRefinement)
@@ -115,10 +116,15 @@ struct Meeting {
 constexpr double kFar = std::numeric_limits<double>::infinity();
 
 // One of a probe's rays and the surface it met, if any, before it is shaded.
+// Compact: a probe keeps all its rays until it knows whether it is inside geometry; the surface is
+// described again when the ray is shaded.
 struct ViewRay {
     glm::dvec3 direction{0.0};
-    std::optional<Meeting> meeting;
-    bool backFace() const { return meeting && meeting->surface.backFace; }
+    double distance = kFar;
+    glm::dvec2 barycentric{0.0}; // where the surface is described (moved in from the edges)
+    uint32_t triangle = 0;
+    bool met = false;
+    bool backFace = false;
 };
 
 // A probe's view before it is shaded: its rays in the order they were cast (texel by texel, s x s
@@ -222,16 +228,16 @@ World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
 }
 
 BounceLight autoBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes) {
-    const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world);
-    const int s = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
-    const int g = int(std::ceil(std::sqrt(double(options.gatherRays))));
+    const double spacing = cacheSpacingFor(world, options.cacheSpacing);
+    const int s = squareSide(options.raysPerTexel), g = squareSide(options.gatherRays);
     const double pathRays = double(probes) * kFaceCount * options.faceSize * options.faceSize * s * s;
     const double cacheRays = double(cachePointCount(world, spacing)) * g * g;
     constexpr double kCacheShare = 0.25;
     return cacheRays >= kCacheShare * pathRays ? BounceLight::Paths : BounceLight::Cache;
 }
 
-double defaultCacheSpacing(const World& world) {
+double cacheSpacingFor(const World& world, double asked) {
+    if (asked > 0.0) return asked;
     const double diagonal = glm::length(glm::dvec3(world.boundsMax) - glm::dvec3(world.boundsMin));
     return diagonal > 0.0 ? diagonal / kDefaultCacheCells : 1.0;
 }
@@ -252,6 +258,14 @@ void addSeenSuns(const RayCaster& caster, std::span<const SceneSun> suns, const 
         for (size_t i = 0; i < radiance.rgb.size(); ++i)
             radiance.rgb[i] += glm::dvec3(sun.irradiance) * basis[i];
     }
+}
+
+void requireViewRays(int faceSize, int raysPerTexel) {
+    const int s = squareSide(raysPerTexel);
+    if (double(kFaceCount) * faceSize * faceSize * s * s <= kMaxViewRays) return;
+    throw Error(ErrorKind::Input, "scene: faces " + std::to_string(faceSize) + " and " +
+                                      std::to_string(s * s) +
+                                      " rays a texel make a probe's view of more than 2^28 rays");
 }
 
 bool insideGeometry(uint32_t backFaceTexels, int faceSize, double share) {
@@ -281,7 +295,7 @@ struct RayBaker::State {
     glm::dvec3 arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, ProbePaths* paths,
                         uint64_t& rays, std::optional<double> cosineDensity = std::nullopt);
     glm::dvec3 leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays,
-                       double emissionShare = 1.0);
+                       double emissionWeight = 1.0);
     double emissionShare(const Meeting& meeting, const glm::dvec3& direction, double cosineDensity) const;
     glm::dvec3 bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
     glm::dvec3 emitterIrradiance(const SurfaceHit& hit, const glm::dvec3& u, uint64_t& rays) const;
@@ -306,11 +320,11 @@ struct RayBaker::State {
 
 void RayBaker::State::layOutCache() {
     const World& world = shading.world();
-    gatherDirections = StratifiedCosineDirections(int(std::ceil(std::sqrt(double(options.gatherRays)))));
-    texelSide = int(std::ceil(std::sqrt(double(options.raysPerTexel))));
+    gatherDirections = StratifiedCosineDirections(squareSide(options.gatherRays));
+    texelSide = squareSide(options.raysPerTexel);
     visibilityRange = visibilityRangeOf(world);
     if (options.bounceLight == BounceLight::Paths) return;
-    const double spacing = options.cacheSpacing > 0.0 ? options.cacheSpacing : defaultCacheSpacing(world);
+    const double spacing = cacheSpacingFor(world, options.cacheSpacing);
     CacheQueries queries{
         .gather =
             [this](int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
@@ -367,13 +381,13 @@ glm::dvec3 RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const
 }
 
 // What a surface leaves towards the ray that met it with `bounce` bounces: nothing from a back face,
-// else `emissionShare` of its emission and the suns' light plus bounce's irradiance, reflected.
+// else `emissionWeight` times its emission and the suns' light plus bounce's irradiance, reflected.
 // `paths` continues the probe's paths (BounceLight::Paths; none for the cache's gathers).
 glm::dvec3 RayBaker::State::leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays,
-                                    double emissionShare) {
+                                    double emissionWeight) {
     if (hit.backFace) return glm::dvec3(0.0);
     const glm::dvec3 direct =
-        emissionShare * hit.emission +
+        emissionWeight * hit.emission +
         reflectedSunLight(shading.suns(), hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
     if (bounce == 0 || hit.albedo == glm::dvec3(0.0)) return direct;
     return direct + hit.albedo * std::numbers::inv_pi * bouncedIrradiance(bounce, hit, paths, rays);
@@ -397,10 +411,10 @@ glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit,
                                               uint64_t& rays) {
     if (options.bounceLight == BounceLight::Cache)
         return cache->irradiance(bounce, hit.triangle, hit.frontSide ? 0 : 1, hit.barycentric, hit.rayOrigin);
-    const glm::dvec2 u = paths->bounceDirection(options.bounces - bounce);
+    const int level = options.bounces - bounce;
+    const glm::dvec2 u = paths->bounceDirection(level);
     const glm::dvec3 direction = cosineDirection(hit.shadingNormal, u.x, u.y);
     const double density = std::max(glm::dot(hit.shadingNormal, direction), 0.0) * std::numbers::inv_pi;
-    const int level = options.bounces - bounce;
     return emitterIrradiance(hit, paths->emitterPoint(level), rays) +
            skyIrradiance(hit, paths->skyPoint(level), rays) +
            std::numbers::pi * arriving(bounce - 1, hit.rayOrigin, direction, paths, rays, density);
@@ -475,7 +489,7 @@ void RayBaker::State::forEachProbeRay(const glm::dvec3& position, ProbeDirection
     if (directions == ProbeDirections::Sphere)
         forEachSphereRay(sphereRayCount(), options.seed, viewIndex(position), ray);
     else
-        forEachViewRay(options.faceSize, texelSide, options.seed, ray, [](int, int, int) {});
+        forEachViewRay(options.faceSize, texelSide, options.seed, ray);
 }
 
 // The index of the random streams of a view from `position` (view_rays.h placeIndex).
@@ -497,11 +511,14 @@ ProbeLook RayBaker::State::look(const glm::dvec3& position, ProbeDirections dire
     look.rays.reserve(size_t(sphereRayCount()));
     forEachProbeRay(position, directions, [&](const glm::dvec3& direction) {
         ++rays;
-        ViewRay ray{direction, intersect(position, direction)};
-        const double distance = ray.meeting ? ray.meeting->distance : kFar;
-        look.moments.add(direction, distance);
-        look.nearest.add(direction, distance, ray.backFace());
-        look.rays.push_back(std::move(ray));
+        ViewRay ray{direction};
+        if (const std::optional<Meeting> meeting = intersect(position, direction))
+            ray = {
+                direction, meeting->distance,        meeting->surface.barycentric, meeting->surface.triangle,
+                true,      meeting->surface.backFace};
+        look.moments.add(direction, ray.distance);
+        look.nearest.add(direction, ray.distance, ray.backFace);
+        look.rays.push_back(ray);
     });
     look.backFaceTexels = backFaceTexels(look.rays, directions);
     return look;
@@ -511,7 +528,7 @@ ProbeLook RayBaker::State::look(const glm::dvec3& position, ProbeDirections dire
 uint32_t RayBaker::State::backFaceTexels(std::span<const ViewRay> rays, ProbeDirections directions) const {
     const size_t perTexel = size_t(texelSide) * size_t(texelSide);
     auto backFacing = [](auto first, auto last) {
-        return size_t(std::count_if(first, last, [](const ViewRay& ray) { return ray.backFace(); }));
+        return size_t(std::count_if(first, last, [](const ViewRay& ray) { return ray.backFace; }));
     };
     if (directions == ProbeDirections::Sphere)
         return uint32_t(backFacing(rays.begin(), rays.end()) / perTexel);
@@ -524,14 +541,16 @@ uint32_t RayBaker::State::backFaceTexels(std::span<const ViewRay> rays, ProbeDir
 // The radiance a view's ray brings back, its path numbered `index` (ProbePaths): the sky, or what
 // its surface leaves.
 glm::dvec3 RayBaker::State::shadeRay(const ViewRay& ray, uint32_t index, ProbePaths& paths, uint64_t& rays) {
-    if (!ray.meeting) return shading.skyRadiance(ray.direction);
+    if (!ray.met) return shading.skyRadiance(ray.direction);
     paths.startRay(index);
-    return leaving(options.bounces, ray.meeting->surface, &paths, rays);
+    return leaving(options.bounces, shading.describe(ray.triangle, ray.barycentric, ray.direction), &paths,
+                   rays);
 }
 
 // A texel view's cube map: each texel the mean of its s x s rays (alpha: 1 where they met mostly
 // the back of a one-sided material). Paths are numbered face by face along a Morton curve over the
-// texels, each texel's rays in a row (ProbePaths).
+// texels, each texel's rays in a row from a multiple of bit_ceil(s^2), so that aligned blocks of
+// numbers are whole texels (ProbePaths).
 Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays) {
     const uint32_t n = uint32_t(options.faceSize), perTexel = uint32_t(texelSide * texelSide);
     const uint32_t faceCodes = std::bit_ceil(n) * std::bit_ceil(n);
@@ -539,13 +558,13 @@ Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook
     Cubemap radiance = makeCubemap(options.faceSize);
     for (uint32_t t = 0; t < uint32_t(radiance.texels.size()); ++t) {
         const uint32_t face = t / (n * n), j = t % (n * n) / n, i = t % n;
-        const uint32_t first = (face * faceCodes + mortonCode(i, j)) * perTexel;
+        const uint32_t first = (face * faceCodes + mortonCode(i, j)) * std::bit_ceil(perTexel);
         glm::dvec3 sum(0.0);
         size_t backFacing = 0;
         for (uint32_t k = 0; k < perTexel; ++k) {
             const ViewRay& ray = look.rays[size_t(t) * perTexel + k];
             sum += shadeRay(ray, first + k, paths, rays);
-            backFacing += ray.backFace() ? 1 : 0;
+            backFacing += ray.backFace ? 1 : 0;
         }
         radiance.texels[t] =
             glm::vec4(glm::vec3(sum / double(perTexel)), 2 * backFacing > perTexel ? 1.0f : 0.0f);

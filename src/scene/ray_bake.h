@@ -41,6 +41,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -114,8 +115,20 @@ constexpr double kDefaultCacheCells = 64.0;
 // The World lit by the sky's suns too (RayBakeOptions::skySuns).
 World withSuns(const World& world, const std::vector<SceneSun>& skySuns);
 
-// The cache spacing of RayBakeOptions::cacheSpacing 0: the world's diagonal / kDefaultCacheCells.
-double defaultCacheSpacing(const World& world);
+// The cache spacing asked for, or where that is 0 the world's diagonal / kDefaultCacheCells.
+double cacheSpacingFor(const World& world, double asked);
+
+// The side s of the s x s rays that `count` rays are rounded up to (per texel, per cache point).
+inline int squareSide(int count) {
+    return int(std::ceil(std::sqrt(double(count))));
+}
+
+// The most rays a probe's view may cast, 6 N^2 s^2 (faces N, s x s rays a texel): its rays are kept
+// until it is shaded, and its paths are numbered in 32 bits (Morton codes of 16-bit coordinates).
+constexpr double kMaxViewRays = double(1 << 28);
+// Throws Error(Input) for a view of faces `faceSize` and `raysPerTexel` rays a texel (rounded up to
+// a square) of more than kMaxViewRays rays.
+void requireViewRays(int faceSize, int raysPerTexel);
 
 // Where the cache point of `triangle` at `barycentric` on side 0 (front) or 1 gathers from: there,
 // or, on an edge or a corner where a wall meets the next, moved towards the triangle's centroid (1%

@@ -24,10 +24,8 @@ inline uint64_t viewStreamBase(uint64_t seed) {
 }
 
 // Calls ray(direction) for each ray of a view of faces `faceSize` with s x s rays per texel (faces,
-// rows, columns, then the texel's strata row by row, in order), and texel(face, i, j) after each
-// texel's.
-template <typename Ray, typename Texel>
-void forEachViewRay(int faceSize, int s, uint64_t seed, Ray&& ray, Texel&& texel) {
+// rows, columns, then the texel's strata row by row, in order).
+template <typename Ray> void forEachViewRay(int faceSize, int s, uint64_t seed, Ray&& ray) {
     const uint32_t n = uint32_t(faceSize), side = uint32_t(s);
     for (int face = 0; face < kFaceCount; ++face)
         for (uint32_t j = 0; j < n; ++j)
@@ -40,7 +38,6 @@ void forEachViewRay(int faceSize, int s, uint64_t seed, Ray&& ray, Texel&& texel
                         ray(faceDirection(face, glsl::stratumCoord(i, sa, side, ja, n),
                                           glsl::stratumCoord(j, sb, side, jb, n)));
                     }
-                texel(face, int(i), int(j));
             }
 }
 

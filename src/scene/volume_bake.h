@@ -172,7 +172,8 @@ ProbeVolume bakeVolumeByRays(const World& world, const ProbeSky& sky, const Volu
 // The same probes' static radiance and transfer (formats/probe_volume.h), the sky's basis functions
 // drawn at `skyFaceSize` (the footprint of the probes' rays); radiance and irradiance hold the static
 // part. Throws Error(Input) for options whose bake is not linear in the sky (cache refinement, which
-// halves cells where their light differs; suns taken out of a sky).
+// halves cells where their light differs; suns taken out of a sky; bounces by paths, which sample
+// the sky where it is bright).
 ProbeVolume bakeVolumeTransfer(const World& world, int skyFaceSize, const VolumeBakeOptions& options,
                                const ProbeGrid& grid, ProbeRange range, VolumeBakeReport& report,
                                const VolumeProgress& progress = {});
