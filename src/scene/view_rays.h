@@ -10,6 +10,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -48,12 +49,14 @@ constexpr uint64_t kSphereViewStream = ~uint64_t(0) - 1;
 // The index of the streams of a view from `position` in a world whose box starts at `boundsMin` and
 // whose diagonal is `size`: its place in that box, (position - boundsMin) / size rounded to 2^-16,
 // mixed. A probe at the same place in a scaled scene draws the same random numbers, so that scenes
-// scaled about the origin bake to the same volume (docs/scene-probes.md, "Scale").
+// scaled about the origin bake to the same volume (docs/scene-probes.md, "Scale"). A world without
+// triangles has no box (its bounds are not finite): there every place is the same.
 inline uint64_t placeIndex(const glm::dvec3& position, const glm::dvec3& boundsMin, double size) {
     uint64_t index = 0;
     for (int axis = 0; axis < 3; ++axis) {
         const double place = std::nearbyint((position[axis] - boundsMin[axis]) / size * 0x1p16);
-        index = mix64(index + uint64_t(int64_t(place)));
+        const double bounded = std::isfinite(place) ? std::clamp(place, -0x1p62, 0x1p62) : 0.0;
+        index = mix64(index + uint64_t(int64_t(bounded)));
     }
     return index;
 }
