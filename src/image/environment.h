@@ -124,10 +124,10 @@ FaceRows crossFaceRows(const Image& cross, Layout layout, std::vector<glm::vec4>
 void copyCrossToCubemap(Environment& environment);
 // Resamples every face to a new size (area average when shrinking, bilinear when growing).
 Cubemap resizeCubemap(const Cubemap& cubemap, int faceSize);
-// A smaller cube map of radiance whose every texel is the mean of the texels whose centres it holds,
-// each weighted by its solid angle: where faceSize divides the map's, each texel keeps exactly its
-// share of the integral (a resize by face area does not: texels shrink towards a face's corners).
-// The map itself where faceSize is not smaller.
+// A smaller cube map of radiance whose every texel is the solid-angle mean of the map over it, a
+// texel of the map that straddles its edges counted by the part inside: each texel keeps exactly its
+// share of the integral at any two sizes (a resize by face area does not: texels shrink towards a
+// face's corners). The map itself where faceSize is not smaller.
 Cubemap averageCubemap(const Cubemap& cubemap, int faceSize);
 
 // The built-in default environment: a sky gradient, darker ground and a small, very bright sun

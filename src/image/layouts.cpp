@@ -323,23 +323,60 @@ Cubemap equirectToCubemap(const Image& equirect, int faceSize, WorkCounter* prog
     return cubemap;
 }
 
+namespace {
+
+// One axis of averageCubemap: the edges of a face's `from` texels and of its `to` texels merged,
+// each piece between two edges with the texel of either grid it lies in. Edges are compared as the
+// integers i to and j from (multiples of 1 / (from to) of the face), so that shared edges are one.
+struct AxisPiece {
+    double end; // face-local coordinate in [-1, 1]; the piece begins where the one before ends
+    int source;
+    int target;
+};
+std::vector<AxisPiece> mergedEdges(int from, int to) {
+    std::vector<AxisPiece> pieces;
+    const int64_t span = int64_t(from) * to;
+    for (int source = 0, target = 0; source < from && target < to;) {
+        const int64_t sourceEnd = int64_t(source + 1) * to, targetEnd = int64_t(target + 1) * from;
+        const int64_t end = std::min(sourceEnd, targetEnd);
+        pieces.push_back({2.0 * double(end) / double(span) - 1.0, source, target});
+        source += sourceEnd == end ? 1 : 0;
+        target += targetEnd == end ? 1 : 0;
+    }
+    return pieces;
+}
+
+} // namespace
+
+// Each piece where a source texel and a target texel overlap adds the source's value times the
+// piece's exact solid angle (cube-map corner formula) to the target; the target's value is that sum
+// over its solid angle (the sum of its pieces'). A row of corner terms serves all six faces.
 Cubemap averageCubemap(const Cubemap& cubemap, int faceSize) {
     const int n = cubemap.faceSize;
     if (faceSize >= n) return cubemap;
     Cubemap result = makeCubemap(faceSize); // throws for a face size below 1
     std::vector<double> weights(result.texels.size(), 0.0);
     std::vector<glm::dvec3> sums(result.texels.size(), glm::dvec3(0.0));
-    for (int face = 0; face < kFaceCount; ++face) {
-        for (int j = 0; j < n; ++j) {
-            for (int i = 0; i < n; ++i) {
-                const size_t to =
-                    (size_t(face) * faceSize + size_t((2 * j + 1) * faceSize / (2 * n))) * faceSize +
-                    size_t((2 * i + 1) * faceSize / (2 * n));
-                const double solidAngle = texelSolidAngle(i, j, n);
-                sums[to] += solidAngle * glm::dvec3(cubemap.at(face, i, j));
+    const std::vector<AxisPiece> pieces = mergedEdges(n, faceSize);
+    auto cornerRow = [&](double b) {
+        std::vector<double> row{cornerSolidAngle(-1.0, b)};
+        for (const AxisPiece& piece : pieces)
+            row.push_back(cornerSolidAngle(piece.end, b));
+        return row;
+    };
+    std::vector<double> top = cornerRow(-1.0);
+    for (const AxisPiece& rowPiece : pieces) {
+        const std::vector<double> bottom = cornerRow(rowPiece.end);
+        for (int face = 0; face < kFaceCount; ++face) {
+            const size_t targetRow = (size_t(face) * faceSize + size_t(rowPiece.target)) * faceSize;
+            for (size_t k = 0; k < pieces.size(); ++k) {
+                const double solidAngle = top[k] - bottom[k] - top[k + 1] + bottom[k + 1];
+                const size_t to = targetRow + size_t(pieces[k].target);
+                sums[to] += solidAngle * glm::dvec3(cubemap.at(face, pieces[k].source, rowPiece.source));
                 weights[to] += solidAngle;
             }
         }
+        top = bottom;
     }
     for (size_t t = 0; t < result.texels.size(); ++t)
         result.texels[t] = glm::vec4(glm::vec3(sums[t] / weights[t]), 1.0f);

@@ -60,13 +60,13 @@ Face majorAxisFace(const glm::dvec3& d) {
     return d.z >= 0.0 ? Face::PositiveZ : Face::NegativeZ;
 }
 
-// F(a, b) = atan2(a b, sqrt(a^2 + b^2 + 1)): the solid angle of the face region between the face
-// center and corner (a, b), signed (docs/conventions.md, "Texel weight").
+} // namespace
+
+// F(a, b): the solid angle of the face region between the face center and corner (a, b), signed
+// (docs/conventions.md, "Texel weight").
 double cornerSolidAngle(double a, double b) {
     return std::atan2(a * b, std::sqrt(a * a + b * b + 1.0));
 }
-
-} // namespace
 
 void requireFaceSize(int faceSize) {
     requirePositiveSize(faceSize, "cube-map face size");

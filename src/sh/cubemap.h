@@ -79,6 +79,9 @@ FacePoint directionToFace(const glm::dvec3& d);
 // Exact solid angle of texel (i, j) of an N x N face: the four-atan2 formula of docs/conventions.md
 // ("Texel weight"), in double (relative error about 1e-9 at N = 4096).
 double texelSolidAngle(int i, int j, int faceSize);
+// F(a, b) = atan2(a b, sqrt(a^2 + b^2 + 1)), the solid angle between the face's centre and its
+// point (a, b), signed: a face rectangle's is F(a0, b0) - F(a0, b1) - F(a1, b0) + F(a1, b1).
+double cornerSolidAngle(double a, double b);
 
 // Equirect (latitude-longitude) maps, docs/conventions.md: pixel (i, j) of W x H.
 glm::dvec3 equirectDirection(int i, int j, int width, int height);
