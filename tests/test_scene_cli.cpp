@@ -752,7 +752,8 @@ TEST_F(SceneCommand, AnEmbreePluginThatCannotBeLoadedIsNamed) {
 }
 
 // Bad options get one line each before any work: a grid that is not three counts, bricks without a
-// whole previous bounce's volume, the cpu's cache refinement for the gpu.
+// whole previous bounce's volume, the cpu's cache refinement for the gpu, a probe's view of more rays
+// than its paths can number (6 x 4096^2 x 64 = 6.4e9 on either backend).
 TEST_F(SceneCommand, BadOptionsAreRefused) {
     const std::string scene = cornellBox();
     expectFailure({{"scene", scene, "--grid", "3,3", "-o", "OUT"}, 2, {"--grid"}, "out.shpv"});
@@ -778,6 +779,12 @@ TEST_F(SceneCommand, BadOptionsAreRefused) {
          2,
          {"--probe-directions sphere is for the cpu backend"},
          "out.shpv"});
+    for (const char* backend : {"cpu", "gpu"})
+        expectFailure({{"scene", scene, "--grid", "2,2,2", "--face-size", "4096", "--rays-per-texel", "64",
+                        "--backend", backend, "-o", "OUT"},
+                       2,
+                       {"faces 4096 and 64 rays a texel", "more than 2^28 rays"},
+                       "out.shpv"});
 }
 
 // The regular files under `folder` and their bytes, to tell that a refused run changed none.
