@@ -5,9 +5,8 @@
 // alpha SHPROBE_CAPTURE_BACK_FACE where most of them met the back of a one-sided material, as
 // capture.frag writes it for recordProbeBake and count_back_faces.comp. Bounces come from the cache,
 // or from each ray's hit continued as a path (ray_paths.glsl), the paths numbered as the cpu numbers
-// them (scene/ray_bake.cpp shadeTexels): face by face along a Morton curve over the texels, each
-// texel's s^2 rays in a row, none left between texels, so that neighbouring rays' bounces are
-// stratified together.
+// them (sobol_words.h firstTexelPath): face by face along a Morton curve over the texels, each
+// texel's s^2 rays in a row, so that neighbouring rays' bounces are stratified together.
 //
 //   set 0: ray_capture_interface.h; SHPROBE_RAYS_INPUT: RayProbe probes[];
 //          SHPROBE_RAYS_OUTPUT: rgba32f image2DArray, 6 layers per probe, in GENERAL;
@@ -44,7 +43,6 @@ void main() {
     uint n = rc.sizes.x;
     uint s = rc.work.w;
     uint faceTexels = n * n;
-    uint mortonSide = 1u << uint(findMSB(n - 1u) + 1); // bit_ceil(n): a face's Morton codes fit its square
     RayProbe at = probes[probe];
     for (uint texel = gl_GlobalInvocationID.x; texel < 6u * faceTexels; texel += gl_NumWorkGroups.x * gl_WorkGroupSize.x) {
         uint face = texel / faceTexels;
@@ -53,7 +51,7 @@ void main() {
         uvec2 stream = mix64Words(add64(rc.seed.zw, uvec2(texel, 0u)));
         uint viewRay = texel * s * s; // the ray's index in the probe's view (scene/view_rays.h's order)
         uint firstRay = 6u * faceTexels * s * s * probe;
-        uint path = (face * mortonSide * mortonSide + mortonCode(i, j)) * s * s;
+        uint path = firstTexelPath(face, i, j, n, s * s);
         vec3 sum = vec3(0.0);
         uint backFaces = 0u;
         for (uint sb = 0u; sb < s; ++sb) {

@@ -8,8 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 namespace shprobe {
 namespace {
@@ -107,6 +109,31 @@ TEST(Emitters, PowerHeuristicWeightsSumToOne) {
     for (const double a : {0.0, 0.1, 1.0, 7.5})
         for (const double b : {0.2, 1.0, 30.0})
             EXPECT_NEAR(powerHeuristic(a, b) + powerHeuristic(b, a), 1.0, 1e-15);
+}
+
+// A texel view's paths take every number below 6 N^2 s^2 exactly once where N is a power of two
+// (firstTexelPath), so that each aligned block of Sobol' points is used whole; with N not a power
+// of two the numbers stay distinct. Numbering each texel from a multiple of the power of two at
+// least s^2 (the rule before) left 7 of every 16 points unused at 9 rays a texel, and its paths'
+// bounces were noisier than at 4 rays (2CylinderEngine 8^3: 3.6% of L00 worst against 1.3%).
+TEST(Emitters, TexelPathsTakeEveryNumberOnce) {
+    for (const uint32_t n : {8u, 6u}) {
+        for (const uint32_t perTexel : {1u, 4u, 9u, 16u}) {
+            const uint32_t side = glsl::powerOfTwoAtLeast(n);
+            std::vector<int> uses(size_t(6 * side * side * perTexel), 0);
+            for (uint32_t face = 0; face < 6; ++face)
+                for (uint32_t j = 0; j < n; ++j)
+                    for (uint32_t i = 0; i < n; ++i)
+                        for (uint32_t k = 0; k < perTexel; ++k)
+                            ++uses.at(firstTexelPath(face, i, j, n, perTexel) + k);
+            EXPECT_LE(*std::max_element(uses.begin(), uses.end()), 1) << n << " " << perTexel;
+            const size_t used = size_t(std::count(uses.begin(), uses.end(), 1));
+            EXPECT_EQ(used, size_t(6 * n * n * perTexel)) << n << " " << perTexel;
+            if (n == side) {
+                EXPECT_EQ(used, uses.size()) << perTexel;
+            }
+        }
+    }
 }
 
 } // namespace

@@ -68,6 +68,23 @@ SHPROBE_FN uint mortonCode(uint i, uint j) {
     return spreadBits(i) | (spreadBits(j) << 1u);
 }
 
+// The smallest power of two at least n (n >= 1).
+SHPROBE_FN uint powerOfTwoAtLeast(uint n) {
+    uint power = 1u;
+    while (power < n)
+        power <<= 1u;
+    return power;
+}
+
+// The number of the first path of texel (i, j) of `face` in a view of faces n, perTexel rays a
+// texel: face by face along a Morton curve (a face's codes fill the square of the power of two at
+// least n), each texel's rays in a row and none left between texels: a Sobol' set's points left
+// unused in every block (the first 9 of each 16) stratify the paths worse than fewer rays do.
+SHPROBE_FN uint firstTexelPath(uint face, uint i, uint j, uint n, uint perTexel) {
+    uint side = powerOfTwoAtLeast(n);
+    return (face * side * side + mortonCode(i, j)) * perTexel;
+}
+
 SHPROBE_END
 
 #endif

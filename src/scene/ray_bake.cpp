@@ -20,7 +20,6 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <bit>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -548,17 +547,14 @@ glm::dvec3 RayBaker::State::shadeRay(const ViewRay& ray, uint32_t index, ProbePa
 }
 
 // A texel view's cube map: each texel the mean of its s x s rays (alpha: 1 where they met mostly
-// the back of a one-sided material). Paths are numbered face by face along a Morton curve over the
-// texels, each texel's s^2 rays in a row with no numbers left between texels: a Sobol' set's points
-// left unused in every block (the first 9 of each 16) stratify the paths worse than fewer rays do.
+// the back of a one-sided material), its paths numbered from firstTexelPath (glsl/sobol_words.h).
 Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays) {
     const uint32_t n = uint32_t(options.faceSize), perTexel = uint32_t(texelSide * texelSide);
-    const uint32_t faceCodes = std::bit_ceil(n) * std::bit_ceil(n);
     ProbePaths paths(options.seed, viewIndex(position));
     Cubemap radiance = makeCubemap(options.faceSize);
     for (uint32_t t = 0; t < uint32_t(radiance.texels.size()); ++t) {
         const uint32_t face = t / (n * n), j = t % (n * n) / n, i = t % n;
-        const uint32_t first = (face * faceCodes + mortonCode(i, j)) * perTexel;
+        const uint32_t first = firstTexelPath(face, i, j, n, perTexel);
         glm::dvec3 sum(0.0);
         size_t backFacing = 0;
         for (uint32_t k = 0; k < perTexel; ++k) {

@@ -155,6 +155,7 @@ inline glm::dvec2 owenScrambledSobol(uint32_t index, uint64_t seed, bool shuffle
     return {double(point.x) * 0x1p-32, double(point.y) * 0x1p-32};
 }
 
+using glsl::firstTexelPath;
 using glsl::mortonCode;
 
 // A uniformly distributed rotation, from the unit quaternion of three uniforms (Shoemake, "Uniform
