@@ -12,7 +12,8 @@
 //          SHPROBE_RAYS_OUTPUT: rgba32f image2DArray, 6 layers per probe, in GENERAL;
 //          SHPROBE_RAYS_DISTANCES: float distances[], each ray's hit distance, negative for a back
 //          face of a one-sided material (visibility maps, relocation); SHPROBE_RAYS_PICKS and
-//          SHPROBE_RAYS_PICK_DENSITIES: the paths' emitters and sky texels
+//          SHPROBE_RAYS_PICK_DENSITIES: the paths' emitters and sky texels; SHPROBE_RAYS_STRATUM_SKY:
+//          the shadow rays to the sky each stratum adds (paths.w)
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce;
 //          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths and their tables)
 //   specialization: 0 = workgroup width, 2 = SHPROBE_RAYS_BY_PATHS for bounces by paths; dispatch (texel groups, probes, 1): each invocation takes
@@ -36,6 +37,25 @@ layout(set = 0, binding = SHPROBE_RAYS_OUTPUT, rgba32f) uniform writeonly image2
 layout(std430, set = 0, binding = SHPROBE_RAYS_DISTANCES) writeonly buffer Distances {
     float distances[];
 };
+layout(std430, set = 0, binding = SHPROBE_RAYS_STRATUM_SKY) readonly buffer StratumSky {
+    uint stratumSkyRays[];
+};
+
+// The sky seen through stratum (sa, sb) of texel (i, j) of `face` (scene/ray_bake.cpp
+// skyThroughStratum): the mean of what the view's ray (`escaped` with `sky`) and `count` shadow rays
+// more see of it, uniform in the stratum on its face, at the points of the stratum's own
+// Owen-scrambled Sobol' set, named by mix64(mix64(probe seed + SHPROBE_STRATUM_SKY_USE) + path).
+vec3 skyThroughStratum(RayProbe at, uint face, uint i, uint j, uvec2 stratum, uint count, uint path, vec3 sky) {
+    uint n = rc.sizes.x, s = rc.work.w;
+    uvec2 set = mix64Words(add64(mix64Words(add64(at.paths.xy, uvec2(SHPROBE_STRATUM_SKY_USE, 0u))), uvec2(path, 0u)));
+    for (uint e = 0u; e < count; ++e) {
+        vec2 u = vec2(owenScrambledSobolWords(e, set, false) >> 8u) * (1.0 / 16777216.0);
+        vec3 direction = normalize(unnormalizedFaceDirection(face, stratumCoord(i, stratum.x, s, u.x, n),
+                                                             stratumCoord(j, stratum.y, s, u.y, n)));
+        if (!bvhAnyHit(rc.sizes.w, at.position.xyz, direction, 0.0, RAY_FAR)) sky += skyTexel(direction, rc.sizes.y);
+    }
+    return sky / float(count + 1u);
+}
 
 void main() {
     uint probe = gl_GlobalInvocationID.y;
@@ -63,6 +83,15 @@ void main() {
                 PathNumbers numbers = PathNumbers(at.paths.xy, path++);
                 RayArrival arrival = kByPaths ? pathArriving(at.position.xyz, direction, numbers)
                                                      : arriving(at.position.xyz, direction, rc.work.z != 0u);
+                uint strata = n * s;
+                uint skyRays = rc.paths.w == 0u ? 0u
+                                                : stratumSkyRays[(face * strata + j * s + sb) * strata + i * s + sa];
+                if (skyRays > 0u) {
+                    bool escaped = arrival.distance == RAY_FAR;
+                    arrival.radiance = (escaped ? vec3(0.0) : arrival.radiance) +
+                                       skyThroughStratum(at, face, i, j, uvec2(sa, sb), skyRays, numbers.ray,
+                                                         escaped ? arrival.radiance : vec3(0.0));
+                }
                 sum += arrival.radiance;
                 backFaces += arrival.backFace ? 1u : 0u;
                 distances[firstRay + viewRay++] = arrival.backFace ? -arrival.distance : arrival.distance;

@@ -24,6 +24,8 @@ namespace {
 constexpr int kFaceSize = 8;
 constexpr int kFootprintFaceSize = 16;
 
+// The strata's rays towards a bright sky are off (RayBakeOptions::skyThroughStrata), as in the
+// transfer's bakes: they follow the sky, so a bake under another sky would cast other rays.
 VolumeBakeOptions bakeOptions(const ProbeGrid& grid, int bounces) {
     const double cell = smallestCellEdge(grid);
     return {.rays = {.order = 3,
@@ -31,7 +33,8 @@ VolumeBakeOptions bakeOptions(const ProbeGrid& grid, int bounces) {
                      .raysPerTexel = 4,
                      .bounces = bounces,
                      .gatherRays = 16,
-                     .relocation = {.limit = 0.45 * cell, .minFrontDistance = 0.1 * cell}},
+                     .relocation = {.limit = 0.45 * cell, .minFrontDistance = 0.1 * cell},
+                     .skyThroughStrata = false},
             .dilate = true};
 }
 

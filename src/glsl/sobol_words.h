@@ -85,6 +85,11 @@ SHPROBE_FN uint firstTexelPath(uint face, uint i, uint j, uint n, uint perTexel)
     return (face * side * side + mortonCode(i, j)) * perTexel;
 }
 
+// The set of a probe's Owen-scrambled Sobol' sets, beyond every bounce's, from which the shadow
+// rays towards the sky in a texel view's strata draw (scene/emitters.h stratumSkyRays): stratum k
+// of a texel draws from the set named by mix64(mix64(probe seed + this) + its path's number).
+#define SHPROBE_STRATUM_SKY_USE 65536u
+
 SHPROBE_END
 
 #endif

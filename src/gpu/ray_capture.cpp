@@ -35,6 +35,7 @@ enum RayBuffer : size_t {
     kCacheB,
     kPicks,
     kPickDensities,
+    kStratumSky,
     kRayBufferCount
 };
 
@@ -154,7 +155,8 @@ glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCap
     constants.seed =
         glm::uvec4(uint32_t(rays.options.seed), 0u, uint32_t(viewStream), uint32_t(viewStream >> 32));
     const uint32_t pathBounces = rays.options.bounceLight == BounceLight::Paths ? rays.options.bounces : 0;
-    constants.paths = glm::uvec4(uint32_t(pathBounces), rays.emitters, rays.skyTexels, 0u);
+    constants.paths =
+        glm::uvec4(uint32_t(pathBounces), rays.emitters, rays.skyTexels, rays.stratumSky ? 1u : 0u);
     return constants;
 }
 
@@ -227,6 +229,7 @@ ProbeRaySet createProbeRaySet(const Context& context, const SceneCapture& captur
     targets.push_back({set.distances.buffer});
     targets.push_back({rays.buffers[kPicks].buffer});
     targets.push_back({rays.buffers[kPickDensities].buffer});
+    targets.push_back({rays.buffers[kStratumSky].buffer});
     set.set = createDescriptorSet(context, set.pool, rays.probes, targets);
     return set;
 }
@@ -333,6 +336,10 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.buffers[kCacheB] = createStorage(context, zeros, "surface cache");
     rays.buffers[kPicks] = createStorage(context, nextEvents.picks, "next-event picks");
     rays.buffers[kPickDensities] = createStorage(context, nextEvents.densities, "next-event densities");
+    const std::vector<uint32_t> stratumSky =
+        stratumSkyRays(shading.sky(), capture.options.faceSize, int(rays.texelSide));
+    rays.stratumSky = !stratumSky.empty();
+    rays.buffers[kStratumSky] = createStorage(context, stratumSky, "strata's sky rays");
     rays.probes =
         createRayProgram(context, true, cached || options.bounces == 0 ? 0u : SHPROBE_RAYS_BY_PATHS);
     if (!cached || options.bounces == 0) return rays;

@@ -87,6 +87,30 @@ double EmitterSampler::areaDensity(uint32_t triangle) const {
     return probability > 0.0 ? probability / triangleArea(*world_, triangle) : 0.0;
 }
 
+std::vector<uint32_t> stratumSkyRays(const Cubemap& sky, int faceSize, int side) {
+    constexpr double kShareOfView = 0.25;
+    constexpr double kMostInAStratum = 4096.0;
+    if (side < 2) return {};
+    const int m = faceSize * side, n = sky.faceSize;
+    std::vector<double> weights(size_t(kFaceCount) * size_t(m) * size_t(m));
+    double total = 0.0;
+    for (size_t c = 0; c < weights.size(); ++c) {
+        const int face = int(c / (size_t(m) * m)), j = int(c / m % m), i = int(c % m);
+        // The sky's texel holding the stratum's centre, as skyRadiance reads it there.
+        const glm::vec4 texel = sky.at(face, (2 * i + 1) * n / (2 * m), (2 * j + 1) * n / (2 * m));
+        const double weight = double(std::max({texel.r, texel.g, texel.b})) * texelSolidAngle(i, j, m);
+        weights[c] = std::isfinite(weight) && weight > 0.0 ? weight : 0.0;
+        total += weights[c];
+    }
+    if (!(total > 0.0)) return {};
+    const double budget = kShareOfView * double(weights.size());
+    std::vector<uint32_t> rays(weights.size());
+    for (size_t c = 0; c < weights.size(); ++c)
+        rays[c] = uint32_t(std::min(kMostInAStratum, std::floor(budget * weights[c] / total)));
+    if (std::all_of(rays.begin(), rays.end(), [](uint32_t count) { return count == 0; })) return {};
+    return rays;
+}
+
 SkySampler::SkySampler(const Cubemap& sky) : faceSize_(sky.faceSize), texels_(skyPower(sky)) {}
 
 SkyDirection SkySampler::sample(double u0, double u1, double u2) const {

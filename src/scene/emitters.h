@@ -88,6 +88,16 @@ class SkySampler {
     DiscreteDistribution texels_; // face after face, rows top to bottom
 };
 
+// The shadow rays a texel view of faces `faceSize` with side x side rays a texel adds towards the sky
+// in each of its strata (the strata of all faces, rows of faceSize side, in order): a quarter of the
+// view's rays shared out in proportion to the sky's largest channel at the stratum's centre times
+// the stratum's solid angle, rounded down, at most 4096 a stratum. The sky a stratum shows is then
+// the mean of what its ray and these see of it (scene/ray_bake.cpp skyThroughStratum), so that a small
+// bright patch of sky partly behind an edge is measured by many rays, not won or lost by one; a
+// smooth sky gets none (no stratum reaches 4 times the mean). Empty where side < 2 (rays through
+// the texels' centres) or no stratum gets a ray.
+std::vector<uint32_t> stratumSkyRays(const Cubemap& sky, int faceSize, int side);
+
 // The power heuristic's weight (exponent 2) of a sample drawn with density `chosen` where another
 // technique would have drawn it with density `other` (both per unit solid angle).
 inline double powerHeuristic(double chosen, double other) {

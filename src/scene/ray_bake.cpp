@@ -284,6 +284,7 @@ struct RayBaker::State {
     std::unique_ptr<SurfaceCache> cache;
     StratifiedCosineDirections gatherDirections{1}; // g x g gather rays per point
     int texelSide = 1;                              // s: s x s rays per texel
+    std::vector<uint32_t> stratumSky;               // per stratum: its shadow rays to the sky
     double visibilityRange = 1.0; // the farthest distance visibility records: the world's diagonal
     std::atomic<uint64_t> probeRays{0};
     std::atomic<uint64_t> cacheRays{0};
@@ -309,6 +310,8 @@ struct RayBaker::State {
     ProbeLook look(const glm::dvec3& position, ProbeDirections directions, uint64_t& rays) const;
     uint32_t backFaceTexels(std::span<const ViewRay> rays, ProbeDirections directions) const;
     glm::dvec3 shadeRay(const ViewRay& ray, uint32_t index, ProbePaths& paths, uint64_t& rays);
+    glm::dvec3 skyThroughStratum(const glm::dvec3& position, const ViewRay& ray, const glm::uvec4& stratum,
+                                 uint32_t count, uint64_t seed, uint64_t& rays) const;
     Cubemap shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays);
     ShCoefficients shadeSphere(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays);
     std::optional<glm::vec3> relocation(const glm::dvec3& position, const NearestHits& seen,
@@ -321,6 +324,8 @@ void RayBaker::State::layOutCache() {
     const World& world = shading.world();
     gatherDirections = StratifiedCosineDirections(squareSide(options.gatherRays));
     texelSide = squareSide(options.raysPerTexel);
+    if (options.directions == ProbeDirections::Texels && options.skyThroughStrata)
+        stratumSky = stratumSkyRays(shading.sky(), options.faceSize, texelSide);
     visibilityRange = visibilityRangeOf(world);
     if (options.bounceLight == BounceLight::Paths) return;
     const double spacing = cacheSpacingFor(world, options.cacheSpacing);
@@ -547,9 +552,12 @@ glm::dvec3 RayBaker::State::shadeRay(const ViewRay& ray, uint32_t index, ProbePa
 }
 
 // A texel view's cube map: each texel the mean of its s x s rays (alpha: 1 where they met mostly
-// the back of a one-sided material), its paths numbered from firstTexelPath (glsl/sobol_words.h).
+// the back of a one-sided material), its paths numbered from firstTexelPath (glsl/sobol_words.h), the
+// sky in a stratum that stratumSkyRays gives rays seen by them too (skyThroughStratum).
 Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays) {
-    const uint32_t n = uint32_t(options.faceSize), perTexel = uint32_t(texelSide * texelSide);
+    const uint32_t n = uint32_t(options.faceSize), s = uint32_t(texelSide), perTexel = s * s;
+    const uint64_t skySeed =
+        mix64(probePathSeed(options.seed, viewIndex(position)) + SHPROBE_STRATUM_SKY_USE);
     ProbePaths paths(options.seed, viewIndex(position));
     Cubemap radiance = makeCubemap(options.faceSize);
     for (uint32_t t = 0; t < uint32_t(radiance.texels.size()); ++t) {
@@ -559,13 +567,44 @@ Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook
         size_t backFacing = 0;
         for (uint32_t k = 0; k < perTexel; ++k) {
             const ViewRay& ray = look.rays[size_t(t) * perTexel + k];
-            sum += shadeRay(ray, first + k, paths, rays);
+            const uint32_t sa = k % s, sb = k / s;
+            const uint32_t skyRays =
+                stratumSky.empty() ? 0 : stratumSky[((face * n + j) * s + sb) * n * s + i * s + sa];
+            if (skyRays == 0) {
+                sum += shadeRay(ray, first + k, paths, rays);
+            } else {
+                sum += (ray.met ? shadeRay(ray, first + k, paths, rays) : glm::dvec3(0.0)) +
+                       skyThroughStratum(position, ray, {face, i, j, k}, skyRays, mix64(skySeed + first + k),
+                                         rays);
+            }
             backFacing += ray.backFace ? 1 : 0;
         }
         radiance.texels[t] =
             glm::vec4(glm::vec3(sum / double(perTexel)), 2 * backFacing > perTexel ? 1.0f : 0.0f);
     }
     return radiance;
+}
+
+// The sky seen through the stratum (face, i, j, k: texel (i, j)'s ray k) of a texel view's `ray`: the
+// mean of what it and `count` shadow rays more see of it, uniform in the stratum on its face as the
+// view's rays are (forEachViewRay), at the points of the stratum's own Owen-scrambled Sobol' set
+// (named by `seed`), to a float's 24 bits as the gpu draws them.
+glm::dvec3 RayBaker::State::skyThroughStratum(const glm::dvec3& position, const ViewRay& ray,
+                                              const glm::uvec4& stratum, uint32_t count, uint64_t seed,
+                                              uint64_t& rays) const {
+    const uint32_t n = uint32_t(options.faceSize), s = uint32_t(texelSide);
+    glm::dvec3 sum = ray.met ? glm::dvec3(0.0) : shading.skyRadiance(ray.direction);
+    for (uint32_t e = 0; e < count; ++e) {
+        const glm::uvec2 point =
+            glsl::owenScrambledSobolWords(e, glm::uvec2(uint32_t(seed), uint32_t(seed >> 32)), false);
+        const glm::vec2 u = glm::vec2(point >> 8u) * 0x1p-24f;
+        const glm::dvec3 direction =
+            faceDirection(int(stratum.x), glsl::stratumCoord(stratum.y, stratum.w % s, s, u.x, n),
+                          glsl::stratumCoord(stratum.z, stratum.w / s, s, u.y, n));
+        ++rays;
+        if (!occluded(position, direction)) sum += shading.skyRadiance(direction);
+    }
+    return sum / double(count + 1);
 }
 
 // A sphere view's radiance, each ray projected with the weight 4 pi / R (Monte-Carlo projection).

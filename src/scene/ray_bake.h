@@ -100,6 +100,10 @@ struct RayBakeOptions {
     ProbeRelocation relocation;
     ProbeDirections directions = ProbeDirections::Texels;
     BounceLight bounceLight = BounceLight::Cache;
+    // A texel view's strata where the sky is bright add shadow rays towards it (emitters.h
+    // stratumSkyRays); off where the bake must be linear in the sky (transfer), as the rays a
+    // stratum adds follow the sky.
+    bool skyThroughStrata = true;
     uint64_t seed = 1;
 };
 

@@ -87,9 +87,11 @@ ProbeVolume bakeVolumeTransfer(const World& world, int skyFaceSize, const Volume
     const size_t columns = size_t(order) * size_t(order);
     const uint64_t probes = range.end - range.begin;
     uint64_t probesBefore = 0, raysBefore = 0;
+    VolumeBakeOptions linear = options; // the same rays under every sky
+    linear.rays.skyThroughStrata = false;
     auto bake = [&](const World& lit, const ShCoefficients& sky) {
         VolumeBakeReport part;
-        ProbeVolume volume = bakeVolumeByRays(lit, {evaluateCubemap(sky, skyFaceSize), {}}, options, grid,
+        ProbeVolume volume = bakeVolumeByRays(lit, {evaluateCubemap(sky, skyFaceSize), {}}, linear, grid,
                                               range, part, [&](uint64_t done, uint64_t rays) {
                                                   if (progress)
                                                       progress(probesBefore + done, raysBefore + rays);
