@@ -26,15 +26,21 @@ std::vector<double> emittedPower(const World& world) {
     return weights;
 }
 
-// Each texel's largest channel times its solid angle.
+// Each texel's largest channel times its solid angle; none where no texel holds more than 4 times
+// the mean (SkySampler).
 std::vector<double> skyPower(const Cubemap& sky) {
     const uint32_t n = uint32_t(sky.faceSize);
     std::vector<double> weights(sky.texels.size());
+    double total = 0.0, largest = 0.0;
     for (uint32_t t = 0; t < uint32_t(weights.size()); ++t) {
         const glm::vec4 texel = sky.texels[t];
         weights[t] = double(std::max({texel.r, texel.g, texel.b})) *
                      texelSolidAngle(int(t % n), int(t / n % n), int(n));
+        if (!(std::isfinite(weights[t]) && weights[t] > 0.0)) continue;
+        total += weights[t];
+        largest = std::max(largest, weights[t]);
     }
+    if (!(largest > 4.0 * total / double(weights.size()))) return std::vector<double>(weights.size(), 0.0);
     return weights;
 }
 
