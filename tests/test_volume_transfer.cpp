@@ -24,8 +24,9 @@ namespace {
 constexpr int kFaceSize = 8;
 constexpr int kFootprintFaceSize = 16;
 
-// The strata's rays towards a bright sky are off (RayBakeOptions::skyThroughStrata), as in the
-// transfer's bakes: they follow the sky, so a bake under another sky would cast other rays.
+// The options asked of bakeVolumeTransfer, which turns the strata's rays towards a bright sky off
+// (RayBakeOptions::skyThroughStrata: they follow the sky, so a bake under another sky would cast
+// other rays); directBake's bakes turn them off too, to cast the transfer's rays.
 VolumeBakeOptions bakeOptions(const ProbeGrid& grid, int bounces) {
     const double cell = smallestCellEdge(grid);
     return {.rays = {.order = 3,
@@ -33,9 +34,15 @@ VolumeBakeOptions bakeOptions(const ProbeGrid& grid, int bounces) {
                      .raysPerTexel = 4,
                      .bounces = bounces,
                      .gatherRays = 16,
-                     .relocation = {.limit = 0.45 * cell, .minFrontDistance = 0.1 * cell},
-                     .skyThroughStrata = false},
+                     .relocation = {.limit = 0.45 * cell, .minFrontDistance = 0.1 * cell}},
             .dilate = true};
+}
+
+ProbeVolume directBake(const World& world, const Cubemap& sky, const ProbeGrid& grid, int bounces) {
+    VolumeBakeOptions options = bakeOptions(grid, bounces);
+    options.rays.skyThroughStrata = false;
+    VolumeBakeReport report;
+    return bakeVolumeByRays(world, {sky, {}}, options, grid, {0, grid.probeCount()}, report);
 }
 
 // A sky with every band present and no symmetry: the built-in sky's projection at order 3.
@@ -87,8 +94,7 @@ TEST(VolumeTransfer, RelitEqualsTheBakeUnderTheBandLimitedSky) {
         ProbeVolume relit =
             bakeVolumeTransfer(world, kFootprintFaceSize, bakeOptions(grid, bounces), grid, range, report);
         relightVolume(relit, sky);
-        const ProbeVolume direct = bakeVolumeByRays(world, {evaluateCubemap(sky, kFootprintFaceSize), {}},
-                                                    bakeOptions(grid, bounces), grid, range, report);
+        const ProbeVolume direct = directBake(world, evaluateCubemap(sky, kFootprintFaceSize), grid, bounces);
         const double worst = worstDifference(relit, direct);
         std::printf("bounces %d: relit against baked, worst %.2e of the mean L00\n", bounces, worst);
         EXPECT_LT(worst, 1e-4) << bounces;
@@ -116,8 +122,7 @@ TEST(VolumeTransfer, TurnedSkyEqualsTheBakeUnderTheTurnedSky) {
     ProbeVolume relit =
         bakeVolumeTransfer(world, kFootprintFaceSize, bakeOptions(grid, 1), grid, range, report);
     relightVolume(relit, rotate(makeShRotation(R, 3), sky));
-    const ProbeVolume direct =
-        bakeVolumeByRays(world, {turned, {}}, bakeOptions(grid, 1), grid, range, report);
+    const ProbeVolume direct = directBake(world, turned, grid, 1);
     const double worst = worstDifference(relit, direct);
     std::printf("turned yaw 70, pitch 25: relit against baked, worst %.2e of the mean L00\n", worst);
     EXPECT_LT(worst, 1e-4);

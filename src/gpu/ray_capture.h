@@ -54,7 +54,8 @@ struct RayCapture {
     uint32_t cachePoints = 0;     // over all lattices and sides; 0 with paths
     uint32_t emitters = 0;        // emissive triangles the paths sample (EmitterSampler)
     uint32_t skyTexels = 0;       // sky texels the paths sample (SkySampler)
-    bool stratumSky = false;      // the view's strata add shadow rays to the sky (stratumSkyRays)
+    bool stratumSky = false;      // the view's strata add shadow rays to the sky (stratumSkyRays;
+                                  // always asked: the gpu bakes no transfer, see skyThroughStrata)
     uint32_t gatherSide = 1;      // g
     uint32_t texelSide = 1;       // s
     double visibilityRange = 1.0; // the farthest distance a visibility map records (visibilityRangeOf)

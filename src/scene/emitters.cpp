@@ -26,7 +26,7 @@ std::vector<double> emittedPower(const World& world) {
     return weights;
 }
 
-// Each texel's largest channel times its solid angle; none where no texel holds more than 4 times
+// Each texel's largest channel times its solid angle; none where no texel holds at least 4 times
 // the mean (SkySampler).
 std::vector<double> skyPower(const Cubemap& sky) {
     const uint32_t n = uint32_t(sky.faceSize);
@@ -40,7 +40,7 @@ std::vector<double> skyPower(const Cubemap& sky) {
         total += weights[t];
         largest = std::max(largest, weights[t]);
     }
-    if (!(largest > 4.0 * total / double(weights.size()))) return std::vector<double>(weights.size(), 0.0);
+    if (!(largest >= 4.0 * total / double(weights.size()))) return std::vector<double>(weights.size(), 0.0);
     return weights;
 }
 

@@ -68,12 +68,12 @@ struct SkyDirection {
 };
 
 // A texel of a sky cube map is picked with probability proportional to its largest channel times
-// its solid angle, and a point uniformly in it on its face. A sky none of whose texels holds more
-// than 4 times the mean texel's power is not sampled (empty): cosine rays find its light as well,
-// and a shadow ray a bounce towards it (always blocked in a closed room) would cost a fifth to a
-// third of a bake's time for nothing. the density per solid angle is then
+// its solid angle, and a point uniformly in it on its face: the density per solid angle is then
 // that probability times (N / 2)^2 (1 + a^2 + b^2)^(3/2) at face point (a, b), the second factor the
 // area a unit solid angle covers on the face. Texels read as SceneShading::skyRadiance reads them.
+// A sky none of whose texels holds at least 4 times the mean texel's power is not sampled (empty):
+// cosine rays find its light as well, and a shadow ray a bounce towards it (always blocked in a
+// closed room) would cost 15-30% of a bake's time for nothing.
 class SkySampler {
   public:
     explicit SkySampler(const Cubemap& sky);
@@ -94,11 +94,11 @@ class SkySampler {
 // The shadow rays a texel view of faces `faceSize` with side x side rays a texel adds towards the sky
 // in each of its strata (the strata of all faces, rows of faceSize side, in order): a quarter of the
 // view's rays shared out in proportion to the sky's largest channel at the stratum's centre times
-// the stratum's solid angle, rounded down, at most 4096 a stratum. The sky a stratum shows is then
-// the mean of what its ray and these see of it (scene/ray_bake.cpp skyThroughStratum), so that a small
-// bright patch of sky partly behind an edge is measured by many rays, not won or lost by one; a
-// smooth sky gets none (no stratum reaches 4 times the mean). Empty where side < 2 (rays through
-// the texels' centres) or no stratum gets a ray.
+// the stratum's solid angle, rounded down (so none below 4 times the mean), at most 4096 a stratum.
+// The sky a stratum shows is then the mean of what its ray and these see of it (scene/ray_bake.cpp
+// skyThroughStratum), so that a small bright patch of sky partly behind an edge is measured by many
+// rays, not won or lost by one; a smooth sky gets none. Empty where side < 2 (rays through the
+// texels' centres) or no stratum gets a ray.
 std::vector<uint32_t> stratumSkyRays(const Cubemap& sky, int faceSize, int side);
 
 // The power heuristic's weight (exponent 2) of a sample drawn with density `chosen` where another
