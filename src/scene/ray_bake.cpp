@@ -298,8 +298,9 @@ struct RayBaker::State {
                        double emissionWeight = 1.0);
     double emissionShare(const Meeting& meeting, const glm::dvec3& direction, double cosineDensity) const;
     glm::dvec3 bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
-    glm::dvec3 emitterIrradiance(const SurfaceHit& hit, const glm::dvec3& u, uint64_t& rays) const;
-    glm::dvec3 skyIrradiance(const SurfaceHit& hit, const glm::dvec3& u, uint64_t& rays) const;
+    glm::dvec3 emitterIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level,
+                                 uint64_t& rays) const;
+    glm::dvec3 skyIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level, uint64_t& rays) const;
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
@@ -419,17 +420,18 @@ glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit,
     const glm::dvec2 u = paths->bounceDirection(level);
     const glm::dvec3 direction = cosineDirection(hit.shadingNormal, u.x, u.y);
     const double density = std::max(glm::dot(hit.shadingNormal, direction), 0.0) * std::numbers::inv_pi;
-    return emitterIrradiance(hit, paths->emitterPoint(level), rays) +
-           skyIrradiance(hit, paths->skyPoint(level), rays) +
+    return emitterIrradiance(hit, *paths, level, rays) + skyIrradiance(hit, *paths, level, rays) +
            std::numbers::pi * arriving(bounce - 1, hit.rayOrigin, direction, paths, rays, density);
 }
 
-// The emitters' irradiance at a hit from one point sampled on them (EmitterSampler), seen by a
-// shadow ray: L_e max(0, n.w) / p(w), p the point's density per solid angle, weighted by the power
-// heuristic against the cosine rays' density.
-glm::dvec3 RayBaker::State::emitterIrradiance(const SurfaceHit& hit, const glm::dvec3& u,
+// The emitters' irradiance at a hit from one point sampled on them (EmitterSampler) with the path's
+// numbers at bounce `level`, seen by a shadow ray: L_e max(0, n.w) / p(w), p the point's density
+// per solid angle, weighted by the power heuristic against the cosine rays' density. The numbers
+// are drawn only where there are emitters (a fifth of a path's time went to drawing them).
+glm::dvec3 RayBaker::State::emitterIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level,
                                               uint64_t& rays) const {
     if (emitters.empty()) return glm::dvec3(0.0);
+    const glm::dvec3 u = paths.emitterPoint(level);
     const EmitterPoint point = emitters.sample(u.x, u.y, u.z);
     const glm::dvec3 toLight = point.position - hit.rayOrigin;
     const double distance = glm::length(toLight);
@@ -447,11 +449,13 @@ glm::dvec3 RayBaker::State::emitterIrradiance(const SurfaceHit& hit, const glm::
     return light.emission * (cosine / density * powerHeuristic(density, cosine * std::numbers::inv_pi));
 }
 
-// The sky's irradiance at a hit from one direction sampled towards its bright texels (SkySampler),
-// seen by a shadow ray: L max(0, n.w) / p(w), weighted by the power heuristic against the cosine
-// rays' density.
-glm::dvec3 RayBaker::State::skyIrradiance(const SurfaceHit& hit, const glm::dvec3& u, uint64_t& rays) const {
+// The sky's irradiance at a hit from one direction sampled towards its bright texels (SkySampler)
+// with the path's numbers at bounce `level`, seen by a shadow ray: L max(0, n.w) / p(w), weighted by
+// the power heuristic against the cosine rays' density.
+glm::dvec3 RayBaker::State::skyIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level,
+                                          uint64_t& rays) const {
     if (skyDirections.empty()) return glm::dvec3(0.0);
+    const glm::dvec3 u = paths.skyPoint(level);
     const SkyDirection sky = skyDirections.sample(u.x, u.y, u.z);
     const double cosine = glm::dot(hit.shadingNormal, sky.direction);
     if (!(cosine > 0.0)) return glm::dvec3(0.0);
