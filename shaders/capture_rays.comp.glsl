@@ -13,10 +13,12 @@
 //          SHPROBE_RAYS_DISTANCES: float distances[], each ray's hit distance, negative for a back
 //          face of a one-sided material (visibility maps, relocation); SHPROBE_RAYS_PICKS and
 //          SHPROBE_RAYS_PICK_DENSITIES: the paths' emitters and sky texels; SHPROBE_RAYS_STRATUM_SKY:
-//          the shadow rays to the sky each stratum adds (paths.w)
+//          the shadow rays to the sky each stratum adds (the variant's SHPROBE_RAYS_STRATUM_SKY_RAYS)
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce;
 //          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths and their tables)
-//   specialization: 0 = workgroup width, 2 = SHPROBE_RAYS_BY_PATHS for bounces by paths; dispatch (texel groups, probes, 1): each invocation takes
+//   specialization: 0 = workgroup width, 2 = the variant's bits (SHPROBE_RAYS_BY_PATHS for bounces by
+//   paths, SHPROBE_RAYS_STRATUM_SKY_RAYS where strata cast rays to the sky); dispatch (texel groups,
+//   probes, 1): each invocation takes
 //   texels x, x + width * groups, ... of probe y.
 #extension GL_GOOGLE_include_directive : require
 #include "gpu_interface.h"
@@ -29,7 +31,8 @@ layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
 // Bounces by paths, or from the cache (or none): a pipeline of each, so that the other's code is not
 // compiled in (lavapipe ran the bounce-0 capture at half speed with both behind a branch).
 layout(constant_id = SHPROBE_SPEC_VARIANT) const uint kVariant = 0u;
-const bool kByPaths = kVariant == SHPROBE_RAYS_BY_PATHS;
+const bool kByPaths = (kVariant & SHPROBE_RAYS_BY_PATHS) != 0u;
+const bool kStratumSky = (kVariant & SHPROBE_RAYS_STRATUM_SKY_RAYS) != 0u;
 layout(std430, set = 0, binding = SHPROBE_RAYS_INPUT) readonly buffer Probes {
     RayProbe probes[];
 };
@@ -84,8 +87,8 @@ void main() {
                 RayArrival arrival = kByPaths ? pathArriving(at.position.xyz, direction, numbers)
                                                      : arriving(at.position.xyz, direction, rc.work.z != 0u);
                 uint strata = n * s;
-                uint skyRays = rc.paths.w == 0u ? 0u
-                                                : stratumSkyRays[(face * strata + j * s + sb) * strata + i * s + sa];
+                uint skyRays =
+                    kStratumSky ? stratumSkyRays[(face * strata + j * s + sb) * strata + i * s + sa] : 0u;
                 if (skyRays > 0u) {
                     bool escaped = arrival.distance == RAY_FAR;
                     arrival.radiance = (escaped ? vec3(0.0) : arrival.radiance) +

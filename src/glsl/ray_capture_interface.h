@@ -36,12 +36,16 @@
 // emitters' points on it (EmitterSampler::areaDensity; 0: never picked).
 #define SHPROBE_RAYS_PICK_DENSITIES 19
 // capture_rays: uint[], per stratum of the view (faces, rows of N s strata, in order) the shadow
-// rays it adds towards the sky (scene/emitters.h stratumSkyRays), where paths.w is 1.
+// rays it adds towards the sky (scene/emitters.h stratumSkyRays), read by the variant with
+// SHPROBE_RAYS_STRATUM_SKY_RAYS.
 #define SHPROBE_RAYS_STRATUM_SKY 20
 // The bindings of capture_rays.
 #define SHPROBE_RAYS_PROBE_BINDINGS 21
 // capture_rays' SHPROBE_SPEC_VARIANT for bounces by paths (the default, 0: from the cache).
 #define SHPROBE_RAYS_BY_PATHS 1u
+// capture_rays' SHPROBE_SPEC_VARIANT bit for strata that cast shadow rays to the sky (a variant of
+// its own, as the paths are: lavapipe ran the bounce-0 capture 1.25x slower with the code compiled in).
+#define SHPROBE_RAYS_STRATUM_SKY_RAYS 2u
 
 SHPROBE_BEGIN
 
@@ -82,8 +86,7 @@ struct RayCaptureConstants {
     uvec4 seed;  // x: the random numbers' seed; y: the bounce gathered; zw: the words (low, high)
                  // of the probes' view stream base (scene/view_rays.h viewStreamBase)
     uvec4 paths; // capture_rays: x: the bounces continued as paths from each ray's hit (0: none, the
-                 // cache's if work.z); y: emitter triangles; z: sky texels picked; w: 1 where
-                 // the view's strata add shadow rays to the sky (SHPROBE_RAYS_STRATUM_SKY)
+                 // cache's if work.z); y: emitter triangles; z: sky texels picked
 };
 
 SHPROBE_END

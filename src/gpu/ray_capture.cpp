@@ -113,7 +113,8 @@ NextEventTable nextEventTable(const SceneShading& shading) {
     return table;
 }
 
-// capture_rays (probes: its variant, SHPROBE_RAYS_BY_PATHS or 0) or cache_gather.
+// capture_rays (probes: its variant, the bits SHPROBE_RAYS_BY_PATHS and SHPROBE_RAYS_STRATUM_SKY_RAYS)
+// or cache_gather.
 ComputeProgram createRayProgram(const Device& device, bool probes, uint32_t variant = 0) {
     std::vector<VkDescriptorType> bindings(probes ? SHPROBE_RAYS_PROBE_BINDINGS : SHPROBE_RAYS_BINDINGS,
                                            VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
@@ -155,8 +156,7 @@ glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCap
     constants.seed =
         glm::uvec4(uint32_t(rays.options.seed), 0u, uint32_t(viewStream), uint32_t(viewStream >> 32));
     const uint32_t pathBounces = rays.options.bounceLight == BounceLight::Paths ? rays.options.bounces : 0;
-    constants.paths =
-        glm::uvec4(uint32_t(pathBounces), rays.emitters, rays.skyTexels, rays.stratumSky ? 1u : 0u);
+    constants.paths = glm::uvec4(uint32_t(pathBounces), rays.emitters, rays.skyTexels, 0u);
     return constants;
 }
 
@@ -340,8 +340,9 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
         stratumSkyRays(shading.sky(), capture.options.faceSize, int(rays.texelSide));
     rays.stratumSky = !stratumSky.empty();
     rays.buffers[kStratumSky] = createStorage(context, stratumSky, "strata's sky rays");
-    rays.probes =
-        createRayProgram(context, true, cached || options.bounces == 0 ? 0u : SHPROBE_RAYS_BY_PATHS);
+    const uint32_t variant = (cached || options.bounces == 0 ? 0u : SHPROBE_RAYS_BY_PATHS) |
+                             (rays.stratumSky ? SHPROBE_RAYS_STRATUM_SKY_RAYS : 0u);
+    rays.probes = createRayProgram(context, true, variant);
     if (!cached || options.bounces == 0) return rays;
     rays.gather = createRayProgram(context, false);
     rays.pool = createDescriptorPool(context, {.sets = 2, .storageBuffers = 2 * SHPROBE_RAYS_BINDINGS});
