@@ -86,9 +86,7 @@ void main() {
                 PathNumbers numbers = PathNumbers(at.paths.xy, path++);
                 RayArrival arrival = kByPaths ? pathArriving(at.position.xyz, direction, numbers)
                                                      : arriving(at.position.xyz, direction, rc.work.z != 0u);
-                uint strata = n * s;
-                uint skyRays =
-                    kStratumSky ? stratumSkyRays[(face * strata + j * s + sb) * strata + i * s + sa] : 0u;
+                uint skyRays = kStratumSky ? stratumSkyRays[stratumIndex(face, i, j, sa, sb, n, s)] : 0u;
                 if (skyRays > 0u) {
                     bool escaped = arrival.distance == RAY_FAR;
                     arrival.radiance = (escaped ? vec3(0.0) : arrival.radiance) +

@@ -28,6 +28,8 @@ namespace {
 
 using testing::GpuTest;
 
+struct L00Agreement; // compareL00's
+
 class RayCaptureTest : public GpuTest {
   protected:
     // The GPU's probes at `positions`, faces n, rays and bounces as options say.
@@ -42,6 +44,11 @@ class RayCaptureTest : public GpuTest {
         destroySceneCapture(context(), capture);
         return probes;
     }
+    // Bounces by paths on the gpu against the cpu's, the same options (defined after compareL00);
+    // prints the agreement after `what`.
+    L00Agreement pathsAgainstCpu(const World& world, const Cubemap& sky,
+                                 std::span<const glm::dvec3> positions, int faceSize, int raysPerTexel,
+                                 int bounces, const char* what);
 };
 
 std::vector<glm::dvec3> gridPositions(const ProbeGrid& grid) {
@@ -288,6 +295,25 @@ L00Agreement compareL00(const std::vector<A>& a, const std::vector<B>& b, int fa
     return agreement;
 }
 
+L00Agreement RayCaptureTest::pathsAgainstCpu(const World& world, const Cubemap& sky,
+                                             std::span<const glm::dvec3> positions, int faceSize,
+                                             int raysPerTexel, int bounces, const char* what) {
+    const std::vector<SceneProbe> gpu =
+        bakeOnGpu(world, sky, positions, faceSize,
+                  {.bounces = bounces, .raysPerTexel = raysPerTexel, .bounceLight = BounceLight::Paths});
+    RayBaker baker(world, sky,
+                   {.faceSize = faceSize,
+                    .raysPerTexel = raysPerTexel,
+                    .bounces = bounces,
+                    .visibilitySize = 0,
+                    .bounceLight = BounceLight::Paths});
+    const L00Agreement agreement = compareL00(gpu, baker.bakeProbes(positions), faceSize);
+    std::printf(
+        "%s, bounce %d, %zu valid probes: gpu against cpu L00 mean %.5f worst %.5f, any coefficient %.5f\n",
+        what, bounces, agreement.probes, agreement.mean, agreement.worst, agreement.worstCoefficient);
+    return agreement;
+}
+
 // The closed Cornell box with its blocks and a 1 m light, 4^3 probes, faces 32^2, one ray per
 // texel and 2 x 2, the default cache (the diagonal / 64) and 64 gather rays, against the cpu with
 // the same options, bounce after bounce, as fractions of the cpu's mean L00. Bounce 0 is the same
@@ -404,18 +430,7 @@ TEST_F(RayCaptureTest, PathsAgreeWithTheCpusPaths) {
     const Cubemap sky = testing::directionalSky(4);
     const std::vector<glm::dvec3> positions = gridPositions(probeGridInWorld(glm::ivec3(4), world));
     for (int bounces : {1, 2}) {
-        const std::vector<SceneProbe> gpu =
-            bakeOnGpu(world, sky, positions, 32, {.bounces = bounces, .bounceLight = BounceLight::Paths});
-        RayBaker baker(world, sky,
-                       {.faceSize = 32,
-                        .raysPerTexel = 1,
-                        .bounces = bounces,
-                        .visibilitySize = 0,
-                        .bounceLight = BounceLight::Paths});
-        const L00Agreement agreement = compareL00(gpu, baker.bakeProbes(positions), 32);
-        std::printf("bounces %d by paths, %zu valid probes: gpu against cpu L00 mean %.5f worst %.5f, any "
-                    "coefficient %.5f\n",
-                    bounces, agreement.probes, agreement.mean, agreement.worst, agreement.worstCoefficient);
+        const L00Agreement agreement = pathsAgainstCpu(world, sky, positions, 32, 1, bounces, "paths");
         EXPECT_LT(agreement.mean, 0.001) << bounces;
         EXPECT_LT(agreement.worst, 0.005) << bounces;
         EXPECT_LT(agreement.worstCoefficient, 0.006) << bounces;
@@ -448,18 +463,7 @@ TEST_F(RayCaptureTest, PathsSampleTheSkysBrightTexelsAsTheCpuDoes) {
     const World& world = testing::openCornellBoxWithBlocks();
     const Cubemap sky = skyWithBrightPatch(16, glm::normalize(glm::dvec3(0.0, 0.3, 1.0)));
     const std::vector<glm::dvec3> positions = gridPositions(probeGridInWorld(glm::ivec3(3), world));
-    const std::vector<SceneProbe> gpu =
-        bakeOnGpu(world, sky, positions, 16, {.bounces = 1, .bounceLight = BounceLight::Paths});
-    RayBaker baker(world, sky,
-                   {.faceSize = 16,
-                    .raysPerTexel = 1,
-                    .bounces = 1,
-                    .visibilitySize = 0,
-                    .bounceLight = BounceLight::Paths});
-    const L00Agreement agreement = compareL00(gpu, baker.bakeProbes(positions), 16);
-    std::printf("a bright patch of sky, %zu valid probes: gpu against cpu L00 mean %.5f worst %.5f, any "
-                "coefficient %.5f\n",
-                agreement.probes, agreement.mean, agreement.worst, agreement.worstCoefficient);
+    const L00Agreement agreement = pathsAgainstCpu(world, sky, positions, 16, 1, 1, "a bright patch of sky");
     EXPECT_GT(agreement.probes, 10u);
     EXPECT_LT(agreement.mean, 0.005);
     EXPECT_LT(agreement.worst, 0.02);
@@ -479,20 +483,8 @@ TEST_F(RayCaptureTest, StrataSeeTheSkysBrightPatchAsOnTheCpu) {
     ASSERT_FALSE(stratumSkyRays(sky, 8, 2).empty());
     const std::vector<glm::dvec3> positions = gridPositions(probeGridInWorld(glm::ivec3(3), world));
     for (int bounces : {0, 1}) {
-        const std::vector<SceneProbe> gpu =
-            bakeOnGpu(world, sky, positions, 8,
-                      {.bounces = bounces, .raysPerTexel = 4, .bounceLight = BounceLight::Paths});
-        RayBaker baker(world, sky,
-                       {.faceSize = 8,
-                        .raysPerTexel = 4,
-                        .bounces = bounces,
-                        .visibilitySize = 0,
-                        .bounceLight = BounceLight::Paths});
-        const L00Agreement agreement = compareL00(gpu, baker.bakeProbes(positions), 8);
-        std::printf(
-            "strata's sky rays, bounce %d, %zu valid probes: gpu against cpu L00 mean %.5f worst %.5f, "
-            "any coefficient %.5f\n",
-            bounces, agreement.probes, agreement.mean, agreement.worst, agreement.worstCoefficient);
+        const L00Agreement agreement =
+            pathsAgainstCpu(world, sky, positions, 8, 4, bounces, "strata's sky rays");
         EXPECT_GT(agreement.probes, 10u);
         EXPECT_LT(agreement.mean, 0.002) << bounces;
         EXPECT_LT(agreement.worst, 0.01) << bounces;

@@ -47,6 +47,13 @@ SHPROBE_FN float stratumCoord(uint i, uint stratum, uint s, float jitter, uint f
     return 2.0f * (float(i) + (float(stratum) + jitter) / float(s)) / float(faceSize) - 1.0f;
 }
 
+// The index of ray (sa, sb) of texel (i, j) of `face` among a view's strata, the view's rays at
+// faces of N s: faces, then rows of N s strata, in order (scene/emitters.h stratumSkyRays).
+SHPROBE_FN uint stratumIndex(uint face, uint i, uint j, uint sa, uint sb, uint faceSize, uint s) {
+    uint strata = faceSize * s;
+    return (face * strata + j * s + sb) * strata + i * s + sa;
+}
+
 // The GPU projection visits the positions (i, j) with i, j < ceil(N / 2), each with its mirror
 // images (N - 1 - i, j), (i, N - 1 - j) and (N - 1 - i, N - 1 - j): four texels per face.
 SHPROBE_FN uint quadrantSize(uint faceSize) {

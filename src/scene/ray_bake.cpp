@@ -560,9 +560,9 @@ glm::dvec3 RayBaker::State::shadeRay(const ViewRay& ray, uint32_t index, ProbePa
 // sky in a stratum that stratumSkyRays gives rays seen by them too (skyThroughStratum).
 Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook& look, uint64_t& rays) {
     const uint32_t n = uint32_t(options.faceSize), s = uint32_t(texelSide), perTexel = s * s;
-    const uint64_t skySeed =
-        mix64(probePathSeed(options.seed, viewIndex(position)) + SHPROBE_STRATUM_SKY_USE);
-    ProbePaths paths(options.seed, viewIndex(position));
+    const uint64_t view = viewIndex(position);
+    const uint64_t skySeed = mix64(probePathSeed(options.seed, view) + SHPROBE_STRATUM_SKY_USE);
+    ProbePaths paths(options.seed, view);
     Cubemap radiance = makeCubemap(options.faceSize);
     for (uint32_t t = 0; t < uint32_t(radiance.texels.size()); ++t) {
         const uint32_t face = t / (n * n), j = t % (n * n) / n, i = t % n;
@@ -571,16 +571,11 @@ Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook
         size_t backFacing = 0;
         for (uint32_t k = 0; k < perTexel; ++k) {
             const ViewRay& ray = look.rays[size_t(t) * perTexel + k];
-            const uint32_t sa = k % s, sb = k / s;
             const uint32_t skyRays =
-                stratumSky.empty() ? 0 : stratumSky[((face * n + j) * s + sb) * n * s + i * s + sa];
-            if (skyRays == 0) {
-                sum += shadeRay(ray, first + k, paths, rays);
-            } else {
-                sum += (ray.met ? shadeRay(ray, first + k, paths, rays) : glm::dvec3(0.0)) +
-                       skyThroughStratum(position, ray, {face, i, j, k}, skyRays, mix64(skySeed + first + k),
-                                         rays);
-            }
+                stratumSky.empty() ? 0 : stratumSky[glsl::stratumIndex(face, i, j, k % s, k / s, n, s)];
+            if (ray.met) sum += shadeRay(ray, first + k, paths, rays);
+            sum +=
+                skyThroughStratum(position, ray, {face, i, j, k}, skyRays, mix64(skySeed + first + k), rays);
             backFacing += ray.backFace ? 1 : 0;
         }
         radiance.texels[t] =
@@ -590,9 +585,9 @@ Cubemap RayBaker::State::shadeTexels(const glm::dvec3& position, const ProbeLook
 }
 
 // The sky seen through the stratum (face, i, j, k: texel (i, j)'s ray k) of a texel view's `ray`: the
-// mean of what it and `count` shadow rays more see of it, uniform in the stratum on its face as the
-// view's rays are (forEachViewRay), at the points of the stratum's own Owen-scrambled Sobol' set
-// (named by `seed`), to a float's 24 bits as the gpu draws them.
+// mean of what it and `count` shadow rays more (none: what the ray sees) see of it, uniform in the stratum on
+// its face as the view's rays are (forEachViewRay), at the points of the stratum's own Owen-scrambled Sobol'
+// set (named by `seed`), to a float's 24 bits as the gpu draws them.
 glm::dvec3 RayBaker::State::skyThroughStratum(const glm::dvec3& position, const ViewRay& ray,
                                               const glm::uvec4& stratum, uint32_t count, uint64_t seed,
                                               uint64_t& rays) const {
