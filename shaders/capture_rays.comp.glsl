@@ -13,7 +13,8 @@
 //          SHPROBE_RAYS_DISTANCES: float distances[], each ray's hit distance, negative for a back
 //          face of a one-sided material (visibility maps, relocation); SHPROBE_RAYS_PICKS and
 //          SHPROBE_RAYS_PICK_DENSITIES: the paths' emitters and sky texels; SHPROBE_RAYS_STRATUM_SKY:
-//          the shadow rays to the sky each stratum adds (the variant's SHPROBE_RAYS_STRATUM_SKY_RAYS)
+//          the shadow rays to the sky each stratum adds (the variant's SHPROBE_RAYS_STRATUM_SKY_RAYS);
+//          SHPROBE_RAYS_SUNLIT_CELLS and SHPROBE_RAYS_SUNLIT_PLANES: the paths' suns' rays into the world
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce;
 //          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths and their tables)
 //   specialization: 0 = workgroup width, 2 = the variant's bits (SHPROBE_RAYS_BY_PATHS for bounces by

@@ -39,8 +39,16 @@
 // rays it adds towards the sky (scene/emitters.h stratumSkyRays), read by the variant with
 // SHPROBE_RAYS_STRATUM_SKY_RAYS.
 #define SHPROBE_RAYS_STRATUM_SKY 20
+// capture_rays: float[], per sun and cell of its plane (SHPROBE_SUNLIT_CELLS^2 a sun, rows in order)
+// the probability SunlitSampler (scene/emitters.h) picks it with; its picks follow the sky texels'
+// in SHPROBE_RAYS_PICKS (paths.w of them).
+#define SHPROBE_RAYS_SUNLIT_CELLS 21
+// capture_rays: SunlitPlane[], one per sun, where its rays into the world start.
+#define SHPROBE_RAYS_SUNLIT_PLANES 22
 // The bindings of capture_rays.
-#define SHPROBE_RAYS_PROBE_BINDINGS 21
+#define SHPROBE_RAYS_PROBE_BINDINGS 23
+// Cells across a sun's plane (SunlitSampler::kCells).
+#define SHPROBE_SUNLIT_CELLS 128u
 // capture_rays' SHPROBE_SPEC_VARIANT for bounces by paths (the default, 0: from the cache).
 #define SHPROBE_RAYS_BY_PATHS 1u
 // capture_rays' SHPROBE_SPEC_VARIANT bit for strata that cast shadow rays to the sky (a variant of
@@ -76,6 +84,15 @@ struct PickedIndex {
     float cumulative;
 };
 
+// A sun's plane (scene/emitters.h SunPlane): cell (i, j) spans corner + [i, i + 1] across +
+// [j, j + 1] down; its rays travel along -toSun.
+struct SunlitPlane {
+    vec4 corner; // xyz; w: the cell's side
+    vec4 across; // xyz
+    vec4 down;   // xyz
+    vec4 toSun;  // xyz: unit
+};
+
 // Push constants of both modules.
 struct RayCaptureConstants {
     uvec4 sizes; // x: probe face size N; y: sky face size; z: sun count; w: BVH node count
@@ -86,7 +103,8 @@ struct RayCaptureConstants {
     uvec4 seed;  // x: the random numbers' seed; y: the bounce gathered; zw: the words (low, high)
                  // of the probes' view stream base (scene/view_rays.h viewStreamBase)
     uvec4 paths; // capture_rays: x: the bounces continued as paths from each ray's hit (0: none, the
-                 // cache's if work.z); y: emitter triangles; z: sky texels picked
+                 // cache's if work.z); y: emitter triangles; z: sky texels picked; w: sun cells
+                 // picked (SunlitSampler)
 };
 
 SHPROBE_END
@@ -96,6 +114,7 @@ static_assert(sizeof(shprobe::glsl::CacheLattice) == 16);
 static_assert(sizeof(shprobe::glsl::CacheGatherPoint) == 32);
 static_assert(sizeof(shprobe::glsl::RayProbe) == 32);
 static_assert(sizeof(shprobe::glsl::PickedIndex) == 8);
+static_assert(sizeof(shprobe::glsl::SunlitPlane) == 64);
 static_assert(sizeof(shprobe::glsl::RayCaptureConstants) == 80);
 #endif
 

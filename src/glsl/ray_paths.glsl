@@ -18,6 +18,12 @@ layout(std430, set = 0, binding = SHPROBE_RAYS_PICKS) readonly buffer Picks {
 layout(std430, set = 0, binding = SHPROBE_RAYS_PICK_DENSITIES) readonly buffer PickDensities {
     float pickDensities[];
 };
+layout(std430, set = 0, binding = SHPROBE_RAYS_SUNLIT_CELLS) readonly buffer SunlitCells {
+    float sunlitCells[];
+};
+layout(std430, set = 0, binding = SHPROBE_RAYS_SUNLIT_PLANES) readonly buffer SunlitPlanes {
+    SunlitPlane sunlitPlanes[];
+};
 
 #define INV_PI 0.318309886183791
 
@@ -57,6 +63,12 @@ vec3 skyNumbers(PathNumbers numbers, uint level) {
                 pathSet(numbers, SETS_PER_BOUNCE * level + 3u, true));
 }
 
+// Three numbers for the sun's ray into the world (SunlitSampler::sample).
+vec3 sunlitNumbers(PathNumbers numbers, uint level) {
+    return vec3(pathSet(numbers, SHPROBE_SUNLIT_USE + 2u * level, true).x,
+                pathSet(numbers, SHPROBE_SUNLIT_USE + 2u * level + 1u, true));
+}
+
 // emitters.h powerHeuristic, as a ratio that no density's square overflows.
 float powerHeuristic(float chosen, float other) {
     if (!(chosen > 0.0)) return 0.0;
@@ -76,6 +88,14 @@ uint pickedIndex(uint first, uint count, float u) {
     return picks[low].index;
 }
 
+// A triangle's point at barycentrics (u, v).
+vec3 trianglePoint(uint triangle, vec2 barycentric) {
+    vec3 p0 = vertices[indices[3u * triangle]].positionU.xyz;
+    vec3 p1 = vertices[indices[3u * triangle + 1u]].positionU.xyz;
+    vec3 p2 = vertices[indices[3u * triangle + 2u]].positionU.xyz;
+    return (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
+}
+
 // EmitterSampler::areaDensity, after the sky texels' probabilities.
 float emitterAreaDensity(uint triangle) {
     return pickDensities[6u * rc.sizes.y * rc.sizes.y + triangle];
@@ -90,11 +110,7 @@ vec3 emitterIrradiance(RaySurface at, PathNumbers numbers, uint level) {
     uint triangle = pickedIndex(0u, rc.paths.y, u.x);
     float root = sqrt(u.y);
     vec2 barycentric = vec2(root * (1.0 - u.z), root * u.z);
-    vec3 p0 = vertices[indices[3u * triangle]].positionU.xyz;
-    vec3 p1 = vertices[indices[3u * triangle + 1u]].positionU.xyz;
-    vec3 p2 = vertices[indices[3u * triangle + 2u]].positionU.xyz;
-    vec3 point = (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
-    vec3 toLight = point - at.leaving;
+    vec3 toLight = trianglePoint(triangle, barycentric) - at.leaving;
     float distance = length(toLight);
     if (!(distance > 0.0)) return vec3(0.0);
     vec3 direction = toLight / distance;
@@ -142,6 +158,77 @@ vec3 skyIrradiance(RaySurface at, PathNumbers numbers, uint level) {
     return skyTexel(direction, n) * (cosine / density * powerHeuristic(density, cosine * INV_PI));
 }
 
+// SunlitSampler::areaDensity: the density per unit area with which sun `sun`'s rays first meet the
+// surface of unit geometric normal `normal` at `position`, were it the first they meet there.
+float sunlitAreaDensity(uint sun, vec3 position, vec3 normal) {
+    if (rc.paths.w == 0u) return 0.0;
+    SunlitPlane plane = sunlitPlanes[sun];
+    float area = plane.corner.w * plane.corner.w;
+    vec3 offset = position - plane.corner.xyz;
+    float i = floor(dot(offset, plane.across.xyz) / area), j = floor(dot(offset, plane.down.xyz) / area);
+    float cells = float(SHPROBE_SUNLIT_CELLS);
+    if (!(i >= 0.0 && i < cells && j >= 0.0 && j < cells)) return 0.0;
+    uint index = (sun * SHPROBE_SUNLIT_CELLS + uint(j)) * SHPROBE_SUNLIT_CELLS + uint(i);
+    return sunlitCells[index] / area * abs(dot(normal, plane.toSun.xyz));
+}
+
+// The light the suns' lit points reflect to `at` (scene/ray_bake.cpp sunlitIrradiance): from a sun's
+// ray into the world, a cell of its plane picked and a uniform point in it, the first surface it
+// meets, where `at` sees it, reflects albedo / pi E max(0, n.l) (its shadow ray to the sun), times
+// max(0, n.w) / p(w), weighted by the power heuristic against the cosine rays' density.
+vec3 sunlitIrradiance(RaySurface at, PathNumbers numbers, uint level) {
+    if (rc.paths.w == 0u) return vec3(0.0);
+    vec3 u = sunlitNumbers(numbers, level);
+    uint cells = SHPROBE_SUNLIT_CELLS;
+    uint index = pickedIndex(rc.paths.y + rc.paths.z, rc.paths.w, u.x);
+    uint sun = index / (cells * cells);
+    SunlitPlane plane = sunlitPlanes[sun];
+    vec3 origin = plane.corner.xyz + (float(index % cells) + u.y) * plane.across.xyz +
+                  (float(index % (cells * cells) / cells) + u.z) * plane.down.xyz;
+    BvhHit hit;
+    if (!bvhClosestHit(rc.sizes.w, origin, -plane.toSun.xyz, 0.0, RAY_FAR, hit)) return vec3(0.0);
+    vec2 barycentric = vec2(hit.u, hit.v);
+    vec3 toLit = trianglePoint(hit.triangle, barycentric) - at.leaving;
+    float distance = length(toLit);
+    if (!(distance > 0.0)) return vec3(0.0);
+    vec3 direction = toLit / distance;
+    float cosine = dot(at.shading, direction);
+    if (!(cosine > 0.0)) return vec3(0.0);
+    RaySurface lit = describeSurface(hit.triangle, barycentric, direction);
+    CaptureSun light = suns[sun];
+    float sunCosine = dot(lit.shading, light.direction.xyz);
+    float litCosine = abs(dot(lit.normal, direction));
+    if (oneSidedBack(lit) || !(sunCosine > 0.0) || !(litCosine > 0.0)) return vec3(0.0);
+    if (bvhAnyHit(rc.sizes.w, at.leaving, direction, 0.0, distance - 2.0 * rc.scale.x)) return vec3(0.0);
+    if (bvhAnyHit(rc.sizes.w, lit.leaving, light.direction.xyz, 0.0, RAY_FAR)) return vec3(0.0);
+    float area = plane.corner.w * plane.corner.w;
+    float density = sunlitCells[index] / area * abs(dot(lit.normal, plane.toSun.xyz)) * distance * distance /
+                    litCosine;
+    if (!(density > 0.0)) return vec3(0.0);
+    vec3 reflected = surfaceAlbedo(lit.material, lit.uv) * INV_PI * light.irradiance.rgb * sunCosine;
+    return reflected * (cosine / density * powerHeuristic(density, cosine * INV_PI));
+}
+
+// The suns' irradiance at a surface a path's bounce met at `position`, `distance` along `direction`
+// drawn with density `cosineDensity` (scene/ray_bake.cpp sunShare): each sun's weighted by the power
+// heuristic against the sunlit points' sampling, which finds the same light too.
+vec3 sharedSunIrradiance(RaySurface met, vec3 position, vec3 direction, float distance, float cosineDensity) {
+    vec3 e = vec3(0.0);
+    float slant = abs(dot(met.normal, direction));
+    for (uint s = 0u; s < rc.sizes.z; ++s) {
+        CaptureSun sun = suns[s];
+        float cosine = dot(met.shading, sun.direction.xyz);
+        if (cosine <= 0.0) continue;
+        if (bvhAnyHit(rc.sizes.w, met.leaving, sun.direction.xyz, 0.0, RAY_FAR)) continue;
+        float area = sunlitAreaDensity(s, position, met.normal);
+        float share = area > 0.0 && slant > 0.0
+                          ? powerHeuristic(cosineDensity, area * distance * distance / slant)
+                          : 1.0;
+        e += sun.irradiance.rgb * (cosine * share);
+    }
+    return e;
+}
+
 // The share of an emitter's light a path's bounce keeps where it meets it at `distance`: the power
 // heuristic against the emitters' own sampling (emitterIrradiance), which finds the same light too.
 float emissionShare(uint triangle, RaySurface met, vec3 direction, float distance, float cosineDensity) {
@@ -166,13 +253,17 @@ RayArrival pathArriving(vec3 origin, vec3 direction, PathNumbers numbers) {
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     float share = 1.0;
+    vec3 position = vec3(0.0), arrivedAlong = direction; // where the last bounce met the surface, and how
+    float bounceDensity = 0.0;                            // 0: the probe's own ray, which counts all
     for (uint level = 0u;; ++level) {
         vec3 reflectance = surfaceAlbedo(surface.material, surface.uv) * INV_PI;
-        radiance += throughput * (share * surfaceEmission(surface.material, surface.uv) +
-                                  reflectance * sunIrradiance(surface.leaving, surface.shading));
+        vec3 sunLight = level == 0u ? sunIrradiance(surface.leaving, surface.shading)
+                                    : sharedSunIrradiance(surface, position, arrivedAlong, hit.t, bounceDensity);
+        radiance += throughput * (share * surfaceEmission(surface.material, surface.uv) + reflectance * sunLight);
         if (level == rc.paths.x || reflectance == vec3(0.0)) break;
         radiance += throughput * reflectance *
-                    (emitterIrradiance(surface, numbers, level) + skyIrradiance(surface, numbers, level));
+                    (emitterIrradiance(surface, numbers, level) + skyIrradiance(surface, numbers, level) +
+                     sunlitIrradiance(surface, numbers, level));
         vec2 u = bounceNumbers(numbers, level);
         vec3 next = cosineDirection(surface.shading, u.x, u.y);
         float density = max(dot(surface.shading, next), 0.0) * INV_PI;
@@ -185,6 +276,9 @@ RayArrival pathArriving(vec3 origin, vec3 direction, PathNumbers numbers) {
         if (oneSidedBack(met)) break;
         share = emissionShare(hit.triangle, met, next, hit.t, density);
         surface = met;
+        position = trianglePoint(hit.triangle, vec2(hit.u, hit.v));
+        arrivedAlong = next;
+        bounceDensity = density;
     }
     return RayArrival(radiance, false, distance);
 }

@@ -90,6 +90,11 @@ SHPROBE_FN uint firstTexelPath(uint face, uint i, uint j, uint n, uint perTexel)
 // of a texel draws from the set named by mix64(mix64(probe seed + this) + its path's number).
 #define SHPROBE_STRATUM_SKY_USE 65536u
 
+// The first of a probe's Owen-scrambled Sobol' sets from which its paths draw the suns' rays into
+// the world (scene/emitters.h SunlitSampler): at bounce level k, set this + 2k for the cell's pick
+// and this + 2k + 1 for the point in the cell.
+#define SHPROBE_SUNLIT_USE 131072u
+
 SHPROBE_END
 
 #endif

@@ -8,6 +8,7 @@
 #include "glsl/ray_capture_interface.h"
 #include "scene/emitters.h"
 #include "scene/ray_bake.h"
+#include "scene/ray_caster.h"
 #include "scene/surface_cache.h"
 #include "scene/view_rays.h"
 #include "sh/cubemap.h"
@@ -36,6 +37,8 @@ enum RayBuffer : size_t {
     kPicks,
     kPickDensities,
     kStratumSky,
+    kSunlitCells,
+    kSunlitPlanes,
     kRayBufferCount
 };
 
@@ -84,12 +87,16 @@ CacheLayout layOutCache(const SceneShading& shading, double spacing) {
     return layout;
 }
 
-// The paths' next-event tables (EmitterSampler's, SkySampler's) as ray_paths.glsl reads them.
+// The paths' next-event tables (EmitterSampler's, SkySampler's, SunlitSampler's) as ray_paths.glsl
+// reads them.
 struct NextEventTable {
-    std::vector<glsl::PickedIndex> picks; // the emitters', then the sky texels'
+    std::vector<glsl::PickedIndex> picks; // the emitters', the sky texels', then the suns' cells
     std::vector<float> densities;         // per sky texel, then per World triangle
+    std::vector<float> sunCells;          // per sun and cell of its plane
+    std::vector<glsl::SunlitPlane> sunPlanes;
     uint32_t emitters = 0;
     uint32_t skyTexels = 0;
+    uint32_t sunlitCells = 0;
 };
 
 void appendPicks(const DiscreteDistribution& distribution, std::vector<glsl::PickedIndex>& picks) {
@@ -97,15 +104,28 @@ void appendPicks(const DiscreteDistribution& distribution, std::vector<glsl::Pic
         picks.push_back({distribution.picked()[k], float(distribution.cumulative()[k])});
 }
 
-NextEventTable nextEventTable(const SceneShading& shading) {
+// `sunlit`: whether the paths sample the suns' lit points (bounces by paths), from rays cast by `caster`.
+NextEventTable nextEventTable(const SceneShading& shading, const RayCaster& caster, bool sunlit) {
     const World& world = shading.world();
     const EmitterSampler emitters(world);
     const SkySampler sky(shading.sky());
+    const SunlitSampler sunCells = sunlit ? SunlitSampler(shading, caster) : SunlitSampler();
     NextEventTable table;
     appendPicks(emitters.triangles(), table.picks);
     table.emitters = uint32_t(table.picks.size());
     appendPicks(sky.texels(), table.picks);
     table.skyTexels = uint32_t(table.picks.size()) - table.emitters;
+    appendPicks(sunCells.cells(), table.picks);
+    table.sunlitCells = uint32_t(table.picks.size()) - table.emitters - table.skyTexels;
+    for (const SunPlane& plane : sunCells.planes()) {
+        table.sunPlanes.push_back({glm::vec4(glm::vec3(plane.corner), float(plane.cellSize)),
+                                   glm::vec4(glm::vec3(plane.across), 0.0f),
+                                   glm::vec4(glm::vec3(plane.down), 0.0f),
+                                   glm::vec4(glm::vec3(plane.toSun), 0.0f)});
+        const size_t first = (table.sunPlanes.size() - 1) * SunlitSampler::kCells * SunlitSampler::kCells;
+        for (size_t cell = 0; cell < size_t(SunlitSampler::kCells) * SunlitSampler::kCells; ++cell)
+            table.sunCells.push_back(float(sunCells.cells().probability(uint32_t(first + cell))));
+    }
     for (uint32_t t = 0; t < uint32_t(shading.sky().texels.size()); ++t)
         table.densities.push_back(float(sky.texels().probability(t)));
     for (uint32_t t = 0; t < uint32_t(world.triangleCount()); ++t)
@@ -156,7 +176,7 @@ glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCap
     constants.seed =
         glm::uvec4(uint32_t(rays.options.seed), 0u, uint32_t(viewStream), uint32_t(viewStream >> 32));
     const uint32_t pathBounces = rays.options.bounceLight == BounceLight::Paths ? rays.options.bounces : 0;
-    constants.paths = glm::uvec4(uint32_t(pathBounces), rays.emitters, rays.skyTexels, 0u);
+    constants.paths = glm::uvec4(uint32_t(pathBounces), rays.emitters, rays.skyTexels, rays.sunlitCells);
     return constants;
 }
 
@@ -230,6 +250,8 @@ ProbeRaySet createProbeRaySet(const Context& context, const SceneCapture& captur
     targets.push_back({rays.buffers[kPicks].buffer});
     targets.push_back({rays.buffers[kPickDensities].buffer});
     targets.push_back({rays.buffers[kStratumSky].buffer});
+    targets.push_back({rays.buffers[kSunlitCells].buffer});
+    targets.push_back({rays.buffers[kSunlitPlanes].buffer});
     set.set = createDescriptorSet(context, set.pool, rays.probes, targets);
     return set;
 }
@@ -322,9 +344,11 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     const CacheLayout cache =
         cached ? layOutCache(shading, cacheSpacingFor(world, options.cacheSpacing)) : CacheLayout{};
     rays.cachePoints = uint32_t(cache.points.size());
-    const NextEventTable nextEvents = nextEventTable(shading);
+    const NextEventTable nextEvents =
+        nextEventTable(shading, BvhRayCaster(rays.bvh), !cached && options.bounces > 0);
     rays.emitters = nextEvents.emitters;
     rays.skyTexels = nextEvents.skyTexels;
+    rays.sunlitCells = nextEvents.sunlitCells;
     rays.buffers.resize(kRayBufferCount);
     rays.buffers[kNodes] = createStorage(context, rays.bvh.nodes, "BVH nodes");
     rays.buffers[kTriangles] = createStorage(context, rays.bvh.triangles, "BVH triangles");
@@ -340,6 +364,8 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
         stratumSkyRays(shading.sky(), capture.options.faceSize, int(rays.texelSide));
     rays.stratumSky = !stratumSky.empty();
     rays.buffers[kStratumSky] = createStorage(context, stratumSky, "strata's sky rays");
+    rays.buffers[kSunlitCells] = createStorage(context, nextEvents.sunCells, "sunlit cells");
+    rays.buffers[kSunlitPlanes] = createStorage(context, nextEvents.sunPlanes, "sun planes");
     const uint32_t variant = (cached || options.bounces == 0 ? 0u : SHPROBE_RAYS_BY_PATHS) |
                              (rays.stratumSky ? SHPROBE_RAYS_STRATUM_SKY_RAYS : 0u);
     rays.probes = createRayProgram(context, true, variant);

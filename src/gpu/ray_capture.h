@@ -54,16 +54,18 @@ struct RayCapture {
     uint32_t cachePoints = 0;     // over all lattices and sides; 0 with paths
     uint32_t emitters = 0;        // emissive triangles the paths sample (EmitterSampler)
     uint32_t skyTexels = 0;       // sky texels the paths sample (SkySampler)
+    uint32_t sunlitCells = 0;     // suns' plane cells the paths sample (SunlitSampler)
     bool stratumSky = false;      // the view's strata add shadow rays to the sky (stratumSkyRays;
                                   // always asked: the gpu bakes no transfer, see skyThroughStrata)
     uint32_t gatherSide = 1;      // g
     uint32_t texelSide = 1;       // s
     double visibilityRange = 1.0; // the farthest distance a visibility map records (visibilityRangeOf)
     glm::vec3 boundsMin{0.0f};    // the world's lower corner, where the probes' paths are named from
-    std::vector<Buffer> buffers;  // the hierarchy's three arrays, the lattices, the gather points, two
-                                  // caches, the paths' picks and densities, the strata's sky rays
-    ComputeProgram probes;        // capture_rays.comp
-    ComputeProgram gather;        // cache_gather.comp
+    std::vector<Buffer>
+        buffers; // the hierarchy's three arrays, the lattices, the gather points, two
+                 // caches, the paths' picks and densities, the strata's sky rays, the suns' cells and planes
+    ComputeProgram probes; // capture_rays.comp
+    ComputeProgram gather; // cache_gather.comp
     VkDescriptorPool pool = VK_NULL_HANDLE;
     std::array<VkDescriptorSet, 2> gatherSets{}; // bounce k gathers with set (k - 1) % 2
 };

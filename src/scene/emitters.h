@@ -4,7 +4,10 @@
 // it by the power heuristic (Veach and Guibas, "Optimally Combining Sampling Techniques for Monte
 // Carlo Rendering", 1995), so that neither estimate counts it twice.
 #pragma once
+#include "glsl/ray_capture_interface.h"
+#include "scene/ray_caster.h"
 #include "scene/scene.h"
+#include "scene/surface_shading.h"
 #include "sh/cubemap.h"
 
 #include <glm/vec2.hpp>
@@ -89,6 +92,72 @@ class SkySampler {
     double densityAt(uint32_t texel, double a, double b) const;
     int faceSize_ = 0;
     DiscreteDistribution texels_; // face after face, rows top to bottom
+};
+
+// A sun's ray into the world (SunlitSampler::sample): it starts outside the world's bounding sphere
+// and travels away from the sun; planeDensity is its origin's density per unit area of the sun's plane.
+struct SunRay {
+    uint32_t sun = 0;
+    glm::dvec3 origin{0.0};
+    glm::dvec3 direction{0.0};
+    double planeDensity = 0.0;
+};
+
+// What a sunlit point reflects to a surface point: L max(0, n.w) / p(w), p(w) the density per solid
+// angle with which it was drawn (0 where none reaches the point), and max(0, n.w).
+struct SunlitLight {
+    glm::dvec3 irradiance{0.0};
+    double density = 0.0;
+    double cosine = 0.0;
+};
+
+// The square of a sun's plane its rays start from, kCells x kCells cells across the world's
+// bounding sphere: cell (i, j) spans corner + [i, i + 1] across + [j, j + 1] down.
+struct SunPlane {
+    glm::dvec3 corner{0.0};
+    glm::dvec3 across{0.0};
+    glm::dvec3 down{0.0};
+    glm::dvec3 toSun{0.0};
+    double cellSize = 0.0;
+};
+
+// Points the suns light, for the light they reflect: where the sun comes in through a small opening,
+// the lit patch of floor lights the room, and a path's cosine rays find that patch by chance. A
+// point is drawn as the first surface a sun's ray meets, the ray started in a cell of the sun's
+// plane picked in proportion to the light that the cell's surfaces reflect (sampled by a ray through
+// its centre when the sampler is made), uniformly in the cell. Its density per unit area of surface is the
+// plane's, times |n.l|. Cells whose rays met nothing lit are never picked: what they light is left
+// to the cosine rays, and the power heuristic keeps both estimates unbiased wherever they overlap; a
+// cell next to a picked one is picked with at least a quarter of its weight, so that a lit patch's
+// edges, where the cell's ray may fall just outside the light, are sampled too. A sun whose beam lights
+// surfaces across a tenth of its square or more is not sampled (kMostLitShare, emitters.cpp).
+class SunlitSampler {
+  public:
+    static constexpr int kCells = int(SHPROBE_SUNLIT_CELLS);
+    SunlitSampler() = default; // empty: no sun
+    // Casts kCells^2 rays a sun; `shading` is of the world `caster` casts against. Both must
+    // outlive the sampler.
+    SunlitSampler(const SceneShading& shading, const RayCaster& caster);
+    bool empty() const { return cells_.empty(); }
+    // The ray for three numbers uniform in [0, 1).
+    SunRay sample(double u0, double u1, double u2) const;
+    // The light that the first surface y met by sample()'s ray reflects of its sun to `at`, where `at`
+    // sees y and y sees the sun (a ray into the world and two shadow rays, counted in `rays`).
+    SunlitLight reflectedTo(const SurfaceHit& at, double u0, double u1, double u2, uint64_t& rays) const;
+    // The density per unit area with which sample()'s rays for sun `sun` first meet the surface of unit
+    // geometric normal `normal` at `position`, were it the first they meet there: 0 where its cell is
+    // never picked.
+    double areaDensity(uint32_t sun, const glm::dvec3& position, const glm::dvec3& normal) const;
+    // The (sun, cell) pairs' distribution, index sun kCells^2 + j kCells + i, and the suns' planes,
+    // for a device that samples as sample() does.
+    const DiscreteDistribution& cells() const { return cells_; }
+    const std::vector<SunPlane>& planes() const { return planes_; }
+
+  private:
+    const SceneShading* shading_ = nullptr;
+    const RayCaster* caster_ = nullptr;
+    std::vector<SunPlane> planes_;
+    DiscreteDistribution cells_{std::vector<double>{}};
 };
 
 // The shadow rays a texel view of faces `faceSize` with side x side rays a texel adds towards the sky

@@ -58,6 +58,12 @@ class ProbePaths {
                          point = set(kSetsPerBounce * level + 3, true);
         return {picks.y, point.x, point.y};
     }
+    // Three numbers for the sun's ray into the world at bounce `level` (SunlitSampler::sample).
+    glm::dvec3 sunlitPoint(int level) const {
+        const glm::dvec2 pick = set(int(SHPROBE_SUNLIT_USE) + 2 * level, true),
+                         point = set(int(SHPROBE_SUNLIT_USE) + 2 * level + 1, true);
+        return {pick.x, point.x, point.y};
+    }
 
   private:
     // The direction; the emitter's and the sky texel's picks; the point on the emitter; in the texel.
@@ -113,6 +119,15 @@ struct Meeting {
 };
 
 constexpr double kFar = std::numeric_limits<double>::infinity();
+
+// How a path's bounce met a surface: the density per solid angle it drew `direction` with and how far
+// it went, against which that surface's emission and the suns' light it reflects are weighted (the
+// power heuristic against the emitters' and the sunlit points' sampling, which find them too).
+struct PathBounce {
+    glm::dvec3 direction{0.0};
+    double cosineDensity = 0.0;
+    double distance = 0.0;
+};
 
 // One of a probe's rays and the surface it met, if any, before it is shaded.
 // Compact: a probe keeps all its rays until it knows whether it is inside geometry; the surface is
@@ -281,6 +296,7 @@ struct RayBaker::State {
     std::unique_ptr<RayCaster> caster;
     EmitterSampler emitters; // the paths' next-event estimation (BounceLight::Paths)
     SkySampler skyDirections;
+    SunlitSampler sunlit; // with paths, bounces and suns
     std::unique_ptr<SurfaceCache> cache;
     StratifiedCosineDirections gatherDirections{1}; // g x g gather rays per point
     int texelSide = 1;                              // s: s x s rays per texel
@@ -295,12 +311,15 @@ struct RayBaker::State {
     glm::dvec3 arriving(int bounce, const glm::dvec3& origin, const glm::dvec3& direction, ProbePaths* paths,
                         uint64_t& rays, std::optional<double> cosineDensity = std::nullopt);
     glm::dvec3 leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays,
-                       double emissionWeight = 1.0);
-    double emissionShare(const Meeting& meeting, const glm::dvec3& direction, double cosineDensity) const;
+                       const PathBounce* from = nullptr);
+    double emissionShare(const SurfaceHit& hit, const PathBounce& from) const;
+    double sunShare(uint32_t sun, const SurfaceHit& hit, const PathBounce& from) const;
     glm::dvec3 bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
     glm::dvec3 emitterIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level,
                                  uint64_t& rays) const;
     glm::dvec3 skyIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level, uint64_t& rays) const;
+    glm::dvec3 sunlitIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level,
+                                uint64_t& rays) const;
     CachePoint gather(int bounce, uint32_t triangle, int side, const glm::dvec2& barycentric, uint64_t stream,
                       uint64_t index);
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to);
@@ -328,7 +347,10 @@ void RayBaker::State::layOutCache() {
     if (options.directions == ProbeDirections::Texels && options.skyThroughStrata)
         stratumSky = stratumSkyRays(shading.sky(), options.faceSize, texelSide);
     visibilityRange = visibilityRangeOf(world);
-    if (options.bounceLight == BounceLight::Paths) return;
+    if (options.bounceLight == BounceLight::Paths) {
+        if (options.bounces > 0) sunlit = SunlitSampler(shading, *caster);
+        return;
+    }
     const double spacing = cacheSpacingFor(world, options.cacheSpacing);
     CacheQueries queries{
         .gather =
@@ -381,31 +403,44 @@ glm::dvec3 RayBaker::State::arriving(int bounce, const glm::dvec3& origin, const
             cosineDensity ? powerHeuristic(*cosineDensity, skyDirections.density(direction)) : 1.0;
         return share * shading.skyRadiance(direction);
     }
-    const double share = cosineDensity ? emissionShare(*meeting, direction, *cosineDensity) : 1.0;
-    return leaving(bounce, meeting->surface, paths, rays, share);
+    if (!cosineDensity) return leaving(bounce, meeting->surface, paths, rays);
+    const PathBounce from{direction, *cosineDensity, meeting->distance};
+    return leaving(bounce, meeting->surface, paths, rays, &from);
 }
 
 // What a surface leaves towards the ray that met it with `bounce` bounces: nothing from a back face,
-// else `emissionWeight` times its emission and the suns' light plus bounce's irradiance, reflected.
-// `paths` continues the probe's paths (BounceLight::Paths; none for the cache's gathers).
+// else its emission and the suns' light plus bounce's irradiance, reflected; the first two weighted
+// by their shares where a path's bounce met it `from`. `paths` continues the probe's paths
+// (BounceLight::Paths; none for the cache's gathers).
 glm::dvec3 RayBaker::State::leaving(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays,
-                                    double emissionWeight) {
+                                    const PathBounce* from) {
     if (hit.backFace) return glm::dvec3(0.0);
+    const auto blocked = [this](auto& o, auto& d) { return occluded(o, d); };
     const glm::dvec3 direct =
-        emissionWeight * hit.emission +
-        reflectedSunLight(shading.suns(), hit, rays, [this](auto& o, auto& d) { return occluded(o, d); });
+        from ? emissionShare(hit, *from) * hit.emission +
+                   reflectedSunLight(shading.suns(), hit, rays, blocked,
+                                     [&](size_t sun) { return sunShare(uint32_t(sun), hit, *from); })
+             : hit.emission + reflectedSunLight(shading.suns(), hit, rays, blocked);
     if (bounce == 0 || hit.albedo == glm::dvec3(0.0)) return direct;
     return direct + hit.albedo * std::numbers::inv_pi * bouncedIrradiance(bounce, hit, paths, rays);
 }
 
 // The share of an emitter's light a path's bounce keeps where it meets it: the power heuristic
 // against the emitters' own sampling (emitterIrradiance), which finds the same light too.
-double RayBaker::State::emissionShare(const Meeting& meeting, const glm::dvec3& direction,
-                                      double cosineDensity) const {
-    const double area = emitters.areaDensity(meeting.surface.triangle);
-    const double cosine = std::abs(glm::dot(meeting.surface.normal, direction));
+double RayBaker::State::emissionShare(const SurfaceHit& hit, const PathBounce& from) const {
+    const double area = emitters.areaDensity(hit.triangle);
+    const double cosine = std::abs(glm::dot(hit.normal, from.direction));
     if (!(area > 0.0) || !(cosine > 0.0)) return 1.0;
-    return powerHeuristic(cosineDensity, area * meeting.distance * meeting.distance / cosine);
+    return powerHeuristic(from.cosineDensity, area * from.distance * from.distance / cosine);
+}
+
+// The share of sun `sun`'s light reflected by a surface a path's bounce met: the power heuristic
+// against the sunlit points' sampling (sunlitIrradiance), which finds the same light too.
+double RayBaker::State::sunShare(uint32_t sun, const SurfaceHit& hit, const PathBounce& from) const {
+    const double area = sunlit.areaDensity(sun, hit.position, hit.normal);
+    const double cosine = std::abs(glm::dot(hit.normal, from.direction));
+    if (!(area > 0.0) || !(cosine > 0.0)) return 1.0;
+    return powerHeuristic(from.cosineDensity, area * from.distance * from.distance / cosine);
 }
 
 // E_bounce at a hit: the cache's, interpolated, or a path's: pi times the radiance of bounce - 1
@@ -421,6 +456,7 @@ glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit,
     const glm::dvec3 direction = cosineDirection(hit.shadingNormal, u.x, u.y);
     const double density = std::max(glm::dot(hit.shadingNormal, direction), 0.0) * std::numbers::inv_pi;
     return emitterIrradiance(hit, *paths, level, rays) + skyIrradiance(hit, *paths, level, rays) +
+           sunlitIrradiance(hit, *paths, level, rays) +
            std::numbers::pi * arriving(bounce - 1, hit.rayOrigin, direction, paths, rays, density);
 }
 
@@ -463,6 +499,18 @@ glm::dvec3 RayBaker::State::skyIrradiance(const SurfaceHit& hit, const ProbePath
     if (occluded(hit.rayOrigin, sky.direction)) return glm::dvec3(0.0);
     return shading.skyRadiance(sky.direction) *
            (cosine / sky.density * powerHeuristic(sky.density, cosine * std::numbers::inv_pi));
+}
+
+// The light the suns' lit points reflect to a hit, from one sun's ray into the world drawn with the
+// path's numbers at bounce `level` (SunlitSampler::reflectedTo), weighted by the power heuristic
+// against the cosine rays' density.
+glm::dvec3 RayBaker::State::sunlitIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level,
+                                             uint64_t& rays) const {
+    if (sunlit.empty()) return glm::dvec3(0.0);
+    const glm::dvec3 u = paths.sunlitPoint(level);
+    const SunlitLight light = sunlit.reflectedTo(hit, u.x, u.y, u.z, rays);
+    if (!(light.density > 0.0)) return glm::dvec3(0.0);
+    return light.irradiance * powerHeuristic(light.density, light.cosine * std::numbers::inv_pi);
 }
 
 // A segment between two points just off the surfaces, counted as a cache ray.

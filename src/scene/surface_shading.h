@@ -81,19 +81,27 @@ class SceneShading {
 
 // What a front face reflects of the suns (scene.h): albedo / pi times sum_suns E_sun max(0, n.l)
 // V(x, l), n the shading normal; one shadow ray per sun above the surface, occluded(origin,
-// direction) saying whether anything blocks it, counted in rays.
-template <typename Occluded>
+// direction) saying whether anything blocks it, counted in rays. Sun k's light counts weight(k)
+// times (a path's share of it, where another estimate finds it too).
+template <typename Occluded, typename Weight>
 glm::dvec3 reflectedSunLight(std::span<const SceneSun> suns, const SurfaceHit& hit, uint64_t& rays,
-                             const Occluded& occluded) {
+                             const Occluded& occluded, const Weight& weight) {
     glm::dvec3 sunLight(0.0);
-    for (const SceneSun& sun : suns) {
-        const glm::dvec3 toSun(sun.direction);
+    for (size_t k = 0; k < suns.size(); ++k) {
+        const glm::dvec3 toSun(suns[k].direction);
         const double cosine = glm::dot(hit.shadingNormal, toSun);
         if (cosine <= 0.0) continue;
         ++rays;
-        if (!occluded(hit.rayOrigin, toSun)) sunLight += glm::dvec3(sun.irradiance) * cosine;
+        if (!occluded(hit.rayOrigin, toSun))
+            sunLight += glm::dvec3(suns[k].irradiance) * (cosine * weight(k));
     }
     return hit.albedo * std::numbers::inv_pi * sunLight;
+}
+
+template <typename Occluded>
+glm::dvec3 reflectedSunLight(std::span<const SceneSun> suns, const SurfaceHit& hit, uint64_t& rays,
+                             const Occluded& occluded) {
+    return reflectedSunLight(suns, hit, rays, occluded, [](size_t) { return 1.0; });
 }
 
 // What a front face leaves towards the ray with no bounced light (scene.h): its emission and the
