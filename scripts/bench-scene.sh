@@ -5,10 +5,10 @@
 # on 1,000 and 10,000 probes at faces 32^2, bounce 0, in a Cornell box (36 triangles, written here)
 # and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels) and in ten
 # of it (1,214,960 triangles, cpu and reference: the cost per probe against the triangles); then one
-# bounce at 4^3 probes (each backend's defaults, the cpu's bounces from its cache and by paths, against
-# the reference's); then relighting a 32^3
-# volume baked with its transfer, and transfer vectors per second of `shprobe transfer` on both
-# backends in the Cornell box and the engine.
+# bounce at 4^3 probes (each backend's defaults, 2 x 2 rays a texel, the cpu's bounces from its
+# cache and by paths, against the reference's); then relighting a 32^3 volume baked with its
+# transfer, and transfer vectors per second of `shprobe transfer` on both backends in the Cornell
+# box and the engine.
 # Whole processes, timed by GNU time with their peak memory; memory per probe is the difference of
 # the 10,000- and 1,000-probe runs' peaks over the 9,000 probes between them.
 #   bash scripts/bench-scene.sh [BUILD_DIR] [OUT.json]
@@ -135,14 +135,14 @@ run() {
 for grid in 10,10,10 25,20,20; do
     probes=$(( ${grid//,/*} ))
     run "gpu: cornell box" "$probes" "$build/shprobe" scene "$work/cornell.gltf" --grid "$grid" --face-size 32 \
-        --bounces 0 --backend gpu -q -o "$work/gpu.shpv"
+        --bounces 0 --backend gpu --rays-per-texel 1 -q -o "$work/gpu.shpv"
     run "cpu: cornell box" "$probes" "$build/shprobe" scene "$work/cornell.gltf" --grid "$grid" --face-size 32 \
         --bounces 0 --backend cpu --rays-per-texel 1 -q -o "$work/cpu.shpv"
     run "reference: cornell box" "$probes" "$build/shprobe-reference" "$work/cornell.gltf" --grid "$grid" \
         --bounces 0 -q -o "$work/reference.shpv"
 done
 run "gpu: 2CylinderEngine" 1000 "$build/shprobe" scene "$engine" --grid 10,10,10 --face-size 32 --bounces 0 \
-    --backend gpu -q -o "$work/gpu.shpv"
+    --backend gpu --rays-per-texel 1 -q -o "$work/gpu.shpv"
 run "cpu: 2CylinderEngine" 1000 "$build/shprobe" scene "$engine" --grid 10,10,10 --face-size 32 --bounces 0 \
     --backend cpu --rays-per-texel 1 -q -o "$work/cpu.shpv"
 run "reference: 2CylinderEngine" 1000 "$build/shprobe-reference" "$engine" --grid 10,10,10 --bounces 0 -q \

@@ -467,12 +467,12 @@ TEST_F(SceneCommand, ScaledScenesBakeTheSameVolume) {
 // pixel patch of radiance 2e4 (0.6 of the sky's light) gets the sky's own projection, computed here
 // from the cube map the bake loads. The patch covers 6e-4 sr; a probe texel of faces 16^2 covers
 // 8e-3 sr, so texel rays that meet the patch or miss it by chance (the sky read at its own 64^2)
-// put L00 off by up to +-100%. Averaged to the rays' footprints (32^2 for the cpu's 2 x 2 rays a
-// texel, 16^2 for the gpu's one, each texel the solid-angle mean of those it covers) the sky keeps
-// every texel's share of the integral: the gpu is then exact to float rounding (its texel centres
-// read the averaged texels), the cpu 4e-4 off (its jittered rays weigh a texel's four averaged sky
-// texels by where they fall, not by their solid angles), and the quad hides 1e-4 sr of black sky:
-// bound 0.25% of L00.
+// put L00 off by up to +-100%. Averaged to the rays' footprints (32^2 for the default 2 x 2 rays a
+// texel, 16^2 for one through each centre, each texel the solid-angle mean of those it covers) the
+// sky keeps every texel's share of the integral: centre rays are then exact to float rounding (they
+// read the averaged texels), jittered rays 4e-4 off (they weigh a texel's four averaged sky texels
+// by where they fall, not by their solid angles), and the quad hides 1e-4 sr of black sky: bound
+// 0.25% of L00, on both backends.
 TEST_F(SceneCommand, SmallBrightPatchesOfTheSkyCountByTheirArea) {
     Image sky = makeImage(256, 128);
     for (int y = 50; y < 52; ++y)
@@ -487,15 +487,24 @@ TEST_F(SceneCommand, SmallBrightPatchesOfTheSkyCountByTheirArea) {
     scene.roots = {0};
     testing::writeGltf(file("open.glb"), scene, testing::GltfContainer::Glb);
     const glm::dvec3 exact = projectCubemap(loadEnvironment(file("patch.exr"), {}).cubemap, 3).rgb[0];
-    for (const std::string backend : {"cpu", "gpu"}) {
-        const RunResult bake = run({"scene", file("open.glb"), "--sky", file("patch.exr"), "--grid", "1,1,1",
-                                    "--bounds", "-1,-1,-1,1,1,1", "--face-size", "16", "--bounces", "0",
-                                    "--backend", backend, "-o", file(backend + ".shpv")});
+    struct Case {
+        const char* backend;
+        const char* raysPerTexel;
+        const char* averaged;
+    };
+    for (const Case c :
+         {Case{"cpu", "0", "averaged to 32^2 faces"}, Case{"gpu", "0", "averaged to 32^2 faces"},
+          Case{"gpu", "1", "averaged to 16^2 faces"}}) {
+        const std::string name = std::string(c.backend) + "_" + c.raysPerTexel;
+        const RunResult bake =
+            run({"scene", file("open.glb"), "--sky", file("patch.exr"), "--grid", "1,1,1", "--bounds",
+                 "-1,-1,-1,1,1,1", "--face-size", "16", "--bounces", "0", "--rays-per-texel", c.raysPerTexel,
+                 "--backend", c.backend, "-o", file(name + ".shpv")});
         ASSERT_EQ(bake.exitCode, 0) << describe(bake);
-        EXPECT_CONTAINS(bake.out, backend == "cpu" ? "averaged to 32^2 faces" : "averaged to 16^2 faces");
-        const glm::vec3 l00 = readProbeVolume(file(backend + ".shpv")).radiance[0];
-        std::printf("%s: L00 %.5g against the sky's %.5g\n", backend.c_str(), l00.r, exact.r);
-        EXPECT_NEAR(l00.r, exact.r, 0.0025 * exact.r) << backend;
+        EXPECT_CONTAINS(bake.out, c.averaged);
+        const glm::vec3 l00 = readProbeVolume(file(name + ".shpv")).radiance[0];
+        std::printf("%s: L00 %.5g against the sky's %.5g\n", name.c_str(), l00.r, exact.r);
+        EXPECT_NEAR(l00.r, exact.r, 0.0025 * exact.r) << name;
     }
 }
 

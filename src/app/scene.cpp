@@ -98,8 +98,8 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
     addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
                    "gpu: probes captured per command buffer", 1, 4096);
     addRangeOption(command, "--rays-per-texel", options.raysPerTexel,
-                   "Jittered rays per cube-map texel, rounded up to a square (0: 4 on the cpu, 1 on "
-                   "the gpu; 1: the texel's centre)",
+                   "Jittered rays per cube-map texel, rounded up to a square (0: 4; 1: the texel's "
+                   "centre)",
                    0, 1024);
     command
         .add_option("--probe-directions", options.probeDirections,
@@ -172,26 +172,27 @@ namespace {
 // sampler tests it against.
 constexpr double kRelocationFrontCells = 0.1;
 
-// The gpu's default casts one ray through each texel's centre, as fast as the raster capture's view.
-int raysPerTexel(const SceneOptions& options, bool gpu) {
-    return options.raysPerTexel > 0 ? options.raysPerTexel : gpu ? 1 : 4;
+// Both backends' default: 2 x 2 jittered rays a texel, so that a volume is as close to the transport
+// on either (one ray through each texel's centre aliases sharp edges: docs/scene-probes.md).
+int raysPerTexel(const SceneOptions& options) {
+    return options.raysPerTexel > 0 ? options.raysPerTexel : 4;
 }
 
 // The face size of a texel a ray: one of the s x s jittered rays of a texel.
-int rayFootprintFaceSize(const SceneOptions& options, bool gpu) {
-    return options.faceSize * int(std::sqrt(double(raysPerTexel(options, gpu))));
+int rayFootprintFaceSize(const SceneOptions& options) {
+    return options.faceSize * int(std::sqrt(double(raysPerTexel(options))));
 }
 
 // The face size of the sky as the probes' rays see it: a texel a ray, never finer than the sky's own.
-int skyFaceSizeForProbes(const SceneOptions& options, bool gpu, int skyFaceSize) {
-    return std::min(skyFaceSize, rayFootprintFaceSize(options, gpu));
+int skyFaceSizeForProbes(const SceneOptions& options, int skyFaceSize) {
+    return std::min(skyFaceSize, rayFootprintFaceSize(options));
 }
 
 // The sky averaged over the probes' ray footprints where it is finer (docs/scene-probes.md, "Small
 // bright patches of a sky"): a patch smaller than a ray's share of the sphere counts by its area,
 // not by whether a ray happened to meet it.
-Cubemap skySeenByProbes(const Cubemap& sky, const SceneOptions& options, bool gpu) {
-    return averageCubemap(sky, skyFaceSizeForProbes(options, gpu, sky.faceSize));
+Cubemap skySeenByProbes(const Cubemap& sky, const SceneOptions& options) {
+    return averageCubemap(sky, skyFaceSizeForProbes(options, sky.faceSize));
 }
 
 ProbeGrid chosenGrid(const SceneOptions& options, const World& world) {
@@ -204,7 +205,7 @@ RayBakeOptions rayOptionsAsked(const SceneOptions& options, const ProbeGrid& gri
     const double cell = smallestCellEdge(grid);
     return {.order = options.order,
             .faceSize = options.faceSize,
-            .raysPerTexel = raysPerTexel(options, false),
+            .raysPerTexel = raysPerTexel(options),
             .bounces = options.bounces,
             .cacheSpacing = options.cacheSpacing,
             .gatherRays = options.gatherRays,
@@ -222,16 +223,12 @@ const char* bounceLightName(BounceLight light) {
 
 // The bounce light of either backend; auto's is the cache where refinement or --transfer asks for it
 // (paths sample the sky where it is bright, so that their bake is not linear in it), else
-// autoBounceLight's for the whole grid (not the brick's probes, so that bricks agree) with the
-// backend's rays per texel.
-BounceLight chosenBounceLight(const SceneOptions& options, const ProbeGrid& grid, const World& world,
-                              bool gpu) {
+// autoBounceLight's for the whole grid (not the brick's probes, so that bricks agree).
+BounceLight chosenBounceLight(const SceneOptions& options, const ProbeGrid& grid, const World& world) {
     if (options.bounceLight != "auto")
         return options.bounceLight == "paths" ? BounceLight::Paths : BounceLight::Cache;
     if (options.cacheRefinement > 0 || options.transfer) return BounceLight::Cache;
-    RayBakeOptions rays = rayOptionsAsked(options, grid);
-    rays.raysPerTexel = raysPerTexel(options, gpu);
-    return autoBounceLight(world, rays, grid.probeCount());
+    return autoBounceLight(world, rayOptionsAsked(options, grid), grid.probeCount());
 }
 
 // What decides the probes' values besides the grid, order and bounces: bricks merge only when it
@@ -245,7 +242,7 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
     settings["cache_spacing"] = options.cacheSpacing;
     settings["gather_rays"] = options.gatherRays;
     if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
-    settings["rays_per_texel"] = raysPerTexel(options, backend == "gpu");
+    settings["rays_per_texel"] = raysPerTexel(options);
     settings["dilation"] = options.dilate;
     if (backend == "cpu") {
         if (options.cacheRefinement > 0) settings["cache_refinement"] = options.cacheRefinement;
@@ -296,11 +293,11 @@ ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOp
     auto progress = [&](uint64_t done, uint64_t rays) { line.update(done, double(rays), "rays"); };
     if (!options.transfer) {
         const SplitSky split = splitSceneSky(sky);
-        const ProbeSky probeSky{skySeenByProbes(split.residual, options, false), split.suns};
+        const ProbeSky probeSky{skySeenByProbes(split.residual, options), split.suns};
         return bakeVolumeByRays(world, probeSky, bakeOptions, grid, range, report, progress);
     }
-    ProbeVolume volume = bakeVolumeTransfer(world, rayFootprintFaceSize(options, false), bakeOptions, grid,
-                                            range, report, progress);
+    ProbeVolume volume =
+        bakeVolumeTransfer(world, rayFootprintFaceSize(options), bakeOptions, grid, range, report, progress);
     relightVolume(volume, projectCubemap(sky.cubemap, options.order));
     return volume;
 }
@@ -374,14 +371,14 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
                             : readPreviousBounce(options, grid, world, settings).bounces + 1;
     const SplitSky split = splitSceneSky(sky);
     const World lit = withSuns(world, split.suns);
-    const Cubemap seen = skySeenByProbes(split.residual, options, true);
+    const Cubemap seen = skySeenByProbes(split.residual, options);
     // The rays cast shadow rays: the raster capture's shadow maps are not read.
     SceneCapture capture = createSceneCapture(
         context, lit, seen, {.faceSize = options.faceSize, .order = options.order, .shadowMapSize = 1});
     ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });
     RayCapture rays = createRayCapture(context, capture, SceneShading(lit, seen),
                                        {.bounces = bounces,
-                                        .raysPerTexel = raysPerTexel(options, true),
+                                        .raysPerTexel = raysPerTexel(options),
                                         .cacheSpacing = options.cacheSpacing,
                                         .gatherRays = options.gatherRays,
                                         .relocation = rayOptionsAsked(options, grid).relocation,
@@ -436,7 +433,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     if (const CpuOnly asked = cpuOnlyOption(options); asked.option && backend.name == "gpu")
         throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason + "), where " +
                                           asked.gpu + "; " + asked.option + " is for the cpu backend");
-    const BounceLight bounceLight = chosenBounceLight(options, grid, world, backend.context.has_value());
+    const BounceLight bounceLight = chosenBounceLight(options, grid, world);
     const std::string settings = bakeSettings(options, backend.name, sky, bounceLight);
     VolumeBakeReport rays;
     ProbeVolume volume = backend.context ? bakeOnGpu(*backend.context, world, sky, options, grid, range,
@@ -450,7 +447,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     const double seconds = millisecondsSince(start) / 1000.0;
     const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0)) + rays.filled;
     std::printf("scene    %s\n", world.description.c_str());
-    const int skySeen = skyFaceSizeForProbes(options, backend.context.has_value(), sky.faceSize());
+    const int skySeen = skyFaceSizeForProbes(options, sky.faceSize());
     const std::string averaged = skySeen < sky.faceSize() ? ", averaged to " + std::to_string(skySeen) +
                                                                 "^2 faces for the probes' rays"
                                                           : "";
@@ -470,7 +467,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     const char* byPaths = "bounces by paths from the probes' hits";
     if (backend.context) {
         std::printf("backend  gpu: %s%s: rays, %d per texel, %s\n", backend.context->info.name.c_str(),
-                    reason.c_str(), raysPerTexel(options, true),
+                    reason.c_str(), raysPerTexel(options),
                     bounceLight == BounceLight::Paths ? byPaths : "every cache point gathered");
     } else {
         const std::string bounced =
@@ -478,7 +475,7 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
                 ? std::string(byPaths)
                 : counted(rays.counts.cachePoints, "cache point") + " (" +
                       counted(rays.counts.halvedCells, "cell halved", "cells halved") + ")";
-        std::printf("backend  cpu: rays by Embree, %d per texel%s, %s%s\n", raysPerTexel(options, false),
+        std::printf("backend  cpu: rays by Embree, %d per texel%s, %s%s\n", raysPerTexel(options),
                     options.probeDirections == "sphere" ? "'s worth over the sphere" : "", bounced.c_str(),
                     reason.c_str());
         std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
