@@ -20,6 +20,14 @@ double triangleArea(const World& world, uint32_t triangle) {
     return 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
 }
 
+// The point of `triangle` at barycentrics (u, v): (1 - u - v) p0 + u p1 + v p2.
+glm::dvec3 trianglePoint(const World& world, uint32_t triangle, const glm::dvec2& barycentric) {
+    const uint32_t* vertex = &world.indices[3 * size_t(triangle)];
+    return (1.0 - barycentric.x - barycentric.y) * glm::dvec3(world.positions[vertex[0]]) +
+           barycentric.x * glm::dvec3(world.positions[vertex[1]]) +
+           barycentric.y * glm::dvec3(world.positions[vertex[2]]);
+}
+
 // Each triangle's area times its emission factor's largest channel.
 std::vector<double> emittedPower(const World& world) {
     std::vector<double> weights(world.triangleCount());
@@ -131,12 +139,7 @@ EmitterPoint EmitterSampler::sample(double u0, double u1, double u2) const {
     const uint32_t triangle = triangles_.pick(u0);
     const double root = std::sqrt(u1);
     const glm::dvec2 barycentric(root * (1.0 - u2), root * u2);
-    const uint32_t* vertex = &world_->indices[3 * size_t(triangle)];
-    const glm::dvec3 p0(world_->positions[vertex[0]]), p1(world_->positions[vertex[1]]),
-        p2(world_->positions[vertex[2]]);
-    const glm::dvec3 position =
-        (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
-    return {triangle, barycentric, position, areaDensity(triangle)};
+    return {triangle, barycentric, trianglePoint(*world_, triangle, barycentric), areaDensity(triangle)};
 }
 
 double EmitterSampler::areaDensity(uint32_t triangle) const {
@@ -185,8 +188,7 @@ SunlitLight SunlitSampler::reflectedTo(const SurfaceHit& at, double u0, double u
         caster_->closestHit({glm::vec3(sunRay.origin), glm::vec3(sunRay.direction)});
     if (!met) return {};
     const glm::dvec2 barycentric(met->hit.u, met->hit.v);
-    const glm::dvec3 toLit =
-        shading_->describe(met->triangle, barycentric, sunRay.direction).position - at.rayOrigin;
+    const glm::dvec3 toLit = trianglePoint(shading_->world(), met->triangle, barycentric) - at.rayOrigin;
     const double distance = glm::length(toLit);
     if (!(distance > 0.0)) return {};
     const glm::dvec3 direction = toLit / distance;
