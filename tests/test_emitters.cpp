@@ -127,15 +127,8 @@ double polygonIrradiance(const glm::dvec3& position, const glm::dvec3& n,
     return 0.5 * std::abs(sum);
 }
 
-// The lit room of the two rooms (scene_fixtures.h): its glTF sun shines through the ceiling's 0.5 m
-// opening onto a 0.5 m square of the floor, the only surface it lights (the roof and the outer walls
-// show it their backs, one-sided). That square, of radiance albedo / pi E n.l, lights a point on the
-// back wall with the closed form of Lambert's polygon formula; the mean of what the sunlit points
-// reflect there (2^20 samples, unweighted) is within four of its standard errors of it, and that error
-// below 0.5% of it, so that a density off by 1% shows. A drawn point's density read back from its
-// position (sunShare's) is the one it was drawn with.
-TEST(Emitters, SunlitPointsGiveTheLitPatchsIrradiance) {
-    const World world = testing::loadFixtureWorld(testing::twoRoomsScene());
+// What SunlitPointsGiveTheLitPatchsIrradiance checks of the lit room in `world`.
+void checkLitPatchIrradiance(const World& world, const char* what) {
     ASSERT_EQ(world.suns.size(), 1u);
     const SceneShading shading(world, makeCubemap(4));
     const Bvh bvh = buildBvh(world);
@@ -171,11 +164,28 @@ TEST(Emitters, SunlitPointsGiveTheLitPatchsIrradiance) {
         const double stated = ray.planeDensity * std::abs(glm::dot(met.normal, toSun));
         readBack += std::abs(sampler.areaDensity(ray.sun, met.position, met.normal) / stated - 1.0) < 1e-6;
     }
-    std::printf("irradiance %.6f (standard error %.6f) against %.6f; %d of %d densities read back\n",
-                estimate.mean(), estimate.standardError(), exact, readBack, (1 << 20) / 64);
+    std::printf("%s: irradiance %.6f (standard error %.6f) against %.6f; %d of %d densities read back\n",
+                what, estimate.mean(), estimate.standardError(), exact, readBack, (1 << 20) / 64);
     EXPECT_NEAR(estimate.mean(), exact, 4.0 * estimate.standardError());
     EXPECT_LT(estimate.standardError(), 0.005 * exact);
     EXPECT_GE(readBack, (1 << 20) / 64 - 16);
+}
+
+// The lit room of the two rooms (scene_fixtures.h): its glTF sun shines through the ceiling's 0.5 m
+// opening onto a 0.5 m square of the floor. That square, of radiance albedo / pi E n.l, lights a
+// point on the back wall with the closed form of Lambert's polygon formula; the mean of what the
+// sunlit points reflect there (2^20 samples, unweighted) is within four of its standard errors of
+// it, and that error below 0.5% of it, so that a density off by 1% shows. Twice: one-sided, the roof
+// shows the sun its back; double-sided, the sunlit roof's light goes to the sky alone and must not
+// be sampled (12 m^2 of roof to the patch's 0.25: sampled, it would leave the patch 2% of the
+// samples, and counted as lit, the sun would not be sampled at all). A drawn point's density read
+// back from its position (sunShare's) is the one it was drawn with.
+TEST(Emitters, SunlitPointsGiveTheLitPatchsIrradiance) {
+    for (const bool doubleSided : {false, true}) {
+        testing::FixtureScene rooms = testing::twoRoomsScene();
+        rooms.materials[0].doubleSided = doubleSided;
+        checkLitPatchIrradiance(testing::loadFixtureWorld(rooms), doubleSided ? "double-sided" : "one-sided");
+    }
 }
 
 // The power heuristic's weights of one sample under two techniques sum to one.

@@ -505,8 +505,8 @@ TEST(RayBake, EngineUnderTheBuiltInSkyApproachesThePathTracer) {
 // and 54% off. Paths sample the sunlit patch (SunlitSampler); with cosine rays alone finding it they
 // were 0.71% / 3.2% / 4.1% off at bounce 1 and needed 4 x 4 rays a texel for the bounds. Against the
 // path tracer at 2^20 directions (standard error of L00 up to 0.28% of the mean). Measured (mean /
-// worst L00, any coefficient): bounce 1 cache 0.53% / 1.6% / 2.3%, paths 0.30% / 0.90% / 1.1%;
-// bounce 2 cache 0.33% / 1.6% / 2.1%, paths 0.29% / 0.73% / 1.3%. Bounds: paths the 0.5% / 2% / 2%
+// worst L00, any coefficient): bounce 1 cache 0.52% / 1.6% / 2.1%, paths 0.29% / 1.2% / 1.3%;
+// bounce 2 cache 0.33% / 1.6% / 1.9%, paths 0.28% / 1.1% / 1.4%. Bounds: paths the 0.5% / 2% / 2%
 // asked of a bake.
 TEST(RayBake, RoomLitThroughAnOpeningApproachesThePathTracer) {
     const UnderTheSky scene = underTheBuiltInSky(testing::loadFixtureWorld(testing::twoRoomsScene()));

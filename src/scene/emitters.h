@@ -124,13 +124,13 @@ struct SunPlane {
 // Points the suns light, for the light they reflect: where the sun comes in through a small opening,
 // the lit patch of floor lights the room, and a path's cosine rays find that patch by chance. A
 // point is drawn as the first surface a sun's ray meets, the ray started in a cell of the sun's
-// plane picked in proportion to the light that the cell's surfaces reflect (sampled by a ray through
-// its centre when the sampler is made), uniformly in the cell. Its density per unit area of surface is the
-// plane's, times |n.l|. Cells whose rays met nothing lit are never picked: what they light is left
-// to the cosine rays, and the power heuristic keeps both estimates unbiased wherever they overlap; a
-// cell next to a picked one is picked with at least a quarter of its weight, so that a lit patch's
-// edges, where the cell's ray may fall just outside the light, are sampled too. A sun whose beam lights
-// surfaces across a tenth of its square or more is not sampled (kMostLitShare, emitters.cpp).
+// plane picked in proportion to the light that the surface its centre ray meets reflects and that
+// reaches another surface (a sunlit roof's goes to the sky), uniformly in the cell. Its density per
+// unit area of surface is the plane's, times |n.l|. Cells never picked leave what they light to the
+// cosine rays, and the power heuristic keeps both estimates unbiased wherever they overlap; a cell
+// next to a picked one is picked with at least a quarter of its weight, so that a lit patch's edges,
+// where the cell's ray may fall just outside the light, are sampled too. A sun whose light reaches
+// other surfaces from 4% of its square or more is not sampled (kMostLitShare, emitters.cpp).
 class SunlitSampler {
   public:
     static constexpr int kCells = int(SHPROBE_SUNLIT_CELLS);
