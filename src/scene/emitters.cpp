@@ -173,7 +173,7 @@ SunlitSampler::SunlitSampler(const SceneShading& shading, const RayCaster& caste
     std::vector<double> weights(world.suns.size() * perSun);
     for (const SceneSun& sun : world.suns)
         planes_.push_back(sunPlane(world, glm::normalize(glm::dvec3(sun.direction))));
-    forEachItem(int(weights.size() / kCells), threadCount(weights.size(), 4096), [&](int row) {
+    forEachItem(int(weights.size() / kCells), threadCount(weights.size(), 1024), [&](int row) {
         const size_t sun = size_t(row) / kCells;
         const SunPlane& plane = planes_[sun];
         for (int i = 0; i < kCells; ++i) {
@@ -218,9 +218,10 @@ SunlitLight SunlitSampler::reflectedTo(const SurfaceHit& at, double u0, double u
     const double sunCosine = glm::dot(lit.shadingNormal, toSun);
     const double litCosine = std::abs(glm::dot(lit.normal, direction));
     if (lit.backFace || !(sunCosine > 0.0) || !(litCosine > 0.0)) return {};
-    rays += 2;
     const float reach = float(distance - 2.0 * shading_->offset());
+    ++rays;
     if (caster_->anyHit({glm::vec3(at.rayOrigin), glm::vec3(direction), 0.0f, reach})) return {};
+    ++rays;
     if (caster_->anyHit({glm::vec3(lit.rayOrigin), glm::vec3(toSun)})) return {};
     const double density =
         sunRay.planeDensity * std::abs(glm::dot(lit.normal, toSun)) * distance * distance / litCosine;

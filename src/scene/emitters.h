@@ -139,7 +139,7 @@ class SunlitSampler {
     // outlive the sampler.
     SunlitSampler(const SceneShading& shading, const RayCaster& caster);
     bool empty() const { return cells_.empty(); }
-    // The ray for three numbers uniform in [0, 1).
+    // The ray for three numbers uniform in [0, 1); not for an empty sampler.
     SunRay sample(double u0, double u1, double u2) const;
     // The light that the first surface y met by sample()'s ray reflects of its sun to `at`, where `at`
     // sees y and y sees the sun (a ray into the world and two shadow rays, counted in `rays`).

@@ -444,9 +444,9 @@ double RayBaker::State::sunShare(uint32_t sun, const SurfaceHit& hit, const Path
 }
 
 // E_bounce at a hit: the cache's, interpolated, or a path's: pi times the radiance of bounce - 1
-// along one cosine-distributed direction (the cosine density cancels the cosine), and the emitters'
-// and the sky's light by a point sampled on them and a direction sampled towards it, each weighted
-// against the cosine ray by the power heuristic.
+// along one cosine-distributed direction (the cosine density cancels the cosine), and the emitters',
+// the sky's and the sunlit points' light by a point or a direction sampled towards them, each
+// weighted against the cosine ray by the power heuristic.
 glm::dvec3 RayBaker::State::bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths,
                                               uint64_t& rays) {
     if (options.bounceLight == BounceLight::Cache)
