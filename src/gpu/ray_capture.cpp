@@ -99,9 +99,22 @@ struct NextEventTable {
     uint32_t sunlitCells = 0;
 };
 
-void appendPicks(const DiscreteDistribution& distribution, std::vector<glsl::PickedIndex>& picks) {
-    for (size_t k = 0; k < distribution.picked().size(); ++k)
-        picks.push_back({distribution.picked()[k], float(distribution.cumulative()[k])});
+// Appends the distribution's picks over `indices` indices with their running sums in float, as
+// ray_paths.glsl searches them, and says which indices it can pick: one whose float sum does not pass
+// the sum before it never is (its probability below the sum's float resolution), so its density is
+// written as 0 and the cosine rays count its light whole, as the estimate needs.
+std::vector<bool> appendPicks(const DiscreteDistribution& distribution, size_t indices,
+                              std::vector<glsl::PickedIndex>& picks) {
+    std::vector<bool> pickable(indices, false);
+    float before = 0.0f;
+    for (size_t k = 0; k < distribution.picked().size(); ++k) {
+        const float sum = float(distribution.cumulative()[k]);
+        if (!(sum > before)) continue;
+        picks.push_back({distribution.picked()[k], sum});
+        pickable[distribution.picked()[k]] = true;
+        before = sum;
+    }
+    return pickable;
 }
 
 // `sunlit`: whether the paths sample the suns' lit points (bounces by paths), from rays cast by `caster`.
@@ -110,26 +123,26 @@ NextEventTable nextEventTable(const SceneShading& shading, const RayCaster& cast
     const EmitterSampler emitters(world);
     const SkySampler sky(shading.sky());
     const SunlitSampler sunCells = sunlit ? SunlitSampler(shading, caster) : SunlitSampler();
+    const size_t cellsPerSun = size_t(SunlitSampler::kCells) * SunlitSampler::kCells;
     NextEventTable table;
-    appendPicks(emitters.triangles(), table.picks);
+    const std::vector<bool> emitting = appendPicks(emitters.triangles(), world.triangleCount(), table.picks);
     table.emitters = uint32_t(table.picks.size());
-    appendPicks(sky.texels(), table.picks);
+    const std::vector<bool> bright = appendPicks(sky.texels(), shading.sky().texels.size(), table.picks);
     table.skyTexels = uint32_t(table.picks.size()) - table.emitters;
-    appendPicks(sunCells.cells(), table.picks);
+    const std::vector<bool> lit =
+        appendPicks(sunCells.cells(), sunCells.planes().size() * cellsPerSun, table.picks);
     table.sunlitCells = uint32_t(table.picks.size()) - table.emitters - table.skyTexels;
-    for (const SunPlane& plane : sunCells.planes()) {
+    for (const SunPlane& plane : sunCells.planes())
         table.sunPlanes.push_back({glm::vec4(glm::vec3(plane.corner), float(plane.cellSize)),
                                    glm::vec4(glm::vec3(plane.across), 0.0f),
                                    glm::vec4(glm::vec3(plane.down), 0.0f),
                                    glm::vec4(glm::vec3(plane.toSun), 0.0f)});
-        const size_t first = (table.sunPlanes.size() - 1) * SunlitSampler::kCells * SunlitSampler::kCells;
-        for (size_t cell = 0; cell < size_t(SunlitSampler::kCells) * SunlitSampler::kCells; ++cell)
-            table.sunCells.push_back(float(sunCells.cells().probability(uint32_t(first + cell))));
-    }
+    for (uint32_t c = 0; c < uint32_t(lit.size()); ++c)
+        table.sunCells.push_back(lit[c] ? float(sunCells.cells().probability(c)) : 0.0f);
     for (uint32_t t = 0; t < uint32_t(shading.sky().texels.size()); ++t)
-        table.densities.push_back(float(sky.texels().probability(t)));
+        table.densities.push_back(bright[t] ? float(sky.texels().probability(t)) : 0.0f);
     for (uint32_t t = 0; t < uint32_t(world.triangleCount()); ++t)
-        table.densities.push_back(float(emitters.areaDensity(t)));
+        table.densities.push_back(emitting[t] ? float(emitters.areaDensity(t)) : 0.0f);
     return table;
 }
 
