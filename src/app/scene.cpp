@@ -388,6 +388,7 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
     const SceneBakeOptions bakeOptions{.order = options.order, .probesPerBatch = options.probesPerBatch};
     std::vector<SceneProbe> probes =
         bakeRayProbes(context, capture, rays, probePositions(grid, range), bakeOptions);
+    report.counts.sunlitSuns = rays.sunlitSuns;
     report.relocated = size_t(std::count_if(probes.begin(), probes.end(), [](const SceneProbe& probe) {
         return probe.offset != glm::vec3(0.0f);
     }));
@@ -464,15 +465,18 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     std::printf("invalid  %zu inside geometry (more than %g of their view is back faces)\n",
                 inside + rays.relocated, options.invalidBackFaces);
     const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
-    const char* byPaths = "bounces by paths from the probes' hits";
+    const std::string byPaths =
+        "bounces by paths from the probes' hits" +
+        (rays.counts.sunlitSuns > 0 ? ", sampling the lit points of " + counted(rays.counts.sunlitSuns, "sun")
+                                    : std::string());
     if (backend.context) {
         std::printf("backend  gpu: %s%s: rays, %d per texel, %s\n", backend.context->info.name.c_str(),
                     reason.c_str(), raysPerTexel(options),
-                    bounceLight == BounceLight::Paths ? byPaths : "every cache point gathered");
+                    bounceLight == BounceLight::Paths ? byPaths.c_str() : "every cache point gathered");
     } else {
         const std::string bounced =
             bounceLight == BounceLight::Paths
-                ? std::string(byPaths)
+                ? byPaths
                 : counted(rays.counts.cachePoints, "cache point") + " (" +
                       counted(rays.counts.halvedCells, "cell halved", "cells halved") + ")";
         std::printf("backend  cpu: rays by Embree, %d per texel%s, %s%s\n", raysPerTexel(options),

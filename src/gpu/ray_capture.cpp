@@ -97,6 +97,7 @@ struct NextEventTable {
     uint32_t emitters = 0;
     uint32_t skyTexels = 0;
     uint32_t sunlitCells = 0;
+    size_t sunlitSuns = 0;
 };
 
 // Appends the distribution's picks over `indices` indices with their running sums in float, as
@@ -132,6 +133,7 @@ NextEventTable nextEventTable(const SceneShading& shading, const RayCaster& cast
     const std::vector<bool> lit =
         appendPicks(sunCells.cells(), sunCells.planes().size() * cellsPerSun, table.picks);
     table.sunlitCells = uint32_t(table.picks.size()) - table.emitters - table.skyTexels;
+    table.sunlitSuns = sunCells.sampledSuns();
     for (const SunPlane& plane : sunCells.planes())
         table.sunPlanes.push_back({glm::vec4(glm::vec3(plane.corner), float(plane.cellSize)),
                                    glm::vec4(glm::vec3(plane.across), 0.0f),
@@ -362,6 +364,7 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.emitters = nextEvents.emitters;
     rays.skyTexels = nextEvents.skyTexels;
     rays.sunlitCells = nextEvents.sunlitCells;
+    rays.sunlitSuns = nextEvents.sunlitSuns;
     rays.buffers.resize(kRayBufferCount);
     rays.buffers[kNodes] = createStorage(context, rays.bvh.nodes, "BVH nodes");
     rays.buffers[kTriangles] = createStorage(context, rays.bvh.triangles, "BVH triangles");

@@ -55,6 +55,7 @@ struct RayCapture {
     uint32_t emitters = 0;        // emissive triangles the paths sample (EmitterSampler)
     uint32_t skyTexels = 0;       // sky texels the paths sample (SkySampler)
     uint32_t sunlitCells = 0;     // suns' plane cells the paths sample (SunlitSampler)
+    size_t sunlitSuns = 0;        // the suns those cells belong to
     bool stratumSky = false;      // the view's strata add shadow rays to the sky (stratumSkyRays;
                                   // always asked: the gpu bakes no transfer, see skyThroughStrata)
     uint32_t gatherSide = 1;      // g

@@ -230,6 +230,17 @@ SunlitLight SunlitSampler::reflectedTo(const SurfaceHit& at, double u0, double u
     return {reflected * (cosine / density), density, cosine};
 }
 
+size_t SunlitSampler::sampledSuns() const {
+    const uint32_t perSun = uint32_t(kCells) * kCells;
+    size_t suns = 0;
+    uint32_t last = UINT32_MAX;
+    for (const uint32_t cell : cells_.picked()) { // in order: sun after sun
+        if (cell / perSun != last) ++suns;
+        last = cell / perSun;
+    }
+    return suns;
+}
+
 SunRay SunlitSampler::sample(double u0, double u1, double u2) const {
     const uint32_t index = cells_.pick(u0);
     const uint32_t perSun = uint32_t(kCells) * kCells;

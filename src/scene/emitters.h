@@ -139,6 +139,8 @@ class SunlitSampler {
     // outlive the sampler.
     SunlitSampler(const SceneShading& shading, const RayCaster& caster);
     bool empty() const { return cells_.empty(); }
+    // The suns whose lit points it draws.
+    size_t sampledSuns() const;
     // The ray for three numbers uniform in [0, 1); not for an empty sampler.
     SunRay sample(double u0, double u1, double u2) const;
     // The light that the first surface y met by sample()'s ray reflects of its sun to `at`, where `at`

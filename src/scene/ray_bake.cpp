@@ -762,7 +762,8 @@ double RayBaker::visibilityRange() const {
 
 RayBakeCounts RayBaker::counts() const {
     const CacheCounts cache = state_->cache ? state_->cache->counts() : CacheCounts{};
-    return {state_->probeRays.load(), state_->cacheRays.load(), cache.points, cache.halvedCells};
+    return {state_->probeRays.load(), state_->cacheRays.load(), cache.points, cache.halvedCells,
+            state_->sunlit.sampledSuns()};
 }
 
 } // namespace shprobe

@@ -205,6 +205,7 @@ struct RayBakeCounts {
                               // needed at once is gathered by both)
     uint64_t cachePoints = 0; // gathered, over all bounces
     uint64_t halvedCells = 0; // cache cells halved, over all bounces and levels
+    size_t sunlitSuns = 0;    // the suns whose lit points the paths sample (SunlitSampler)
 };
 
 // Called after each probe with the number done so far, from whichever thread finished it (one call
