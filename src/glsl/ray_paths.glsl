@@ -209,21 +209,27 @@ vec3 sunlitIrradiance(RaySurface at, PathNumbers numbers, uint level) {
     return reflected * (cosine / density * powerHeuristic(density, cosine * INV_PI));
 }
 
+// The power heuristic's weight of a path's bounce that met `met` at `distance` along `direction`,
+// drawn with `cosineDensity`, against a technique that draws points there with `areaDensity` per
+// unit area (scene/ray_bake.cpp bounceShare); 1 where it draws none.
+float bounceShare(float areaDensity, RaySurface met, vec3 direction, float distance, float cosineDensity) {
+    float cosine = abs(dot(met.normal, direction));
+    if (!(areaDensity > 0.0) || !(cosine > 0.0)) return 1.0;
+    return powerHeuristic(cosineDensity, areaDensity * distance * distance / cosine);
+}
+
 // The suns' irradiance at a surface a path's bounce met at `position`, `distance` along `direction`
 // drawn with density `cosineDensity` (scene/ray_bake.cpp sunShare): each sun's weighted by the power
 // heuristic against the sunlit points' sampling, which finds the same light too.
 vec3 sharedSunIrradiance(RaySurface met, vec3 position, vec3 direction, float distance, float cosineDensity) {
     vec3 e = vec3(0.0);
-    float slant = abs(dot(met.normal, direction));
     for (uint s = 0u; s < rc.sizes.z; ++s) {
         CaptureSun sun = suns[s];
         float cosine = dot(met.shading, sun.direction.xyz);
         if (cosine <= 0.0) continue;
         if (bvhAnyHit(rc.sizes.w, met.leaving, sun.direction.xyz, 0.0, RAY_FAR)) continue;
-        float area = sunlitAreaDensity(s, position, met.normal);
-        float share = area > 0.0 && slant > 0.0
-                          ? powerHeuristic(cosineDensity, area * distance * distance / slant)
-                          : 1.0;
+        float share = bounceShare(sunlitAreaDensity(s, position, met.normal), met, direction, distance,
+                                  cosineDensity);
         e += sun.irradiance.rgb * (cosine * share);
     }
     return e;
@@ -232,10 +238,7 @@ vec3 sharedSunIrradiance(RaySurface met, vec3 position, vec3 direction, float di
 // The share of an emitter's light a path's bounce keeps where it meets it at `distance`: the power
 // heuristic against the emitters' own sampling (emitterIrradiance), which finds the same light too.
 float emissionShare(uint triangle, RaySurface met, vec3 direction, float distance, float cosineDensity) {
-    float area = emitterAreaDensity(triangle);
-    float cosine = abs(dot(met.normal, direction));
-    if (!(area > 0.0) || !(cosine > 0.0)) return 1.0;
-    return powerHeuristic(cosineDensity, area * distance * distance / cosine);
+    return bounceShare(emitterAreaDensity(triangle), met, direction, distance, cosineDensity);
 }
 
 // What arrives at `origin` along a probe's ray, the light its hit leaves followed as a path of

@@ -62,9 +62,9 @@ struct RayCapture {
     uint32_t texelSide = 1;       // s
     double visibilityRange = 1.0; // the farthest distance a visibility map records (visibilityRangeOf)
     glm::vec3 boundsMin{0.0f};    // the world's lower corner, where the probes' paths are named from
-    std::vector<Buffer>
-        buffers; // the hierarchy's three arrays, the lattices, the gather points, two
-                 // caches, the paths' picks and densities, the strata's sky rays, the suns' cells and planes
+    // The hierarchy's three arrays, the lattices, the gather points, two caches, the paths' picks and
+    // densities, the strata's sky rays, the suns' cells and planes.
+    std::vector<Buffer> buffers;
     ComputeProgram probes; // capture_rays.comp
     ComputeProgram gather; // cache_gather.comp
     VkDescriptorPool pool = VK_NULL_HANDLE;

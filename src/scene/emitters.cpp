@@ -59,17 +59,14 @@ std::vector<double> skyPower(const Cubemap& sky) {
 
 // The plane square of a sun (unit direction `toSun`) covering the world's bounding sphere, its
 // corner twice the sphere's radius out towards the sun, so that every ray from it starts outside
-// the world. The frame is Duff et al.'s, "Building an Orthonormal Basis, Revisited" (2017).
+// the world; its sides follow CosineFrame's tangents about the sun's direction.
 SunPlane sunPlane(const World& world, const glm::dvec3& toSun) {
     const glm::dvec3 low(world.boundsMin), high(world.boundsMax);
     const double radius = 0.5 * glm::length(high - low) * 1.01;
-    const double sign = toSun.z >= 0.0 ? 1.0 : -1.0;
-    const double a = -1.0 / (sign + toSun.z), b = toSun.x * toSun.y * a;
-    const glm::dvec3 e1(1.0 + sign * toSun.x * toSun.x * a, sign * b, -sign * toSun.x);
-    const glm::dvec3 e2(b, sign + toSun.y * toSun.y * a, -toSun.y);
+    const CosineFrame frame(toSun);
     const double cell = 2.0 * radius / SunlitSampler::kCells;
-    return {0.5 * (low + high) - radius * (e1 + e2) + 2.0 * radius * toSun, cell * e1, cell * e2, toSun,
-            cell};
+    return {0.5 * (low + high) - radius * (frame.t + frame.bitangent) + 2.0 * radius * toSun, cell * frame.t,
+            cell * frame.bitangent, toSun, cell};
 }
 
 // The share of the light leaving `surface` (cosine-weighted) that meets another surface: 3 x 3 rays

@@ -314,6 +314,7 @@ struct RayBaker::State {
                        const PathBounce* from = nullptr);
     double emissionShare(const SurfaceHit& hit, const PathBounce& from) const;
     double sunShare(uint32_t sun, const SurfaceHit& hit, const PathBounce& from) const;
+    static double bounceShare(double areaDensity, const SurfaceHit& hit, const PathBounce& from);
     glm::dvec3 bouncedIrradiance(int bounce, const SurfaceHit& hit, ProbePaths* paths, uint64_t& rays);
     glm::dvec3 emitterIrradiance(const SurfaceHit& hit, const ProbePaths& paths, int level,
                                  uint64_t& rays) const;
@@ -428,19 +429,22 @@ glm::dvec3 RayBaker::State::leaving(int bounce, const SurfaceHit& hit, ProbePath
 // The share of an emitter's light a path's bounce keeps where it meets it: the power heuristic
 // against the emitters' own sampling (emitterIrradiance), which finds the same light too.
 double RayBaker::State::emissionShare(const SurfaceHit& hit, const PathBounce& from) const {
-    const double area = emitters.areaDensity(hit.triangle);
-    const double cosine = std::abs(glm::dot(hit.normal, from.direction));
-    if (!(area > 0.0) || !(cosine > 0.0)) return 1.0;
-    return powerHeuristic(from.cosineDensity, area * from.distance * from.distance / cosine);
+    return bounceShare(emitters.areaDensity(hit.triangle), hit, from);
 }
 
 // The share of sun `sun`'s light reflected by a surface a path's bounce met: the power heuristic
 // against the sunlit points' sampling (sunlitIrradiance), which finds the same light too.
 double RayBaker::State::sunShare(uint32_t sun, const SurfaceHit& hit, const PathBounce& from) const {
-    const double area = sunlit.areaDensity(sun, hit.position, hit.normal);
+    return bounceShare(sunlit.areaDensity(sun, hit.position, hit.normal), hit, from);
+}
+
+// The power heuristic's weight of a path's bounce that met `hit` against a technique that draws
+// points there with `areaDensity` per unit area (d^2 / |cos| of it per solid angle); 1 where it
+// draws none.
+double RayBaker::State::bounceShare(double areaDensity, const SurfaceHit& hit, const PathBounce& from) {
     const double cosine = std::abs(glm::dot(hit.normal, from.direction));
-    if (!(area > 0.0) || !(cosine > 0.0)) return 1.0;
-    return powerHeuristic(from.cosineDensity, area * from.distance * from.distance / cosine);
+    if (!(areaDensity > 0.0) || !(cosine > 0.0)) return 1.0;
+    return powerHeuristic(from.cosineDensity, areaDensity * from.distance * from.distance / cosine);
 }
 
 // E_bounce at a hit: the cache's, interpolated, or a path's: pi times the radiance of bounce - 1
