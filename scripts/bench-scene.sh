@@ -5,7 +5,7 @@
 # on 1,000 and 10,000 probes at faces 32^2, bounce 0, in a Cornell box (36 triangles, written here)
 # and, at 1,000 probes, in 2CylinderEngine.glb (121,496 triangles, assimp-testmodels) and in ten
 # of it (1,214,960 triangles, cpu and reference: the cost per probe against the triangles); then one
-# bounce at 4^3 probes (each backend's defaults, 2 x 2 rays a texel, the cpu's bounces from its
+# bounce at 4^3 probes (each backend's defaults, 3 x 3 rays a texel, the cpu's bounces from its
 # cache and by paths, against the reference's); then relighting a 32^3 volume baked with its
 # transfer, and transfer vectors per second of `shprobe transfer` on both backends in the Cornell
 # box and the engine.

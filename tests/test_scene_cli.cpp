@@ -467,12 +467,12 @@ TEST_F(SceneCommand, ScaledScenesBakeTheSameVolume) {
 // pixel patch of radiance 2e4 (0.6 of the sky's light) gets the sky's own projection, computed here
 // from the cube map the bake loads. The patch covers 6e-4 sr; a probe texel of faces 16^2 covers
 // 8e-3 sr, so texel rays that meet the patch or miss it by chance (the sky read at its own 64^2)
-// put L00 off by up to +-100%. Averaged to the rays' footprints (32^2 for the default 2 x 2 rays a
+// put L00 off by up to +-100%. Averaged to the rays' footprints (48^2 for the default 3 x 3 rays a
 // texel, 16^2 for one through each centre, each texel the solid-angle mean of those it covers) the
 // sky keeps every texel's share of the integral: centre rays are then exact to float rounding (they
-// read the averaged texels), jittered rays 4e-4 off (they weigh a texel's four averaged sky texels
-// by where they fall, not by their solid angles), and the quad hides 1e-4 sr of black sky: bound
-// 0.25% of L00, on both backends.
+// read the averaged texels), jittered rays equal to 5 digits (4e-4 off at 2 x 2: they weigh a
+// texel's averaged sky texels by where they fall, not by their solid angles), and the quad hides
+// 1e-4 sr of black sky: bound 0.25% of L00, on both backends.
 TEST_F(SceneCommand, SmallBrightPatchesOfTheSkyCountByTheirArea) {
     Image sky = makeImage(256, 128);
     for (int y = 50; y < 52; ++y)
@@ -493,7 +493,7 @@ TEST_F(SceneCommand, SmallBrightPatchesOfTheSkyCountByTheirArea) {
         const char* averaged;
     };
     for (const Case c :
-         {Case{"cpu", "0", "averaged to 32^2 faces"}, Case{"gpu", "0", "averaged to 32^2 faces"},
+         {Case{"cpu", "0", "averaged to 48^2 faces"}, Case{"gpu", "0", "averaged to 48^2 faces"},
           Case{"gpu", "1", "averaged to 16^2 faces"}}) {
         const std::string name = std::string(c.backend) + "_" + c.raysPerTexel;
         const RunResult bake =

@@ -145,7 +145,7 @@ struct SceneOptions {
     std::string previous;             // the previous bounce's whole volume
     uint32_t probesPerBatch = 32;
     std::string backend = "auto";  // auto | gpu (rasterized captures) | cpu (rays: scene/ray_bake.h)
-    int raysPerTexel = 0;          // 0: 4 on the cpu, 1 (the texel's centre) on the gpu
+    int raysPerTexel = 0;          // 0: 9 (3 x 3) on both backends; 1: the texel's centre
     double cacheSpacing = 0.0;     // cpu: 0 is the world's diagonal / 64
     int gatherRays = 64;           // cpu: per cache point
     int cacheRefinement = 0;       // cpu: the most times a cache cell is halved

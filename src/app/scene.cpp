@@ -98,8 +98,8 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
     addRangeOption(command, "--probes-per-batch", options.probesPerBatch,
                    "gpu: probes captured per command buffer", 1, 4096);
     addRangeOption(command, "--rays-per-texel", options.raysPerTexel,
-                   "Jittered rays per cube-map texel, rounded up to a square (0: 4; 1: the texel's "
-                   "centre)",
+                   "Jittered rays per cube-map texel, rounded up to a square (0: " +
+                       std::to_string(kDefaultRaysPerTexel) + "; 1: the texel's centre)",
                    0, 1024);
     command
         .add_option("--probe-directions", options.probeDirections,
@@ -122,7 +122,8 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
         .add_option("--bounce-light", options.bounceLight,
                     "Where a surface's bounced light comes from: the cache of surface points, "
                     "or a path from each probe ray's hit; auto: paths unless the cache would cast under "
-                    "a quarter of their rays for the grid, the cache with --transfer or --cache-refinement")
+                    "a quarter of their rays for the grid (at 2 x 2 a texel), the cache with --transfer or "
+                    "--cache-refinement")
         ->check(CLI::IsMember({"auto", "cache", "paths"}))
         ->capture_default_str();
     addDeviceOptions(command, options.device, options.validation);
@@ -172,10 +173,10 @@ namespace {
 // sampler tests it against.
 constexpr double kRelocationFrontCells = 0.1;
 
-// Both backends' default: 2 x 2 jittered rays a texel, so that a volume is as close to the transport
-// on either (one ray through each texel's centre aliases sharp edges: docs/scene-probes.md).
+// Both backends' default is the same (kDefaultRaysPerTexel), so that a volume is as close to the
+// transport whichever bakes it.
 int raysPerTexel(const SceneOptions& options) {
-    return options.raysPerTexel > 0 ? options.raysPerTexel : 4;
+    return options.raysPerTexel > 0 ? options.raysPerTexel : kDefaultRaysPerTexel;
 }
 
 // The face size of a texel a ray: one of the s x s jittered rays of a texel.

@@ -243,7 +243,11 @@ World withSuns(const World& world, const std::vector<SceneSun>& skySuns) {
 
 BounceLight autoBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes) {
     const double spacing = cacheSpacingFor(world, options.cacheSpacing);
-    const int s = squareSide(options.raysPerTexel), g = squareSide(options.gatherRays);
+    // Rays a texel past 2 x 2 lower the paths' error, not the cache's: they ask for paths, so the
+    // cache is weighed against the paths' rays at 2 x 2 at most.
+    constexpr int kMostWeighedSide = 2;
+    const int s = std::min(squareSide(options.raysPerTexel), kMostWeighedSide);
+    const int g = squareSide(options.gatherRays);
     const double pathRays = double(probes) * kFaceCount * options.faceSize * options.faceSize * s * s;
     const double cacheRays = double(cachePointCount(world, spacing)) * g * g;
     constexpr double kCacheShare = 0.25;
