@@ -110,14 +110,14 @@ struct RayBakeOptions {
 // `shprobe scene`'s rays a texel on both backends: 3 x 3 jittered rays. One ray through each
 // texel's centre aliases sharp edges; 2 x 2 left a coefficient of a sunlit probe of
 // 2CylinderEngine's 8^3 grid 2.1% of the mean L00 off the path tracer, 3 x 3 0.8%
-// (docs/scene-probes.md, "Bounces by paths against the path tracer").
+// (docs/scene-probes.md, "At the defaults").
 constexpr int kDefaultRaysPerTexel = 9;
 
 // Paths unless the cache casts fewer than a quarter of their rays: a probe's rays (at most 2 x 2 a
 // texel: more lower only the paths' error) times `probes` (the whole grid's, so that its bricks
-// agree) against the lattice points times their gather rays, each ray a bounce with its shadow rays. Paths
-// are unbiased where the cache interpolates, and cost about as much per ray (docs/scene-probes.md measures
-// both).
+// agree) against the lattice points times their gather rays, each ray a bounce with its shadow
+// rays. Paths are unbiased where the cache interpolates, and cost about as much per ray
+// (docs/scene-probes.md measures both).
 BounceLight autoBounceLight(const World& world, const RayBakeOptions& options, uint64_t probes);
 
 // Cache points per world diagonal when RayBakeOptions::cacheSpacing is 0.
