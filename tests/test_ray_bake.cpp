@@ -231,7 +231,7 @@ ValidProbes validProbes(RayBaker& baker, const ProbeGrid& grid) {
     const std::vector<RayBakedProbe> probes = baker.bakeProbes(all);
     ValidProbes valid;
     for (size_t p = 0; p < probes.size(); ++p) {
-        if (2 * probes[p].backFaceTexels > 6 * 32 * 32) continue;
+        if (insideGeometry(probes[p].backFaceTexels, 32, 0.5)) continue;
         valid.probes.push_back(probes[p]);
         valid.positions.push_back(all[p]);
     }
@@ -529,7 +529,7 @@ TEST(RayBake, SunlitProbesOfADenseGridMeetTheBoundAtTheDefaults) {
     double meanL00 = 0.0;
     size_t valid = 0;
     for (const RayBakedProbe& probe : RayBaker(scene.world, scene.sky, coarse).bakeProbes(all)) {
-        if (2 * probe.backFaceTexels > 6 * 8 * 8) continue;
+        if (insideGeometry(probe.backFaceTexels, coarse.faceSize, 0.5)) continue;
         meanL00 += probe.radiance.rgb[0].g;
         ++valid;
     }
