@@ -6,6 +6,7 @@
 #include "sh/projection.h"
 
 #include <glm/common.hpp>
+#include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -220,6 +221,39 @@ TEST(FastProjection, EveryFiniteHalfConvertsExactly) {
                 return;
             }
         }
+    }
+}
+
+// Checks: packHalves rounds every float to the nearest half. For each pair of neighbouring finite
+// halves a < b (a >= 0): a itself, the float just below their midpoint and a itself in the other lanes
+// give a; just above gives b; the midpoint (exact in float: 12 significant bits) either. Negative
+// values in the second lane mirror them. Beyond the range: infinities.
+TEST(FastProjection, PackHalvesRoundsToTheNearestHalf) {
+    std::vector<glm::vec4> texels;
+    std::vector<std::array<uint16_t, 2>> expected; // the halves allowed for lane 0 (lane 1: sign set)
+    for (uint16_t bits = 0; bits < 0x7bff; ++bits) {
+        const float a = glm::unpackHalf1x16(bits), b = glm::unpackHalf1x16(uint16_t(bits + 1));
+        const float middle = (a + b) / 2;
+        const uint16_t next = uint16_t(bits + 1);
+        for (auto [value, low, high] :
+             {std::tuple{a, bits, bits}, std::tuple{std::nextafter(middle, 0.0f), bits, bits},
+              std::tuple{middle, bits, next}, std::tuple{std::nextafter(middle, b), next, next}}) {
+            texels.push_back({value, -value, a, 1.0f});
+            expected.push_back({low, high});
+        }
+    }
+    texels.push_back({1e5f, -1e5f, 65504.0f, 1.0f});
+    expected.push_back({0x7c00, 0x7c00});
+    std::vector<uint64_t> halves(texels.size());
+    packHalves(texels, halves.data());
+    for (size_t t = 0; t < texels.size(); ++t) {
+        const uint16_t lane0 = uint16_t(halves[t]), lane1 = uint16_t(halves[t] >> 16);
+        const bool nearest = lane0 == expected[t][0] || lane0 == expected[t][1];
+        const bool lanesKept = lane1 == (lane0 | 0x8000u) &&
+                               glm::unpackHalf1x16(uint16_t(halves[t] >> 32)) == texels[t].z &&
+                               uint16_t(halves[t] >> 48) == 0x3c00;
+        ASSERT_TRUE(nearest && lanesKept) << "value " << texels[t].x << ": halves 0x" << std::hex << halves[t]
+                                          << ", expected 0x" << expected[t][0] << " or 0x" << expected[t][1];
     }
 }
 

@@ -29,6 +29,7 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/packing.hpp>
 #include <random>
+#include <span>
 
 namespace shprobe::testing {
 namespace {
@@ -70,6 +71,17 @@ ShCoefficients readCoefficientSet(const glm::vec4* values, int order, Quantity q
     for (size_t i = 0; i < set.rgb.size(); ++i)
         set.rgb[i] = glm::dvec3(glm::vec3(values[i]));
     return set;
+}
+
+// The texels as the RGBA16F upload rounds them (packHalves, tested in test_fast_projection): 5e4, a
+// tie between two halves, goes to the even one.
+std::vector<glm::vec4> halfRounded(std::span<const glm::vec4> texels) {
+    std::vector<uint64_t> halves(texels.size());
+    packHalves(texels, halves.data());
+    std::vector<glm::vec4> rounded;
+    for (uint64_t texel : halves)
+        rounded.push_back(glm::unpackHalf4x16(texel));
+    return rounded;
 }
 
 Cubemap singleTexelCubemap(int faceSize, int face, int i, int j) {
@@ -300,16 +312,78 @@ TEST_F(GpuProjection, BatchEqualsSingleBakesInOneSubmission) {
 // texels, and the fp32 tolerance applies unchanged. Values beyond the half range are refused.
 TEST_F(GpuProjection, HalfFloatInputMatchesTheReferenceOfItsValues) {
     Cubemap cubemap = hotSunCubemap(32);
-    cubemap.at(2, 10, 6) = glm::vec4(6e4f, 5e4f, 4e4f, 1.0f); // the sun, within the half range
+    cubemap.at(2, 10, 6) = glm::vec4(6e4f, 5e4f, 4e4f, 1.0f); // the sun, within the half range (5e4: a tie)
     Cubemap rounded = cubemap;
-    for (glm::vec4& texel : rounded.texels)
-        texel = glm::unpackHalf4x16(glm::packHalf4x16(texel));
+    rounded.texels = halfRounded(cubemap.texels);
     ProbeBaker baker = hostBaker({.order = 3}, TexelFormat::Rgba16F);
     GpuBake gpu = bakeCubemap(context(), baker, cubemap);
     EXPECT_LT(relativeError(gpu.radiance, projectCubemap(rounded, 3)), kGpuTolerance);
     cubemap.at(0, 0, 0) = glm::vec4(1e5f, 0.0f, 0.0f, 1.0f);
     EXPECT_THROW(bakeCubemap(context(), baker, cubemap), Error);
     destroyProbeBaker(context(), baker);
+}
+
+// Uploads through staging slots smaller than a face (vk/staged_upload.h): slots of 5 rows against
+// faces of 7, so copies start and end inside layers, span whole layers and cross from one probe to
+// the next, with each slot refilled while the copy before is in flight. Any row misplaced changes the
+// noise's coefficients, so the bake must equal bit for bit the same maps uploaded in one slot.
+TEST_F(GpuProjection, UploadThroughSmallStagingSlotsEqualsOneSlot) {
+    const std::vector<Cubemap> cubemaps = {noiseCubemap(7, 21), noiseCubemap(7, 22), noiseCubemap(7, 23)};
+    std::vector<const Cubemap*> batch;
+    for (const Cubemap& cubemap : cubemaps)
+        batch.push_back(&cubemap);
+    for (TexelFormat format : {TexelFormat::Rgba32F, TexelFormat::Rgba16F}) {
+        ProbeBaker baker = hostBaker({.order = 3}, format);
+        const VkDeviceSize rowBytes = 7 * texelBytes(format);
+        const std::vector<GpuBake> oneSlot = bakeCubemaps(context(), baker, batch);
+        CubemapUpload upload = createCubemapUpload(context(), batch, baker.options.cubemaps,
+                                                   {.slotBytes = 5 * rowBytes, .slots = 2});
+        EXPECT_TRUE(upload.staged.copiedAhead);
+        EXPECT_EQ(upload.staged.fences.size(), 2u);
+        EXPECT_EQ(upload.staged.tail.size(), 1u) << "126 rows in slots of 5: the last holds 1";
+        Buffer output = createBuffer(context(), probeBakeOutputBytes(3, 3),
+                                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "coefficients");
+        ProbeBakeSet set = createProbeBakeSet(context(), baker, {upload.image.view, 7, 3, output.buffer, 0});
+        submitAndWait(context(), [&](VkCommandBuffer commands) {
+            recordCubemapUpload(commands, upload);
+            recordProbeBake(commands, baker, set);
+            computeWriteBarrier(commands);
+        });
+        invalidateBuffer(context(), output);
+        for (uint32_t k = 0; k < 3; ++k)
+            EXPECT_EQ(readBakeOutput(output, 0, 3, 3, k).radiance.rgb, oneSlot[k].radiance.rgb)
+                << (format == TexelFormat::Rgba16F ? "RGBA16F" : "RGBA32F") << ", probe " << k;
+        destroyProbeBakeSet(context(), set);
+        destroyBuffer(context(), output);
+        destroyCubemapUpload(context(), upload);
+        destroyProbeBaker(context(), baker);
+    }
+}
+
+// Two maps of 8.6 MB each are packed by several threads (4 MiB a thread), each writing its own rows
+// of the slot; the batch must equal the single bakes bit for bit (on lavapipe these read the texels
+// in place, without packing).
+TEST_F(GpuProjection, BatchPackedOnSeveralThreadsEqualsSingleBakes) {
+    const std::vector<Cubemap> cubemaps = {noiseCubemap(300, 31), noiseCubemap(300, 32)};
+    const Cubemap* batch[] = {&cubemaps[0], &cubemaps[1]};
+    ProbeBaker baker = hostBaker({.order = 3});
+    const std::vector<GpuBake> batched = bakeCubemaps(context(), baker, batch);
+    for (size_t k = 0; k < cubemaps.size(); ++k)
+        EXPECT_EQ(batched[k].radiance.rgb, bakeCubemap(context(), baker, cubemaps[k]).radiance.rgb)
+            << "probe " << k;
+    destroyProbeBaker(context(), baker);
+}
+
+// A texel out of the half range in the last probe: refused after earlier slots were copied, with
+// the slots in flight waited for and everything freed (the validation layer reports objects left).
+TEST_F(GpuProjection, UploadRefusedInALaterSlotLeavesNothingBehind) {
+    std::vector<Cubemap> cubemaps = {noiseCubemap(7, 24), noiseCubemap(7, 25)};
+    cubemaps[1].at(5, 6, 6) = glm::vec4(7e4f, 0.0f, 0.0f, 1.0f);
+    const Cubemap* batch[] = {&cubemaps[0], &cubemaps[1]};
+    const VkDeviceSize rowBytes = 7 * texelBytes(TexelFormat::Rgba16F);
+    EXPECT_THROW(createCubemapUpload(context(), batch, uploadBinding(context(), TexelFormat::Rgba16F),
+                                     {.slotBytes = 3 * rowBytes, .slots = 2}),
+                 Error);
 }
 
 // The renderer's path (probe_baker.h): a baker on a borrowed device, the caller's own image, command
@@ -721,8 +795,7 @@ TEST_F(GpuEquirect, HalfFloatInputMatchesTheReferenceOfItsValues) {
     Image image = noiseEquirect(48, 24, 24);
     image.at(5, 20) = glm::vec4(6e4f, 5e4f, 4e4f, 1.0f); // a sun within the half range
     Image rounded = image;
-    for (glm::vec4& texel : rounded.texels)
-        texel = glm::unpackHalf4x16(glm::packHalf4x16(texel));
+    rounded.texels = halfRounded(image.texels);
     ProbeBaker baker = equirectBaker({.order = 3}, TexelFormat::Rgba16F);
     EXPECT_LT(relativeError(bakeEquirect(context(), baker, image).radiance, projectEquirect(rounded, 3)),
               kGpuTolerance);

@@ -83,7 +83,8 @@ std::string gpuTimings(const GpuSession& session, const BakeResult& result) {
                   context.instanceMilliseconds, context.deviceMilliseconds, session.pipelineMilliseconds(),
                   cached ? "from the pipeline cache" : "cold: the pipeline cache held none",
                   phases.uploadMilliseconds,
-                  phases.inPlace ? "texels read in place, no copy" : "texels copied through a staging buffer",
+                  phases.inPlace ? "texels read in place, no copy"
+                                 : "texels copied through staging slots, the last with the dispatch",
                   phases.submitMilliseconds, result.deviceMilliseconds, phases.readbackMilliseconds);
     return text;
 }

@@ -1,10 +1,12 @@
 #include "gpu/host_bake.h"
 
 #include "common/error.h"
+#include "common/parallel.h"
 #include "common/scope_exit.h"
 #include "common/stopwatch.h"
 #include "glsl/gpu_interface.h"
 #include "sh/basis.h"
+#include "sh/fast_projection.h"
 #include "vk/check.h"
 #include "vk/host_memory.h"
 #include "vk/image.h"
@@ -12,9 +14,9 @@
 #include "vk/vulkan_commands.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
-#include <glm/gtc/packing.hpp>
 #include <optional>
 #include <span>
 #include <string>
@@ -55,22 +57,72 @@ void checkEquirect(const Device& device, const Image& equirect) {
                                           std::to_string(equirect.height));
 }
 
-// Copies the texels into the staging memory in the image's format (faces follow each other, as
-// layers do). RGBA16F refuses values a half cannot hold rather than clamping them silently.
-void packTexels(std::span<const glm::vec4> texels, TexelFormat format, void* destination) {
+// Writes the texels in the image's format; false where one does not fit RGBA16F (requireHalfRange
+// says which).
+bool packTexels(std::span<const glm::vec4> texels, TexelFormat format, void* destination) {
     if (format == TexelFormat::Rgba32F) {
-        std::memcpy(destination, texels.data(), texels.size() * sizeof(glm::vec4));
-        return;
+        std::memcpy(destination, texels.data(), texels.size_bytes());
+        return true;
     }
-    auto* out = static_cast<uint64_t*>(destination);
+    packHalves(texels, static_cast<uint64_t*>(destination));
+    return std::all_of(texels.begin(), texels.end(), [](const glm::vec4& texel) {
+        return glm::all(glm::lessThanEqual(glm::abs(glm::vec3(texel)), glm::vec3(kHalfMax)));
+    });
+}
+
+// RGBA16F refuses values a half cannot hold rather than clamping them silently.
+void requireHalfRange(std::span<const glm::vec4> texels) {
     for (const glm::vec4& texel : texels) {
-        glm::vec3 rgb(texel);
-        if (glm::any(glm::greaterThan(glm::abs(rgb), glm::vec3(kHalfMax))))
+        const glm::vec3 rgb(texel);
+        if (!glm::all(glm::lessThanEqual(glm::abs(rgb), glm::vec3(kHalfMax))))
             throw Error(ErrorKind::Input, "GPU bake: a texel of " +
                                               std::to_string(std::max({rgb.r, rgb.g, rgb.b})) +
                                               " does not fit RGBA16F (at most 65504); use RGBA32F");
-        *out++ = glm::packHalf4x16(glm::vec4(rgb, 0.0f));
     }
+}
+
+// Calls visit(texels) for the rows [first, first + count) of the probes' layers, numbered through
+// the probes (each holds whole rows of `width` texels): one span per probe the rows meet.
+template <class Visit>
+void forEachRowSpan(std::span<const std::span<const glm::vec4>> probeTexels, uint32_t width, uint64_t first,
+                    uint64_t count, const Visit& visit) {
+    for (std::span<const glm::vec4> texels : probeTexels) {
+        const uint64_t rows = texels.size() / width;
+        if (first >= rows) {
+            first -= rows;
+            continue;
+        }
+        const uint64_t taken = std::min(count, rows - first);
+        visit(texels.subspan(first * width, taken * width));
+        count -= taken;
+        if (count == 0) return;
+        first = 0;
+    }
+}
+
+// A bytes-per-thread share worth a thread's start (tens of microseconds) when packing texels.
+constexpr size_t kPackBytesPerThread = size_t(4) << 20;
+
+// Fills staging rows from the probes' texels in `format`, on all cores.
+FillRows packRows(std::span<const std::span<const glm::vec4>> probeTexels, uint32_t width,
+                  TexelFormat format) {
+    return [=](uint64_t first, uint32_t rows, void* destination) {
+        const size_t rowBytes = size_t(width) * texelBytes(format);
+        const unsigned threads = threadCount(rows * rowBytes, kPackBytesPerThread);
+        const uint32_t perThread = (rows + threads - 1) / threads;
+        std::atomic<bool> fits = true;
+        forEachItem(int(threads), threads, [&](int piece) {
+            const uint32_t begin = std::min(rows, uint32_t(piece) * perThread);
+            const uint32_t end = std::min(rows, begin + perThread);
+            char* out = static_cast<char*>(destination) + begin * rowBytes;
+            forEachRowSpan(probeTexels, width, first + begin, end - begin,
+                           [&](std::span<const glm::vec4> texels) {
+                               if (!packTexels(texels, format, out)) fits = false;
+                               out += texels.size() * texelBytes(format);
+                           });
+        });
+        if (!fits) forEachRowSpan(probeTexels, width, first, rows, requireHalfRange);
+    };
 }
 
 // Probe k's coefficients of one quantity in a bake output that starts at `offset`.
@@ -96,45 +148,40 @@ TexelFormat uploadFormat(CubemapBinding binding) {
 
 // The image of an upload, `layers` layers of `extent` for `binding`, holding the texels of each
 // probe (probeTexels, whole layers each). Where the device reads host memory in place
-// (vk/host_memory.h), one probe's RGBA32F texels become the image itself: no staging buffer, no
-// copy; returns true then. Otherwise they are packed into the staging buffer, to be copied.
-bool createLayers(const Device& device, VkExtent2D extent, uint32_t layers, CubemapBinding binding,
-                  std::span<const std::span<const glm::vec4>> probeTexels, const char* what, Buffer& staging,
-                  GpuImage& image) {
+// (vk/host_memory.h), one probe's RGBA32F texels become the image itself: no staging, no copy;
+// returns true then. Otherwise they are packed into staging slots, all but the last copied at once.
+bool createLayers(const Context& context, VkExtent2D extent, uint32_t layers, CubemapBinding binding,
+                  std::span<const std::span<const glm::vec4>> probeTexels, const char* what,
+                  const StagingOptions& staging, StagedRows& staged, GpuImage& image) {
     const TexelFormat format = uploadFormat(binding);
     const VkImageUsageFlags readUsage =
         binding == CubemapBinding::SampledImage ? VK_IMAGE_USAGE_SAMPLED_BIT : VK_IMAGE_USAGE_STORAGE_BIT;
     if (probeTexels.size() == 1 && format == TexelFormat::Rgba32F) {
         const std::span<const glm::vec4> texels = probeTexels.front();
-        if (std::optional<GpuImage> inPlace = importHostImage(
-                device, texels.data(), texels.size_bytes(), imageFormat(format), extent, layers, readUsage)) {
+        if (std::optional<GpuImage> inPlace =
+                importHostImage(context, texels.data(), texels.size_bytes(), imageFormat(format), extent,
+                                layers, readUsage)) {
             image = *inPlace;
             return true;
         }
     }
-    const VkDeviceSize layerBytes = VkDeviceSize(extent.width) * extent.height * texelBytes(format);
-    staging =
-        createBuffer(device, layerBytes * layers, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload, what);
-    auto* out = static_cast<char*>(staging.mapped);
-    for (std::span<const glm::vec4> texels : probeTexels) {
-        packTexels(texels, format, out);
-        out += texels.size() * texelBytes(format);
-    }
-    image = createImage(device, {.format = imageFormat(format),
-                                 .extent = extent,
-                                 .usage = readUsage | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                 .what = what,
-                                 .layers = layers});
+    image = createImage(context, {.format = imageFormat(format),
+                                  .extent = extent,
+                                  .usage = readUsage | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                  .what = what,
+                                  .layers = layers});
+    staged = stageImageRows(context, image, VkDeviceSize(extent.width) * texelBytes(format),
+                            packRows(probeTexels, extent.width, format), staging);
     return false;
 }
 
-// Records the copy of every layer (none for an image read in place) and leaves the image as
+// Records the last staging slot's copy (none for an image read in place) and leaves the image as
 // probe_baker.h asks: in cubemapLayout(binding), visible to compute-shader reads.
-void recordLayers(VkCommandBuffer commands, const Buffer& staging, const GpuImage& image,
+void recordLayers(VkCommandBuffer commands, const StagedRows& staged, const GpuImage& image,
                   CubemapBinding binding, bool inPlace) {
     if (!inPlace)
-        return recordImageUpload(commands, staging.buffer, image, cubemapLayout(binding),
-                                 VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+        return recordStagedRows(commands, staged, image, cubemapLayout(binding),
+                                VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
     changeLayout(commands, image,
                  {VK_IMAGE_LAYOUT_UNDEFINED, cubemapLayout(binding), VK_PIPELINE_STAGE_HOST_BIT,
                   VK_ACCESS_HOST_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
@@ -149,14 +196,14 @@ struct CubemapSource {
     static VkExtent2D size(const Cubemap& cubemap) {
         return {uint32_t(cubemap.faceSize), uint32_t(cubemap.faceSize)};
     }
-    static Upload upload(const Device& device, std::span<const Cubemap* const> members,
+    static Upload upload(const Context& context, std::span<const Cubemap* const> members,
                          CubemapBinding binding) {
-        return createCubemapUpload(device, members, binding);
+        return createCubemapUpload(context, members, binding);
     }
     static void record(VkCommandBuffer commands, const Upload& upload) {
         recordCubemapUpload(commands, upload);
     }
-    static void destroy(const Device& device, Upload& upload) { destroyCubemapUpload(device, upload); }
+    static void destroy(const Context& context, Upload& upload) { destroyCubemapUpload(context, upload); }
     static ProbeBakeSet bakeSet(const Device& device, const ProbeBaker& baker, const Upload& upload,
                                 VkBuffer output, VkDeviceSize offset) {
         return createProbeBakeSet(device, baker,
@@ -172,14 +219,14 @@ struct EquirectSource {
     static VkExtent2D size(const Image& equirect) {
         return {uint32_t(equirect.width), uint32_t(equirect.height)};
     }
-    static Upload upload(const Device& device, std::span<const Image* const> members,
+    static Upload upload(const Context& context, std::span<const Image* const> members,
                          CubemapBinding binding) {
-        return createEquirectUpload(device, members, binding);
+        return createEquirectUpload(context, members, binding);
     }
     static void record(VkCommandBuffer commands, const Upload& upload) {
         recordEquirectUpload(commands, upload);
     }
-    static void destroy(const Device& device, Upload& upload) { destroyEquirectUpload(device, upload); }
+    static void destroy(const Context& context, Upload& upload) { destroyEquirectUpload(context, upload); }
     static ProbeBakeSet bakeSet(const Device& device, const ProbeBaker& baker, const Upload& upload,
                                 VkBuffer output, VkDeviceSize offset) {
         return createEquirectBakeSet(
@@ -309,8 +356,8 @@ CubemapBinding uploadBinding(const Device& device, TexelFormat format) {
     return format == TexelFormat::Rgba16F ? CubemapBinding::StorageRgba16F : CubemapBinding::StorageRgba32F;
 }
 
-CubemapUpload createCubemapUpload(const Device& device, std::span<const Cubemap* const> cubemaps,
-                                  CubemapBinding binding) {
+CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
+                                  CubemapBinding binding, const StagingOptions& staging) {
     if (cubemaps.empty()) throw Error(ErrorKind::Input, "GPU bake: an upload of no cube maps");
     CubemapUpload upload;
     upload.binding = binding;
@@ -323,24 +370,24 @@ CubemapUpload createCubemapUpload(const Device& device, std::span<const Cubemap*
             throw Error(ErrorKind::Input, "GPU bake: cube maps of one upload must share their face size");
         texels.emplace_back(cubemap->texels);
     }
-    OnFailure undo([&] { destroyCubemapUpload(device, upload); });
-    upload.inPlace = createLayers(device, {upload.faceSize, upload.faceSize}, kFaceCount * upload.probeCount,
-                                  binding, texels, "cube maps to bake", upload.staging, upload.image);
+    OnFailure undo([&] { destroyCubemapUpload(context, upload); });
+    upload.inPlace = createLayers(context, {upload.faceSize, upload.faceSize}, kFaceCount * upload.probeCount,
+                                  binding, texels, "cube maps to bake", staging, upload.staged, upload.image);
     return upload;
 }
 
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload) {
-    recordLayers(commands, upload.staging, upload.image, upload.binding, upload.inPlace);
+    recordLayers(commands, upload.staged, upload.image, upload.binding, upload.inPlace);
 }
 
-void destroyCubemapUpload(const Device& device, CubemapUpload& upload) {
-    destroyImage(device, upload.image);
-    destroyBuffer(device, upload.staging);
+void destroyCubemapUpload(const Context& context, CubemapUpload& upload) {
+    destroyStagedRows(context, upload.staged);
+    destroyImage(context, upload.image);
     upload = CubemapUpload{};
 }
 
-EquirectUpload createEquirectUpload(const Device& device, std::span<const Image* const> equirects,
-                                    CubemapBinding binding) {
+EquirectUpload createEquirectUpload(const Context& context, std::span<const Image* const> equirects,
+                                    CubemapBinding binding, const StagingOptions& staging) {
     EquirectUpload upload;
     upload.binding = binding;
     upload.width = uint32_t(equirects.front()->width);
@@ -348,27 +395,27 @@ EquirectUpload createEquirectUpload(const Device& device, std::span<const Image*
     upload.probeCount = uint32_t(equirects.size());
     std::vector<std::span<const glm::vec4>> texels;
     for (const Image* equirect : equirects) {
-        checkEquirect(device, *equirect);
+        checkEquirect(context, *equirect);
         if (uint32_t(equirect->width) != upload.width || uint32_t(equirect->height) != upload.height)
             throw Error(ErrorKind::Input, "GPU bake: equirect maps of one upload must share their size");
         texels.emplace_back(equirect->texels);
     }
-    OnFailure undo([&] { destroyEquirectUpload(device, upload); });
-    upload.inPlace = createLayers(device, {upload.width, upload.height}, upload.probeCount, binding, texels,
-                                  "equirect maps to bake", upload.staging, upload.image);
-    upload.view = createImageView(device, upload.image.image, VK_IMAGE_VIEW_TYPE_2D_ARRAY,
+    OnFailure undo([&] { destroyEquirectUpload(context, upload); });
+    upload.inPlace = createLayers(context, {upload.width, upload.height}, upload.probeCount, binding, texels,
+                                  "equirect maps to bake", staging, upload.staged, upload.image);
+    upload.view = createImageView(context, upload.image.image, VK_IMAGE_VIEW_TYPE_2D_ARRAY,
                                   upload.image.format, upload.probeCount);
     return upload;
 }
 
 void recordEquirectUpload(VkCommandBuffer commands, const EquirectUpload& upload) {
-    recordLayers(commands, upload.staging, upload.image, upload.binding, upload.inPlace);
+    recordLayers(commands, upload.staged, upload.image, upload.binding, upload.inPlace);
 }
 
-void destroyEquirectUpload(const Device& device, EquirectUpload& upload) {
-    if (upload.view) vkDestroyImageView(device.device, upload.view, nullptr);
-    destroyImage(device, upload.image);
-    destroyBuffer(device, upload.staging);
+void destroyEquirectUpload(const Context& context, EquirectUpload& upload) {
+    if (upload.view) vkDestroyImageView(context.device, upload.view, nullptr);
+    destroyStagedRows(context, upload.staged);
+    destroyImage(context, upload.image);
     upload = EquirectUpload{};
 }
 

@@ -10,6 +10,7 @@
 #include "vk/context.h"
 #include "vk/image.h"
 #include "vk/resources.h"
+#include "vk/staged_upload.h"
 
 #include <span>
 #include <string>
@@ -23,46 +24,47 @@ namespace shprobe {
 CubemapBinding uploadBinding(const Device& device, TexelFormat format);
 
 // Cube maps of one face size in a 2D-array image, 6 layers each (probe_baker.h's layout), with the
-// staging buffer they are copied from; or, where the device reads host memory in place
-// (vk/host_memory.h), one cube map's own texels as the image (inPlace: no staging buffer, no copy;
-// the cube map must outlive the upload).
+// staging slots they are copied from (vk/staged_upload.h: packed on all cores, every slot but the
+// last copied while the next is packed); or, where the device reads host memory in place
+// (vk/host_memory.h), one cube map's own texels as the image (inPlace: no staging, no copy; the
+// cube map must outlive the upload).
 struct CubemapUpload {
     uint32_t faceSize = 0;
     uint32_t probeCount = 0;
     CubemapBinding binding = CubemapBinding::SampledImage;
-    Buffer staging;
+    StagedRows staged;
     GpuImage image;
     bool inPlace = false;
 };
 
-// Creates the image for a baker of this binding and fills the staging buffer (all cube maps must
-// have the same face size).
-CubemapUpload createCubemapUpload(const Device& device, std::span<const Cubemap* const> cubemaps,
-                                  CubemapBinding binding);
-// Records the copy and leaves the image as probe_baker.h asks: in cubemapLayout(upload.binding),
-// visible to compute-shader reads.
+// Creates the image for a baker of this binding and copies the texels into it (all cube maps must
+// have the same face size), but for the last staging slot, which recordCubemapUpload records.
+CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
+                                  CubemapBinding binding, const StagingOptions& staging = {});
+// Records the last slot's copy and leaves the image as probe_baker.h asks: in
+// cubemapLayout(upload.binding), visible to compute-shader reads.
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload);
-void destroyCubemapUpload(const Device& device, CubemapUpload& upload);
+// Waits for copies still in flight.
+void destroyCubemapUpload(const Context& context, CubemapUpload& upload);
 
 // Equirect maps of one size in a 2D-array image, one layer each (probe_baker.h's equirect layout),
-// with the staging buffer they are copied from; `view` is the 2D-array view the bake reads (one
-// layer included).
+// uploaded as cube maps are; `view` is the 2D-array view the bake reads (one layer included).
 struct EquirectUpload {
     uint32_t width = 0;
     uint32_t height = 0;
     uint32_t probeCount = 0;
     CubemapBinding binding = CubemapBinding::SampledImage;
-    Buffer staging;
+    StagedRows staged;
     GpuImage image;
     VkImageView view = VK_NULL_HANDLE;
     bool inPlace = false;
 };
 
 // As the cube-map upload functions, for equirect maps (all of one size).
-EquirectUpload createEquirectUpload(const Device& device, std::span<const Image* const> equirects,
-                                    CubemapBinding binding);
+EquirectUpload createEquirectUpload(const Context& context, std::span<const Image* const> equirects,
+                                    CubemapBinding binding, const StagingOptions& staging = {});
 void recordEquirectUpload(VkCommandBuffer commands, const EquirectUpload& upload);
-void destroyEquirectUpload(const Device& device, EquirectUpload& upload);
+void destroyEquirectUpload(const Context& context, EquirectUpload& upload);
 
 struct GpuBake {
     ShCoefficients radiance;
@@ -71,8 +73,8 @@ struct GpuBake {
                                      // submission, uploads excluded); 0 where unsupported
     uint32_t workgroups = 0;         // projection workgroups of this probe
     // Host wall times of the whole submission (all probes): creating the images and bake sets
-    // (packing texels into staging memory unless read in place), submitting and waiting (copies,
-    // dispatches), reading the coefficients back.
+    // (packing texels into staging slots and copying all but the last, unless read in place),
+    // submitting and waiting (the last copies, dispatches), reading the coefficients back.
     double uploadMilliseconds = 0.0;
     double submitMilliseconds = 0.0;
     double readbackMilliseconds = 0.0;

@@ -1,0 +1,118 @@
+#include "vk/staged_upload.h"
+
+#include "common/scope_exit.h"
+#include "vk/check.h"
+#include "vk/vulkan_commands.h"
+
+#include <algorithm>
+
+namespace shprobe {
+
+namespace {
+
+// The copy of `count` rows from `first` on (numbered through the layers) out of the buffer at
+// `offset`: a partial layer, whole layers, a partial layer; at most three regions.
+std::vector<VkBufferImageCopy> rowRegions(uint64_t first, uint64_t count, const GpuImage& image,
+                                          VkDeviceSize rowBytes, VkDeviceSize offset) {
+    const uint64_t height = image.extent.height;
+    std::vector<VkBufferImageCopy> regions;
+    while (count > 0) {
+        const uint32_t layer = uint32_t(first / height);
+        const uint32_t y = uint32_t(first % height);
+        const bool wholeLayers = y == 0 && count >= height;
+        const uint32_t layers = wholeLayers ? uint32_t(count / height) : 1;
+        const uint32_t rows =
+            wholeLayers ? uint32_t(height) : uint32_t(std::min<uint64_t>(count, height - y));
+        VkBufferImageCopy region{};
+        region.bufferOffset = offset;
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, layer, layers};
+        region.imageOffset = {0, int32_t(y), 0};
+        region.imageExtent = {image.extent.width, rows, 1};
+        regions.push_back(region);
+        const uint64_t copied = uint64_t(layers) * rows;
+        first += copied;
+        count -= copied;
+        offset += copied * rowBytes;
+    }
+    return regions;
+}
+
+void toTransferDestination(VkCommandBuffer commands, const GpuImage& image) {
+    changeLayout(commands, image,
+                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                  VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_ACCESS_TRANSFER_WRITE_BIT});
+}
+
+} // namespace
+
+StagedRows stageImageRows(const Context& context, const GpuImage& image, VkDeviceSize rowBytes,
+                          const FillRows& fill, const StagingOptions& options) {
+    const uint64_t totalRows = uint64_t(image.extent.height) * image.layers;
+    const uint64_t rowsPerSlot =
+        std::min<uint64_t>(totalRows, std::max<VkDeviceSize>(1, options.slotBytes / rowBytes));
+    const uint64_t chunks = (totalRows + rowsPerSlot - 1) / rowsPerSlot;
+    const uint32_t slots = uint32_t(std::clamp<uint64_t>(options.slots, 1, chunks));
+
+    StagedRows staged;
+    OnFailure undo([&] { destroyStagedRows(context, staged); });
+    staged.slotBytes = rowsPerSlot * rowBytes;
+    staged.ring = createBuffer(context, staged.slotBytes * slots, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                               MemoryUse::Upload, "staging for the texels");
+    for (uint64_t chunk = 0; chunk < chunks; ++chunk) {
+        const uint32_t slot = uint32_t(chunk % slots);
+        if (slot < staged.fences.size()) // the slot's earlier copy must be done before it is refilled
+            VK_CHECK(vkWaitForFences(context.device, 1, &staged.fences[slot], VK_TRUE, UINT64_MAX));
+        const uint64_t first = chunk * rowsPerSlot;
+        const uint32_t rows = uint32_t(std::min(rowsPerSlot, totalRows - first));
+        const VkDeviceSize offset = slot * staged.slotBytes;
+        fill(first, rows, static_cast<char*>(staged.ring.mapped) + offset);
+        std::vector<VkBufferImageCopy> regions = rowRegions(first, rows, image, rowBytes, offset);
+        if (chunk + 1 == chunks) {
+            staged.tail = std::move(regions);
+            break;
+        }
+        if (slot == staged.fences.size()) {
+            staged.commands.push_back(allocateCommandBuffer(context));
+            staged.fences.push_back(createFence(context));
+        } else {
+            VK_CHECK(vkResetFences(context.device, 1, &staged.fences[slot])); // reset only to resubmit
+        }
+        VkCommandBuffer commands = staged.commands[slot];
+        beginCommands(commands);
+        if (chunk == 0) toTransferDestination(commands, image);
+        vkCmdCopyBufferToImage(commands, staged.ring.buffer, image.image,
+                               VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, uint32_t(regions.size()),
+                               regions.data());
+        VK_CHECK(vkEndCommandBuffer(commands));
+        submitCommands(context, commands, staged.fences[slot]);
+        staged.copiedAhead = true;
+    }
+    return staged;
+}
+
+void recordStagedRows(VkCommandBuffer commands, const StagedRows& staged, const GpuImage& image,
+                      VkImageLayout layout, VkPipelineStageFlags readStage) {
+    // Copies submitted earlier come first in submission order: the barriers below order them too.
+    if (!staged.copiedAhead) toTransferDestination(commands, image);
+    vkCmdCopyBufferToImage(commands, staged.ring.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                           uint32_t(staged.tail.size()), staged.tail.data());
+    changeLayout(commands, image,
+                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, layout, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_ACCESS_TRANSFER_WRITE_BIT, readStage, VK_ACCESS_SHADER_READ_BIT});
+}
+
+void destroyStagedRows(const Context& context, StagedRows& staged) {
+    if (!staged.fences.empty()) // each fence is signalled or pending: reset only when resubmitted
+        vkWaitForFences(context.device, uint32_t(staged.fences.size()), staged.fences.data(), VK_TRUE,
+                        UINT64_MAX);
+    for (VkFence fence : staged.fences)
+        vkDestroyFence(context.device, fence, nullptr);
+    if (!staged.commands.empty())
+        vkFreeCommandBuffers(context.device, context.commandPool, uint32_t(staged.commands.size()),
+                             staged.commands.data());
+    destroyBuffer(context, staged.ring);
+    staged = StagedRows{};
+}
+
+} // namespace shprobe
