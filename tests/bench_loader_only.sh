@@ -46,7 +46,7 @@ cp "$bench" "$work/alone/shprobe-bench"
 (cd "$work/alone" && ./shprobe-bench --sizes 16 --orders 3 --repeat 1 --json bench.json) > "$work/run" ||
   { cat "$work/run"; fail "shprobe-bench --sizes 16 --orders 3 --repeat 1 failed"; }
 cat "$work/run"
-for row in "cpu memory read (bound)" "cpu memcpy" "gpu buffer read (device)" "gpu buffer copy (device)" "host-to-device copy, pinned (transfer bound)" "gpu projection (device)" "gpu bake (wall" "cpu reference (double)" "cpu fast"; do
+for row in "cpu memory read (bound)" "cpu memcpy" "gpu buffer read (device)" "gpu buffer copy (device)" "host-to-device copy, pinned (transfer bound)" "gpu texel reads only (device)" "gpu texel reads only, buffer (device)" "gpu projection (device)" "gpu bake (wall" "cpu reference (double)" "cpu fast"; do
   grep -qF "$row" "$work/run" || fail "no '$row' row"
 done
 for key in '"device":' '"measurements":' '"face_size": 16' '"pipeline_creation":'; do

@@ -198,11 +198,17 @@ class Bench {
             add(faceSize, format, 0, "host-to-device copy, pinned (transfer bound)",
                 bounds.device.transferMilliseconds, -1.0, Bound::Transfer);
         }
-        // read_texels reads the texels as the projection does: its access pattern's own bound.
+        // read_texels reads the texels as the projection does: its access pattern's own bound, from
+        // the image and from a buffer.
         for (TexelFormat format : kFormats) {
-            const double ms = deviceReadMilliseconds(context_, input.rgba32f, format, options_.repeat);
-            if (ms > 0.0)
-                add(faceSize, format, 0, "gpu texel reads only (device)", ms, -1.0, Bound::DeviceRead);
+            const TexelReads reads =
+                deviceTexelReads(context_, input.rgba32f, bytesOf(input, format), format, options_.repeat);
+            if (reads.imageMilliseconds > 0.0)
+                add(faceSize, format, 0, "gpu texel reads only (device)", reads.imageMilliseconds, -1.0,
+                    Bound::DeviceRead);
+            if (reads.bufferMilliseconds > 0.0)
+                add(faceSize, format, 0, "gpu texel reads only, buffer (device)", reads.bufferMilliseconds,
+                    -1.0, Bound::DeviceRead);
         }
         for (int order : options_.orders)
             runOrder(input, order);

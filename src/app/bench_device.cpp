@@ -1,6 +1,7 @@
 #include "app/bench_device.h"
 #include "app/stopwatch.h"
 
+#include "common/error.h"
 #include "common/scope_exit.h"
 #include "glsl/gpu_interface.h"
 #include "gpu/probe_baker.h"
@@ -15,6 +16,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <glm/common.hpp>
+#include <glm/vector_relational.hpp>
+#include <string>
 #include <unistd.h>
 #include <vector>
 
@@ -89,6 +93,37 @@ double bufferReadMilliseconds(const Context& context, const Buffer& words, int r
     });
 }
 
+// Each invocation of both read_texels variants sums the same texels in the same order, so their
+// sums agree (to rounding, should a driver reorder the additions): the buffer variant reads what the
+// image holds. Throws Error(Device) where they do not.
+void requireSameSums(const Context& context, const Buffer& imageSums, const Buffer& bufferSums) {
+    Buffer readback = createBuffer(context, 2 * imageSums.size, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                   MemoryUse::Readback, "read sums to compare");
+    ScopeExit destroyReadback([&] { destroyBuffer(context, readback); });
+    submitAndWait(context, [&](VkCommandBuffer commands) {
+        computeWriteBarrier(commands);
+        const VkBufferCopy first{0, 0, imageSums.size}, second{0, imageSums.size, imageSums.size};
+        vkCmdCopyBuffer(commands, imageSums.buffer, readback.buffer, 1, &first);
+        vkCmdCopyBuffer(commands, bufferSums.buffer, readback.buffer, 1, &second);
+        computeWriteBarrier(commands);
+    });
+    invalidateBuffer(context, readback);
+    const size_t count = size_t(imageSums.size / sizeof(glm::vec4));
+    const auto* image = static_cast<const glm::vec4*>(readback.mapped);
+    const glm::vec4* buffer = image + count;
+    for (size_t i = 0; i < count; ++i)
+        if (glm::any(glm::greaterThan(glm::abs(image[i] - buffer[i]), 1e-5f * glm::abs(image[i]))))
+            throw Error(ErrorKind::Device, "bench: read_texels from a buffer summed other texels than from "
+                                           "the image (invocation " +
+                                               std::to_string(i) + ")");
+}
+
+// A read_texels module.
+struct ReadShader {
+    const char* name;
+    std::span<const uint32_t> spirv;
+};
+
 } // namespace
 
 DeviceBounds measureDeviceBounds(const Context& context, std::span<const std::byte> bytes, int repeat) {
@@ -114,13 +149,11 @@ DeviceBounds measureDeviceBounds(const Context& context, std::span<const std::by
     return bounds;
 }
 
-double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format,
-                              int repeat) {
-    if (!context.info.timestamps) return 0.0;
+TexelReads deviceTexelReads(const Context& context, const Cubemap& cubemap, std::span<const std::byte> bytes,
+                            TexelFormat format, int repeat) {
+    if (!context.info.timestamps) return {};
     // read_texels reads as the storage-image projection does, the one the program uses.
-    if (uploadBinding(context, format) == CubemapBinding::SampledImage) return 0.0;
-    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-                                                     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    if (uploadBinding(context, format) == CubemapBinding::SampledImage) return {};
     const ProbeBakerOptions plan{.order = 3,
                                  .cubemaps = uploadBinding(context, format)}; // an order-3 projection's plan
     const bool half = format == TexelFormat::Rgba16F;
@@ -141,27 +174,54 @@ double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, Te
         groups = set.groupsPerProbe;
         destroyProbeBakeSet(context, set);
     }
-    Buffer sums = createBuffer(context, VkDeviceSize(groups) * plan.workgroupSize * 16,
-                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "read sums");
-    ScopeExit destroySums([&] { destroyBuffer(context, sums); });
-    ComputeProgram read = createComputeProgram(
-        context, {.name = half ? "read_texels_rgba16f.comp" : "read_texels_rgba32f.comp",
-                  .spirv = half ? spirv::read_texels_rgba16f_comp : spirv::read_texels_rgba32f_comp,
-                  .bindings = kBindings,
-                  .pushConstantSize = sizeof(glsl::ProjectParams),
-                  .localSize = plan.workgroupSize});
-    ScopeExit destroyRead([&] { destroyComputeProgram(context, read); });
-    VkDescriptorPool pool =
-        createDescriptorPool(context, {.sets = 1, .storageBuffers = 1, .storageImages = 1});
-    ScopeExit destroyPool([&] { vkDestroyDescriptorPool(context.device, pool, nullptr); });
-    const BindingTarget targets[] = {{.imageView = upload.image.view}, {sums.buffer, 0, VK_WHOLE_SIZE}};
-    VkDescriptorSet set = createDescriptorSet(context, pool, read, targets);
-    return bestDeviceMilliseconds(
-        context, repeat,
-        [&](VkCommandBuffer commands) {
-            dispatch(commands, read, set, glsl::ProjectParams{upload.faceSize}, {groups, 1});
-        },
-        [&](VkCommandBuffer commands) { recordCubemapUpload(commands, upload); });
+    const VkDeviceSize sumBytes = VkDeviceSize(groups) * plan.workgroupSize * 16;
+    // read_texels over `texels` (an image view or a buffer) with the projection's dispatch, into `sums`.
+    auto readMilliseconds = [&](const ReadShader& shader, VkDescriptorType type, const BindingTarget& texels,
+                                const Buffer& sums, const std::function<void(VkCommandBuffer)>& first) {
+        const VkDescriptorType bindings[] = {type, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+        ComputeProgram read = createComputeProgram(context, {.name = shader.name,
+                                                             .spirv = shader.spirv,
+                                                             .bindings = bindings,
+                                                             .pushConstantSize = sizeof(glsl::ProjectParams),
+                                                             .localSize = plan.workgroupSize});
+        ScopeExit destroyRead([&] { destroyComputeProgram(context, read); });
+        const bool image = type == VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+        VkDescriptorPool pool = createDescriptorPool(
+            context, {.sets = 1, .storageBuffers = image ? 1u : 2u, .storageImages = image ? 1u : 0u});
+        ScopeExit destroyPool([&] { vkDestroyDescriptorPool(context.device, pool, nullptr); });
+        const BindingTarget targets[] = {texels, {sums.buffer, 0, VK_WHOLE_SIZE}};
+        VkDescriptorSet set = createDescriptorSet(context, pool, read, targets);
+        return bestDeviceMilliseconds(
+            context, repeat,
+            [&](VkCommandBuffer commands) {
+                dispatch(commands, read, set, glsl::ProjectParams{upload.faceSize}, {groups, 1});
+            },
+            first);
+    };
+    constexpr VkBufferUsageFlags kSumUsage =
+        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+    Buffer imageSums = createBuffer(context, sumBytes, kSumUsage, MemoryUse::Device, "read sums");
+    ScopeExit destroyImageSums([&] { destroyBuffer(context, imageSums); });
+    TexelReads reads;
+    reads.imageMilliseconds =
+        readMilliseconds(half ? ReadShader{"read_texels_rgba16f.comp", spirv::read_texels_rgba16f_comp}
+                              : ReadShader{"read_texels_rgba32f.comp", spirv::read_texels_rgba32f_comp},
+                         VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {.imageView = upload.image.view}, imageSums,
+                         [&](VkCommandBuffer commands) { recordCubemapUpload(commands, upload); });
+    if (bytes.size() > context.info.limits.maxStorageBufferRange) return reads;
+    Buffer texels = createBuffer(context, bytes.size(),
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                 MemoryUse::Device, "texels to read");
+    ScopeExit destroyTexels([&] { destroyBuffer(context, texels); });
+    uploadBuffer(context, texels, bytes.data(), bytes.size());
+    Buffer bufferSums = createBuffer(context, sumBytes, kSumUsage, MemoryUse::Device, "read sums");
+    ScopeExit destroyBufferSums([&] { destroyBuffer(context, bufferSums); });
+    reads.bufferMilliseconds = readMilliseconds(
+        half ? ReadShader{"read_texels_buffer_rgba16f.comp", spirv::read_texels_buffer_rgba16f_comp}
+             : ReadShader{"read_texels_buffer_rgba32f.comp", spirv::read_texels_buffer_rgba32f_comp},
+        VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {texels.buffer, 0, VK_WHOLE_SIZE}, bufferSums, {});
+    requireSameSums(context, imageSums, bufferSums);
+    return reads;
 }
 
 PipelineCreation measurePipelineCreation(const Device& device, int order) {

@@ -12,10 +12,17 @@
 
 namespace shprobe {
 
-// Device milliseconds (timestamps) of read_texels_<format>.comp over the cube map: every texel read
-// as the storage-image projection reads it, and only summed. The best of `repeat` runs after an
-// untimed one; 0 without timestamps or without storage images of the format.
-double deviceReadMilliseconds(const Context& context, const Cubemap& cubemap, TexelFormat format, int repeat);
+// Device milliseconds (timestamps) of read_texels over the cube map: every texel read as the
+// storage-image projection reads it (positions, streams, order), and only summed. Each the best of
+// `repeat` runs after an untimed one; 0 without timestamps or without storage images of the format.
+struct TexelReads {
+    double imageMilliseconds = 0.0;  // read_texels_<format>.comp: from the image the projection reads
+    double bufferMilliseconds = 0.0; // read_texels_buffer_<format>.comp: from a storage buffer of the
+                                     // same texels (`bytes`, layer after layer); 0 where they exceed
+                                     // maxStorageBufferRange
+};
+TexelReads deviceTexelReads(const Context& context, const Cubemap& cubemap, std::span<const std::byte> bytes,
+                            TexelFormat format, int repeat);
 
 // The device's own bounds for `bytes` (a multiple of 16 bytes), timed with timestamps, each the best
 // of `repeat` runs after an untimed one; 0 without timestamps. On a CPU device such as lavapipe all
