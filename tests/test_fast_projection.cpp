@@ -224,10 +224,10 @@ TEST(FastProjection, EveryFiniteHalfConvertsExactly) {
     }
 }
 
-// Checks: packHalves rounds every float to the nearest half. For each pair of neighbouring finite
-// halves a < b (a >= 0): a itself, the float just below their midpoint and a itself in the other lanes
-// give a; just above gives b; the midpoint (exact in float: 12 significant bits) either. Negative
-// values in the second lane mirror them. Beyond the range: infinities.
+// Checks: packHalves rounds every float to the nearest half, by F16C and without. For each pair of
+// neighbouring finite halves a < b (a >= 0): a itself and the float just below their midpoint give a,
+// just above gives b, the midpoint (exact in float: 12 significant bits) either. The second lane
+// holds the negatives, the third a itself; alpha is written 0. Beyond the range: infinities.
 TEST(FastProjection, PackHalvesRoundsToTheNearestHalf) {
     std::vector<glm::vec4> texels;
     std::vector<std::array<uint16_t, 2>> expected; // the halves allowed for lane 0 (lane 1: sign set)
@@ -238,22 +238,26 @@ TEST(FastProjection, PackHalvesRoundsToTheNearestHalf) {
         for (auto [value, low, high] :
              {std::tuple{a, bits, bits}, std::tuple{std::nextafter(middle, 0.0f), bits, bits},
               std::tuple{middle, bits, next}, std::tuple{std::nextafter(middle, b), next, next}}) {
-            texels.push_back({value, -value, a, 1.0f});
+            texels.push_back({value, -value, a, 1e9f});
             expected.push_back({low, high});
         }
     }
     texels.push_back({1e5f, -1e5f, 65504.0f, 1.0f});
     expected.push_back({0x7c00, 0x7c00});
-    std::vector<uint64_t> halves(texels.size());
-    packHalves(texels, halves.data());
-    for (size_t t = 0; t < texels.size(); ++t) {
-        const uint16_t lane0 = uint16_t(halves[t]), lane1 = uint16_t(halves[t] >> 16);
-        const bool nearest = lane0 == expected[t][0] || lane0 == expected[t][1];
-        const bool lanesKept = lane1 == (lane0 | 0x8000u) &&
-                               glm::unpackHalf1x16(uint16_t(halves[t] >> 32)) == texels[t].z &&
-                               uint16_t(halves[t] >> 48) == 0x3c00;
-        ASSERT_TRUE(nearest && lanesKept) << "value " << texels[t].x << ": halves 0x" << std::hex << halves[t]
-                                          << ", expected 0x" << expected[t][0] << " or 0x" << expected[t][1];
+    for (KernelLevel level : {KernelLevel::X86_64_V4, KernelLevel::Baseline}) {
+        std::vector<uint64_t> halves(texels.size());
+        packHalves(texels, halves.data(), level);
+        for (size_t t = 0; t < texels.size(); ++t) {
+            const uint16_t lane0 = uint16_t(halves[t]), lane1 = uint16_t(halves[t] >> 16);
+            const bool nearest = lane0 == expected[t][0] || lane0 == expected[t][1];
+            const bool lanesKept = lane1 == (lane0 | 0x8000u) &&
+                                   glm::unpackHalf1x16(uint16_t(halves[t] >> 32)) == texels[t].z &&
+                                   (halves[t] >> 48) == 0;
+            ASSERT_TRUE(nearest && lanesKept)
+                << (level == KernelLevel::Baseline ? "baseline" : "widest") << ", value " << texels[t].x
+                << ": halves 0x" << std::hex << halves[t] << ", expected 0x" << expected[t][0] << " or 0x"
+                << expected[t][1];
+        }
     }
 }
 

@@ -57,6 +57,10 @@ void checkEquirect(const Device& device, const Image& equirect) {
                                           std::to_string(equirect.height));
 }
 
+bool exceedsHalfRange(const glm::vec4& texel) {
+    return glm::any(glm::greaterThan(glm::abs(glm::vec3(texel)), glm::vec3(kHalfMax)));
+}
+
 // Writes the texels in the image's format; false where one does not fit RGBA16F (requireHalfRange
 // says which).
 bool packTexels(std::span<const glm::vec4> texels, TexelFormat format, void* destination) {
@@ -65,20 +69,16 @@ bool packTexels(std::span<const glm::vec4> texels, TexelFormat format, void* des
         return true;
     }
     packHalves(texels, static_cast<uint64_t*>(destination));
-    return std::all_of(texels.begin(), texels.end(), [](const glm::vec4& texel) {
-        return glm::all(glm::lessThanEqual(glm::abs(glm::vec3(texel)), glm::vec3(kHalfMax)));
-    });
+    return std::none_of(texels.begin(), texels.end(), exceedsHalfRange);
 }
 
 // RGBA16F refuses values a half cannot hold rather than clamping them silently.
 void requireHalfRange(std::span<const glm::vec4> texels) {
-    for (const glm::vec4& texel : texels) {
-        const glm::vec3 rgb(texel);
-        if (!glm::all(glm::lessThanEqual(glm::abs(rgb), glm::vec3(kHalfMax))))
+    for (const glm::vec4& texel : texels)
+        if (exceedsHalfRange(texel))
             throw Error(ErrorKind::Input, "GPU bake: a texel of " +
-                                              std::to_string(std::max({rgb.r, rgb.g, rgb.b})) +
+                                              std::to_string(std::max({texel.r, texel.g, texel.b})) +
                                               " does not fit RGBA16F (at most 65504); use RGBA32F");
-    }
 }
 
 // Calls visit(texels) for the rows [first, first + count) of the probes' layers, numbered through

@@ -216,11 +216,13 @@ struct Rgba16FTexels {
     std::memcpy(floats, &converted, sizeof converted);
 }
 
-// Texels to halves by F16C, one texel (four floats) an instruction, rounded to nearest even.
+// Texels' RGB to halves by F16C, one texel an instruction, rounded to nearest even; alpha 0.
 [[gnu::target("f16c")]] void packHalvesF16c(std::span<const glm::vec4> texels, uint64_t* halves) {
+    const __m128 rgb = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
     for (size_t t = 0; t < texels.size(); ++t) {
-        const __m128i converted = _mm_cvtps_ph(_mm_loadu_ps(&texels[t].x), _MM_FROUND_TO_NEAREST_INT);
-        _mm_storel_epi64(reinterpret_cast<__m128i*>(halves + t), converted);
+        const __m128 texel = _mm_and_ps(_mm_loadu_ps(&texels[t].x), rgb);
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(halves + t),
+                         _mm_cvtps_ph(texel, _MM_FROUND_TO_NEAREST_INT));
     }
 }
 
@@ -896,12 +898,13 @@ KernelLevel widestKernelLevel() {
 #endif
 }
 
-void packHalves(std::span<const glm::vec4> texels, uint64_t* halves) {
+void packHalves(std::span<const glm::vec4> texels, uint64_t* halves, KernelLevel widest) {
 #if SHPROBE_X86_LEVELS
-    if (widestKernelLevel() != KernelLevel::Baseline) return packHalvesF16c(texels, halves);
+    if (widest != KernelLevel::Baseline && widestKernelLevel() != KernelLevel::Baseline)
+        return packHalvesF16c(texels, halves);
 #endif
     for (size_t t = 0; t < texels.size(); ++t)
-        halves[t] = glm::packHalf4x16(texels[t]);
+        halves[t] = glm::packHalf4x16(glm::vec4(glm::vec3(texels[t]), 0.0f));
 }
 
 ShCoefficients projectFacesFast(const FaceRows& faces, TexelFormat format, int faceSize, int order,

@@ -26,10 +26,12 @@ struct FastProjectionOptions {
 // The widest kernels this processor runs (Baseline where there are no others).
 KernelLevel widestKernelLevel();
 
-// RGBA texels to RGBA16F, four halves a 64-bit word (TexelFormat::Rgba16F), each value rounded to
-// the nearest half, beyond +-65504 to an infinity. By F16C where the processor has it (x86-64-v3),
-// else by glm::packHalf4x16, which rounds ties away from zero where F16C rounds them to even.
-void packHalves(std::span<const glm::vec4> texels, uint64_t* halves);
+// The RGB of texels to RGBA16F, four halves a 64-bit word (TexelFormat::Rgba16F) with alpha 0 (the
+// projection reads RGB), each value rounded to the nearest half, from +-65520 on to an infinity. By
+// F16C where the processor has it and `widest` allows (x86-64-v3 and up), else by
+// glm::packHalf4x16, which rounds ties away from zero where F16C rounds them to even.
+void packHalves(std::span<const glm::vec4> texels, uint64_t* halves,
+                KernelLevel widest = KernelLevel::X86_64_V4);
 
 // Radiance coefficients of orders 1..kMaxOrder. texels: 6 faces of faceSize^2 texels, face-major in
 // Vulkan layer order (Cubemap's layout), RGBA. Throws Error(Input) for a face size below 1, an

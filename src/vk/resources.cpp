@@ -185,7 +185,6 @@ void submitAndWait(const Context& context, const std::function<void(VkCommandBuf
     VkFence fence = createFence(context);
     ScopeExit destroyFence([&] { vkDestroyFence(context.device, fence, nullptr); });
     submitCommands(context, commands, fence);
-    ++gSubmissions;
     VK_CHECK(vkWaitForFences(context.device, 1, &fence, VK_TRUE, UINT64_MAX));
 }
 
@@ -234,6 +233,7 @@ void submitCommands(const Context& context, VkCommandBuffer commands, VkFence fe
         submit.pSignalSemaphores = &sync.signal;
     }
     VK_CHECK(vkQueueSubmit(context.queue, 1, &submit, fence));
+    ++gSubmissions;
 }
 
 VkQueryPool createTimestampPool(const Device& device) {

@@ -59,7 +59,7 @@ struct QueueSync {
 // completed.
 void submitCommands(const Context& context, VkCommandBuffer commands, VkFence fence,
                     const QueueSync& sync = {});
-// Queue submissions made by submitAndWait in this process so far (tests count them).
+// Queue submissions made by submitAndWait and submitCommands in this process so far (tests count them).
 uint64_t submissionCount();
 
 // A pool of two timestamp queries, or VK_NULL_HANDLE when the queue cannot write timestamps.

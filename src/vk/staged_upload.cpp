@@ -60,33 +60,34 @@ StagedRows stageImageRows(const Context& context, const GpuImage& image, VkDevic
     staged.ring = createBuffer(context, staged.slotBytes * slots, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                MemoryUse::Upload, "staging for the texels");
     for (uint64_t chunk = 0; chunk < chunks; ++chunk) {
-        const uint32_t slot = uint32_t(chunk % slots);
-        if (slot < staged.fences.size()) // the slot's earlier copy must be done before it is refilled
-            VK_CHECK(vkWaitForFences(context.device, 1, &staged.fences[slot], VK_TRUE, UINT64_MAX));
+        const uint32_t index = uint32_t(chunk % slots);
+        if (index < staged.submitted.size()) { // the slot's earlier copy must be done before it is refilled
+            StagingSlot& slot = staged.submitted[index];
+            VK_CHECK(vkWaitForFences(context.device, 1, &slot.fence, VK_TRUE, UINT64_MAX));
+            slot.pending = false;
+        }
         const uint64_t first = chunk * rowsPerSlot;
         const uint32_t rows = uint32_t(std::min(rowsPerSlot, totalRows - first));
-        const VkDeviceSize offset = slot * staged.slotBytes;
+        const VkDeviceSize offset = index * staged.slotBytes;
         fill(first, rows, static_cast<char*>(staged.ring.mapped) + offset);
         std::vector<VkBufferImageCopy> regions = rowRegions(first, rows, image, rowBytes, offset);
         if (chunk + 1 == chunks) {
             staged.tail = std::move(regions);
             break;
         }
-        if (slot == staged.fences.size()) {
-            staged.commands.push_back(allocateCommandBuffer(context));
-            staged.fences.push_back(createFence(context));
-        } else {
-            VK_CHECK(vkResetFences(context.device, 1, &staged.fences[slot])); // reset only to resubmit
-        }
-        VkCommandBuffer commands = staged.commands[slot];
-        beginCommands(commands);
-        if (chunk == 0) toTransferDestination(commands, image);
-        vkCmdCopyBufferToImage(commands, staged.ring.buffer, image.image,
+        if (index == staged.submitted.size())
+            staged.submitted.push_back({allocateCommandBuffer(context), createFence(context)});
+        StagingSlot& slot = staged.submitted[index];
+        VK_CHECK(vkResetFences(context.device, 1, &slot.fence));
+        beginCommands(slot.commands);
+        if (chunk == 0) toTransferDestination(slot.commands, image);
+        vkCmdCopyBufferToImage(slot.commands, staged.ring.buffer, image.image,
                                VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, uint32_t(regions.size()),
                                regions.data());
-        VK_CHECK(vkEndCommandBuffer(commands));
-        submitCommands(context, commands, staged.fences[slot]);
-        staged.copiedAhead = true;
+        VK_CHECK(vkEndCommandBuffer(slot.commands));
+        submitCommands(context, slot.commands, slot.fence);
+        slot.pending = true;
+        ++staged.submissions;
     }
     return staged;
 }
@@ -94,7 +95,7 @@ StagedRows stageImageRows(const Context& context, const GpuImage& image, VkDevic
 void recordStagedRows(VkCommandBuffer commands, const StagedRows& staged, const GpuImage& image,
                       VkImageLayout layout, VkPipelineStageFlags readStage) {
     // Copies submitted earlier come first in submission order: the barriers below order them too.
-    if (!staged.copiedAhead) toTransferDestination(commands, image);
+    if (staged.submissions == 0) toTransferDestination(commands, image);
     vkCmdCopyBufferToImage(commands, staged.ring.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                            uint32_t(staged.tail.size()), staged.tail.data());
     changeLayout(commands, image,
@@ -103,14 +104,11 @@ void recordStagedRows(VkCommandBuffer commands, const StagedRows& staged, const 
 }
 
 void destroyStagedRows(const Context& context, StagedRows& staged) {
-    if (!staged.fences.empty()) // each fence is signalled or pending: reset only when resubmitted
-        vkWaitForFences(context.device, uint32_t(staged.fences.size()), staged.fences.data(), VK_TRUE,
-                        UINT64_MAX);
-    for (VkFence fence : staged.fences)
-        vkDestroyFence(context.device, fence, nullptr);
-    if (!staged.commands.empty())
-        vkFreeCommandBuffers(context.device, context.commandPool, uint32_t(staged.commands.size()),
-                             staged.commands.data());
+    for (const StagingSlot& slot : staged.submitted) {
+        if (slot.pending) vkWaitForFences(context.device, 1, &slot.fence, VK_TRUE, UINT64_MAX);
+        vkDestroyFence(context.device, slot.fence, nullptr);
+        vkFreeCommandBuffers(context.device, context.commandPool, 1, &slot.commands);
+    }
     destroyBuffer(context, staged.ring);
     staged = StagedRows{};
 }

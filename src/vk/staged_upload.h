@@ -19,15 +19,20 @@ struct StagingOptions {
     uint32_t slots = 3;
 };
 
+// A slot whose copy was submitted: its commands, and the fence signalled when the copy is done.
+struct StagingSlot {
+    VkCommandBuffer commands = VK_NULL_HANDLE;
+    VkFence fence = VK_NULL_HANDLE;
+    bool pending = false; // submitted and not yet waited for: only then may the fence be waited on
+};
+
 // Rows are numbered through the layers: row r is row r % height of layer r / height.
 struct StagedRows {
     Buffer ring;
     VkDeviceSize slotBytes = 0;
-    std::vector<VkCommandBuffer> commands; // one per slot that was submitted
-    std::vector<VkFence> fences;           // signalled when that slot's copy is done
-    std::vector<VkBufferImageCopy> tail;   // the last slot's copy, for recordStagedRows
-    bool copiedAhead = false;              // slots before the last were submitted (the image is in
-                                           // TRANSFER_DST_OPTIMAL already)
+    std::vector<StagingSlot> submitted;  // the slots copied ahead (none when the image fits one slot)
+    uint64_t submissions = 0;            // copies submitted ahead, one per slot filled but the last
+    std::vector<VkBufferImageCopy> tail; // the last slot's copy, for recordStagedRows
 };
 
 // Writes `rows` rows, from `firstRow` on, tightly packed (rowBytes each) to `destination`.
