@@ -114,19 +114,28 @@ void changeLayout(VkCommandBuffer commands, const GpuImage& image, const LayoutC
     changeLayout(commands, image.image, aspectOf(image.format), image.layers, change);
 }
 
-void recordImageUpload(VkCommandBuffer commands, VkBuffer staging, const GpuImage& image,
-                       VkImageLayout layout, VkPipelineStageFlags readStage) {
+void beginImageCopies(VkCommandBuffer commands, const GpuImage& image) {
     changeLayout(commands, image,
                  {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                   VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
                   VK_ACCESS_TRANSFER_WRITE_BIT});
+}
+
+void endImageCopies(VkCommandBuffer commands, const GpuImage& image, VkImageLayout layout,
+                    VkPipelineStageFlags readStage) {
+    changeLayout(commands, image,
+                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, layout, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_ACCESS_TRANSFER_WRITE_BIT, readStage, VK_ACCESS_SHADER_READ_BIT});
+}
+
+void recordImageUpload(VkCommandBuffer commands, VkBuffer staging, const GpuImage& image,
+                       VkImageLayout layout, VkPipelineStageFlags readStage) {
+    beginImageCopies(commands, image);
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.layers};
     region.imageExtent = {image.extent.width, image.extent.height, 1};
     vkCmdCopyBufferToImage(commands, staging, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-    changeLayout(commands, image,
-                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, layout, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                  VK_ACCESS_TRANSFER_WRITE_BIT, readStage, VK_ACCESS_SHADER_READ_BIT});
+    endImageCopies(commands, image, layout, readStage);
 }
 
 VkSampler createSampler(const Device& device, VkFilter filter) {

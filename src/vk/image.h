@@ -46,9 +46,15 @@ void changeLayout(VkCommandBuffer commands, const GpuImage& image, const LayoutC
 void changeLayout(VkCommandBuffer commands, VkImage image, VkImageAspectFlags aspect, uint32_t layers,
                   const LayoutChange& change);
 
+// The two transitions around copies into an image: from whatever it held (discarded) to
+// TRANSFER_DST_OPTIMAL, ready for copies; then from there to `layout`, the copies' writes visible to
+// shader reads at `readStage`.
+void beginImageCopies(VkCommandBuffer commands, const GpuImage& image);
+void endImageCopies(VkCommandBuffer commands, const GpuImage& image, VkImageLayout layout,
+                    VkPipelineStageFlags readStage);
+
 // Records the copy of every layer of the image from the buffer (rows tightly packed, layer after
-// layer, from offset 0) and leaves the image in `layout`, its texels visible to shader reads at
-// `readStage`. The image's earlier contents are discarded.
+// layer, from offset 0) between those transitions.
 void recordImageUpload(VkCommandBuffer commands, VkBuffer staging, const GpuImage& image,
                        VkImageLayout layout, VkPipelineStageFlags readStage);
 

@@ -37,13 +37,6 @@ std::vector<VkBufferImageCopy> rowRegions(uint64_t first, uint64_t count, const 
     return regions;
 }
 
-void toTransferDestination(VkCommandBuffer commands, const GpuImage& image) {
-    changeLayout(commands, image,
-                 {VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                  VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                  VK_ACCESS_TRANSFER_WRITE_BIT});
-}
-
 } // namespace
 
 StagedRows stageImageRows(const Context& context, const GpuImage& image, VkDeviceSize rowBytes,
@@ -80,7 +73,7 @@ StagedRows stageImageRows(const Context& context, const GpuImage& image, VkDevic
         StagingSlot& slot = staged.submitted[index];
         VK_CHECK(vkResetFences(context.device, 1, &slot.fence));
         beginCommands(slot.commands);
-        if (chunk == 0) toTransferDestination(slot.commands, image);
+        if (chunk == 0) beginImageCopies(slot.commands, image);
         vkCmdCopyBufferToImage(slot.commands, staged.ring.buffer, image.image,
                                VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, uint32_t(regions.size()),
                                regions.data());
@@ -95,12 +88,10 @@ StagedRows stageImageRows(const Context& context, const GpuImage& image, VkDevic
 void recordStagedRows(VkCommandBuffer commands, const StagedRows& staged, const GpuImage& image,
                       VkImageLayout layout, VkPipelineStageFlags readStage) {
     // Copies submitted earlier come first in submission order: the barriers below order them too.
-    if (staged.submissions == 0) toTransferDestination(commands, image);
+    if (staged.submissions == 0) beginImageCopies(commands, image);
     vkCmdCopyBufferToImage(commands, staged.ring.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                            uint32_t(staged.tail.size()), staged.tail.data());
-    changeLayout(commands, image,
-                 {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, layout, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                  VK_ACCESS_TRANSFER_WRITE_BIT, readStage, VK_ACCESS_SHADER_READ_BIT});
+    endImageCopies(commands, image, layout, readStage);
 }
 
 void destroyStagedRows(const Context& context, StagedRows& staged) {
