@@ -4,10 +4,11 @@
 //
 // The shaders' one basis. The C++ one (src/sh/basis.h, evalBasisRecurrence: the double reference
 // and the fast CPU projection) runs the unnormalized Lisle-Huang recurrence from band 0 and
-// normalizes at the end. Here bands 0-4 are closed forms and the recurrence, in normalized form, only
-// continues them: on llvmpipe a loop over the bands keeps the basis array in memory, and returning
-// before the loop made order-3 projection four times faster (docs/gpu-path.md). Both are checked
-// against each other by test_gpu (GPU against CPU projections at orders 1, 3, 5 and 8).
+// normalizes at the end. Here bands 0-4 are closed forms and bands 5-7 the recurrence in normalized
+// form, all straight-line code with constant indices: an array indexed at run time stays in memory
+// on llvmpipe, which made projection four times slower at order 3 and twelve at order 8
+// (docs/gpu-path.md). Both are checked against each other by test_gpu (GPU against CPU projections
+// at orders 1, 3, 5 and 8).
 #ifndef SHPROBE_SH_BASIS_GLSL
 #define SHPROBE_SH_BASIS_GLSL
 #include "gpu_interface.h"
@@ -54,37 +55,52 @@ void shEvalBands0To4(vec3 d, inout float y[SH_BASIS_CAPACITY]) {
     y[24] = 0.625835735449f * (x2 * (x2 - 3.0f * y2) - y2 * (3.0f * x2 - y2));
 }
 
-// Band l >= 5 from bands l-1 and l-2, by the normalized recurrences of the associated Legendre
+// Bands 5-7 from bands l-1 and l-2, by the normalized recurrences of the associated Legendre
 // functions applied to the whole basis values (the cos/sin(m phi) part depends on m only):
 //   y_l,+-l     = -sqrt((2l+1)/(2l)) (x y_l-1,+-(l-1) -+ y y_l-1,-+(l-1))   (complex multiplication)
 //   y_l,+-(l-1) = sqrt(2l+1) z y_l-1,+-(l-1)
 //   y_l,+-m     = a_lm (z y_l-1,+-m - b_lm y_l-2,+-m),  a_lm = sqrt((4l^2-1)/(l^2-m^2)),
 //                 b_lm = sqrt(((l-1)^2-m^2)/(4(l-1)^2-1))
 // (Lisle & Huang 2007, "Algorithms for Spherical Harmonic Lighting", section 2.1, in normalized form.)
-void shEvalBand(uint l, vec3 d, inout float y[SH_BASIS_CAPACITY]) {
-    uint c = l * (l + 1u), p = (l - 1u) * l, q = (l - 2u) * (l - 1u);
-    float sectoral = -sqrt(float(2u * l + 1u) / float(2u * l));
-    y[c + l] = sectoral * (d.x * y[p + l - 1u] - d.y * y[p - l + 1u]);
-    y[c - l] = sectoral * (d.x * y[p - l + 1u] + d.y * y[p + l - 1u]);
-    float subdiagonal = sqrt(float(2u * l + 1u)) * d.z;
-    y[c + l - 1u] = subdiagonal * y[p + l - 1u];
-    y[c - l + 1u] = subdiagonal * y[p - l + 1u];
-    for (uint m = 0u; m + 1u < l; ++m) {
-        float l2 = float(l * l), m2 = float(m * m), k = float((l - 1u) * (l - 1u));
-        float a = sqrt((4.0f * l2 - 1.0f) / (l2 - m2));
-        float b = sqrt((k - m2) / (4.0f * k - 1.0f));
-        y[c + m] = a * (d.z * y[p + m] - b * y[q + m]);
-        y[c - m] = a * (d.z * y[p - m] - b * y[q - m]); // m = 0 writes y[c] twice, the same value
-    }
+// Workaround(llvmpipe, Mesa 22.3): spelled out for literal l and m, so that every index into y and
+// every factor is a constant: a loop over the bands left y in memory on llvmpipe (as any array
+// indexed at run time), with a masked store per lane and write, and order-8 projection ran 12 times
+// as long as order 5 (4-7 times as long as now). A loop over l and m gives the same values where a
+// driver keeps y in registers.
+#define SH_INDEX(l, m) ((l) * ((l) + 1) + (m))
+#define SH_SECTORAL(l)                                                                            \
+    y[SH_INDEX(l, l)] = -sqrt(float(2 * (l) + 1) / float(2 * (l))) *                              \
+        (d.x * y[SH_INDEX((l) - 1, (l) - 1)] - d.y * y[SH_INDEX((l) - 1, 1 - (l))]);              \
+    y[SH_INDEX(l, -(l))] = -sqrt(float(2 * (l) + 1) / float(2 * (l))) *                           \
+        (d.x * y[SH_INDEX((l) - 1, 1 - (l))] + d.y * y[SH_INDEX((l) - 1, (l) - 1)]);              \
+    y[SH_INDEX(l, (l) - 1)] = sqrt(float(2 * (l) + 1)) * d.z * y[SH_INDEX((l) - 1, (l) - 1)];     \
+    y[SH_INDEX(l, 1 - (l))] = sqrt(float(2 * (l) + 1)) * d.z * y[SH_INDEX((l) - 1, 1 - (l))];
+#define SH_STEP_UP(l, m)                                                                          \
+    y[SH_INDEX(l, m)] = sqrt(float(4 * (l) * (l) - 1) / float((l) * (l) - (m) * (m))) *            \
+        (d.z * y[SH_INDEX((l) - 1, m)] -                                                          \
+         sqrt(float(((l) - 1) * ((l) - 1) - (m) * (m)) / float(4 * ((l) - 1) * ((l) - 1) - 1)) *   \
+             y[SH_INDEX((l) - 2, m)]);
+#define SH_STEP(l, m) SH_STEP_UP(l, m) SH_STEP_UP(l, -(m))
+
+#if SHPROBE_MAX_ORDER != 8
+#error "shEvalBands5To7 spells out the bands up to 7 (order 8)"
+#endif
+void shEvalBands5To7(vec3 d, inout float y[SH_BASIS_CAPACITY]) {
+    if (SH_ORDER < 6u) return;
+    SH_SECTORAL(5) SH_STEP_UP(5, 0) SH_STEP(5, 1) SH_STEP(5, 2) SH_STEP(5, 3)
+    if (SH_ORDER < 7u) return;
+    SH_SECTORAL(6) SH_STEP_UP(6, 0) SH_STEP(6, 1) SH_STEP(6, 2) SH_STEP(6, 3) SH_STEP(6, 4)
+    if (SH_ORDER < 8u) return;
+    SH_SECTORAL(7) SH_STEP_UP(7, 0) SH_STEP(7, 1) SH_STEP(7, 2) SH_STEP(7, 3) SH_STEP(7, 4) SH_STEP(7, 5)
 }
+#undef SH_STEP
+#undef SH_STEP_UP
+#undef SH_SECTORAL
+#undef SH_INDEX
 
 void shEvalBasis(vec3 d, out float y[SH_BASIS_CAPACITY]) {
     shEvalBands0To4(d, y);
-    // Workaround(llvmpipe, Mesa 22.3): without this early return llvmpipe keeps y in memory even
-    // when the loop below runs zero times, and the projection at order 3 runs four times slower.
-    // The loop alone gives the same values; drop the return where a driver keeps y in registers.
-    if (SH_ORDER <= 5u) return;
-    for (uint l = 5u; l < SH_ORDER; ++l) shEvalBand(l, d, y);
+    shEvalBands5To7(d, y);
 }
 
 // Every coefficient up to SH_BASIS_CAPACITY as X(index, l, m), for code that needs one variable
