@@ -46,10 +46,10 @@ cp "$bench" "$work/alone/shprobe-bench"
 (cd "$work/alone" && ./shprobe-bench --sizes 16 --orders 3 --repeat 1 --json bench.json) > "$work/run" ||
   { cat "$work/run"; fail "shprobe-bench --sizes 16 --orders 3 --repeat 1 failed"; }
 cat "$work/run"
-for row in "cpu memory read (bound)" "cpu memcpy" "gpu buffer read (device)" "gpu buffer copy (device)" "host-to-device copy, pinned (transfer bound)" "gpu texel reads only (device)" "gpu texel reads only, buffer (device)" "gpu projection (device)" "gpu bake (wall" "cpu reference (double)" "cpu fast"; do
+for row in "cpu memory read (bound)" "cpu memcpy" "gpu buffer read (device)" "gpu buffer copy (device)" "host-to-device copy, pinned (transfer bound)" "gpu texel reads only (device)" "gpu texel reads only, buffer (device)" "gpu multiply-adds at peak (arithmetic bound)" "gpu projection (device)" "gpu bake (wall" "cpu reference (double)" "cpu fast"; do
   grep -qF "$row" "$work/run" || fail "no '$row' row"
 done
-for key in '"device":' '"measurements":' '"face_size": 16' '"pipeline_creation":'; do
+for key in '"device":' '"multiply_adds_per_second":' '"measurements":' '"face_size": 16' '"pipeline_creation":'; do
   grep -qF "$key" "$work/alone/bench.json" || fail "no $key in bench.json"
 done
 echo "a run of shprobe-bench alone: OK"

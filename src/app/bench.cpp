@@ -12,6 +12,7 @@
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
+#include "glsl/dispatch_plan.h"
 #include "gpu/host_bake.h"
 #include "sh/basis.h"
 #include "sh/cubemap.h"
@@ -164,20 +165,33 @@ double memcpyMilliseconds(std::span<const std::byte> bytes, int repeat) {
     return bestMilliseconds(repeat, [&] { std::memcpy(destination.data(), bytes.data(), bytes.size()); });
 }
 
+// The float arithmetic project.comp does for one probe, per face pair and position: the signed sums
+// (24 vec3 additions, 72) and, per coefficient, the accumulation (a multiply by the weight and three
+// multiply-adds) and the basis (about three: each recurrence step is a multiply, a multiply-add and
+// a multiply; the closed forms of bands 0-4 take no more), 72 + 7 n^2 in all. The walk, the
+// direction and the solid angle (a few dozen a position, at any order) are not counted, so the
+// bound it gives is optimistic.
+double projectionMultiplyAdds(int faceSize, int order) {
+    constexpr double kFacePairs = 3.0;
+    return double(glsl::projectionPositions(uint32_t(faceSize))) * kFacePairs * (72.0 + 7.0 * order * order);
+}
+
 // What a row's fraction is against, each measured in the same run on the same bytes.
 enum class Bound {
     CpuRead,              // memoryReadMilliseconds: the CPU rows
     DeviceRead,           // the faster of read_buffer.comp and a buffer copy: the device rows
+    DeviceArithmetic,     // the projection's multiply-adds at the device's rate (multiply_adds.comp)
     Transfer,             // a host-to-device copy from pinned memory: the uploads
     TransferAndProjection // the transfer, then the projection on the device: a whole GPU bake
 };
 
 // The names of Bound in the report's `against` column and JSON `bound`.
-constexpr const char* kBoundNames[] = {"cpu read", "gpu read", "transfer", "xfer+proj"};
+constexpr const char* kBoundNames[] = {"cpu read", "gpu read", "gpu arith", "transfer", "xfer+proj"};
 
 class Bench {
   public:
-    Bench(const BenchOptions& options, Context& context) : options_(options), context_(context) {}
+    Bench(const BenchOptions& options, Context& context, double multiplyAddsPerSecond)
+        : options_(options), context_(context), multiplyAddsPerSecond_(multiplyAddsPerSecond) {}
 
     void runFaceSize(int faceSize) {
         const BenchInput input = noiseInput(faceSize);
@@ -233,6 +247,8 @@ class Bench {
             return bounds.cpuReadMs;
         case Bound::DeviceRead: // a copy reads every byte too, and on some devices sooner
             return std::min(bounds.device.readMilliseconds, bounds.device.copyMilliseconds);
+        case Bound::DeviceArithmetic:
+            return arithmeticMs_;
         case Bound::Transfer:
             return bounds.device.transferMilliseconds;
         case Bound::TransferAndProjection:
@@ -249,6 +265,12 @@ class Bench {
             double ms = bestMilliseconds(1, [&] { reference = projectCubemap(cubemap, order); });
             add(cubemap.faceSize, TexelFormat::Rgba32F, order, "cpu reference (double)", ms, 0.0,
                 Bound::CpuRead);
+        }
+        arithmeticMs_ = 0.0;
+        if (multiplyAddsPerSecond_ > 0.0) {
+            arithmeticMs_ = projectionMultiplyAdds(cubemap.faceSize, order) / multiplyAddsPerSecond_ * 1e3;
+            add(cubemap.faceSize, TexelFormat::Rgba32F, order, "gpu multiply-adds at peak (arithmetic bound)",
+                arithmeticMs_, -1.0, Bound::DeviceArithmetic);
         }
         for (TexelFormat format : kFormats)
             runGpu(cubemap, format, order, haveReference ? &reference : nullptr);
@@ -268,9 +290,13 @@ class Bench {
         });
         const double error = reference ? errorToReference(bake.radiance, *reference) : -1.0;
         bounds_[size_t(format)].projectionMs = bake.deviceMilliseconds > 0.0 ? deviceMs : 0.0;
+        // Against the slower of its two bounds (a roofline): reading the texels or doing the arithmetic.
+        const Bound bound =
+            boundMilliseconds(format, Bound::DeviceArithmetic) > boundMilliseconds(format, Bound::DeviceRead)
+                ? Bound::DeviceArithmetic
+                : Bound::DeviceRead;
         if (bake.deviceMilliseconds > 0.0)
-            add(cubemap.faceSize, format, order, "gpu projection (device)", deviceMs, error,
-                Bound::DeviceRead);
+            add(cubemap.faceSize, format, order, "gpu projection (device)", deviceMs, error, bound);
         add(cubemap.faceSize, format, order, "gpu bake (wall: upload, dispatch, readback)", wallMs, error,
             Bound::TransferAndProjection);
     }
@@ -306,6 +332,8 @@ class Bench {
 
     const BenchOptions& options_;
     Context& context_;
+    double multiplyAddsPerSecond_; // 0 without timestamps
+    double arithmeticMs_ = 0.0;    // the order being measured: projectionMultiplyAdds at that rate
     double texels_ = 0.0;
     std::array<Bounds, kFormats.size()> bounds_{}; // indexed by TexelFormat
     std::vector<Measurement> measurements_;
@@ -328,7 +356,8 @@ PipelineCreations measurePipelines(const Device& device, const std::vector<int>&
     return creations;
 }
 
-nlohmann::ordered_json reportJson(const Device& device, const std::vector<Measurement>& measurements,
+nlohmann::ordered_json reportJson(const Device& device, double multiplyAddsPerSecond,
+                                  const std::vector<Measurement>& measurements,
                                   const PipelineCreations& pipelineCreations) {
     nlohmann::ordered_json report;
     report["device"] = device.info.name;
@@ -336,6 +365,7 @@ nlohmann::ordered_json reportJson(const Device& device, const std::vector<Measur
     report["device_type"] = deviceTypeName(device.info.type);
     report["subgroup_size"] = device.info.subgroupSize;
     report["threads"] = std::thread::hardware_concurrency();
+    report["multiply_adds_per_second"] = multiplyAddsPerSecond;
     report["input"] = "noise in [0, 1), half-representable, 6 faces; RGBA32F and RGBA16F";
     nlohmann::ordered_json rows = nlohmann::ordered_json::array();
     for (const Measurement& m : measurements) {
@@ -397,9 +427,13 @@ void runBench(const BenchOptions& options) {
     if (context.info.type == VK_PHYSICAL_DEVICE_TYPE_CPU)
         std::printf("the device is a CPU: its bounds (gpu buffer read, copy, transfer) are passes over CPU "
                     "memory\n");
+    const double multiplyAdds = multiplyAddsPerSecond(context, options.repeat);
+    if (multiplyAdds > 0.0)
+        std::printf("device float multiply-adds: %.1f G/s (the arithmetic bound's rate)\n",
+                    multiplyAdds * 1e-9);
     std::printf("%6s  %-7s  %5s  %-46s %10s %10s %7s %9s %-10s %s\n", "face", "format", "order", "path", "ms",
                 "Mtexel/s", "GB/s", "of bound", "against", "error/|L00|");
-    Bench bench(options, context);
+    Bench bench(options, context, multiplyAdds);
     for (int faceSize : options.faceSizes)
         bench.runFaceSize(faceSize);
     const PipelineCreations pipelineCreations = measurePipelines(context, options.orders);
@@ -408,7 +442,8 @@ void runBench(const BenchOptions& options) {
         throw Error(ErrorKind::Device, counted(messages, "Vulkan validation message") + " (above)");
     if (!options.json.empty())
         writeOutputFile(options.json,
-                        reportJson(context, bench.measurements(), pipelineCreations).dump(2) + "\n");
+                        reportJson(context, multiplyAdds, bench.measurements(), pipelineCreations).dump(2) +
+                            "\n");
 }
 
 } // namespace shprobe

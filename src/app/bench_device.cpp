@@ -224,6 +224,51 @@ TexelReads deviceTexelReads(const Context& context, const Cubemap& cubemap, std:
     return reads;
 }
 
+double multiplyAddsPerSecond(const Context& context, int repeat) {
+    if (!context.info.timestamps) return 0.0;
+    constexpr uint32_t kLocalSize = 64;
+    constexpr uint32_t kSteps = 1u << 14;                         // within llvmpipe's loop cap
+    constexpr double kPerInvocation = double(kSteps) * 8.0 * 4.0; // eight vec4 chains a step
+    constexpr double kLongEnoughMs = 10.0;
+    static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    ComputeProgram program = createComputeProgram(context, {.name = "multiply_adds.comp",
+                                                            .spirv = spirv::multiply_adds_comp,
+                                                            .bindings = kBindings,
+                                                            .pushConstantSize = 12,
+                                                            .localSize = kLocalSize});
+    ScopeExit destroyProgram([&] { destroyComputeProgram(context, program); });
+    VkDescriptorPool pool = createDescriptorPool(context, {.sets = 1, .storageBuffers = 1});
+    ScopeExit destroyPool([&] { vkDestroyDescriptorPool(context.device, pool, nullptr); });
+    const uint32_t maxGroups = context.info.limits.maxComputeWorkGroupCount[0];
+    // The largest dispatch the search may reach, and its sums (16 MiB): 2^39 multiply-adds, 16 ms at
+    // the 33 T/s of an NVIDIA H200 (67 TFLOPS).
+    const uint32_t largest = std::min(maxGroups, 1u << 14);
+    Buffer sums = createBuffer(context, VkDeviceSize(largest) * kLocalSize * 16,
+                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device, "multiply-add sums");
+    ScopeExit destroySums([&] { destroyBuffer(context, sums); });
+    const BindingTarget targets[] = {{sums.buffer, 0, VK_WHOLE_SIZE}};
+    VkDescriptorSet set = createDescriptorSet(context, pool, program, targets);
+    struct Push {
+        uint32_t steps;
+        float factor, term;
+    };
+    auto milliseconds = [&](uint32_t groups, int runs) {
+        return bestDeviceMilliseconds(context, runs, [&](VkCommandBuffer commands) {
+            dispatch(commands, program, set, Push{kSteps, 1.0f, 1e-7f}, {groups, 1});
+        });
+    };
+    // Grow the dispatch until it fills the device long enough for the timestamps to be exact.
+    uint32_t groups = 1;
+    double ms = milliseconds(groups, 1);
+    while (ms < kLongEnoughMs && groups < largest) {
+        const double scale = ms > 0.0 ? std::ceil(kLongEnoughMs / ms) : 16.0;
+        groups = uint32_t(std::min(double(largest), std::max(2.0, std::min(scale, 16.0)) * groups));
+        ms = milliseconds(groups, 1);
+    }
+    ms = std::min(ms, milliseconds(groups, repeat));
+    return double(groups) * kLocalSize * kPerInvocation / (ms * 1e-3);
+}
+
 PipelineCreation measurePipelineCreation(const Device& device, int order) {
     std::error_code noTemporaryFolder; // TMPDIR naming no folder
     std::filesystem::path folder = std::filesystem::temp_directory_path(noTemporaryFolder);

@@ -34,6 +34,11 @@ struct DeviceBounds {
 };
 DeviceBounds measureDeviceBounds(const Context& context, std::span<const std::byte> bytes, int repeat);
 
+// The device's rate of float multiply-adds (multiply_adds.comp: independent fused multiply-adds, one
+// float each), from timestamps over a dispatch grown until it runs 10 ms or more, the best of
+// `repeat` runs; 0 without timestamps. On a CPU device such as lavapipe, the CPU's vector units.
+double multiplyAddsPerSecond(const Context& context, int repeat);
+
 struct PipelineCreation {
     double firstMilliseconds = 0.0;  // createProbeBaker with an empty pipeline cache
     double cachedMilliseconds = 0.0; // again, with a cache loaded from the first one's saved data
