@@ -112,6 +112,27 @@ class GpuProjection : public GpuTest {
         return createProbeBaker(context(), options);
     }
 
+    // The radiance of each probe of an upload (order 3), baked in one submission of the test's own
+    // that also records the upload's last copy.
+    std::vector<ShCoefficients> bakeUpload(const ProbeBaker& baker, const CubemapUpload& upload) {
+        Buffer output = createBuffer(context(), probeBakeOutputBytes(3, upload.probeCount),
+                                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback, "coefficients");
+        ProbeBakeSet set = createProbeBakeSet(
+            context(), baker, {upload.image.view, upload.faceSize, upload.probeCount, output.buffer, 0});
+        submitAndWait(context(), [&](VkCommandBuffer commands) {
+            recordCubemapUpload(commands, upload);
+            recordProbeBake(commands, baker, set);
+            computeWriteBarrier(commands);
+        });
+        invalidateBuffer(context(), output);
+        std::vector<ShCoefficients> radiance;
+        for (uint32_t k = 0; k < upload.probeCount; ++k)
+            radiance.push_back(readBakeOutput(output, 0, 3, upload.probeCount, k).radiance);
+        destroyProbeBakeSet(context(), set);
+        destroyBuffer(context(), output);
+        return radiance;
+    }
+
     GpuBake bake(const Cubemap& cubemap, const ProbeBakerOptions& options) {
         ProbeBaker baker = hostBaker(options);
         GpuBake result = bakeCubemap(context(), baker, cubemap);
@@ -327,7 +348,8 @@ TEST_F(GpuProjection, HalfFloatInputMatchesTheReferenceOfItsValues) {
 // rows against faces of 7: copies start and end inside layers, hold whole layers and partial ones,
 // and cross from one probe to the next, with each slot refilled while the copy before is in flight,
 // and every slot but the last submitted ahead. Any row misplaced changes the noise's coefficients, so
-// the bake must equal bit for bit the same maps uploaded in one slot (one submission).
+// the bake must equal bit for bit the same maps baked by bakeCubemaps in one submission (one slot
+// where the texels are staged).
 TEST_F(GpuProjection, UploadThroughSmallStagingSlotsEqualsOneSlot) {
     const std::vector<Cubemap> cubemaps = {noiseCubemap(7, 21), noiseCubemap(7, 22), noiseCubemap(7, 23)};
     std::vector<const Cubemap*> batch;
@@ -349,36 +371,71 @@ TEST_F(GpuProjection, UploadThroughSmallStagingSlotsEqualsOneSlot) {
             submissionsBefore = submissionCount();
             CubemapUpload upload =
                 createCubemapUpload(context(), batch, baker.options.cubemaps,
-                                    {.slotBytes = slotRows * 7 * texelBytes(format), .slots = 2});
+                                    {.staging = {.slotBytes = slotRows * 7 * texelBytes(format), .slots = 2},
+                                     .fastest = UploadRoute::Staged});
             const uint64_t slots = (3 * 6 * 7 + slotRows - 1) / slotRows; // 126 rows
             EXPECT_EQ(upload.staged.submissions, slots - 1) << what << ", slots of " << slotRows;
             EXPECT_EQ(submissionCount() - submissionsBefore, slots - 1) << what << ", slots of " << slotRows;
-            Buffer output =
-                createBuffer(context(), probeBakeOutputBytes(3, 3), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                             MemoryUse::Readback, "coefficients");
-            ProbeBakeSet set =
-                createProbeBakeSet(context(), baker, {upload.image.view, 7, 3, output.buffer, 0});
-            submitAndWait(context(), [&](VkCommandBuffer commands) {
-                recordCubemapUpload(commands, upload);
-                recordProbeBake(commands, baker, set);
-                computeWriteBarrier(commands);
-            });
-            invalidateBuffer(context(), output);
+            const std::vector<ShCoefficients> radiance = bakeUpload(baker, upload);
             for (uint32_t k = 0; k < 3; ++k)
-                EXPECT_EQ(readBakeOutput(output, 0, 3, 3, k).radiance.rgb, oneSlot[k].radiance.rgb)
+                EXPECT_EQ(radiance[k].rgb, oneSlot[k].radiance.rgb)
                     << what << ", slots of " << slotRows << ", probe " << k;
-            destroyProbeBakeSet(context(), set);
-            destroyBuffer(context(), output);
             destroyCubemapUpload(context(), upload);
         }
         destroyProbeBaker(context(), baker);
     }
 }
 
+// Every route an upload can take (host_bake.h, UploadRoute) puts the same texels in the image: one
+// map and batches of three, faces of 8, 12 and 7, both formats; each route bakes bit for bit what the
+// staging slots bake. On a CPU device such as lavapipe the packed route is taken wherever it is
+// allowed, rows and layers the driver pads included (lavapipe: rows to 64 bytes, RGBA16F rows of 12 and
+// 7 texels and RGBA32F rows of 7; layers of 7 rows to 8), and one RGBA32F map of faces 8 is read in
+// place.
+TEST_F(GpuProjection, EveryUploadRouteBakesTheSameTexels) {
+    const bool hostImages = context().info.type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    for (int faceSize : {8, 12, 7}) {
+        const std::vector<Cubemap> cubemaps = {noiseCubemap(faceSize, 41), noiseCubemap(faceSize, 42),
+                                               noiseCubemap(faceSize, 43)};
+        for (size_t probes : {size_t(1), size_t(3)}) {
+            std::vector<const Cubemap*> batch;
+            for (size_t k = 0; k < probes; ++k)
+                batch.push_back(&cubemaps[k]);
+            for (TexelFormat format : {TexelFormat::Rgba32F, TexelFormat::Rgba16F}) {
+                const std::string what = std::string(format == TexelFormat::Rgba16F ? "RGBA16F" : "RGBA32F") +
+                                         ", faces of " + std::to_string(faceSize) + ", " +
+                                         std::to_string(probes) + " probes";
+                ProbeBaker baker = hostBaker({.order = 3}, format);
+                std::vector<ShCoefficients> staged;
+                for (UploadRoute fastest : {UploadRoute::Staged, UploadRoute::Packed, UploadRoute::InPlace}) {
+                    CubemapUpload upload =
+                        createCubemapUpload(context(), batch, baker.options.cubemaps, {.fastest = fastest});
+                    EXPECT_GE(upload.route, fastest) << what; // no faster route than allowed
+                    if (hostImages && fastest != UploadRoute::Staged) {
+                        EXPECT_NE(upload.route, UploadRoute::Staged) << what;
+                    }
+                    if (hostImages && fastest == UploadRoute::InPlace && probes == 1 && faceSize == 8 &&
+                        format == TexelFormat::Rgba32F) {
+                        EXPECT_EQ(upload.route, UploadRoute::InPlace) << what;
+                    }
+                    const std::vector<ShCoefficients> radiance = bakeUpload(baker, upload);
+                    destroyCubemapUpload(context(), upload);
+                    if (staged.empty()) staged = radiance;
+                    for (size_t k = 0; k < probes; ++k)
+                        EXPECT_EQ(radiance[k].rgb, staged[k].rgb)
+                            << what << ", route " << int(fastest) << ", probe " << k;
+                }
+                destroyProbeBaker(context(), baker);
+            }
+        }
+    }
+}
+
 // Five maps of 210^2 faces (4.2 MB each in RGBA32F, 2.1 MB in RGBA16F) are packed by more than one
-// thread (4 MiB a thread at least) where there are cores, each writing its own rows of the slot; with
-// two threads, as on two cores, a thread's rows cross from one map to the next (1260 rows a map). The
-// batch must equal the single bakes bit for bit (on lavapipe these read RGBA32F texels in place).
+// thread (4 MiB a thread at least) where there are cores, each writing its own rows of the slot (on
+// lavapipe: of the image's own memory); with two threads, as on two cores, a thread's rows cross from
+// one map to the next (1260 rows a map). The batch must equal the single bakes bit for bit (on
+// lavapipe the single RGBA32F bakes read their texels in place).
 TEST_F(GpuProjection, BatchPackedOnSeveralThreadsEqualsSingleBakes) {
     std::vector<Cubemap> cubemaps;
     std::vector<const Cubemap*> batch;
@@ -404,8 +461,9 @@ TEST_F(GpuProjection, UploadRefusedInALaterSlotLeavesNothingBehind) {
     const Cubemap* batch[] = {&cubemaps[0], &cubemaps[1]};
     const VkDeviceSize rowBytes = 7 * texelBytes(TexelFormat::Rgba16F);
     try {
-        createCubemapUpload(context(), batch, uploadBinding(context(), TexelFormat::Rgba16F),
-                            {.slotBytes = 3 * rowBytes, .slots = 2});
+        createCubemapUpload(
+            context(), batch, uploadBinding(context(), TexelFormat::Rgba16F),
+            {.staging = {.slotBytes = 3 * rowBytes, .slots = 2}, .fastest = UploadRoute::Staged});
         ADD_FAILURE() << "a texel of 7e4 was uploaded as a half";
     } catch (const Error& error) {
         EXPECT_EQ(error.kind(), ErrorKind::Input);

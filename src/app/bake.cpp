@@ -64,6 +64,18 @@ void printSummary(FILE* report, const BakeOptions& options, const Environment& e
     std::fprintf(report, "\n");
 }
 
+const char* uploadRouteText(UploadRoute route) {
+    switch (route) {
+    case UploadRoute::InPlace:
+        return "texels read in place, no copy";
+    case UploadRoute::Packed:
+        return "texels packed into the image's own memory, no copy";
+    case UploadRoute::Staged:
+        return "texels copied through staging slots, the last with the dispatch";
+    }
+    return "";
+}
+
 // --timings: the phases of a GPU bake, one a line. The instance and the device start beside the
 // load; the pipelines are created in the bake; "dispatch" is the submission's wall time (copies,
 // the bake's dispatches; llvmpipe compiles each shader at its first dispatch), of which the device's
@@ -82,10 +94,8 @@ std::string gpuTimings(const GpuSession& session, const BakeResult& result) {
                   "  timing   readback %10.1f ms\n",
                   context.instanceMilliseconds, context.deviceMilliseconds, session.pipelineMilliseconds(),
                   cached ? "from the pipeline cache" : "cold: the pipeline cache held none",
-                  phases.uploadMilliseconds,
-                  phases.inPlace ? "texels read in place, no copy"
-                                 : "texels copied through staging slots, the last with the dispatch",
-                  phases.submitMilliseconds, result.deviceMilliseconds, phases.readbackMilliseconds);
+                  phases.uploadMilliseconds, uploadRouteText(phases.route), phases.submitMilliseconds,
+                  result.deviceMilliseconds, phases.readbackMilliseconds);
     return text;
 }
 

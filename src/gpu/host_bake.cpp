@@ -103,9 +103,13 @@ void forEachRowSpan(std::span<const std::span<const glm::vec4>> probeTexels, uin
 // A bytes-per-thread share worth a thread's start (tens of microseconds) when packing texels.
 constexpr size_t kPackBytesPerThread = size_t(4) << 20;
 
-// Fills staging rows from the probes' texels in `format`, on all cores.
-FillRows packRows(std::span<const std::span<const glm::vec4>> probeTexels, uint32_t width,
-                  TexelFormat format) {
+// Fills rows of `height`-row layers from the probes' texels in `format`, on all cores, where `layout`
+// places them (staging slots: tightly packed; an image's own memory: its layout).
+FillRows packRows(std::span<const std::span<const glm::vec4>> probeTexels, uint32_t width, uint32_t height,
+                  TexelFormat format, LinearRows layout) {
+    const auto offsetOf = [=](uint64_t row) {
+        return row / height * layout.layerPitch + row % height * layout.rowPitch;
+    };
     return [=](uint64_t first, uint32_t rows, void* destination) {
         const size_t rowBytes = size_t(width) * texelBytes(format);
         const unsigned threads = threadCount(rows * rowBytes, kPackBytesPerThread);
@@ -114,12 +118,13 @@ FillRows packRows(std::span<const std::span<const glm::vec4>> probeTexels, uint3
         forEachItem(int(threads), threads, [&](int piece) {
             const uint32_t begin = std::min(rows, uint32_t(piece) * perThread);
             const uint32_t end = std::min(rows, begin + perThread);
-            char* out = static_cast<char*>(destination) + begin * rowBytes;
-            forEachRowSpan(probeTexels, width, first + begin, end - begin,
-                           [&](std::span<const glm::vec4> texels) {
-                               if (!packTexels(texels, format, out)) fits = false;
-                               out += texels.size() * texelBytes(format);
-                           });
+            uint64_t row = first + begin;
+            forEachRowSpan(probeTexels, width, row, end - begin, [&](std::span<const glm::vec4> texels) {
+                for (size_t texel = 0; texel < texels.size(); texel += width, ++row) {
+                    char* out = static_cast<char*>(destination) + (offsetOf(row) - offsetOf(first));
+                    if (!packTexels(texels.subspan(texel, width), format, out)) fits = false;
+                }
+            });
         });
         if (!fits) forEachRowSpan(probeTexels, width, first, rows, requireHalfRange);
     };
@@ -147,22 +152,33 @@ TexelFormat uploadFormat(CubemapBinding binding) {
 }
 
 // The image of an upload, `layers` layers of `extent` for `binding`, holding the texels of each
-// probe (probeTexels, whole layers each). Where the device reads host memory in place
-// (vk/host_memory.h), one probe's RGBA32F texels become the image itself: no staging, no copy;
-// returns true then. Otherwise they are packed into staging slots, all but the last copied at once.
-bool createLayers(const Context& context, VkExtent2D extent, uint32_t layers, CubemapBinding binding,
-                  std::span<const std::span<const glm::vec4>> probeTexels, const char* what,
-                  const StagingOptions& staging, StagedRows& staged, GpuImage& image) {
+// probe (probeTexels, whole layers each), by the fastest route from options.fastest on that the
+// device and the texels allow; returns the route taken. What it made is in `staged` and `image`
+// when it throws.
+UploadRoute createLayers(const Context& context, VkExtent2D extent, uint32_t layers, CubemapBinding binding,
+                         std::span<const std::span<const glm::vec4>> probeTexels, const char* what,
+                         const UploadOptions& options, StagedRows& staged, GpuImage& image) {
     const TexelFormat format = uploadFormat(binding);
     const VkImageUsageFlags readUsage =
         binding == CubemapBinding::SampledImage ? VK_IMAGE_USAGE_SAMPLED_BIT : VK_IMAGE_USAGE_STORAGE_BIT;
-    if (probeTexels.size() == 1 && format == TexelFormat::Rgba32F) {
+    const VkDeviceSize rowBytes = VkDeviceSize(extent.width) * texelBytes(format);
+    if (options.fastest == UploadRoute::InPlace && probeTexels.size() == 1 &&
+        format == TexelFormat::Rgba32F) {
         const std::span<const glm::vec4> texels = probeTexels.front();
         if (std::optional<GpuImage> inPlace =
                 importHostImage(context, texels.data(), texels.size_bytes(), imageFormat(format), extent,
                                 layers, readUsage)) {
             image = *inPlace;
-            return true;
+            return UploadRoute::InPlace;
+        }
+    }
+    if (options.fastest != UploadRoute::Staged) {
+        if (std::optional<MappedImage> mapped =
+                createMappedImage(context, imageFormat(format), extent, layers, readUsage, what)) {
+            image = mapped->image; // the caller's undo destroys it should the packing throw
+            packRows(probeTexels, extent.width, extent.height, format,
+                     mapped->rows)(0, extent.height * layers, mapped->texels);
+            return UploadRoute::Packed;
         }
     }
     image = createImage(context, {.format = imageFormat(format),
@@ -170,21 +186,29 @@ bool createLayers(const Context& context, VkExtent2D extent, uint32_t layers, Cu
                                   .usage = readUsage | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                                   .what = what,
                                   .layers = layers});
-    staged = stageImageRows(context, image, VkDeviceSize(extent.width) * texelBytes(format),
-                            packRows(probeTexels, extent.width, format), staging);
-    return false;
+    const LinearRows tight{.rowPitch = rowBytes, .layerPitch = rowBytes * extent.height};
+    staged =
+        stageImageRows(context, image, rowBytes,
+                       packRows(probeTexels, extent.width, extent.height, format, tight), options.staging);
+    return UploadRoute::Staged;
 }
 
-// Records the last staging slot's copy (none for an image read in place) and leaves the image as
-// probe_baker.h asks: in cubemapLayout(binding), visible to compute-shader reads.
+// Records the last staging slot's copy (none for an image in host memory) and leaves the image as
+// probe_baker.h asks: in cubemapLayout(binding), visible to compute-shader reads; what the host
+// wrote there before the submission is visible to the device without a barrier of its own (the
+// memory is coherent), the transition keeps it.
 void recordLayers(VkCommandBuffer commands, const StagedRows& staged, const GpuImage& image,
-                  CubemapBinding binding, bool inPlace) {
-    if (!inPlace)
+                  CubemapBinding binding, UploadRoute route) {
+    if (route == UploadRoute::Staged)
         return recordStagedRows(commands, staged, image, cubemapLayout(binding),
                                 VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+    // An imported image starts UNDEFINED (a CPU device keeps its texels, vk/host_memory.h), a mapped one
+    // PREINITIALIZED.
+    const VkImageLayout from =
+        route == UploadRoute::InPlace ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_PREINITIALIZED;
     changeLayout(commands, image,
-                 {VK_IMAGE_LAYOUT_UNDEFINED, cubemapLayout(binding), VK_PIPELINE_STAGE_HOST_BIT,
-                  VK_ACCESS_HOST_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
+                 {from, cubemapLayout(binding), VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_WRITE_BIT,
+                  VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT});
 }
 
 // A source kind's host side, for bakeBatch: cube maps (6 layers each) or equirect maps (1).
@@ -288,14 +312,14 @@ std::vector<GpuBake> bakeBatch(const Context& context, const ProbeBaker& baker,
     Buffer output = createBuffer(context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                  MemoryUse::Readback, "coefficients");
     ScopeExit releaseOutput([&] { destroyBuffer(context, output); });
-    bool inPlace = true;
+    UploadRoute route = UploadRoute::InPlace;
     for (BakeGroup<Source>& group : groups) {
         std::vector<const typename Source::Texels*> members;
         for (size_t index : group.members)
             members.push_back(sources[index]);
         group.upload = Source::upload(context, members, baker.options.cubemaps);
         group.set = Source::bakeSet(context, baker, group.upload, output.buffer, group.outputOffset);
-        inPlace = inPlace && group.upload.inPlace;
+        route = std::max(route, group.upload.route);
     }
     VkQueryPool timestamps = createTimestampPool(context);
     ScopeExit releaseTimestamps([&] {
@@ -335,7 +359,7 @@ std::vector<GpuBake> bakeBatch(const Context& context, const ProbeBaker& baker,
         bake.uploadMilliseconds = uploadMs;
         bake.submitMilliseconds = submitMs;
         bake.readbackMilliseconds = readbackMs;
-        bake.inPlace = inPlace;
+        bake.route = route;
     }
     return bakes;
 }
@@ -357,7 +381,7 @@ CubemapBinding uploadBinding(const Device& device, TexelFormat format) {
 }
 
 CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
-                                  CubemapBinding binding, const StagingOptions& staging) {
+                                  CubemapBinding binding, const UploadOptions& options) {
     if (cubemaps.empty()) throw Error(ErrorKind::Input, "GPU bake: an upload of no cube maps");
     CubemapUpload upload;
     upload.binding = binding;
@@ -371,13 +395,13 @@ CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubema
         texels.emplace_back(cubemap->texels);
     }
     OnFailure undo([&] { destroyCubemapUpload(context, upload); });
-    upload.inPlace = createLayers(context, {upload.faceSize, upload.faceSize}, kFaceCount * upload.probeCount,
-                                  binding, texels, "cube maps to bake", staging, upload.staged, upload.image);
+    upload.route = createLayers(context, {upload.faceSize, upload.faceSize}, kFaceCount * upload.probeCount,
+                                binding, texels, "cube maps to bake", options, upload.staged, upload.image);
     return upload;
 }
 
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload) {
-    recordLayers(commands, upload.staged, upload.image, upload.binding, upload.inPlace);
+    recordLayers(commands, upload.staged, upload.image, upload.binding, upload.route);
 }
 
 void destroyCubemapUpload(const Context& context, CubemapUpload& upload) {
@@ -387,7 +411,7 @@ void destroyCubemapUpload(const Context& context, CubemapUpload& upload) {
 }
 
 EquirectUpload createEquirectUpload(const Context& context, std::span<const Image* const> equirects,
-                                    CubemapBinding binding, const StagingOptions& staging) {
+                                    CubemapBinding binding, const UploadOptions& options) {
     EquirectUpload upload;
     upload.binding = binding;
     upload.width = uint32_t(equirects.front()->width);
@@ -401,15 +425,15 @@ EquirectUpload createEquirectUpload(const Context& context, std::span<const Imag
         texels.emplace_back(equirect->texels);
     }
     OnFailure undo([&] { destroyEquirectUpload(context, upload); });
-    upload.inPlace = createLayers(context, {upload.width, upload.height}, upload.probeCount, binding, texels,
-                                  "equirect maps to bake", staging, upload.staged, upload.image);
+    upload.route = createLayers(context, {upload.width, upload.height}, upload.probeCount, binding, texels,
+                                "equirect maps to bake", options, upload.staged, upload.image);
     upload.view = createImageView(context, upload.image.image, VK_IMAGE_VIEW_TYPE_2D_ARRAY,
                                   upload.image.format, upload.probeCount);
     return upload;
 }
 
 void recordEquirectUpload(VkCommandBuffer commands, const EquirectUpload& upload) {
-    recordLayers(commands, upload.staged, upload.image, upload.binding, upload.inPlace);
+    recordLayers(commands, upload.staged, upload.image, upload.binding, upload.route);
 }
 
 void destroyEquirectUpload(const Context& context, EquirectUpload& upload) {

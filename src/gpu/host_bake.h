@@ -23,24 +23,36 @@ namespace shprobe {
 // RGBA16F reads half the bytes; values beyond the half range, +-65504, are refused at upload.
 CubemapBinding uploadBinding(const Device& device, TexelFormat format);
 
-// Cube maps of one face size in a 2D-array image, 6 layers each (probe_baker.h's layout), with the
-// staging slots they are copied from (vk/staged_upload.h: packed on all cores, every slot but the
-// last copied while the next is packed); or, where the device reads host memory in place
-// (vk/host_memory.h), one cube map's own texels as the image (inPlace: no staging, no copy; the
-// cube map must outlive the upload).
+// How an upload's texels reach the image the bake reads, fastest first. The first two need a device
+// that reads host memory where it lies (a CPU device such as lavapipe, vk/host_memory.h).
+enum class UploadRoute {
+    InPlace, // one map's own RGBA32F texels are the image's memory: no copy (the map must outlive the upload)
+    Packed,  // packed on all cores straight into the image's own mapped memory: no staging, no device copy
+    Staged,  // packed on all cores into staging slots, which the device copies into the image
+             // (vk/staged_upload.h: every slot but the last copied while the next is packed)
+};
+
+struct UploadOptions {
+    StagingOptions staging;
+    UploadRoute fastest = UploadRoute::InPlace; // the first route tried; Staged: as on a GPU, always
+};
+
+// Cube maps of one face size in a 2D-array image, 6 layers each (probe_baker.h's layout), and the
+// staging slots they are copied from when `route` is Staged.
 struct CubemapUpload {
     uint32_t faceSize = 0;
     uint32_t probeCount = 0;
     CubemapBinding binding = CubemapBinding::SampledImage;
     StagedRows staged;
     GpuImage image;
-    bool inPlace = false;
+    UploadRoute route = UploadRoute::Staged;
 };
 
-// Creates the image for a baker of this binding and copies the texels into it (all cube maps must
-// have the same face size), but for the last staging slot, which recordCubemapUpload records.
+// Creates the image for a baker of this binding and puts the texels there (all cube maps must have
+// the same face size) by the fastest route the device and the maps allow from options.fastest on,
+// but for the last staging slot's copy, which recordCubemapUpload records.
 CubemapUpload createCubemapUpload(const Context& context, std::span<const Cubemap* const> cubemaps,
-                                  CubemapBinding binding, const StagingOptions& staging = {});
+                                  CubemapBinding binding, const UploadOptions& options = {});
 // Records the last slot's copy and leaves the image as probe_baker.h asks: in
 // cubemapLayout(upload.binding), visible to compute-shader reads.
 void recordCubemapUpload(VkCommandBuffer commands, const CubemapUpload& upload);
@@ -57,12 +69,12 @@ struct EquirectUpload {
     StagedRows staged;
     GpuImage image;
     VkImageView view = VK_NULL_HANDLE;
-    bool inPlace = false;
+    UploadRoute route = UploadRoute::Staged;
 };
 
 // As the cube-map upload functions, for equirect maps (all of one size).
 EquirectUpload createEquirectUpload(const Context& context, std::span<const Image* const> equirects,
-                                    CubemapBinding binding, const StagingOptions& staging = {});
+                                    CubemapBinding binding, const UploadOptions& options = {});
 void recordEquirectUpload(VkCommandBuffer commands, const EquirectUpload& upload);
 void destroyEquirectUpload(const Context& context, EquirectUpload& upload);
 
@@ -73,12 +85,12 @@ struct GpuBake {
                                      // submission, uploads excluded); 0 where unsupported
     uint32_t workgroups = 0;         // projection workgroups of this probe
     // Host wall times of the whole submission (all probes): creating the images and bake sets
-    // (packing texels into staging slots and copying all but the last, unless read in place),
+    // (packing the texels, and copying all staging slots but the last where they were staged),
     // submitting and waiting (the last copies, dispatches), reading the coefficients back.
     double uploadMilliseconds = 0.0;
     double submitMilliseconds = 0.0;
     double readbackMilliseconds = 0.0;
-    bool inPlace = false; // the texels were read where they lie (vk/host_memory.h), not copied
+    UploadRoute route = UploadRoute::Staged; // the slowest of the submission's uploads
 };
 
 // Probe k of the `probes` probes of a bake whose output (probe_baker.h's layout) starts at `offset`

@@ -21,33 +21,41 @@ VkDeviceSize minImportAlignment(const Device& device) {
     return host.minImportedHostPointerAlignment;
 }
 
-// Whether a linear image of this format, usage and size can be made over imported host memory.
-bool linearImportable(const Device& device, VkFormat format, VkExtent2D extent, uint32_t layers,
-                      VkImageUsageFlags usage) {
+// Whether a linear image of this format, usage and size can be made, over imported host memory
+// (handleTypes kHostAllocation) or over memory of its own (0).
+bool linearSupported(const Device& device, VkFormat format, VkExtent2D extent, uint32_t layers,
+                     VkImageUsageFlags usage, VkExternalMemoryHandleTypeFlags handleTypes) {
+    const bool imported = handleTypes != 0;
     VkPhysicalDeviceExternalImageFormatInfo external{
         VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_EXTERNAL_IMAGE_FORMAT_INFO};
     external.handleType = kHostAllocation;
-    VkPhysicalDeviceImageFormatInfo2 info{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_IMAGE_FORMAT_INFO_2, &external};
+    VkPhysicalDeviceImageFormatInfo2 info{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_IMAGE_FORMAT_INFO_2,
+                                          imported ? &external : nullptr};
     info.format = format;
     info.type = VK_IMAGE_TYPE_2D;
     info.tiling = VK_IMAGE_TILING_LINEAR;
     info.usage = usage;
     VkExternalImageFormatProperties externalProperties{VK_STRUCTURE_TYPE_EXTERNAL_IMAGE_FORMAT_PROPERTIES};
-    VkImageFormatProperties2 properties{VK_STRUCTURE_TYPE_IMAGE_FORMAT_PROPERTIES_2, &externalProperties};
+    VkImageFormatProperties2 properties{VK_STRUCTURE_TYPE_IMAGE_FORMAT_PROPERTIES_2,
+                                        imported ? &externalProperties : nullptr};
     if (vkGetPhysicalDeviceImageFormatProperties2(device.physicalDevice, &info, &properties) != VK_SUCCESS)
         return false;
     const VkImageFormatProperties& limits = properties.imageFormatProperties;
-    return (externalProperties.externalMemoryProperties.externalMemoryFeatures &
-            VK_EXTERNAL_MEMORY_FEATURE_IMPORTABLE_BIT) &&
-           limits.maxArrayLayers >= layers && limits.maxExtent.width >= extent.width &&
-           limits.maxExtent.height >= extent.height;
+    const bool importable = (externalProperties.externalMemoryProperties.externalMemoryFeatures &
+                             VK_EXTERNAL_MEMORY_FEATURE_IMPORTABLE_BIT) != 0;
+    return (importable || !imported) && limits.maxArrayLayers >= layers &&
+           limits.maxExtent.width >= extent.width && limits.maxExtent.height >= extent.height;
 }
 
+// An image of external host memory (handleTypes kHostAllocation) must start in UNDEFINED; one of its
+// own memory (0) starts in PREINITIALIZED, which keeps what the host writes before the first
+// transition.
 VkImage createLinearImage(const Device& device, VkFormat format, VkExtent2D extent, uint32_t layers,
-                          VkImageUsageFlags usage) {
+                          VkImageUsageFlags usage, VkExternalMemoryHandleTypeFlags handleTypes) {
+    const bool imported = handleTypes != 0;
     VkExternalMemoryImageCreateInfo external{VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_IMAGE_CREATE_INFO};
-    external.handleTypes = kHostAllocation;
-    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO, &external};
+    external.handleTypes = handleTypes;
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO, imported ? &external : nullptr};
     info.imageType = VK_IMAGE_TYPE_2D;
     info.format = format;
     info.extent = {extent.width, extent.height, 1};
@@ -57,20 +65,18 @@ VkImage createLinearImage(const Device& device, VkFormat format, VkExtent2D exte
     info.tiling = VK_IMAGE_TILING_LINEAR;
     info.usage = usage;
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED; // what an image of external memory must start in
+    info.initialLayout = imported ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_PREINITIALIZED;
     VkImage image = VK_NULL_HANDLE;
     VK_CHECK(vkCreateImage(device.device, &info, nullptr, &image));
     return image;
 }
 
-// Whether the driver lays the image out as the texels lie: rows of `rowBytes`, layer after layer.
-bool tightlyPacked(const Device& device, VkImage image, VkDeviceSize rowBytes, uint32_t height,
-                   uint32_t layers) {
+// The driver's layout of the first layer (rowPitch, arrayPitch: the same for every layer).
+VkSubresourceLayout firstLayerLayout(const Device& device, VkImage image) {
     VkImageSubresource first{VK_IMAGE_ASPECT_COLOR_BIT, 0, 0};
     VkSubresourceLayout layout{};
     vkGetImageSubresourceLayout(device.device, image, &first, &layout);
-    return layout.offset == 0 && layout.rowPitch == rowBytes &&
-           (layers == 1 || layout.arrayPitch == rowBytes * height);
+    return layout;
 }
 
 // A device-local memory type that can hold host memory at `pointer` and the image, or UINT32_MAX.
@@ -87,6 +93,20 @@ uint32_t importMemoryType(const Device& device, void* pointer, uint32_t imageTyp
     return UINT32_MAX;
 }
 
+// A host-visible, coherent memory type the image allows, device-local where one is, or UINT32_MAX.
+uint32_t mappableMemoryType(const Device& device, uint32_t imageTypes) {
+    constexpr VkMemoryPropertyFlags kMappable =
+        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    uint32_t found = UINT32_MAX;
+    for (uint32_t i = 0; i < device.memory.memoryTypeCount; ++i) {
+        const VkMemoryPropertyFlags flags = device.memory.memoryTypes[i].propertyFlags;
+        if (!(imageTypes & (1u << i)) || (flags & kMappable) != kMappable) continue;
+        if (flags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) return i;
+        if (found == UINT32_MAX) found = i;
+    }
+    return found;
+}
+
 } // namespace
 
 std::optional<GpuImage> importHostImage(const Device& device, const void* texels, VkDeviceSize bytes,
@@ -95,13 +115,16 @@ std::optional<GpuImage> importHostImage(const Device& device, const void* texels
     // A CPU device only: its layouts are all one and its transitions touch no memory, so the texels
     // survive the transition from UNDEFINED, which Vulkan does not promise in general.
     if (!device.hostMemoryImport || device.info.type != VK_PHYSICAL_DEVICE_TYPE_CPU ||
-        !linearImportable(device, format, extent, layers, usage))
+        !linearSupported(device, format, extent, layers, usage, kHostAllocation))
         return std::nullopt;
     GpuImage image{.format = format, .extent = extent, .layers = layers};
     OnFailure undo([&] { destroyImage(device, image); });
-    image.image = createLinearImage(device, format, extent, layers, usage);
+    image.image = createLinearImage(device, format, extent, layers, usage, kHostAllocation);
     const VkDeviceSize layerBytes = bytes / layers;
-    if (!tightlyPacked(device, image.image, layerBytes / extent.height, extent.height, layers)) {
+    const VkSubresourceLayout layout = firstLayerLayout(device, image.image);
+    const VkDeviceSize rowBytes = layerBytes / extent.height;
+    if (layout.offset != 0 || layout.rowPitch != rowBytes ||
+        (layers > 1 && layout.arrayPitch != layerBytes)) {
         destroyImage(device, image);
         return std::nullopt;
     }
@@ -133,6 +156,34 @@ std::optional<GpuImage> importHostImage(const Device& device, const void* texels
         createImageView(device, image.image, layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D,
                         format, layers);
     return image;
+}
+
+std::optional<MappedImage> createMappedImage(const Device& device, VkFormat format, VkExtent2D extent,
+                                             uint32_t layers, VkImageUsageFlags usage, const char* what) {
+    // A CPU device only: there, a linear image in host memory is read as fast as any, and the
+    // driver's layout is what the host writes; on a GPU it would be read across the bus.
+    if (device.info.type != VK_PHYSICAL_DEVICE_TYPE_CPU ||
+        !linearSupported(device, format, extent, layers, usage, 0))
+        return std::nullopt;
+    MappedImage mapped{.image = {.format = format, .extent = extent, .layers = layers}};
+    GpuImage& image = mapped.image;
+    OnFailure undo([&] { destroyImage(device, image); });
+    image.image = createLinearImage(device, format, extent, layers, usage, 0);
+    const VkSubresourceLayout layout = firstLayerLayout(device, image.image);
+    mapped.rows = {.rowPitch = layout.rowPitch, .layerPitch = layout.arrayPitch};
+    VkMemoryRequirements requirements;
+    vkGetImageMemoryRequirements(device.device, image.image, &requirements);
+    const uint32_t type = mappableMemoryType(device, requirements.memoryTypeBits);
+    if (layout.offset != 0 || type == UINT32_MAX) {
+        destroyImage(device, image);
+        return std::nullopt;
+    }
+    bindImageMemory(device, image, type, what);
+    VK_CHECK(vkMapMemory(device.device, image.memory, 0, VK_WHOLE_SIZE, 0, &mapped.texels));
+    image.view =
+        createImageView(device, image.image, layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D,
+                        format, layers);
+    return mapped;
 }
 
 } // namespace shprobe

@@ -22,4 +22,25 @@ std::optional<GpuImage> importHostImage(const Device& device, const void* texels
                                         VkFormat format, VkExtent2D extent, uint32_t layers,
                                         VkImageUsageFlags usage);
 
+// Where a linear image's rows lie in its memory: row r of layer l at l layerPitch + r rowPitch.
+struct LinearRows {
+    VkDeviceSize rowPitch = 0;
+    VkDeviceSize layerPitch = 0;
+};
+
+// A linear-tiled image of `layers` layers of `extent` in `format` in host-visible, coherent memory of
+// a CPU device, mapped at `texels` with its rows where `rows` says (the driver may pad them), in
+// VK_IMAGE_LAYOUT_PREINITIALIZED (what the host writes there before the first transition stays):
+// texels written there are read by the device where they lie, with no staging copy and no copy into
+// an image. nullopt where the device cannot: it is not a CPU device, the format's linear tiling lacks
+// `usage` or these layers, or no memory type is host-visible and coherent. `what` names the image in
+// errors. destroyImage releases it and the mapping.
+struct MappedImage {
+    GpuImage image;
+    void* texels = nullptr;
+    LinearRows rows;
+};
+std::optional<MappedImage> createMappedImage(const Device& device, VkFormat format, VkExtent2D extent,
+                                             uint32_t layers, VkImageUsageFlags usage, const char* what);
+
 } // namespace shprobe

@@ -31,23 +31,21 @@ VkImageAspectFlags aspectOf(VkFormat format) {
     return isDepthFormat(format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
 }
 
-void allocateAndBind(const Device& device, GpuImage& image, const char* what) {
+} // namespace
+
+void bindImageMemory(const Device& device, GpuImage& image, uint32_t memoryType, const char* what) {
     VkMemoryRequirements requirements;
     vkGetImageMemoryRequirements(device.device, image.image, &requirements);
+    checkAllocationSize(device, requirements.size, memoryType, what);
     VkMemoryAllocateInfo allocate{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     allocate.allocationSize = requirements.size;
-    allocate.memoryTypeIndex = imageMemoryType(device, requirements.memoryTypeBits);
-    if (allocate.memoryTypeIndex == UINT32_MAX)
-        throw Error(ErrorKind::Device, std::string("no memory type for ") + what);
-    checkAllocationSize(device, requirements.size, allocate.memoryTypeIndex, what);
+    allocate.memoryTypeIndex = memoryType;
     VkResult result = vkAllocateMemory(device.device, &allocate, nullptr, &image.memory);
     if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
         throw Error(ErrorKind::Device, std::string("out of memory for ") + what + " on " + device.info.name);
     VK_CHECK(result);
     VK_CHECK(vkBindImageMemory(device.device, image.image, image.memory, 0));
 }
-
-} // namespace
 
 GpuImage createImage(const Device& device, const GpuImageDesc& desc) {
     GpuImage image;
@@ -68,7 +66,12 @@ GpuImage createImage(const Device& device, const GpuImageDesc& desc) {
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
     VK_CHECK(vkCreateImage(device.device, &info, nullptr, &image.image));
-    allocateAndBind(device, image, desc.what);
+    VkMemoryRequirements requirements;
+    vkGetImageMemoryRequirements(device.device, image.image, &requirements);
+    const uint32_t memoryType = imageMemoryType(device, requirements.memoryTypeBits);
+    if (memoryType == UINT32_MAX)
+        throw Error(ErrorKind::Device, std::string("no memory type for ") + desc.what);
+    bindImageMemory(device, image, memoryType, desc.what);
 
     const VkImageViewType viewType = desc.cube          ? VK_IMAGE_VIEW_TYPE_CUBE
                                      : image.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY

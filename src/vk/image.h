@@ -28,6 +28,10 @@ struct GpuImageDesc {
 GpuImage createImage(const Device& device, const GpuImageDesc& desc);
 void destroyImage(const Device& device, GpuImage& image);
 
+// Allocates memory of `memoryType` for image.image (created elsewhere) and binds it; Error(Device)
+// naming `what` where the size exceeds what the memory type allows or the device is out of memory.
+void bindImageMemory(const Device& device, GpuImage& image, uint32_t memoryType, const char* what);
+
 // A view of `layers` layers of mip 0, from firstLayer on, of an image of `format` (depth formats:
 // the depth aspect, others colour), for images created elsewhere too (a swapchain's).
 VkImageView createImageView(const Device& device, VkImage image, VkImageViewType type, VkFormat format,
