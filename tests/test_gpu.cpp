@@ -350,7 +350,7 @@ TEST_F(GpuProjection, HalfFloatInputMatchesTheReferenceOfItsValues) {
 // and every slot but the last submitted ahead. Any row misplaced changes the noise's coefficients, so
 // the bake must equal bit for bit the same maps baked by bakeCubemaps in one submission (one slot
 // where the texels are staged).
-TEST_F(GpuProjection, UploadThroughSmallStagingSlotsEqualsOneSlot) {
+TEST_F(GpuProjection, UploadThroughSmallStagingSlotsEqualsTheDefaultRoute) {
     const std::vector<Cubemap> cubemaps = {noiseCubemap(7, 21), noiseCubemap(7, 22), noiseCubemap(7, 23)};
     std::vector<const Cubemap*> batch;
     for (const Cubemap& cubemap : cubemaps)
@@ -358,12 +358,13 @@ TEST_F(GpuProjection, UploadThroughSmallStagingSlotsEqualsOneSlot) {
     for (TexelFormat format : {TexelFormat::Rgba32F, TexelFormat::Rgba16F}) {
         ProbeBaker baker = hostBaker({.order = 3}, format);
         uint64_t submissionsBefore = submissionCount();
-        const std::vector<GpuBake> oneSlot = bakeCubemaps(context(), baker, batch);
+        const std::vector<GpuBake> batched = bakeCubemaps(context(), baker, batch);
         EXPECT_EQ(submissionCount() - submissionsBefore, 1u);
-        for (size_t k = 0; k < cubemaps.size(); ++k) { // the one slot against the reference of its values
+        for (size_t k = 0; k < cubemaps.size();
+             ++k) { // the default route against the reference of its values
             Cubemap uploaded = cubemaps[k];
             if (format == TexelFormat::Rgba16F) uploaded.texels = halfRounded(cubemaps[k].texels);
-            EXPECT_LT(relativeError(oneSlot[k].radiance, projectCubemap(uploaded, 3)), kGpuTolerance)
+            EXPECT_LT(relativeError(batched[k].radiance, projectCubemap(uploaded, 3)), kGpuTolerance)
                 << "probe " << k;
         }
         for (uint32_t slotRows : {5u, 17u}) {
@@ -378,7 +379,7 @@ TEST_F(GpuProjection, UploadThroughSmallStagingSlotsEqualsOneSlot) {
             EXPECT_EQ(submissionCount() - submissionsBefore, slots - 1) << what << ", slots of " << slotRows;
             const std::vector<ShCoefficients> radiance = bakeUpload(baker, upload);
             for (uint32_t k = 0; k < 3; ++k)
-                EXPECT_EQ(radiance[k].rgb, oneSlot[k].radiance.rgb)
+                EXPECT_EQ(radiance[k].rgb, batched[k].radiance.rgb)
                     << what << ", slots of " << slotRows << ", probe " << k;
             destroyCubemapUpload(context(), upload);
         }

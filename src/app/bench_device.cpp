@@ -19,6 +19,7 @@
 #include <glm/common.hpp>
 #include <glm/vector_relational.hpp>
 #include <string>
+#include <thread>
 #include <unistd.h>
 #include <vector>
 
@@ -257,10 +258,13 @@ double multiplyAddsPerSecond(const Context& context, int repeat) {
             dispatch(commands, program, set, Push{kSteps, 1.0f, 1e-7f}, {groups, 1});
         });
     };
-    // Grow the dispatch until it fills the device long enough for the timestamps to be exact.
+    // Grow the dispatch until it fills the device long enough for the timestamps to be exact, and
+    // to 16 workgroups a CPU thread at least: on a CPU device, whose threads each run whole
+    // workgroups, the last round's idle threads then cost under a sixteenth.
+    const uint32_t leastGroups = 16 * std::max(1u, std::thread::hardware_concurrency());
     uint32_t groups = 1;
     double ms = milliseconds(groups, 1);
-    while (ms < kLongEnoughMs && groups < largest) {
+    while ((ms < kLongEnoughMs || groups < leastGroups) && groups < largest) {
         const double scale = ms > 0.0 ? std::ceil(kLongEnoughMs / ms) : 16.0;
         groups = uint32_t(std::min(double(largest), std::max(2.0, std::min(scale, 16.0)) * groups));
         ms = milliseconds(groups, 1);

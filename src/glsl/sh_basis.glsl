@@ -6,8 +6,8 @@
 // and the fast CPU projection) runs the unnormalized Lisle-Huang recurrence from band 0 and
 // normalizes at the end. Here bands 0-4 are closed forms and bands 5-7 the recurrence in normalized
 // form, all straight-line code with constant indices: an array indexed at run time stays in memory
-// on llvmpipe, which made projection four times slower at order 3 and twelve at order 8
-// (docs/gpu-path.md). Both are checked against each other by test_gpu (GPU against CPU projections
+// on llvmpipe, which made projection four times slower at order 3 and four to seven times at order
+// 8 (docs/gpu-path.md). Both are checked against each other by test_gpu (GPU against CPU projections
 // at orders 1, 3, 5 and 8).
 #ifndef SHPROBE_SH_BASIS_GLSL
 #define SHPROBE_SH_BASIS_GLSL

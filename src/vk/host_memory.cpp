@@ -93,20 +93,6 @@ uint32_t importMemoryType(const Device& device, void* pointer, uint32_t imageTyp
     return UINT32_MAX;
 }
 
-// A host-visible, coherent memory type the image allows, device-local where one is, or UINT32_MAX.
-uint32_t mappableMemoryType(const Device& device, uint32_t imageTypes) {
-    constexpr VkMemoryPropertyFlags kMappable =
-        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    uint32_t found = UINT32_MAX;
-    for (uint32_t i = 0; i < device.memory.memoryTypeCount; ++i) {
-        const VkMemoryPropertyFlags flags = device.memory.memoryTypes[i].propertyFlags;
-        if (!(imageTypes & (1u << i)) || (flags & kMappable) != kMappable) continue;
-        if (flags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) return i;
-        if (found == UINT32_MAX) found = i;
-    }
-    return found;
-}
-
 } // namespace
 
 std::optional<GpuImage> importHostImage(const Device& device, const void* texels, VkDeviceSize bytes,
@@ -173,7 +159,9 @@ std::optional<MappedImage> createMappedImage(const Device& device, VkFormat form
     mapped.rows = {.rowPitch = layout.rowPitch, .layerPitch = layout.arrayPitch};
     VkMemoryRequirements requirements;
     vkGetImageMemoryRequirements(device.device, image.image, &requirements);
-    const uint32_t type = mappableMemoryType(device, requirements.memoryTypeBits);
+    const uint32_t type =
+        imageMemoryType(device, requirements.memoryTypeBits,
+                        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
     if (layout.offset != 0 || type == UINT32_MAX) {
         destroyImage(device, image);
         return std::nullopt;

@@ -1,8 +1,9 @@
-// Images over host memory the program already holds (VK_EXT_external_memory_host), for a CPU
-// device such as lavapipe, which reads host memory where it lies. The texels are then read in
-// place, with no staging copy and no copy into an image: on lavapipe, 6 x 4096^2 RGBA32F (1.6 GB)
-// would otherwise be copied twice into fresh pages, which the kernel clears first. Where anything
-// is missing the caller copies as before.
+// Images in host memory, for a CPU device such as lavapipe, which reads host memory where it lies:
+// over memory the program already holds (VK_EXT_external_memory_host), whose texels are then read in
+// place, or over mapped memory of their own, into which the program writes the texels. Either way
+// there is no staging copy and no copy into an image: on lavapipe, 6 x 4096^2 RGBA32F (1.6 GB) would
+// otherwise be copied twice into fresh pages, which the kernel clears first. Where the device cannot,
+// the caller stages the texels as on a GPU.
 #pragma once
 #include "vk/context.h"
 #include "vk/image.h"

@@ -12,17 +12,6 @@ namespace shprobe {
 
 namespace {
 
-// Device-local memory when the image allows it, else any type it allows.
-uint32_t imageMemoryType(const Device& device, uint32_t typeBits) {
-    uint32_t fallback = UINT32_MAX;
-    for (uint32_t i = 0; i < device.memory.memoryTypeCount; ++i) {
-        if (!(typeBits & (1u << i))) continue;
-        if (device.memory.memoryTypes[i].propertyFlags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) return i;
-        if (fallback == UINT32_MAX) fallback = i;
-    }
-    return fallback;
-}
-
 bool isDepthFormat(VkFormat format) {
     return format == VK_FORMAT_D32_SFLOAT || format == VK_FORMAT_D16_UNORM;
 }
@@ -32,6 +21,17 @@ VkImageAspectFlags aspectOf(VkFormat format) {
 }
 
 } // namespace
+
+uint32_t imageMemoryType(const Device& device, uint32_t typeBits, VkMemoryPropertyFlags required) {
+    uint32_t fallback = UINT32_MAX;
+    for (uint32_t i = 0; i < device.memory.memoryTypeCount; ++i) {
+        const VkMemoryPropertyFlags flags = device.memory.memoryTypes[i].propertyFlags;
+        if (!(typeBits & (1u << i)) || (flags & required) != required) continue;
+        if (flags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) return i;
+        if (fallback == UINT32_MAX) fallback = i;
+    }
+    return fallback;
+}
 
 void bindImageMemory(const Device& device, GpuImage& image, uint32_t memoryType, const char* what) {
     VkMemoryRequirements requirements;

@@ -28,6 +28,10 @@ struct GpuImageDesc {
 GpuImage createImage(const Device& device, const GpuImageDesc& desc);
 void destroyImage(const Device& device, GpuImage& image);
 
+// A memory type of typeBits (an image's memory requirements) with every flag of `required`,
+// device-local where one is; UINT32_MAX where none.
+uint32_t imageMemoryType(const Device& device, uint32_t typeBits, VkMemoryPropertyFlags required = 0);
+
 // Allocates memory of `memoryType` for image.image (created elsewhere) and binds it; Error(Device)
 // naming `what` where the size exceeds what the memory type allows or the device is out of memory.
 void bindImageMemory(const Device& device, GpuImage& image, uint32_t memoryType, const char* what);
