@@ -93,6 +93,12 @@ uint32_t importMemoryType(const Device& device, void* pointer, uint32_t imageTyp
     return UINT32_MAX;
 }
 
+// A view of all the image's layers: 2D for one, a 2D array for more.
+VkImageView createLayersView(const Device& device, const GpuImage& image) {
+    const VkImageViewType type = image.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
+    return createImageView(device, image.image, type, image.format, image.layers);
+}
+
 } // namespace
 
 std::optional<GpuImage> importHostImage(const Device& device, const void* texels, VkDeviceSize bytes,
@@ -138,9 +144,7 @@ std::optional<GpuImage> importHostImage(const Device& device, const void* texels
         return std::nullopt;
     }
     VK_CHECK(vkBindImageMemory(device.device, image.image, image.memory, offset));
-    image.view =
-        createImageView(device, image.image, layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D,
-                        format, layers);
+    image.view = createLayersView(device, image);
     return image;
 }
 
@@ -168,9 +172,7 @@ std::optional<MappedImage> createMappedImage(const Device& device, VkFormat form
     }
     bindImageMemory(device, image, type, what);
     VK_CHECK(vkMapMemory(device.device, image.memory, 0, VK_WHOLE_SIZE, 0, &mapped.texels));
-    image.view =
-        createImageView(device, image.image, layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D,
-                        format, layers);
+    image.view = createLayersView(device, image);
     return mapped;
 }
 
