@@ -113,6 +113,7 @@ FillRows packRows(std::span<const std::span<const glm::vec4>> probeTexels, uint3
     return [=](uint64_t first, uint32_t rows, void* destination) {
         const size_t rowBytes = size_t(width) * texelBytes(format);
         const unsigned threads = threadCount(rows * rowBytes, kPackBytesPerThread);
+        const VkDeviceSize firstOffset = offsetOf(first); // where `destination` lies
         const uint32_t perThread = (rows + threads - 1) / threads;
         std::atomic<bool> fits = true;
         forEachItem(int(threads), threads, [&](int piece) {
@@ -121,7 +122,7 @@ FillRows packRows(std::span<const std::span<const glm::vec4>> probeTexels, uint3
             uint64_t row = first + begin;
             forEachRowSpan(probeTexels, width, row, end - begin, [&](std::span<const glm::vec4> texels) {
                 for (size_t texel = 0; texel < texels.size(); texel += width, ++row) {
-                    char* out = static_cast<char*>(destination) + (offsetOf(row) - offsetOf(first));
+                    char* out = static_cast<char*>(destination) + (offsetOf(row) - firstOffset);
                     if (!packTexels(texels.subspan(texel, width), format, out)) fits = false;
                 }
             });
