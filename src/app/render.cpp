@@ -151,7 +151,11 @@ void addRenderOptions(CLI::App& command, RenderOptions& options) {
                   "Image size N or WxH (default 512; with --grid the cell width, 384)");
     command.add_flag("--grid", options.grid,
                      "Environment, order-3 and order-5 reconstructions and lit spheres in one image");
-    command.add_option("--background", options.background, "Background behind the sphere")
+    command
+        .add_option("--background", options.background,
+                    "Background behind the sphere: environment (auto's for an image input), "
+                    "radiance or sh (the SH reconstruction; auto's for a probe with radiance), "
+                    "shading (a white surface facing each direction), color (flat)")
         ->check(CLI::IsMember({"auto", "environment", "radiance", "sh", "shading", "color"}))
         ->capture_default_str();
     addExposureOption(command, options.exposure);

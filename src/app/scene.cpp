@@ -70,10 +70,9 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                        "gpu: the whole volume of the previous bounce: bake the bounce after it (the whole "
                        "transport again, the volume checked to be this bake's)");
     command
-        .add_option(
-            "--backend", options.backend,
-            "gpu: rays on the Vulkan device; cpu: rays on all cores, by Embree; both gather bounces at "
-            "the surfaces; auto: cpu where no GPU is (lavapipe), else gpu")
+        .add_option("--backend", options.backend,
+                    "gpu: rays on the Vulkan device; cpu: rays on all cores, by Embree; both bake the same "
+                    "transport (--bounce-light); auto: cpu where no GPU is (lavapipe), else gpu")
         ->check(CLI::IsMember({"auto", "gpu", "cpu"}))
         ->capture_default_str();
     command
