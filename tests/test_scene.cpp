@@ -296,10 +296,13 @@ TEST(SceneModels, BrokenFilesAreRefused) {
     EXPECT_EQ(seen, expected.size());
 }
 
-// TestNoRootNode: a scene with no nodes, and a file with no scenes at all, hold no triangles.
+// TestNoRootNode: a scene with no nodes holds no triangles; a file with no scenes names default
+// scene 0 all the same, which glTF forbids (its schema: "scene" MUST NOT be defined when "scenes" is
+// undefined).
 TEST(SceneModels, ScenesWithoutTrianglesAreRefused) {
-    for (const char* name : {"TestNoRootNode/NoScene.gltf", "TestNoRootNode/SceneWithoutNodes.gltf"})
-        expectRefused((kModels / name).string(), {"no triangles"});
+    expectRefused((kModels / "TestNoRootNode/SceneWithoutNodes.gltf").string(), {"no triangles"});
+    expectRefused((kModels / "TestNoRootNode/NoScene.gltf").string(),
+                  {"the default scene is 0, but the file has 0 scenes"});
 }
 
 // glTF-Asset-Generator's Mesh_PrimitiveMode: the unit square facing +z drawn in every mode, indexed
@@ -619,6 +622,21 @@ TEST_F(SceneTest, MalformedScenesAreRefused) {
              d["materials"][0]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = -1.0;
          },
          {"emissiveStrength", "at least 0"}},
+        {"an albedo above 1, which would reflect more light than it receives",
+         [](json& d) {
+             d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {10.0, 0.5, 0.5, 1.0};
+         },
+         {"materials[0].pbrMetallicRoughness.baseColorFactor[0] is 10", "outside the 0..1"}},
+        {"a negative albedo",
+         [](json& d) {
+             d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {0.5, -1.0, 0.5, 1.0};
+         },
+         {"baseColorFactor[1] is -1", "outside the 0..1"}},
+        {"an emissive factor outside 0..1",
+         [](json& d) {
+             d["materials"][0]["emissiveFactor"] = {-1.0, 1.0, 1.0};
+         },
+         {"materials[0].emissiveFactor[0] is -1", "outside the 0..1"}},
         {"a triangle list of 35 indices",
          [](json& d) { d["accessors"][2]["count"] = 35; },
          {"indices", "35 indices", "multiple of 3"}},

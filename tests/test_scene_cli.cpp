@@ -6,6 +6,7 @@
 #include "scene_fixtures.h"
 #include "terminal_run.h"
 
+#include "formats/probe_file.h"
 #include "formats/probe_volume.h"
 #include "image/environment.h"
 #include "image/image_write.h"
@@ -244,6 +245,15 @@ TEST_F(SceneCommand, RelightableVolumesRelightWithoutACapture) {
     EXPECT_CONTAINS(turned.settings, "\"sky_turn\":[90.0,-20.0]");
     runOk({"relight", file("turned.shpv"), "-q", "-o", file("back.shpv")});
     EXPECT_EQ(bytesOf(file("back.shpv")), bytesOf(file("whole.shpv")));
+    // A sky whose light the transfer carries past float: refused as the input it is, nothing written.
+    ShCoefficients blinding = makeCoefficients(3, Quantity::Radiance);
+    for (glm::dvec3& coefficient : blinding.rgb)
+        coefficient = glm::dvec3(1e38);
+    writeProbeFile(file("blinding.json"), blinding, {});
+    expectFailure({{"relight", file("whole.shpv"), "--probe", file("blinding.json"), "-o", "OUT"},
+                   2,
+                   {"overflows float", "the sky " + file("blinding.json") + " is far too strong"},
+                   "out.shpv"});
 
     runOk({"scene", scene, "--grid", "1,1,1", "--face-size", "4", "--backend", "cpu", "-q", "-o",
            file("plain.shpv")});
@@ -512,6 +522,14 @@ TEST_F(SceneCommand, ScalesFloatCannotHoldAreRefused) {
     writeScaledCornellBox(file("tiny.glb"), 1e-12f);
     writeScaledCornellBox(file("huge.glb"), 1e11f);
     writeScaledCornellBox(file("far.glb"), 1.0f, glm::vec3(1e6f, 0.0f, 0.0f));
+    testing::FixtureScene point =
+        testing::boxScene(); // without a sun, which a scale of 0 leaves no direction
+    point.nodes.push_back({.scale = glm::vec3(0.0f), .children = point.roots});
+    point.roots = {int(point.nodes.size() - 1)};
+    testing::writeGltf(file("point.glb"), point, testing::GltfContainer::Glb);
+    // 0.1 across at 1e7, where float's spacing is 1: flat along x by rounding alone, which --bounds
+    // would not mend.
+    writeScaledCornellBox(file("farther.glb"), 0.1f, glm::vec3(1e7f, 0.0f, 0.0f));
     for (const char* backend : {"cpu", "gpu"}) {
         auto refused = [&](const std::string& scene, std::vector<std::string> mentions) {
             expectFailure(
@@ -520,9 +538,12 @@ TEST_F(SceneCommand, ScalesFloatCannotHoldAreRefused) {
                  mentions,
                  "out.shpv"});
         };
-        refused(file("tiny.glb"), {"3.46e-12 across", "1e-10", "scale the scene up"});
-        refused(file("huge.glb"), {"reach 2e+11", "1e+10", "scale the scene down"});
-        refused(file("far.glb"), {"reach 1e+06", "3.46 across", "nearer the origin"});
+        refused(file("tiny.glb"),
+                {file("tiny.glb") + " (", "3.46e-12 across", "1e-10", "scale the scene up"});
+        refused(file("huge.glb"), {file("huge.glb") + " (", "reach 2e+11", "1e+10", "scale the scene down"});
+        refused(file("far.glb"), {file("far.glb") + " (", "reach 1e+06", "3.46 across", "nearer the origin"});
+        refused(file("point.glb"), {file("point.glb") + " (", "all its vertices lie at one point"});
+        refused(file("farther.glb"), {file("farther.glb") + " (", "reach 1e+07", "nearer the origin"});
     }
 }
 
@@ -571,6 +592,19 @@ TEST_F(SceneCommand, VolumesKnowTheirSceneByContent) {
     std::vector<std::string> next = bounce1;
     next.insert(next.end(), {"-o", file("g1.shpv")});
     runOk(next);
+    // Continuing with other settings or another grid names what differs and both values.
+    const std::string previous = (here / "g0.shpv").string();
+    expectFailure({{"scene", copy, "--previous", previous, "--face-size", "4", "--grid", "2,2,2", "--bounds",
+                    "-2,-2,-2,2,2,2", "--backend", "gpu", "-o", "OUT"},
+                   2,
+                   {previous + ": setting \"face_size\" is 8 in the volume, 4 in this bake"},
+                   "out.shpv"});
+    expectFailure({{"scene", copy, "--previous", previous, "--face-size", "8", "--grid", "2,2,2", "--bounds",
+                    "-1,-2,-2,2,2,2", "--backend", "gpu", "-o", "OUT"},
+                   2,
+                   {previous + ": bounds [-2.0,-2.0,-2.0]..[2.0,2.0,2.0] in the volume, "
+                               "[-1.0,-2.0,-2.0]..[2.0,2.0,2.0] in this bake"},
+                   "out.shpv"});
 
     // The copy's material turns pink: its hash changes, and the volumes baked before are refused.
     std::string text = readText(copy);
@@ -726,6 +760,21 @@ TEST_F(SceneCommand, RenderDrawsTheSceneLitByItsVolume) {
         {{"render", "--scene", scene, "--volume", file("brick.shpv"), "-o", "OUT"}, 2, {"brick"}, "out.png"});
 }
 
+// A light that float cannot hold in the probes' sums is the input's fault: one line saying so, exit
+// 2, no file; not the failed write the volume writer's own check would report. Inside a closed box
+// glowing 3e38 (glTF's factor 1 times KHR_materials_emissive_strength, each texel finite), L00 is
+// 3e38 sqrt(4 pi) = 1.1e39, past float's 3.4e38.
+TEST_F(SceneCommand, LightThatOverflowsFloatIsRefused) {
+    const std::string scene = file("blinding.glb");
+    testing::writeBoxGltf(scene, {.emission = glm::vec3(3e38f)});
+    for (const char* backend : {"cpu", "gpu"})
+        expectFailure({{"scene", scene, "--grid", "1,1,1", "--face-size", "8", "--bounces", "0", "--backend",
+                        backend, "-o", "OUT"},
+                       2,
+                       {"overflows float: the light of " + scene, "is far too strong"},
+                       "out.shpv"});
+}
+
 // Each broken glTF of assimp-testmodels: one line naming the file, exit 2, nothing written.
 TEST_F(SceneCommand, BrokenScenesAreRefused) {
     const std::string models = SHPROBE_GLTF_MODELS_DIR;
@@ -779,6 +828,13 @@ TEST_F(SceneCommand, BadOptionsAreRefused) {
                    2,
                    {"--previous", "cpu"},
                    "out.shpv"});
+    // Rays from a probe that far would be past what the ray tests hold (Embree asserts on them).
+    for (const char* backend : {"cpu", "gpu"})
+        expectFailure({{"scene", scene, "--grid", "2,2,2", "--bounds", "0,0,0,1e19,1,1", "--backend", backend,
+                        "-o", "OUT"},
+                       2,
+                       {"--bounds", "reaches 1e19, beyond the 1e+10"},
+                       "out.shpv"});
     expectFailure({{"scene", scene, "--grid", "2,2,2", "--backend", "rays", "-o", "OUT"},
                    2,
                    {"--backend"},

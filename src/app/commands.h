@@ -273,6 +273,9 @@ void runRelight(const RelightOptions& options);
 // The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize
 // (0: its own), or the built-in sky (128^2 faces by default).
 Environment loadSceneSky(const std::string& path, int faceSize);
+// Refuses, before it is written, a baked or relit volume whose light overflowed float: "PROBE
+// overflows float: LIGHT is far too strong", LIGHT naming what lit it (a bad input, not a failed write).
+void requireFiniteLight(const ProbeVolume& volume, const std::string& light);
 // The sky as the ray paths read it: its sun, where it has one (sh/lights.h extractSun), taken out
 // as a directional sun of the same power, which they sample explicitly (a sun of 1e-3 sr is found
 // by less than one ray in a thousand); the rest stays in the cube map.

@@ -93,6 +93,7 @@ void runRelight(const RelightOptions& options) {
     relightVolume(volume, sky.radiance);
     const double milliseconds = millisecondsSince(start);
     volume.settings = relitSettings(volume, sky, options);
+    requireFiniteLight(volume, "the sky " + sky.name);
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;
     std::printf("relit    %s of %s by %s", counted(volume.probeCount(), "probe").c_str(),

@@ -134,6 +134,11 @@ void addMergeOptions(CLI::App& command, MergeOptions& options) {
     command.add_option("-o,--output", options.output, "Whole volume to write")->required();
 }
 
+void requireFiniteLight(const ProbeVolume& volume, const std::string& light) {
+    if (const std::string probe = nonFiniteLight(volume); !probe.empty())
+        throw Error(ErrorKind::Input, probe + " overflows float: " + light + " is far too strong");
+}
+
 Environment loadSceneSky(const std::string& path, int faceSize) {
     if (path.empty()) {
         const int size = faceSize > 0 ? faceSize : 128;
@@ -264,17 +269,19 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
     };
     if (previous.begin != 0 || previous.end != previous.grid.probeCount())
         refuse("--previous needs the whole volume (merge the bricks first)");
-    if (previous.grid.counts != grid.counts || previous.grid.boundsMin != grid.boundsMin ||
-        previous.grid.boundsMax != grid.boundsMax)
-        refuse("its grid of " + std::to_string(previous.grid.probeCount()) + " probes is not this bake's");
+    if (const std::string difference = gridDifference(previous.grid, grid, "the volume", "this bake");
+        !difference.empty())
+        refuse(difference);
     if (previous.order != options.order)
         refuse("order " + std::to_string(previous.order) + ", this bake's is " +
                std::to_string(options.order));
     if (const std::string mismatch = sceneMismatch(previous, gltfSceneHash(options.scene), world.description);
         !mismatch.empty())
         refuse(mismatch);
-    if (nlohmann::json::parse(previous.settings) != nlohmann::json::parse(settings))
-        refuse("baked with " + previous.settings + ", this bake is " + settings);
+    if (const std::string difference =
+            settingsDifference(previous.settings, settings, "the volume", "this bake");
+        !difference.empty())
+        refuse(difference);
     if (previous.irradiance.empty()) refuse("the volume holds no irradiance");
     return previous;
 }
@@ -443,6 +450,8 @@ void runScene(const SceneOptions& options, bool bouncesGiven) {
     volume.source = world.description;
     volume.sourceHash = gltfSceneHash(options.scene);
     volume.settings = settings;
+    requireFiniteLight(volume,
+                       "the light of " + world.description + " and its sky, " + sky.description + ",");
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;
     const double seconds = millisecondsSince(start) / 1000.0;

@@ -109,6 +109,21 @@ std::string jsonText(const nlohmann::ordered_json& value) {
     return value.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
+// "the QUANTITY of probe P" for the first valid probe with a coefficient that is not finite; empty
+// where there is none. Invalid probes are written as zeros, whatever they hold.
+std::string nonFiniteProbe(const ProbeVolume& volume, const std::vector<glm::vec3>& coefficients,
+                           const char* quantity) {
+    if (coefficients.empty()) return "";
+    const size_t perProbe = coefficientsPerProbe(volume);
+    for (uint32_t p = 0; p < volume.probeCount(); ++p) {
+        if (!volume.valid[p]) continue;
+        for (size_t c = 0; c < perProbe; ++c)
+            if (!isFinite(coefficients[p * perProbe + c]))
+                return std::string("the ") + quantity + " of probe " + text(volume.begin + p);
+    }
+    return "";
+}
+
 void checkCoefficients(const ProbeVolume& volume, const std::vector<glm::vec3>& coefficients,
                        const char* quantity, const std::string& what) {
     if (coefficients.empty()) return;
@@ -117,13 +132,8 @@ void checkCoefficients(const ProbeVolume& volume, const std::vector<glm::vec3>& 
         fail(what, std::string(quantity) + " holds " + counted(coefficients.size(), "coefficient") +
                        ", not " + text(size_t(volume.probeCount()) * perProbe) + " for " +
                        counted(volume.probeCount(), "probe") + " of order " + text(uint64_t(volume.order)));
-    for (uint32_t p = 0; p < volume.probeCount(); ++p) {
-        if (!volume.valid[p]) continue; // written as zeros
-        for (size_t c = 0; c < perProbe; ++c)
-            if (!isFinite(coefficients[p * perProbe + c]))
-                fail(what, std::string("the ") + quantity + " of probe " + text(volume.begin + p) +
-                               " is not finite");
-    }
+    if (const std::string probe = nonFiniteProbe(volume, coefficients, quantity); !probe.empty())
+        fail(what, probe + " is not finite");
 }
 
 void checkValidity(const ProbeVolume& volume, const std::string& what) {
@@ -559,23 +569,6 @@ std::string boundsText(const ProbeGrid& grid) {
     return vectorJson(grid.boundsMin).dump() + ".." + vectorJson(grid.boundsMax).dump();
 }
 
-// The first setting whose value differs, as "setting \"face_size\" is 64 in A, 128 in B".
-std::string settingsDifference(const std::string& a, const std::string& b, const std::string& nameA,
-                               const std::string& nameB) {
-    const json first = *settingsObject(a), second = *settingsObject(b);
-    auto valueIn = [](const json& settings, const std::string& key) {
-        auto it = settings.find(key);
-        return it == settings.end() ? std::string("missing") : clipped(it->dump());
-    };
-    json keys = first;
-    keys.update(second);
-    for (const auto& [key, unused] : keys.items())
-        if (valueIn(first, key) != valueIn(second, key))
-            return "setting " + quotedInput(key) + " is " + valueIn(first, key) + " in " + nameA + ", " +
-                   valueIn(second, key) + " in " + nameB;
-    return "";
-}
-
 std::string hashText(const ProbeVolume& volume) {
     return volume.sourceHash.empty() ? "no source hash" : clipped(volume.sourceHash);
 }
@@ -586,10 +579,7 @@ std::string bakeDifference(const ProbeVolume& a, const ProbeVolume& b, const std
     auto both = [&](const std::string& x, const std::string& y) {
         return x + " in " + nameA + ", " + y + " in " + nameB;
     };
-    if (a.grid.counts != b.grid.counts)
-        return "grid " + both(countsText(a.grid.counts), countsText(b.grid.counts));
-    if (a.grid.boundsMin != b.grid.boundsMin || a.grid.boundsMax != b.grid.boundsMax)
-        return "bounds " + both(boundsText(a.grid), boundsText(b.grid));
+    if (const std::string grid = gridDifference(a.grid, b.grid, nameA, nameB); !grid.empty()) return grid;
     if (a.order != b.order) return "order " + both(std::to_string(a.order), std::to_string(b.order));
     if (quantitiesText(a) != quantitiesText(b)) return both(quantitiesText(a), quantitiesText(b));
     if (a.visibilitySize != b.visibilitySize)
@@ -636,6 +626,38 @@ void append(std::vector<glm::vec3>& to, const std::vector<glm::vec3>& from) {
 }
 
 } // namespace
+
+std::string nonFiniteLight(const ProbeVolume& volume) {
+    if (std::string probe = nonFiniteProbe(volume, volume.radiance, "radiance"); !probe.empty()) return probe;
+    return nonFiniteProbe(volume, volume.irradiance, "irradiance");
+}
+
+std::string gridDifference(const ProbeGrid& a, const ProbeGrid& b, const std::string& nameA,
+                           const std::string& nameB) {
+    auto both = [&](const std::string& x, const std::string& y) {
+        return x + " in " + nameA + ", " + y + " in " + nameB;
+    };
+    if (a.counts != b.counts) return "grid " + both(countsText(a.counts), countsText(b.counts));
+    if (a.boundsMin != b.boundsMin || a.boundsMax != b.boundsMax)
+        return "bounds " + both(boundsText(a), boundsText(b));
+    return "";
+}
+
+std::string settingsDifference(const std::string& a, const std::string& b, const std::string& nameA,
+                               const std::string& nameB) {
+    const json first = *settingsObject(a), second = *settingsObject(b);
+    auto shown = [](const json& settings, const std::string& key) {
+        auto it = settings.find(key);
+        return it == settings.end() ? std::string("missing") : clipped(it->dump());
+    };
+    json keys = first;
+    keys.update(second);
+    for (const auto& [key, unused] : keys.items())
+        if (first.contains(key) != second.contains(key) || (first.contains(key) && first[key] != second[key]))
+            return "setting " + quotedInput(key) + " is " + shown(first, key) + " in " + nameA + ", " +
+                   shown(second, key) + " in " + nameB;
+    return "";
+}
 
 void checkProbeGrid(const ProbeGrid& grid, const std::string& what) {
     uint64_t total = 1;

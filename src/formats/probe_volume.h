@@ -86,6 +86,19 @@ struct ProbeVolume {
 // was, else why not in words: "baked in DESCRIPTION (HASH), not in DESCRIPTION (HASH): ...".
 std::string sceneMismatch(const ProbeVolume& volume, const std::string& hash, const std::string& description);
 
+// "the radiance of probe P" (else "the irradiance of probe P") for the first valid probe holding a
+// coefficient that is not finite, as writeProbeVolume refuses it; empty where every one is finite.
+// The volume's sizes must be consistent.
+std::string nonFiniteLight(const ProbeVolume& volume);
+
+// What differs between two grids (counts first, then bounds), or between two bakes' settings (the
+// first key whose value differs), in words naming both: "bounds [0,0,0]..[1,1,1] in A, ... in B",
+// "setting \"face_size\" is 8 in A, 4 in B". Empty where they agree.
+std::string gridDifference(const ProbeGrid& a, const ProbeGrid& b, const std::string& nameA,
+                           const std::string& nameB);
+std::string settingsDifference(const std::string& a, const std::string& b, const std::string& nameA,
+                               const std::string& nameB);
+
 // Writes atomically (common/output_file.h). Throws Error(Input) "cannot write PATH: PROBLEM" for a
 // volume that is not consistent (sizes, ranges, validity bytes other than 0 and 1, settings that
 // are not a JSON object, a non-finite coefficient of a valid probe), and Error(Output) as

@@ -15,6 +15,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <glm/geometric.hpp>
@@ -331,6 +332,9 @@ std::vector<int> checkedParents(const tinygltf::Model& model, const std::string&
 // The root nodes to draw: the default scene's, else scene 0's, else every node without a parent.
 std::vector<int> sceneRoots(const tinygltf::Model& model, const std::vector<int>& parents,
                             const std::string& path) {
+    if (model.defaultScene >= 0 && size_t(model.defaultScene) >= model.scenes.size())
+        fail(path, "the default scene is " + std::to_string(model.defaultScene) + ", but the file has " +
+                       counted(model.scenes.size(), "scene"));
     if (model.scenes.empty()) {
         std::vector<int> roots;
         for (size_t n = 0; n < parents.size(); ++n)
@@ -338,9 +342,6 @@ std::vector<int> sceneRoots(const tinygltf::Model& model, const std::vector<int>
         return roots;
     }
     const int scene = std::max(model.defaultScene, 0);
-    if (size_t(scene) >= model.scenes.size())
-        fail(path, "the default scene is " + std::to_string(scene) + ", but the file has " +
-                       counted(model.scenes.size(), "scene"));
     const std::string where = "scenes[" + std::to_string(scene) + "].nodes";
     std::vector<int> roots = model.scenes[size_t(scene)].nodes;
     std::vector<bool> listed(parents.size(), false);
@@ -630,6 +631,8 @@ class SceneBuilder {
         const std::string where = "materials[" + std::to_string(index) + "]";
         SceneMaterial scene;
         const std::vector<double>& base = material.pbrMetallicRoughness.baseColorFactor;
+        requireUnitFactors(base, where + ".pbrMetallicRoughness.baseColorFactor");
+        requireUnitFactors(material.emissiveFactor, where + ".emissiveFactor");
         if (base.size() >= 3) scene.albedo = glm::vec3(float(base[0]), float(base[1]), float(base[2]));
         if (material.emissiveFactor.size() == 3)
             scene.emission = glm::vec3(glm::make_vec3(material.emissiveFactor.data()));
@@ -639,6 +642,18 @@ class SceneBuilder {
                                           where + ".pbrMetallicRoughness.baseColorTexture");
         scene.emissionTexture = textureSlot(material.emissiveTexture, where + ".emissiveTexture");
         return scene;
+    }
+
+    // glTF's colour factors lie in 0..1 (an albedo above 1 would reflect more light than it
+    // receives, and the bounces would grow without end); a brighter emission takes
+    // KHR_materials_emissive_strength.
+    void requireUnitFactors(const std::vector<double>& factors, const std::string& where) const {
+        for (size_t i = 0; i < factors.size(); ++i) {
+            if (factors[i] >= 0.0 && factors[i] <= 1.0) continue;
+            char value[32];
+            std::snprintf(value, sizeof(value), "%g", factors[i]);
+            fail(path_, where + "[" + std::to_string(i) + "] is " + value + ", outside the 0..1 glTF allows");
+        }
     }
 
     double emissiveStrength(const tinygltf::Material& material, const std::string& where) const {

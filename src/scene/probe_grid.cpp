@@ -1,10 +1,12 @@
 #include "scene/probe_grid.h"
 
 #include "common/error.h"
+#include "scene/surface_shading.h"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string_view>
 #include <vector>
@@ -70,6 +72,14 @@ GridBounds parseGridBounds(const std::string& text) {
             fail(quoted("--bounds", text) + " is not a list of 6 numbers X0,Y0,Z0,X1,Y1,Z1");
         if (error == std::errc::result_out_of_range || !std::isfinite(values[n]))
             fail(quoted("--bounds", text) + " holds a value that is not finite");
+        // As far as the scene's own coordinates may reach (checkSceneScale): beyond, a probe's rays
+        // are past what the ray tests hold.
+        if (std::abs(values[n]) > kMaxSceneCoordinate) {
+            char limit[16];
+            std::snprintf(limit, sizeof(limit), "%g", kMaxSceneCoordinate);
+            fail(quoted("--bounds", text) + " reaches " + std::string(items[n]) + ", beyond the " + limit +
+                 " a probe's rays hold");
+        }
     }
     GridBounds bounds{{values[0], values[1], values[2]}, {values[3], values[4], values[5]}};
     for (int a = 0; a < 3; ++a)
@@ -87,6 +97,7 @@ ProbeGrid makeProbeGrid(const glm::ivec3& counts, const GridBounds& bounds) {
 
 ProbeGrid probeGridInWorld(const glm::ivec3& counts, const World& world) {
     if (world.triangleCount() == 0) fail(world.description + ": the scene has no triangles; give --bounds");
+    checkSceneScale(world); // a scale the rays cannot hold first: its box may look flat only by rounding
     GridBounds bounds;
     for (int a = 0; a < 3; ++a) {
         const double low = world.boundsMin[a], high = world.boundsMax[a];

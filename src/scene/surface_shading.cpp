@@ -201,7 +201,11 @@ std::string number(double value) {
 } // namespace
 
 void checkSceneScale(const World& world) {
-    if (world.triangleCount() == 0) return;    // the sky alone, at any scale
+    if (world.triangleCount() == 0) return; // the sky alone, at any scale
+    const std::string name = world.description.empty() ? "scene" : world.description;
+    auto scaleError = [&](const std::string& message) {
+        return Error(ErrorKind::Input, name + ": " + message);
+    };
     glm::dvec3 low(INFINITY), high(-INFINITY); // of the positions: a World built by hand may not set bounds
     for (const glm::vec3& p : world.positions) {
         low = glm::min(low, glm::dvec3(p));
@@ -210,18 +214,19 @@ void checkSceneScale(const World& world) {
     const double size = glm::length(high - low);
     const double largest = largestCoordinate(world);
     if (largest > kMaxSceneCoordinate)
-        throw sceneError("its coordinates reach " + number(largest) + ", beyond the " +
+        throw scaleError("its coordinates reach " + number(largest) + ", beyond the " +
                          number(kMaxSceneCoordinate) +
                          " the float ray test and capture hold (products of three coordinates); scale "
                          "the scene down");
+    if (size == 0.0) throw scaleError("all its vertices lie at one point, so no triangle has any area");
     if (size < kMinSceneSize)
-        throw sceneError("it is " + number(size) + " across (its box's diagonal), smaller than the " +
+        throw scaleError("it is " + number(size) + " across (its box's diagonal), smaller than the " +
                          number(kMinSceneSize) +
                          " the float ray test and capture resolve (products of three coordinates); scale "
                          "the scene up");
     const double offset = kOffsetScale * largest;
     if (offset > kMaxSurfaceOffsetShare * size)
-        throw sceneError("its coordinates reach " + number(largest) + ", where float's spacing (" +
+        throw scaleError("its coordinates reach " + number(largest) + ", where float's spacing (" +
                          number(largest * std::numeric_limits<float>::epsilon()) +
                          ") is too coarse for a scene " + number(size) +
                          " across: rays leaving a surface start 256 such steps off it (" + number(offset) +
