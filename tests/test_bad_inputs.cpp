@@ -344,6 +344,12 @@ TEST_F(BadInputs, TexelsOverflowingFp32SumsAreRefused) {
         expectFailure({{"bake", file("overflow.exr"), "--backend", backend, "-o", "OUT"},
                        2,
                        {file("overflow.exr"), "not finite", "fp32 sums"}});
+    // An --ambient light past float, added to a finite projection: the GPU's convolution overflows,
+    // and the line names the input, not the convolution.
+    writeImage(file("plain.exr"), constantImage(32, 16, glm::vec3(1.0f)));
+    expectFailure({{"bake", file("plain.exr"), "--ambient", "1e39,1,1", "--backend", "gpu", "-o", "OUT"},
+                   2,
+                   {"error: " + file("plain.exr"), "not finite", "fp32 sums"}});
 }
 
 // ---- Options out of range ---------------------------------------------------------------------

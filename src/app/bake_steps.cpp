@@ -293,9 +293,10 @@ BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, con
 std::vector<BakeResult> bake(const BakeOptions& options, Backend& backend,
                              std::span<const Environment* const> environments, WorkCounter* progress) {
     if (backend.session) {
-        DeviceStep step(environments.size() == 1
-                            ? "baking " + environments[0]->description
-                            : "baking a chunk of " + std::to_string(environments.size()) + " probes");
+        const bool batch = environments.size() > 1;
+        DeviceStep step(batch ? "baking a chunk of " + std::to_string(environments.size()) + " probes"
+                              : "baking " + environments[0]->description,
+                        DeviceWork::Sized, batch ? "--face-size or --batch-bytes" : "--face-size");
         return bakeOnGpu(options, *backend.session, environments);
     }
     std::vector<BakeResult> results;

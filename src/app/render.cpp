@@ -93,7 +93,7 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
             loadRenderInput(context, options.input, {options.faceSize, options.sanitize, options.maxPixels});
     }
     {
-        DeviceStep step("rendering " + options.output);
+        DeviceStep step("rendering " + options.output, DeviceWork::Sized, "--size");
         renderInput(context, options, size, result);
     }
     if (uint32_t messages = context.validationMessages(); messages > 0)

@@ -134,7 +134,8 @@ GpuBake bakeEquirect(const Context& context, const ProbeBaker& baker, const Imag
 VkDeviceSize batchTexelBytes(const Device& device);
 
 // The convolution alone, on radiance computed elsewhere (after lights were added to it, or with a
-// window found from it, as de-ringing does). Fills radiance and irradiance of the result.
+// window found from it, as de-ringing does). Fills radiance and irradiance of the result; radiance
+// beyond float comes back not finite, for the caller's requireFinite to name its input.
 GpuBake convolveOnGpu(const Context& context, const ProbeBaker& baker, const ShCoefficients& radiance,
                       std::span<const double> window = {});
 

@@ -238,7 +238,7 @@ Layout detectLayout(int width, int height) {
     }
     throw Error(ErrorKind::Input, "image is " + sizeText(width, height) +
                                       ", which matches no layout: expected 2:1 (equirect), 4:3 "
-                                      "(hcross) or 3:4 (vcross); or give --layout");
+                                      "(hcross) or 3:4 (vcross)");
 }
 
 int crossFaceSize(int width, int height, Layout layout) {

@@ -12,6 +12,7 @@ namespace {
 struct Step {
     std::string what;
     DeviceWork work;
+    std::string sizedBy;
 };
 
 thread_local std::vector<Step> deviceSteps;
@@ -40,14 +41,16 @@ const char* kLavapipeHint =
 
 // Work whose size follows the options: a smaller one may fit, or finish before a watchdog.
 std::string sizedWorkExplanation(VkResult result) {
+    const std::string smaller = "try a smaller " + sizingOptions();
     switch (result) {
     case VK_ERROR_DEVICE_LOST:
         return ": the Vulkan device was lost (a driver crash or GPU reset; a watchdog may stop long "
-               "dispatches: try a smaller --face-size or --texels-per-invocation, or --backend cpu)";
+               "dispatches: " +
+               smaller + " or --texels-per-invocation, or --backend cpu)";
     case VK_ERROR_OUT_OF_DEVICE_MEMORY:
-        return ": out of device memory; try a smaller --face-size (or --backend cpu)";
+        return ": out of device memory; " + smaller + " (or --backend cpu)";
     case VK_ERROR_OUT_OF_HOST_MEMORY:
-        return ": out of host memory; try a smaller --face-size";
+        return ": out of host memory; " + smaller;
     default:
         return "";
     }
@@ -133,8 +136,12 @@ const char* vkResultName(VkResult result) {
     }
 }
 
-DeviceStep::DeviceStep(std::string what, DeviceWork work) {
-    deviceSteps.push_back({std::move(what), work});
+DeviceStep::DeviceStep(std::string what, DeviceWork work, std::string sizedBy) {
+    deviceSteps.push_back({std::move(what), work, std::move(sizedBy)});
+}
+
+std::string sizingOptions() {
+    return deviceSteps.empty() ? "--face-size" : deviceSteps.back().sizedBy;
 }
 
 DeviceStep::~DeviceStep() {

@@ -24,13 +24,19 @@ enum class DeviceWork {
 // error of any Vulkan call that fails meanwhile says so. Steps nest (the error names them outer to
 // inner, "baking sky.exr: projecting the environment") and the innermost one's work decides the
 // advice; each thread has its own. Outside any step a failure is said in words, without advice.
+// `sizedBy` names the options a smaller value of which makes Sized work smaller ("--size" for a
+// render target), for the advice.
 class DeviceStep {
   public:
-    explicit DeviceStep(std::string what, DeviceWork work = DeviceWork::Sized);
+    explicit DeviceStep(std::string what, DeviceWork work = DeviceWork::Sized,
+                        std::string sizedBy = "--face-size");
     ~DeviceStep();
     DeviceStep(const DeviceStep&) = delete;
     DeviceStep& operator=(const DeviceStep&) = delete;
 };
+
+// The options that size the innermost step's work ("--face-size" outside any step).
+std::string sizingOptions();
 
 // The message VK_CHECK throws when `call` (its source text) returned `result`, e.g.
 // "vkQueueSubmit(...) failed with VK_ERROR_DEVICE_LOST (-4) while projecting the environment: the

@@ -82,7 +82,7 @@ VkDeviceMemory allocateMemory(const Device& device, VkMemoryRequirements require
     if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
         throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(requirements.size) + " for " +
                                            what + ": out of memory on " + device.info.name +
-                                           "; try a smaller --face-size");
+                                           "; try a smaller " + sizingOptions());
     VK_CHECK(result);
     return memory;
 }
@@ -99,8 +99,7 @@ void checkAllocationSize(const Device& device, VkDeviceSize size, uint32_t memor
     if (size > limit)
         throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(size) + " for " + what +
                                            ": more than one allocation may hold on " + device.info.name +
-                                           " (" + sizeText(limit) +
-                                           "); try a smaller --face-size or fewer probes at a time");
+                                           " (" + sizeText(limit) + "); try a smaller " + sizingOptions());
 }
 
 Buffer createBuffer(const Device& device, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,

@@ -236,6 +236,12 @@ TEST_F(RenderCli, BadProbeFilesNameTheFileAndTheField) {
              rows + "}",
          "\"quantity\""},
         {"malformed.json", "{" + header + R"("order": 3, "coefficients": [[1,1,1], )", "not valid JSON"},
+        // A double past float: the shaders would draw infinity.
+        {"beyond-float.json",
+         "{" + header +
+             R"("convention": "real-orthonormal-condon-shortley", "order": 3, "quantity": "radiance", )" +
+             R"("coefficients": [[1,1,1],[0,0,0],[0,-4e38,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]]})",
+         "coefficient l=1 m=0 (green) is -4e+38, beyond the float range render shades in"},
     };
     for (const BadFile& file : files) {
         std::string path = folder / file.name;
@@ -259,6 +265,12 @@ TEST_F(RenderCli, BadOptionsAreRefusedBeforeAnyOutput) {
     expectInputError({"render", folder / "missing.exr", "-o", out}, {"missing.exr"}, out);
     expectInputError({"render", order3, "--size", "0", "-o", out}, {"--size"}, out);
     expectInputError({"render", order3, "--grid", "-o", out}, {"order 5"}, out);
+    // A target larger than one allocation may hold (4 GiB at 16384^2 against lavapipe's 2 GiB, the
+    // device the tests run on): the advice names the option that sizes it.
+    const RunResult huge = run({"render", order3, "--size", "16384", "-o", out});
+    EXPECT_EQ(huge.exitCode, 4) << describe(huge);
+    EXPECT_CONTAINS(huge.err, "try a smaller --size");
+    EXPECT_FALSE(fs::exists(out));
 }
 
 TEST_F(RenderCli, ViewWithoutADisplaySaysSoAndPointsToRender) {
