@@ -715,8 +715,10 @@ TEST_F(Reliability, BadOptionsAreRefusedBeforeAnyWork) {
          "--brick: '2/2': bricks are numbered from 0"},
         {with(sceneBake, {"--grid", "2,2,2", "--brick", "0/9"}), "--brick 0/9: the grid has 8 probes"},
         {{"convert", probe, "--format", "irradiance-equirect", "--map-size", "7", "-o", "OUT"},
-         "equirect width must be even and at least 2"},
+         "--map-size: an equirect map's width must be even and at least 2, not 7"},
         {{"bench", "--sizes", "256", "0", "--json", "OUT"}, "cube-map face size must be positive, got 0"},
+        {{"bench", "--sizes", "256", "100000", "--json", "OUT"},
+         "--sizes: 100000 is more than the 16384 a bake takes as --face-size"},
     };
     // shprobe view runs shprobe-view, which a build without GLFW lacks.
     if (fs::exists(fs::path(SHPROBE_EXECUTABLE).parent_path() / "shprobe-view")) {

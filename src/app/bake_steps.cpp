@@ -5,7 +5,6 @@
 #include "common/scope_exit.h"
 #include "common/stopwatch.h"
 #include "formats/engine_export.h"
-#include "formats/probe_export.h"
 #include "image/specular_prefilter.h"
 #include "sh/basis.h"
 #include "sh/fast_projection.h"
@@ -342,8 +341,6 @@ void checkFormatOptions(const BakeOptions& options) {
         throw Error(ErrorKind::Input,
                     "--extract-sun: --format " + options.format +
                         " cannot hold the sun; use --format json, which keeps it beside the coefficients");
-    if (options.format == "irradiance-equirect" && options.mapSize % 2 != 0)
-        throw Error(ErrorKind::Input, "--map-size: an equirect map's width must be even");
     requireMapSizeFits(options.format, options.mapSize);
     if (options.format == "gltf" && !options.lights.directional.empty())
         throw Error(ErrorKind::Input,

@@ -393,10 +393,15 @@ nlohmann::ordered_json reportJson(const Device& device, double multiplyAddsPerSe
     return report;
 }
 
-// Sizes no cube map can have are refused before the device starts.
+// Sizes no cube map can have, or that bake would refuse, are refused before the device starts.
 std::vector<int> checkedFaceSizes(const std::vector<int>& faceSizes) {
-    for (int faceSize : faceSizes)
+    for (int faceSize : faceSizes) {
         requireFaceSize(faceSize);
+        if (faceSize > kMaxGpuFaceSize)
+            throw Error(ErrorKind::Input, "--sizes: " + std::to_string(faceSize) + " is more than the " +
+                                              std::to_string(kMaxGpuFaceSize) +
+                                              " a bake takes as --face-size");
+    }
     return faceSizes;
 }
 

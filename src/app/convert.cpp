@@ -54,8 +54,6 @@ void runConvert(const ConvertOptions& given) {
     ConvertOptions options = given;
     settleFormatAndOutput(options.format, options.output);
     const ExportFormat& format = *findExportFormat(options.format);
-    // --map-size 0 is the writer's default, which fits.
-    if (options.format == "irradiance-equirect" && options.mapSize > 0) requireEquirectWidth(options.mapSize);
     requireMapSizeFits(options.format, options.mapSize);
     checkOutputPath(options.output, format.content);
     checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});

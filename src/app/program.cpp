@@ -25,6 +25,8 @@ int exitCode(ErrorKind kind) {
         return 3;
     case ErrorKind::Device:
         return 4;
+    case ErrorKind::Memory:
+        return 1;
     }
     return 1;
 }

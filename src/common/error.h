@@ -10,6 +10,7 @@ enum class ErrorKind {
     Input,  // a file, an option or data given by the user is unusable
     Output, // an output file could not be written
     Device, // no usable Vulkan device or Embree, or the device failed
+    Memory, // the machine cannot allocate what the work needs
 };
 
 class Error : public std::runtime_error {

@@ -55,6 +55,10 @@ OutputContent formatContent(const std::string& format) {
 }
 
 void requireMapSizeFits(const std::string& format, int mapSize) {
+    if (format == "irradiance-equirect" && mapSize != 0 && (mapSize < 2 || mapSize % 2 != 0))
+        throw Error(ErrorKind::Input,
+                    "--map-size: an equirect map's width must be even and at least 2, not " +
+                        std::to_string(mapSize));
     if (format == "gltf" && mapSize != 0 && !isSpecularSize(mapSize))
         throw Error(ErrorKind::Input, "--map-size: gltf's specularImageSize must be a power of two from " +
                                           std::to_string(kMinSpecularSize) + " to " +

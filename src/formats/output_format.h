@@ -25,8 +25,9 @@ void settleFormatAndOutput(std::string& format, std::string& output);
 // a terminal only text).
 OutputContent formatContent(const std::string& format);
 
-// --map-size for the format, checked before any work: gltf's specularImageSize must be a power of two
-// from 32 to 512 (image/specular_prefilter.h); Error(Input) otherwise. 0 is the writer's default.
+// --map-size for the format, checked before any work: an irradiance-equirect map's width even and at
+// least 2, gltf's specularImageSize a power of two from 32 to 512 (image/specular_prefilter.h);
+// Error(Input) otherwise. 0 is the writer's default.
 void requireMapSizeFits(const std::string& format, int mapSize);
 
 } // namespace shprobe

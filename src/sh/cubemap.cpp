@@ -8,7 +8,10 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <cstdio>
+#include <new>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 namespace shprobe {
@@ -60,6 +63,20 @@ Face majorAxisFace(const glm::dvec3& d) {
     return d.z >= 0.0 ? Face::PositiveZ : Face::NegativeZ;
 }
 
+// Zeroed texels; where the machine cannot allocate them, one line saying what and how much, not a
+// bare std::bad_alloc.
+std::vector<glm::vec4> allocateTexels(size_t count, const std::string& what) {
+    char size[32];
+    std::snprintf(size, sizeof(size), "%.1f GiB", double(count) * sizeof(glm::vec4) / double(1u << 30));
+    try {
+        return std::vector<glm::vec4>(count);
+    } catch (const std::bad_alloc&) {
+        throw Error(ErrorKind::Memory, "out of memory: " + what + " needs " + size);
+    } catch (const std::length_error&) { // more than a vector may hold at all
+        throw Error(ErrorKind::Memory, "out of memory: " + what + " needs " + size);
+    }
+}
+
 } // namespace
 
 // F(a, b): the solid angle of the face region between the face center and corner (a, b), signed
@@ -75,13 +92,17 @@ void requireFaceSize(int faceSize) {
 Cubemap makeCubemap(int faceSize) {
     requireFaceSize(faceSize);
     const size_t texelCount = size_t(kFaceCount) * size_t(faceSize) * size_t(faceSize);
-    return Cubemap{faceSize, std::vector<glm::vec4>(texelCount)};
+    const std::string size = std::to_string(faceSize);
+    return Cubemap{faceSize, allocateTexels(texelCount, "a cube map of 6 x " + size + "^2 texels")};
 }
 
 Image makeImage(int width, int height) {
     requirePositiveSize(width, "image width");
     requirePositiveSize(height, "image height");
-    return Image{width, height, std::vector<glm::vec4>(size_t(width) * size_t(height))};
+    return Image{
+        width, height,
+        allocateTexels(size_t(width) * size_t(height),
+                       "an image of " + std::to_string(width) + " x " + std::to_string(height) + " texels")};
 }
 
 glm::dvec3 faceDirection(int face, double a, double b) {
