@@ -11,6 +11,7 @@
 // temporary folder; no binary file is checked in.
 #include "child_program.h"
 #include "common/error.h"
+#include "formats/probe_export.h"
 #include "formats/probe_file.h"
 #include "image/environment.h"
 #include "image/image_write.h"
@@ -448,6 +449,33 @@ TEST_F(BadInputs, OutputIntoAMissingFolder) {
         EXPECT_LT(result.seconds, 5.0) << "the output must be checked before any work";
         EXPECT_FALSE(fs::exists(missing));
     }
+}
+
+// "-o ''" names no file: bake and convert, which have a default name, refuse it (exit 2, one line)
+// rather than write that default, and nothing appears in the working folder.
+TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    const fs::path working = folder() / "working";
+    fs::create_directories(working);
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"bake", "-o", ""}, {"convert", file("probe.json"), "-o", ""}}) {
+        SCOPED_TRACE(args[0]);
+        const RunResult result = run(args, {.workingFolder = working.string()});
+        expectMessage({args, 2, {"--output", "'' names no file"}}, result);
+        EXPECT_TRUE(fs::is_empty(working));
+    }
+}
+
+// A binary probe file of several probes (a batch's) is not one probe: convert says so instead of
+// writing the first alone.
+TEST_F(BadInputs, ConvertTakesABinaryFileOfOneProbe) {
+    const ShCoefficients probe = testProbe(3);
+    const std::vector<ShCoefficients> two{probe, probe};
+    writeBinaryProbes(file("two.bin"), two);
+    expectFailure({{"convert", file("two.bin"), "-o", "OUT"},
+                   2,
+                   {file("two.bin"), "holds 2 probes; convert takes a file of one"},
+                   "out.json"});
 }
 
 // Exit 3, naming the folder; an existing file in it is untouched and nothing is added. Permission

@@ -160,11 +160,14 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
         "Environment: an equirect (2:1) or cross (4:3, 3:4) image, a folder holding px nx py ny "
         "pz nz images, or a pattern with {face}; default: the built-in sky. Several inputs "
         "are a batch and need --out-dir");
-    CLI::Option* output = command.add_option(
-        "-o,--output", options.output,
-        "Output file of a single input (default: probe and the format's extension, probe.json); "
-        "- writes to standard output. A link is followed and its target replaced; a device or "
-        "FIFO is written through");
+    CLI::Option* output =
+        command
+            .add_option(
+                "-o,--output", options.output,
+                "Output file of a single input (default: probe and the format's extension, probe.json); "
+                "- writes to standard output. A link is followed and its target replaced; a device or "
+                "FIFO is written through")
+            ->check(nonEmptyName());
     command
         .add_option("--out-dir", options.outDir,
                     "Batch: write each input's probe into this folder, named after the input (its stem and "

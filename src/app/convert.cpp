@@ -1,6 +1,7 @@
 // `shprobe convert`: a probe file in, any format of formats/engine_export.h out, so that baking and
 // exporting are separate steps. The output name and format follow bake's rule (settleFormatAndOutput).
 #include "app/commands.h"
+#include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "formats/engine_export.h"
@@ -23,7 +24,9 @@ bool isBinaryProbeName(const std::string& path) {
 Probe readAnyProbe(const std::string& path) {
     if (!isBinaryProbeName(path)) return readProbe(path);
     std::vector<ShCoefficients> probes = readBinaryProbes(path);
-    if (probes.empty()) throw Error(ErrorKind::Input, path + ": the binary file holds no probe");
+    if (probes.size() != 1)
+        throw Error(ErrorKind::Input, path + ": the binary file holds " + counted(probes.size(), "probe") +
+                                          "; convert takes a file of one");
     return Probe{probes.front(), std::nullopt};
 }
 
@@ -44,9 +47,10 @@ void addConvertOptions(CLI::App& command, ConvertOptions& options) {
     command
         .add_option("probe", options.input, "Probe file: JSON (readProbe) or .bin; - reads standard input")
         ->required();
-    command.add_option(
-        "-o,--output", options.output,
-        "Output file (default: probe and the format's extension); - writes to standard output");
+    command
+        .add_option("-o,--output", options.output,
+                    "Output file (default: probe and the format's extension); - writes to standard output")
+        ->check(nonEmptyName());
     addFormatOptions(command, options.format, options.mapSize, options.mirror);
 }
 

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <numbers>
 #include <string>
@@ -136,11 +137,19 @@ void requireFinite(const glm::dmat3& R) {
     }
 }
 
+// A number as the messages give it: 6 significant digits, an exponent where needed ("1e-30", "0.5"),
+// never the hundreds of digits std::to_string writes for 1e300.
+std::string numberText(double value) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%g", value);
+    return text;
+}
+
 std::string rowMajorText(const glm::dmat3& R) {
     std::string text;
     for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c)
-            text += (text.empty() ? "" : ",") + std::to_string(R[c][r]);
+            text += (text.empty() ? "" : ",") + numberText(R[c][r]);
     }
     return text;
 }
@@ -159,7 +168,7 @@ void requireOrthonormal(const glm::dmat3& R) {
     }
     if (deviation > kRotationTolerance) {
         throw Error(ErrorKind::Input, "matrix (" + rowMajorText(R) +
-                                          ") is not orthonormal: |R^T R - I| = " + std::to_string(deviation));
+                                          ") is not orthonormal: |R^T R - I| = " + numberText(deviation));
     }
 }
 
@@ -170,7 +179,7 @@ void validateOrthogonal(const glm::dmat3& Q) {
     const double det = glm::determinant(Q);
     if (std::abs(std::abs(det) - 1.0) > kRotationTolerance)
         throw Error(ErrorKind::Input,
-                    "matrix (" + rowMajorText(Q) + ") is not orthogonal: determinant " + std::to_string(det));
+                    "matrix (" + rowMajorText(Q) + ") is not orthogonal: determinant " + numberText(det));
 }
 
 void validateRotation(const glm::dmat3& R) {
@@ -178,7 +187,7 @@ void validateRotation(const glm::dmat3& R) {
     const double det = glm::determinant(R);
     if (std::abs(det - 1.0) > kRotationTolerance) {
         throw Error(ErrorKind::Input,
-                    "matrix (" + rowMajorText(R) + ") is not a rotation: determinant " + std::to_string(det));
+                    "matrix (" + rowMajorText(R) + ") is not a rotation: determinant " + numberText(det));
     }
 }
 
@@ -211,10 +220,9 @@ glm::dmat3 orthogonalFromRowMajor(std::span<const double, 9> rowMajor) {
 glm::dmat3 rotationFromQuaternion(double w, double x, double y, double z) {
     const double norm = std::sqrt(w * w + x * x + y * y + z * z);
     if (!std::isfinite(norm) || std::abs(norm - 1.0) > kRotationTolerance) {
-        throw Error(ErrorKind::Input, "quaternion (w,x,y,z) = (" + std::to_string(w) + "," +
-                                          std::to_string(x) + "," + std::to_string(y) + "," +
-                                          std::to_string(z) + ") is not a unit quaternion (norm " +
-                                          std::to_string(norm) + ")");
+        throw Error(ErrorKind::Input, "quaternion (w,x,y,z) = (" + numberText(w) + "," + numberText(x) + "," +
+                                          numberText(y) + "," + numberText(z) +
+                                          ") is not a unit quaternion (norm " + numberText(norm) + ")");
     }
     w /= norm, x /= norm, y /= norm, z /= norm; // so that R is orthonormal to rounding
     glm::dmat3 R(0.0);                          // R[column][row]
