@@ -45,7 +45,8 @@ void checkProbeFits(const Probe& probe, const ExportFormat& format, const std::s
 
 void addConvertOptions(CLI::App& command, ConvertOptions& options) {
     command
-        .add_option("probe", options.input, "Probe file: JSON (readProbe) or .bin; - reads standard input")
+        .add_option("probe", options.input,
+                    "Probe file: JSON (readProbe) or .bin; - reads JSON from standard input")
         ->required();
     command
         .add_option("-o,--output", options.output,
