@@ -225,7 +225,7 @@ inline CLI::Validator nonEmptyName() {
         [](const std::string& input) {
             return input.empty() ? std::string("'' names no file") : std::string();
         },
-        "FILE");
+        "");
 }
 
 // --device and --validation, as bake, render and view take them.

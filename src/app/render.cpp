@@ -93,7 +93,9 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
             loadRenderInput(context, options.input, {options.faceSize, options.sanitize, options.maxPixels});
     }
     {
-        DeviceStep step("rendering " + options.output, DeviceWork::Sized, "--size");
+        // An environment input's cube map is uploaded in this step too: --face-size sizes that.
+        DeviceStep step("rendering " + options.output, DeviceWork::Sized,
+                        isProbeFile(options.input) ? "--size" : "--size or --face-size");
         renderInput(context, options, size, result);
     }
     if (uint32_t messages = context.validationMessages(); messages > 0)

@@ -56,7 +56,11 @@ ShCoefficients probeFileRadiance(const std::string& path, int order) {
 }
 
 RelitLight loadRelitLight(const LitSceneOptions& options, int order) {
-    if (!options.probe.empty()) return {options.probe, probeFileRadiance(options.probe, order), {}};
+    if (!options.probe.empty()) {
+        ShCoefficients light = probeFileRadiance(options.probe, order);
+        requireFloatLight(light, options.probe); // the device relights in float
+        return {options.probe, std::move(light), {}};
+    }
     Environment sky = loadSceneSky(options.sky, 0);
     return {options.sky.empty() ? std::string("the built-in sky") : options.sky, std::nullopt,
             std::move(sky.cubemap)};

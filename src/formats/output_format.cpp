@@ -1,6 +1,7 @@
 #include "formats/output_format.h"
 
 #include "common/error.h"
+#include "formats/probe_export.h"
 #include "image/specular_prefilter.h"
 
 #include <string_view>
@@ -55,7 +56,7 @@ OutputContent formatContent(const std::string& format) {
 }
 
 void requireMapSizeFits(const std::string& format, int mapSize) {
-    if (format == "irradiance-equirect" && mapSize != 0 && (mapSize < 2 || mapSize % 2 != 0))
+    if (format == "irradiance-equirect" && mapSize != 0 && !isEquirectMapWidth(mapSize))
         throw Error(ErrorKind::Input,
                     "--map-size: an equirect map's width must be even and at least 2, not " +
                         std::to_string(mapSize));

@@ -274,13 +274,14 @@ ShCoefficients irradianceMapCoefficients(const ShCoefficients& probe) {
     return probe.quantity == Quantity::Irradiance ? probe : convolveIrradiance(probe);
 }
 
-void requireEquirectWidth(int width) {
-    if (width < 2 || width % 2 != 0)
-        throw Error(ErrorKind::Input, "equirect width must be even and at least 2");
+bool isEquirectMapWidth(int width) {
+    return width >= 2 && width % 2 == 0;
 }
 
 void writeIrradianceEquirect(const std::string& path, const ShCoefficients& probe, int width) {
-    requireEquirectWidth(width);
+    if (!isEquirectMapWidth(width))
+        throw Error(ErrorKind::Input,
+                    "equirect width must be even and at least 2, not " + std::to_string(width));
     ShCoefficients irradiance = irradianceMapCoefficients(probe);
     Image image = makeImage(width, width / 2);
     for (int j = 0; j < image.height; ++j)

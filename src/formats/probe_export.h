@@ -68,8 +68,8 @@ void writeProbeHeader(const std::string& path, const ShCoefficients& probe, Head
 ShCoefficients irradianceMapCoefficients(const ShCoefficients& probe);
 void writeIrradianceEquirect(const std::string& path, const ShCoefficients& probe, int width);
 void writeIrradianceCross(const std::string& path, const ShCoefficients& probe, int faceSize);
-// Throws Error(Input) for a width writeIrradianceEquirect refuses (odd, or below 2), so that an
-// option can be checked before any work.
-void requireEquirectWidth(int width);
+// Whether writeIrradianceEquirect takes this width (even, at least 2), so that an option can be
+// checked before any work (requireMapSizeFits).
+bool isEquirectMapWidth(int width);
 
 } // namespace shprobe

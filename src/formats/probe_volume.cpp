@@ -645,7 +645,9 @@ std::string gridDifference(const ProbeGrid& a, const ProbeGrid& b, const std::st
 
 std::string settingsDifference(const std::string& a, const std::string& b, const std::string& nameA,
                                const std::string& nameB) {
-    const json first = *settingsObject(a), second = *settingsObject(b);
+    const std::optional<json> firstObject = settingsObject(a), secondObject = settingsObject(b);
+    if (!firstObject || !secondObject) return "settings that are not both JSON objects";
+    const json &first = *firstObject, &second = *secondObject;
     auto shown = [](const json& settings, const std::string& key) {
         auto it = settings.find(key);
         return it == settings.end() ? std::string("missing") : clipped(it->dump());

@@ -93,7 +93,8 @@ std::string nonFiniteLight(const ProbeVolume& volume);
 
 // What differs between two grids (counts first, then bounds), or between two bakes' settings (the
 // first key whose value differs), in words naming both: "bounds [0,0,0]..[1,1,1] in A, ... in B",
-// "setting \"face_size\" is 8 in A, 4 in B". Empty where they agree.
+// "setting \"face_size\" is 8 in A, 4 in B" (settings that are not JSON objects: "settings that
+// are not both JSON objects"). Empty where they agree.
 std::string gridDifference(const ProbeGrid& a, const ProbeGrid& b, const std::string& nameA,
                            const std::string& nameB);
 std::string settingsDifference(const std::string& a, const std::string& b, const std::string& nameA,

@@ -9,7 +9,9 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <limits>
 #include <numbers>
+#include <span>
 
 namespace shprobe {
 
@@ -30,6 +32,34 @@ std::array<glm::vec4, SHPROBE_FOLDED_COUNT> toUniform(const FoldedCoefficients& 
 glm::dvec3 meanRadiance(const ShCoefficients& probe) {
     double y00 = basisPolynomialScale(0);
     return probe.quantity == Quantity::Radiance ? probe.rgb[0] * y00 : probe.rgb[0] * y00 / kPi;
+}
+
+// The shaders sum terms in float, each a value times a low-degree polynomial in the normal
+// (|3 z^2 - 1| <= 2 and the like) or a transfer entry of at most a few units: sums of magnitudes up
+// to a 16th of float's largest leave that headroom. NaN fails the test too.
+bool withinFloatShading(const glm::dvec3& sumOfMagnitudes) {
+    const double limit = std::numeric_limits<float>::max() / 16.0;
+    return glm::all(glm::lessThanEqual(sumOfMagnitudes, glm::dvec3(limit)));
+}
+
+[[noreturn]] void failFloatRange(const std::string& name) {
+    throw Error(ErrorKind::Input, name +
+                                      ": its light is past the float range the shaders take (a coefficient "
+                                      "or the sun's radiance within a factor of 16 of 3.4e38, or above)");
+}
+
+// A probe whose folded sums could pass float's range would be drawn as infinity; a sun's irradiance
+// is at most pi times its radiance.
+void requireFloatShading(const ProbeShading& shading, const std::string& name) {
+    auto within = [](std::span<const glm::vec4> values, double scale) {
+        glm::dvec3 sum(0.0);
+        for (const glm::vec4& value : values)
+            sum += glm::abs(glm::dvec3(glm::vec3(value)));
+        return withinFloatShading(sum * scale);
+    };
+    if (!within(shading.irradiance, 1.0) || (shading.hasRadiance && !within(shading.radiance, 1.0)) ||
+        !within(shading.l1, 1.0) || !within(std::span(&shading.foldedSun.radiance, 1), kPi))
+        failFloatRange(name);
 }
 
 } // namespace
@@ -59,6 +89,13 @@ glsl::RenderSun foldSun(const SphericalLight& sun) {
     folded.radiance = glm::vec4(glm::vec3(sun.radiance), 0.0f);
     folded.shape = glm::vec4(float(s), float(std::cos(r)), float(s * s), float(4.0 * half * half));
     return folded;
+}
+
+void requireFloatLight(const ShCoefficients& light, const std::string& name) {
+    glm::dvec3 sum(0.0);
+    for (const glm::dvec3& coefficient : light.rgb)
+        sum += glm::abs(coefficient);
+    if (!withinFloatShading(sum)) failFloatRange(name);
 }
 
 ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string& name,
@@ -102,6 +139,7 @@ ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string
         shading.sun = SphericalLight{glm::normalize(d), sun->angularRadius, sunRadiance};
         shading.foldedSun = foldSun(*shading.sun);
     }
+    requireFloatShading(shading, name);
     return shading;
 }
 

@@ -50,6 +50,11 @@ struct ProbeShading {
 ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string& name,
                        const std::optional<SphericalLight>& sun = std::nullopt);
 
+// Throws Error(Input) "NAME: its light is past the float range the shaders take (...)" where the
+// shaders' float sums of these coefficients (each times a basis polynomial or a transfer entry)
+// could pass float's range; foldProbe checks its own result so.
+void requireFloatLight(const ShCoefficients& light, const std::string& name);
+
 // The sun's uniforms: unit direction, radiance, and sin r, cos r, sin^2 r, 4 sin^2(r/2) from the
 // double radius (sin^2(r/2) rather than 1 - cos r, which cancels for small r).
 glsl::RenderSun foldSun(const SphericalLight& sun);

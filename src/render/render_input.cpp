@@ -4,15 +4,12 @@
 #include "common/scope_exit.h"
 #include "formats/probe_file.h"
 #include "image/environment.h"
-#include "sh/basis.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <glm/matrix.hpp>
-#include <limits>
 
 namespace shprobe {
 
@@ -46,23 +43,6 @@ glm::vec4 sampleCubemap(const Cubemap& cubemap, const glm::dvec3& d) {
     return glm::mix(top, bottom, fy);
 }
 
-// The shaders take the probe in float: a coefficient beyond it would render as infinity.
-void requireFloatRange(const ShCoefficients& coefficients, const std::string& path) {
-    static const char* const kChannels[] = {"red", "green", "blue"};
-    for (size_t i = 0; i < coefficients.rgb.size(); ++i) {
-        for (int c = 0; c < 3; ++c) {
-            const double value = coefficients.rgb[i][c];
-            if (std::abs(value) <= std::numeric_limits<float>::max()) continue;
-            const int l = shBand(int(i));
-            char text[32];
-            std::snprintf(text, sizeof(text), "%g", value);
-            throw Error(ErrorKind::Input, path + ": coefficient l=" + std::to_string(l) + " m=" +
-                                              std::to_string(int(i) - l * (l + 1)) + " (" + kChannels[c] +
-                                              ") is " + text + ", beyond the float range render shades in");
-        }
-    }
-}
-
 } // namespace
 
 bool isProbeFile(const std::string& path) {
@@ -91,7 +71,6 @@ RenderInput readProbeInput(const std::string& path) {
     RenderInput input;
     input.name = path;
     Probe probe = readProbe(path);
-    requireFloatRange(probe.coefficients, path);
     input.probe = std::move(probe.coefficients);
     if (probe.sun)
         input.sun = SphericalLight{probe.sun->direction, probe.sun->angularRadius, probe.sun->radiance};

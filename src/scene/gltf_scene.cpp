@@ -6,6 +6,7 @@
 #include "common/error.h"
 #include "common/input_file.h"
 #include "common/quoted.h"
+#include "common/short_number.h"
 #include "image/codec.h"
 #include "scene/gltf_geometry.h"
 #include "scene/gltf_schema.h"
@@ -15,7 +16,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <glm/geometric.hpp>
@@ -650,9 +650,8 @@ class SceneBuilder {
     void requireUnitFactors(const std::vector<double>& factors, const std::string& where) const {
         for (size_t i = 0; i < factors.size(); ++i) {
             if (factors[i] >= 0.0 && factors[i] <= 1.0) continue;
-            char value[32];
-            std::snprintf(value, sizeof(value), "%g", factors[i]);
-            fail(path_, where + "[" + std::to_string(i) + "] is " + value + ", outside the 0..1 glTF allows");
+            fail(path_, where + "[" + std::to_string(i) + "] is " + shortNumber(factors[i]) +
+                            ", outside the 0..1 glTF allows");
         }
     }
 

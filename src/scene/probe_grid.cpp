@@ -1,12 +1,12 @@
 #include "scene/probe_grid.h"
 
 #include "common/error.h"
+#include "common/short_number.h"
 #include "scene/surface_shading.h"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <string_view>
 #include <vector>
@@ -74,12 +74,9 @@ GridBounds parseGridBounds(const std::string& text) {
             fail(quoted("--bounds", text) + " holds a value that is not finite");
         // As far as the scene's own coordinates may reach (checkSceneScale): beyond, a probe's rays
         // are past what the ray tests hold.
-        if (std::abs(values[n]) > kMaxSceneCoordinate) {
-            char limit[16];
-            std::snprintf(limit, sizeof(limit), "%g", kMaxSceneCoordinate);
-            fail(quoted("--bounds", text) + " reaches " + std::string(items[n]) + ", beyond the " + limit +
-                 " a probe's rays hold");
-        }
+        if (std::abs(values[n]) > kMaxSceneCoordinate)
+            fail(quoted("--bounds", text) + " reaches " + std::string(items[n]) + ", beyond the " +
+                 shortNumber(kMaxSceneCoordinate) + " a probe's rays hold");
     }
     GridBounds bounds{{values[0], values[1], values[2]}, {values[3], values[4], values[5]}};
     for (int a = 0; a < 3; ++a)

@@ -40,7 +40,8 @@ ProbeGrid makeProbeGrid(const glm::ivec3& counts, const GridBounds& bounds);
 // sits on the outermost geometry (the floor, the walls of a room), where it would see half of its
 // sphere behind the surface, and the margins are even on every side; a single probe on an axis is
 // at the box's middle. Throws Error(Input) naming the world when its box is flat along an axis (a
-// lone ground plane) or empty: where the probes should be is then for --bounds to say.
+// lone ground plane) or empty: where the probes should be is then for --bounds to say; first, as
+// checkSceneScale does, for a scale the rays cannot hold (a box may look flat by rounding alone).
 ProbeGrid probeGridInWorld(const glm::ivec3& counts, const World& world);
 
 glm::dvec3 probePosition(const ProbeGrid& grid, const glm::ivec3& cell);

@@ -40,11 +40,12 @@ constexpr double kMinSceneSize = 1e-10;         // the bounding box's diagonal, 
 constexpr double kMaxSceneCoordinate = 1e10;    // |x|, |y|, |z| of any vertex, at most
 constexpr double kMaxSurfaceOffsetShare = 0.01; // SceneShading::offset() over the diagonal, at most
 
-// Throws Error(Input) "scene: ..." naming the scale for a World with triangles that is smaller than
-// kMinSceneSize, whose coordinates reach past kMaxSceneCoordinate, or whose float spacing is too
-// coarse for its size: where rays leaving a surface start (256 float steps of the largest
-// coordinate off it) more than kMaxSurfaceOffsetShare of the scene away, a scene far from the
-// origin for its size. Both backends call it.
+// Throws Error(Input) "DESCRIPTION: ..." (world.description, else "scene") naming the scale for a
+// World with triangles whose vertices all lie at one point, that is smaller than kMinSceneSize,
+// whose coordinates reach past kMaxSceneCoordinate, or whose float spacing is too coarse for its
+// size: where rays leaving a surface start (256 float steps of the largest coordinate off it) more
+// than kMaxSurfaceOffsetShare of the scene away, a scene far from the origin for its size. Both
+// backends call it, and probeGridInWorld before it places a grid.
 void checkSceneScale(const World& world);
 
 // A World checked and copied with what shading needs (suns normalized), and the sky. Immutable:

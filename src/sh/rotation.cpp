@@ -6,6 +6,7 @@
 #include "sh/rotation.h"
 
 #include "common/error.h"
+#include "common/short_number.h"
 #include "sh/basis.h"
 
 #include <glm/geometric.hpp>
@@ -14,7 +15,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <numbers>
 #include <string>
@@ -137,19 +137,11 @@ void requireFinite(const glm::dmat3& R) {
     }
 }
 
-// A number as the messages give it: 6 significant digits, an exponent where needed ("1e-30", "0.5"),
-// never the hundreds of digits std::to_string writes for 1e300.
-std::string numberText(double value) {
-    char text[32];
-    std::snprintf(text, sizeof(text), "%g", value);
-    return text;
-}
-
 std::string rowMajorText(const glm::dmat3& R) {
     std::string text;
     for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c)
-            text += (text.empty() ? "" : ",") + numberText(R[c][r]);
+            text += (text.empty() ? "" : ",") + shortNumber(R[c][r]);
     }
     return text;
 }
@@ -168,7 +160,7 @@ void requireOrthonormal(const glm::dmat3& R) {
     }
     if (deviation > kRotationTolerance) {
         throw Error(ErrorKind::Input, "matrix (" + rowMajorText(R) +
-                                          ") is not orthonormal: |R^T R - I| = " + numberText(deviation));
+                                          ") is not orthonormal: |R^T R - I| = " + shortNumber(deviation));
     }
 }
 
@@ -179,7 +171,7 @@ void validateOrthogonal(const glm::dmat3& Q) {
     const double det = glm::determinant(Q);
     if (std::abs(std::abs(det) - 1.0) > kRotationTolerance)
         throw Error(ErrorKind::Input,
-                    "matrix (" + rowMajorText(Q) + ") is not orthogonal: determinant " + numberText(det));
+                    "matrix (" + rowMajorText(Q) + ") is not orthogonal: determinant " + shortNumber(det));
 }
 
 void validateRotation(const glm::dmat3& R) {
@@ -187,7 +179,7 @@ void validateRotation(const glm::dmat3& R) {
     const double det = glm::determinant(R);
     if (std::abs(det - 1.0) > kRotationTolerance) {
         throw Error(ErrorKind::Input,
-                    "matrix (" + rowMajorText(R) + ") is not a rotation: determinant " + numberText(det));
+                    "matrix (" + rowMajorText(R) + ") is not a rotation: determinant " + shortNumber(det));
     }
 }
 
@@ -220,9 +212,9 @@ glm::dmat3 orthogonalFromRowMajor(std::span<const double, 9> rowMajor) {
 glm::dmat3 rotationFromQuaternion(double w, double x, double y, double z) {
     const double norm = std::sqrt(w * w + x * x + y * y + z * z);
     if (!std::isfinite(norm) || std::abs(norm - 1.0) > kRotationTolerance) {
-        throw Error(ErrorKind::Input, "quaternion (w,x,y,z) = (" + numberText(w) + "," + numberText(x) + "," +
-                                          numberText(y) + "," + numberText(z) +
-                                          ") is not a unit quaternion (norm " + numberText(norm) + ")");
+        throw Error(ErrorKind::Input, "quaternion (w,x,y,z) = (" + shortNumber(w) + "," + shortNumber(x) +
+                                          "," + shortNumber(y) + "," + shortNumber(z) +
+                                          ") is not a unit quaternion (norm " + shortNumber(norm) + ")");
     }
     w /= norm, x /= norm, y /= norm, z /= norm; // so that R is orthonormal to rounding
     glm::dmat3 R(0.0);                          // R[column][row]

@@ -41,7 +41,7 @@ const char* kLavapipeHint =
 
 // Work whose size follows the options: a smaller one may fit, or finish before a watchdog.
 std::string sizedWorkExplanation(VkResult result) {
-    const std::string smaller = "try a smaller " + sizingOptions();
+    const std::string smaller = "try a smaller " + deviceSteps.back().sizedBy; // Sized: inside a step
     switch (result) {
     case VK_ERROR_DEVICE_LOST:
         return ": the Vulkan device was lost (a driver crash or GPU reset; a watchdog may stop long "
@@ -140,8 +140,9 @@ DeviceStep::DeviceStep(std::string what, DeviceWork work, std::string sizedBy) {
     deviceSteps.push_back({std::move(what), work, std::move(sizedBy)});
 }
 
-std::string sizingOptions() {
-    return deviceSteps.empty() ? "--face-size" : deviceSteps.back().sizedBy;
+std::string sizeAdvice() {
+    if (currentWork() != DeviceWork::Sized) return "";
+    return "; try a smaller " + deviceSteps.back().sizedBy;
 }
 
 DeviceStep::~DeviceStep() {

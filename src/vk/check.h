@@ -35,8 +35,9 @@ class DeviceStep {
     DeviceStep& operator=(const DeviceStep&) = delete;
 };
 
-// The options that size the innermost step's work ("--face-size" outside any step).
-std::string sizingOptions();
+// "; try a smaller OPTIONS" for the innermost step's options where its work is Sized, else empty
+// (fixed-size work, or outside any step: no option makes it smaller).
+std::string sizeAdvice();
 
 // The message VK_CHECK throws when `call` (its source text) returned `result`, e.g.
 // "vkQueueSubmit(...) failed with VK_ERROR_DEVICE_LOST (-4) while projecting the environment: the

@@ -81,8 +81,7 @@ VkDeviceMemory allocateMemory(const Device& device, VkMemoryRequirements require
     VkResult result = vkAllocateMemory(device.device, &info, nullptr, &memory);
     if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY)
         throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(requirements.size) + " for " +
-                                           what + ": out of memory on " + device.info.name +
-                                           "; try a smaller " + sizingOptions());
+                                           what + ": out of memory on " + device.info.name + sizeAdvice());
     VK_CHECK(result);
     return memory;
 }
@@ -99,7 +98,7 @@ void checkAllocationSize(const Device& device, VkDeviceSize size, uint32_t memor
     if (size > limit)
         throw Error(ErrorKind::Device, std::string("allocating ") + sizeText(size) + " for " + what +
                                            ": more than one allocation may hold on " + device.info.name +
-                                           " (" + sizeText(limit) + "); try a smaller " + sizingOptions());
+                                           " (" + sizeText(limit) + ")" + sizeAdvice());
 }
 
 Buffer createBuffer(const Device& device, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use,

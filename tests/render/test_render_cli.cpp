@@ -236,12 +236,25 @@ TEST_F(RenderCli, BadProbeFilesNameTheFileAndTheField) {
              rows + "}",
          "\"quantity\""},
         {"malformed.json", "{" + header + R"("order": 3, "coefficients": [[1,1,1], )", "not valid JSON"},
-        // A double past float: the shaders would draw infinity.
+        // Light the shaders' float sums cannot hold, which they would draw as infinity: a coefficient
+        // past float, a sun past it, and an irradiance probe within float whose radiance, E / A_2,
+        // is not (3e38 / (pi / 4)).
         {"beyond-float.json",
          "{" + header +
              R"("convention": "real-orthonormal-condon-shortley", "order": 3, "quantity": "radiance", )" +
              R"("coefficients": [[1,1,1],[0,0,0],[0,-4e38,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]]})",
-         "coefficient l=1 m=0 (green) is -4e+38, beyond the float range render shades in"},
+         "its light is past the float range the shaders take"},
+        {"sun-beyond-float.json",
+         "{" + header +
+             R"("convention": "real-orthonormal-condon-shortley", "order": 3, "quantity": "radiance", )" +
+             rows +
+             R"(, "sun": {"direction": [0,1,0], "radiance": [1e39,1,1], "angular_radius_degrees": 1}})",
+         "its light is past the float range the shaders take"},
+        {"irradiance-beyond-float.json",
+         "{" + header +
+             R"("convention": "real-orthonormal-condon-shortley", "order": 3, "quantity": "irradiance", )" +
+             R"("coefficients": [[1,1,1],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[3e38,0,0],[0,0,0],[0,0,0]]})",
+         "its light is past the float range the shaders take"},
     };
     for (const BadFile& file : files) {
         std::string path = folder / file.name;

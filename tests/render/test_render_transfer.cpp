@@ -6,7 +6,7 @@
 //   - the light turned by 90 degrees on the device equals the light turned on the CPU (`shprobe
 //     rotate`) and relit unturned, from a probe and from a sky;
 //   - refusals: a scene without transfer, more attributes than the device has, an irradiance
-//     probe, a bad turn, light options without --transfer.
+//     probe, a light past float, a bad turn, light options without --transfer.
 #include "render/lit_scene.h"
 #include "render/probe_shading.h"
 #include "run_program.h"
@@ -279,6 +279,13 @@ TEST_F(RenderTransfer, RefusesScenesWithoutTransferTooManyAttributesAndBadTurns)
     expectRefused(
         {"render", "--scene", scene, "--transfer", "--probe", file("irradiance.json"), "-o", file("f.png")},
         {"irradiance.json", "holds irradiance"}, file("f.png"));
+    // A light the device's float relighting cannot hold would draw infinity.
+    ShCoefficients blinding = testProbe(3);
+    blinding.rgb[0] = glm::dvec3(1e38);
+    writeProbeFile(file("blinding.json"), blinding, {});
+    expectRefused(
+        {"render", "--scene", scene, "--transfer", "--probe", file("blinding.json"), "-o", file("g.png")},
+        {"blinding.json", "its light is past the float range the shaders take"}, file("g.png"));
     expectRefused({"render", "--scene", scene, "--transfer", "--light-yaw", "400", "-o", file("c.png")},
                   {"--light-yaw"}, file("c.png"));
     expectRefused({"render", "--scene", scene, "--light-yaw", "10", "-o", file("d.png")}, {"--transfer"},
