@@ -62,15 +62,17 @@ Face majorAxisFace(const glm::dvec3& d) {
     return d.z >= 0.0 ? Face::PositiveZ : Face::NegativeZ;
 }
 
-// Zeroed texels, `count` of them (in double: 6 N^2 may pass size_t for any int N); where the machine
-// cannot allocate them, one line saying what and how much, not a bare std::bad_alloc.
-std::vector<glm::vec4> allocateTexels(double count, const std::string& what) {
+// Zeroed texels, `rows` rows of `rowTexels`; where the machine cannot allocate them, one line saying
+// what and how much, not a bare std::bad_alloc. The count is checked before it is multiplied out:
+// 6 N^2 passes size_t for N near 2^31.
+std::vector<glm::vec4> allocateTexels(size_t rows, size_t rowTexels, const std::string& what) {
     char size[32];
-    std::snprintf(size, sizeof(size), "%.1f GiB", count * sizeof(glm::vec4) / double(1u << 30));
+    std::snprintf(size, sizeof(size), "%.1f GiB",
+                  double(rows) * double(rowTexels) * sizeof(glm::vec4) / double(1u << 30));
     const Error outOfMemory(ErrorKind::Memory, "out of memory: " + what + " needs " + size);
-    if (count > double(std::vector<glm::vec4>().max_size())) throw outOfMemory;
+    if (rows > std::vector<glm::vec4>().max_size() / rowTexels) throw outOfMemory;
     try {
-        return std::vector<glm::vec4>(size_t(count));
+        return std::vector<glm::vec4>(rows * rowTexels);
     } catch (const std::bad_alloc&) {
         throw outOfMemory;
     }
@@ -90,17 +92,18 @@ void requireFaceSize(int faceSize) {
 
 Cubemap makeCubemap(int faceSize) {
     requireFaceSize(faceSize);
-    const double texelCount = double(kFaceCount) * faceSize * faceSize;
     const std::string size = std::to_string(faceSize);
-    return Cubemap{faceSize, allocateTexels(texelCount, "a cube map of 6 x " + size + "^2 texels")};
+    return Cubemap{faceSize, allocateTexels(size_t(kFaceCount) * size_t(faceSize), size_t(faceSize),
+                                            "a cube map of 6 x " + size + "^2 texels")};
 }
 
 Image makeImage(int width, int height) {
     requirePositiveSize(width, "image width");
     requirePositiveSize(height, "image height");
-    return Image{width, height,
-                 allocateTexels(double(width) * height, "an image of " + std::to_string(width) + " x " +
-                                                            std::to_string(height) + " texels")};
+    return Image{
+        width, height,
+        allocateTexels(size_t(height), size_t(width),
+                       "an image of " + std::to_string(width) + " x " + std::to_string(height) + " texels")};
 }
 
 glm::dvec3 faceDirection(int face, double a, double b) {
