@@ -569,6 +569,12 @@ std::string boundsText(const ProbeGrid& grid) {
     return vectorJson(grid.boundsMin).dump() + ".." + vectorJson(grid.boundsMax).dump();
 }
 
+// "X in A, Y in B": two bakes' values of one thing.
+std::string inEach(const std::string& x, const std::string& y, const std::string& nameA,
+                   const std::string& nameB) {
+    return x + " in " + nameA + ", " + y + " in " + nameB;
+}
+
 std::string hashText(const ProbeVolume& volume) {
     return volume.sourceHash.empty() ? "no source hash" : clipped(volume.sourceHash);
 }
@@ -576,9 +582,7 @@ std::string hashText(const ProbeVolume& volume) {
 // What differs between two bricks' bakes, in words; empty when they are of one bake.
 std::string bakeDifference(const ProbeVolume& a, const ProbeVolume& b, const std::string& nameA,
                            const std::string& nameB) {
-    auto both = [&](const std::string& x, const std::string& y) {
-        return x + " in " + nameA + ", " + y + " in " + nameB;
-    };
+    auto both = [&](const std::string& x, const std::string& y) { return inEach(x, y, nameA, nameB); };
     if (const std::string grid = gridDifference(a.grid, b.grid, nameA, nameB); !grid.empty()) return grid;
     if (a.order != b.order) return "order " + both(std::to_string(a.order), std::to_string(b.order));
     if (quantitiesText(a) != quantitiesText(b)) return both(quantitiesText(a), quantitiesText(b));
@@ -634,9 +638,7 @@ std::string nonFiniteLight(const ProbeVolume& volume) {
 
 std::string gridDifference(const ProbeGrid& a, const ProbeGrid& b, const std::string& nameA,
                            const std::string& nameB) {
-    auto both = [&](const std::string& x, const std::string& y) {
-        return x + " in " + nameA + ", " + y + " in " + nameB;
-    };
+    auto both = [&](const std::string& x, const std::string& y) { return inEach(x, y, nameA, nameB); };
     if (a.counts != b.counts) return "grid " + both(countsText(a.counts), countsText(b.counts));
     if (a.boundsMin != b.boundsMin || a.boundsMax != b.boundsMax)
         return "bounds " + both(boundsText(a), boundsText(b));
@@ -647,17 +649,20 @@ std::string settingsDifference(const std::string& a, const std::string& b, const
                                const std::string& nameB) {
     const std::optional<json> firstObject = settingsObject(a), secondObject = settingsObject(b);
     if (!firstObject || !secondObject) return "settings that are not both JSON objects";
-    const json &first = *firstObject, &second = *secondObject;
-    auto shown = [](const json& settings, const std::string& key) {
+    auto valueIn = [](const json& settings, const std::string& key) -> std::optional<json> {
         auto it = settings.find(key);
-        return it == settings.end() ? std::string("missing") : clipped(it->dump());
+        return it == settings.end() ? std::nullopt : std::optional<json>(*it);
     };
-    json keys = first;
-    keys.update(second);
-    for (const auto& [key, unused] : keys.items())
-        if (first.contains(key) != second.contains(key) || (first.contains(key) && first[key] != second[key]))
-            return "setting " + quotedInput(key) + " is " + shown(first, key) + " in " + nameA + ", " +
-                   shown(second, key) + " in " + nameB;
+    auto shown = [](const std::optional<json>& value) {
+        return value ? clipped(value->dump()) : std::string("missing");
+    };
+    json keys = *firstObject;
+    keys.update(*secondObject);
+    for (const auto& [key, unused] : keys.items()) {
+        const std::optional<json> first = valueIn(*firstObject, key), second = valueIn(*secondObject, key);
+        if (first != second)
+            return "setting " + quotedInput(key) + " is " + inEach(shown(first), shown(second), nameA, nameB);
+    }
     return "";
 }
 

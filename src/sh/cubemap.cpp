@@ -66,15 +66,17 @@ Face majorAxisFace(const glm::dvec3& d) {
 // what and how much, not a bare std::bad_alloc. The count is checked before it is multiplied out:
 // 6 N^2 passes size_t for N near 2^31.
 std::vector<glm::vec4> allocateTexels(size_t rows, size_t rowTexels, const std::string& what) {
-    char size[32];
-    std::snprintf(size, sizeof(size), "%.1f GiB",
-                  double(rows) * double(rowTexels) * sizeof(glm::vec4) / double(1u << 30));
-    const Error outOfMemory(ErrorKind::Memory, "out of memory: " + what + " needs " + size);
-    if (rows > std::vector<glm::vec4>().max_size() / rowTexels) throw outOfMemory;
+    auto outOfMemory = [&] { // the message only where it is needed
+        char size[32];
+        std::snprintf(size, sizeof(size), "%.1f GiB",
+                      double(rows) * double(rowTexels) * sizeof(glm::vec4) / double(1u << 30));
+        return Error(ErrorKind::Memory, "out of memory: " + what + " needs " + size);
+    };
+    if (rows > std::vector<glm::vec4>().max_size() / rowTexels) throw outOfMemory();
     try {
         return std::vector<glm::vec4>(rows * rowTexels);
     } catch (const std::bad_alloc&) {
-        throw outOfMemory;
+        throw outOfMemory();
     }
 }
 

@@ -39,9 +39,14 @@ const char* kLavapipeHint =
     "without a GPU, Mesa's lavapipe works (Debian: apt-get install mesa-vulkan-drivers), "
     "or bake with `--backend cpu`";
 
+// Sized work is always inside a step: the options that size it, for the advice.
+std::string trySmaller() {
+    return "try a smaller " + deviceSteps.back().sizedBy;
+}
+
 // Work whose size follows the options: a smaller one may fit, or finish before a watchdog.
 std::string sizedWorkExplanation(VkResult result) {
-    const std::string smaller = "try a smaller " + deviceSteps.back().sizedBy; // Sized: inside a step
+    const std::string smaller = trySmaller();
     switch (result) {
     case VK_ERROR_DEVICE_LOST:
         return ": the Vulkan device was lost (a driver crash or GPU reset; a watchdog may stop long "
@@ -141,8 +146,7 @@ DeviceStep::DeviceStep(std::string what, DeviceWork work, std::string sizedBy) {
 }
 
 std::string sizeAdvice() {
-    if (currentWork() != DeviceWork::Sized) return "";
-    return "; try a smaller " + deviceSteps.back().sizedBy;
+    return currentWork() == DeviceWork::Sized ? "; " + trySmaller() : "";
 }
 
 DeviceStep::~DeviceStep() {
