@@ -345,12 +345,22 @@ TEST_F(BadInputs, TexelsOverflowingFp32SumsAreRefused) {
         expectFailure({{"bake", file("overflow.exr"), "--backend", backend, "-o", "OUT"},
                        2,
                        {file("overflow.exr"), "not finite", "fp32 sums"}});
-    // An --ambient light past float, added to a finite projection: the GPU's convolution overflows,
-    // and the line names the input, not the convolution.
+}
+
+// Lights past float added to a finite projection: refused on every backend, naming the lights (the
+// image is not at fault). An --ambient of 5e37 has L00 = 5e37 sqrt(4 pi) = 1.8e38, which fits, but
+// its irradiance pi L00 = 5.6e38 does not; 1e37's (1.1e38) does.
+TEST_F(BadInputs, LightsPastFloatAreRefused) {
     writeImage(file("plain.exr"), constantImage(32, 16, glm::vec3(1.0f)));
-    expectFailure({{"bake", file("plain.exr"), "--ambient", "1e39,1,1", "--backend", "gpu", "-o", "OUT"},
-                   2,
-                   {"error: " + file("plain.exr"), "not finite", "fp32 sums"}});
+    for (const char* backend : {"gpu", "cpu", "reference"})
+        for (const char* ambient : {"1e39,1,1", "5e37,1,1"})
+            expectFailure(
+                {{"bake", file("plain.exr"), "--ambient", ambient, "--backend", backend, "-o", "OUT"},
+                 2,
+                 {"error: " + file("plain.exr"), "--ambient", "past float", "make them weaker"}});
+    runOk({"bake", file("plain.exr"), "--ambient", "1e37,1,1", "-q", "-o", file("bright.json")});
+    expectFailure(
+        {{"light", "--ambient", "1e39,1,1", "-o", "OUT"}, 2, {"light: ", "--ambient", "past float"}});
 }
 
 // ---- Options out of range ---------------------------------------------------------------------

@@ -44,8 +44,8 @@ bool needsFinishing(const BakeOptions& options) {
     return hasLights(options.lights) || !options.window.none();
 }
 
-Finished finish(const BakeOptions& options, ShCoefficients radiance) {
-    addLights(radiance, options.lights);
+Finished finish(const BakeOptions& options, ShCoefficients radiance, const std::string& input) {
+    addLights(radiance, options.lights, input);
     std::optional<std::vector<double>> window = windowFactorsFor(options.window, radiance);
     return {std::move(radiance), window.value_or(std::vector<double>{})};
 }
@@ -239,7 +239,7 @@ std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, GpuSession& sessio
         BakeResult result{bake.radiance, bake.irradiance, session.context().info.name,
                           bake.deviceMilliseconds, bake};
         if (needsFinishing(options) && isFinite(bake)) {
-            Finished finished = finish(options, bake.radiance);
+            Finished finished = finish(options, bake.radiance, environment->description);
             const ProbeBaker& baker = session.baker(equirect ? ProbeSource::Equirect : ProbeSource::Cubemaps);
             GpuBake convolved = convolveOnGpu(session.context(), baker, finished.radiance, finished.window);
             result.radiance = convolved.radiance;
@@ -280,7 +280,8 @@ ShCoefficients projectOnCpu(const std::string& backend, const Environment& envir
 
 BakeResult bakeOnCpu(const BakeOptions& options, const std::string& backend, const Environment& environment,
                      WorkCounter* progress) {
-    Finished finished = finish(options, projectOnCpu(backend, environment, options.order, progress));
+    Finished finished =
+        finish(options, projectOnCpu(backend, environment, options.order, progress), environment.description);
     BakeResult result;
     result.radiance =
         finished.window.empty() ? finished.radiance : applyWindow(finished.radiance, finished.window);

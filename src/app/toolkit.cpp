@@ -7,6 +7,7 @@
 
 #include "common/error.h"
 #include "common/output_file.h"
+#include "common/short_number.h"
 #include "formats/probe_file.h"
 #include "sh/basis.h"
 #include "sh/irradiance.h"
@@ -14,7 +15,9 @@
 #include "sh/rotation.h"
 #include "sh/windowing.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -165,13 +168,34 @@ bool hasLights(const LightOptions& options) {
     return !options.ambient.empty() || !options.directional.empty() || !options.spheres.empty();
 }
 
-void addLights(ShCoefficients& radiance, const LightOptions& options) {
+namespace {
+
+// The largest magnitude among the probe's coefficients and its irradiance's (NaN counts as infinite).
+double largestMagnitude(const ShCoefficients& radiance) {
+    double largest = 0.0;
+    for (const ShCoefficients& probe : {radiance, convolveIrradiance(radiance)})
+        for (const glm::dvec3& coefficient : probe.rgb)
+            for (int c = 0; c < 3; ++c)
+                largest = std::isnan(coefficient[c]) ? HUGE_VAL : std::max(largest, std::abs(coefficient[c]));
+    return largest;
+}
+
+} // namespace
+
+void addLights(ShCoefficients& radiance, const LightOptions& options, const std::string& name) {
+    const double floatMax = std::numeric_limits<float>::max();
+    const bool fitted = largestMagnitude(radiance) <= floatMax;
     for (const glm::dvec3& ambient : options.ambient)
         addAmbient(radiance, ambient);
     for (const DirectionalLight& light : options.directional)
         addDirectionalLight(radiance, light);
     for (const SphericalLight& light : options.spheres)
         addSphericalLight(radiance, light);
+    const double largest = largestMagnitude(radiance);
+    if (!fitted || largest <= floatMax) return;
+    throw Error(ErrorKind::Input,
+                name + ": with the lights of --ambient, --directional and --sphere the probe " + "reaches " +
+                    shortNumber(largest) + ", past float's " + shortNumber(floatMax) + ": make them weaker");
 }
 
 Window parseWindow(const std::string& text) {
@@ -251,7 +275,7 @@ void runLight(const LightCommandOptions& options) {
         throw Error(ErrorKind::Input, "light: give at least one --ambient, --directional or --sphere");
     checkOutputPath(options.output);
     ShCoefficients radiance = makeCoefficients(options.order, Quantity::Radiance);
-    addLights(radiance, options.lights);
+    addLights(radiance, options.lights, "light");
     ProbeMetadata metadata;
     metadata.source = "analytic lights";
     writeProbeFile(options.output, options.irradiance ? convolveIrradiance(radiance) : radiance, metadata);
