@@ -476,16 +476,41 @@ TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
     }
 }
 
-// A binary probe file of several probes (a batch's) is not one probe: convert says so instead of
-// writing the first alone.
-TEST_F(BadInputs, ConvertTakesABinaryFileOfOneProbe) {
+// A binary probe file of several probes (a batch's) is not one probe: the readers say so instead
+// of taking the first alone.
+TEST_F(BadInputs, ProbeReadersTakeABinaryFileOfOneProbe) {
     const ShCoefficients probe = testProbe(3);
     const std::vector<ShCoefficients> two{probe, probe};
     writeBinaryProbes(file("two.bin"), two);
-    expectFailure({{"convert", file("two.bin"), "-o", "OUT"},
-                   2,
-                   {file("two.bin"), "holds 2 probes; convert takes a file of one"},
-                   "out.json"});
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"convert", file("two.bin"), "-o", "OUT"},
+          {"rotate", file("two.bin"), "--euler", "0,0,0", "-o", "OUT"}})
+        expectFailure({args, 2, {file("two.bin"), "holds 2 probes; give a file of one probe"}, "out.json"});
+}
+
+// A binary probe is known by its magic, not its name: from standard input, under another extension,
+// and as render's and rotate's input it reads back as the float32 values it holds.
+TEST_F(BadInputs, BinaryProbesAreReadByContent) {
+    const ShCoefficients probe = testProbe(3);
+    writeBinaryProbes(file("probe.bin"), std::span(&probe, 1));
+    fs::copy_file(file("probe.bin"), file("probe.dat"));
+    const auto expectSameProbe = [&](const std::string& path) {
+        const ShCoefficients back = readProbeFile(path);
+        ASSERT_EQ(back.rgb.size(), probe.rgb.size());
+        for (size_t i = 0; i < probe.rgb.size(); ++i)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_EQ(back.rgb[i][c], double(float(probe.rgb[i][c]))) << path << " coefficient " << i;
+    };
+    const RunResult piped =
+        run({"convert", "-", "-o", file("piped.json")}, {.standardInput = file("probe.bin")});
+    EXPECT_EQ(piped.exitCode, 0) << piped.err;
+    expectSameProbe(file("piped.json"));
+    runOk({"convert", file("probe.dat"), "-o", file("renamed.json")});
+    expectSameProbe(file("renamed.json"));
+    runOk({"rotate", file("probe.bin"), "--euler", "0,0,0", "-o", file("turned.json")});
+    expectSameProbe(file("turned.json"));
+    runOk({"render", file("probe.bin"), "--size", "8", "-o", file("sphere.exr")});
+    EXPECT_TRUE(fs::exists(file("sphere.exr")));
 }
 
 // Exit 3, naming the folder; an existing file in it is untouched and nothing is added. Permission

@@ -1,34 +1,17 @@
 // `shprobe convert`: a probe file in, any format of formats/engine_export.h out, so that baking and
 // exporting are separate steps. The output name and format follow bake's rule (settleFormatAndOutput).
 #include "app/commands.h"
-#include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "formats/engine_export.h"
 #include "formats/output_format.h"
-#include "formats/probe_export.h"
 #include "formats/probe_file.h"
 
 #include <cstdio>
-#include <filesystem>
 
 namespace shprobe {
 
 namespace {
-
-bool isBinaryProbeName(const std::string& path) {
-    return std::filesystem::path(path).extension() == ".bin";
-}
-
-// A JSON coefficient file (with its sun, if any), or the first probe of a binary file.
-Probe readAnyProbe(const std::string& path) {
-    if (!isBinaryProbeName(path)) return readProbe(path);
-    std::vector<ShCoefficients> probes = readBinaryProbes(path);
-    if (probes.size() != 1)
-        throw Error(ErrorKind::Input, path + ": the binary file holds " + counted(probes.size(), "probe") +
-                                          "; convert takes a file of one");
-    return Probe{probes.front(), std::nullopt};
-}
 
 void checkProbeFits(const Probe& probe, const ExportFormat& format, const std::string& input) {
     if (probe.sun && format.sun == SunHandling::Refused)
@@ -46,7 +29,7 @@ void checkProbeFits(const Probe& probe, const ExportFormat& format, const std::s
 void addConvertOptions(CLI::App& command, ConvertOptions& options) {
     command
         .add_option("probe", options.input,
-                    "Probe file: JSON (readProbe) or .bin; - reads JSON from standard input")
+                    "Probe file: JSON or binary (.bin, one probe); - reads standard input")
         ->required();
     command
         .add_option("-o,--output", options.output,
@@ -62,7 +45,7 @@ void runConvert(const ConvertOptions& given) {
     requireMapSizeFits(options.format, options.mapSize);
     checkOutputPath(options.output, format.content);
     checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
-    const Probe probe = readAnyProbe(options.input);
+    const Probe probe = readProbe(options.input);
     checkProbeFits(probe, format, options.input);
 
     ExportOptions exportOptions{.mapSize = options.mapSize, .mirror = options.mirror};

@@ -231,7 +231,7 @@ std::optional<std::vector<double>> windowFactorsFor(const Window& window, const 
 }
 
 void addRotateOptions(CLI::App& command, RotateOptions& options) {
-    command.add_option("probe", options.input, "Coefficient file (JSON)")->required();
+    command.add_option("probe", options.input, "Probe file: JSON, or binary of one probe")->required();
     command.add_option("-o,--output", options.output, "Rotated coefficient file")->required();
     addRotationOption(command, "--euler", options, 3, eulerRotation,
                       "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)",

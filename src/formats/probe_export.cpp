@@ -234,9 +234,13 @@ void writeBinaryProbes(const std::string& path, std::span<const ShCoefficients> 
     writeOutputFile(path, probesToBinary(probes), OutputContent::Binary);
 }
 
+bool isBinaryProbeData(std::string_view bytes) {
+    return bytes.size() >= sizeof(kMagic) && std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) == 0;
+}
+
 std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std::string& name) {
+    if (!isBinaryProbeData(bytes)) fail(name, "not a binary probe file (magic)");
     if (bytes.size() < kBinaryProbeHeaderBytes) fail(name, "too short for a binary probe header");
-    if (std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) fail(name, "not a binary probe file (magic)");
     if (wordAt(bytes, 4) != kBinaryProbeVersion)
         fail(name, "unknown version " + std::to_string(wordAt(bytes, 4)));
     uint32_t order = wordAt(bytes, 8), quantity = wordAt(bytes, 12), count = wordAt(bytes, 16);

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace shprobe {
@@ -27,6 +28,8 @@ constexpr uint32_t kBinaryProbeHeaderBytes = 32;
 std::string probesToBinary(std::span<const ShCoefficients> probes);
 // All probes must share order and quantity. Written atomically; throws Error(Output) naming the file.
 void writeBinaryProbes(const std::string& path, std::span<const ShCoefficients> probes);
+// Whether the bytes begin with the magic "SHPB" (readProbe takes such a file, whatever its name).
+bool isBinaryProbeData(std::string_view bytes);
 // Parses and validates; throws Error(Input) naming `name` and what is wrong.
 std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std::string& name);
 std::vector<ShCoefficients> readBinaryProbes(const std::string& path);

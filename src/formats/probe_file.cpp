@@ -6,6 +6,7 @@
 #include "common/output_file.h"
 #include "common/quoted.h"
 #include "formats/json_reading.h"
+#include "formats/probe_export.h"
 #include "sh/basis.h"
 
 #include <algorithm>
@@ -219,8 +220,14 @@ Probe parseProbe(std::string_view text, const std::string& name) {
 }
 
 Probe readProbe(const std::string& path) {
-    return parseProbe(readInputFile(path, kMaxProbeFileBytes, "a probe file"),
-                      path == "-" ? "standard input" : path);
+    const std::string bytes = readInputFile(path, kMaxProbeFileBytes, "a probe file");
+    const std::string name = path == "-" ? "standard input" : path;
+    if (!isBinaryProbeData(bytes)) return parseProbe(bytes, name);
+    std::vector<ShCoefficients> probes = parseBinaryProbes(bytes, name);
+    if (probes.size() != 1)
+        throw Error(ErrorKind::Input, name + ": the binary file holds " + counted(probes.size(), "probe") +
+                                          "; give a file of one probe");
+    return Probe{std::move(probes.front()), std::nullopt};
 }
 
 ShCoefficients parseProbeJson(std::string_view text, const std::string& name) {

@@ -44,7 +44,8 @@ struct Probe {
 // "sun" is checked when present: "direction" 3 finite numbers, not all 0 (normalized on read),
 // "radiance" 3 finite numbers >= 0, "angular_radius_degrees" in (0, 90].
 Probe parseProbe(std::string_view text, const std::string& name);
-// Reads path ("-": standard input) of at most 1 MiB (a probe file of order 8 has a few KB).
+// Reads path ("-": standard input) of at most 1 MiB (a probe file of order 8 has a few KB): JSON, or
+// a binary file of one probe (probe_export.h, known by its magic whatever its name; no sun).
 Probe readProbe(const std::string& path);
 // The coefficients only (the sun, if any, is validated and dropped).
 ShCoefficients parseProbeJson(std::string_view text, const std::string& name);

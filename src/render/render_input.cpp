@@ -50,7 +50,7 @@ bool isProbeFile(const std::string& path) {
     std::string extension = std::filesystem::path(path).extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });
-    return extension == ".json";
+    return extension == ".json" || extension == ".bin";
 }
 
 ProbeBaker createRenderBaker(const Device& device) {

@@ -34,10 +34,10 @@ struct RenderInput {
     double bakeMilliseconds = 0.0;      // GPU bake wall time (0 for probe files)
 };
 
-// A path ending in .json is a probe file (read with readProbe: bad files get an error naming the
-// file and field; its sun, if any, comes along); anything else an environment (baked whole, the sun
-// left in); an empty path the built-in sky.
-// ".json", or "-": a probe on standard input.
+// A path ending in .json or .bin is a probe file (read with readProbe: bad files get an error naming
+// the file and field; a JSON file's sun, if any, comes along); anything else an environment (baked
+// whole, the sun left in); an empty path the built-in sky.
+// ".json", ".bin", or "-": a probe on standard input.
 bool isProbeFile(const std::string& path);
 RenderInput readProbeInput(const std::string& path); // probe files only; needs no device
 RenderInput loadRenderInput(const Context& context, const std::string& path,
