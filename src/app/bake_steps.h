@@ -141,7 +141,7 @@ std::vector<BakeResult> bake(const BakeOptions& options, Backend& backend,
 VkDeviceSize environmentBytes(const Environment& environment);
 
 // On the GPU, an equirect map with a side beyond the device's image limit is resampled to a cube map
-// (of width / 4), as every equirect was before direct projection; elsewhere nothing changes.
+// (of width / 4); elsewhere nothing changes.
 void fitBackend(const Backend& backend, Environment& environment);
 
 // "6 x 256 x 256 texels" of a cube map, "1024 x 512 pixels" of an equirect map projected directly.

@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
          [&](const CLI::App&) { runBench(bench, benchJob); }},
     };
     // Only the command the line names gets its options: constructing every command's options was a
-    // third of what `shprobe --help` ran (1.4 of its 4.3 million instructions, by callgrind).
+    // third of what `shprobe --help` ran (docs/benchmark.md).
     const std::string_view named = commandNamed(argc, argv);
     std::string names;
     bool known = named.empty();

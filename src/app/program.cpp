@@ -78,7 +78,7 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
     }
 
     // Only once a command runs: parsing writes no file, and the handler's thread is a tenth of
-    // what `shprobe --help` took (0.1-0.2 ms of 1.5-2.0).
+    // what `shprobe --help` takes (docs/benchmark.md).
     removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
     prepareHeap();
     try {

@@ -8,8 +8,8 @@
 // format read with texelFetch (the sampler does not matter). Both give the same values. Not a
 // driver workaround: the storage variants are what any engine may bind (their own images in
 // RGBA32F or RGBA16F), and the host bakes pick them where the device supports the format. On
-// llvmpipe they also read three times faster (a texel fetch is a called function that looks up
-// per-lane mip-level addresses; `shprobe bench`, "gpu texel reads only").
+// llvmpipe they also read faster (a texel fetch is a called function that looks up per-lane
+// mip-level addresses; `shprobe bench`, "gpu texel reads only").
 #ifndef SHPROBE_CUBEMAP_INPUT_GLSL
 #define SHPROBE_CUBEMAP_INPUT_GLSL
 

@@ -64,7 +64,7 @@ void main() {
     int firstLayer = int(gl_WorkGroupID.y) * 6;
     START_STREAM(quadrant)
     // Workaround(llvmpipe, Mesa 22.3): for speed, face pair by face pair, eight texels at a time;
-    // one pass reading all 24 texels of a position ran 20% slower on lavapipe (docs/gpu-path.md).
+    // one pass reading all 24 texels of a position ran slower on lavapipe (docs/gpu-path.md).
     // Both give the same sums, and another device may prefer the one pass. PAIR is a literal, so
     // the masks are constants, and radiance[] and basis[] are indexed by constants only.
 #define READ_MIRRORS(face, mask)                                      \

@@ -52,7 +52,8 @@
 // capture_rays' SHPROBE_SPEC_VARIANT for bounces by paths (the default, 0: from the cache).
 #define SHPROBE_RAYS_BY_PATHS 1u
 // capture_rays' SHPROBE_SPEC_VARIANT bit for strata that cast shadow rays to the sky (a variant of
-// its own, as the paths are: lavapipe ran the bounce-0 capture 1.25x slower with the code compiled in).
+// its own, as the paths are, so that captures without them do not carry their code: see
+// docs/benchmark.md).
 #define SHPROBE_RAYS_STRATUM_SKY_RAYS 2u
 
 SHPROBE_BEGIN

@@ -25,8 +25,7 @@ constexpr int kSmallestSpecularMip = 16; // the extension's example size for rou
 constexpr int kDefaultSpecularSize = 128;
 // At least two mips: one mip cannot span roughness 0 to 1 (r_i = i / (N - 1) needs N >= 2; a
 // reader such as Babylon, whose LOD scale is (N - 1) / log2(size), would read it at every
-// roughness). At most 512: the sums grow about 5 times a doubling (128: 0.3 s on two cores, 512:
-// 6 s).
+// roughness). At most 512: the sums grow about 5 times a doubling of the size (docs/benchmark.md).
 constexpr int kMinSpecularSize = 2 * kSmallestSpecularMip;
 constexpr int kMaxSpecularSize = 512;
 

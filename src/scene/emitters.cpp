@@ -181,9 +181,8 @@ SunlitSampler::SunlitSampler(const SceneShading& shading, const RayCaster& caste
         }
     });
     // A sun whose light reaches other surfaces from 4% of its square or more lights the scene
-    // broadly, and the cosine rays meet what it lights often enough: 2CylinderEngine under the
-    // built-in sky's sun, 11%, where sampling it took 1.3 to 1.6 times as long for no lower error.
-    // Sunlight let in through an opening reaches them from 1% (the two rooms).
+    // broadly, and the cosine rays meet what it lights often enough: sampling it costs time for no
+    // lower error (docs/benchmark.md). Sunlight let in through an opening reaches them from 1%.
     constexpr double kMostLitShare = 0.04;
     for (size_t first = 0; first < weights.size(); first += perSun) {
         const auto cells = weights.begin() + std::ptrdiff_t(first);

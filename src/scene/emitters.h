@@ -76,7 +76,7 @@ struct SkyDirection {
 // area a unit solid angle covers on the face. Texels read as SceneShading::skyRadiance reads them.
 // A sky none of whose texels holds at least 4 times the mean texel's power is not sampled (empty):
 // cosine rays find its light as well, and a shadow ray a bounce towards it (always blocked in a
-// closed room) would cost 15-30% of a bake's time for nothing.
+// closed room) would be cast for nothing (docs/benchmark.md).
 class SkySampler {
   public:
     explicit SkySampler(const Cubemap& sky);

@@ -108,7 +108,7 @@ inline glm::dvec2 smallAngleCosSin(double x) {
 // row by row, jittered by a RandomStream (two numbers a stratum): cosineDirection(n, (a + u1) / g,
 // (b + u2) / g) to rounding. Where g >= 8 the azimuth 2 pi (b + u2) / g is taken apart by angle
 // addition: the columns' starts once, when made, and the jitter's angle (at most pi / 4) by
-// smallAngleCosSin. sincos on every ray was 9% of the shadowed transfer's time.
+// smallAngleCosSin, so that no ray pays for a sincos (docs/benchmark.md).
 class StratifiedCosineDirections {
   public:
     explicit StratifiedCosineDirections(int g) : g_(g) {

@@ -503,9 +503,9 @@ RowPair rowPair(const Plan& plan, int face, int row) {
 // The rows read after the current ones (the next face's, or the first face's at the next row of
 // positions), asked for from memory while the current ones are multiplied. They are asked for in
 // memory order, the near row forwards and the far row backwards: from visit to visit a face's near
-// rows ascend and its far rows descend, so each face is read as two continuous streams. Left to the
-// hardware prefetchers, reads in the order of the mirror pairs (four streams meeting in the middle
-// of each row) made the projection of 6 x 1024^2 texels take 1.4 times as long.
+// rows ascend and its far rows descend, so each face is read as two continuous streams, which the
+// hardware prefetchers follow better than the mirror pairs' order (four streams meeting in the
+// middle of each row; docs/benchmark.md).
 struct NextRows {
     const std::byte* near = nullptr; // none: nothing to ask for
     const std::byte* far = nullptr;
@@ -877,7 +877,7 @@ void requireProjectable(std::span<const void* const> faces, int order) {
         throw Error(ErrorKind::Input, "no texels to project");
 }
 
-// Texels worth a thread: about 0.1 ms of work, more than starting a thread costs.
+// Texels worth a thread: more work than starting the thread costs (docs/benchmark.md).
 constexpr size_t kTexelsPerThread = size_t(1) << 17;
 
 // The threads asked for, or all cores but no more than the work is worth; never more than blocks.
