@@ -19,6 +19,7 @@
 #include "scene/ray_caster.h"
 #include "scene/reference_tracer.h"
 #include "scene/transfer.h"
+#include "sh/basis.h"
 #include "sh/irradiance.h"
 
 #include <algorithm>
@@ -56,7 +57,7 @@ void addOptions(CLI::App& app, ReferenceOptions& options) {
                     "Probes per axis, NX,NY,NZ (required for a volume)");
     addParsedOption(app, "--bounds", options.bounds, parseGridBounds,
                     "Grid box X0,Y0,Z0,X1,Y1,Z1 (default: as shprobe scene)");
-    addRangeOption(app, "--order", options.order, "SH order", 1, 8);
+    addRangeOption(app, "--order", options.order, "SH order", 1, kMaxOrder);
     addRangeOption(app, "--bounces", options.bounces, "Diffuse bounces", 0, 64);
     addRangeOption(app, "--samples", options.samples, "Path-traced directions per probe", 16, 1 << 24);
     addRangeOption(app, "--validity-faces", options.validityFaces,

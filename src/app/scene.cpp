@@ -20,6 +20,7 @@
 #include "scene/probe_grid.h"
 #include "scene/ray_bake.h"
 #include "scene/volume_bake.h"
+#include "sh/basis.h"
 #include "sh/lights.h"
 #include "sh/projection.h"
 #include "vk/context.h"
@@ -50,7 +51,7 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
     addParsedOption(command, "--bounds", options.bounds, parseGridBounds,
                     "Grid box X0,Y0,Z0,X1,Y1,Z1, probes on its corners (default: the scene's box, "
                     "inset by half a cell)");
-    addRangeOption(command, "--order", options.order, "SH order, 1..8", 1, 8);
+    addRangeOption(command, "--order", options.order, "SH order", 1, kMaxOrder);
     addRangeOption(command, "--face-size", options.faceSize, "Each probe's cube-map face size", 1, 4096);
     addRangeOption(command, "--bounces", options.bounces,
                    "Indirect bounces: 0 is what the probes see directly (sky, emission); each "

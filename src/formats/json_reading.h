@@ -20,4 +20,9 @@ nlohmann::json parseBoundedJson(std::string_view text, int maxDepth);
 // bracketed prefix.
 std::string jsonProblem(const nlohmann::json::exception& error);
 
+// The member `field` of a JSON object; throws Error(Input) "NAME: missing field \"FIELD\"".
+const nlohmann::json& requireField(const nlohmann::json& object, const char* field, const std::string& name);
+// The same, a string; throws Error(Input) "NAME: field \"FIELD\" must be a string" for another type.
+std::string requireString(const nlohmann::json& object, const char* field, const std::string& name);
+
 } // namespace shprobe

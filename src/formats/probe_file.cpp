@@ -29,22 +29,9 @@ constexpr int kMaxJsonDepth = 16;
 
 const char* kFormat = "shprobe.sh";
 const int kVersion = 1;
-const char* kConvention = "real-orthonormal-condon-shortley";
 
 [[noreturn]] void fail(const std::string& name, const std::string& problem) {
     throw Error(ErrorKind::Input, name + ": " + problem);
-}
-
-const json& requireField(const json& root, const char* field, const std::string& name) {
-    auto it = root.find(field);
-    if (it == root.end()) fail(name, std::string("missing field \"") + field + "\"");
-    return *it;
-}
-
-std::string requireString(const json& root, const char* field, const std::string& name) {
-    const json& value = requireField(root, field, name);
-    if (!value.is_string()) fail(name, std::string("field \"") + field + "\" must be a string");
-    return value.get<std::string>();
 }
 
 int requireOrder(const json& root, const std::string& name) {
@@ -140,7 +127,7 @@ std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata&
     nlohmann::ordered_json header = nlohmann::ordered_json::object();
     header["format"] = kFormat;
     header["version"] = kVersion;
-    header["convention"] = kConvention;
+    header["convention"] = kConventionName;
     header["order"] = coefficients.order;
     header["quantity"] = quantityName(coefficients.quantity);
     if (!metadata.source.empty()) header["source"] = metadata.source;
@@ -202,9 +189,9 @@ Probe parseProbe(std::string_view text, const std::string& name) {
     if (!version.is_number_integer() || version.get<int64_t>() != kVersion)
         fail(name, "field \"version\" must be " + std::to_string(kVersion));
     std::string convention = requireString(root, "convention", name);
-    if (convention != kConvention)
+    if (convention != kConventionName)
         fail(name,
-             "field \"convention\" is " + quotedInput(convention) + "; expected \"" + kConvention + "\"");
+             "field \"convention\" is " + quotedInput(convention) + "; expected \"" + kConventionName + "\"");
 
     ShCoefficients coefficients = makeCoefficients(requireOrder(root, name), requireQuantity(root, name));
     const json& rows = requireField(root, "coefficients", name);

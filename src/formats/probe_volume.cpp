@@ -53,7 +53,6 @@ constexpr int kMaxJsonDepth = 16;
 
 const char* kFormat = "shprobe.volume";
 const int kVersion = 1;
-const char* kConvention = "real-orthonormal-condon-shortley";
 const char* kAxes = "xyz";
 
 [[noreturn]] void fail(const std::string& what, const std::string& problem) {
@@ -226,7 +225,7 @@ nlohmann::ordered_json headerJson(const ProbeVolume& volume) {
     nlohmann::ordered_json header = nlohmann::ordered_json::object();
     header["format"] = kFormat;
     header["version"] = kVersion;
-    header["convention"] = kConvention;
+    header["convention"] = kConventionName;
     header["order"] = volume.order;
     header["coefficient_count"] = coefficientCount(volume.order);
     json quantities = json::array();
@@ -320,18 +319,6 @@ struct VolumeHeader {
     bool transfer = false; // static radiance and transfer
 };
 
-const json& requireField(const json& object, const char* field, const std::string& name) {
-    auto it = object.find(field);
-    if (it == object.end()) fail(name, std::string("missing field \"") + field + "\"");
-    return *it;
-}
-
-std::string requireString(const json& object, const char* field, const std::string& name) {
-    const json& value = requireField(object, field, name);
-    if (!value.is_string()) fail(name, std::string("field \"") + field + "\" must be a string");
-    return value.get<std::string>();
-}
-
 int64_t requireInteger(const json& value, const std::string& field, int64_t low, int64_t high,
                        const std::string& name) {
     // Unsigned values past INT64_MAX would wrap to negative numbers in get<int64_t>.
@@ -424,8 +411,8 @@ VolumeHeader parseHeader(std::string_view headerText, const std::string& name) {
     if (requireString(root, "format", name) != kFormat)
         fail(name, std::string("field \"format\" must be \"") + kFormat + "\"");
     requireInteger(requireField(root, "version", name), "version", kVersion, kVersion, name);
-    if (requireString(root, "convention", name) != kConvention)
-        fail(name, std::string("field \"convention\" must be \"") + kConvention + "\"");
+    if (requireString(root, "convention", name) != kConventionName)
+        fail(name, std::string("field \"convention\" must be \"") + kConventionName + "\"");
     VolumeHeader header;
     ProbeVolume& volume = header.volume;
     volume.order = int(requireInteger(requireField(root, "order", name), "order", 1, kMaxOrder, name));

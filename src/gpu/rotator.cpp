@@ -15,8 +15,6 @@ namespace shprobe {
 
 namespace {
 
-constexpr uint32_t kWorkgroupSize = 64;
-
 // Floats taken by one rotation's band matrices: sum over l < order of (2l+1)^2.
 size_t matrixFloats(int order) {
     return size_t(order) * (4 * size_t(order) * order - 1) / 3;
@@ -58,9 +56,7 @@ std::vector<glm::vec4> packProbes(std::span<const ShCoefficients> probes) {
 } // namespace
 
 Rotator createRotator(const Device& device, int order) {
-    if (order < 1 || order > kMaxOrder)
-        throw Error(ErrorKind::Input,
-                    "order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxOrder));
+    requireOrder(order);
     Rotator rotator;
     rotator.order = order;
     static constexpr VkDescriptorType kBindings[] = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
@@ -70,7 +66,6 @@ Rotator createRotator(const Device& device, int order) {
                                                     .spirv = spirv::rotate_comp,
                                                     .bindings = kBindings,
                                                     .pushConstantSize = sizeof(glsl::RotateParams),
-                                                    .localSize = kWorkgroupSize,
                                                     .order = uint32_t(order)});
     return rotator;
 }
@@ -108,13 +103,13 @@ std::vector<ShCoefficients> rotateOnGpu(const Context& context, const Rotator& r
 
     uint32_t stride = rotations.size() == 1 ? 0u : uint32_t(matrixFloats(rotator.order));
     glsl::RotateParams params{uint32_t(probes.size()), stride};
-    uint32_t groups = uint32_t((input.size() + kWorkgroupSize - 1) / kWorkgroupSize);
+    const uint64_t groups = workgroupsFor(rotator.program, input.size());
     if (groups > context.info.limits.maxComputeWorkGroupCount[0])
         throw Error(ErrorKind::Input, "GPU rotation: " + std::to_string(probes.size()) +
                                           " probes are more than one dispatch can rotate on " +
                                           context.info.name + "; rotate them in smaller batches");
     submitAndWait(context, [&](VkCommandBuffer commands) {
-        dispatch(commands, rotator.program, set, params, {groups});
+        dispatch(commands, rotator.program, set, params, {uint32_t(groups)});
         computeWriteBarrier(commands);
     });
     invalidateBuffer(context, rotatedBuffer);
@@ -174,7 +169,7 @@ void recordProbeRotation(VkCommandBuffer commands, const Rotator& rotator, const
                          VkPipelineStageFlags readers) {
     const uint32_t coefficients = uint32_t(coefficientCount(rotator.order));
     dispatch(commands, rotator.program, rotated.set, glsl::RotateParams{1u, 0u},
-             {(coefficients + kWorkgroupSize - 1) / kWorkgroupSize});
+             {uint32_t(workgroupsFor(rotator.program, coefficients))});
     const VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_SHADER_WRITE_BIT,
                                   VK_ACCESS_SHADER_READ_BIT};
     vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, readers, 0, 1, &barrier, 0, nullptr,

@@ -17,8 +17,6 @@ namespace shprobe {
 
 namespace {
 
-constexpr uint32_t kWorkgroupSize = 64;
-
 // What the passes read, uploaded once: the hierarchy, the sides, the triangles with their
 // materials, texture coordinates and textures; and U_k, which pass k writes into transfer[k % 2]
 // while a bounce reads U_{k-1} from the other, copied into `readback` after each pass.
@@ -134,7 +132,6 @@ void createTransferPrograms(const Context& context, const TransferBuffers& b, in
                                               .spirv = spirv,
                                               .bindings = std::span(kBindings).first(bindings),
                                               .pushConstantSize = sizeof(glsl::TransferParams),
-                                              .localSize = kWorkgroupSize,
                                               .order = uint32_t(order)});
     };
     programs.direct = program("transfer_direct.comp", spirv::transfer_direct_comp, 5);
@@ -171,9 +168,9 @@ void destroyGpuTransfer(GpuTransfer& gpu) {
 }
 
 // Sides per submission: kTransferRaysPerSubmission rays, within one dispatch's workgroup count.
-uint32_t sidesPerChunk(const Device& device, int strata) {
+uint32_t sidesPerChunk(const Device& device, const ComputeProgram& program, int strata) {
     const uint64_t byRays = std::max<uint64_t>(1, kTransferRaysPerSubmission / (uint64_t(strata) * strata));
-    const uint64_t byGroups = uint64_t(device.info.limits.maxComputeWorkGroupCount[0]) * kWorkgroupSize;
+    const uint64_t byGroups = uint64_t(device.info.limits.maxComputeWorkGroupCount[0]) * program.localSize;
     return uint32_t(std::min({byRays, byGroups, uint64_t(UINT32_MAX / 2)}));
 }
 
@@ -188,13 +185,12 @@ uint64_t castPass(GpuTransfer& gpu, const TransferScene& scene, int k, std::span
     const ComputeProgram& program = k == 0 ? gpu.programs.direct : gpu.programs.bounce;
     const VkDescriptorSet set = k == 0 ? gpu.programs.directSet : gpu.programs.bounceSets[k % 2];
     const uint32_t sides = uint32_t(scene.sides.size());
-    const uint32_t chunk = sidesPerChunk(context, scene.strata);
+    const uint32_t chunk = sidesPerChunk(context, program, scene.strata);
     for (uint32_t first = 0; first < sides; first += chunk) {
         const glsl::TransferParams params{first, std::min(chunk, sides - first),
                                           uint32_t(scene.bvh.nodes.size()), uint32_t(scene.strata)};
         submitAndWait(context, [&](VkCommandBuffer commands) {
-            dispatch(commands, program, set, params,
-                     {(params.sideCount + kWorkgroupSize - 1) / kWorkgroupSize});
+            dispatch(commands, program, set, params, {uint32_t(workgroupsFor(program, params.sideCount))});
             computeWriteBarrier(commands);
         });
     }

@@ -14,8 +14,6 @@ namespace shprobe {
 
 namespace {
 
-constexpr uint32_t kWorkgroupSize = 64;
-
 template <typename T> VkDeviceSize bytesOf(const std::vector<T>& values) {
     return values.size() * sizeof(T);
 }
@@ -32,7 +30,7 @@ void checkVolume(const Device& device, const VolumeRelighter& relighter, const P
                         std::to_string(device.info.limits.maxStorageBufferRange >> 20) +
                         " MiB); relight it in bricks");
     const uint64_t groups =
-        (uint64_t(volume.probeCount()) * volume.order * volume.order + kWorkgroupSize - 1) / kWorkgroupSize;
+        workgroupsFor(relighter.program, uint64_t(volume.probeCount()) * coefficientCount(volume.order));
     if (groups > device.info.limits.maxComputeWorkGroupCount[0])
         throw Error(ErrorKind::Input, "GPU relight: " + std::to_string(volume.probeCount()) +
                                           " probes are more than one dispatch relights on " +
@@ -66,9 +64,7 @@ glsl::RelightVolumeParams relightParams(const VolumeRelighter& relighter, uint32
 } // namespace
 
 VolumeRelighter createVolumeRelighter(const Device& device, int order) {
-    if (order < 1 || order > kMaxOrder)
-        throw Error(ErrorKind::Input,
-                    "order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxOrder));
+    requireOrder(order);
     static constexpr VkDescriptorType kBindings[] = {
         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
@@ -77,7 +73,6 @@ VolumeRelighter createVolumeRelighter(const Device& device, int order) {
                                                  .spirv = spirv::relight_volume_comp,
                                                  .bindings = kBindings,
                                                  .pushConstantSize = sizeof(glsl::RelightVolumeParams),
-                                                 .localSize = kWorkgroupSize,
                                                  .order = uint32_t(order)})};
 }
 
@@ -135,7 +130,7 @@ void recordVolumeRelight(VkCommandBuffer commands, const VolumeRelighter& religh
                          VkPipelineStageFlags readers) {
     const uint64_t coefficients = uint64_t(relit.probes) * uint64_t(coefficientCount(relighter.order));
     dispatch(commands, relighter.program, relit.set, relightParams(relighter, relit.probes),
-             {uint32_t((coefficients + kWorkgroupSize - 1) / kWorkgroupSize)});
+             {uint32_t(workgroupsFor(relighter.program, coefficients))});
     // Shaders read it, or a copy does (relightVolumeOnGpu's readback).
     const VkAccessFlags reads = (readers & VK_PIPELINE_STAGE_TRANSFER_BIT ? VK_ACCESS_TRANSFER_READ_BIT : 0) |
                                 (readers & ~VK_PIPELINE_STAGE_TRANSFER_BIT ? VK_ACCESS_SHADER_READ_BIT : 0);

@@ -75,9 +75,6 @@ class ProbePaths {
     uint32_t ray_ = 0;
 };
 
-// A thread should cast at least this many rays, so that starting it stays a small part of its run.
-constexpr size_t kRaysPerThread = 4096;
-
 // How far in from its triangle's edges a point whose rays leave is moved (insideTriangle): surface
 // offsets, and the least share of the way to the centroid for a cache point.
 constexpr double kInwardOffsets = 4.0;
@@ -85,9 +82,7 @@ constexpr double kLatticeInwardFraction = 0.01;
 
 void requireOptions(const RayBakeOptions& options) {
     auto refuse = [](const std::string& what) { throw Error(ErrorKind::Input, "scene: " + what); };
-    if (options.order < 1 || options.order > kMaxOrder)
-        refuse("SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " +
-               std::to_string(options.order));
+    requireOrder(options.order);
     requireFaceSize(options.faceSize);
     if (options.bounces < 0) refuse("bounces must be 0 or more, got " + std::to_string(options.bounces));
     if (!(options.cacheSpacing >= 0.0) || !std::isfinite(options.cacheSpacing))

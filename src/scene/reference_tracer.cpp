@@ -41,10 +41,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// A thread should cast at least this many rays (a few milliseconds), so that starting it (tens of
-// microseconds) stays a small part of its run.
-constexpr size_t kRaysPerThread = 4096;
-
 } // namespace
 
 struct ReferenceTracer::State {
@@ -214,10 +210,7 @@ PathTracedProbe combineReplicas(std::span<const ReplicaEstimate> replicas, int o
 }
 
 void requirePathTraceOptions(const PathTraceOptions& options, size_t probes) {
-    if (options.order < 1 || options.order > kMaxOrder) {
-        throw Error(ErrorKind::Input, "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " +
-                                          std::to_string(options.order));
-    }
+    requireOrder(options.order);
     if (options.bounces < 0)
         throw Error(ErrorKind::Input, "bounces must be 0 or more, got " + std::to_string(options.bounces));
     if (options.samples < 1)

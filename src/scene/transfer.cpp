@@ -25,16 +25,12 @@ namespace shprobe {
 
 namespace {
 
-// A thread should cast at least this many rays, so that starting it stays a small part of its run.
-constexpr size_t kRaysPerThread = 4096;
 // Vertex sides per work item: enough to keep the shared counter cold.
 constexpr size_t kSidesPerItem = 16;
 
 void requireOptions(const TransferOptions& options) {
     auto refuse = [](const std::string& what) { throw Error(ErrorKind::Input, "transfer: " + what); };
-    if (options.order < 1 || options.order > kMaxOrder)
-        refuse("SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " +
-               std::to_string(options.order));
+    requireOrder(options.order);
     if (options.rays < 1 || options.rays > kMaxTransferRays)
         refuse("rays must be in 1.." + std::to_string(kMaxTransferRays) + ", got " +
                std::to_string(options.rays));

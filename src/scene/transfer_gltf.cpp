@@ -103,7 +103,7 @@ tinygltf::Value describe(const VertexTransfer& transfer, const TransferDescripti
     Value::Object o;
     o["format"] = Value(std::string("shprobe.transfer"));
     o["version"] = Value(int(kTransferVersion));
-    o["convention"] = Value(std::string("real-orthonormal-condon-shortley"));
+    o["convention"] = Value(std::string(kConventionName));
     o["order"] = Value(transfer.order);
     o["model"] = Value(std::string(transferModelName(description.model)));
     o["bounces"] = Value(description.bounces);

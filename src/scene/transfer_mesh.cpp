@@ -2,6 +2,7 @@
 
 #include "common/error.h"
 #include "scene/gltf_scene.h"
+#include "sh/basis.h"
 
 #include <cstring>
 #include <tiny_gltf.h>
@@ -74,9 +75,10 @@ TransferMesh loadTransferMesh(const std::string& path) {
     TransferMesh mesh;
     mesh.order = extrasNumber(description, "order", path);
     mesh.channels = extrasNumber(description, "channels", path);
-    if (mesh.order < 1 || mesh.order > 8 || (mesh.channels != 1 && mesh.channels != 3))
+    if (mesh.order < 1 || mesh.order > kMaxOrder || (mesh.channels != 1 && mesh.channels != 3))
         refuse(path, "asset.extras.shTransfer: order " + std::to_string(mesh.order) + ", channels " +
-                         std::to_string(mesh.channels) + " (orders 1..8, channels 1 or 3)");
+                         std::to_string(mesh.channels) + " (orders 1.." + std::to_string(kMaxOrder) +
+                         ", channels 1 or 3)");
     mesh.attributes = (mesh.order * mesh.order * mesh.channels + 3) / 4;
     mesh.transfer.assign(source.world.positions.size() * size_t(mesh.attributes) * 4, 0.0f);
     for (const GltfPlacedPrimitive& placed : source.primitives)

@@ -21,10 +21,7 @@ static_assert(kMaxOrder == SHPROBE_MAX_ORDER, "kMaxOrder (basis.h) and SHPROBE_M
 constexpr double kPi = std::numbers::pi;
 
 void requireOrderFits(int order, std::span<double> out) {
-    if (order < 1 || order > kMaxOrder) {
-        throw Error(ErrorKind::Input,
-                    "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
-    }
+    requireOrder(order);
     if (out.size() < size_t(coefficientCount(order))) {
         throw Error(ErrorKind::Input, "SH output holds " + std::to_string(out.size()) + " values, order " +
                                           std::to_string(order) + " needs " +
@@ -81,6 +78,19 @@ void evalBasis(int order, const glm::dvec3& d, std::span<double> out) {
     const NormalizationTable& normalization = normalizationTable();
     for (int i = 0; i < coefficientCount(order); ++i)
         out[size_t(i)] *= normalization[size_t(i)];
+}
+
+void requireOrder(int order) {
+    if (order < 1 || order > kMaxOrder)
+        throw Error(ErrorKind::Input,
+                    "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
+}
+
+void requireCoefficients(const ShCoefficients& probe) {
+    if (probe.order < 1 || probe.order > kMaxOrder ||
+        probe.rgb.size() != size_t(coefficientCount(probe.order)))
+        throw Error(ErrorKind::Input, "SH probe of order " + std::to_string(probe.order) + " holds " +
+                                          std::to_string(probe.rgb.size()) + " coefficients");
 }
 
 } // namespace shprobe

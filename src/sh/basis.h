@@ -1,12 +1,16 @@
 // Real orthonormal spherical harmonics with the Condon-Shortley phase (docs/conventions.md).
 // Order n = number of bands: l = 0..n-1, n^2 coefficients, flat index i = l(l+1) + m.
 #pragma once
+#include "sh/coefficients.h"
+
 #include <glm/vec3.hpp>
 #include <span>
 
 namespace shprobe {
 
 constexpr int kMaxOrder = 8;
+// How files name this convention (field "convention").
+inline constexpr char kConventionName[] = "real-orthonormal-condon-shortley";
 
 constexpr int coefficientCount(int order) {
     return order * order;
@@ -16,6 +20,11 @@ constexpr int shIndex(int l, int m) {
 }
 // Band l of flat index i.
 int shBand(int index);
+
+// Throw Error(Input) for an order outside 1..kMaxOrder ("SH order must be in 1..8, got 9"), and for
+// a probe of such an order or without order^2 coefficients.
+void requireOrder(int order);
+void requireCoefficients(const ShCoefficients& probe);
 
 // y_i(d) for i < order^2 at unit direction d: evalBasisRecurrence, then recurrenceNormalization.
 // Order 1..kMaxOrder. out must hold coefficientCount(order) values.

@@ -869,10 +869,7 @@ ShCoefficients combineBlocks(const Plan& plan, const std::vector<double>& blockS
 }
 
 void requireProjectable(std::span<const void* const> faces, int order) {
-    if (order < 1 || order > kMaxOrder) {
-        throw Error(ErrorKind::Input,
-                    "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
-    }
+    requireOrder(order);
     if (std::find(faces.begin(), faces.end(), nullptr) != faces.end())
         throw Error(ErrorKind::Input, "no texels to project");
 }

@@ -24,14 +24,6 @@ double centralBinomialOverPowerOfTwo(int l) {
     return product;
 }
 
-void requireCoefficientCount(const ShCoefficients& coefficients) {
-    if (coefficients.order < 1 || coefficients.order > kMaxOrder ||
-        coefficients.rgb.size() != size_t(coefficientCount(coefficients.order))) {
-        throw Error(ErrorKind::Input, "SH probe of order " + std::to_string(coefficients.order) + " holds " +
-                                          std::to_string(coefficients.rgb.size()) + " coefficients");
-    }
-}
-
 } // namespace
 
 // A_0 = pi, A_1 = 2 pi / 3, A_l = 0 for odd l > 1, and for even l (docs/conventions.md; Brown,
@@ -49,7 +41,7 @@ ShCoefficients convolveIrradiance(const ShCoefficients& radiance) {
     if (radiance.quantity != Quantity::Radiance) {
         throw Error(ErrorKind::Input, "irradiance convolution needs radiance coefficients, got irradiance");
     }
-    requireCoefficientCount(radiance);
+    requireCoefficients(radiance);
     ShCoefficients irradiance = radiance;
     irradiance.quantity = Quantity::Irradiance;
     for (size_t i = 0; i < irradiance.rgb.size(); ++i)
@@ -58,7 +50,7 @@ ShCoefficients convolveIrradiance(const ShCoefficients& radiance) {
 }
 
 glm::dvec3 evaluate(const ShCoefficients& coefficients, const glm::dvec3& direction) {
-    requireCoefficientCount(coefficients);
+    requireCoefficients(coefficients);
     std::array<double, coefficientCount(kMaxOrder)> basis{};
     evalBasis(coefficients.order, direction, basis);
     glm::dvec3 sum(0.0);

@@ -26,11 +26,7 @@ void requireRadiance(const ShCoefficients& radiance) {
     if (radiance.quantity != Quantity::Radiance) {
         throw Error(ErrorKind::Input, "lights are added to radiance coefficients, got irradiance");
     }
-    if (radiance.order < 1 || radiance.order > kMaxOrder ||
-        radiance.rgb.size() != size_t(coefficientCount(radiance.order))) {
-        throw Error(ErrorKind::Input, "SH probe of order " + std::to_string(radiance.order) + " holds " +
-                                          std::to_string(radiance.rgb.size()) + " coefficients");
-    }
+    requireCoefficients(radiance);
 }
 
 // Zonal harmonics need no basis evaluation: any number of bands.

@@ -18,10 +18,7 @@ namespace {
 using BasisValues = std::array<double, coefficientCount(kMaxOrder)>;
 
 ShCoefficients makeRadianceCoefficients(int order) {
-    if (order < 1 || order > kMaxOrder) {
-        throw Error(ErrorKind::Input,
-                    "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
-    }
+    requireOrder(order);
     return makeCoefficients(order, Quantity::Radiance);
 }
 

@@ -36,13 +36,6 @@ class BandMatrix {
     std::vector<double> values_;
 };
 
-void requireOrder(int order) {
-    if (order < 1 || order > kMaxOrder) {
-        throw Error(ErrorKind::Input, "SH rotation order must be in 1.." + std::to_string(kMaxOrder) +
-                                          ", got " + std::to_string(order));
-    }
-}
-
 // Band 1 without the phase: the basis is (y, z, x) for m = -1, 0, 1, and a linear function a.w
 // becomes (R a).w under g(w) = f(R^T w), so D^1_mn = R(axis(m), axis(n)).
 BandMatrix bandOne(const glm::dmat3& R) {

@@ -24,13 +24,6 @@ constexpr int kRefinedSamples = 8;
 constexpr double kSmallestStep = 1e-9;
 constexpr int kMaxRefinementSteps = 2000;
 
-void requireCoefficients(const ShCoefficients& c) {
-    if (c.order < 1 || c.order > kMaxOrder || c.rgb.size() != size_t(coefficientCount(c.order))) {
-        throw Error(ErrorKind::Input, "SH probe of order " + std::to_string(c.order) + " holds " +
-                                          std::to_string(c.rgb.size()) + " coefficients");
-    }
-}
-
 void requireSampleCount(int sampleCount) {
     if (sampleCount < 1) throw Error(ErrorKind::Input, "minimum search needs at least one sample direction");
 }
@@ -180,10 +173,7 @@ void requireDeringInput(const ShCoefficients& radiance, const DeringOptions& opt
 } // namespace
 
 std::vector<double> windowFactors(WindowKind kind, double width, int order) {
-    if (order < 1 || order > kMaxOrder) {
-        throw Error(ErrorKind::Input,
-                    "SH order must be in 1.." + std::to_string(kMaxOrder) + ", got " + std::to_string(order));
-    }
+    requireOrder(order);
     if (!(width > 0.0))
         throw Error(ErrorKind::Input, "window width must be positive, got " + std::to_string(width));
     std::vector<double> factors(static_cast<size_t>(order), 1.0);

@@ -28,6 +28,24 @@ const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 const char* kCpuBackendHint =
     "; nothing was run on the device (`shprobe bake --backend cpu` bakes without one)";
 
+// Vulkan's count-then-fill lists, `enumerate(&count, items)`: asked again where the list grew in
+// between (VK_INCOMPLETE); any other failure throws, naming the call.
+template <class Item, class Enumerate>
+std::vector<Item> enumerated(const Enumerate& enumerate, const char* call) {
+    std::vector<Item> items;
+    VkResult result = VK_INCOMPLETE;
+    while (result == VK_INCOMPLETE) {
+        uint32_t count = 0;
+        if (VkResult counted = enumerate(&count, nullptr); counted != VK_SUCCESS)
+            throwVkError(counted, call, __FILE__, __LINE__);
+        items.resize(count);
+        result = enumerate(&count, items.data());
+        items.resize(count);
+    }
+    if (result != VK_SUCCESS) throwVkError(result, call, __FILE__, __LINE__);
+    return items;
+}
+
 bool envFlag(const char* name) {
     const char* value = std::getenv(name);
     return value && *value && std::strcmp(value, "0") != 0;
@@ -36,20 +54,19 @@ bool envFlag(const char* name) {
 // Synchronization validation (hazards between commands: missing barriers) comes with the layer's
 // VK_EXT_validation_features, which Debian 12's layer (1.3.239) has; without it, the plain checks.
 bool layerHasExtension(const char* layer, const char* extension) {
-    uint32_t count = 0;
-    if (vkEnumerateInstanceExtensionProperties(layer, &count, nullptr) != VK_SUCCESS) return false;
-    std::vector<VkExtensionProperties> extensions(count);
-    vkEnumerateInstanceExtensionProperties(layer, &count, extensions.data());
+    const auto extensions = enumerated<VkExtensionProperties>(
+        [&](uint32_t* count, VkExtensionProperties* items) {
+            return vkEnumerateInstanceExtensionProperties(layer, count, items);
+        },
+        "vkEnumerateInstanceExtensionProperties");
     return std::any_of(extensions.begin(), extensions.end(), [&](const VkExtensionProperties& e) {
         return std::strcmp(e.extensionName, extension) == 0;
     });
 }
 
 bool hasInstanceLayer(const char* name) {
-    uint32_t count = 0;
-    vkEnumerateInstanceLayerProperties(&count, nullptr);
-    std::vector<VkLayerProperties> layers(count);
-    vkEnumerateInstanceLayerProperties(&count, layers.data());
+    const auto layers = enumerated<VkLayerProperties>(vkEnumerateInstanceLayerProperties,
+                                                      "vkEnumerateInstanceLayerProperties");
     return std::any_of(layers.begin(), layers.end(), [&](const VkLayerProperties& layer) {
         return std::strcmp(layer.layerName, name) == 0;
     });
@@ -206,11 +223,11 @@ const DeviceInfo& findRequestedDevice(const std::vector<DeviceInfo>& devices, co
 std::vector<VkPhysicalDevice> enumeratePhysicalDevices(VkInstance instance) {
     // The loader starts the listed drivers here; their failures are the driver list's too.
     DeviceStep step("listing the Vulkan devices", DeviceWork::DriverLoading);
-    uint32_t count = 0;
-    VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
-    std::vector<VkPhysicalDevice> physicalDevices(count);
-    VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, physicalDevices.data()));
-    return physicalDevices;
+    return enumerated<VkPhysicalDevice>(
+        [&](uint32_t* count, VkPhysicalDevice* items) {
+            return vkEnumeratePhysicalDevices(instance, count, items);
+        },
+        "vkEnumeratePhysicalDevices");
 }
 
 std::vector<DeviceInfo> describeDevices(const std::vector<VkPhysicalDevice>& physicalDevices) {
@@ -251,10 +268,11 @@ VkDebugUtilsMessengerEXT createMessenger(VkInstance instance, ValidationLog* log
 }
 
 bool hasDeviceExtension(VkPhysicalDevice physicalDevice, const std::string& name) {
-    uint32_t count = 0;
-    vkEnumerateDeviceExtensionProperties(physicalDevice, nullptr, &count, nullptr);
-    std::vector<VkExtensionProperties> extensions(count);
-    vkEnumerateDeviceExtensionProperties(physicalDevice, nullptr, &count, extensions.data());
+    const auto extensions = enumerated<VkExtensionProperties>(
+        [&](uint32_t* count, VkExtensionProperties* items) {
+            return vkEnumerateDeviceExtensionProperties(physicalDevice, nullptr, count, items);
+        },
+        "vkEnumerateDeviceExtensionProperties");
     return std::any_of(extensions.begin(), extensions.end(),
                        [&](const VkExtensionProperties& e) { return name == e.extensionName; });
 }

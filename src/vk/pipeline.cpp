@@ -44,6 +44,7 @@ ComputeProgram createComputeProgram(const Device& device, const ComputeProgramDe
     ComputeProgram program;
     program.bindings.assign(desc.bindings.begin(), desc.bindings.end());
     program.pushConstantSize = desc.pushConstantSize;
+    program.localSize = desc.localSize;
     OnFailure undo([&] { destroyComputeProgram(device, program); });
     std::vector<LayoutBinding> bindings;
     for (VkDescriptorType type : desc.bindings)
@@ -170,6 +171,10 @@ void writeDescriptors(const Device& device, VkDescriptorSet set, std::span<const
 void writeDescriptor(const Device& device, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
                      const BindingTarget& target) {
     writeDescriptors(device, set, {&type, 1}, {&target, 1}, binding);
+}
+
+uint64_t workgroupsFor(const ComputeProgram& program, uint64_t threads) {
+    return (threads + program.localSize - 1) / program.localSize;
 }
 
 void dispatchRaw(VkCommandBuffer commands, const ComputeProgram& program, VkDescriptorSet set,

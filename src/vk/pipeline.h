@@ -30,6 +30,7 @@ struct ComputeProgram {
     VkPipeline pipeline = VK_NULL_HANDLE;
     std::vector<VkDescriptorType> bindings;
     uint32_t pushConstantSize = 0;
+    uint32_t localSize = 0; // invocations a workgroup
 };
 
 ComputeProgram createComputeProgram(const Device& device, const ComputeProgramDesc& desc);
@@ -101,6 +102,9 @@ struct GroupCount {
 template <typename PushConstants>
 void dispatch(VkCommandBuffer commands, const ComputeProgram& program, VkDescriptorSet set,
               const PushConstants& constants, GroupCount groups);
+
+// The workgroups that cover `threads` invocations, one each: threads / localSize rounded up.
+uint64_t workgroupsFor(const ComputeProgram& program, uint64_t threads);
 
 void dispatchRaw(VkCommandBuffer commands, const ComputeProgram& program, VkDescriptorSet set,
                  const void* constants, uint32_t constantsSize, GroupCount groups);
