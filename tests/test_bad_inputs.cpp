@@ -16,6 +16,8 @@
 #include "image/environment.h"
 #include "image/image_write.h"
 #include "sh/basis.h"
+#include "test_images.h"
+#include "test_support.h"
 #include "vk/check.h"
 #include "vk/context.h"
 #include "vk/resources.h"
@@ -45,21 +47,11 @@
 
 namespace shprobe {
 namespace {
+using testing::constantImage;
+using testing::filledImage;
 using BadInputs = ProgramTest;
 
 // ---- Test files -------------------------------------------------------------------------------
-
-Image filledImage(int width, int height, const std::function<glm::vec3(int, int)>& value) {
-    Image image = makeImage(width, height);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x)
-            image.at(x, y) = glm::vec4(value(x, y), 1.0f);
-    return image;
-}
-
-Image constantImage(int width, int height, glm::vec3 value) {
-    return filledImage(width, height, [&](int, int) { return value; });
-}
 
 // Raw channels through OpenImageIO, for channel counts and formats writeImage (RGB) does not make.
 template <typename T>
@@ -642,14 +634,7 @@ DeviceInfo deviceNamed(const std::string& name, uint32_t index, std::string unsu
 
 // The message of the Error(Device) that f must throw.
 std::string deviceErrorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& error) {
-        EXPECT_EQ(error.kind(), ErrorKind::Device) << error.what();
-        return error.what();
-    }
-    ADD_FAILURE() << "no Error was thrown";
-    return {};
+    return testing::errorOf(ErrorKind::Device, f);
 }
 
 // A device without a required feature is passed over for one that has it; when none has it (or

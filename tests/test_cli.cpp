@@ -1,5 +1,5 @@
-// The shprobe program end to end: it is run as a child process (posix_spawn, arguments passed as
-// an argv array so no path is ever parsed by a shell, stdout and stderr captured into files, the
+// The shprobe program end to end: it is run as a child process (child_program.h: arguments passed
+// as an argv array so no path is ever parsed by a shell, stdout and stderr captured into files, the
 // environment passed explicitly). Checks the bake summary and coefficient table, the files it
 // writes (read back with readProbeFile), GPU = CPU through the program, determinism, the exit codes
 // and one-line error messages of docs/commands.md, that failures leave no file behind and never touch
@@ -11,6 +11,7 @@
 // ctest runs this with VK_ICD_FILENAMES = lavapipe and SHPROBE_VALIDATION=1, which the children
 // inherit: any validation message fails their bake. Each GPU bake costs a process start with the
 // validation layer (~0.3-1 s), so images are tiny and the runs a few dozen.
+#include "child_program.h"
 #include "common/error.h"
 #include "formats/probe_export.h"
 #include "formats/probe_file.h"
@@ -24,6 +25,7 @@
 #include "sh/rotation.h"
 #include "sh/windowing.h"
 #include "terminal_run.h"
+#include "test_images.h"
 #include "vk/context.h"
 
 #include <OpenImageIO/imageio.h>
@@ -43,7 +45,6 @@
 #include <limits>
 #include <numbers>
 #include <regex>
-#include <spawn.h>
 #include <sstream>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -52,86 +53,14 @@
 
 namespace shprobe {
 namespace {
+using testing::filledImage;
 namespace fs = std::filesystem;
 using testing::EnvironmentChanges;
 using testing::readText;
 using testing::runOnTerminal;
 using testing::TerminalRun;
 
-#define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "in: " << (text)
-
-// ---- Running the program ----------------------------------------------------------------------
-
-struct RunResult {
-    int exitCode = -1; // the exit status, or 128 + signal if the child was killed
-    std::string out;
-    std::string err;
-    double seconds = 0.0;
-};
-
-void writeText(const fs::path& path, const std::string& text) {
-    std::ofstream(path, std::ios::binary) << text;
-}
-
-// Runs SHPROBE_EXECUTABLE with `args`; stdout and stderr go to files under `logFolder`, stdin is
-// /dev/null. The child's environment is ours with `changes` applied, passed explicitly.
-// With stderrFd >= 0 the child's stderr is that descriptor (a terminal) instead of a file, and
-// the result's err is left empty for the caller to fill.
-RunResult runShprobe(const std::vector<std::string>& args, const fs::path& logFolder,
-                     const EnvironmentChanges& changes = {}, int stderrFd = -1) {
-    static int runCount = 0;
-    fs::create_directories(logFolder);
-    std::string tag = std::to_string(++runCount);
-    fs::path outPath = logFolder / ("run" + tag + ".stdout");
-    fs::path errPath = logFolder / ("run" + tag + ".stderr");
-
-    std::vector<std::string> argStrings{SHPROBE_EXECUTABLE};
-    argStrings.insert(argStrings.end(), args.begin(), args.end());
-    std::vector<std::string> envStrings = testing::changedEnvironment(changes);
-    std::vector<char*> argv = testing::pointersTo(argStrings), envp = testing::pointersTo(envStrings);
-
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (stderrFd >= 0)
-        posix_spawn_file_actions_adddup2(&actions, stderrFd, 2);
-    else
-        posix_spawn_file_actions_addopen(&actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-
-    RunResult result;
-    auto start = std::chrono::steady_clock::now();
-    pid_t pid = 0;
-    int spawnError = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
-    posix_spawn_file_actions_destroy(&actions);
-    if (spawnError != 0) {
-        ADD_FAILURE() << "cannot start " << argv[0] << ": " << std::strerror(spawnError);
-        return result;
-    }
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0)
-        if (errno != EINTR) {
-            ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
-            return result;
-        }
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    result.out = readText(outPath);
-    if (stderrFd < 0) result.err = readText(errPath);
-    return result;
-}
-
-std::string describe(const RunResult& run) {
-    return "exit " + std::to_string(run.exitCode) + "\n--- stdout:\n" + run.out + "--- stderr:\n" + run.err;
-}
-
-std::vector<std::string> linesOf(const std::string& text) {
-    std::vector<std::string> lines;
-    std::istringstream in(text);
-    for (std::string line; std::getline(in, line);)
-        lines.push_back(line);
-    return lines;
-}
+// ---- Reading what it prints ------------------------------------------------------------------
 
 bool startsWith(const std::string& text, const std::string& prefix) {
     return text.rfind(prefix, 0) == 0;
@@ -160,25 +89,7 @@ std::string coefficientRowsText(const std::string& json) {
     return at == std::string::npos ? std::string() : json.substr(at);
 }
 
-// Every entry of a folder, hidden ones (temporary files) included.
-std::vector<std::string> entriesOf(const fs::path& folder) {
-    std::vector<std::string> names;
-    std::error_code ignored;
-    for (const fs::directory_entry& entry : fs::directory_iterator(folder, ignored))
-        names.push_back(entry.path().filename().string());
-    std::sort(names.begin(), names.end());
-    return names;
-}
-
 // ---- Test images ------------------------------------------------------------------------------
-
-Image filledImage(int width, int height, const std::function<glm::vec3(int, int)>& value) {
-    Image image = makeImage(width, height);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x)
-            image.at(x, y) = glm::vec4(value(x, y), 1.0f);
-    return image;
-}
 
 // A smooth, positive, coloured environment with energy in bands 0 to 3, sampled as an equirect.
 Image smoothEquirect(int width, int height) {
@@ -209,40 +120,9 @@ constexpr double kY00 = 0.28209479177387814; // 1 / (2 sqrt(pi))
 // ---- Fixture ----------------------------------------------------------------------------------
 
 // A folder of its own for each test (inputs, outputs and the children's logs), removed afterwards.
-class Cli : public ::testing::Test {
-  protected:
-    Cli() {
-        const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
-        folder_ =
-            fs::temp_directory_path() / ("shprobe_test_cli_" + std::to_string(getpid()) + "_" + test->name());
-        fs::remove_all(folder_);
-        fs::create_directories(folder_);
-    }
-    ~Cli() override {
-        std::error_code ignored;
-        // A read-only folder left by a failed test must not stop the cleanup.
-        fs::permissions(folder_ / "readonly", fs::perms::owner_all, ignored);
-        fs::remove_all(folder_, ignored);
-    }
-    std::string file(const std::string& name) const { return (folder_ / name).string(); }
-    fs::path folder() const { return folder_; }
-
-    RunResult run(const std::vector<std::string>& args, const EnvironmentChanges& changes = {}) const {
-        return runShprobe(args, folder_ / "logs", changes);
-    }
-
-    // A successful run: exit 0, nothing on stderr (with the validation layer on, any message would
-    // show there and fail the bake anyway).
-    RunResult runOk(const std::vector<std::string>& args) const {
-        RunResult result = run(args);
-        EXPECT_EQ(result.exitCode, 0) << describe(result);
-        EXPECT_EQ(result.err, "") << describe(result);
-        return result;
-    }
-
-  private:
-    fs::path folder_;
-};
+// Runs in a folder of its own (ProgramTest, child_program.h); runOk asks for exit 0 and nothing on
+// stderr (with the validation layer on, any message would show there and fail the bake anyway).
+class Cli : public ProgramTest {};
 
 // ---- 1. The built-in sky ----------------------------------------------------------------------
 
@@ -362,7 +242,7 @@ TEST_F(Cli, AutoBackendChoosesByJobAndDevice) {
                                 {"VK_DRIVER_FILES", std::nullopt}};
     EXPECT_CONTAINS(runOk({"bake", "-q", "-o", file("sky.json")}).out,
                     "backend  cpu: cpu (float, all cores) " + small);
-    RunResult withoutDriver = run({"bake", "-q", "-o", file("sky.json")}, noDriver);
+    RunResult withoutDriver = run({"bake", "-q", "-o", file("sky.json")}, {.environment = noDriver});
     EXPECT_EQ(withoutDriver.exitCode, 0) << describe(withoutDriver);
     EXPECT_CONTAINS(withoutDriver.out, small);
 
@@ -377,7 +257,7 @@ TEST_F(Cli, AutoBackendChoosesByJobAndDevice) {
         "faster)";
     EXPECT_CONTAINS(runOk(large).out, "backend  cpu: cpu (float, all cores) " +
                                           (gpuFile ? "(auto: the Vulkan device is a CPU (llvmpipe" : noGpu));
-    RunResult largeWithoutDriver = run(large, noDriver);
+    RunResult largeWithoutDriver = run(large, {.environment = noDriver});
     EXPECT_EQ(largeWithoutDriver.exitCode, 0) << describe(largeWithoutDriver);
     EXPECT_CONTAINS(largeWithoutDriver.out, gpuFile ? "(auto: no usable Vulkan device)" : noGpu);
 
@@ -437,71 +317,9 @@ TEST_F(Cli, GpuBakeIsDeterministic) {
 
 // ---- 4. Failures ------------------------------------------------------------------------------
 
-struct Failure {
-    std::vector<std::string> args;     // "OUT" is replaced by the output path
-    int exitCode;                      // docs/commands.md: 2 input or usage, 3 output, 4 device
-    std::vector<std::string> mentions; // parts the message must contain
-    bool usageError = false;           // printed by CLI11: a non-zero exit and the option named
-    EnvironmentChanges environment = {};
-};
-
-class CliFailures : public Cli {
-  protected:
-    // Runs the failure twice: into an empty folder (no file, not even a temporary one, may appear)
-    // and onto an existing output file (left byte for byte as it was). Both runs must exit with the
-    // expected code and print exactly one line, "shprobe: error: ...", holding `mentions`.
-    void expectFailure(const Failure& failure) {
-        SCOPED_TRACE(::testing::Message() << "shprobe " << joined(failure.args));
-        fs::path fresh = folder() / "fresh_out";
-        fs::path existing = folder() / "existing_out";
-        fs::remove_all(fresh);
-        fs::remove_all(existing);
-        fs::create_directories(fresh);
-        fs::create_directories(existing);
-        const std::string before = "{\"an existing probe\": \"must not be touched\"}\n";
-        writeText(existing / "probe.json", before);
-
-        for (const fs::path& output : {fresh / "probe.json", existing / "probe.json"}) {
-            RunResult result = run(withOutput(failure.args, output.string()), failure.environment);
-            expectMessage(failure, result);
-        }
-        EXPECT_EQ(entriesOf(fresh), std::vector<std::string>{}) << "a failed bake left files behind";
-        EXPECT_EQ(entriesOf(existing), std::vector<std::string>{"probe.json"});
-        EXPECT_EQ(readText(existing / "probe.json"), before) << "a failed bake changed the existing file";
-    }
-
-    static void expectMessage(const Failure& failure, const RunResult& result) {
-        if (failure.usageError) {
-            EXPECT_NE(result.exitCode, 0) << describe(result);
-            for (const std::string& part : failure.mentions)
-                EXPECT_CONTAINS(result.out + result.err, part);
-            return;
-        }
-        if (result.exitCode == 0) {
-            ADD_FAILURE() << "expected exit " << failure.exitCode << ", the run succeeded:\n"
-                          << describe(result);
-            return;
-        }
-        EXPECT_EQ(result.exitCode, failure.exitCode) << describe(result);
-        EXPECT_EQ(linesOf(result.err).size(), 1u) << "exactly one line expected:\n" << result.err;
-        EXPECT_TRUE(startsWith(result.err, "shprobe: error: ")) << result.err;
-        EXPECT_TRUE(result.err.empty() || result.err.back() == '\n') << result.err;
-        for (const std::string& part : failure.mentions)
-            EXPECT_CONTAINS(result.err, part);
-    }
-
-    static std::vector<std::string> withOutput(std::vector<std::string> args, const std::string& output) {
-        for (std::string& arg : args)
-            if (arg == "OUT") arg = output;
-        return args;
-    }
-    static std::string joined(const std::vector<std::string>& args) {
-        std::string text;
-        for (const std::string& arg : args)
-            text += (text.empty() ? "" : " ") + arg;
-        return text;
-    }
-};
+// Failures follow ProgramTest::expectFailure's rules: the exit code, exactly one line "shprobe: error:
+// ..." holding the mentions, no file left in an empty folder, an existing output untouched.
+class CliFailures : public Cli {};
 
 // A missing input file: exit 2, the message names the file.
 TEST_F(CliFailures, MissingInputFile) {
@@ -563,9 +381,9 @@ TEST_F(CliFailures, NanTexelsRefusedOrSanitized) {
 // Out-of-range options are usage errors reported by CLI11 before anything runs: non-zero exit,
 // the option named, and no file.
 TEST_F(CliFailures, OptionsOutOfRange) {
-    expectFailure({{"bake", "--order", "0", "-o", "OUT"}, 2, {"--order"}, true});
-    expectFailure({{"bake", "--order", "9", "-o", "OUT"}, 2, {"--order"}, true});
-    expectFailure({{"bake", "--face-size", "0", "-o", "OUT"}, 2, {"--face-size"}, true});
+    expectFailure({{"bake", "--order", "0", "-o", "OUT"}, 2, {"--order"}});
+    expectFailure({{"bake", "--order", "9", "-o", "OUT"}, 2, {"--order"}});
+    expectFailure({{"bake", "--face-size", "0", "-o", "OUT"}, 2, {"--face-size"}});
 }
 
 // Output into a missing folder: exit 3, naming the folder, and checked before anything else: with
@@ -583,7 +401,8 @@ TEST_F(CliFailures, OutputIntoMissingFolder) {
     RunResult badInput = run({"bake", file("nowhere.exr"), "-o", out});
     expectMessage(failure, badInput);
 
-    RunResult noDriver = run({"bake", "-o", out}, {{"VK_ICD_FILENAMES", file("no_such_icd.json")}});
+    RunResult noDriver =
+        run({"bake", "-o", out}, {.environment = {{"VK_ICD_FILENAMES", file("no_such_icd.json")}}});
     expectMessage(failure, noDriver);
     EXPECT_FALSE(fs::exists(missing));
 }
@@ -621,14 +440,14 @@ TEST_F(CliFailures, NoVulkanDevice) {
     expectFailure({{"bake", "--backend", "gpu", "--face-size", "8", "-o", "OUT"},
                    4,
                    {"Vulkan", "lavapipe", "mesa-vulkan-drivers"},
-                   false,
+                   "out.json",
                    noDriver});
 
     // With validation on (as ctest runs), the loader's own diagnostics may come first through the
     // debug messenger, as "vulkan validation: ..." lines; the error itself is still one line, last.
     noDriver["SHPROBE_VALIDATION"] = "1";
-    RunResult validated =
-        run({"bake", "--backend", "gpu", "--face-size", "8", "-o", file("validated.json")}, noDriver);
+    RunResult validated = run({"bake", "--backend", "gpu", "--face-size", "8", "-o", file("validated.json")},
+                              {.environment = noDriver});
     EXPECT_EQ(validated.exitCode, 4) << describe(validated);
     std::vector<std::string> lines = linesOf(validated.err);
     ASSERT_FALSE(lines.empty());
@@ -743,7 +562,7 @@ TEST_F(Cli, RotateTakesEulerQuaternionOrMatrix) {
 }
 
 TEST_F(CliFailures, RotateRefusesBadRotations) {
-    runShprobe({"light", "--ambient", "1,1,1", "-o", file("probe.json")}, folder() / "logs", {});
+    run({"light", "--ambient", "1,1,1", "-o", file("probe.json")});
     expectFailure(
         {{"rotate", file("probe.json"), "--matrix", "1,0,0,0,1,0,0,0,2", "-o", "OUT"}, 2, {"orthonormal"}});
     expectFailure({{"rotate", file("probe.json"), "-o", "OUT"}, 2, {"--euler", "--quat", "--matrix"}});
@@ -1025,7 +844,8 @@ TEST_F(CliBatch, OutputFolderIsCheckedBeforeTheBake) {
     EnvironmentChanges noDriver{{"VK_ICD_FILENAMES", file("no_such_icd.json")},
                                 {"VK_DRIVER_FILES", std::nullopt}};
     auto expectOutputError = [&](const std::string& outDir, const std::string& mention) {
-        RunResult result = run({"bake", a(), file("nowhere.exr"), "--out-dir", outDir}, noDriver);
+        RunResult result =
+            run({"bake", a(), file("nowhere.exr"), "--out-dir", outDir}, {.environment = noDriver});
         EXPECT_EQ(result.exitCode, 3) << describe(result);
         EXPECT_EQ(linesOf(result.err).size(), 1u) << result.err;
         EXPECT_TRUE(startsWith(result.err, "shprobe: error: ")) << result.err;
@@ -1218,7 +1038,7 @@ TEST_F(CliFailures, BrokenDriverListIsNamed) {
     auto expectDriverListError = [&](const std::vector<std::string>& args, const EnvironmentChanges& changes,
                                      const std::string& variable) {
         SCOPED_TRACE(::testing::Message() << variable << " shprobe " << joined(args));
-        RunResult result = run(args, changes);
+        RunResult result = run(args, {.environment = changes});
         EXPECT_EQ(result.exitCode, 4) << describe(result);
         EXPECT_EQ(linesOf(result.err).size(), 1u) << result.err;
         EXPECT_TRUE(startsWith(result.err, "shprobe: error: ")) << result.err;
@@ -1239,8 +1059,8 @@ TEST_F(CliFailures, BrokenDriverListIsNamed) {
                                       {"SHPROBE_VALIDATION", std::nullopt}};
         for (const std::vector<std::string>& args : gpuCommands)
             expectDriverListError(args, brokenList, "VK_ICD_FILENAMES=" + list);
-        RunResult cpu =
-            run({"bake", "--backend", "cpu", "--face-size", "8", "-q", "-o", file("cpu.json")}, brokenList);
+        RunResult cpu = run({"bake", "--backend", "cpu", "--face-size", "8", "-q", "-o", file("cpu.json")},
+                            {.environment = brokenList});
         EXPECT_EQ(cpu.exitCode, 0) << describe(cpu);
     }
     EXPECT_FALSE(fs::exists(file("gpu.json")));
@@ -1252,7 +1072,7 @@ TEST_F(CliFailures, BrokenDriverListIsNamed) {
     // SHPROBE_DEBUG=1 adds the failed call's place in the source, on a line of its own.
     EnvironmentChanges debug = driverFiles;
     debug["SHPROBE_DEBUG"] = "1";
-    RunResult debugged = run(gpuCommands[0], debug);
+    RunResult debugged = run(gpuCommands[0], {.environment = debug});
     EXPECT_EQ(debugged.exitCode, 4) << describe(debugged);
     const std::vector<std::string> debugLines = linesOf(debugged.err);
     ASSERT_EQ(debugLines.size(), 2u) << debugged.err;
@@ -1269,7 +1089,8 @@ TEST_F(CliFailures, BrokenDriverListIsNamed) {
         {"VK_DRIVER_FILES", std::nullopt},
         {"VK_LOADER_DEBUG", std::nullopt},
         {"SHPROBE_VALIDATION", "1"}};
-    RunResult partly = run({"bake", "--face-size", "8", "-q", "-o", file("partly.json")}, partlyBroken);
+    RunResult partly =
+        run({"bake", "--face-size", "8", "-q", "-o", file("partly.json")}, {.environment = partlyBroken});
     EXPECT_EQ(partly.exitCode, 0) << describe(partly);
     EXPECT_EQ(partly.err, "") << describe(partly);
 }

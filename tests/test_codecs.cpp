@@ -7,6 +7,8 @@
 #include "common/error.h"
 #include "image/codec.h"
 #include "image/exr_plugin.h"
+#include "library_leaks.h"
+#include "test_support.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -39,6 +41,7 @@
 
 namespace shprobe {
 namespace {
+using testing::LibraryLeaksIgnored;
 namespace fs = std::filesystem;
 
 #define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "message: " << (text)
@@ -73,31 +76,6 @@ void writeBytes(const std::string& path, const std::string& bytes) {
 void cutFile(const std::string& from, const std::string& to, uintmax_t size) {
     writeBytes(to, readBytes(from).substr(0, size));
 }
-
-#if defined(__SANITIZE_ADDRESS__)
-#define SHPROBE_TEST_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SHPROBE_TEST_ASAN 1
-#endif
-#endif
-#if defined(SHPROBE_TEST_ASAN)
-#include <sanitizer/lsan_interface.h>
-#endif
-
-// OpenImageIO 2.4's PNG reader leaks its error text (31 bytes) when libpng longjmps out of a
-// truncated file: LeakSanitizer is told to overlook what is allocated during such a read.
-class LibraryLeaksIgnored {
-  public:
-#if defined(SHPROBE_TEST_ASAN)
-    LibraryLeaksIgnored() {
-        __lsan_disable();
-    }
-    ~LibraryLeaksIgnored() {
-        __lsan_enable();
-    }
-#endif
-};
 
 // A reproducible stream of numbers (Knuth's MMIX LCG).
 class Numbers {
@@ -249,24 +227,10 @@ float expectSameAsOiio(const std::string& path, float tolerance = 0.0f, int colu
 
 // The message of the Error(Input) that f must throw.
 std::string inputErrorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& error) {
-        EXPECT_EQ(error.kind(), ErrorKind::Input) << error.what();
-        return error.what();
-    }
-    ADD_FAILURE() << "no Error was thrown";
-    return {};
+    return testing::errorOf(ErrorKind::Input, f);
 }
 std::string outputErrorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& error) {
-        EXPECT_EQ(error.kind(), ErrorKind::Output) << error.what();
-        return error.what();
-    }
-    ADD_FAILURE() << "no Error was thrown";
-    return {};
+    return testing::errorOf(ErrorKind::Output, f);
 }
 
 // Writes `data` (T per channel value, interleaved) through OpenImageIO; `adjust` edits the spec.

@@ -7,7 +7,10 @@
 #include "image/channels.h"
 #include "image/environment.h"
 #include "image/image_write.h"
+#include "library_leaks.h"
 #include "sh/fast_projection.h"
+#include "test_images.h"
+#include "test_support.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -35,6 +38,8 @@
 
 namespace shprobe {
 namespace {
+using testing::filledImage;
+using testing::LibraryLeaksIgnored;
 namespace fs = std::filesystem;
 
 // A folder of its own for each test, removed with its contents afterwards.
@@ -58,14 +63,6 @@ class EnvironmentFiles : public ::testing::Test {
     fs::path folder_;
 };
 
-Image filledImage(int width, int height, const std::function<glm::vec3(int, int)>& value) {
-    Image image = makeImage(width, height);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x)
-            image.at(x, y) = glm::vec4(value(x, y), 1.0f);
-    return image;
-}
-
 // Writes raw channel data through OpenImageIO, for the channel counts and integer formats that
 // writeImage (RGB float) does not produce. Alpha is written as given, not premultiplied. A colour
 // space, if given, is recorded in the file (PNG: gAMA 1 for "linear").
@@ -88,14 +85,7 @@ void writeText(const std::string& path, const std::string& text) {
 
 // The message of the Error(Input) that f must throw.
 std::string inputErrorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& error) {
-        EXPECT_EQ(error.kind(), ErrorKind::Input) << error.what();
-        return error.what();
-    }
-    ADD_FAILURE() << "no Error was thrown";
-    return {};
+    return testing::errorOf(ErrorKind::Input, f);
 }
 
 #define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "message: " << (text)
@@ -928,32 +918,6 @@ TEST_F(EnvironmentFiles, PixelLimitIsAnOption) {
     EXPECT_CONTAINS(inputErrorOf([&] { loadEnvironment(file("small.exr"), {.maxPixels = 0}); }),
                     "--max-pixels");
 }
-
-#if defined(__SANITIZE_ADDRESS__)
-#define SHPROBE_TEST_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SHPROBE_TEST_ASAN 1
-#endif
-#endif
-#if defined(SHPROBE_TEST_ASAN)
-#include <sanitizer/lsan_interface.h>
-#endif
-
-// OpenImageIO 2.4's PNG reader leaks its error text (31 bytes) when libpng longjmps out of a
-// truncated file (PNGInput::PngReadCallback): LeakSanitizer is told to overlook what is allocated
-// during such a read. Nothing in other builds.
-class LibraryLeaksIgnored {
-  public:
-#if defined(SHPROBE_TEST_ASAN)
-    LibraryLeaksIgnored() {
-        __lsan_disable();
-    }
-    ~LibraryLeaksIgnored() {
-        __lsan_enable();
-    }
-#endif
-};
 
 // libpng prints "libpng error: ..." to stderr itself; OpenImageIO reports the same text, which the
 // Error carries. Nothing reaches stderr. (AddressSanitizer builds let library output through: see

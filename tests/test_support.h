@@ -13,6 +13,7 @@
 #include <functional>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace shprobe::testing {
@@ -86,6 +87,18 @@ inline void expectInputError(const std::function<void()>& call, const char* what
     } catch (const Error& error) {
         EXPECT_EQ(error.kind(), ErrorKind::Input) << what;
     }
+}
+
+// The message of the Error of `kind` that f must throw (a failure, and "", where it throws none).
+inline std::string errorOf(ErrorKind kind, const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& error) {
+        EXPECT_EQ(error.kind(), kind) << error.what();
+        return error.what();
+    }
+    ADD_FAILURE() << "no Error was thrown";
+    return {};
 }
 
 } // namespace shprobe::testing
