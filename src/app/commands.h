@@ -139,6 +139,7 @@ struct SceneOptions {
     int order = 3;
     int faceSize = 32;
     int bounces = 1;
+    bool bouncesGiven = false;        // --bounces on the command line (not with --brick or --previous)
     std::string sky;                  // any input bake takes; empty: the built-in sky
     int skyFaceSize = 0;              // 0: the sky's own (128 for the built-in sky)
     std::optional<BrickOption> brick; // I/N: one brick of the grid, one bounce
@@ -176,6 +177,7 @@ struct TransferCommandOptions {
     int order = 3;
     int rays = 256;
     int bounces = 1;              // interreflected only
+    bool bouncesGiven = false;    // --bounces on the command line
     std::string format;           // glb | binary; empty: binary for a .shpt output, else glb
     std::string backend = "auto"; // auto | gpu | cpu
     std::string device;
@@ -272,10 +274,9 @@ void runConvert(const ConvertOptions& options);
 
 void addInfoOptions(CLI::App& command, InfoOptions& options);
 void addSceneOptions(CLI::App& command, SceneOptions& options);
-// bouncesGiven: --bounces was on the command line (it cannot go with --brick or --previous).
-void runScene(const SceneOptions& options, bool bouncesGiven);
+void runScene(const SceneOptions& options);
 void addTransferOptions(CLI::App& command, TransferCommandOptions& options);
-void runTransfer(const TransferCommandOptions& options, bool bouncesGiven);
+void runTransfer(const TransferCommandOptions& options);
 void addMergeOptions(CLI::App& command, MergeOptions& options);
 void runMerge(const MergeOptions& options);
 void addRelightOptions(CLI::App& command, RelightOptions& options);

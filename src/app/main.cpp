@@ -122,12 +122,18 @@ int main(int argc, char** argv) {
          "Bake a grid of light probes inside a glTF scene, by rays on the CPU or on a Vulkan device, into a "
          "probe volume (docs/scene-probes.md)",
          [&](CLI::App& c) { shprobe::addSceneOptions(c, scene); },
-         [&](const CLI::App& c) { shprobe::runScene(scene, c.count("--bounces") > 0); }},
+         [&](const CLI::App& c) {
+             scene.bouncesGiven = c.count("--bounces") > 0;
+             shprobe::runScene(scene);
+         }},
         {"transfer",
          "Bake per-vertex radiance transfer of a glTF scene (any sky relights it) into the scene's "
          "vertex attributes, by rays on the CPU or a Vulkan device (docs/transfer.md)",
          [&](CLI::App& c) { shprobe::addTransferOptions(c, transfer); },
-         [&](const CLI::App& c) { shprobe::runTransfer(transfer, c.count("--bounces") > 0); }},
+         [&](const CLI::App& c) {
+             transfer.bouncesGiven = c.count("--bounces") > 0;
+             shprobe::runTransfer(transfer);
+         }},
         {"merge", "Join the bricks of one `shprobe scene` bake into its whole volume",
          [&](CLI::App& c) { shprobe::addMergeOptions(c, merge); },
          [&](const CLI::App&) { shprobe::runMerge(merge); }},

@@ -40,6 +40,7 @@ struct ReferenceOptions {
     std::string scene;
     std::string output = "reference.shpv";
     glm::ivec3 grid{1};
+    bool gridGiven = false;           // --grid on the command line
     std::optional<GridBounds> bounds; // none: as shprobe scene
     int order = 3;
     int bounces = 1;
@@ -224,9 +225,9 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
     return volume;
 }
 
-void run(const ReferenceOptions& options, bool gridGiven) {
+void run(const ReferenceOptions& options) {
     if (options.transferRays > 0) return measureTransferRate(options, loadGltfScene(options.scene));
-    if (!gridGiven) throw Error(ErrorKind::Input, "--grid is required (unless --transfer-rate)");
+    if (!options.gridGiven) throw Error(ErrorKind::Input, "--grid is required (unless --transfer-rate)");
     checkOutputPath(options.output, OutputContent::Binary);
     checkOutputsAreNotInputs({&options.output, 1}, sceneInputs(options.scene, options.sky));
     const Clock::time_point start = Clock::now();
@@ -254,6 +255,8 @@ int main(int argc, char** argv) {
     shprobe::addVersionFlag(app, "shprobe-reference");
     shprobe::ReferenceOptions options;
     addOptions(app, options);
-    return shprobe::runProgram(app, "shprobe-reference", argc, argv,
-                               [&] { run(options, app.count("--grid") > 0); });
+    return shprobe::runProgram(app, "shprobe-reference", argc, argv, [&] {
+        options.gridGiven = app.count("--grid") > 0;
+        run(options);
+    });
 }

@@ -337,8 +337,8 @@ RayBackend chooseSceneBackend(const SceneOptions& options) {
 // What the options ask for that no scene can give, before the scene is read: a bounce count with
 // one bounce's options, a cpu option for the gpu, bounds that make no grid of these counts, more
 // bricks than probes.
-void checkSceneOptions(const SceneOptions& options, bool bouncesGiven) {
-    if (bouncesGiven && !options.previous.empty())
+void checkSceneOptions(const SceneOptions& options) {
+    if (options.bouncesGiven && !options.previous.empty())
         throw Error(ErrorKind::Input, "scene: --previous bakes one bounce; --bounces is for whole bakes");
     if (!options.previous.empty() && options.backend == "cpu")
         throw Error(ErrorKind::Input, "scene: --previous continues a gpu bake; the cpu backend bakes every "
@@ -426,8 +426,8 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
 
 } // namespace
 
-void runScene(const SceneOptions& options, bool bouncesGiven) {
-    checkSceneOptions(options, bouncesGiven);
+void runScene(const SceneOptions& options) {
+    checkSceneOptions(options);
     const Clock::time_point start = Clock::now();
     const World world = loadGltfScene(options.scene);
     const ProbeGrid grid = chosenGrid(options, world);

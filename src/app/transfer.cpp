@@ -31,9 +31,9 @@ bool writesBinary(const TransferCommandOptions& options) {
 }
 
 // Every refusal the options and paths allow, before the scene is read.
-void checkTransferOptions(const TransferCommandOptions& options, bool bouncesGiven) {
+void checkTransferOptions(const TransferCommandOptions& options) {
     const TransferModel model = parseTransferModel(options.model);
-    if (bouncesGiven && model != TransferModel::Interreflected)
+    if (options.bouncesGiven && model != TransferModel::Interreflected)
         throw Error(ErrorKind::Input,
                     "transfer: --bounces is for the interreflected model, not " + options.model);
     checkOutputPath(options.output, OutputContent::Binary);
@@ -119,8 +119,8 @@ void addTransferOptions(CLI::App& command, TransferCommandOptions& options) {
     command.add_flag("-q,--quiet", options.quiet, "No report");
 }
 
-void runTransfer(const TransferCommandOptions& options, bool bouncesGiven) {
-    checkTransferOptions(options, bouncesGiven);
+void runTransfer(const TransferCommandOptions& options) {
+    checkTransferOptions(options);
     const Clock::time_point start = Clock::now();
     const GltfSceneSource source = loadGltfSceneSource(options.scene);
     const TransferModel model = parseTransferModel(options.model);
