@@ -15,6 +15,7 @@
 #include "formats/probe_file.h"
 #include "image/environment.h"
 #include "image/image_write.h"
+#include "png_chunks.h"
 #include "sh/basis.h"
 #include "test_images.h"
 #include "test_support.h"
@@ -47,8 +48,11 @@
 
 namespace shprobe {
 namespace {
+using testing::bigEndian32;
 using testing::constantImage;
 using testing::filledImage;
+using testing::kPngSignature;
+using testing::pngChunk;
 using BadInputs = ProgramTest;
 
 // ---- Test files -------------------------------------------------------------------------------
@@ -86,30 +90,12 @@ void writeHdrHeader(const fs::path& path, int width, int height) {
                         std::to_string(width) + "\n");
 }
 
-uint32_t crc32(const std::string& bytes) { // PNG's CRC (ISO 3309), bit by bit
-    uint32_t crc = 0xffffffffu;
-    for (unsigned char byte : bytes) {
-        crc ^= byte;
-        for (int bit = 0; bit < 8; ++bit)
-            crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-    }
-    return ~crc;
-}
-
-std::string bigEndian(uint32_t value) {
-    return {char(value >> 24), char(value >> 16), char(value >> 8), char(value)};
-}
-
-std::string pngChunk(const std::string& type, const std::string& data) {
-    return bigEndian(uint32_t(data.size())) + type + data + bigEndian(crc32(type + data));
-}
-
 // A valid PNG signature and IHDR (8-bit RGB) claiming width x height, then the start of an empty
 // zlib stream as the only IDAT and IEND: far too few pixels.
 void writePngHeader(const fs::path& path, uint32_t width, uint32_t height) {
-    std::string header = bigEndian(width) + bigEndian(height) + std::string("\x08\x02\x00\x00\x00", 5);
-    writeText(path, std::string("\x89PNG\r\n\x1a\n", 8) + pngChunk("IHDR", header) +
-                        pngChunk("IDAT", std::string("\x78\x9c", 2)) + pngChunk("IEND", ""));
+    std::string header = bigEndian32(width) + bigEndian32(height) + std::string("\x08\x02\x00\x00\x00", 5);
+    writeText(path, kPngSignature + pngChunk("IHDR", header) + pngChunk("IDAT", std::string("\x78\x9c", 2)) +
+                        pngChunk("IEND", ""));
 }
 
 // A probe file of `order` whose coefficients are all distinct.

@@ -8,6 +8,7 @@
 #include "image/codec.h"
 #include "image/exr_plugin.h"
 #include "library_leaks.h"
+#include "png_chunks.h"
 #include "test_support.h"
 
 #include <OpenEXR/ImfChannelList.h>
@@ -41,7 +42,9 @@
 
 namespace shprobe {
 namespace {
+using testing::bigEndian32;
 using testing::LibraryLeaksIgnored;
+using testing::pngChunk;
 namespace fs = std::filesystem;
 
 #define EXPECT_CONTAINS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "message: " << (text)
@@ -632,24 +635,6 @@ TEST_F(Codecs, PngFilesOpenImageIoWritesDecodeAsItReadsThem) {
 // depths 1, 2 and 4, transparency (tRNS, which libpng made an alpha channel), Adam7 interlacing,
 // IDAT split over chunks, ancillary chunks after the pixels, and colour-space chunks. The pixels
 // are deflated as stored blocks (RFC 1951, 3.2.4), every row with filter 0.
-std::string bigEndian32(uint32_t value) {
-    return {char(value >> 24), char(value >> 16), char(value >> 8), char(value)};
-}
-
-uint32_t crc32(const std::string& bytes) {
-    uint32_t crc = 0xffffffffu;
-    for (unsigned char byte : bytes) {
-        crc ^= byte;
-        for (int k = 0; k < 8; ++k)
-            crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-    }
-    return ~crc;
-}
-
-std::string pngChunk(const std::string& type, const std::string& data, uint32_t crcFlip = 0) {
-    return bigEndian32(uint32_t(data.size())) + type + data + bigEndian32(crc32(type + data) ^ crcFlip);
-}
-
 std::string storedZlib(const std::string& data) {
     std::string out("\x78\x01", 2);
     size_t at = 0;

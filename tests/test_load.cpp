@@ -1,10 +1,13 @@
-// Load: a batch of 1,000 small probes and one 6 x 4096^2 bake, each through the program on
-// lavapipe, with the program's peak resident memory measured (wait4's ru_maxrss) against the data's
-// size plus the overhead stated here. Label "load": part of every ctest run.
+// Load: a batch of 1,000 small probes, one 6 x 4096^2 bake, and files cut short that claim
+// 16384 x 8192 pixels, each through the program on lavapipe, with the program's peak resident
+// memory measured (wait4's ru_maxrss) against the data's size plus the overhead stated here. Label
+// "load": part of every ctest run.
+#include "png_chunks.h"
 #include "render/run_program.h"
 
 #include <OpenImageIO/imageio.h>
 
+#include <cstdint>
 #include <fstream>
 #include <regex>
 
@@ -77,6 +80,64 @@ TEST(Load, OneCubeMapOf4096SquaredFaces) {
         << "data " << dataKiB << " KiB, baseline " << baseline << " KiB";
     RecordProperty("peak KiB, 6 x 4096^2", std::to_string(run.peakKiB));
     RecordProperty("data KiB", std::to_string(dataKiB));
+}
+
+// The files claiming 16384 x 8192 pixels (2 GiB as RGBA32F texels), each cut short.
+
+// A Radiance HDR: its header and the first scanline's 4-byte start, nothing more.
+void writeCutHdr(const std::string& path) {
+    std::ofstream(path, std::ios::binary) << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8192 +X 16384\n"
+                                          << std::string("\x02\x02\x40\x00", 4);
+}
+
+// A PNG of RGB8 pixels whose one IDAT chunk, CRC and all, holds the start of a deflate stream.
+void writeCutPng(const std::string& path) {
+    const std::string header =
+        bigEndian32(16384) + bigEndian32(8192) + std::string("\x08\x02\x00\x00\x00", 5);
+    std::ofstream(path, std::ios::binary)
+        << kPngSignature + pngChunk("IHDR", header) +
+               pngChunk("IDAT", std::string("\x78\x9c\xed\xc1\x01\x0d\x00\x00\x00", 9));
+}
+
+// An EXR of one half-float channel, run-length encoded (one scanline a chunk, 8192 of them), of
+// even grey, written scanline by scanline from one row (4 MiB); then cut to its first MiB, past its
+// offset table (64 KiB).
+void writeCutExr(const std::string& path) {
+    const std::string whole = path + ".whole.exr";
+    {
+        auto out = OIIO::ImageOutput::create(whole);
+        ASSERT_TRUE(out) << whole;
+        OIIO::ImageSpec spec(16384, 8192, 1, OIIO::TypeDesc::HALF);
+        spec.attribute("compression", "rle");
+        ASSERT_TRUE(out->open(whole, spec)) << out->geterror();
+        const std::vector<float> row(16384, 0.5f);
+        for (int y = 0; y < 8192; ++y)
+            ASSERT_TRUE(out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, row.data())) << out->geterror();
+        ASSERT_TRUE(out->close());
+    }
+    std::ifstream in(whole, std::ios::binary);
+    std::string start(1024 * 1024, '\0');
+    in.read(start.data(), std::streamsize(start.size()));
+    std::ofstream(path, std::ios::binary) << start;
+}
+
+// A file of a few bytes (or KiB) claiming 16384 x 8192 pixels is refused (exit 2, one line naming
+// it) before its 2 GiB of texels are allocated: the peak stays within 64 MiB of the baseline (the
+// allocator's slack and a file read whole), where filling the texels would add 2 GiB.
+TEST(Load, CutFilesClaimingHugeImagesAreRefusedFirst) {
+    TemporaryFolder folder("shprobe_load_cut");
+    const long baseline = baselineKiB(folder);
+    writeCutHdr(folder / "cut.hdr");
+    writeCutPng(folder / "cut.png");
+    writeCutExr(folder / "cut.exr");
+    for (const char* name : {"cut.hdr", "cut.png", "cut.exr"}) {
+        SCOPED_TRACE(name);
+        RunResult run =
+            runProgram({"bake", folder / name, "-o", folder / "cut.json"}, folder.path() / "logs");
+        EXPECT_EQ(run.exitCode, 2) << describe(run);
+        EXPECT_NE(run.err.find("the file may be truncated or corrupt"), std::string::npos) << run.err;
+        EXPECT_LE(run.peakKiB, baseline + 64 * kMiB) << "baseline " << baseline << " KiB";
+    }
 }
 
 } // namespace

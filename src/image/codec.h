@@ -38,6 +38,11 @@ class ImageDecoder {
     // first[4 (y width + x) + c] (the RGBA texels of an Image). Called once per image, or once per
     // planned channel when they lie apart.
     virtual void readChannels(int begin, int end, float* first) = 0;
+    // What can be checked of the pixel data without decoding it (a file cut short, compressed data
+    // too short for the pixels the header claims), before the caller allocates the image: a tiny
+    // file claiming 16384 x 8192 pixels is refused at once, not after 2 GiB are filled. Throws
+    // Error(Input); readChannels would find the same later. The default checks nothing.
+    virtual void checkData() {}
 
   protected:
     ImageHeader header_;

@@ -281,6 +281,25 @@ class ExrDecoder final : public ImageDecoder {
         }
     }
 
+    // A scanline image's chunks lie in the file in its line order, so a file cut short lacks the
+    // last: that one chunk is read raw (not decompressed). Tiles, in any order, are left to
+    // readChannels.
+    void checkData() override {
+        if (!part_) return;
+        const Imf::Header& header = part_->header();
+        if (header.hasTileDescription()) return;
+        const int last = header.lineOrder() == Imf::DECREASING_Y ? dataWindow_.min.y : dataWindow_.max.y;
+        try {
+            const char* data = nullptr;
+            int size = 0;
+            part_->rawPixelData(last, data, size);
+        } catch (const std::exception& error) {
+            throw Error(ErrorKind::Input,
+                        path_ + ": cannot read the pixels; the file may be truncated or corrupt (" +
+                            oneLine(error.what()) + ")");
+        }
+    }
+
   private:
     std::string path_;
     std::unique_ptr<Imf::IStream> stream_; // the file in memory, which file_ reads; or none

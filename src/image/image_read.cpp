@@ -135,6 +135,7 @@ OpenedImage openImage(const std::string& path, int64_t maxPixels) {
     OpenedImage opened{path, openDecoder(path, checkHeaderAndFormat(path)), {}};
     checkHeader(path, opened.header(), maxPixels);
     opened.plan = planChannels(opened.header().channels, path);
+    opened.decoder->checkData();
     return opened;
 }
 

@@ -157,6 +157,11 @@ struct MemoryReader {
 };
 
 // ---- PNG chunks ---------------------------------------------------------------------------------
+// Deflate packs at most 258 bytes (its longest match) into 2 bits, when a block's codes give that
+// match and its distance one bit each (RFC 1951, 3.2.5): no stream is smaller than 1/1032 of what
+// it inflates to.
+constexpr uint64_t kDeflateMostPacked = 1032;
+
 // PNG specification (ISO/IEC 15948), 5.3: a chunk is a 4-byte big-endian length, a 4-byte type,
 // the data and a CRC-32 of type and data. A type whose first letter is upper case is critical.
 
@@ -227,6 +232,18 @@ struct PngHeader {
     uint32_t gamma = 0;          // gAMA's value (gamma times 100000), 0 if none or out of range
     std::string textColourSpace; // a tEXt chunk "oiio:ColorSpace" (OpenImageIO writes one)
     uint64_t firstIdat = 0;
+
+    // Samples a pixel holds in the file (a palette index is one).
+    int storedSamples() const {
+        static constexpr int kSamples[] = {1, 0, 3, 1, 2, 0, 4}; // by colour type
+        return kSamples[colourType];
+    }
+    // The bytes the pixels inflate to, non-interlaced: each row a filter byte and its samples
+    // (PNG specification, 7.2); an interlaced image's passes take more.
+    uint64_t inflatedBytes() const {
+        return uint64_t(height) *
+               (1 + (uint64_t(width) * uint64_t(storedSamples()) * uint64_t(depth) + 7) / 8);
+    }
 
     int channels() const {
         switch (colourType) {
@@ -629,7 +646,7 @@ class StbDecoder final : public ImageDecoder {
     // IDAT chunks and an IEND chunk put after them.
     void checkPngChunks() {
         PngChunk chunk;
-        uint64_t offset = png_.firstIdat;
+        uint64_t offset = png_.firstIdat, compressed = 0;
         for (;; offset = chunk.next()) {
             const ChunkRead read = readChunk(file_, offset, chunk);
             // The file may end after the IDAT chunks, even within the next chunk, but not in one.
@@ -641,7 +658,12 @@ class StbDecoder final : public ImageDecoder {
                            " bytes");
             if (chunk.type != "IDAT") break;
             if (!chunk.crcGood) failPixels("IDAT: CRC error");
+            compressed += chunk.length;
         }
+        if (compressed * kDeflateMostPacked < png_.inflatedBytes())
+            failPixels("the IDAT chunks hold " + std::to_string(compressed) + " bytes, too few for " +
+                       std::to_string(png_.width) + "x" + std::to_string(png_.height) +
+                       " pixels at deflate's best: end of file");
         file_.truncate(size_t(offset));
         file_.append(std::string("\0\0\0\0IEND\xae\x42\x60\x82", 12));
     }
@@ -705,12 +727,21 @@ class StbDecoder final : public ImageDecoder {
         }
     }
 
-    void decode() {
+  public:
+    // The whole file read, and a PNG's chunks or an HDR's scanlines walked, as decode needs them.
+    void checkData() override {
+        if (checked_) return;
         if (header_.width < 1 || header_.height < 1) failPixels("the image has no pixels");
         file_.readAll();
         if (file_.size() > size_t(INT_MAX)) failPixels("the file is larger than 2 GiB");
         if (format_ == ImageFormat::Png) checkPngChunks();
         if (format_ == ImageFormat::Hdr) checkHdrScanlines();
+        checked_ = true;
+    }
+
+  private:
+    void decode() {
+        checkData();
         MemoryReader reader{file_.data(), file_.size()};
         const stbi_io_callbacks callbacks = reader.callbacks();
         const int channels = int(header_.channels.size());
@@ -748,6 +779,7 @@ class StbDecoder final : public ImageDecoder {
     PngHeader png_;
     HdrOrientation hdr_; // the standard one until the resolution line says otherwise
     bool sixteenBit_ = false;
+    bool checked_ = false; // checkData done
     std::unique_ptr<void, StbFree> pixels_;
 };
 
