@@ -576,9 +576,9 @@ template <int Order> struct EquirectTerms {
 // stage's, then the row's: accumulateRow), so that no float sum runs long. A cube map's products
 // vary with Omega y_k, so their roundings mostly cancel and a chunk is a whole stage. An equirect
 // row's cos(0 phi) entries are all 1: along a row of even radiance every product is the same, each
-// rounding of the growing sum goes the same way, and over W/4 terms they add up (a constant 4096 x
-// 2048 map came out 9.7e-6 of |L_00| off, 3.9e-5 at 16384 wide): chunks of 16 pairs, then stages
-// of 4 chunks, keep it at 1.5e-7 up to 4096 wide and 6e-7 at 16384.
+// rounding of the growing sum goes the same way, and over W/4 terms they add up: chunks of 16
+// pairs, stages of 4 chunks and the stages' compensated sum (accumulateRow) keep them from it
+// (test_fast_projection, FastEquirectProjection.EvenRowsWithinTarget).
 template <class Terms, int First, int Count, class ParitySums>
 void accumulateCoefficients(const ParitySums& paritySumsOf, const Lanes* table, int pairCount, Lanes* sums) {
     [&]<int... q>(std::integer_sequence<int, q...>) {
@@ -661,13 +661,20 @@ void accumulateRow(const Plan& plan, int face, int row, int lastRow, const Lanes
                    Lanes* sums) {
     const RowPair rows = rowPair(plan, face, row);
     const NextRows next = nextRows(plan, face, row, lastRow);
+    // The stage sums reach the row's with Kahan's compensation (the low bits each addition lost,
+    // carried into the next), so that their roundings do not add up along a long row either.
+    Lanes lost[Terms::kCount] = {};
     for (int stage = 0; stage < plan.pairs; stage += kStagePairs) {
         Lanes stageSums[Terms::kCount] = {}; // short sums (accumulateCoefficients)
         accumulateStage<Terms, Texels>(rows, next, stage, std::min(kStagePairs, plan.pairs - stage),
                                        table + size_t(stage) * tableLanesPerPair(Terms::kTableEntries),
                                        scratch.paritySums.get(), stageSums);
-        for (int q = 0; q < Terms::kCount; ++q)
-            sums[q] += stageSums[q];
+        for (int q = 0; q < Terms::kCount; ++q) {
+            const Lanes added = stageSums[q] - lost[q];
+            const Lanes sum = sums[q] + added;
+            lost[q] = (sum - sums[q]) - added;
+            sums[q] = sum;
+        }
     }
 }
 
