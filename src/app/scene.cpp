@@ -287,11 +287,22 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
     return previous;
 }
 
+// What one `shprobe scene` bakes: the scene and its sky, the grid and the part of it (a brick or
+// the whole), and how, with the settings' JSON that a volume's bricks must share.
+struct SceneJob {
+    const SceneOptions& options;
+    const World& world;
+    const Environment& sky;
+    ProbeGrid grid;
+    ProbeRange range;
+    BounceLight bounceLight;
+    std::string settings;
+};
+
 // Every bounce of probes [range.begin, range.end) by rays (scene/volume_bake.h), the progress on a
 // terminal; with --transfer the volume's transfer, and its light the sky's band-limited to the order.
-ProbeVolume bakeByRays(const World& world, const Environment& sky, const SceneOptions& options,
-                       BounceLight bounceLight, const ProbeGrid& grid, ProbeRange range,
-                       VolumeBakeReport& report) {
+ProbeVolume bakeByRays(const SceneJob& job, VolumeBakeReport& report) {
+    const auto& [options, world, sky, grid, range, bounceLight, settings] = job;
     RayBakeOptions rayOptions = rayOptionsAsked(options, grid);
     rayOptions.bounceLight = bounceLight;
     const VolumeBakeOptions bakeOptions{rayOptions, options.dilate};
@@ -371,9 +382,8 @@ void checkSceneOptions(const SceneOptions& options) {
 // gathered whole or bounces by paths (`bounceLight`): a brick is exactly its part of the whole
 // bake. Probes still inside geometry are filled as the cpu fills them (dilateInvalidProbes), the
 // counts in `report`. After --previous, the bounce after that volume's.
-ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environment& sky,
-                      const SceneOptions& options, const ProbeGrid& grid, ProbeRange range,
-                      BounceLight bounceLight, const std::string& settings, VolumeBakeReport& report) {
+ProbeVolume bakeOnGpu(const Context& context, const SceneJob& job, VolumeBakeReport& report) {
+    const auto& [options, world, sky, grid, range, bounceLight, settings] = job;
     const int bounces = options.previous.empty()
                             ? options.bounces
                             : readPreviousBounce(options, grid, world, settings).bounces + 1;
@@ -424,38 +434,10 @@ ProbeVolume bakeOnGpu(const Context& context, const World& world, const Environm
     return volume;
 }
 
-} // namespace
-
-void runScene(const SceneOptions& options) {
-    checkSceneOptions(options);
-    const Clock::time_point start = Clock::now();
-    const World world = loadGltfScene(options.scene);
-    const ProbeGrid grid = chosenGrid(options, world);
-    const ProbeRange range =
-        options.brick ? brickRange(grid, options.brick->brick) : ProbeRange{0, grid.probeCount()};
-    const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
-
-    RayBackend backend = chooseSceneBackend(options);
-    ScopeExit releaseContext([&] {
-        if (backend.context) destroyContext(*backend.context);
-    });
-    if (const CpuOnly asked = cpuOnlyOption(options); asked.option && backend.name == "gpu")
-        throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason + "), where " +
-                                          asked.gpu + "; " + asked.option + " is for the cpu backend");
-    const BounceLight bounceLight = chosenBounceLight(options, grid, world);
-    const std::string settings = bakeSettings(options, backend.name, sky, bounceLight);
-    VolumeBakeReport rays;
-    ProbeVolume volume = backend.context ? bakeOnGpu(*backend.context, world, sky, options, grid, range,
-                                                     bounceLight, settings, rays)
-                                         : bakeByRays(world, sky, options, bounceLight, grid, range, rays);
-    volume.source = world.description;
-    volume.sourceHash = gltfSceneHash(options.scene);
-    volume.settings = settings;
-    requireFiniteLight(volume,
-                       "the light of " + world.description + " and its sky, " + sky.description + ",");
-    writeProbeVolume(options.output, volume);
-    if (options.quiet) return;
-    const double seconds = millisecondsSince(start) / 1000.0;
+// The summary of a bake: the scene, sky, grid, backend and what the rays found.
+void printSceneSummary(const SceneJob& job, const RayBackend& backend, const ProbeVolume& volume,
+                       const VolumeBakeReport& rays, double seconds) {
+    const auto& [options, world, sky, grid, range, bounceLight, settings] = job;
     const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0)) + rays.filled;
     std::printf("scene    %s\n", world.description.c_str());
     const int skySeen = skyFaceSizeForProbes(options, sky.faceSize());
@@ -502,6 +484,38 @@ void runScene(const SceneOptions& options) {
                     rays.relocated, options.relocationLimit, inside);
     std::printf("filled   %s from valid neighbours\n", counted(rays.filled, "invalid probe").c_str());
     std::printf("wrote    %s in %.2f s\n", options.output.c_str(), seconds);
+}
+
+} // namespace
+
+void runScene(const SceneOptions& options) {
+    checkSceneOptions(options);
+    const Clock::time_point start = Clock::now();
+    const World world = loadGltfScene(options.scene);
+    const ProbeGrid grid = chosenGrid(options, world);
+    const ProbeRange range =
+        options.brick ? brickRange(grid, options.brick->brick) : ProbeRange{0, grid.probeCount()};
+    const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
+
+    RayBackend backend = chooseSceneBackend(options);
+    ScopeExit releaseContext([&] {
+        if (backend.context) destroyContext(*backend.context);
+    });
+    if (const CpuOnly asked = cpuOnlyOption(options); asked.option && backend.name == "gpu")
+        throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason + "), where " +
+                                          asked.gpu + "; " + asked.option + " is for the cpu backend");
+    const BounceLight bounceLight = chosenBounceLight(options, grid, world);
+    const SceneJob job{
+        options, world, sky, grid, range, bounceLight, bakeSettings(options, backend.name, sky, bounceLight)};
+    VolumeBakeReport rays;
+    ProbeVolume volume = backend.context ? bakeOnGpu(*backend.context, job, rays) : bakeByRays(job, rays);
+    volume.source = world.description;
+    volume.sourceHash = gltfSceneHash(options.scene);
+    volume.settings = job.settings;
+    requireFiniteLight(volume,
+                       "the light of " + world.description + " and its sky, " + sky.description + ",");
+    writeProbeVolume(options.output, volume);
+    if (!options.quiet) printSceneSummary(job, backend, volume, rays, millisecondsSince(start) / 1000.0);
 }
 
 void runMerge(const MergeOptions& options) {
