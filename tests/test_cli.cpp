@@ -561,12 +561,44 @@ TEST_F(Cli, RotateTakesEulerQuaternionOrMatrix) {
     }
 }
 
+// light and rotate write the format -o's extension names, as bake does: a .bin holds the JSON
+// file's probe as float32 (readProbeFile reads either), a .h a header; a probe with a sun (from
+// --extract-sun) goes to .json only (RotateRefusesBadRotations); .txt, which names no format, is
+// JSON.
+TEST_F(Cli, LightAndRotateWriteTheFormatTheirOutputNames) {
+    const std::vector<std::string> lights{"--directional", "0,1,0", "3,2,1", "--ambient", "0.1,0.1,0.1"};
+    auto light = [&](const std::string& output) {
+        std::vector<std::string> args{"light"};
+        args.insert(args.end(), lights.begin(), lights.end());
+        args.insert(args.end(), {"-o", file(output)});
+        runOk(args);
+    };
+    light("lights.json");
+    light("lights.bin");
+    light("lights.h");
+    light("lights.txt");
+    const ShCoefficients json = readProbeFile(file("lights.json"));
+    EXPECT_LT(relativeDifference(readProbeFile(file("lights.bin")), json), 1e-7); // float32
+    EXPECT_EQ(readText(file("lights.bin")).substr(0, 4), "SHPB");
+    EXPECT_NE(readText(file("lights.h")).find("static const float lights_sh[25][4]"), std::string::npos);
+    EXPECT_EQ(readProbeFile(file("lights.txt")).rgb, json.rgb);
+    runOk({"rotate", file("lights.bin"), "--euler", "0,90,0", "-o", file("turned.bin")});
+    runOk({"rotate", file("lights.json"), "--euler", "0,90,0", "-o", file("turned.json")});
+    EXPECT_LT(relativeDifference(readProbeFile(file("turned.bin")), readProbeFile(file("turned.json"))),
+              1e-7);
+}
+
 TEST_F(CliFailures, RotateRefusesBadRotations) {
     run({"light", "--ambient", "1,1,1", "-o", file("probe.json")});
     expectFailure(
         {{"rotate", file("probe.json"), "--matrix", "1,0,0,0,1,0,0,0,2", "-o", "OUT"}, 2, {"orthonormal"}});
     expectFailure({{"rotate", file("probe.json"), "-o", "OUT"}, 2, {"--euler", "--quat", "--matrix"}});
     expectFailure({{"rotate", file("missing.json"), "--euler", "0,90,0", "-o", "OUT"}, 2, {"missing.json"}});
+    runOk({"bake", "--extract-sun", "-q", "-o", file("sunny.json")});
+    expectFailure({{"rotate", file("sunny.json"), "--euler", "0,90,0", "-o", "OUT"},
+                   2,
+                   {"has a sun", "binary cannot hold", "write .json"},
+                   "turned.bin"});
 }
 
 TEST_F(CliFailures, BadLightsAndWindows) {

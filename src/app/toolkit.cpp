@@ -8,6 +8,8 @@
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/short_number.h"
+#include "formats/engine_export.h"
+#include "formats/output_format.h"
 #include "formats/probe_file.h"
 #include "sh/basis.h"
 #include "sh/irradiance.h"
@@ -180,6 +182,27 @@ double largestMagnitude(const ShCoefficients& radiance) {
     return largest;
 }
 
+// The format -o's extension names, as bake and convert choose it (json where it names none); its
+// output checked before any work.
+const ExportFormat& outputFormatOf(const std::string& output) {
+    std::string format, path = output;
+    settleFormatAndOutput(format, path);
+    const ExportFormat& chosen = *findExportFormat(format);
+    checkOutputPath(output, chosen.content);
+    return chosen;
+}
+
+// A probe with a sun goes only where the format keeps it (json), as in convert.
+void writeInFormat(const ExportFormat& format, const std::string& output, const ShCoefficients& probe,
+                   const ProbeMetadata& metadata) {
+    if (metadata.sun && format.sun == SunHandling::Refused)
+        throw Error(ErrorKind::Input, metadata.source + " has a sun beside its coefficients, which " +
+                                          format.name + " cannot hold; write .json");
+    ExportOptions options;
+    options.metadata = metadata;
+    format.write(output, probe, options);
+}
+
 } // namespace
 
 void addLights(ShCoefficients& radiance, const LightOptions& options, const std::string& name) {
@@ -232,7 +255,10 @@ std::optional<std::vector<double>> windowFactorsFor(const Window& window, const 
 
 void addRotateOptions(CLI::App& command, RotateOptions& options) {
     command.add_option("probe", options.input, "Probe file: JSON, or binary of one probe")->required();
-    command.add_option("-o,--output", options.output, "Rotated coefficient file")->required();
+    command
+        .add_option("-o,--output", options.output,
+                    "Rotated probe, in the format its extension names (as bake's -o; JSON where none)")
+        ->required();
     addRotationOption(command, "--euler", options, 3, eulerRotation,
                       "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)",
                       numberFrom(-360.0, 360.0));
@@ -247,7 +273,7 @@ void addRotateOptions(CLI::App& command, RotateOptions& options) {
 
 void runRotate(const RotateOptions& options) {
     const GivenRotation& given = chosenRotation(options);
-    checkOutputPath(options.output);
+    const ExportFormat& format = outputFormatOf(options.output);
     checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
     Probe probe = readProbe(options.input);
     const glm::dmat3& rotation = given.matrix;
@@ -257,14 +283,17 @@ void runRotate(const RotateOptions& options) {
     metadata.sun = probe.sun;
     if (metadata.sun) metadata.sun->direction = glm::normalize(rotation * metadata.sun->direction);
     const ShCoefficients& coefficients = probe.coefficients;
-    writeProbeFile(options.output, rotate(makeShRotation(rotation, coefficients.order), coefficients),
-                   metadata);
+    writeInFormat(format, options.output, rotate(makeShRotation(rotation, coefficients.order), coefficients),
+                  metadata);
     std::fprintf(reportStream(options.output), "shprobe rotate: %s -> %s (%s)\n", options.input.c_str(),
                  options.output.c_str(), given.description.c_str());
 }
 
 void addLightOptions(CLI::App& command, LightCommandOptions& options) {
-    command.add_option("-o,--output", options.output, "Coefficient file (JSON)")->required();
+    command
+        .add_option("-o,--output", options.output,
+                    "Probe file, in the format its extension names (as bake's -o; JSON where none)")
+        ->required();
     addRangeOption(command, "--order", options.order, "SH order", 1, kMaxOrder);
     command.add_flag("--irradiance", options.irradiance, "Write irradiance instead of radiance");
     addLightOptions(command, options.lights);
@@ -273,12 +302,13 @@ void addLightOptions(CLI::App& command, LightCommandOptions& options) {
 void runLight(const LightCommandOptions& options) {
     if (!hasLights(options.lights))
         throw Error(ErrorKind::Input, "light: give at least one --ambient, --directional or --sphere");
-    checkOutputPath(options.output);
+    const ExportFormat& format = outputFormatOf(options.output);
     ShCoefficients radiance = makeCoefficients(options.order, Quantity::Radiance);
     addLights(radiance, options.lights, "light");
     ProbeMetadata metadata;
     metadata.source = "analytic lights";
-    writeProbeFile(options.output, options.irradiance ? convolveIrradiance(radiance) : radiance, metadata);
+    writeInFormat(format, options.output, options.irradiance ? convolveIrradiance(radiance) : radiance,
+                  metadata);
     std::fprintf(reportStream(options.output),
                  "shprobe light: %zu ambient, %zu directional, %zu spherical -> %s\n",
                  options.lights.ambient.size(), options.lights.directional.size(),

@@ -121,7 +121,7 @@ HeaderPlan headerPlan(const ShCoefficients& probe) {
 void appendHeaderComment(std::ostringstream& out, const ShCoefficients& probe, const HeaderPlan& plan,
                          const std::string& array, const std::string& source, HeaderLanguage language) {
     int count = coefficientCount(probe.order);
-    out << "// An SH light probe for shprobe/glsl/sh_irradiance.glsl, written by shprobe bake.\n"
+    out << "// An SH light probe for shprobe/glsl/sh_irradiance.glsl, written by shprobe.\n"
         << "//   source     " << commentText(source) << "\n"
         << "//   order      " << probe.order << ": bands l = 0.." << probe.order - 1 << ", " << count
         << " coefficients (real orthonormal SH with the Condon-Shortley phase)\n"
