@@ -275,9 +275,7 @@ class ExrDecoder final : public ImageDecoder {
                     at[4 * t] = float(value) * (1.0f / 4294967295.0f); // as OpenImageIO's convert_type
                 }
         } catch (const std::exception& error) {
-            throw Error(ErrorKind::Input,
-                        path_ + ": cannot read the pixels; the file may be truncated or corrupt (" +
-                            oneLine(error.what()) + ")");
+            failPixels(error);
         }
     }
 
@@ -294,13 +292,22 @@ class ExrDecoder final : public ImageDecoder {
             int size = 0;
             part_->rawPixelData(last, data, size);
         } catch (const std::exception& error) {
-            throw Error(ErrorKind::Input,
-                        path_ + ": cannot read the pixels; the file may be truncated or corrupt (" +
-                            oneLine(error.what()) + ")");
+            failPixels(error);
         }
     }
 
   private:
+    // OpenEXR's message on one line. rawPixelData puts "Error reading pixel data from image file
+    // \"X\". " before a message that may begin so already: the sentence is said once.
+    [[noreturn]] void failPixels(const std::exception& error) const {
+        std::string text = oneLine(error.what());
+        const size_t end = text.find(". ");
+        if (end != std::string::npos && text.compare(end + 2, end + 2, text, 0, end + 2) == 0)
+            text.erase(0, end + 2);
+        throw Error(ErrorKind::Input,
+                    path_ + ": cannot read the pixels; the file may be truncated or corrupt (" + text + ")");
+    }
+
     std::string path_;
     std::unique_ptr<Imf::IStream> stream_; // the file in memory, which file_ reads; or none
     std::unique_ptr<Imf::MultiPartInputFile> file_;
