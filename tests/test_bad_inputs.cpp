@@ -327,7 +327,8 @@ TEST_F(BadInputs, TexelsOverflowingFp32SumsAreRefused) {
 
 // Lights past float added to a finite projection: refused on every backend, naming the lights (the
 // image is not at fault). An --ambient of 5e37 has L00 = 5e37 sqrt(4 pi) = 1.8e38, which fits, but
-// its irradiance pi L00 = 5.6e38 does not; 1e37's (1.1e38) does.
+// its irradiance pi L00 = 5.6e38 does not; 1e37's (1.1e38) does. An image of 5e37 whose irradiance
+// is past float already (the double reference bakes it) is refused too once lights add to it.
 TEST_F(BadInputs, LightsPastFloatAreRefused) {
     writeImage(file("plain.exr"), constantImage(32, 16, glm::vec3(1.0f)));
     for (const char* backend : {"gpu", "cpu", "reference"})
@@ -337,6 +338,11 @@ TEST_F(BadInputs, LightsPastFloatAreRefused) {
                  2,
                  {"error: " + file("plain.exr"), "--ambient", "past float", "make them weaker"}});
     runOk({"bake", file("plain.exr"), "--ambient", "1e37,1,1", "-q", "-o", file("bright.json")});
+    writeImage(file("bright.exr"), constantImage(32, 16, glm::vec3(5e37f)));
+    expectFailure(
+        {{"bake", file("bright.exr"), "--ambient", "1e39,1,1", "--backend", "reference", "-o", "OUT"},
+         2,
+         {"error: " + file("bright.exr"), "radiance reaches", "past float"}});
     expectFailure(
         {{"light", "--ambient", "1e39,1,1", "-o", "OUT"}, 2, {"light: ", "--ambient", "past float"}});
 }

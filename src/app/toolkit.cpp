@@ -172,13 +172,12 @@ bool hasLights(const LightOptions& options) {
 
 namespace {
 
-// The largest magnitude among the probe's coefficients and its irradiance's (NaN counts as infinite).
-double largestMagnitude(const ShCoefficients& radiance) {
+// The largest magnitude among the probe's coefficients (NaN counts as infinite).
+double largestMagnitude(const ShCoefficients& probe) {
     double largest = 0.0;
-    for (const ShCoefficients& probe : {radiance, convolveIrradiance(radiance)})
-        for (const glm::dvec3& coefficient : probe.rgb)
-            for (int c = 0; c < 3; ++c)
-                largest = std::isnan(coefficient[c]) ? HUGE_VAL : std::max(largest, std::abs(coefficient[c]));
+    for (const glm::dvec3& coefficient : probe.rgb)
+        for (int c = 0; c < 3; ++c)
+            largest = std::isnan(coefficient[c]) ? HUGE_VAL : std::max(largest, std::abs(coefficient[c]));
     return largest;
 }
 
@@ -206,19 +205,24 @@ void writeInFormat(const ExportFormat& format, const std::string& output, const 
 } // namespace
 
 void addLights(ShCoefficients& radiance, const LightOptions& options, const std::string& name) {
-    const double floatMax = std::numeric_limits<float>::max();
-    const bool fitted = largestMagnitude(radiance) <= floatMax;
+    const double before =
+        std::max(largestMagnitude(radiance), largestMagnitude(convolveIrradiance(radiance)));
     for (const glm::dvec3& ambient : options.ambient)
         addAmbient(radiance, ambient);
     for (const DirectionalLight& light : options.directional)
         addDirectionalLight(radiance, light);
     for (const SphericalLight& light : options.spheres)
         addSphericalLight(radiance, light);
-    const double largest = largestMagnitude(radiance);
-    if (!fitted || largest <= floatMax) return;
+    const double floatMax = std::numeric_limits<float>::max();
+    const double lit = largestMagnitude(radiance),
+                 irradiance = largestMagnitude(convolveIrradiance(radiance));
+    if (std::max(lit, irradiance) <= floatMax || !(std::max(lit, irradiance) > before)) return;
+    const bool radianceOver = !(lit <= floatMax);
     throw Error(ErrorKind::Input,
-                name + ": with the lights of --ambient, --directional and --sphere the probe " + "reaches " +
-                    shortNumber(largest) + ", past float's " + shortNumber(floatMax) + ": make them weaker");
+                name + ": with the lights of --ambient, --directional and --sphere the probe's " +
+                    (radianceOver ? "radiance" : "irradiance") + " reaches " +
+                    shortNumber(radianceOver ? lit : irradiance) + ", past float's " + shortNumber(floatMax) +
+                    ": make them weaker");
 }
 
 Window parseWindow(const std::string& text) {

@@ -22,8 +22,9 @@ struct LightOptions {
 // A malformed light is refused while the command line is parsed: Error(Input) naming the option.
 void addLightOptions(CLI::App& command, LightOptions& options);
 bool hasLights(const LightOptions& options);
-// Adds the lights; throws Error(Input) naming `name` when they take a probe that fitted float's
-// range past it (or its irradiance, pi L00 at most): neither the GPU nor the files engines read hold it.
+// Adds the lights; throws Error(Input) naming `name` when they take the probe or its irradiance (pi
+// L00 at most) past float's range, or further past it: neither the GPU nor the files engines read
+// hold it.
 void addLights(ShCoefficients& radiance, const LightOptions& options, const std::string& name);
 
 // --window none | hanning:WIDTH | lanczos:WIDTH | dering | dering-lanczos
