@@ -28,22 +28,20 @@ const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 const char* kCpuBackendHint =
     "; nothing was run on the device (`shprobe bake --backend cpu` bakes without one)";
 
-// Vulkan's count-then-fill lists, `enumerate(&count, items)`: asked again where the list grew in
-// between (VK_INCOMPLETE); any other failure throws, naming the call.
-template <class Item, class Enumerate>
-std::vector<Item> enumerated(const Enumerate& enumerate, const char* call) {
+// Vulkan's count-then-fill lists, `enumerate(&count, items)`, for the queries below: asked again
+// where the list grew in between (VK_INCOMPLETE); a list that cannot be read counts as empty, so
+// that what it would name counts as absent (a layer's extension, a device's).
+template <class Item, class Enumerate> std::vector<Item> listed(const Enumerate& enumerate) {
     std::vector<Item> items;
     VkResult result = VK_INCOMPLETE;
     while (result == VK_INCOMPLETE) {
         uint32_t count = 0;
-        if (VkResult counted = enumerate(&count, nullptr); counted != VK_SUCCESS)
-            throwVkError(counted, call, __FILE__, __LINE__);
+        if (enumerate(&count, nullptr) != VK_SUCCESS) return {};
         items.resize(count);
         result = enumerate(&count, items.data());
         items.resize(count);
     }
-    if (result != VK_SUCCESS) throwVkError(result, call, __FILE__, __LINE__);
-    return items;
+    return result == VK_SUCCESS ? items : std::vector<Item>{};
 }
 
 bool envFlag(const char* name) {
@@ -54,19 +52,16 @@ bool envFlag(const char* name) {
 // Synchronization validation (hazards between commands: missing barriers) comes with the layer's
 // VK_EXT_validation_features, which Debian 12's layer (1.3.239) has; without it, the plain checks.
 bool layerHasExtension(const char* layer, const char* extension) {
-    const auto extensions = enumerated<VkExtensionProperties>(
-        [&](uint32_t* count, VkExtensionProperties* items) {
-            return vkEnumerateInstanceExtensionProperties(layer, count, items);
-        },
-        "vkEnumerateInstanceExtensionProperties");
+    const auto extensions = listed<VkExtensionProperties>([&](uint32_t* count, VkExtensionProperties* items) {
+        return vkEnumerateInstanceExtensionProperties(layer, count, items);
+    });
     return std::any_of(extensions.begin(), extensions.end(), [&](const VkExtensionProperties& e) {
         return std::strcmp(e.extensionName, extension) == 0;
     });
 }
 
 bool hasInstanceLayer(const char* name) {
-    const auto layers = enumerated<VkLayerProperties>(vkEnumerateInstanceLayerProperties,
-                                                      "vkEnumerateInstanceLayerProperties");
+    const auto layers = listed<VkLayerProperties>(vkEnumerateInstanceLayerProperties);
     return std::any_of(layers.begin(), layers.end(), [&](const VkLayerProperties& layer) {
         return std::strcmp(layer.layerName, name) == 0;
     });
@@ -223,11 +218,11 @@ const DeviceInfo& findRequestedDevice(const std::vector<DeviceInfo>& devices, co
 std::vector<VkPhysicalDevice> enumeratePhysicalDevices(VkInstance instance) {
     // The loader starts the listed drivers here; their failures are the driver list's too.
     DeviceStep step("listing the Vulkan devices", DeviceWork::DriverLoading);
-    return enumerated<VkPhysicalDevice>(
-        [&](uint32_t* count, VkPhysicalDevice* items) {
-            return vkEnumeratePhysicalDevices(instance, count, items);
-        },
-        "vkEnumeratePhysicalDevices");
+    uint32_t count = 0;
+    VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
+    std::vector<VkPhysicalDevice> physicalDevices(count);
+    VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, physicalDevices.data()));
+    return physicalDevices;
 }
 
 std::vector<DeviceInfo> describeDevices(const std::vector<VkPhysicalDevice>& physicalDevices) {
@@ -268,11 +263,9 @@ VkDebugUtilsMessengerEXT createMessenger(VkInstance instance, ValidationLog* log
 }
 
 bool hasDeviceExtension(VkPhysicalDevice physicalDevice, const std::string& name) {
-    const auto extensions = enumerated<VkExtensionProperties>(
-        [&](uint32_t* count, VkExtensionProperties* items) {
-            return vkEnumerateDeviceExtensionProperties(physicalDevice, nullptr, count, items);
-        },
-        "vkEnumerateDeviceExtensionProperties");
+    const auto extensions = listed<VkExtensionProperties>([&](uint32_t* count, VkExtensionProperties* items) {
+        return vkEnumerateDeviceExtensionProperties(physicalDevice, nullptr, count, items);
+    });
     return std::any_of(extensions.begin(), extensions.end(),
                        [&](const VkExtensionProperties& e) { return name == e.extensionName; });
 }
