@@ -33,7 +33,8 @@
 #   include/shprobe/shprobe{,_scene,_render}_spirv.h  the embedded-module declarations (generated)
 #   include/shprobe/glsl/                      src/glsl: the C++/GLSL shared headers
 #                                              (<shprobe/glsl/gpu_interface.h>) and the GLSL includes
-#   share/shprobe/spirv/*.spv, INTERFACE.md    every module built into the libraries, and its contract
+#   share/shprobe/spirv/*.spv, INTERFACE.md    the modules of shprobe_spirv and shprobe_render_spirv
+#                                              (the scene capture's stay inside), and their contract
 #   share/shprobe/shaders/*.glsl               the modules' sources (compile with -I include/shprobe/glsl)
 #   lib/cmake/shprobe/                         shprobeConfig.cmake, shprobeConfigVersion.cmake (same
 #                                              major.minor: 0.x may break the interface), the targets

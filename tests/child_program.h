@@ -1,6 +1,6 @@
 // Runs the shprobe program as a child for the tests of what it does with hostile inputs and
-// outputs (test_bad_inputs, test_reliability): stdout and stderr captured through files, and a
-// fixture whose expectFailure checks the rules every failure follows (the exit code, exactly one
+// outputs (test_bad_inputs, test_reliability, test_cli, test_scene_cli): stdout and stderr captured through
+// files, and a fixture whose expectFailure checks the rules every failure follows (the exit code, exactly one
 // line "shprobe: error: ...", no file left behind, an existing output unchanged).
 #pragma once
 #include "render/run_program.h"

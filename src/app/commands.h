@@ -139,7 +139,7 @@ struct SceneOptions {
     int order = 3;
     int faceSize = 32;
     int bounces = 1;
-    bool bouncesGiven = false;        // --bounces on the command line (not with --brick or --previous)
+    bool bouncesGiven = false;        // --bounces on the command line (not with --previous)
     std::string sky;                  // any input bake takes; empty: the built-in sky
     int skyFaceSize = 0;              // 0: the sky's own (128 for the built-in sky)
     std::optional<BrickOption> brick; // I/N: one brick of the grid, one bounce

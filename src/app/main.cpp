@@ -145,8 +145,8 @@ int main(int argc, char** argv) {
         {"bench", shprobe::kBenchSummary, [&](CLI::App& c) { addBench(c, bench, benchJob); },
          [&](const CLI::App&) { runBench(bench, benchJob); }},
     };
-    // Only the command the line names gets its options: constructing every command's options was a
-    // third of what `shprobe --help` ran (docs/benchmark.md).
+    // Only the command the line names gets its options: constructing every command's options was
+    // much of what `shprobe --help` ran (docs/benchmark.md).
     const std::string_view named = commandNamed(argc, argv);
     std::string names;
     bool known = named.empty();

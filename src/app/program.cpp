@@ -77,8 +77,8 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
         return exitCode(e.kind());
     }
 
-    // Only once a command runs: parsing writes no file, and the handler's thread is a tenth of
-    // what `shprobe --help` takes (docs/benchmark.md).
+    // Only once a command runs: parsing writes no file, and the handler's thread is a fair part
+    // of what `shprobe --help` takes (docs/benchmark.md).
     removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
     prepareHeap();
     try {

@@ -68,7 +68,9 @@ void addRelightOptions(CLI::App& command, RelightOptions& options) {
     command.add_option("-o,--output", options.output, "Probe volume to write")->required();
     CLI::Option* sky = command.add_option("--sky", options.sky,
                                           "The new sky: any input `bake` takes (default: the built-in sky)");
-    command.add_option("--probe", options.probe, "The new sky as a radiance probe file (JSON)")
+    command
+        .add_option("--probe", options.probe,
+                    "The new sky as a radiance probe file (JSON, or binary of one probe)")
         ->excludes(sky);
     command.add_option("--yaw", options.yaw, "The sky's turn about +Y, degrees")
         ->check(numberFrom(-360.0, 360.0));

@@ -67,7 +67,10 @@ void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
             ->excludes(command.get_option("--volume"));
     CLI::Option* sky =
         command.add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)")->needs(scene);
-    command.add_option("--probe", options.probe, "With --transfer: the light's radiance coefficients (JSON)")
+    command
+        .add_option(
+            "--probe", options.probe,
+            "With --transfer: the light's radiance coefficients (a probe file: JSON, or binary of one probe)")
         ->needs(transfer)
         ->excludes(sky);
     command

@@ -99,7 +99,7 @@ void addTransferOptions(CLI::App& command, TransferCommandOptions& options) {
                     "shadowed plus --bounces of the light the surfaces reflect")
         ->check(CLI::IsMember({"unshadowed", "shadowed", "interreflected"}))
         ->capture_default_str();
-    addRangeOption(command, "--order", options.order, "SH order, 1..8", 1, kMaxOrder);
+    addRangeOption(command, "--order", options.order, "SH order", 1, kMaxOrder);
     addRangeOption(command, "--rays", options.rays,
                    "Rays per vertex (and bounce), stratified, rounded up to a square", 1, kMaxTransferRays);
     addRangeOption(command, "--bounces", options.bounces, "interreflected: bounces off the surfaces", 0,

@@ -246,7 +246,7 @@ std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std:
     uint32_t order = wordAt(bytes, 8), quantity = wordAt(bytes, 12), count = wordAt(bytes, 16);
     uint32_t dataOffset = wordAt(bytes, 20);
     if (order < 1 || order > uint32_t(kMaxOrder))
-        fail(name, "order " + std::to_string(order) + " is outside 1..8");
+        fail(name, "order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxOrder));
     if (quantity > 1) fail(name, "quantity " + std::to_string(quantity) + " is neither 0 nor 1");
     if (dataOffset < kBinaryProbeHeaderBytes || dataOffset > bytes.size()) fail(name, "bad header size");
     uint64_t expected = uint64_t(count) * order * order * 3 * sizeof(float);

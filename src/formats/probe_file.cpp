@@ -34,7 +34,7 @@ const int kVersion = 1;
     throw Error(ErrorKind::Input, name + ": " + problem);
 }
 
-int requireOrder(const json& root, const std::string& name) {
+int orderField(const json& root, const std::string& name) {
     const json& value = requireField(root, "order", name);
     if (!value.is_number_integer() || value.get<int64_t>() < 1 || value.get<int64_t>() > kMaxOrder)
         fail(name, "field \"order\" must be an integer from 1 to " + std::to_string(kMaxOrder));
@@ -193,7 +193,7 @@ Probe parseProbe(std::string_view text, const std::string& name) {
         fail(name,
              "field \"convention\" is " + quotedInput(convention) + "; expected \"" + kConventionName + "\"");
 
-    ShCoefficients coefficients = makeCoefficients(requireOrder(root, name), requireQuantity(root, name));
+    ShCoefficients coefficients = makeCoefficients(orderField(root, name), requireQuantity(root, name));
     const json& rows = requireField(root, "coefficients", name);
     if (!rows.is_array() || rows.size() != coefficients.rgb.size())
         fail(name, "field \"coefficients\" must hold " + counted(coefficients.rgb.size(), "row") +

@@ -108,8 +108,8 @@ struct RayBakeOptions {
 };
 
 // `shprobe scene`'s rays a texel on both backends: 3 x 3 jittered rays. One ray through each
-// texel's centre aliases sharp edges; 3 x 3 is the fewest that keep sunlit probes within 1% of the
-// path tracer (docs/scene-probes.md, "At the defaults").
+// texel's centre aliases sharp edges; 3 x 3 is the fewest that keep every coefficient of sunlit
+// probes within the 2% of the path tracer asked of a bake (docs/scene-probes.md, "At the defaults").
 constexpr int kDefaultRaysPerTexel = 9;
 
 // Paths unless the cache casts fewer than a quarter of their rays: a probe's rays (at most 2 x 2 a

@@ -13,8 +13,7 @@
 
 namespace shprobe {
 
-// A thread should cast at least this many rays (a few milliseconds), so that starting it (tens of
-// microseconds) stays a small part of its run.
+// A thread should cast at least this many rays, so that starting it stays a small part of its run.
 constexpr size_t kRaysPerThread = 4096;
 
 // Rays against a World's triangles, cast from any number of threads at once.
