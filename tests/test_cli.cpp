@@ -597,7 +597,7 @@ TEST_F(CliFailures, RotateRefusesBadRotations) {
     runOk({"bake", "--extract-sun", "-q", "-o", file("sunny.json")});
     expectFailure({{"rotate", file("sunny.json"), "--euler", "0,90,0", "-o", "OUT"},
                    2,
-                   {"has a sun", "binary cannot hold", "write .json"},
+                   {"has a sun", "--format binary cannot hold", "an output name ending in .json"},
                    "turned.bin"});
 }
 

@@ -13,12 +13,7 @@ namespace shprobe {
 
 namespace {
 
-void checkProbeFits(const Probe& probe, const ExportFormat& format, const std::string& input) {
-    if (probe.sun && format.sun == SunHandling::Refused)
-        throw Error(ErrorKind::Input,
-                    input + " has a sun beside its coefficients, which --format " + format.name +
-                        " cannot hold; use --format json, or bake again without --extract-sun to keep "
-                        "the sun in the coefficients");
+void checkProbeFits(const Probe& probe, const ExportFormat& format) {
     if (probe.coefficients.order > format.maxOrder && format.maxOrder < 3)
         throw Error(ErrorKind::Input, "--format " + std::string(format.name) + " holds orders 1 to " +
                                           std::to_string(format.maxOrder));
@@ -46,7 +41,7 @@ void runConvert(const ConvertOptions& given) {
     checkOutputPath(options.output, format.content);
     checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
     const Probe probe = readProbe(options.input);
-    checkProbeFits(probe, format, options.input);
+    checkProbeFits(probe, format);
 
     ExportOptions exportOptions{.mapSize = options.mapSize, .mirror = options.mirror};
     exportOptions.metadata.source = options.input == "-" ? "standard input" : options.input;

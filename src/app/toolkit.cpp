@@ -191,12 +191,9 @@ const ExportFormat& outputFormatOf(const std::string& output) {
     return chosen;
 }
 
-// A probe with a sun goes only where the format keeps it (json), as in convert.
+// A probe with a sun goes only where the format keeps it (json): ExportFormat::write refuses it.
 void writeInFormat(const ExportFormat& format, const std::string& output, const ShCoefficients& probe,
                    const ProbeMetadata& metadata) {
-    if (metadata.sun && format.sun == SunHandling::Refused)
-        throw Error(ErrorKind::Input, metadata.source + " has a sun beside its coefficients, which " +
-                                          format.name + " cannot hold; write .json");
     ExportOptions options;
     options.metadata = metadata;
     format.write(output, probe, options);

@@ -494,8 +494,18 @@ void requireRepresentable(const ExportFormat& format, const ShCoefficients& prob
                                       numberText(probe.rgb[size_t(worstIndex)][worstChannel]) + ", " + holds);
 }
 
+void requireSunFits(const ExportFormat& format, const ExportOptions& options) {
+    if (!options.metadata.sun || format.sun != SunHandling::Refused) return;
+    const std::string name = options.metadata.source.empty() ? "the probe" : options.metadata.source;
+    throw Error(ErrorKind::Input,
+                name + " has a sun beside its coefficients, which --format " + format.name +
+                    " cannot hold; write json (--format json, or an output name ending in .json), or bake "
+                    "again without --extract-sun to keep the sun in the coefficients");
+}
+
 void ExportFormat::write(const std::string& path, const ShCoefficients& probe,
                          const ExportOptions& options) const {
+    requireSunFits(*this, options);
     requireRepresentable(*this, probe, options);
     writeFile(path, probe, options);
 }

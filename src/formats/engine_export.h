@@ -70,10 +70,14 @@ struct ExportFormat {
     std::vector<WrittenNumber> (*numbersOf)(const ShCoefficients& probe, const ExportOptions& options);
     void (*writeFile)(const std::string& path, const ShCoefficients& probe, const ExportOptions& options);
 
-    // Every caller writes through here: refuses a probe with a number the format cannot hold
-    // (requireRepresentable), then writes.
+    // Every caller writes through here: refuses a sun the format would drop (requireSunFits) and a
+    // number it cannot hold (requireRepresentable), then writes.
     void write(const std::string& path, const ShCoefficients& probe, const ExportOptions& options) const;
 };
+
+// Throws Error(Input) when options.metadata has a sun and the format would drop it (SunHandling::
+// Refused), naming the probe and the remedy. Nothing is written.
+void requireSunFits(const ExportFormat& format, const ExportOptions& options);
 
 // Throws Error(Input) when a number the format would write for the probe is not representable in
 // its type (NumberType), naming the probe (options.metadata.source) and its coefficient of largest
