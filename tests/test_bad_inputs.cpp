@@ -461,15 +461,19 @@ TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
 }
 
 // A binary probe file of several probes (a batch's) is not one probe: the readers say so instead
-// of taking the first alone.
+// of taking the first alone, also where the batch is larger than any JSON probe file (1 MiB).
 TEST_F(BadInputs, ProbeReadersTakeABinaryFileOfOneProbe) {
     const ShCoefficients probe = testProbe(3);
-    const std::vector<ShCoefficients> two{probe, probe};
-    writeBinaryProbes(file("two.bin"), two);
-    for (const std::vector<std::string>& args :
-         {std::vector<std::string>{"convert", file("two.bin"), "-o", "OUT"},
-          {"rotate", file("two.bin"), "--euler", "0,0,0", "-o", "OUT"}})
-        expectFailure({args, 2, {file("two.bin"), "holds 2 probes; give a file of one probe"}, "out.json"});
+    for (const size_t count : {size_t(2), size_t(20000)}) {
+        const std::vector<ShCoefficients> batch(count, probe);
+        writeBinaryProbes(file("batch.bin"), batch);
+        const std::string holds = "holds " + std::to_string(count) + " probes; give a file of one probe";
+        for (const std::vector<std::string>& args :
+             {std::vector<std::string>{"convert", file("batch.bin"), "-o", "OUT"},
+              {"rotate", file("batch.bin"), "--euler", "0,0,0", "-o", "OUT"}})
+            expectFailure({args, 2, {file("batch.bin"), holds}, "out.json"});
+    }
+    ASSERT_GT(fs::file_size(file("batch.bin")), uintmax_t(1) << 20);
 }
 
 // A binary probe is known by its magic, not its name: from standard input, under another extension,

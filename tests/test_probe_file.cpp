@@ -239,7 +239,7 @@ TEST(ProbeFile, ReadRefusesWhatIsNotAProbeFile) {
     const std::pair<const char*, const char*> cases[] = {
         {"folder.json", "is a folder"},
         {"empty.json", "the file is empty"},
-        {"large.json", "the file has 1048577 bytes, more than a probe file can have (1048576 at most)"},
+        {"large.json", "the file has 1048577 bytes, more than a JSON probe file can have (1048576 at most)"},
         {"deep.json", "JSON nested deeper than 16 levels"},
         {"cut.json", "not valid JSON (parse error at line"},
         {"absent.json", "no such file"},

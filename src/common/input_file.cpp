@@ -26,11 +26,6 @@ struct Descriptor {
     }
 };
 
-std::string sizeLimitText(uint64_t bytes, uint64_t maxBytes, const char* what) {
-    return "the file has " + std::to_string(bytes) + " bytes, more than " + what + " can have (" +
-           std::to_string(maxBytes) + " at most)";
-}
-
 // Opens a regular file for reading, without blocking, and checks what it is from the open file
 // itself (fstat), so nothing can be swapped in between the check and the read.
 int openRegular(const std::string& path, const char* what, struct stat& status) {
@@ -104,6 +99,11 @@ uint64_t checkInputFile(const std::string& path, const char* what) {
     struct stat status {};
     Descriptor file{openRegular(path, what, status)};
     return uint64_t(status.st_size);
+}
+
+std::string sizeLimitText(uint64_t bytes, uint64_t maxBytes, const char* what) {
+    return "the file has " + std::to_string(bytes) + " bytes, more than " + what + " can have (" +
+           std::to_string(maxBytes) + " at most)";
 }
 
 std::string readInputFile(const std::string& path, uint64_t maxBytes, const char* what) {

@@ -31,5 +31,7 @@ uint64_t checkInputFile(const std::string& path, const char* what);
 // before it is read, or as soon as standard input passes the limit). Only regular files are
 // opened; the rest are refused as checkInputFile does.
 std::string readInputFile(const std::string& path, uint64_t maxBytes, const char* what);
+// "the file has B bytes, more than WHAT can have (M at most)", readInputFile's refusal.
+std::string sizeLimitText(uint64_t bytes, uint64_t maxBytes, const char* what);
 
 } // namespace shprobe

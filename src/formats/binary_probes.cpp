@@ -14,9 +14,6 @@ namespace shprobe {
 
 namespace {
 
-// 10,000 probes of order 8 take 7.7 MB; a file far larger than that is not read.
-constexpr uint64_t kMaxBinaryProbeFileBytes = uint64_t(256) << 20;
-
 constexpr char kMagic[4] = {'S', 'H', 'P', 'B'};
 
 void appendWord(std::string& bytes, uint32_t value) {
@@ -83,7 +80,7 @@ bool isBinaryProbeData(std::string_view bytes) {
     return bytes.size() >= sizeof(kMagic) && std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) == 0;
 }
 
-std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std::string& name) {
+uint32_t binaryProbeCount(std::string_view bytes, const std::string& name) {
     if (!isBinaryProbeData(bytes)) fail(name, "not a binary probe file (magic)");
     if (bytes.size() < kBinaryProbeHeaderBytes) fail(name, "too short for a binary probe header");
     if (wordAt(bytes, 4) != kBinaryProbeVersion)
@@ -99,6 +96,12 @@ std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std:
         fail(name, "holds " + counted(bytes.size() - dataOffset, "data byte") + ", not " +
                        std::to_string(expected) + " for " + counted(count, "probe") + " of order " +
                        std::to_string(order));
+    return count;
+}
+
+std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std::string& name) {
+    const uint32_t count = binaryProbeCount(bytes, name);
+    const uint32_t order = wordAt(bytes, 8), quantity = wordAt(bytes, 12), dataOffset = wordAt(bytes, 20);
     std::vector<ShCoefficients> probes;
     size_t offset = dataOffset;
     for (uint32_t p = 0; p < count; ++p) {

@@ -24,12 +24,17 @@ namespace shprobe {
 //          32  float32  count x n^2 x 3: probe after probe, coefficients in flat-index order, r g b
 constexpr uint32_t kBinaryProbeVersion = 1;
 constexpr uint32_t kBinaryProbeHeaderBytes = 32;
+// 10,000 probes of order 8 take 7.7 MB; a file far larger than that is not read.
+constexpr uint64_t kMaxBinaryProbeFileBytes = uint64_t(256) << 20;
 
 std::string probesToBinary(std::span<const ShCoefficients> probes);
 // All probes must share order and quantity. Written atomically; throws Error(Output) naming the file.
 void writeBinaryProbes(const std::string& path, std::span<const ShCoefficients> probes);
 // Whether the bytes begin with the magic "SHPB" (readProbe takes such a file, whatever its name).
 bool isBinaryProbeData(std::string_view bytes);
+// Validates the header against the file's size and returns the number of probes, reading none;
+// throws Error(Input) naming `name` and what is wrong.
+uint32_t binaryProbeCount(std::string_view bytes, const std::string& name);
 // Parses and validates; throws Error(Input) naming `name` and what is wrong.
 std::vector<ShCoefficients> parseBinaryProbes(std::string_view bytes, const std::string& name);
 std::vector<ShCoefficients> readBinaryProbes(const std::string& path);

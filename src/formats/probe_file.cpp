@@ -20,8 +20,8 @@ namespace {
 
 using nlohmann::json;
 
-// A coefficient file of order 8 is a few kilobytes; anything far larger is not one, and is not
-// read into memory at all.
+// A JSON coefficient file of order 8 is a few kilobytes; anything far larger is not one, and is
+// not parsed.
 constexpr uint64_t kMaxProbeFileBytes = 1u << 20;
 // A coefficient file nests three levels (the object, "coefficients", a row). The parser stops
 // at this depth, before it builds the levels below: "[[[[..." is refused at once.
@@ -206,15 +206,22 @@ Probe parseProbe(std::string_view text, const std::string& name) {
     return probe;
 }
 
+// Read up to a batch file's limit, so that a batch's binary file is refused for holding many probes,
+// not for its size; a JSON file past its own limit is refused before it is parsed.
 Probe readProbe(const std::string& path) {
-    const std::string bytes = readInputFile(path, kMaxProbeFileBytes, "a probe file");
+    const std::string bytes = readInputFile(path, kMaxBinaryProbeFileBytes, "a probe file");
     const std::string name = path == "-" ? "standard input" : path;
-    if (!isBinaryProbeData(bytes)) return parseProbe(bytes, name);
-    std::vector<ShCoefficients> probes = parseBinaryProbes(bytes, name);
-    if (probes.size() != 1)
-        throw Error(ErrorKind::Input, name + ": the binary file holds " + counted(probes.size(), "probe") +
+    if (!isBinaryProbeData(bytes)) {
+        if (bytes.size() > kMaxProbeFileBytes)
+            throw Error(ErrorKind::Input,
+                        name + ": " + sizeLimitText(bytes.size(), kMaxProbeFileBytes, "a JSON probe file"));
+        return parseProbe(bytes, name);
+    }
+    const uint32_t count = binaryProbeCount(bytes, name);
+    if (count != 1)
+        throw Error(ErrorKind::Input, name + ": the binary file holds " + counted(count, "probe") +
                                           "; give a file of one probe");
-    return Probe{std::move(probes.front()), std::nullopt};
+    return Probe{std::move(parseBinaryProbes(bytes, name).front()), std::nullopt};
 }
 
 ShCoefficients parseProbeJson(std::string_view text, const std::string& name) {
