@@ -41,7 +41,7 @@ struct RunResult {
     std::string out;
     std::string err;
     double seconds = 0.0;
-    long peakKiB = 0; // the child's peak resident memory (ru_maxrss)
+    long peakKiB = 0; // the program's peak resident memory (ru_maxrss, as peak_launcher saw it)
 };
 
 struct RunOptions {
@@ -73,8 +73,8 @@ class Child {
         fs::create_directories(logFolder);
         outPath_ = logFolder / ("run" + std::to_string(++runs) + ".stdout");
         errPath_ = logFolder / ("run" + std::to_string(runs) + ".stderr");
-        std::vector<std::string> argStrings{SHPROBE_EXECUTABLE};
-        argStrings.insert(argStrings.end(), args.begin(), args.end());
+        peakPath_ = logFolder / ("run" + std::to_string(runs) + ".peak");
+        std::vector<std::string> argStrings = testing::launchedProgram(args);
         std::vector<std::string> envStrings = changedEnvironment(options.environment);
         std::vector<char*> argv = pointersTo(argStrings), envp = pointersTo(envStrings);
         const bool drop = options.asOtherUser && geteuid() == 0;
@@ -86,7 +86,8 @@ class Child {
     ~Child() {
         if (pid_ > 0 && !waited_) {
             kill(pid_, SIGKILL);
-            wait();
+            while (waitpid(pid_, nullptr, 0) < 0 && errno == EINTR) {
+            }
         }
     }
     Child(const Child&) = delete;
@@ -98,8 +99,7 @@ class Child {
     RunResult wait() {
         RunResult result;
         int status = 0;
-        struct rusage usage {};
-        while (wait4(pid_, &status, 0, &usage) < 0)
+        while (waitpid(pid_, &status, 0) < 0)
             if (errno != EINTR) {
                 ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
                 return result;
@@ -107,7 +107,7 @@ class Child {
         waited_ = true;
         result.seconds = std::chrono::duration<double>(Clock::now() - start_).count();
         result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-        result.peakKiB = usage.ru_maxrss;
+        result.peakKiB = testing::peakKiBIn(peakPath_);
         result.out = readText(outPath_);
         result.err = readText(errPath_);
         return result;
@@ -121,6 +121,8 @@ class Child {
         int err = open(errPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
         if (in < 0 || out < 0 || err < 0 || dup2(in, 0) < 0 || dup2(out, 1) < 0 || dup2(err, 2) < 0)
             _exit(126);
+        int peak = open(peakPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644); // before any drop
+        if (peak < 0 || dup2(peak, 3) < 0) _exit(126);
         struct sigaction standard {};
         standard.sa_handler = SIG_DFL;
         for (int number : {SIGINT, SIGTERM, SIGHUP})
@@ -138,7 +140,7 @@ class Child {
 
     pid_t pid_ = -1;
     bool waited_ = false;
-    fs::path outPath_, errPath_;
+    fs::path outPath_, errPath_, peakPath_;
     Clock::time_point start_;
 };
 

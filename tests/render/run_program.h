@@ -1,5 +1,6 @@
 // Runs the shprobe program as a child (posix_spawn with an argv array: no shell parses a path),
-// stdout and stderr captured through files, the environment ours with some variables changed.
+// stdout and stderr captured through files, the environment ours with some variables changed. The
+// program runs under tests/peak_launcher.cpp, which reports its own peak memory.
 #pragma once
 #include <gtest/gtest.h>
 
@@ -13,7 +14,6 @@
 #include <spawn.h>
 #include <sstream>
 #include <string>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
@@ -26,8 +26,23 @@ struct RunResult {
     int exitCode = -1; // the exit status, or 128 + signal
     std::string out;
     std::string err;
-    long peakKiB = 0; // the child's peak resident memory (ru_maxrss)
+    long peakKiB = 0; // the program's peak resident memory (ru_maxrss, as peak_launcher saw it)
 };
+
+// The program and its arguments, under peak_launcher, which writes the program's peak to its
+// descriptor 3.
+inline std::vector<std::string> launchedProgram(const std::vector<std::string>& args) {
+    std::vector<std::string> argStrings{SHPROBE_PEAK_LAUNCHER, "3", SHPROBE_EXECUTABLE};
+    argStrings.insert(argStrings.end(), args.begin(), args.end());
+    return argStrings;
+}
+
+inline long peakKiBIn(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    long kib = 0;
+    if (!(in >> kib)) ADD_FAILURE() << "peak_launcher wrote no peak to " << path;
+    return kib;
+}
 
 // A value sets the variable, nullopt removes it.
 using EnvironmentChanges = std::map<std::string, std::optional<std::string>>;
@@ -64,8 +79,8 @@ inline RunResult runProgram(const std::vector<std::string>& args, const std::fil
     std::filesystem::create_directories(logFolder);
     std::filesystem::path outPath = logFolder / ("run" + std::to_string(++runs) + ".stdout");
     std::filesystem::path errPath = logFolder / ("run" + std::to_string(runs) + ".stderr");
-    std::vector<std::string> argStrings{SHPROBE_EXECUTABLE};
-    argStrings.insert(argStrings.end(), args.begin(), args.end());
+    std::filesystem::path peakPath = logFolder / ("run" + std::to_string(runs) + ".peak");
+    std::vector<std::string> argStrings = launchedProgram(args);
     std::vector<std::string> envStrings = changedEnvironment(changes);
     std::vector<char*> argv = pointersTo(argStrings), envp = pointersTo(envStrings);
 
@@ -74,6 +89,7 @@ inline RunResult runProgram(const std::vector<std::string>& args, const std::fil
     posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
     posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 3, peakPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     pid_t pid = 0;
     int spawnError = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
     posix_spawn_file_actions_destroy(&actions);
@@ -83,13 +99,12 @@ inline RunResult runProgram(const std::vector<std::string>& args, const std::fil
         return result;
     }
     int status = 0;
-    struct rusage usage {};
-    while (wait4(pid, &status, 0, &usage) < 0)
+    while (waitpid(pid, &status, 0) < 0)
         if (errno != EINTR) {
-            ADD_FAILURE() << "wait4 failed: " << std::strerror(errno);
+            ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
             return result;
         }
-    result.peakKiB = usage.ru_maxrss;
+    result.peakKiB = peakKiBIn(peakPath);
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     result.out = readText(outPath);
     result.err = readText(errPath);
