@@ -7,7 +7,8 @@
 //   set 0: ray_capture_interface.h; SHPROBE_RAYS_CACHE: E_{k-1}; SHPROBE_RAYS_INPUT:
 //          CacheGatherPoint points[]; SHPROBE_RAYS_OUTPUT: vec4 gathered[] (rgb: E_k)
 //   push constants: RayCaptureConstants (work.x points from work.y; work.z: 1 where k > 1;
-//          work.w: g; seed.x: the seed, seed.y: k)
+//          work.w: g; seed.x: the seed, seed.y: k; pass: the rays of each point this dispatch
+//          casts, `gathered` holding the sums between)
 //   specialization: 0 = workgroup width; dispatch (groups, 1, 1): each invocation takes points
 //   x, x + width * groups, ...
 #extension GL_GOOGLE_include_directive : require
@@ -18,7 +19,7 @@ layout(local_size_x_id = SHPROBE_SPEC_LOCAL_SIZE) in;
 layout(std430, set = 0, binding = SHPROBE_RAYS_INPUT) readonly buffer Points {
     CacheGatherPoint points[];
 };
-layout(std430, set = 0, binding = SHPROBE_RAYS_OUTPUT) writeonly buffer Gathered {
+layout(std430, set = 0, binding = SHPROBE_RAYS_OUTPUT) buffer Gathered {
     vec4 gathered[];
 };
 
@@ -46,15 +47,13 @@ void main() {
             continue;
         }
         uint stream = pcgHash(pcgHash(rc.seed.x + pcgHash(rc.seed.y)) + p);
-        vec3 sum = vec3(0.0);
-        for (uint a = 0u; a < g; ++a) {
-            for (uint b = 0u; b < g; ++b) {
-                uint ray = 2u * (a * g + b);
-                float u1 = (float(a) + uniformAt(stream + ray)) / float(g);
-                float u2 = (float(b) + uniformAt(stream + ray + 1u)) / float(g);
-                sum += arriving(point.origin.xyz, cosineDirection(point.normal.xyz, u1, u2), rc.work.z != 0u).radiance;
-            }
+        uint first = rc.pass.x, end = rc.pass.x + rc.pass.y;
+        vec3 sum = first == 0u ? vec3(0.0) : gathered[p].rgb;
+        for (uint r = first; r < end; ++r) { // in stratum (r / g, r % g)
+            float u1 = (float(r / g) + uniformAt(stream + 2u * r)) / float(g);
+            float u2 = (float(r % g) + uniformAt(stream + 2u * r + 1u)) / float(g);
+            sum += arriving(point.origin.xyz, cosineDirection(point.normal.xyz, u1, u2), rc.work.z != 0u).radiance;
         }
-        gathered[p] = vec4(sum * (3.14159265358979 / float(g * g)), 0.0);
+        gathered[p] = vec4(end < g * g ? sum : sum * (3.14159265358979 / float(g * g)), 0.0);
     }
 }

@@ -16,7 +16,8 @@
 //          the shadow rays to the sky each stratum adds (the variant's SHPROBE_RAYS_STRATUM_SKY_RAYS);
 //          SHPROBE_RAYS_SUNLIT_CELLS and SHPROBE_RAYS_SUNLIT_PLANES: the paths' suns' rays into the world
 //   push constants: RayCaptureConstants (work.x: probes; work.z: 1 to reflect the cached bounce;
-//          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths and their tables)
+//          work.w: s; seed.zw: the view's stream base; paths: the bounces by paths and their tables;
+//          pass: the rays of each texel this dispatch casts, the output holding the sums between)
 //   specialization: 0 = workgroup width, 2 = the variant's bits (SHPROBE_RAYS_BY_PATHS for bounces by
 //   paths, SHPROBE_RAYS_STRATUM_SKY_RAYS where strata cast rays to the sky); dispatch (texel groups,
 //   probes, 1): each invocation takes
@@ -37,7 +38,7 @@ const bool kStratumSky = (kVariant & SHPROBE_RAYS_STRATUM_SKY_RAYS) != 0u;
 layout(std430, set = 0, binding = SHPROBE_RAYS_INPUT) readonly buffer Probes {
     RayProbe probes[];
 };
-layout(set = 0, binding = SHPROBE_RAYS_OUTPUT, rgba32f) uniform writeonly image2DArray cubemaps;
+layout(set = 0, binding = SHPROBE_RAYS_OUTPUT, rgba32f) uniform image2DArray cubemaps;
 layout(std430, set = 0, binding = SHPROBE_RAYS_DISTANCES) writeonly buffer Distances {
     float distances[];
 };
@@ -72,35 +73,41 @@ void main() {
         uint face = texel / faceTexels;
         uint i = texel % faceTexels % n;
         uint j = texel % faceTexels / n;
-        uvec2 stream = mix64Words(add64(rc.seed.zw, uvec2(texel, 0u)));
-        uint viewRay = texel * s * s; // the ray's index in the probe's view (scene/view_rays.h's order)
+        ivec3 at3 = ivec3(i, j, 6u * probe + face);
+        // The pass's rays r of the texel's s^2, in stratum (r % s, r / s), two draws each before them.
+        uint first = rc.pass.x, end = rc.pass.x + rc.pass.y;
+        uvec2 stream = skipRandomStates(mix64Words(add64(rc.seed.zw, uvec2(texel, 0u))), 2u * first);
+        uint viewRay = texel * s * s + first; // the ray's index in the probe's view (scene/view_rays.h's order)
         uint firstRay = 6u * faceTexels * s * s * probe;
-        uint path = firstTexelPath(face, i, j, n, s * s);
-        vec3 sum = vec3(0.0);
-        uint backFaces = 0u;
-        for (uint sb = 0u; sb < s; ++sb) {
-            for (uint sa = 0u; sa < s; ++sa) {
-                float ja = s == 1u ? 0.5 : nextRandom(stream);
-                float jb = s == 1u ? 0.5 : nextRandom(stream);
-                vec3 direction = normalize(unnormalizedFaceDirection(face, stratumCoord(i, sa, s, ja, n),
-                                                                     stratumCoord(j, sb, s, jb, n)));
-                PathNumbers numbers = PathNumbers(at.paths.xy, path++);
-                RayArrival arrival = kByPaths ? pathArriving(at.position.xyz, direction, numbers)
-                                                     : arriving(at.position.xyz, direction, rc.work.z != 0u);
-                uint skyRays = kStratumSky ? stratumSkyRays[stratumIndex(face, i, j, sa, sb, n, s)] : 0u;
-                if (skyRays > 0u) {
-                    bool escaped = arrival.distance == RAY_FAR;
-                    arrival.radiance = (escaped ? vec3(0.0) : arrival.radiance) +
-                                       skyThroughStratum(at, face, i, j, uvec2(sa, sb), skyRays, numbers.ray,
-                                                         escaped ? arrival.radiance : vec3(0.0));
-                }
-                sum += arrival.radiance;
-                backFaces += arrival.backFace ? 1u : 0u;
-                distances[firstRay + viewRay++] = arrival.backFace ? -arrival.distance : arrival.distance;
+        uint path = firstTexelPath(face, i, j, n, s * s) + first;
+        vec4 soFar = first == 0u ? vec4(0.0) : imageLoad(cubemaps, at3); // rgb: the sum; a: back faces
+        vec3 sum = soFar.rgb;
+        uint backFaces = uint(soFar.a);
+        for (uint r = first; r < end; ++r) {
+            uint sa = r % s, sb = r / s;
+            float ja = s == 1u ? 0.5 : nextRandom(stream);
+            float jb = s == 1u ? 0.5 : nextRandom(stream);
+            vec3 direction = normalize(unnormalizedFaceDirection(face, stratumCoord(i, sa, s, ja, n),
+                                                                 stratumCoord(j, sb, s, jb, n)));
+            PathNumbers numbers = PathNumbers(at.paths.xy, path++);
+            RayArrival arrival = kByPaths ? pathArriving(at.position.xyz, direction, numbers)
+                                          : arriving(at.position.xyz, direction, rc.work.z != 0u);
+            uint skyRays = kStratumSky ? stratumSkyRays[stratumIndex(face, i, j, sa, sb, n, s)] : 0u;
+            if (skyRays > 0u) {
+                bool escaped = arrival.distance == RAY_FAR;
+                arrival.radiance = (escaped ? vec3(0.0) : arrival.radiance) +
+                                   skyThroughStratum(at, face, i, j, uvec2(sa, sb), skyRays, numbers.ray,
+                                                     escaped ? arrival.radiance : vec3(0.0));
             }
+            sum += arrival.radiance;
+            backFaces += arrival.backFace ? 1u : 0u;
+            distances[firstRay + viewRay++] = arrival.backFace ? -arrival.distance : arrival.distance;
+        }
+        if (end < s * s) {
+            imageStore(cubemaps, at3, vec4(sum, float(backFaces)));
+            continue;
         }
         bool mostlyBack = 2u * backFaces > s * s;
-        imageStore(cubemaps, ivec3(i, j, 6u * probe + face),
-                   vec4(sum / float(s * s), mostlyBack ? SHPROBE_CAPTURE_BACK_FACE : 0.0));
+        imageStore(cubemaps, at3, vec4(sum / float(s * s), mostlyBack ? SHPROBE_CAPTURE_BACK_FACE : 0.0));
     }
 }

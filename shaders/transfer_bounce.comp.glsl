@@ -2,7 +2,8 @@
 // A bounce of per-vertex transfer (scene/transfer.h): for each vertex side, U_k = 1 / g^2 times the
 // sum, over its g x g rays (glsl/transfer_rays.glsl) that meet the front of a surface or either
 // side of a double-sided one (bvhClosestHit), of the albedo there times U_{k-1} of the side met,
-// interpolated over the triangle by the hit's barycentrics. One invocation per side.
+// interpolated over the triangle by the hit's barycentrics. One invocation per side, casting the
+// pass's share of its rays.
 //
 // Interface:
 //   set 0, bindings 0-4, push constants, specialization and dispatch: glsl/transfer_pass.glsl;
@@ -70,19 +71,17 @@ void main() {
     TransferSide side = sides[s];
     vec3 sum[SHPROBE_MAX_COEFFICIENTS];
     for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
-        sum[i] = vec3(0.0);
+        sum[i] = transferSumSoFar(s, i);
     if (transferCasts(side)) {
-        uvec2 state = side.ids.xy;
-        for (uint a = 0u; a < params.strata; ++a) {
-            for (uint b = 0u; b < params.strata; ++b) {
-                vec3 direction = transferRayDirection(side.normal.xyz, params.strata, a, b, state);
-                BvhHit hit;
-                if (bvhClosestHit(params.nodeCount, side.origin.xyz, direction, 0.0, transferNoLimit(), hit))
-                    gather(hit, sum);
-            }
+        uvec2 state = transferRayState(side);
+        for (uint k = params.firstRay; k < transferRaysEnd(); ++k) {
+            vec3 direction = transferRayDirection(side.normal.xyz, params.strata, k, state);
+            BvhHit hit;
+            if (bvhClosestHit(params.nodeCount, side.origin.xyz, direction, 0.0, transferNoLimit(), hit))
+                gather(hit, sum);
         }
     }
-    float scale = 1.0 / float(params.strata * params.strata);
+    float scale = transferStoredScale(1.0 / float(params.strata * params.strata));
     for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
         transfer[s * SH_COEFFICIENTS + i] = vec4(sum[i] * scale, 0.0);
 }

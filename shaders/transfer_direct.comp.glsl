@@ -1,7 +1,7 @@
 #version 450
 // The direct pass of per-vertex transfer (scene/transfer.h): for each vertex side, U_0 = pi / g^2
 // times the sum of y(w) over its g x g rays that meet nothing (bvhAnyHit), the rays of
-// glsl/transfer_rays.glsl. One invocation per side.
+// glsl/transfer_rays.glsl. One invocation per side, casting the pass's share of its rays.
 //
 // Interface:
 //   set 0, bindings 0-4, push constants, specialization and dispatch: glsl/transfer_pass.glsl;
@@ -16,22 +16,19 @@ void main() {
     TransferSide side = sides[s];
     float sum[SH_BASIS_CAPACITY];
     for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
-        sum[i] = 0.0;
+        sum[i] = transferSumSoFar(s, i).r;
     if (transferCasts(side)) {
-        uvec2 state = side.ids.xy;
+        uvec2 state = transferRayState(side);
         float y[SH_BASIS_CAPACITY];
-        for (uint a = 0u; a < params.strata; ++a) {
-            for (uint b = 0u; b < params.strata; ++b) {
-                vec3 direction = transferRayDirection(side.normal.xyz, params.strata, a, b, state);
-                if (bvhAnyHit(params.nodeCount, side.origin.xyz, direction, 0.0, transferNoLimit()))
-                    continue;
-                shEvalBasis(direction, y);
-                for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
-                    sum[i] += y[i];
-            }
+        for (uint k = params.firstRay; k < transferRaysEnd(); ++k) {
+            vec3 direction = transferRayDirection(side.normal.xyz, params.strata, k, state);
+            if (bvhAnyHit(params.nodeCount, side.origin.xyz, direction, 0.0, transferNoLimit())) continue;
+            shEvalBasis(direction, y);
+            for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
+                sum[i] += y[i];
         }
     }
-    float scale = 3.14159265358979323846 / float(params.strata * params.strata);
+    float scale = transferStoredScale(3.14159265358979323846 / float(params.strata * params.strata));
     for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
         transfer[s * SH_COEFFICIENTS + i] = vec4(vec3(sum[i] * scale), 0.0);
 }

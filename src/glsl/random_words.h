@@ -33,9 +33,19 @@ SHPROBE_FN uvec2 mix64Words(uvec2 z) {
     return xorShift64(z, 31u);
 }
 
-// The state after a draw from `state` (splitmix64's Weyl sequence).
+// splitmix64's Weyl sequence: a draw adds this to the state.
+SHPROBE_FN uvec2 randomStep() {
+    return uvec2(0x7f4a7c15u, 0x9e3779b9u);
+}
+
+// The state after a draw from `state`.
 SHPROBE_FN uvec2 nextRandomState(uvec2 state) {
-    return add64(state, uvec2(0x7f4a7c15u, 0x9e3779b9u));
+    return add64(state, randomStep());
+}
+
+// The state after `draws` draws from `state`, at once.
+SHPROBE_FN uvec2 skipRandomStates(uvec2 state, uint draws) {
+    return add64(state, multiply64(uvec2(draws, 0u), randomStep()));
 }
 
 // The number in [0, 1) drawn into `state` (the state nextRandomState gave).

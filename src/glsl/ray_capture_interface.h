@@ -106,6 +106,9 @@ struct RayCaptureConstants {
     uvec4 paths; // capture_rays: x: the bounces continued as paths from each ray's hit (0: none, the
                  // cache's if work.z); y: emitter triangles; z: sky texels picked; w: sun cells
                  // picked (SunlitSampler)
+    uvec4 pass;  // x: the first of each texel's s^2 (or point's g^2) rays this pass casts; y: how
+                 // many. A pass after the first carries on the sums the one before left in the
+                 // output; the last finishes them (gpu/ray_capture.cpp says why there are passes).
 };
 
 SHPROBE_END
@@ -116,7 +119,7 @@ static_assert(sizeof(shprobe::glsl::CacheGatherPoint) == 32);
 static_assert(sizeof(shprobe::glsl::RayProbe) == 32);
 static_assert(sizeof(shprobe::glsl::PickedIndex) == 8);
 static_assert(sizeof(shprobe::glsl::SunlitPlane) == 64);
-static_assert(sizeof(shprobe::glsl::RayCaptureConstants) == 80);
+static_assert(sizeof(shprobe::glsl::RayCaptureConstants) == 96);
 #endif
 
 #endif

@@ -37,12 +37,18 @@ struct TransferTexture {
     uvec4 extent; // x: first texel; y: width; z: height; w: 0
 };
 
-// transfer_direct.comp and transfer_bounce.comp: sides firstSide .. firstSide + sideCount - 1.
+// transfer_direct.comp and transfer_bounce.comp: sides firstSide .. firstSide + sideCount - 1, each
+// casting its rays firstRay .. firstRay + rayCount - 1 of g^2 (ray k in stratum (k / g, k % g)). A
+// pass after a side's first carries on the sums the pass before left in the output; the last scales
+// them.
 struct TransferParams {
     uint firstSide;
     uint sideCount;
     uint nodeCount; // of the hierarchy (0: no triangles)
     uint strata;    // g: each side casts g x g rays
+    uint firstRay;
+    uint rayCount;
+    uint unused[2];
 };
 
 SHPROBE_END
@@ -52,7 +58,7 @@ static_assert(sizeof(shprobe::glsl::TransferSide) == 48);
 static_assert(sizeof(shprobe::glsl::TransferTriangle) == 16);
 static_assert(sizeof(shprobe::glsl::TransferMaterial) == 32);
 static_assert(sizeof(shprobe::glsl::TransferTexture) == 16);
-static_assert(sizeof(shprobe::glsl::TransferParams) == 16);
+static_assert(sizeof(shprobe::glsl::TransferParams) == 32);
 #endif
 
 #endif

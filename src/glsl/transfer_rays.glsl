@@ -20,10 +20,11 @@ vec3 transferCosineDirection(vec3 n, float u1, float u2) {
     return -r * cos(phi) * t - r * sin(phi) * bitangent + sqrt(max(0.0, 1.0 - u1)) * n;
 }
 
-// The direction of the side's ray in stratum (a, b), drawing its two numbers from `state`.
-vec3 transferRayDirection(vec3 n, uint strata, uint a, uint b, inout uvec2 state) {
-    float u1 = (float(a) + nextRandom(state)) / float(strata);
-    float u2 = (float(b) + nextRandom(state)) / float(strata);
+// The direction of the side's ray k, in stratum (k / strata, k % strata), drawing its two numbers
+// from `state`.
+vec3 transferRayDirection(vec3 n, uint strata, uint k, inout uvec2 state) {
+    float u1 = (float(k / strata) + nextRandom(state)) / float(strata);
+    float u2 = (float(k % strata) + nextRandom(state)) / float(strata);
     return transferCosineDirection(n, u1, u2);
 }
 

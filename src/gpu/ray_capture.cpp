@@ -56,6 +56,30 @@ uint32_t groupsFor(uint64_t threads) {
     return uint32_t(std::clamp<uint64_t>((threads + kLocalSize - 1) / kLocalSize, 1, kMaxGroups));
 }
 
+// Workaround(llvmpipe, Mesa 22.3): llvmpipe ends an invocation's loops after 65535 iterations in
+// all (glsl/dispatch_plan.h), and a texel's or cache point's rays are a loop around traversals whose
+// steps the scene decides: 1,024 rays a texel, or 9 continued as paths of 53 bounces, ran past the
+// limit and left the light short. So a dispatch has each invocation cast at most this many rays
+// times the traversals each takes in a row (1 + its bounces as a path), carrying the sums from pass
+// to pass: a ray's segment may then take 2,000 loop iterations (its traversal, its next-event rays,
+// the tables' searches). Other devices spend a dispatch per pass.
+constexpr uint64_t kRaySegmentsPerPass = 32;
+
+// Sets constants.pass to each pass over `rays` rays per item (texel or point), where an invocation
+// takes `items` of `threads` and each ray is `segments` traversals in a row, and calls dispatchPass.
+template <typename DispatchPass>
+void forEachPass(glsl::RayCaptureConstants& constants, uint32_t rays, uint64_t segments, uint64_t items,
+                 DispatchPass&& dispatchPass) {
+    const uint64_t itemsPerInvocation =
+        (items + uint64_t(groupsFor(items)) * kLocalSize - 1) / (uint64_t(groupsFor(items)) * kLocalSize);
+    const uint32_t perPass =
+        uint32_t(std::max<uint64_t>(1, kRaySegmentsPerPass / (segments * itemsPerInvocation)));
+    for (uint32_t first = 0; first < rays; first += perPass) {
+        constants.pass = glm::uvec4(first, std::min(perPass, rays - first), 0u, 0u);
+        dispatchPass();
+    }
+}
+
 // Every cache point of the world's lattices at `spacing`, side by side (scene/surface_cache.h's
 // order), and each triangle's first point and m. A zero-area triangle's points have no normal: no
 // ray meets such a triangle, so they gather nothing (normal 0, which cache_gather.comp skips).
@@ -205,9 +229,11 @@ void gatherBounce(const Context& context, const SceneCapture& capture, const Ray
         const uint32_t count = std::min(chunk, rays.cachePoints - first);
         constants.work = glm::uvec4(count, first, bounce > 1 ? 1u : 0u, rays.gatherSide);
         submitAndWait(context, [&](VkCommandBuffer commands) {
-            dispatch(commands, rays.gather, rays.gatherSets[size_t(bounce - 1) % 2], constants,
-                     {groupsFor(count)});
-            computeWriteBarrier(commands);
+            forEachPass(constants, uint32_t(raysPerPoint), 1, count, [&] {
+                dispatch(commands, rays.gather, rays.gatherSets[size_t(bounce - 1) % 2], constants,
+                         {groupsFor(count)});
+                computeWriteBarrier(commands);
+            });
         });
     }
 }
@@ -289,8 +315,10 @@ void recordProbeRays(VkCommandBuffer commands, const SceneCapture& capture, cons
     const bool cachedBounce = rays.options.bounces > 0 && rays.options.bounceLight == BounceLight::Cache;
     constants.work = glm::uvec4(uint32_t(positions.size()), 0u, cachedBounce ? 1u : 0u, rays.texelSide);
     const uint64_t texels = 6 * uint64_t(capture.options.faceSize) * uint64_t(capture.options.faceSize);
-    dispatch(commands, rays.probes, set.set, constants, {groupsFor(texels), uint32_t(positions.size())});
-    computeWriteBarrier(commands);
+    forEachPass(constants, rays.texelSide * rays.texelSide, 1 + uint64_t(constants.paths.x), texels, [&] {
+        dispatch(commands, rays.probes, set.set, constants, {groupsFor(texels), uint32_t(positions.size())});
+        computeWriteBarrier(commands);
+    });
 }
 
 // Probe k's visibility map of a batch (DistanceMoments) and the nearest faces its rays met, from

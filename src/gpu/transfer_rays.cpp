@@ -167,6 +167,14 @@ void destroyGpuTransfer(GpuTransfer& gpu) {
         destroyBuffer(gpu.context, *buffer);
 }
 
+// Workaround(llvmpipe, Mesa 22.3): llvmpipe ends an invocation's loops after 65535 iterations in
+// all (glsl/dispatch_plan.h), and a side's rays are a loop around the hierarchy's traversal, whose
+// steps per ray the scene decides: 1,024 rays ran past the limit and left whole groups of sides
+// short. So a side's rays are cast in passes of this many, each pass carrying on the sums the one
+// before left: at order 8 a ray may then take over 3,000 traversal steps (a bounce gathers 3 x 64
+// sums per hit) before a pass nears the limit. Other devices spend a dispatch per pass.
+constexpr uint32_t kTransferRaysPerPass = 16;
+
 // Sides per submission: kTransferRaysPerSubmission rays, within one dispatch's workgroup count.
 uint32_t sidesPerChunk(const Device& device, const ComputeProgram& program, int strata) {
     const uint64_t byRays = std::max<uint64_t>(1, kTransferRaysPerSubmission / (uint64_t(strata) * strata));
@@ -186,12 +194,19 @@ uint64_t castPass(GpuTransfer& gpu, const TransferScene& scene, int k, std::span
     const VkDescriptorSet set = k == 0 ? gpu.programs.directSet : gpu.programs.bounceSets[k % 2];
     const uint32_t sides = uint32_t(scene.sides.size());
     const uint32_t chunk = sidesPerChunk(context, program, scene.strata);
+    const uint32_t rays = uint32_t(scene.strata) * uint32_t(scene.strata);
     for (uint32_t first = 0; first < sides; first += chunk) {
-        const glsl::TransferParams params{first, std::min(chunk, sides - first),
-                                          uint32_t(scene.bvh.nodes.size()), uint32_t(scene.strata)};
+        glsl::TransferParams params{.firstSide = first,
+                                    .sideCount = std::min(chunk, sides - first),
+                                    .nodeCount = uint32_t(scene.bvh.nodes.size()),
+                                    .strata = uint32_t(scene.strata)};
         submitAndWait(context, [&](VkCommandBuffer commands) {
-            dispatch(commands, program, set, params, {uint32_t(workgroupsFor(program, params.sideCount))});
-            computeWriteBarrier(commands);
+            for (params.firstRay = 0; params.firstRay < rays; params.firstRay += kTransferRaysPerPass) {
+                params.rayCount = std::min(kTransferRaysPerPass, rays - params.firstRay);
+                dispatch(commands, program, set, params,
+                         {uint32_t(workgroupsFor(program, params.sideCount))});
+                computeWriteBarrier(commands);
+            }
         });
     }
     const Buffer& written = gpu.buffers.transfer[size_t(k % 2)];

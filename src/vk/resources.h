@@ -67,8 +67,8 @@ VkQueryPool createTimestampPool(const Device& device);
 // Milliseconds between the pool's two timestamps (waits for them); 0 for VK_NULL_HANDLE.
 double timestampMilliseconds(const Device& device, VkQueryPool pool);
 
-// A barrier making compute-shader (and transfer) writes visible to later compute reads, transfers
-// and host reads.
+// A barrier making compute-shader (and transfer) writes visible to later compute reads and writes,
+// transfers and host reads (a later pass may add to what an earlier one wrote).
 void computeWriteBarrier(VkCommandBuffer commands);
 
 } // namespace shprobe
