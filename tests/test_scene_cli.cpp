@@ -26,6 +26,7 @@
 #include <map>
 #include <span>
 #include <sys/stat.h>
+#include <tuple>
 
 namespace shprobe {
 namespace {
@@ -276,6 +277,41 @@ TEST_F(SceneCommand, RelightableVolumesRelightWithoutACapture) {
                    2,
                    {"--cache-refinement", "keeps no cache"},
                    "out.shpv"});
+}
+
+// A volume written to standard output is the file's bytes alone: scene's, merge's and relight's
+// summaries then go to stderr, as bake's do (they were appended to the stream, which merge then
+// refused as longer than its header says).
+TEST_F(SceneCommand, VolumesOnStandardOutputHoldNoSummary) {
+    const std::string scene = file("open.glb");
+    testing::writeCornellBoxGltf(scene, {});
+    const std::vector<std::string> bake{"scene", scene,       "--grid", "2,2,2",     "--face-size",
+                                        "4",     "--bounces", "0",      "--transfer"};
+    auto to = [](std::vector<std::string> args, const std::string& output) {
+        args.insert(args.end(), {"-o", output});
+        return args;
+    };
+    auto brick = [&](const char* which) {
+        std::vector<std::string> args = bake;
+        args.insert(args.end(), {"--brick", which});
+        return args;
+    };
+    runOk(to(bake, file("whole.shpv")));
+    runOk(to(brick("0/2"), file("b0.shpv")));
+    runOk(to(brick("1/2"), file("b1.shpv")));
+    runOk(to({"relight", file("whole.shpv")}, file("relit.shpv")));
+    const std::vector<std::tuple<std::vector<std::string>, std::string, std::string>> cases = {
+        {bake, "whole.shpv", "wrote    -"},
+        {{"merge", file("b0.shpv"), file("b1.shpv")}, "whole.shpv", "merged   2 bricks into -"},
+        {{"relight", file("whole.shpv")}, "relit.shpv", "wrote    -"},
+    };
+    for (const auto& [args, same, summary] : cases) {
+        SCOPED_TRACE(args[0]);
+        const RunResult result = run(to(args, "-"));
+        ASSERT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_TRUE(result.out == bytesOf(file(same))) << result.out.size() << " bytes on stdout";
+        EXPECT_CONTAINS(result.err, summary);
+    }
 }
 
 // Probe relocation on the cpu backend, in the closed Cornell box with its blocks: of a 4x3x3 grid

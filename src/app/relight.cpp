@@ -51,13 +51,14 @@ std::string relitSettings(const ProbeVolume& volume, const RelightSky& sky, cons
 
 // Relighting against its bound, both best of 5 in this run: a pass reading the transfer's bytes on
 // all cores (relighting reads each once and writes a ninth as much).
-void printRelightTimings(ProbeVolume& volume, const ShCoefficients& sky) {
+void printRelightTimings(FILE* report, ProbeVolume& volume, const ShCoefficients& sky) {
     const double relight = bestMilliseconds(5, [&] { relightVolume(volume, sky); });
     const std::span<const std::byte> bytes = std::as_bytes(std::span(volume.transfer));
     const double read = memoryReadMilliseconds(bytes, 5);
-    std::printf("time     relight %.2f ms (best of 5); reading its transfer's %.1f MB on all cores %.2f ms: "
-                "%.2f of that bound\n",
-                relight, double(bytes.size()) / 1e6, read, read / relight);
+    std::fprintf(report,
+                 "time     relight %.2f ms (best of 5); reading its transfer's %.1f MB on all cores %.2f ms: "
+                 "%.2f of that bound\n",
+                 relight, double(bytes.size()) / 1e6, read, read / relight);
 }
 
 } // namespace
@@ -98,14 +99,15 @@ void runRelight(const RelightOptions& options) {
     requireFiniteLight(volume, "the sky " + sky.name);
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;
-    std::printf("relit    %s of %s by %s", counted(volume.probeCount(), "probe").c_str(),
-                options.volume.c_str(), sky.name.c_str());
+    FILE* report = reportStream(options.output);
+    std::fprintf(report, "relit    %s of %s by %s", counted(volume.probeCount(), "probe").c_str(),
+                 options.volume.c_str(), sky.name.c_str());
     if (options.yaw != 0.0 || options.pitch != 0.0)
-        std::printf(", turned yaw %g, pitch %g deg", options.yaw, options.pitch);
-    std::printf(" (order %d; emission and the scene's suns as baked) in %.2f ms\n", volume.order,
-                milliseconds);
-    std::printf("wrote    %s\n", options.output.c_str());
-    if (options.timings) printRelightTimings(volume, sky.radiance);
+        std::fprintf(report, ", turned yaw %g, pitch %g deg", options.yaw, options.pitch);
+    std::fprintf(report, " (order %d; emission and the scene's suns as baked) in %.2f ms\n", volume.order,
+                 milliseconds);
+    std::fprintf(report, "wrote    %s\n", options.output.c_str());
+    if (options.timings) printRelightTimings(report, volume, sky.radiance);
 }
 
 } // namespace shprobe

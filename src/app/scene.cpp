@@ -438,52 +438,57 @@ ProbeVolume bakeOnGpu(const Context& context, const SceneJob& job, VolumeBakeRep
 void printSceneSummary(const SceneJob& job, const RayBackend& backend, const ProbeVolume& volume,
                        const VolumeBakeReport& rays, double seconds) {
     const auto& [options, world, sky, grid, range, bounceLight, settings] = job;
+    FILE* report = reportStream(options.output); // stderr where the volume goes to standard output
     const size_t inside = std::count(volume.valid.begin(), volume.valid.end(), uint8_t(0)) + rays.filled;
-    std::printf("scene    %s\n", world.description.c_str());
+    std::fprintf(report, "scene    %s\n", world.description.c_str());
     const int skySeen = skyFaceSizeForProbes(options, sky.faceSize());
     const std::string averaged = skySeen < sky.faceSize() ? ", averaged to " + std::to_string(skySeen) +
                                                                 "^2 faces for the probes' rays"
                                                           : "";
     if (options.transfer)
-        std::printf("sky      %s, band-limited to order %d: the volume holds its transfer (`shprobe relight` "
-                    "lights it anew; emission and the scene's suns stay as baked)\n",
-                    sky.description.c_str(), options.order);
+        std::fprintf(
+            report,
+            "sky      %s, band-limited to order %d: the volume holds its transfer (`shprobe relight` "
+            "lights it anew; emission and the scene's suns stay as baked)\n",
+            sky.description.c_str(), options.order);
     else
-        std::printf("sky      %s%s\n", sky.description.c_str(), averaged.c_str());
-    std::printf("probes   %u of a %dx%dx%d grid (%s), order %d, faces %d^2, bounce %d\n", volume.probeCount(),
-                grid.counts.x, grid.counts.y, grid.counts.z,
-                options.brick ? ("brick " + options.brick->text).c_str() : "whole", options.order,
-                options.faceSize, volume.bounces);
-    std::printf("invalid  %zu inside geometry (more than %g of their view is back faces)\n",
-                inside + rays.relocated, options.invalidBackFaces);
+        std::fprintf(report, "sky      %s%s\n", sky.description.c_str(), averaged.c_str());
+    std::fprintf(report, "probes   %u of a %dx%dx%d grid (%s), order %d, faces %d^2, bounce %d\n",
+                 volume.probeCount(), grid.counts.x, grid.counts.y, grid.counts.z,
+                 options.brick ? ("brick " + options.brick->text).c_str() : "whole", options.order,
+                 options.faceSize, volume.bounces);
+    std::fprintf(report, "invalid  %zu inside geometry (more than %g of their view is back faces)\n",
+                 inside + rays.relocated, options.invalidBackFaces);
     const std::string reason = backend.reason.empty() ? "" : " (auto: " + backend.reason + ")";
     const std::string byPaths =
         "bounces by paths from the probes' hits" +
         (rays.counts.sunlitSuns > 0 ? ", sampling the lit points of " + counted(rays.counts.sunlitSuns, "sun")
                                     : std::string());
     if (backend.context) {
-        std::printf("backend  gpu: %s%s: rays, %d per texel, %s\n", backend.context->info.name.c_str(),
-                    reason.c_str(), raysPerTexel(options),
-                    bounceLight == BounceLight::Paths ? byPaths.c_str() : "every cache point gathered");
+        std::fprintf(report, "backend  gpu: %s%s: rays, %d per texel, %s\n",
+                     backend.context->info.name.c_str(), reason.c_str(), raysPerTexel(options),
+                     bounceLight == BounceLight::Paths ? byPaths.c_str() : "every cache point gathered");
     } else {
         const std::string bounced =
             bounceLight == BounceLight::Paths
                 ? byPaths
                 : counted(rays.counts.cachePoints, "cache point") + " (" +
                       counted(rays.counts.halvedCells, "cell halved", "cells halved") + ")";
-        std::printf("backend  cpu: rays by Embree, %d per texel%s, %s%s\n", raysPerTexel(options),
-                    options.probeDirections == "sphere" ? "'s worth over the sphere" : "", bounced.c_str(),
-                    reason.c_str());
-        std::printf("rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
-                    double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
-                    double(rays.counts.cacheRays));
+        std::fprintf(report, "backend  cpu: rays by Embree, %d per texel%s, %s%s\n", raysPerTexel(options),
+                     options.probeDirections == "sphere" ? "'s worth over the sphere" : "", bounced.c_str(),
+                     reason.c_str());
+        std::fprintf(report, "rays     %.3g (%.3g probes', %.3g gathering bounces)\n",
+                     double(rays.counts.probeRays + rays.counts.cacheRays), double(rays.counts.probeRays),
+                     double(rays.counts.cacheRays));
     }
     if (options.relocationLimit > 0.0)
-        std::printf("moved    %zu out of geometry (by at most %g of the smallest cell side), %zu stayed "
-                    "inside\n",
-                    rays.relocated, options.relocationLimit, inside);
-    std::printf("filled   %s from valid neighbours\n", counted(rays.filled, "invalid probe").c_str());
-    std::printf("wrote    %s in %.2f s\n", options.output.c_str(), seconds);
+        std::fprintf(report,
+                     "moved    %zu out of geometry (by at most %g of the smallest cell side), %zu stayed "
+                     "inside\n",
+                     rays.relocated, options.relocationLimit, inside);
+    std::fprintf(report, "filled   %s from valid neighbours\n",
+                 counted(rays.filled, "invalid probe").c_str());
+    std::fprintf(report, "wrote    %s in %.2f s\n", options.output.c_str(), seconds);
 }
 
 } // namespace
@@ -526,8 +531,9 @@ void runMerge(const MergeOptions& options) {
         bricks.push_back(readProbeVolume(path));
     const ProbeVolume whole = mergeProbeVolumes(bricks, options.bricks);
     writeProbeVolume(options.output, whole);
-    std::printf("merged   %s into %s (%s)\n", counted(bricks.size(), "brick").c_str(), options.output.c_str(),
-                counted(whole.probeCount(), "probe").c_str());
+    std::fprintf(reportStream(options.output), "merged   %s into %s (%s)\n",
+                 counted(bricks.size(), "brick").c_str(), options.output.c_str(),
+                 counted(whole.probeCount(), "probe").c_str());
 }
 
 } // namespace shprobe
