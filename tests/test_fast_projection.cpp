@@ -1,6 +1,7 @@
 // The fast float projection of cube maps and equirect maps against the double reference and closed
 // forms, its half-float input, its independence of the thread count, and its refusals.
 #include "common/error.h"
+#include "common/parallel.h"
 #include "sh/basis.h"
 #include "sh/fast_projection.h"
 #include "sh/projection.h"
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -584,6 +586,26 @@ TEST(FastProjection, InvalidInputThrows) {
     Cubemap truncated = cube;
     truncated.texels.pop_back();
     EXPECT_EQ(errorKind([&] { projectCubemapFast(truncated, 3); }), input);
+}
+
+// The fast path's rows go over all cores by forEachItem: every item once, and an exception a task
+// throws on any thread (out of memory in a worker) reaches the caller after all threads stop,
+// where it used to end the process (std::terminate).
+TEST(ForEachItem, EveryItemOnceAndExceptionsReachTheCaller) {
+    std::vector<std::atomic<int>> visits(1000);
+    forEachItem(1000, 4, [&](int item) { ++visits[size_t(item)]; });
+    EXPECT_TRUE(std::all_of(visits.begin(), visits.end(), [](const std::atomic<int>& v) { return v == 1; }));
+    for (int failing : {0, 1, 500, 999}) {
+        std::atomic<int> done{0};
+        EXPECT_THROW(forEachItem(1000, 4,
+                                 [&](int item) {
+                                     if (item == failing) throw std::bad_alloc();
+                                     ++done;
+                                 }),
+                     std::bad_alloc)
+            << failing;
+        EXPECT_LT(done.load(), 1000) << failing;
+    }
 }
 
 } // namespace

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <exception>
+#include <mutex>
 #include <system_error>
 #include <thread>
 #include <vector>
@@ -20,7 +22,9 @@ inline unsigned threadCount(size_t work, size_t workPerThread) {
 }
 
 // Calls task(item) for every item in [0, count) on `threads` threads, the caller's among them;
-// each takes the next item not yet taken. Items must write disjoint outputs and must not throw.
+// each takes the next item not yet taken. Items must write disjoint outputs. The first exception a
+// task throws (out of memory, say) stops the items not yet taken and reaches the caller once every
+// thread has stopped, as the plain loop's would; an exception leaving a thread would end the process.
 template <typename Task> void forEachItem(int count, unsigned threads, const Task& task) {
     if (threads <= 1) { // the plain loop: no shared counter
         for (int item = 0; item < count; ++item)
@@ -28,19 +32,30 @@ template <typename Task> void forEachItem(int count, unsigned threads, const Tas
         return;
     }
     std::atomic<int> next{0};
+    std::mutex failureLock;
+    std::exception_ptr failure;
     const auto work = [&] {
-        for (int item = next++; item < count; item = next++)
-            task(item);
-    };
-    std::vector<std::jthread> workers;
-    for (unsigned t = 1; t < threads && int(t) < count; ++t) {
         try {
-            workers.emplace_back(work);
-        } catch (const std::system_error&) {
-            break; // a process limit on threads: those running, and the caller's, take the rest
+            for (int item = next++; item < count; item = next++)
+                task(item);
+        } catch (...) {
+            next = count;
+            const std::lock_guard lock(failureLock);
+            if (!failure) failure = std::current_exception();
         }
-    }
-    work(); // then the workers join, as they go out of scope
+    };
+    {
+        std::vector<std::jthread> workers;
+        for (unsigned t = 1; t < threads && int(t) < count; ++t) {
+            try {
+                workers.emplace_back(work);
+            } catch (const std::system_error&) {
+                break; // a process limit on threads: those running, and the caller's, take the rest
+            }
+        }
+        work();
+    } // the workers join here
+    if (failure) std::rethrow_exception(failure);
 }
 
 } // namespace shprobe
