@@ -3,6 +3,7 @@
 #include "app/bench_job.h"
 #include "app/stopwatch.h"
 #include "common/error.h"
+#include "common/input_file.h"
 #include "common/output_file.h"
 #include "image/environment.h"
 #include "image/image_write.h"
@@ -49,23 +50,25 @@ Image horizontalCross(const Cubemap& cubemap) {
 }
 
 void writeLayouts(const std::string& equirect, const std::string& folder) {
+    const std::filesystem::path dir(folder);
+    std::vector<std::string> outputs{(dir / "cross.exr").string()};
+    for (const char* face : kFaceFileNames)
+        outputs.push_back((dir / "faces" / (std::string(face) + ".exr")).string());
+    checkOutputsAreNotInputs(outputs, {&equirect, 1});
     LoadOptions load;
     load.layout = Layout::Equirect;
     const Environment environment = loadEnvironment(equirect, load);
-    const std::filesystem::path dir(folder);
     std::error_code error;
     std::filesystem::create_directories(dir / "faces", error);
     if (error)
-        throw Error(ErrorKind::Output, "cannot create " + (dir / "faces").string() + ": " + error.message());
-    const std::string cross = (dir / "cross.exr").string();
-    writeImage(cross, horizontalCross(environment.cubemap));
-    std::printf("%s: %s as a horizontal cross, %d x %d\n", cross.c_str(), environment.description.c_str(),
-                4 * environment.cubemap.faceSize, 3 * environment.cubemap.faceSize);
-    for (int face = 0; face < kFaceCount; ++face) {
-        const std::string path =
-            (dir / "faces" / (std::string(kFaceFileNames[size_t(face)]) + ".exr")).string();
-        writeImage(path, faceImage(environment.cubemap, face));
-    }
+        throw Error(ErrorKind::Output,
+                    "cannot create " + (dir / "faces").string() + ": " + systemReason(error.value()));
+    writeImage(outputs[0], horizontalCross(environment.cubemap));
+    std::printf("%s: %s as a horizontal cross, %d x %d\n", outputs[0].c_str(),
+                environment.description.c_str(), 4 * environment.cubemap.faceSize,
+                3 * environment.cubemap.faceSize);
+    for (int face = 0; face < kFaceCount; ++face)
+        writeImage(outputs[size_t(face) + 1], faceImage(environment.cubemap, face));
     std::printf("%s/faces/{px,nx,py,ny,pz,nz}.exr: its six faces, %d x %d each\n", folder.c_str(),
                 environment.cubemap.faceSize, environment.cubemap.faceSize);
 }
