@@ -508,6 +508,25 @@ TEST_F(TransferProgram, BadInputsAreRefusedWithOneLine) {
     }
 }
 
+// What -o names is what is written: a .glb name with --format binary, a .shpt name with --format
+// glb, and a .gltf name (readers expect JSON there; transfer writes binary glTF) are refused in one
+// line that says so, nothing written.
+TEST_F(TransferProgram, OutputNamesAgreeWithTheFormat) {
+    const std::string scene = path("scene.glb");
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"--format binary -o " + path("t.glb"), "names a glb file but --format is binary"},
+        {"--format glb -o " + path("t.shpt"), "names a binary file but --format is glb"},
+        {"-o " + path("t.gltf"), "names a JSON glTF file"},
+    };
+    for (const auto& [args, says] : cases) {
+        EXPECT_EQ(run("transfer " + scene + " --model unshadowed " + args), 2) << args;
+        EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << args << ": " << err_;
+        EXPECT_NE(err_.find(says), std::string::npos) << args << ": " << err_;
+    }
+    for (const char* name : {"t.glb", "t.shpt", "t.gltf"})
+        EXPECT_FALSE(fs::exists(path(name))) << name;
+}
+
 // The .glb's JSON chunk and BIN chunk.
 struct Glb {
     nlohmann::json json;

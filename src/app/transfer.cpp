@@ -20,14 +20,36 @@
 #include <algorithm>
 #include <cstdio>
 #include <optional>
+#include <string_view>
 
 namespace shprobe {
 
 namespace {
 
+bool endsWith(const std::string& text, std::string_view end) {
+    return text.size() >= end.size() && text.compare(text.size() - end.size(), end.size(), end) == 0;
+}
+
 bool writesBinary(const TransferCommandOptions& options) {
     if (!options.format.empty()) return options.format == "binary";
-    return options.output.size() >= 5 && options.output.compare(options.output.size() - 5, 5, ".shpt") == 0;
+    return endsWith(options.output, ".shpt");
+}
+
+// The file -o names must be what is written: .shpt the transfer alone, .glb the scene (binary glTF;
+// a .gltf name would tell readers to expect JSON).
+void checkOutputName(const TransferCommandOptions& options) {
+    const std::string& output = options.output;
+    if (endsWith(output, ".gltf"))
+        throw Error(ErrorKind::Input,
+                    "-o " + output +
+                        " names a JSON glTF file, but transfer writes binary glTF (.glb) or "
+                        "the transfer alone (.shpt)");
+    const char* named = endsWith(output, ".shpt") ? "binary" : endsWith(output, ".glb") ? "glb" : nullptr;
+    if (named && !options.format.empty() && options.format != named)
+        throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
+                                          options.format + "; use the extension " +
+                                          (options.format == "binary" ? ".shpt" : ".glb") +
+                                          " or leave out --format");
 }
 
 // Every refusal the options and paths allow, before the scene is read.
@@ -36,6 +58,7 @@ void checkTransferOptions(const TransferCommandOptions& options) {
     if (options.bouncesGiven && model != TransferModel::Interreflected)
         throw Error(ErrorKind::Input,
                     "transfer: --bounces is for the interreflected model, not " + options.model);
+    checkOutputName(options);
     checkOutputPath(options.output, OutputContent::Binary);
     std::vector<std::string> inputs{options.scene};
     try {
