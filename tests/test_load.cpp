@@ -109,6 +109,13 @@ void writeCutHdr(const std::string& path) {
                                           << std::string("\x02\x02\x40\x00", 4);
 }
 
+// A Radiance HDR whose first scanline says it is 64 pixels long, not the header's 16384, then ends
+// (stb_image refuses such a line, but only after allocating the image).
+void writeHdrOfWrongLineLength(const std::string& path) {
+    std::ofstream(path, std::ios::binary) << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8192 +X 16384\n"
+                                          << std::string("\x02\x02\x00\x40\x80\x01", 6);
+}
+
 // A PNG of RGB8 pixels whose one IDAT chunk, CRC and all, holds the start of a deflate stream.
 void writeCutPng(const std::string& path) {
     const std::string header =
@@ -140,7 +147,8 @@ void writeCutExr(const std::string& path) {
     std::ofstream(path, std::ios::binary) << start;
 }
 
-// A file of a few bytes (or KiB) claiming 16384 x 8192 pixels is refused (exit 2, one line naming
+// A file of a few bytes (or KiB) claiming 16384 x 8192 pixels, cut short or with a corrupt first
+// scanline, is refused (exit 2, one line naming
 // it) before its 2 GiB of texels are allocated: the peak stays within 64 MiB of the baseline (the
 // allocator's slack and a file read whole), where filling the texels would add 2 GiB.
 TEST(Load, CutFilesClaimingHugeImagesAreRefusedFirst) {
@@ -149,7 +157,8 @@ TEST(Load, CutFilesClaimingHugeImagesAreRefusedFirst) {
     writeCutHdr(folder / "cut.hdr");
     writeCutPng(folder / "cut.png");
     writeCutExr(folder / "cut.exr");
-    for (const char* name : {"cut.hdr", "cut.png", "cut.exr"}) {
+    writeHdrOfWrongLineLength(folder / "long.hdr");
+    for (const char* name : {"cut.hdr", "cut.png", "cut.exr", "long.hdr"}) {
         SCOPED_TRACE(name);
         RunResult run =
             runProgram({"bake", folder / name, "-o", folder / "cut.json"}, folder.path() / "logs");

@@ -674,7 +674,7 @@ class StbDecoder final : public ImageDecoder {
     // else each scanline is 2, 2, its width (16 bits), then each of its four components as runs
     // (a count above 128: that many repeats of the next byte) and dumps (a count up to 128: that
     // many bytes). A scanline not starting 2, 2 makes stb_image read flat pixels from there on.
-    // Malformed counts that stb_image itself refuses are left to it.
+    // What stb_image would refuse only after allocating the image is refused here, in its words.
     void checkHdrScanlines() {
         const unsigned char* bytes = file_.data();
         const size_t size = file_.size();
@@ -704,21 +704,28 @@ class StbDecoder final : public ImageDecoder {
             if (size - at < 4) failPixels(cut);
             const unsigned char* start = bytes + at;
             if (start[0] != 2 || start[1] != 2 || (start[2] & 0x80)) return needFlat(width * height);
-            if ((uint64_t(start[2]) << 8 | start[3]) != width) return; // stb_image refuses it
+            const uint64_t said = uint64_t(start[2]) << 8 | start[3];
+            if (said != width)
+                failPixels("corrupt HDR: scanline " + std::to_string(row) + " says it is " +
+                           std::to_string(said) + " pixels long, not " + std::to_string(width));
             at += 4;
             for (int component = 0; component < 4; ++component)
                 for (uint64_t x = 0; x < width;) {
                     if (at >= size) failPixels(cut);
                     const unsigned count = bytes[at++];
+                    const auto overrun = [&] {
+                        failPixels("corrupt HDR: a run of scanline " + std::to_string(row) +
+                                   " passes its end");
+                    };
                     if (count > 128) {
-                        if (count - 128 > width - x) return; // stb_image refuses it
+                        if (count - 128 > width - x) overrun();
                         if (at >= size) failPixels(cut);
                         at += 1;
                         x += count - 128;
                     } else {
                         if (count == 0)
                             failPixels("scanline " + std::to_string(row) + " holds a run of length 0");
-                        if (count > width - x) return; // stb_image refuses it
+                        if (count > width - x) overrun();
                         if (size - at < count) failPixels(cut);
                         at += count;
                         x += count;
