@@ -192,6 +192,18 @@ TEST_F(BadInputs, TruncatedPng) {
     expectFailure({{"bake", file("cut.png"), "-o", "OUT"}, 2, {file("cut.png"), "truncated", "end of file"}});
 }
 
+// A file of zeros (a sparse 1 GiB one here) is no image, whatever its name: refused from its first
+// 512 bytes, where OpenImageIO's DICOM reader, offered what no other reader takes, read it to its
+// end 4 bytes at a time (26 s for 200 MB).
+TEST_F(BadInputs, FilesOfZerosAreRefusedAtOnce) {
+    for (const char* name : {"zeros.hdr", "zeros.tif"}) {
+        std::ofstream(file(name)).close();
+        fs::resize_file(file(name), uintmax_t(1) << 30);
+        expectFailure(
+            {{"bake", file(name), "-o", "OUT"}, 2, {file(name), "its first 512 bytes are all zero"}});
+    }
+}
+
 // A header claiming 65536 x 32768 (2^31 pixels, 32 GiB as RGBA32F) is refused from the header
 // with the limit and the option that raises it: the run is quick and allocates nothing of that size.
 TEST_F(BadInputs, OversizeHeaderIsRefusedBeforeAnyAllocation) {
