@@ -279,6 +279,21 @@ TEST_F(SceneCommand, RelightableVolumesRelightWithoutACapture) {
                    "out.shpv"});
 }
 
+// --rays-per-texel is rounded up to a square, and the bake says and records the rays it cast: 3 and 4
+// (2 x 2) give the same volume and the summary "4 per texel" (they differed in the recorded count and
+// the sky's averaging, so their bricks would not merge).
+TEST_F(SceneCommand, RaysPerTexelAreRoundedUpToASquare) {
+    const std::string scene = cornellBox();
+    for (const char* rays : {"3", "4"}) {
+        const RunResult result =
+            run({"scene", scene, "--grid", "2,2,2", "--face-size", "4", "--bounces", "0", "--backend", "cpu",
+                 "--rays-per-texel", rays, "-o", file(rays + std::string(".shpv"))});
+        ASSERT_EQ(result.exitCode, 0) << describe(result);
+        EXPECT_CONTAINS(result.out, "4 per texel");
+    }
+    EXPECT_TRUE(bytesOf(file("3.shpv")) == bytesOf(file("4.shpv")));
+}
+
 // A volume written to standard output is the file's bytes alone: scene's, merge's and relight's
 // summaries then go to stderr, as bake's do (they were appended to the stream, which merge then
 // refused as longer than its header says).

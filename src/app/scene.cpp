@@ -180,8 +180,11 @@ constexpr double kRelocationFrontCells = 0.1;
 
 // Both backends' default is the same (kDefaultRaysPerTexel), so that a volume is as close to the
 // transport whichever bakes it.
+// As cast: rounded up to a square (3 and 4 cast the same 2 x 2), so that the summary, the volume's
+// settings and the sky's averaging say the rays the bake cast.
 int raysPerTexel(const SceneOptions& options) {
-    return options.raysPerTexel > 0 ? options.raysPerTexel : kDefaultRaysPerTexel;
+    const int side = squareSide(options.raysPerTexel > 0 ? options.raysPerTexel : kDefaultRaysPerTexel);
+    return side * side;
 }
 
 // The face size of a texel a ray: one of the s x s jittered rays of a texel.
