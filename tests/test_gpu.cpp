@@ -149,6 +149,21 @@ class GpuProjection : public GpuTest {
     }
 };
 
+// The check every GPU test ends with (validationMessages() unchanged) can fail: a buffer asked for
+// with no usage (VUID-VkBufferCreateInfo-usage-requiredbitmask, which drivers ignore) is counted
+// as a validation message. Its own context, so that the suite's stays clean.
+TEST(ValidationLayer, CountsAMessage) {
+    ContextOptions options;
+    options.validation = true;
+    Context context = createContext(options);
+    const VkBufferCreateInfo info{.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO, .size = 16, .usage = 0};
+    VkBuffer buffer = VK_NULL_HANDLE;
+    const VkResult result = vkCreateBuffer(context.device, &info, nullptr, &buffer);
+    if (result == VK_SUCCESS) vkDestroyBuffer(context.device, buffer, nullptr);
+    EXPECT_GE(context.validationMessages(), 1u);
+    destroyContext(context);
+}
+
 TEST_F(GpuProjection, MatchesReferenceOnGeneratedCubemaps) {
     for (int order : {1, 3, 5, 8}) {
         expectMatchesReference(noiseCubemap(16, 1), order, "noise");

@@ -281,6 +281,9 @@ Agreement cornellBoxAgreement(ProbeDirections directions, int bounces, BounceLig
                     .directions = directions,
                     .bounceLight = light});
     const auto [baked, positions] = validProbes(baker, grid);
+    // The blocks hold 3 of the 64 probes (measured); with fewer valid the bounds below would check
+    // less than they say, and with none nothing.
+    EXPECT_EQ(baked.size(), size_t(61)) << "valid probes";
     const std::vector<PathTracedProbe> reference =
         pathTraceProbes(tracer, positions, {.order = 3, .bounces = bounces, .samples = samples});
     const Agreement agreement = compare(baked, reference);
