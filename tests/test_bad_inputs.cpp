@@ -458,18 +458,33 @@ TEST_F(BadInputs, OutputIntoAMissingFolder) {
 }
 
 // "-o ''" names no file: bake and convert, which have a default name, refuse it (exit 2, one line)
-// rather than write that default, and nothing appears in the working folder.
+// rather than write that default, and nothing appears in the working folder. So does an empty input
+// or file option where a default exists (a script's empty variable): bake '' and render '' baked
+// the built-in sky, --out-dir '' wrote into the working folder, --sky '' and --probe '' lit by the
+// built-in sky, bench --json '' wrote nothing.
 TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
     writeProbeFile(file("probe.json"), testProbe(3), {});
     const fs::path working = folder() / "working";
     fs::create_directories(working);
-    for (const std::vector<std::string>& args :
-         {std::vector<std::string>{"bake", "-o", ""}, {"convert", file("probe.json"), "-o", ""}}) {
-        SCOPED_TRACE(args[0]);
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"bake", "-o", ""}, "--output"},
+        {{"convert", file("probe.json"), "-o", ""}, "--output"},
+        {{"bake", ""}, "input"},
+        {{"render", "", "-o", file("r.png")}, "input"},
+        {{"bake", "--out-dir", ""}, "--out-dir"},
+        {{"bake", "--list", "", "--out-dir", file("probes")}, "--list"},
+        {{"scene", file("s.glb"), "--sky", "", "-o", file("v.shpv")}, "--sky"},
+        {{"relight", file("v.shpv"), "--probe", "", "-o", file("w.shpv")}, "--probe"},
+        {{"bench", "--json", ""}, "--json"},
+    };
+    for (const auto& [args, option] : cases) {
+        SCOPED_TRACE(args[0] + " " + option);
         const RunResult result = run(args, {.workingFolder = working.string()});
-        expectMessage({args, 2, {"--output", "'' names no file"}}, result);
+        expectMessage({args, 2, {option + ": '' names no file"}}, result);
         EXPECT_TRUE(fs::is_empty(working));
     }
+    for (const char* name : {"r.png", "probes", "v.shpv", "w.shpv"})
+        EXPECT_FALSE(fs::exists(file(name))) << name;
 }
 
 // A binary probe file of several probes (a batch's) is not one probe: the readers say so instead

@@ -2,6 +2,7 @@
 // CPU path or the double-precision CPU reference (bake_steps.h). One input is written to -o;
 // several (or a --list) are a batch written to --out-dir (bake_batch.cpp).
 #include "app/bake_steps.h"
+#include "app/parsed_option.h"
 #include "app/program.h"
 #include "app/progress_line.h"
 #include "app/stopwatch.h"
@@ -155,11 +156,12 @@ void runSingleBake(const BakeOptions& options) {
 } // namespace
 
 void addBakeOptions(CLI::App& command, BakeOptions& options) {
-    command.add_option(
-        "input", options.inputs,
-        "Environment: an equirect (2:1) or cross (4:3, 3:4) image, a folder holding px nx py ny "
-        "pz nz images, or a pattern with {face}; default: the built-in sky. Several inputs "
-        "are a batch and need --out-dir");
+    command
+        .add_option("input", options.inputs,
+                    "Environment: an equirect (2:1) or cross (4:3, 3:4) image, a folder holding px nx py ny "
+                    "pz nz images, or a pattern with {face}; default: the built-in sky. Several inputs "
+                    "are a batch and need --out-dir")
+        ->check(nonEmptyName());
     CLI::Option* output =
         command
             .add_option(
@@ -174,12 +176,14 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
                     "the format's extension: sky.exr -> DIR/sky.json); the folder is created if its parent "
                     "exists. Bad inputs are reported and skipped, the others written (exit code 2)")
         ->type_name("DIR")
+        ->check(nonEmptyName())
         ->excludes(output);
     command
         .add_option("--list", options.listFile,
                     "Batch: more inputs from this file, one path a line (blank lines and # comments "
                     "ignored); needs --out-dir")
-        ->type_name("FILE");
+        ->type_name("FILE")
+        ->check(nonEmptyName());
     command
         .add_option(
             "--batch-bytes", options.batchBytes,

@@ -416,7 +416,8 @@ void addBenchOptions(CLI::App& command, BenchOptions& options) {
         .add_option("--reference-max-size", options.referenceMaxFaceSize,
                     "Largest face size for the (slow) double reference")
         ->capture_default_str();
-    command.add_option("--json", options.json, "Also write the measurements to this JSON file");
+    command.add_option("--json", options.json, "Also write the measurements to this JSON file")
+        ->check(nonEmptyName());
     command.add_option("--device", options.device, "Vulkan device index or name part");
 }
 

@@ -220,16 +220,6 @@ inline CLI::Validator numberFrom(double min, double max) {
         allowed.substr(2));
 }
 
-// An output name given empty ("-o ''") names no file; where a default name exists (bake, convert),
-// it is refused rather than taken as that default.
-inline CLI::Validator nonEmptyName() {
-    return CLI::Validator(
-        [](const std::string& input) {
-            return input.empty() ? std::string("'' names no file") : std::string();
-        },
-        "");
-}
-
 // --device and --validation, as bake, render and view take them.
 inline void addDeviceOptions(CLI::App& command, std::string& device, bool& validation) {
     command.add_option("--device", device, "Vulkan device index or name part (see `shprobe info`)");

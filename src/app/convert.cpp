@@ -1,6 +1,7 @@
 // `shprobe convert`: a probe file in, any format of formats/engine_export.h out, so that baking and
 // exporting are separate steps. The output name and format follow bake's rule (settleFormatAndOutput).
 #include "app/commands.h"
+#include "app/parsed_option.h"
 #include "common/error.h"
 #include "common/output_file.h"
 #include "formats/engine_export.h"

@@ -19,4 +19,14 @@ CLI::Option* addParsedOption(CLI::App& command, std::string name, Value& value, 
         std::move(name), [&value, parse](const Text& text) { value = parse(text); }, std::move(help));
 }
 
+// A file name given empty ("-o ''", "--sky ''", an input '') names no file; where a default exists
+// (the built-in sky, probe.json) it is refused rather than taken as that default.
+inline CLI::Validator nonEmptyName() {
+    return CLI::Validator(
+        [](const std::string& input) {
+            return input.empty() ? std::string("'' names no file") : std::string();
+        },
+        "");
+}
+
 } // namespace shprobe

@@ -2,6 +2,7 @@
 // `shprobe scene --transfer` lit by another sky, or its sky turned, from its transfer alone
 // (scene/volume_bake.h relightVolume): no scene, no rays.
 #include "app/commands.h"
+#include "app/parsed_option.h"
 
 #include "app/bench.h"
 #include "app/stopwatch.h"
@@ -67,11 +68,14 @@ void addRelightOptions(CLI::App& command, RelightOptions& options) {
     command.add_option("volume", options.volume, "Probe volume baked with `shprobe scene --transfer`")
         ->required();
     command.add_option("-o,--output", options.output, "Probe volume to write")->required();
-    CLI::Option* sky = command.add_option("--sky", options.sky,
-                                          "The new sky: any input `bake` takes (default: the built-in sky)");
+    CLI::Option* sky = command
+                           .add_option("--sky", options.sky,
+                                       "The new sky: any input `bake` takes (default: the built-in sky)")
+                           ->check(nonEmptyName());
     command
         .add_option("--probe", options.probe,
                     "The new sky as a radiance probe file (JSON, or binary of one probe)")
+        ->check(nonEmptyName())
         ->excludes(sky);
     command.add_option("--yaw", options.yaw, "The sky's turn about +Y, degrees")
         ->check(numberFrom(-360.0, 360.0));

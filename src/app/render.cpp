@@ -138,9 +138,11 @@ ImageSize parseImageSize(const std::string& text, const char* option) {
 }
 
 void addRenderOptions(CLI::App& command, RenderOptions& options) {
-    command.add_option("input", options.input,
-                       "Probe file (.json, or .bin of one probe) or environment image (baked first); "
-                       "default: the built-in sky");
+    command
+        .add_option("input", options.input,
+                    "Probe file (.json, or .bin of one probe) or environment image (baked first); "
+                    "default: the built-in sky")
+        ->check(nonEmptyName());
     command
         .add_option("-o,--output", options.output, "Image: .png/.jpg (tonemapped sRGB) or .exr/.hdr (linear)")
         ->capture_default_str();

@@ -1,6 +1,7 @@
 // `shprobe render --scene SCENE --volume VOLUME`: a glTF scene lit by its probe volume, as its
 // probes see it (gpu/scene_capture.h recordSceneView), tonemapped like every render.
 #include "app/commands.h"
+#include "app/parsed_option.h"
 #include "app/stopwatch.h"
 
 #include "common/counted.h"
@@ -58,6 +59,7 @@ void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
     for (const char* name : sphereOnly)
         scene->excludes(command.get_option(name));
     command.add_option("--volume", options.volume, "The scene's probe volume (`shprobe scene`)")
+        ->check(nonEmptyName())
         ->needs(scene);
     CLI::Option* transfer =
         command
@@ -66,7 +68,9 @@ void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
             ->needs(scene)
             ->excludes(command.get_option("--volume"));
     CLI::Option* sky =
-        command.add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)")->needs(scene);
+        command.add_option("--sky", options.sky, "The scene's sky (default: the built-in sky)")
+            ->check(nonEmptyName())
+            ->needs(scene);
     command
         .add_option(
             "--probe", options.probe,

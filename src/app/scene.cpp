@@ -57,9 +57,11 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
                    "Indirect bounces: 0 is what the probes see directly (sky, emission); each "
                    "bounce adds the light the surfaces reflect from the one before",
                    0, 64);
-    command.add_option("--sky", options.sky,
-                       "Environment seen where no geometry is (any input `bake` "
-                       "takes; default: the built-in sky)");
+    command
+        .add_option(
+            "--sky", options.sky,
+            "Environment seen where no geometry is (any input `bake` takes; default: the built-in sky)")
+        ->check(nonEmptyName());
     command
         .add_option("--sky-face-size", options.skyFaceSize,
                     "Face size the sky is resampled to (0: its own; 128 for the built-in sky)")
@@ -67,9 +69,11 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
     addParsedOption(command, "--brick", options.brick, parseBrickOption,
                     "Bake only brick I of N (0 <= I < N) of the grid, every bounce of its probes; "
                     "`shprobe merge` joins the bricks");
-    command.add_option("--previous", options.previous,
-                       "gpu: the whole volume of the previous bounce: bake the bounce after it (the whole "
-                       "transport again, the volume checked to be this bake's)");
+    command
+        .add_option("--previous", options.previous,
+                    "gpu: the whole volume of the previous bounce: bake the bounce after it (the whole "
+                    "transport again, the volume checked to be this bake's)")
+        ->check(nonEmptyName());
     command
         .add_option("--backend", options.backend,
                     "gpu: rays on the Vulkan device; cpu: rays on all cores, by Embree; both bake the same "

@@ -40,9 +40,11 @@ ViewerOptions viewerSettings(const ViewOptions& options) {
 } // namespace
 
 void addViewOptions(CLI::App& command, ViewOptions& options) {
-    command.add_option("input", options.input,
-                       "Probe file (.json, or .bin of one probe) or environment image (baked first); "
-                       "default: the built-in sky");
+    command
+        .add_option("input", options.input,
+                    "Probe file (.json, or .bin of one probe) or environment image (baked first); "
+                    "default: the built-in sky")
+        ->check(nonEmptyName());
     addSizeOption(command, options.size, "Window size, N or WxH")
         ->default_str(std::to_string(kDefaultWindowSize.width) + "x" +
                       std::to_string(kDefaultWindowSize.height));
