@@ -5,14 +5,18 @@
 #include "common/input_file.h"
 #include "common/output_file.h"
 #include "common/quoted.h"
+#include "common/scope_exit.h"
 #include "formats/json_reading.h"
 #include "formats/probe_export.h"
 #include "sh/basis.h"
 
 #include <algorithm>
 #include <cmath>
+#include <fcntl.h>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace shprobe {
 
@@ -206,11 +210,29 @@ Probe parseProbe(std::string_view text, const std::string& name) {
     return probe;
 }
 
-// Read up to a batch file's limit, so that a batch's binary file is refused for holding many probes,
-// not for its size; a JSON file past its own limit is refused before it is parsed.
+// Whether a regular file begins with the binary magic; false for anything else, which readInputFile
+// then refuses or reads (opened without blocking: a FIFO must not hang the run here).
+bool startsAsBinaryProbes(const std::string& path) {
+    const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) return false;
+    ScopeExit closeFile([&] { close(fd); });
+    struct stat status {};
+    char start[4] = {};
+    return fstat(fd, &status) == 0 && S_ISREG(status.st_mode) &&
+           pread(fd, start, sizeof start, 0) == ssize_t(sizeof start) &&
+           isBinaryProbeData(std::string_view(start, sizeof start));
+}
+
+// A batch's binary file may be larger than any JSON probe file: the limit follows the file's first
+// bytes, so that a batch is refused for holding many probes, not for its size, and a large JSON file
+// before it is read. Standard input cannot be looked at first: it gets the binary limit, and JSON past
+// its own is refused before it is parsed.
 Probe readProbe(const std::string& path) {
-    const std::string bytes = readInputFile(path, kMaxBinaryProbeFileBytes, "a probe file");
-    const std::string name = path == "-" ? "standard input" : path;
+    const bool standardInput = path == "-";
+    const std::string bytes = standardInput || startsAsBinaryProbes(path)
+                                  ? readInputFile(path, kMaxBinaryProbeFileBytes, "a binary probe file")
+                                  : readInputFile(path, kMaxProbeFileBytes, "a JSON probe file");
+    const std::string name = standardInput ? "standard input" : path;
     if (!isBinaryProbeData(bytes)) {
         if (bytes.size() > kMaxProbeFileBytes)
             throw Error(ErrorKind::Input,
