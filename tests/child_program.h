@@ -115,13 +115,14 @@ class Child {
 
   private:
     [[noreturn]] void becomeShprobe(char** argv, char** envp, bool drop, const RunOptions& options) const {
-        int in = open(options.standardInput.c_str(), O_RDONLY);
-        int out = options.standardOutput >= 0 ? options.standardOutput
-                                              : open(outPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        int err = open(errPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        // Close-on-exec, so that only the copies dup2 makes (0 to 3) reach the program.
+        constexpr int kWrite = O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC;
+        int in = open(options.standardInput.c_str(), O_RDONLY | O_CLOEXEC);
+        int out = options.standardOutput >= 0 ? options.standardOutput : open(outPath_.c_str(), kWrite, 0644);
+        int err = open(errPath_.c_str(), kWrite, 0644);
         if (in < 0 || out < 0 || err < 0 || dup2(in, 0) < 0 || dup2(out, 1) < 0 || dup2(err, 2) < 0)
             _exit(126);
-        int peak = open(peakPath_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644); // before any drop
+        int peak = open(peakPath_.c_str(), kWrite, 0644); // before any drop
         if (peak < 0 || dup2(peak, 3) < 0) _exit(126);
         struct sigaction standard {};
         standard.sa_handler = SIG_DFL;

@@ -597,7 +597,7 @@ TEST_F(CliFailures, RotateRefusesBadRotations) {
     runOk({"bake", "--extract-sun", "-q", "-o", file("sunny.json")});
     expectFailure({{"rotate", file("sunny.json"), "--euler", "0,90,0", "-o", "OUT"},
                    2,
-                   {"has a sun", "--format binary cannot hold", "an output name ending in .json"},
+                   {"has a sun", "the binary format cannot hold", "an output name ending in .json"},
                    "turned.bin"});
 }
 

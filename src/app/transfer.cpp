@@ -18,6 +18,7 @@
 #include "sh/basis.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <optional>
 #include <string_view>
@@ -26,8 +27,11 @@ namespace shprobe {
 
 namespace {
 
+// Whether the name ends in `end` (lower case), in any case: "T.GLB" ends in ".glb".
 bool endsWith(const std::string& text, std::string_view end) {
-    return text.size() >= end.size() && text.compare(text.size() - end.size(), end.size(), end) == 0;
+    if (text.size() < end.size()) return false;
+    return std::equal(end.begin(), end.end(), text.end() - std::ptrdiff_t(end.size()),
+                      [](char e, char t) { return e == char(std::tolower(static_cast<unsigned char>(t))); });
 }
 
 bool writesBinary(const TransferCommandOptions& options) {

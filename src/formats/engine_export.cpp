@@ -497,10 +497,11 @@ void requireRepresentable(const ExportFormat& format, const ShCoefficients& prob
 void requireSunFits(const ExportFormat& format, const ExportOptions& options) {
     if (!options.metadata.sun || format.sun != SunHandling::Refused) return;
     const std::string name = options.metadata.source.empty() ? "the probe" : options.metadata.source;
-    throw Error(ErrorKind::Input,
-                name + " has a sun beside its coefficients, which --format " + format.name +
-                    " cannot hold; write json (--format json, or an output name ending in .json), or bake "
-                    "again without --extract-sun to keep the sun in the coefficients");
+    throw Error(
+        ErrorKind::Input,
+        name + " has a sun beside its coefficients, which the " + format.name +
+            " format cannot hold; write json (--format json, or an output name ending in .json), or bake "
+            "again without --extract-sun to keep the sun in the coefficients");
 }
 
 void ExportFormat::write(const std::string& path, const ShCoefficients& probe,
