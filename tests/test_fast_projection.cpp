@@ -13,12 +13,14 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <thread>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -600,11 +602,14 @@ TEST(ForEachItem, EveryItemOnceAndExceptionsReachTheCaller) {
         EXPECT_THROW(forEachItem(1000, 4,
                                  [&](int item) {
                                      if (item == failing) throw std::bad_alloc();
+                                     std::this_thread::sleep_for(std::chrono::microseconds(200));
                                      ++done;
                                  }),
                      std::bad_alloc)
             << failing;
-        EXPECT_LT(done.load(), 1000) << failing;
+        // The items not yet taken are left: a failure at the first item ends the run within the items
+        // the other threads hold, where the 999 others would all sleep their turn.
+        if (failing == 0) EXPECT_LT(done.load(), 500);
     }
 }
 

@@ -58,11 +58,11 @@ uint32_t groupsFor(uint64_t threads) {
 
 // Workaround(llvmpipe, Mesa 22.3): llvmpipe ends an invocation's loops after 65535 iterations in
 // all (glsl/dispatch_plan.h), and a texel's or cache point's rays are a loop around traversals whose
-// steps the scene decides: 1,024 rays a texel, or 9 continued as paths of 53 bounces, ran past the
-// limit and left the light short. So a dispatch has each invocation cast at most this many rays
-// times the traversals each takes in a row (1 + its bounces as a path), carrying the sums from pass
-// to pass: a ray's segment may then take 2,000 loop iterations (its traversal, its next-event rays,
-// the tables' searches). Other devices spend a dispatch per pass.
+// steps the scene decides, so many rays or long paths left the light short (docs/scene-probes.md).
+// A dispatch has each invocation cast at most this many rays times the traversals each takes in a
+// row (1 + its bounces as a path), carrying the sums from pass to pass, which leaves a ray's segment
+// (its traversal, next-event rays and table searches) 2,000 loop iterations. Other devices spend a
+// dispatch per pass.
 constexpr uint64_t kRaySegmentsPerPass = 32;
 
 // Sets constants.pass to each pass over `rays` rays per item (texel or point), where an invocation

@@ -169,10 +169,10 @@ void destroyGpuTransfer(GpuTransfer& gpu) {
 
 // Workaround(llvmpipe, Mesa 22.3): llvmpipe ends an invocation's loops after 65535 iterations in
 // all (glsl/dispatch_plan.h), and a side's rays are a loop around the hierarchy's traversal, whose
-// steps per ray the scene decides: 1,024 rays ran past the limit and left whole groups of sides
-// short. So a side's rays are cast in passes of this many, each pass carrying on the sums the one
-// before left: at order 8 a ray may then take over 3,000 traversal steps (a bounce gathers 3 x 64
-// sums per hit) before a pass nears the limit. Other devices spend a dispatch per pass.
+// steps per ray the scene decides, so many rays left groups of sides short (docs/transfer.md). A
+// side's rays are cast in passes of this many, each carrying on the sums the one before left, which
+// leaves a ray over 3,000 traversal steps at order 8 (a bounce gathers 3 x 64 sums per hit). Other
+// devices spend a dispatch per pass.
 constexpr uint32_t kTransferRaysPerPass = 16;
 
 // Sides per submission: kTransferRaysPerSubmission rays, within one dispatch's workgroup count.
