@@ -319,6 +319,17 @@ TEST_F(Cli, GpuBakeIsDeterministic) {
 
 // Failures follow ProgramTest::expectFailure's rules: the exit code, exactly one line "shprobe: error:
 // ..." holding the mentions, no file left in an empty folder, an existing output untouched.
+// `bench --json -` writes the JSON alone to standard output and its table to stderr, so that the
+// output can be piped to a JSON reader (the table was printed around it).
+TEST_F(Cli, BenchJsonOnStandardOutputIsTheJsonAlone) {
+    const RunResult result = run({"bench", "--sizes", "4", "--orders", "3", "--repeat", "1",
+                                  "--reference-max-size", "4", "--json", "-"});
+    ASSERT_EQ(result.exitCode, 0) << describe(result);
+    EXPECT_TRUE(result.out.starts_with("{") && result.out.ends_with("}\n")) << result.out;
+    EXPECT_EQ(result.out.find("pipeline creation"), std::string::npos) << result.out;
+    EXPECT_CONTAINS(result.err, "pipeline creation");
+}
+
 class CliFailures : public Cli {};
 
 // A missing input file: exit 2, the message names the file.

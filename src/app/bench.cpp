@@ -191,7 +191,8 @@ constexpr const char* kBoundNames[] = {"cpu read", "gpu read", "gpu arith", "tra
 class Bench {
   public:
     Bench(const BenchOptions& options, Context& context, double multiplyAddsPerSecond)
-        : options_(options), context_(context), multiplyAddsPerSecond_(multiplyAddsPerSecond) {}
+        : options_(options), context_(context), multiplyAddsPerSecond_(multiplyAddsPerSecond),
+          report_(reportStream(options.json)) {}
 
     void runFaceSize(int faceSize) {
         const BenchInput input = noiseInput(faceSize);
@@ -322,17 +323,18 @@ class Bench {
         measurements_.push_back({faceSize, formatName(format), order, path, ms, rate, bytes, boundMs / ms,
                                  kBoundNames[size_t(bound)], error});
         const Measurement& m = measurements_.back();
-        std::printf("%6d  %-7s  %5s  %-46s %10.2f %10.1f %7.2f %8.1f%% %-10s", m.faceSize, m.format,
-                    order ? std::to_string(order).c_str() : "-", m.path.c_str(), m.milliseconds,
-                    m.texelsPerSecond * 1e-6, m.bytesPerSecond * 1e-9, m.fractionOfBound * 100.0, m.bound);
-        if (m.errorToReference >= 0.0) std::printf("  %.1e", m.errorToReference);
-        std::printf("\n");
-        std::fflush(stdout);
+        std::fprintf(report_, "%6d  %-7s  %5s  %-46s %10.2f %10.1f %7.2f %8.1f%% %-10s", m.faceSize, m.format,
+                     order ? std::to_string(order).c_str() : "-", m.path.c_str(), m.milliseconds,
+                     m.texelsPerSecond * 1e-6, m.bytesPerSecond * 1e-9, m.fractionOfBound * 100.0, m.bound);
+        if (m.errorToReference >= 0.0) std::fprintf(report_, "  %.1e", m.errorToReference);
+        std::fprintf(report_, "\n");
+        std::fflush(report_);
     }
 
     const BenchOptions& options_;
     Context& context_;
     double multiplyAddsPerSecond_; // 0 without timestamps
+    FILE* report_;                 // the table: stderr where the JSON goes to standard output
     double arithmeticMs_ = 0.0;    // the order being measured: projectionMultiplyAdds at that rate
     double texels_ = 0.0;
     std::array<Bounds, kFormats.size()> bounds_{}; // indexed by TexelFormat
@@ -343,14 +345,14 @@ using PipelineCreations = std::vector<std::pair<int, PipelineCreation>>;
 
 // The pipelines of each order created with an empty cache, then from the first one's data read back
 // from a file: what a second run of the program saves, if the driver caches anything.
-PipelineCreations measurePipelines(const Device& device, const std::vector<int>& orders) {
-    std::printf("\npipeline creation (project, reduce, convolve)\n%5s %12s %14s %12s\n", "order", "first ms",
-                "from cache ms", "cache bytes");
+PipelineCreations measurePipelines(const Device& device, const std::vector<int>& orders, FILE* report) {
+    std::fprintf(report, "\npipeline creation (project, reduce, convolve)\n%5s %12s %14s %12s\n", "order",
+                 "first ms", "from cache ms", "cache bytes");
     PipelineCreations creations;
     for (int order : orders) {
         PipelineCreation creation = measurePipelineCreation(device, order);
-        std::printf("%5d %12.2f %14.2f %12zu\n", order, creation.firstMilliseconds,
-                    creation.cachedMilliseconds, creation.cacheBytes);
+        std::fprintf(report, "%5d %12.2f %14.2f %12zu\n", order, creation.firstMilliseconds,
+                     creation.cachedMilliseconds, creation.cacheBytes);
         creations.emplace_back(order, creation);
     }
     return creations;
@@ -427,22 +429,24 @@ void runBench(const BenchOptions& options) {
     contextOptions.device = options.device;
     Context context = createContext(contextOptions);
     ScopeExit destroy([&] { destroyContext(context); });
-    std::printf("device: %s (%s), %s, subgroup size %u; CPU threads: %u\n", context.info.name.c_str(),
-                deviceTypeName(context.info.type), context.info.driver.c_str(), context.info.subgroupSize,
-                std::thread::hardware_concurrency());
+    FILE* report = reportStream(options.json); // the table: stderr where the JSON goes to standard output
+    std::fprintf(report, "device: %s (%s), %s, subgroup size %u; CPU threads: %u\n",
+                 context.info.name.c_str(), deviceTypeName(context.info.type), context.info.driver.c_str(),
+                 context.info.subgroupSize, std::thread::hardware_concurrency());
     if (context.info.type == VK_PHYSICAL_DEVICE_TYPE_CPU)
-        std::printf("the device is a CPU: its bounds (gpu buffer read, copy, transfer) are passes over CPU "
-                    "memory\n");
+        std::fprintf(report,
+                     "the device is a CPU: its bounds (gpu buffer read, copy, transfer) are passes over CPU "
+                     "memory\n");
     const double multiplyAdds = multiplyAddsPerSecond(context, options.repeat);
     if (multiplyAdds > 0.0)
-        std::printf("device float multiply-adds: %.1f G/s (the arithmetic bound's rate)\n",
-                    multiplyAdds * 1e-9);
-    std::printf("%6s  %-7s  %5s  %-46s %10s %10s %7s %9s %-10s %s\n", "face", "format", "order", "path", "ms",
-                "Mtexel/s", "GB/s", "of bound", "against", "error/|L00|");
+        std::fprintf(report, "device float multiply-adds: %.1f G/s (the arithmetic bound's rate)\n",
+                     multiplyAdds * 1e-9);
+    std::fprintf(report, "%6s  %-7s  %5s  %-46s %10s %10s %7s %9s %-10s %s\n", "face", "format", "order",
+                 "path", "ms", "Mtexel/s", "GB/s", "of bound", "against", "error/|L00|");
     Bench bench(options, context, multiplyAdds);
     for (int faceSize : options.faceSizes)
         bench.runFaceSize(faceSize);
-    const PipelineCreations pipelineCreations = measurePipelines(context, options.orders);
+    const PipelineCreations pipelineCreations = measurePipelines(context, options.orders, report);
     // With the validation layer (SHPROBE_VALIDATION=1), a message fails the run as it fails a bake.
     if (uint32_t messages = context.validationMessages(); messages > 0)
         throw Error(ErrorKind::Device, counted(messages, "Vulkan validation message") + " (above)");
