@@ -826,6 +826,18 @@ TEST_F(SceneCommand, LightThatOverflowsFloatIsRefused) {
                        "out.shpv"});
 }
 
+// A glTF sun whose colour times intensity float cannot hold is refused by the reader, naming the
+// file and the light (it was "scene: sun 0 has no direction or a non-finite irradiance").
+TEST_F(SceneCommand, SunPastFloatIsRefusedNamingTheFile) {
+    const std::string scene = file("sunny.glb");
+    testing::writeCornellBoxGltf(scene,
+                                 {.sun = testing::FixtureSun{.colour = glm::vec3(3e38f), .intensity = 2.0f}});
+    expectFailure({{"scene", scene, "--grid", "1,1,1", "-o", "OUT"},
+                   2,
+                   {scene + ": lights[0]: its colour times its intensity is past what float holds"},
+                   "out.shpv"});
+}
+
 // Each broken glTF of assimp-testmodels: one line naming the file, exit 2, nothing written.
 TEST_F(SceneCommand, BrokenScenesAreRefused) {
     const std::string models = SHPROBE_GLTF_MODELS_DIR;

@@ -711,7 +711,11 @@ class SceneBuilder {
                             std::to_string(light.intensity) + "; it must be at least 0");
         const glm::dvec3 colour =
             light.color.size() == 3 ? glm::make_vec3(light.color.data()) : glm::dvec3(1.0);
-        world_.suns.push_back({glm::vec3(glm::normalize(axis)), glm::vec3(colour * light.intensity)});
+        const glm::vec3 irradiance(colour * light.intensity);
+        if (!std::isfinite(irradiance.r) || !std::isfinite(irradiance.g) || !std::isfinite(irradiance.b))
+            fail(path_, "lights[" + std::to_string(index) +
+                            "]: its colour times its intensity is past what float holds; make it weaker");
+        world_.suns.push_back({glm::vec3(glm::normalize(axis)), irradiance});
     }
 
     // "2 point lights ignored, 1 line or point primitive ignored"
