@@ -457,8 +457,9 @@ TEST_F(BadInputs, OutputIntoAMissingFolder) {
     }
 }
 
-// "-o ''" names no file: bake and convert, which have a default name, refuse it (exit 2, one line)
-// rather than write that default, and nothing appears in the working folder. So does an empty input
+// "-o ''" names no file: every command refuses it in the same words (exit 2, one line; bake and
+// convert have a default name they must not take instead, the others said "cannot write ''" with
+// exit 3), and nothing appears in the working folder. So does an empty input
 // or file option where a default exists (a script's empty variable): bake '' and render '' baked
 // the built-in sky, --out-dir '' wrote into the working folder, --sky '' and --probe '' lit by the
 // built-in sky, bench --json '' wrote nothing.
@@ -469,6 +470,13 @@ TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
     const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
         {{"bake", "-o", ""}, "--output"},
         {{"convert", file("probe.json"), "-o", ""}, "--output"},
+        {{"rotate", file("probe.json"), "--euler", "0,0,0", "-o", ""}, "--output"},
+        {{"light", "--ambient", "1,1,1", "-o", ""}, "--output"},
+        {{"render", file("probe.json"), "-o", ""}, "--output"},
+        {{"scene", file("s.glb"), "--grid", "1,1,1", "-o", ""}, "--output"},
+        {{"transfer", file("s.glb"), "-o", ""}, "--output"},
+        {{"merge", file("v.shpv"), "-o", ""}, "--output"},
+        {{"relight", file("v.shpv"), "-o", ""}, "--output"},
         {{"bake", ""}, "input"},
         {{"render", "", "-o", file("r.png")}, "input"},
         {{"bake", "--out-dir", ""}, "--out-dir"},

@@ -67,7 +67,9 @@ void printRelightTimings(FILE* report, ProbeVolume& volume, const ShCoefficients
 void addRelightOptions(CLI::App& command, RelightOptions& options) {
     command.add_option("volume", options.volume, "Probe volume baked with `shprobe scene --transfer`")
         ->required();
-    command.add_option("-o,--output", options.output, "Probe volume to write")->required();
+    command.add_option("-o,--output", options.output, "Probe volume to write")
+        ->required()
+        ->check(nonEmptyName());
     CLI::Option* sky = command
                            .add_option("--sky", options.sky,
                                        "The new sky: any input `bake` takes (default: the built-in sky)")

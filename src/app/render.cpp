@@ -145,7 +145,8 @@ void addRenderOptions(CLI::App& command, RenderOptions& options) {
         ->check(nonEmptyName());
     command
         .add_option("-o,--output", options.output, "Image: .png/.jpg (tonemapped sRGB) or .exr/.hdr (linear)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(nonEmptyName());
     command.add_option("--order", options.order, "SH order: 3 (9 coefficients) or 5 (25)")
         ->check(CLI::IsMember({3, 5}))
         ->capture_default_str();

@@ -45,7 +45,8 @@ BrickOption parseBrickOption(const std::string& text) {
 void addSceneOptions(CLI::App& command, SceneOptions& options) {
     command.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
     command.add_option("-o,--output", options.output, "Probe volume to write (docs/probe-volume.md)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(nonEmptyName());
     addParsedOption(command, "--grid", options.grid, parseGridCounts, "Probes per axis, NX,NY,NZ")
         ->required();
     addParsedOption(command, "--bounds", options.bounds, parseGridBounds,
@@ -136,7 +137,9 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
 
 void addMergeOptions(CLI::App& command, MergeOptions& options) {
     command.add_option("bricks", options.bricks, "Probe volumes of the bricks, in any order")->required();
-    command.add_option("-o,--output", options.output, "Whole volume to write")->required();
+    command.add_option("-o,--output", options.output, "Whole volume to write")
+        ->required()
+        ->check(nonEmptyName());
 }
 
 void requireFiniteLight(const ProbeVolume& volume, const std::string& light) {

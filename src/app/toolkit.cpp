@@ -259,7 +259,8 @@ void addRotateOptions(CLI::App& command, RotateOptions& options) {
     command
         .add_option("-o,--output", options.output,
                     "Rotated probe, in the format its extension names (as bake's -o; JSON where none)")
-        ->required();
+        ->required()
+        ->check(nonEmptyName());
     addRotationOption(command, "--euler", options, 3, eulerRotation,
                       "ALPHA,BETA,GAMMA degrees: R = Rz(gamma) Ry(beta) Rz(alpha)",
                       numberFrom(-360.0, 360.0));
@@ -294,7 +295,8 @@ void addLightOptions(CLI::App& command, LightCommandOptions& options) {
     command
         .add_option("-o,--output", options.output,
                     "Probe file, in the format its extension names (as bake's -o; JSON where none)")
-        ->required();
+        ->required()
+        ->check(nonEmptyName());
     addRangeOption(command, "--order", options.order, "SH order", 1, kMaxOrder);
     command.add_flag("--irradiance", options.irradiance, "Write irradiance instead of radiance");
     addLightOptions(command, options.lights);

@@ -2,6 +2,7 @@
 // on all cores or on a Vulkan device (gpu/transfer_rays.h), written into the scene as vertex
 // attributes or into the binary file (scene/transfer_gltf.h).
 #include "app/commands.h"
+#include "app/parsed_option.h"
 #include "app/program.h"
 
 #include "app/bake_steps.h"
@@ -119,7 +120,8 @@ void addTransferOptions(CLI::App& command, TransferCommandOptions& options) {
     command
         .add_option("-o,--output", options.output,
                     "The scene with the transfer as vertex attributes (.glb), or the binary file (.shpt)")
-        ->required();
+        ->required()
+        ->check(nonEmptyName());
     command
         .add_option("--model", options.model,
                     "unshadowed: exact, no rays; shadowed: the sky each vertex sees; interreflected: "
