@@ -65,8 +65,9 @@ uint32_t groupsFor(uint64_t threads) {
 // dispatch per pass.
 constexpr uint64_t kRaySegmentsPerPass = 32;
 
-// Sets constants.pass to each pass over `rays` rays per item (texel or point), where an invocation
-// takes `items` of `threads` and each ray is `segments` traversals in a row, and calls dispatchPass.
+// Sets constants.pass to each pass over `rays` rays per item (texel or point) and calls
+// dispatchPass: `items` spread over the dispatch's invocations, each ray `segments` traversals in a
+// row.
 template <typename DispatchPass>
 void forEachPass(glsl::RayCaptureConstants& constants, uint32_t rays, uint64_t segments, uint64_t items,
                  DispatchPass&& dispatchPass) {
