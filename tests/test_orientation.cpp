@@ -445,17 +445,16 @@ double maxRelativeDifference(const ShCoefficients& x, const ShCoefficients& y, i
     return worst;
 }
 
-// Both paths are second-order accurate quadratures of the same integral; the conversion adds a
-// bilinear interpolation per cube texel (one sample per texel at 512 -> 128). Interpolating samples
-// spaced h = 2 pi / 512 = 0.0123 rad biases a smooth function by about (h^2 / 8) times its second
-// derivative, which for band l acts on L_lm like (h^2 / 8) l (l + 1) = 1.9e-5 l (l + 1): at most
-// 1.1e-4 (l = 2) and 3.8e-4 (l = 4) of a coefficient, and no coefficient here exceeds |L00|.
-// The midpoint rules of the two projections err by smaller terms of the same form (h^2 / 24).
-// Measured: 4.3e-5 (order 3) and 7.9e-5 (order 5) of |L00|; against a 4096 x 2048 direct projection
-// the direct path errs by 1.8e-5 and the converted one by 8.2e-5, so the conversion dominates, as
-// estimated. The tolerances sit between the estimate and the measurement (margins 4.6 and 6.4) and
-// far below what a half-pixel mistake causes: rendering the map half a pixel off in u or in v moves
-// the coefficients by 6e-3 to 8e-3 of |L00| (measured), a flipped axis by order 1.
+// Both paths are second-order accurate quadratures of the same integral; the conversion keeps each
+// pixel's power in the texels it covers (128-texel faces from 512 pixels: about a pixel a texel),
+// and the cube's projection then evaluates the basis at texel centres, a midpoint rule over cells
+// h = 2 pi / 512 = 0.0123 rad wide, which for band l errs like (h^2 / 24) l (l + 1) = 6.3e-6 l (l + 1)
+// of a coefficient, twice over (the pixels' and the texels' cells): at most 7.6e-5 (l = 2) and
+// 2.5e-4 (l = 4), and no coefficient here exceeds |L00|. Measured: 4.3e-5 (order 3) and 7.2e-5
+// (order 5) of |L00|.
+// The tolerances sit above the estimate and far below what a half-pixel mistake causes: rendering the map
+// half a pixel off in u or in v moves the coefficients by 6e-3 to 8e-3 of |L00| (measured), a flipped axis by
+// order 1.
 constexpr double kSyntheticToleranceOrder3 = 2e-4;
 constexpr double kSyntheticToleranceOrder5 = 5e-4;
 
@@ -475,17 +474,14 @@ TEST(EquirectProjection, DirectAgreesWithConvertedCubemap) {
 }
 
 // A real HDR environment (Blender's studio light "sunset", 1024 x 512, installed on some machines):
-// the same comparison, at the loader's default face size (width / 4 = 256, one bilinear sample per
-// cube texel). The smooth-function estimate above does not hold here: the sun is a feature of about
-// 2 x 2 pixels (peak 6520) holding 7% of the red channel's power, and point-sampling it on a grid
-// about as fine as its pixels (cube texels there 0.005 rad apart, equirect pixels 0.006 rad) captures
-// its power only to a few percent (L00 red differs by 0.2%, i.e. 2.8% of the sun's power). The sun
-// weighs up to about 3 times more in l >= 1 coefficients than in L00 (|y_lm| up to ~0.9 against
-// y_00 = 0.28). Measured: 3.6e-3 (order 3) and 4.3e-3 (order 5) of |L00|, at L_2,1 and L_3,1 in
-// red; it falls to 9e-4 at face size 512 and 4e-4 at 1024, as resampling error does. The bound,
-// 1e-2 (7% power x ~5% capture error x 3), catches orientation mistakes (order-1 changes) but not
-// half-pixel shifts: the synthetic test above is the one that checks those.
-constexpr double kSunsetTolerance = 1e-2;
+// the same comparison, at the loader's default face size (width / 4 = 256). The sun is a feature of
+// about 2 x 2 pixels (peak 6520) holding 7% of the red channel's power: the cube keeps that power
+// and moves it by less than a texel (0.0078 rad at most), and over the several texels the sun
+// covers the first-order part of that move cancels. Measured: 1.4e-5 (order 3) and 3.2e-5 (order
+// 5) of |L00|; sampling the map at texel centres instead, as a resampling that misses part of the
+// sun does, gave 3.6e-3 and 4.3e-3. The bound is that of the smooth maps above, 5e-4: a half-pixel
+// shift (6e-3 to 8e-3) or a flipped axis fails it.
+constexpr double kSunsetTolerance = 5e-4;
 
 TEST(EquirectProjection, DirectAgreesWithConvertedCubemapOnARealHdr) {
     const std::string path = "/usr/share/blender/datafiles/studiolights/world/sunset.exr";

@@ -352,7 +352,7 @@ void checkFormatOptions(const BakeOptions& options) {
 namespace {
 
 // gltf's specularImages source: the environment's radiance at the specularImageSize (an area
-// average: equirect maps by supersamples covering their pixels, cube maps by resizeCubemap) with
+// average: equirect maps by each pixel's share of a texel, cube maps by resizeCubemap) with
 // the analytic lights drawn in: --ambient everywhere, each --sphere's cap by texel coverage.
 Cubemap specularRadianceOf(const BakeOptions& options, const Environment& environment, int size) {
     Cubemap radiance = environment.keptEquirect() ? equirectToCubemap(environment.equirect, size)

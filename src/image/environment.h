@@ -105,9 +105,10 @@ Environment loadEnvironment(const std::string& path, const LoadOptions& options)
 // shape would be stretched without a word.
 void checkEquirectShape(int width, int height);
 
-// Cube map of an equirect map: each texel averages a grid of supersamples (enough to cover the
-// equirect pixels under it), each bilinearly interpolated, wrapping in longitude. Its rows (of all
-// six faces) are counted into `progress`.
+// Cube map of an equirect map: each texel is the mean of the equirect's pixels over its footprint
+// on the sphere, each weighed by the solid angle the two share, so the map's power is kept. Its
+// rows (of all six faces) are counted into `progress`. The pixels must be finite (the loader's NaN
+// policy): a texel's sums run along rows past pixels outside it.
 Cubemap equirectToCubemap(const Image& equirect, int faceSize, WorkCounter* progress = nullptr);
 // The face size of a cross of that size (HorizontalCross or VerticalCross). Throws Error(Input)
 // unless the size has the cross's aspect ratio, 4:3 or 3:4 (since 3 and 4 are coprime, the ratio

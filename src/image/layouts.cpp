@@ -62,71 +62,6 @@ void copyCrossFace(const Image& cross, CrossSlot slot, int face, Cubemap& cubema
     }
 }
 
-// Bilinear sample at continuous pixel coordinates whose pixel centers are at (i + 0.5, j + 0.5),
-// x in [0, width) as directionToEquirect gives it: wraps in x (longitude is periodic) and clamps
-// in y (rows stop at the poles).
-glm::dvec3 sampleEquirect(const Image& image, double x, double y) {
-    double sx = x - 0.5;
-    double sy = y - 0.5;
-    double floorX = std::floor(sx);
-    double floorY = std::floor(sy);
-    double tx = sx - floorX;
-    double ty = sy - floorY;
-    // x lies in [0, width), so floorX in [-1, width - 1]: one wrap each way, no division.
-    int x0 = int(floorX) < 0 ? image.width - 1 : int(floorX);
-    int x1 = x0 + 1 == image.width ? 0 : x0 + 1;
-    int y0 = std::clamp(int(floorY), 0, image.height - 1);
-    int y1 = std::clamp(int(floorY) + 1, 0, image.height - 1);
-    auto texel = [&](int px, int py) { return glm::dvec3(glm::vec3(image.at(px, py))); };
-    glm::dvec3 top = (1.0 - tx) * texel(x0, y0) + tx * texel(x1, y0);
-    glm::dvec3 bottom = (1.0 - tx) * texel(x0, y1) + tx * texel(x1, y1);
-    return (1.0 - ty) * top + ty * bottom;
-}
-
-// The side faces in quarter turns about the vertical axis: a direction of +X turned t times is +Z,
-// -X, -Z's direction at the same face coordinates, and its longitude t quarter turns further.
-constexpr std::array<Face, 4> kSideFacesByTurn{Face::PositiveX, Face::PositiveZ, Face::NegativeX,
-                                               Face::NegativeZ};
-
-// Row j of every face, each texel the mean of a k x k grid of equirect samples spread evenly over
-// it. The acos and atan2 of a sample's position (two fifths of the resampling) are worked out for
-// +X and +Y alone: the three other side faces share +X's row coordinate and lie W/4 further per
-// quarter turn (kSideFacesByTurn), and -Y at (a, b) is +Y at (a, -b) mirrored in the horizon, the
-// same column and the row H - y, so it takes +Y's samples for its row faceSize - 1 - j.
-void resampleRow(const Image& equirect, int j, int k, Cubemap& cubemap) {
-    const int n = cubemap.faceSize;
-    const double step = 2.0 / (double(n) * k); // supersample spacing in face coordinates
-    const double quarterTurn = 0.25 * equirect.width;
-    const double height = equirect.height;
-    auto wrapped = [&](double x) { return x >= equirect.width ? x - equirect.width : x; };
-    auto position = [&](Face face, double a, double b) {
-        return unitDirectionToEquirect(faceDirection(int(face), a, b), equirect.width, equirect.height);
-    };
-    for (int i = 0; i < n; ++i) {
-        std::array<glm::dvec3, 4> sides{};
-        glm::dvec3 top(0.0), bottom(0.0);
-        for (int sj = 0; sj < k; ++sj) {
-            for (int si = 0; si < k; ++si) {
-                double a = -1.0 + (i * k + si + 0.5) * step;
-                double b = -1.0 + (j * k + sj + 0.5) * step;
-                PixelPoint side = position(Face::PositiveX, a, b);
-                for (size_t turn = 0; turn < sides.size(); ++turn)
-                    sides[turn] +=
-                        sampleEquirect(equirect, wrapped(side.x + double(turn) * quarterTurn), side.y);
-                PixelPoint cap = position(Face::PositiveY, a, b);
-                top += sampleEquirect(equirect, cap.x, cap.y);
-                bottom += sampleEquirect(equirect, cap.x, height - cap.y);
-            }
-        }
-        const double samples = double(k * k);
-        auto texel = [&](const glm::dvec3& sum) { return glm::vec4(glm::vec3(sum / samples), 1.0f); };
-        for (size_t turn = 0; turn < sides.size(); ++turn)
-            cubemap.at(int(kSideFacesByTurn[turn]), i, j) = texel(sides[turn]);
-        cubemap.at(int(Face::PositiveY), i, j) = texel(top);
-        cubemap.at(int(Face::NegativeY), i, n - 1 - j) = texel(bottom);
-    }
-}
-
 // One output texel of a 1-D resampling: the source texels it reads and their weights.
 struct Tap {
     int source;
@@ -187,9 +122,8 @@ void resizeColumns(const std::vector<glm::dvec4>& rows, int face, const Taps& ta
     }
 }
 
-// Work worth a thread (threadCount): a quarter to half a millisecond of equirect samples or
-// resampling taps, far more than starting and joining the thread costs.
-constexpr size_t kSamplesPerThread = size_t(1) << 12;
+// Work worth a thread (threadCount): a quarter to half a millisecond of resampling taps, far more
+// than starting and joining the thread costs.
 constexpr size_t kTapsPerThread = size_t(1) << 16;
 
 // Taps read by one row of either pass: every output texel's taps.
@@ -305,22 +239,6 @@ void checkEquirectShape(int width, int height) {
     if (width != 2 * height)
         throw Error(ErrorKind::Input,
                     "image is " + sizeText(width, height) + ", but an equirect image must be 2:1");
-}
-
-Cubemap equirectToCubemap(const Image& equirect, int faceSize, WorkCounter* progress) {
-    if (equirect.texels.empty()) throw Error(ErrorKind::Input, "the equirect image is empty");
-    checkEquirectShape(equirect.width, equirect.height);
-    Cubemap cubemap = makeCubemap(faceSize); // throws for a face size below 1
-    // A face spans a quarter of the equator, so at the equator a texel covers width / (4 faceSize)
-    // equirect pixels; k supersamples per side are at least that dense.
-    int k = std::max(1, int(std::ceil(double(equirect.width) / (4.0 * faceSize))));
-    const size_t samples = cubemap.texels.size() * size_t(k) * size_t(k);
-    startWork(progress, "resampling, rows", uint64_t(faceSize), uint64_t(kFaceCount) * uint64_t(faceSize));
-    forEachItem(faceSize, threadCount(samples, kSamplesPerThread), [&](int j) {
-        resampleRow(equirect, j, k, cubemap);
-        countWork(progress, 1);
-    });
-    return cubemap;
 }
 
 namespace {
