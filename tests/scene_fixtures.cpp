@@ -161,10 +161,12 @@ void appendLittleEndian32(std::string& out, uint32_t value) {
     out.append(bytes, 4);
 }
 
+} // namespace
+
 // Section 4.4: header (magic, version 2, length), the JSON chunk padded with spaces, the BIN chunk
 // padded with zeros.
-std::string glbOf(const json& document, std::string bin) {
-    std::string text = document.dump();
+std::string glbOf(const Glb& glb) {
+    std::string text = glb.json.dump(), bin = glb.bin;
     text.resize((text.size() + 3) / 4 * 4, ' ');
     bin.resize((bin.size() + 3) / 4 * 4, '\0');
     std::string file = "glTF";
@@ -177,12 +179,23 @@ std::string glbOf(const json& document, std::string bin) {
     return file;
 }
 
-} // namespace
+Glb readGlb(const std::string& bytes) {
+    auto word = [&](size_t at) {
+        uint32_t w;
+        std::memcpy(&w, bytes.data() + at, 4);
+        return w;
+    };
+    const uint32_t jsonLength = word(12);
+    Glb glb{json::parse(bytes.substr(20, jsonLength)), {}};
+    const size_t binAt = 20 + jsonLength;
+    if (binAt + 8 <= bytes.size()) glb.bin = bytes.substr(binAt + 8, word(binAt));
+    return glb;
+}
 
 void writeGltf(const std::string& path, const FixtureScene& scene, GltfContainer container) {
     if (container == GltfContainer::Gltf) return writeText(path, gltfText(scene));
     const auto [document, bin] = documentOf(scene);
-    writeText(path, glbOf(document, bin));
+    writeText(path, glbOf({document, bin}));
 }
 
 std::string gltfText(const FixtureScene& scene) {

@@ -10,6 +10,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -74,6 +75,16 @@ std::string gltfText(const FixtureScene& scene);
 std::string dataUri(const std::string& bytes);
 // Writes `text` (any bytes) to path; throws std::runtime_error if it cannot.
 void writeText(const std::string& path, const std::string& text);
+
+// A .glb's two chunks (section 4.4): the JSON and the binary buffer.
+struct Glb {
+    nlohmann::json json;
+    std::string bin;
+};
+// The chunks of a .glb's bytes, and the bytes of a .glb of chunks: for tests that read a written
+// file by the specification, or damage it.
+Glb readGlb(const std::string& bytes);
+std::string glbOf(const Glb& glb);
 
 // The rotation of a node whose directional light (which shines along the node's -Z) arrives from
 // `towardsLight`: it takes +Z to that unit vector.

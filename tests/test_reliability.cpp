@@ -455,6 +455,38 @@ TEST_F(Reliability, NumberOptionsMustBeFiniteAndInRange) {
     }
 }
 
+// Whole-number options and options given twice are refused in the project's words, not CLI11's
+// ("Value 1e9 not in range 1 to 4294967296", "At Most 1 required but received 2").
+TEST_F(Reliability, WholeNumberAndRepeatedOptionsAreRefusedInPlainWords) {
+    writeProbeFile(file("probe.json"), testProbe(3), {});
+    const std::string probe = file("probe.json");
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"render", probe, "--max-pixels", "1e9", "-o", "OUT"},
+         "--max-pixels: 1e9 is not a whole number from 1 to 4294967296"},
+        {{"bake", "--face-size", "0", "-o", "OUT"}, "--face-size: 0 is not a whole number from 1 to 16384"},
+        {{"bake", "--order", "2.5", "-o", "OUT"}, "--order: 2.5 is not a whole number from 1 to 8"},
+        {{"render", probe, "--order", "3", "--order", "5", "-o", "OUT"},
+         "--order: given 2 times; give it once"},
+        {{"bake", "--order", "3", "--order", "5", "--order", "4", "-o", "OUT"},
+         "--order: given 3 times; give it once"},
+    };
+    for (const auto& [args, message] : cases) {
+        const std::string output = args[0] == "render" ? "out.png" : "out.json";
+        expectFailure({args, 2, {message}, output});
+        RunResult result = run(withOutput(args, file(output)));
+        EXPECT_EQ(result.err.find("Value "), std::string::npos) << result.err;
+        EXPECT_EQ(result.err.find("At Most"), std::string::npos) << result.err;
+    }
+}
+
+// A whole number is read in decimal, as it is checked: "08" is eight (CLI11 alone reads a leading 0
+// as octal and refuses 08), "+16" sixteen.
+TEST_F(Reliability, WholeNumbersAreReadInDecimal) {
+    RunResult result = run({"bake", "--order", "08", "--face-size", "+16", "-o", file("probe.json")});
+    ASSERT_EQ(result.exitCode, 0) << describe(result);
+    EXPECT_EQ(readProbeFile(file("probe.json")).order, 8);
+}
+
 // --directional and --sphere repeat as the help says: two lights give the sum of their probes.
 TEST_F(Reliability, RepeatedLightOptionsAddUp) {
     const std::vector<std::string> a = {"--directional", "0,1,0", "1,2,3"},

@@ -33,6 +33,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::FixtureMesh;
 using testing::FixtureScene;
+using testing::Glb;
+using testing::readGlb;
 
 constexpr double kPi = std::numbers::pi;
 
@@ -525,24 +527,6 @@ TEST_F(TransferProgram, OutputNamesAgreeWithTheFormat) {
     }
     for (const char* name : {"t.glb", "t.shpt", "t.gltf"})
         EXPECT_FALSE(fs::exists(path(name))) << name;
-}
-
-// The .glb's JSON chunk and BIN chunk.
-struct Glb {
-    nlohmann::json json;
-    std::string bin;
-};
-Glb readGlb(const std::string& bytes) {
-    auto word = [&](size_t at) {
-        uint32_t w;
-        std::memcpy(&w, bytes.data() + at, 4);
-        return w;
-    };
-    const uint32_t jsonLength = word(12);
-    Glb glb{nlohmann::json::parse(bytes.substr(20, jsonLength)), {}};
-    const size_t binAt = 20 + jsonLength;
-    if (binAt + 8 <= bytes.size()) glb.bin = bytes.substr(binAt + 8, word(binAt));
-    return glb;
 }
 
 // The floats of attribute `name` of a primitive, read by the specification (tightly packed VEC4).

@@ -201,7 +201,7 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
                     "Cube-map face size: crosses and face files are resized to it, equirect inputs resampled "
                     "to a cube map of it (default: the cross's or the faces' own size; equirect inputs are "
                     "projected directly, each pixel weighted by its solid angle)")
-        ->check(CLI::Range(1, kMaxGpuFaceSize));
+        ->transform(wholeNumberFrom(1, kMaxGpuFaceSize));
     command
         .add_option(
             "--backend", options.backend,
@@ -256,7 +256,7 @@ void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool
                     "Irradiance maps: equirect width (even; default 512) or cross face size (default 128); "
                     "gltf: specularImageSize, mip 0's face size (a power of two from 32 to 512; default "
                     "128)")
-        ->check(CLI::Range(1, 16384));
+        ->transform(wholeNumberFrom(1, 16384));
     command
         .add_option("--mirror", mirror,
                     "filament: on (default) matches cmgen's default mirroring of the cube map (x -> -x), "

@@ -1,6 +1,7 @@
 // The subcommands of the shprobe program. Each adds its options to the parser and runs from a
 // plain options struct; library errors (shprobe::Error) reach main, which prints them.
 #pragma once
+#include "app/program.h"
 #include "app/toolkit.h"
 #include "glsl/dispatch_plan.h"
 #include "image/environment.h"
@@ -229,6 +230,9 @@ inline void addDeviceOptions(CLI::App& command, std::string& device, bool& valid
 // The Vulkan context of the commands that draw (render, scene): a queue that does graphics too
 // (render.cpp).
 Context createGraphicsContext(const std::string& device, bool validation);
+// The graphics context of `shprobe render` at `size` (--size or its default): refused in words naming
+// --size (Error(Input)), before any image is made, where the device cannot create its render targets.
+Context createRenderContext(const RenderOptions& options, ImageSize size);
 
 // --exposure of render and view: stops relative to the automatic exposure (2^64 either way
 // is already far past black and white).
@@ -245,7 +249,7 @@ inline void addImageLimitOption(CLI::App& command, int64_t& maxPixels) {
         .add_option("--max-pixels", maxPixels,
                     "Largest image file to read, in pixels (16384x8192 by default); larger ones are "
                     "refused from their header")
-        ->check(CLI::Range(int64_t(1), kMaxImageSide * kMaxImageSide))
+        ->transform(wholeNumberFrom(1, kMaxImageSide * kMaxImageSide))
         ->capture_default_str();
 }
 

@@ -40,6 +40,26 @@ std::string oneLine(std::string text) {
     return text;
 }
 
+// The option of the parsed command line given more often than it takes a value, if any.
+const CLI::Option* repeatedOption(const CLI::App& app) {
+    for (const CLI::Option* option : app.get_options())
+        if (option->get_multi_option_policy() == CLI::MultiOptionPolicy::Throw &&
+            option->get_items_expected_max() <= 1 && option->count() > 1)
+            return option;
+    for (const CLI::App* command : app.get_subcommands())
+        if (const CLI::Option* option = repeatedOption(*command)) return option;
+    return nullptr;
+}
+
+// CLI11's message, but for an option given twice, of which it says "--order: At Most 1 required but
+// received 2": that is said as the other option errors are.
+std::string parseErrorText(const CLI::App& app, const CLI::ParseError& e) {
+    const CLI::Option* repeated =
+        dynamic_cast<const CLI::ArgumentMismatch*>(&e) ? repeatedOption(app) : nullptr;
+    if (!repeated) return oneLine(e.what());
+    return repeated->get_name() + ": given " + std::to_string(repeated->count()) + " times; give it once";
+}
+
 void printError(const char* name, const Error& e) {
     std::fprintf(stderr, "%s: error: %s\n", name, oneLine(e.what()).c_str());
 }
@@ -70,7 +90,7 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         if (e.get_exit_code() == 0) return app.exit(e); // --help, --version
-        std::fprintf(stderr, "%s: error: %s (see --help)\n", name, oneLine(e.what()).c_str());
+        std::fprintf(stderr, "%s: error: %s (see --help)\n", name, parseErrorText(app, e).c_str());
         return 2;
     } catch (const Error& e) { // a value that its option's parser refused (app/parsed_option.h)
         printError(name, e);

@@ -3,18 +3,45 @@
 #pragma once
 #include <CLI/CLI.hpp>
 
+#include <charconv>
+#include <cstdint>
 #include <functional>
+#include <string>
+#include <string_view>
 
 namespace shprobe {
 
 // --version: prints "PROGRAM VERSION" and exits 0.
 void addVersionFlag(CLI::App& app, const char* program);
 
-// An option whose value must lie in [low, high], with its default shown in --help.
-template <typename T, typename Bound>
+// A whole-number option's check at parse time, in the words of numberFrom (commands.h): "--frames:
+// 1e9 is not a whole number from 1 to 1073741824", where CLI11's Range says "Value 1e9 not in range".
+// Attached with transform(): the value is handed on as the decimal number checked, since CLI11 would
+// read "010" as octal 8 and refuse "09".
+inline CLI::Validator wholeNumberFrom(int64_t min, int64_t max) {
+    const std::string allowed = "whole number from " + std::to_string(min) + " to " + std::to_string(max);
+    return CLI::Validator(
+        [=](std::string& input) {
+            const std::string_view digits =
+                input.starts_with('+') ? std::string_view(input).substr(1) : input;
+            int64_t value = 0;
+            const char* end = digits.data() + digits.size();
+            const auto [stop, error] = std::from_chars(digits.data(), end, value);
+            if (error != std::errc() || stop != end || value < min || value > max)
+                return input + " is not a " + allowed;
+            input = std::to_string(value);
+            return std::string();
+        },
+        allowed);
+}
+
+// A whole-number option whose value must lie in [low, high], with its default shown in --help.
+template <typename T>
 CLI::Option* addRangeOption(CLI::App& command, const std::string& name, T& value, const std::string& help,
-                            Bound low, Bound high) {
-    return command.add_option(name, value, help)->check(CLI::Range(low, high))->capture_default_str();
+                            int64_t low, int64_t high) {
+    return command.add_option(name, value, help)
+        ->transform(wholeNumberFrom(low, high))
+        ->capture_default_str();
 }
 
 // Parses the command line into `app`, then calls `run`. Returns the exit code: 0 success, 1 out of

@@ -31,6 +31,32 @@ Context createGraphicsContext(const std::string& device, bool validation) {
 
 namespace {
 
+// The size as the refusals of a size name it.
+std::string sizeAsked(const RenderOptions& options, ImageSize size) {
+    if (options.grid) return "--size " + std::to_string(size.width) + " with --grid";
+    return "--size " + std::to_string(size.width) + "x" + std::to_string(size.height);
+}
+
+// The picture's pixels: --size, or with --grid its cells side by side (render/grid.h).
+VkExtent2D pictureExtent(const RenderOptions& options, ImageSize size) {
+    if (!options.grid) return {size.width, size.height};
+    const VkExtent2D cell = gridCellExtent(size.width);
+    return {cell.width * kGridColumns, cell.height * kGridRows};
+}
+
+} // namespace
+
+Context createRenderContext(const RenderOptions& options, ImageSize size) {
+    Context context = createGraphicsContext(options.device, options.validation);
+    OnFailure release([&] { destroyContext(context); });
+    const VkExtent2D targets =
+        options.grid ? gridCellExtent(size.width) : VkExtent2D{size.width, size.height};
+    requireRenderTargetExtent(context, targets, sizeAsked(options, size));
+    return context;
+}
+
+namespace {
+
 constexpr uint32_t kDefaultSize = 512;
 constexpr uint32_t kDefaultGridCell = 384;
 constexpr uint32_t kMaxSize = 16384;
@@ -84,7 +110,7 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
         foldProbe(result.input.probe, foldOrder(options, result.input.probe), result.input.name,
                   result.input.sun); // throws early
     }
-    Context context = createGraphicsContext(options.device, options.validation);
+    Context context = createRenderContext(options, size);
     ScopeExit releaseContext([&] { destroyContext(context); });
     if (!isProbeFile(options.input)) {
         DeviceStep step("baking " +
@@ -186,7 +212,7 @@ CLI::Option* addSizeOption(CLI::App& command, std::optional<ImageSize>& size, co
 
 void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize, int64_t& maxPixels) {
     command.add_option("--face-size", faceSize, "Cube-map face size of an environment input")
-        ->check(CLI::Range(1, kMaxGpuFaceSize));
+        ->transform(wholeNumberFrom(1, kMaxGpuFaceSize));
     command.add_flag("--sanitize", sanitize, "Replace NaN and infinite texels with 0 instead of failing");
     addImageLimitOption(command, maxPixels);
 }
@@ -195,6 +221,8 @@ void runRender(const RenderOptions& options) {
     const uint32_t side = options.grid ? kDefaultGridCell : kDefaultSize;
     const ImageSize size = options.size.value_or(ImageSize{side, side});
     checkRenderOutputPath(options.output); // before any work
+    const VkExtent2D picture = pictureExtent(options, size);
+    checkRenderOutputSize(options.output, picture.width, picture.height, sizeAsked(options, size));
     if (options.scene.transfer) return runTransferRender(options, size.width, size.height);
     if (options.scene.drawn()) return runSceneRender(options, size.width, size.height);
     checkOutputsAreNotInputs({&options.output, 1}, filesReadBy(options.input));

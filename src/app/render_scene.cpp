@@ -117,7 +117,7 @@ void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t heigh
     const LitScene scene = loadLitScene(options.scene);
     const ProbeVolume& volume = scene.volume;
 
-    Context context = createGraphicsContext(options.device, options.validation);
+    Context context = createRenderContext(options, {width, height});
     ScopeExit releaseContext([&] { destroyContext(context); });
     SceneCapture capture = createLitSceneCapture(context, scene);
     ScopeExit releaseCapture([&] { destroySceneCapture(context, capture); });

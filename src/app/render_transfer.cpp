@@ -71,7 +71,7 @@ void runTransferRender(const RenderOptions& options, uint32_t width, uint32_t he
     const TransferMesh mesh = loadTransferMesh(options.scene.scene);
     const RelitLight source = loadRelitLight(options.scene, mesh.order);
 
-    Context context = createGraphicsContext(options.device, options.validation);
+    Context context = createRenderContext(options, {width, height});
     ScopeExit releaseContext([&] { destroyContext(context); });
     const ShCoefficients light = relitLightCoefficients(context, source, mesh.order);
     RelitScene relit = createRelitScene(context, mesh, light);

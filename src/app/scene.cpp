@@ -66,7 +66,7 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
     command
         .add_option("--sky-face-size", options.skyFaceSize,
                     "Face size the sky is resampled to (0: its own; 128 for the built-in sky)")
-        ->check(CLI::Range(0, 4096));
+        ->transform(wholeNumberFrom(0, 4096));
     addParsedOption(command, "--brick", options.brick, parseBrickOption,
                     "Bake only brick I of N (0 <= I < N) of the grid, every bounce of its probes; "
                     "`shprobe merge` joins the bricks");

@@ -10,6 +10,7 @@
 #include "app/stopwatch.h"
 #include "common/counted.h"
 #include "common/error.h"
+#include "common/file_extension.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
 #include "gpu/transfer_rays.h"
@@ -19,37 +20,30 @@
 #include "sh/basis.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cstdio>
 #include <optional>
-#include <string_view>
 
 namespace shprobe {
 
 namespace {
 
-// Whether the name ends in `end` (lower case), in any case: "T.GLB" ends in ".glb".
-bool endsWith(const std::string& text, std::string_view end) {
-    if (text.size() < end.size()) return false;
-    return std::equal(end.begin(), end.end(), text.end() - std::ptrdiff_t(end.size()),
-                      [](char e, char t) { return e == char(std::tolower(static_cast<unsigned char>(t))); });
-}
-
 bool writesBinary(const TransferCommandOptions& options) {
     if (!options.format.empty()) return options.format == "binary";
-    return endsWith(options.output, ".shpt");
+    return hasExtension(options.output, ".shpt");
 }
 
 // The file -o names must be what is written: .shpt the transfer alone, .glb the scene (binary glTF;
 // a .gltf name would tell readers to expect JSON).
 void checkOutputName(const TransferCommandOptions& options) {
     const std::string& output = options.output;
-    if (endsWith(output, ".gltf"))
+    if (hasExtension(output, ".gltf"))
         throw Error(ErrorKind::Input,
                     "-o " + output +
                         " names a JSON glTF file, but transfer writes binary glTF (.glb) or "
                         "the transfer alone (.shpt)");
-    const char* named = endsWith(output, ".shpt") ? "binary" : endsWith(output, ".glb") ? "glb" : nullptr;
+    const char* named = hasExtension(output, ".shpt")  ? "binary"
+                        : hasExtension(output, ".glb") ? "glb"
+                                                       : nullptr;
     if (named && !options.format.empty() && options.format != named)
         throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
                                           options.format + "; use the extension " +

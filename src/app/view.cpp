@@ -56,7 +56,7 @@ void addViewOptions(CLI::App& command, ViewOptions& options) {
         ->capture_default_str();
     command.add_option("--screenshot", options.screenshot, "Save frame --frames to this PNG and exit");
     command.add_option("--frames", options.frames, "Exit after this many frames")
-        ->check(CLI::Range(1, 1 << 30));
+        ->transform(wholeNumberFrom(1, 1 << 30));
     addParsedOption<std::vector<std::string>>(
         command, "--keys", options.keys, scriptedKeys,
         "Key presses to replay, one before each frame: 3 5 m b left right up down j l i k + - r q p")

@@ -7,6 +7,7 @@
 #include "image/specular_prefilter.h"
 
 #include "common/error.h"
+#include "common/file_extension.h"
 #include "formats/probe_export.h"
 #include "sh/basis.h"
 #include "sh/cubemap.h"
@@ -15,7 +16,6 @@
 #include "sh/rotation.h"
 
 #include <algorithm>
-#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -457,12 +457,6 @@ constexpr ExportFormat kFormats[] = {
      writeEngine<Engine::Godot>},
 };
 
-std::string lowercase(std::string text) {
-    for (char& c : text)
-        c = char(std::tolower(static_cast<unsigned char>(c)));
-    return text;
-}
-
 } // namespace
 
 void requireRepresentable(const ExportFormat& format, const ShCoefficients& probe,
@@ -522,14 +516,13 @@ const ExportFormat* findExportFormat(std::string_view name) {
 }
 
 const ExportFormat* formatOfOutputName(const std::string& path) {
-    const std::string name = lowercase(path);
     const ExportFormat* best = nullptr;
     for (const ExportFormat& format : kFormats) {
         const std::string_view extension = format.extension;
-        bool matches = name.size() > extension.size() && name.ends_with(extension);
+        bool matches = path.size() > extension.size() && hasExtension(path, extension);
         if (matches && (!best || extension.size() > std::string_view(best->extension).size())) best = &format;
     }
-    if (!best && name.ends_with(".hpp")) return findExportFormat("cpp");
+    if (!best && hasExtension(path, ".hpp")) return findExportFormat("cpp");
     return best;
 }
 

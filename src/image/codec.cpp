@@ -2,8 +2,8 @@
 // (image/codec.h).
 #include "image/codec.h"
 
-#include <algorithm>
-#include <cctype>
+#include "common/file_extension.h"
+
 #include <cstring>
 #include <string_view>
 
@@ -32,16 +32,10 @@ ImageFormat sniffImageFormat(const unsigned char* bytes, size_t count) {
 }
 
 ImageFormat imageFormatOfName(const std::string& path) {
-    const size_t slash = path.find_last_of('/');
-    const size_t dot = path.find_last_of('.');
-    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return ImageFormat::Other;
-    std::string extension = path.substr(dot + 1);
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    if (extension == "exr") return ImageFormat::Exr;
-    if (extension == "hdr") return ImageFormat::Hdr;
-    if (extension == "png") return ImageFormat::Png;
-    if (extension == "jpg" || extension == "jpeg") return ImageFormat::Jpeg;
+    if (hasExtension(path, ".exr")) return ImageFormat::Exr;
+    if (hasExtension(path, ".hdr")) return ImageFormat::Hdr;
+    if (hasExtension(path, ".png")) return ImageFormat::Png;
+    if (hasExtension(path, ".jpg") || hasExtension(path, ".jpeg")) return ImageFormat::Jpeg;
     return ImageFormat::Other;
 }
 

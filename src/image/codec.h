@@ -7,6 +7,7 @@
 #pragma once
 #include "image/channels.h"
 
+#include <climits>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -100,6 +101,12 @@ struct BytePixels {
     int pixelStride = 4;
     const uint8_t* data = nullptr; // already sRGB-encoded (or data, for RGBA)
 };
+
+// stb_image_write counts bytes in int: the most pixels its HDR, PNG and JPEG encoders take at
+// `channels` a pixel, (channels + 1) * 4 bytes each with room to spare.
+constexpr int64_t maxStbPixels(int channels) {
+    return INT_MAX / ((int64_t(channels) + 1) * 4);
+}
 
 // The file's bytes. EXR (the OpenEXR plugin's): 32-bit floats, ZIP compression, scanlines; HDR:
 // RGBE; PNG and JPEG (quality 95): 8 bits per channel. Errors: Error(Output) "cannot write WHAT:

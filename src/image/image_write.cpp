@@ -106,6 +106,12 @@ void writeImage(const std::string& path, const Image& image, const std::string& 
                       }});
 }
 
+int64_t maxWrittenPixels(const std::string& path) {
+    const ImageFormat format = imageFormatOfName(path);
+    const bool stb = format == ImageFormat::Hdr || format == ImageFormat::Png || format == ImageFormat::Jpeg;
+    return stb ? maxStbPixels(3) : INT64_MAX;
+}
+
 std::string encodeRgba8(const std::string& format, int width, int height, const std::vector<uint8_t>& rgba) {
     const std::string what = "a " + format + " image";
     if (width < 1 || height < 1 || rgba.size() != size_t(width) * size_t(height) * 4)

@@ -20,6 +20,10 @@ void writeImage(const std::string& path, const Image& image, const std::string& 
 // extension's format (PNG, JPEG); alpha is dropped.
 void writeSrgbImage(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba);
 
+// The most pixels writeImage and writeSrgbImage put in a file named `path` (RGB): stb_image_write's
+// limit for HDR, PNG and JPEG, none (INT64_MAX) for EXR and OpenImageIO's formats.
+int64_t maxWrittenPixels(const std::string& path);
+
 // The bytes of an 8-bit RGBA file of OpenImageIO's format `format` ("png") holding RGBA8 bytes
 // (rows top down) as they are, for files embedded in others (a glTF's data URIs).
 std::string encodeRgba8(const std::string& format, int width, int height, const std::vector<uint8_t>& rgba);

@@ -820,7 +820,7 @@ void checkSize(int width, int height, int channels, int pixelStride, bool hasDat
         failOutput(what, std::to_string(channels) + " channels every " + std::to_string(pixelStride) +
                              " values cannot be written");
     if (!hasData) failOutput(what, "no pixels given");
-    if (int64_t(width) * height * (channels + 1) * 4 > INT_MAX)
+    if (int64_t(width) * height > maxStbPixels(channels))
         failOutput(what, "the image is " + std::to_string(width) + "x" + std::to_string(height) +
                              ", too large to encode");
 }

@@ -68,11 +68,16 @@ void placeCell(RenderedImage& grid, const RenderedImage& cell, int x0, int y0) {
 
 } // namespace
 
+VkExtent2D gridCellExtent(uint32_t cellWidth) {
+    const uint32_t width = std::max(cellWidth, 2u);
+    return {width, width / 2};
+}
+
 RenderedImage renderGrid(const Context& context, OffscreenRenderer& renderer, const GridOptions& options) {
     if (renderer.scene.probe.order < 5)
         throw Error(ErrorKind::Input,
                     "the grid compares orders 3 and 5: it needs a probe of order 5 or more");
-    const uint32_t width = std::max(options.cellWidth, 2u), height = width / 2;
+    const auto [width, height] = gridCellExtent(options.cellWidth);
     RenderedImage grid;
     grid.linear = makeImage(int(width) * kGridColumns, int(height) * kGridRows);
     grid.directions = makeImage(grid.linear.width, grid.linear.height);

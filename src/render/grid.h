@@ -23,6 +23,9 @@ struct GridOptions {
     float exposure = 1.0f;    // linear, before the display curve
 };
 
+// One cell's pixels: cellWidth (at least 2) x half of it. The picture is kGridColumns x kGridRows cells.
+VkExtent2D gridCellExtent(uint32_t cellWidth);
+
 // The renderer must hold the probe folded at order 5 (and the environment, if any).
 RenderedImage renderGrid(const Context& context, OffscreenRenderer& renderer, const GridOptions& options);
 

@@ -33,6 +33,16 @@ void checkRenderOutputPath(const std::string& path) {
     checkOutputPath(path, OutputContent::Binary);
 }
 
+void checkRenderOutputSize(const std::string& path, uint32_t width, uint32_t height,
+                           const std::string& asked) {
+    const int64_t pixels = int64_t(width) * height, limit = maxWrittenPixels(path);
+    if (pixels <= limit) return;
+    throw Error(ErrorKind::Input, asked + ": " + path + " would be " + std::to_string(width) + "x" +
+                                      std::to_string(height) + ", " + std::to_string(pixels) +
+                                      " pixels; shprobe writes PNG, JPEG and HDR files of at most " +
+                                      std::to_string(limit) + " pixels: write .exr, or ask a smaller size");
+}
+
 void writeRenderedImage(const std::string& path, const RenderedImage& image) {
     switch (outputKind(path)) {
     case OutputKind::Linear:

@@ -2,6 +2,7 @@
 
 #include "common/error.h"
 #include "common/scope_exit.h"
+#include "vk/check.h"
 #include "vk/graphics.h"
 #include "vk/vulkan_commands.h"
 
@@ -58,7 +59,33 @@ Image readFloatImage(const Device& device, const Buffer& buffer, VkExtent2D exte
     return image;
 }
 
+std::string extentText(uint64_t width, uint64_t height) {
+    return std::to_string(width) + "x" + std::to_string(height);
+}
+
 } // namespace
+
+void requireRenderTargetExtent(const Device& device, VkExtent2D extent, const std::string& asked) {
+    VkPhysicalDeviceImageFormatInfo2 info{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_IMAGE_FORMAT_INFO_2};
+    info.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+    info.type = VK_IMAGE_TYPE_2D;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage =
+        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    VkImageFormatProperties2 properties{VK_STRUCTURE_TYPE_IMAGE_FORMAT_PROPERTIES_2};
+    VK_CHECK(vkGetPhysicalDeviceImageFormatProperties2(device.physicalDevice, &info, &properties));
+    const VkImageFormatProperties& limits = properties.imageFormatProperties;
+    const uint64_t bytes = uint64_t(extent.width) * extent.height * 16;
+    if (extent.width <= limits.maxExtent.width && extent.height <= limits.maxExtent.height &&
+        bytes <= limits.maxResourceSize)
+        return;
+    throw Error(ErrorKind::Input, asked + ": " + device.info.name +
+                                      " makes RGBA32F render targets of at most " +
+                                      extentText(limits.maxExtent.width, limits.maxExtent.height) +
+                                      " pixels and " + std::to_string(limits.maxResourceSize) +
+                                      " bytes, and one of " + extentText(extent.width, extent.height) +
+                                      " is " + std::to_string(bytes) + " bytes: ask a smaller size");
+}
 
 OffscreenRenderer createOffscreenRenderer(const Context& context) {
     OffscreenRenderer renderer;

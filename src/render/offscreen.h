@@ -6,6 +6,7 @@
 #include "sh/cubemap.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace shprobe {
@@ -16,6 +17,12 @@ struct OffscreenRenderer {
     SceneRenderer scene;
     Tonemapper tonemapper; // into kDisplayFormat, left ready for readback
 };
+
+// Throws Error(Input) naming `asked` (the option that sized them) where the device cannot create
+// render targets of `extent`: RGBA32F, the largest texels of every render path, past the format's
+// maxExtent or past its maxResourceSize (16 bytes a texel, as the validation layer counts them).
+// Before any image is made: past those, vkCreateImage's result is undefined.
+void requireRenderTargetExtent(const Device& device, VkExtent2D extent, const std::string& asked);
 
 OffscreenRenderer createOffscreenRenderer(const Context& context);
 void destroyOffscreenRenderer(const Device& device, OffscreenRenderer& renderer);

@@ -128,6 +128,11 @@ void addAttributes(tinygltf::Model& model, std::vector<unsigned char>& bin, cons
     const size_t floats = size_t(order) * size_t(order) * size_t(channels);
     const int attributes = transferAttributeCount(order, channels);
     tinygltf::Primitive& primitive = model.meshes[size_t(mesh)].primitives[size_t(p.primitive)];
+    // A model that already holds a transfer (one of ours, baked again) keeps none of it: left over
+    // past this one's count, its attributes would not match the header.
+    std::erase_if(primitive.attributes, [](const auto& attribute) {
+        return attribute.first.starts_with(kTransferAttributePrefix);
+    });
     std::vector<float> column(size_t(p.vertexCount) * 4);
     for (int a = 0; a < attributes; ++a) {
         for (size_t v = 0; v < p.vertexCount; ++v)

@@ -21,8 +21,10 @@ struct TransferMesh {
 };
 
 // Throws Error(Input), one line naming the file, for what loadGltfScene refuses, a scene without
-// asset.extras.shTransfer or with a primitive that lacks one of its attributes, and attributes
-// that are not VEC4 float accessors of POSITION's count.
+// asset.extras.shTransfer, a header whose format, version, convention, order, channels or
+// attribute names are not those the writer writes, a primitive with other attributes than the
+// header makes, attributes that are not VEC4 float accessors of POSITION's count, and a
+// coefficient that is not finite or a padding float that is not zero.
 TransferMesh loadTransferMesh(const std::string& path);
 
 } // namespace shprobe

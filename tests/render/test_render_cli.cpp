@@ -278,12 +278,35 @@ TEST_F(RenderCli, BadOptionsAreRefusedBeforeAnyOutput) {
     expectInputError({"render", folder / "missing.exr", "-o", out}, {"missing.exr"}, out);
     expectInputError({"render", order3, "--size", "0", "-o", out}, {"--size"}, out);
     expectInputError({"render", order3, "--grid", "-o", out}, {"order 5"}, out);
-    // A target larger than one allocation may hold (4 GiB at 16384^2 against lavapipe's 2 GiB, the
-    // device the tests run on): the advice names the option that sizes it.
-    const RunResult huge = run({"render", order3, "--size", "16384", "-o", out});
+    // A target larger than one allocation may hold (3 GiB at 16384x12288 against lavapipe's 2 GiB,
+    // the device the tests run on): the advice names the option that sizes it.
+    const std::string exr = folder / "out.exr";
+    const RunResult huge = run({"render", order3, "--size", "16384x12288", "-o", exr});
     EXPECT_EQ(huge.exitCode, 4) << describe(huge);
     EXPECT_CONTAINS(huge.err, "try a smaller --size");
-    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(exr));
+}
+
+// Sizes the output's format cannot hold are refused before any work (stb_image_write's PNG, JPEG
+// and HDR count bytes in int: at most 134217727 RGB pixels), the grid's whole picture counted; EXR
+// has no such limit. Sizes whose render targets the device cannot create (lavapipe: RGBA32F of at
+// most 4294967295 bytes, one byte short of 16384^2 texels) are refused before the image is made.
+TEST_F(RenderCli, SizesTheFormatOrTheDeviceCannotHoldAreRefusedFirst) {
+    std::string order5 = folder / "order5.json";
+    writeProbeFile(order5, testProbe(5), {});
+    for (const char* name : {"big.png", "big.jpg", "big.hdr"}) {
+        const std::string out = folder / name;
+        expectInputError(
+            {"render", order5, "--size", "16384x8192", "-o", out},
+            {"--size 16384x8192", out, "16384x8192, 134217728 pixels", "at most 134217727 pixels"}, out);
+    }
+    const std::string grid = folder / "grid.png";
+    expectInputError({"render", order5, "--grid", "--size", "8192", "-o", grid},
+                     {"--size 8192 with --grid", "24576x8192", "at most 134217727 pixels"}, grid);
+    const std::string exr = folder / "big.exr";
+    expectInputError({"render", order5, "--size", "16384", "-o", exr},
+                     {"--size 16384x16384", "RGBA32F render targets", "4294967295 bytes", "4294967296 bytes"},
+                     exr);
 }
 
 TEST_F(RenderCli, ViewWithoutADisplaySaysSoAndPointsToRender) {

@@ -17,6 +17,8 @@
 #include <OpenImageIO/imageio.h>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
@@ -292,6 +294,79 @@ TEST_F(RenderTransfer, RefusesScenesWithoutTransferTooManyAttributesAndBadTurns)
                   file("d.png"));
     expectRefused({"render", "--scene", scene, "--transfer", "--volume", "v.shpv", "-o", file("e.png")},
                   {"--volume"}, file("e.png"));
+}
+
+// A transfer file damaged after `shprobe transfer` wrote it: a coefficient that is NaN or infinite
+// (the device would draw it), a padding float that is not zero, and a header that does not describe
+// the attributes (another format, version or convention, channels or names that make another count)
+// are each refused in one line naming the file, before any device work.
+TEST_F(RenderTransfer, RefusesDamagedTransferFiles) {
+    const Glb written = readGlb(readText(transferBox("box.glb", 3))); // RGB: 27 floats, 7 attributes
+    const nlohmann::json& attributes = written.json["meshes"][0]["primitives"][0]["attributes"];
+    // The file `name`: the written one, `edit`ed.
+    auto damaged = [&](const std::string& name, const std::function<void(Glb&)>& edit) {
+        Glb glb = written;
+        edit(glb);
+        writeText(file(name), glbOf(glb));
+        return file(name);
+    };
+    // Float `component` of `vertex` in attribute `name` set to `value`.
+    auto setFloat = [&](const std::string& name, size_t vertex, size_t component, float value) {
+        return [&, name, vertex, component, value](Glb& glb) {
+            const nlohmann::json& accessor = glb.json["accessors"][attributes[name].get<size_t>()];
+            const nlohmann::json& view = glb.json["bufferViews"][accessor["bufferView"].get<size_t>()];
+            const size_t at = view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0)) +
+                              (vertex * 4 + component) * sizeof(float);
+            std::memcpy(&glb.bin[at], &value, sizeof(float));
+        };
+    };
+    auto setHeader = [](const std::string& key, nlohmann::json value) {
+        return [key, value](Glb& glb) { glb.json["asset"]["extras"]["shTransfer"][key] = value; };
+    };
+    const std::vector<std::pair<std::string, std::vector<std::string>>> cases{
+        {damaged("nan.glb", setFloat("_SH_TRANSFER_0", 0, 0, NAN)),
+         {"nan.glb", "mesh 0 primitive 0's _SH_TRANSFER_0 holds nan at vertex 0", "must be finite"}},
+        {damaged("inf.glb", setFloat("_SH_TRANSFER_3", 2, 1, -INFINITY)),
+         {"inf.glb", "_SH_TRANSFER_3 holds -inf at vertex 2"}},
+        {damaged("padding.glb", setFloat("_SH_TRANSFER_6", 1, 3, 1.0f)),
+         {"padding.glb", "_SH_TRANSFER_6 holds 1 at vertex 1 past the 27 floats"}},
+        {damaged("format.glb", setHeader("format", "other.transfer")),
+         {"format.glb", "\"format\" is not \"shprobe.transfer\""}},
+        {damaged("version.glb", setHeader("version", 2)), {"version.glb", "version 2", "reads 1"}},
+        {damaged("convention.glb", setHeader("convention", "real-orthonormal")),
+         {"convention.glb", "\"convention\" is not"}},
+        {damaged("names.glb", setHeader("channels", 1)),
+         {"names.glb", "\"attributes\" is not _SH_TRANSFER_0..2"}},
+        {damaged("count.glb",
+                 [&](Glb& glb) {
+                     setHeader("channels", 1)(glb);
+                     setHeader("attributes", {"_SH_TRANSFER_0", "_SH_TRANSFER_1", "_SH_TRANSFER_2"})(glb);
+                 }),
+         {"count.glb", "has 7 _SH_TRANSFER_ attributes", "order 3 and channels 1 make 3"}},
+    };
+    for (const auto& [scene, parts] : cases) {
+        SCOPED_TRACE(scene);
+        expectRefused({"render", "--scene", scene, "--transfer", "-o", file("out.png")}, parts,
+                      file("out.png"));
+    }
+}
+
+// A transfer baked from a model that holds one already (order 3, RGB: 7 attributes) at order 1
+// (one attribute) replaces it: the file holds its own count and renders.
+TEST_F(RenderTransfer, ATransferOfATransferKeepsOnlyItsOwnAttributes) {
+    const std::string first = transferBox("order3.glb", 3);
+    RunResult again = run({"transfer", first, "--order", "1", "-o", file("order1.glb")});
+    ASSERT_EQ(again.exitCode, 0) << describe(again);
+    const Glb written = readGlb(readText(file("order1.glb")));
+    for (const auto& primitive : written.json["meshes"][0]["primitives"]) {
+        size_t transferAttributes = 0;
+        for (const auto& [name, accessor] : primitive["attributes"].items())
+            transferAttributes += name.starts_with("_SH_TRANSFER_") ? 1 : 0;
+        EXPECT_EQ(transferAttributes, 1u);
+    }
+    RunResult rendered =
+        run({"render", "--scene", file("order1.glb"), "--transfer", "--size", "32", "-o", file("out.png")});
+    EXPECT_EQ(rendered.exitCode, 0) << describe(rendered);
 }
 
 } // namespace
