@@ -495,6 +495,16 @@ TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
         EXPECT_FALSE(fs::exists(file(name))) << name;
 }
 
+// A binary file given as --list (an image, say) is refused at its first NUL byte, naming the line,
+// before any input is read: its bytes were taken for paths, and the outputs' names cut at the NUL.
+TEST_F(BadInputs, ListOfABinaryFileIsRefused) {
+    writeText(file("list.txt"),
+              "# skies\n" + file("a.exr") + "\n" + std::string("\x89PNG\0\x01\xff", 7) + "\n");
+    const RunResult result = run({"bake", "--list", file("list.txt"), "--out-dir", file("probes")});
+    expectMessage({{}, 2, {"--list " + file("list.txt") + ": line 3 holds a NUL byte"}}, result);
+    EXPECT_FALSE(fs::exists(file("probes")));
+}
+
 // A binary probe file of several probes (a batch's) is not one probe: the readers say so instead
 // of taking the first alone, also where the batch is larger than any JSON probe file (1 MiB).
 TEST_F(BadInputs, ProbeReadersTakeABinaryFileOfOneProbe) {

@@ -479,6 +479,15 @@ TEST_F(Reliability, WholeNumberAndRepeatedOptionsAreRefusedInPlainWords) {
     }
 }
 
+// --mirror takes on or off, as its help says: not a number or yes, which CLI11 would take for a bool.
+TEST_F(Reliability, MirrorTakesOnOrOff) {
+    for (const char* value : {"2", "yes", "maybe"})
+        expectFailure({{"bake", "--format", "filament", "--mirror", value, "-o", "OUT"},
+                       2,
+                       {std::string("--mirror: ") + value + " is not on or off"},
+                       "sky.filament.txt"});
+}
+
 // A whole number is read in decimal, as it is checked: "08" is eight (CLI11 alone reads a leading 0
 // as octal and refuses 08), "+16" sixteen.
 TEST_F(Reliability, WholeNumbersAreReadInDecimal) {

@@ -261,6 +261,12 @@ void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool
         .add_option("--mirror", mirror,
                     "filament: on (default) matches cmgen's default mirroring of the cube map (x -> -x), "
                     "off matches cmgen --no-mirror")
+        // CLI11 reads any number, yes and no as a bool too: the help names on and off alone.
+        ->check(CLI::Validator(
+            [](std::string& value) {
+                return value == "on" || value == "off" ? std::string() : value + " is not on or off";
+            },
+            "on or off"))
         ->capture_default_str();
 }
 

@@ -41,7 +41,15 @@ std::vector<std::string> readInputList(const std::string& path) {
     }
     std::istringstream in(text);
     std::vector<std::string> inputs;
+    int number = 0;
     for (std::string line; std::getline(in, line);) {
+        ++number;
+        // No path holds a NUL byte: the file is something else (an image, say), whose bytes would
+        // otherwise be taken for names and their outputs' names cut short.
+        if (line.find('\0') != std::string::npos)
+            throw Error(ErrorKind::Input, "--list " + path + ": line " + std::to_string(number) +
+                                              " holds a NUL byte, which no path does; a list holds one "
+                                              "input's path a line");
         size_t first = line.find_first_not_of(" \t\r");
         if (first == std::string::npos || line[first] == '#') continue;
         size_t last = line.find_last_not_of(" \t\r");
