@@ -12,6 +12,13 @@
 // piece Q is linear in x, and the integral of x dz along it follows by parts from that of z dphi
 // along a great circle, which has a closed form (below), so the result is exact up to rounding. A texel is
 // that integral divided by its footprint's area, found the same way, so a constant map stays constant.
+//
+// The geometry (the pieces and their integrals) does not depend on the pixels, and faces related by
+// a symmetry of the equirect grid share it: where W is a multiple of 4, the four side faces are
+// one another turned a quarter turn about the axis (W / 4 columns) and each cap is a quarter of it
+// turned four times; -Y is +Y mirrored (x -> W / 2 - x, z -> -z, which keeps the loops'
+// orientation). Each edge's pieces are found once, on the face they were worked out on, and summed
+// against each related face's pixels (PixelView).
 #include "image/environment.h"
 
 #include "common/error.h"
@@ -56,19 +63,45 @@ struct ArcPoint {
     double c; // sqrt(n_y^2 + (e(phi) . n)^2): the angle atan2(u, c) of the closed form below
 };
 
-// The integrals of one texel's footprint, accumulated piece by piece around its edges.
+// A piece of a loop inside one pixel (addPiece), all that its integral needs but the pixel values.
+struct Piece {
+    double xa; // unwrapped x of its ends
+    double xb;
+    double dz;
+    double i;   // the integral of (x - xa) dz along it
+    int column; // the pixel's
+    int row;
+    bool carried; // goes on in the row where the piece before ended: Q carries on from there
+};
+
+// One texel's footprint (or one edge of it), gathered piece by piece around its edges: the area
+// at once, the integral of radiance (loopIntegral) once per face that shares the geometry.
 struct FootprintLoop {
-    glm::dvec3 integral{0.0}; // of radiance, in pixel x dz units
-    double area = 0.0;        // in the same units
-    double xRef = 0.0;        // x_ref, the loop's first x: keeps Q small against rounding
-    double xLast = 0.0;       // unwrapped x of the last point reached
+    double area = 0.0;  // in pixel x dz units
+    double xRef = 0.0;  // x_ref, the loop's first x: keeps Q small against rounding
+    double xLast = 0.0; // unwrapped x of the last point reached
     bool started = false;
     std::vector<ArcPoint> points;                 // scratch for one edge
+    std::vector<Piece> pieces;                    // in order along the loop
     std::vector<std::pair<int, double>> rowSteps; // dz by row along the loop, for sharedEdge
-    // Q at the end of the last piece, carried to the next piece where it goes on in the same row.
+    // Where the last piece ended, for the next piece's `carried`.
     int carriedRow = -1;
     double carriedX = 0.0;
-    glm::dvec3 carriedQ{0.0};
+
+    void restart() {
+        area = 0.0;
+        started = false;
+        pieces.clear();
+        rowSteps.clear();
+        carriedRow = -1;
+    }
+};
+
+// Which pixels a face reads where its geometry is another face's: column c of row r there is
+// column (c + shift) mod W of row r here, or, mirrored, column (shift - c) mod W of row H - 1 - r.
+struct PixelView {
+    int shift = 0; // in [0, W)
+    bool mirrored = false;
 };
 
 // A texel's integrals, gathered from its four edges.
@@ -112,33 +145,47 @@ class EquirectFootprints {
         return true;
     }
 
-    glm::vec4 pixelAt(const Corner& p) const { return glm::vec4(glm::vec3(pixel(column(p.x), p.row)), 1.0f); }
+    glm::vec4 pixelAt(const Corner& p, PixelView view) const {
+        return glm::vec4(glm::vec3(pixel(view, column(p.x), p.row)), 1.0f);
+    }
 
-    // An edge's integrals with Q taken from its own first x, x0; sharedEdge moves them to a texel's.
-    // The loop keeps them with the dz the edge spends in each row.
+    // An edge's pieces and area, with Q to be taken from its own first x, x0 (loopIntegral);
+    // sharedEdge moves them to a texel's. The loop keeps them with the dz the edge spends in each row.
     double edgeIntegrals(const Corner& p, const Corner& q, FootprintLoop& loop) const {
         const double x0 = p.atPole ? q.x : p.x;
-        loop.integral = glm::dvec3(0.0);
-        loop.area = 0.0;
+        loop.restart();
         loop.xRef = loop.xLast = x0;
         loop.started = true;
-        loop.rowSteps.clear();
-        loop.carriedRow = -1;
         edge(p, q, loop);
         return x0;
+    }
+
+    // The integral of Q dz around a loop's pieces, Q(x) that of its row from the loop's xRef to x:
+    // with Q = Q(a) + L (x - x_a) on a piece, Q(a) dz plus L times the piece's i.
+    glm::dvec3 loopIntegral(const FootprintLoop& loop, PixelView view) const {
+        glm::dvec3 integral(0.0), q(0.0);
+        for (const Piece& piece : loop.pieces) {
+            const glm::dvec3 value = pixel(view, piece.column, piece.row);
+            if (!piece.carried) q = rowIntegral(view, piece.row, loop.xRef, piece.xa);
+            integral += q * piece.dz + value * piece.i;
+            q += (piece.xb - piece.xa) * value;
+        }
+        return integral;
     }
 
     // Adds an edge (edgeIntegrals) to a texel whose loop runs along it (sign 1) or against it (-1),
     // with Q from the texel's xRef: Q(x) - Q(xRef) = (Q(x) - Q(x0)) + (Q(x0) - Q(xRef)) row by row,
     // the edge unwrapped to lie by the texel (a texel off the poles spans less than half a turn).
-    void sharedEdge(const FootprintLoop& edgeLoop, double x0, double sign, double xRef,
-                    TexelSums& texel) const {
+    void sharedEdge(const FootprintLoop& edgeLoop, const glm::dvec3& edgeIntegral, double x0, double sign,
+                    double xRef, PixelView view, TexelSums& texel) const {
         const double x = unwrapped(x0, xRef);
-        glm::dvec3 integral = edgeLoop.integral;
+        glm::dvec3 integral = edgeIntegral;
         double dz = 0.0;
-        for (const auto& [row, rowDz] : edgeLoop.rowSteps) {
-            integral += rowDz * rowIntegral(row, xRef, x);
-            dz += rowDz;
+        if (x != xRef) { // else the edge starts at the texel's reference corner: nothing to move
+            for (const auto& [row, rowDz] : edgeLoop.rowSteps) {
+                integral += rowDz * rowIntegral(view, row, xRef, x);
+                dz += rowDz;
+            }
         }
         texel.integral += sign * integral;
         texel.area += sign * (edgeLoop.area + (x - xRef) * dz);
@@ -147,18 +194,14 @@ class EquirectFootprints {
     // The texel around a pole (odd face sizes) winds a whole turn, so it is integrated on its own,
     // around its loop and closed along the pole.
     glm::vec4 poleTexel(int face, const Corner& p00, const Corner& p10, const Corner& p11, const Corner& p01,
-                        FootprintLoop& loop) const {
-        loop.integral = glm::dvec3(0.0);
-        loop.area = 0.0;
-        loop.started = false;
-        loop.rowSteps.clear();
-        loop.carriedRow = -1;
+                        PixelView view, FootprintLoop& loop) const {
+        loop.restart();
         edge(p00, p10, loop);
         edge(p10, p11, loop);
         edge(p11, p01, loop);
         edge(p01, p00, loop);
         closeAroundPole(face, p00, loop);
-        return glm::vec4(glm::vec3(loop.integral / loop.area), 1.0f);
+        return glm::vec4(glm::vec3(loopIntegral(loop, view) / loop.area), 1.0f);
     }
 
   private:
@@ -168,10 +211,14 @@ class EquirectFootprints {
         return x >= width ? x - width : x;
     }
 
-    int rowOf(double z) const {
+    int rowOf(double z) const { return rowOf(z, 0, height - 1); }
+
+    // The row of z among rows [firstRow, lastRow], those an arc spans (rowCrossings).
+    int rowOf(double z, int firstRow, int lastRow) const {
         // Row j holds z in (rowTop[j + 1], rowTop[j]]: the count of inner boundaries at or above z.
-        const auto first = rowTop.begin() + 1, last = rowTop.begin() + height;
-        return int(std::partition_point(first, last, [z](double top) { return top >= z; }) - first);
+        const auto first = rowTop.begin() + firstRow + 1, last = rowTop.begin() + lastRow + 1;
+        return firstRow +
+               int(std::partition_point(first, last, [z](double top) { return top >= z; }) - first);
     }
 
     // The pixel column of an x within a turn of [0, W), as unwrapped x are.
@@ -180,8 +227,15 @@ class EquirectFootprints {
         return c < 0 ? c + width : c >= width ? c - width : c;
     }
 
-    glm::dvec3 pixel(int columnIndex, int row) const {
-        return glm::dvec3(glm::vec3(image.at(columnIndex, row)));
+    // The image's column that a view reads for column c in [0, W).
+    int imageColumn(PixelView view, int c) const {
+        c = view.mirrored ? view.shift - c : c + view.shift;
+        return c < 0 ? c + width : c >= width ? c - width : c;
+    }
+
+    glm::dvec3 pixel(PixelView view, int columnIndex, int row) const {
+        return glm::dvec3(
+            glm::vec3(image.at(imageColumn(view, columnIndex), view.mirrored ? height - 1 - row : row)));
     }
 
     bool clearOfRowEdges(const Corner& p) const {
@@ -229,20 +283,16 @@ class EquirectFootprints {
         meridian(loop.xRef, zPole, poleRow, start.z, start.row, loop);
     }
 
-    // A piece from a to b inside one pixel: Q dz integrated along it, and the area term. With
-    // Q = Q(a) + L (x - x_a), the loop integral gains Q(a) dz plus L times I, the integral of
-    // (x - x_a) dz, which by parts is (x_b - x_a) z_b minus the integral of z dx. `zdx` is that last
-    // integral (0 along a meridian).
+    // A piece from a to b inside one pixel, kept for loopIntegral, and its area term. I, the integral
+    // of (x - x_a) dz along it, is by parts (x_b - x_a) z_b minus the integral of z dx. `zdx` is that
+    // last integral (0 along a meridian).
     void addPiece(const ArcPoint& a, const ArcPoint& b, int row, double zdx, FootprintLoop& loop) const {
         const double dz = b.z - a.z;
         const double i = (b.x - a.x) * b.z - zdx;
-        const glm::dvec3 value = pixel(column(0.5 * (a.x + b.x)), row);
         const bool carried = row == loop.carriedRow && a.x == loop.carriedX;
-        const glm::dvec3 q = carried ? loop.carriedQ : rowIntegral(row, loop.xRef, a.x);
         loop.carriedRow = row;
         loop.carriedX = b.x;
-        loop.carriedQ = q + (b.x - a.x) * value;
-        loop.integral += q * dz + value * i;
+        loop.pieces.push_back({a.x, b.x, dz, i, column(0.5 * (a.x + b.x)), row, carried});
         loop.area += (a.x - loop.xRef) * dz + i;
         if (!loop.rowSteps.empty() && loop.rowSteps.back().first == row)
             loop.rowSteps.back().second += dz;
@@ -300,8 +350,9 @@ class EquirectFootprints {
         // Ends in one row and clear of its edges by more than the arc can rise: no row crossed, and
         // the points are in order.
         const bool oneRow = p.row == q.row && clearOfRowEdges(p) && clearOfRowEdges(q);
+        std::pair<int, int> rows{p.row, p.row};
         if (!oneRow) {
-            rowCrossings(p, q, xp, n, points);
+            rows = rowCrossings(p, q, xp, n, points);
             std::sort(points.begin(), points.end(),
                       [](const ArcPoint& a, const ArcPoint& b) { return a.t < b.t; });
         }
@@ -309,16 +360,18 @@ class EquirectFootprints {
             const ArcPoint& a = points[k];
             const ArcPoint& b = points[k + 1];
             if (a.t == b.t) continue;
-            const int row = oneRow ? p.row : rowOf(glm::normalize(origin + 0.5 * (a.t + b.t) * step).y);
+            const int row =
+                oneRow ? p.row
+                       : rowOf(glm::normalize(origin + 0.5 * (a.t + b.t) * step).y, rows.first, rows.second);
             addPiece(a, b, row, zdxBetween(a, b, n), loop);
         }
     }
 
     // z along an arc may rise past both ends (towards the pole), so the rows between its lowest and
     // highest points are tried: where z(t) = z_j, (d_y)^2 (1 - z_j^2) = z_j^2 (d_x^2 + d_z^2) with
-    // d_y of z_j's sign, a quadratic in t.
-    void rowCrossings(const Corner& p, const Corner& q, double xp, const glm::dvec3& n,
-                      std::vector<ArcPoint>& points) const {
+    // d_y of z_j's sign, a quadratic in t. Returns the rows the arc spans, top to bottom.
+    std::pair<int, int> rowCrossings(const Corner& p, const Corner& q, double xp, const glm::dvec3& n,
+                                     std::vector<ArcPoint>& points) const {
         const glm::dvec3 origin = p.direction, step = q.direction - p.direction;
         const glm::dvec3 top =
             glm::normalize(glm::dvec3(0.0, 1.0, 0.0) - n.y * n); // highest point of the circle
@@ -327,7 +380,8 @@ class EquirectFootprints {
         };
         const double zHigh = std::max({p.z, q.z, onArc(top) ? top.y : -1.0});
         const double zLow = std::min({p.z, q.z, onArc(-top) ? -top.y : 1.0});
-        for (int j = rowOf(zHigh) + 1; j <= rowOf(zLow); ++j) {
+        const std::pair<int, int> rows{rowOf(zHigh), rowOf(zLow)};
+        for (int j = rows.first + 1; j <= rows.second; ++j) {
             const double zj = rowTop[size_t(j)];
             const Crossings crossings = boundaryCrossings(origin, step, zj);
             for (int k = 0; k < crossings.count; ++k) {
@@ -337,6 +391,7 @@ class EquirectFootprints {
                 points.push_back(arcPoint(t, d, unwrapped(xOf(d), xp), zj, n));
             }
         }
+        return rows;
     }
 
     // Parameters t where the direction origin + t step has height zj (up to two).
@@ -361,14 +416,22 @@ class EquirectFootprints {
     }
 
     // The integral of row `row` over x from `from` to `to` (unwrapped; negative when to < from).
-    glm::dvec3 rowIntegral(int row, double from, double to) const {
-        if (to < from) return -rowIntegral(row, to, from);
+    glm::dvec3 rowIntegral(PixelView view, int row, double from, double to) const {
+        if (to == from) return glm::dvec3(0.0);
+        if (to < from) return -rowIntegral(view, row, to, from);
         const double first = std::floor(from), last = std::floor(to);
-        if (first == last) return (to - from) * pixel(column(first), row);
-        glm::dvec3 sum = (first + 1.0 - from) * pixel(column(first), row);
-        for (double c = first + 1.0; c < last; c += 1.0)
-            sum += pixel(column(c), row);
-        return sum + (to - last) * pixel(column(last), row);
+        if (first == last) return (to - from) * pixel(view, column(first), row);
+        glm::dvec3 sum = (first + 1.0 - from) * pixel(view, column(first), row);
+        // The whole pixels between, walked along the image's row as the view reads it.
+        const glm::vec4* line = &image.at(0, view.mirrored ? height - 1 - row : row);
+        const int step = view.mirrored ? -1 : 1;
+        int c = imageColumn(view, column(first + 1.0));
+        for (int k = int(last - first) - 1; k > 0; --k) {
+            sum += glm::dvec3(glm::vec3(line[c]));
+            c += step;
+            c = c < 0 ? c + width : c >= width ? c - width : c;
+        }
+        return sum + (to - last) * pixel(view, column(last), row);
     }
 
     // The most an edge rises above its ends in z: an arc of angle l, at most l^2 / 8 (z'' = -z along
@@ -383,9 +446,71 @@ class EquirectFootprints {
 
 // Work worth a thread (threadCount): about a millisecond of texels.
 constexpr size_t kTexelsPerThread = size_t(1) << 11;
-// A task takes this many rows of a face: the edges inside them are worked out once for the two
-// texels on either side, those along the task's first and last rows once per task.
+// A task takes this many rows of a group's geometry: the edges inside them are worked out once
+// for the two texels on either side, those along the task's first and last rows once per task.
 constexpr int kRowsPerTask = 8;
+
+// A face that takes its texels from a group's geometry: texel (i, j) there is texel (i, j) turned
+// a number of quarter turns here (turned), its pixels read through `view`.
+struct GroupFace {
+    int face;
+    int quarterTurns;
+    PixelView view;
+};
+
+// Faces whose texels are those of face `geometry`, or, fourFold, of a quarter of it (inQuarter).
+struct FaceGroup {
+    int geometry;
+    bool fourFold;
+    std::vector<GroupFace> faces;
+};
+
+// Turning a direction a quarter turn about the axis, (x, z) -> (z, -x), moves its x back W / 4
+// columns: it takes +Z to +X, +X to -Z, -Z to -X, and +Y's texel (i, j) to its texel turned (i, j, 1).
+// Mirroring (x, y, z) -> (x, -y, -z) takes +Y to -Y, x to W / 2 - x, row r to H - 1 - r.
+std::vector<FaceGroup> faceGroups(int width) {
+    const int px = int(Face::PositiveX), nx = int(Face::NegativeX), pz = int(Face::PositiveZ),
+              nz = int(Face::NegativeZ), py = int(Face::PositiveY), ny = int(Face::NegativeY);
+    auto wrap = [width](int c) { return (c % width + width) % width; };
+    const int mirrorShift = width / 2 - 1; // column c mirrored: W / 2 - 1 - c
+    std::vector<FaceGroup> groups;
+    if (width % 4 == 0) {
+        const int quarter = width / 4;
+        groups.push_back({pz, false, {}});
+        for (int k = 0; k < 4; ++k) // +Z, +X, -Z, -X
+            groups.back().faces.push_back(
+                {std::array{pz, px, nz, nx}[size_t(k)], 0, {wrap(-k * quarter), false}});
+        groups.push_back({py, true, {}});
+        for (int k = 0; k < 4; ++k) {
+            groups.back().faces.push_back({py, k, {wrap(-k * quarter), false}});
+            groups.back().faces.push_back({ny, k, {wrap(mirrorShift + k * quarter), true}});
+        }
+    } else {
+        for (int face : {px, nx, pz, nz})
+            groups.push_back({face, false, {{face, 0, {0, false}}}});
+        groups.push_back({py, false, {{py, 0, {0, false}}, {ny, 0, {mirrorShift, true}}}});
+    }
+    return groups;
+}
+
+// Texel (i, j) of an N x N cap turned k quarter turns about the axis: (i, j) -> (j, N - 1 - i).
+std::pair<int, int> turned(int i, int j, int k, int n) {
+    for (; k > 0; --k)
+        std::tie(i, j) = std::pair{j, n - 1 - i};
+    return {i, j};
+}
+
+// A quarter of a cap that turned four times covers it once: the texels (i, j) with i <= m, j < m
+// of an N = 2 m + 1 face, with the texel (m, m) around the pole, and i, j < m of N = 2 m.
+bool inQuarter(int i, int j, int n) {
+    const int m = n / 2;
+    return n % 2 == 1 ? (i <= m && j < m) || (i == m && j == m) : i < m && j < m;
+}
+
+// The rows of a group's geometry that its tasks work out.
+int groupRows(const FaceGroup& group, int n) {
+    return group.fourFold ? (n + 1) / 2 : n;
+}
 
 std::vector<Corner> cornerRow(const EquirectFootprints& footprints, int face, int j, int faceSize) {
     std::vector<Corner> corners;
@@ -396,10 +521,12 @@ std::vector<Corner> cornerRow(const EquirectFootprints& footprints, int face, in
     return corners;
 }
 
-// Rows [firstRow, firstRow + rows) of a face: each texel in one pixel takes it; the one around a
-// pole is integrated alone; every other gathers its four edges, each worked out once.
-void resampleRows(const EquirectFootprints& footprints, int face, int firstRow, int rows, Cubemap& cubemap) {
-    const int n = cubemap.faceSize;
+// Rows [firstRow, firstRow + rows) of a group's geometry, for each of its faces: each texel in one
+// pixel takes it; the one around a pole is integrated alone; every other gathers its four edges,
+// each worked out once and summed against each face's pixels.
+void resampleRows(const EquirectFootprints& footprints, const FaceGroup& group, int firstRow, int rows,
+                  Cubemap& cubemap) {
+    const int n = cubemap.faceSize, face = group.geometry;
     std::vector<std::vector<Corner>> corners;
     for (int j = 0; j <= rows; ++j)
         corners.push_back(cornerRow(footprints, face, firstRow + j, n));
@@ -410,53 +537,71 @@ void resampleRows(const EquirectFootprints& footprints, int face, int firstRow, 
     };
     const bool cap = face == int(Face::PositiveY) || face == int(Face::NegativeY);
     auto aroundPole = [&](int i, int j) { return cap && n % 2 == 1 && i == n / 2 && firstRow + j == n / 2; };
+    auto wanted = [&](int i, int j) { return !group.fourFold || inQuarter(i, firstRow + j, n); };
 
-    std::vector<char> gathered(size_t(rows) * size_t(n)); // whether a texel gathers its edges
-    std::vector<TexelSums> sums(gathered.size());
-    std::vector<double> xRefs(gathered.size());
+    const size_t texels = size_t(rows) * size_t(n);
+    std::vector<char> gathered(texels); // whether a texel gathers its edges
+    std::vector<double> xRefs(texels);
     for (int j = 0; j < rows; ++j) {
         for (int i = 0; i < n; ++i) {
             const auto c = texelCorners(i, j);
             const size_t t = size_t(j) * n + size_t(i);
-            gathered[t] = !aroundPole(i, j) && !footprints.inOnePixel({c[0], c[1], c[2], c[3]});
+            gathered[t] =
+                wanted(i, j) && !aroundPole(i, j) && !footprints.inOnePixel({c[0], c[1], c[2], c[3]});
             xRefs[t] = c[0]->atPole ? c[2]->x : c[0]->x; // a texel has at most one corner at a pole
         }
     }
+    const size_t faceCount = group.faces.size();
+    std::vector<TexelSums> sums(faceCount * texels); // face by face
     FootprintLoop loop;
     // The edge from corner p to corner q, to texel (i, j) along its loop (p00 p10 p11 p01) with sign.
     auto shareEdge = [&](const Corner& p, const Corner& q,
-                         std::initializer_list<std::tuple<int, int, double>> texels) {
+                         std::initializer_list<std::tuple<int, int, double>> edgeTexels) {
         bool needed = false;
-        for (const auto& [i, j, sign] : texels)
+        for (const auto& [i, j, sign] : edgeTexels)
             needed = needed || (j >= 0 && j < rows && i >= 0 && i < n && gathered[size_t(j) * n + size_t(i)]);
         if (!needed) return;
         const double x0 = footprints.edgeIntegrals(p, q, loop);
-        for (const auto& [i, j, sign] : texels) {
-            if (j < 0 || j >= rows || i < 0 || i >= n) continue;
-            const size_t t = size_t(j) * n + size_t(i);
-            if (gathered[t]) footprints.sharedEdge(loop, x0, sign, xRefs[t], sums[t]);
+        for (size_t f = 0; f < faceCount; ++f) {
+            const PixelView view = group.faces[f].view;
+            const glm::dvec3 integral = footprints.loopIntegral(loop, view);
+            for (const auto& [i, j, sign] : edgeTexels) {
+                if (j < 0 || j >= rows || i < 0 || i >= n) continue;
+                const size_t t = size_t(j) * n + size_t(i);
+                if (gathered[t])
+                    footprints.sharedEdge(loop, integral, x0, sign, xRefs[t], view, sums[f * texels + t]);
+            }
         }
     };
-    for (int j = 0; j <= rows; ++j)
+    // Row by row, the sides of a row of texels after its top, so that the pixels they read are
+    // still in the cache for each face.
+    for (int j = 0; j <= rows; ++j) {
         for (int i = 0; i < n; ++i) // left to right: the top of texel (i, j), the bottom of (i, j - 1)
             shareEdge(corners[size_t(j)][size_t(i)], corners[size_t(j)][size_t(i) + 1],
                       {{i, j, 1.0}, {i, j - 1, -1.0}});
-    for (int j = 0; j < rows; ++j)
+        if (j == rows) break;
         for (int i = 0; i <= n; ++i) // downwards: the right side of texel (i - 1, j), the left of (i, j)
             shareEdge(corners[size_t(j)][size_t(i)], corners[size_t(j) + 1][size_t(i)],
                       {{i - 1, j, 1.0}, {i, j, -1.0}});
+    }
 
-    for (int j = 0; j < rows; ++j) {
-        for (int i = 0; i < n; ++i) {
-            const auto c = texelCorners(i, j);
-            const size_t t = size_t(j) * n + size_t(i);
-            glm::vec4& texel = cubemap.at(face, i, firstRow + j);
-            if (aroundPole(i, j))
-                texel = footprints.poleTexel(face, *c[0], *c[1], *c[2], *c[3], loop);
-            else if (!gathered[t])
-                texel = footprints.pixelAt(*c[0]);
-            else
-                texel = glm::vec4(glm::vec3(sums[t].integral / sums[t].area), 1.0f);
+    for (size_t f = 0; f < faceCount; ++f) {
+        const auto [target, quarterTurns, view] = group.faces[f];
+        for (int j = 0; j < rows; ++j) {
+            for (int i = 0; i < n; ++i) {
+                if (!wanted(i, j) || (aroundPole(i, j) && quarterTurns != 0)) continue;
+                const auto c = texelCorners(i, j);
+                const size_t t = size_t(j) * n + size_t(i);
+                const auto [ti, tj] = turned(i, firstRow + j, quarterTurns, n);
+                glm::vec4& texel = cubemap.at(target, ti, tj);
+                const TexelSums& sum = sums[f * texels + t];
+                if (aroundPole(i, j))
+                    texel = footprints.poleTexel(face, *c[0], *c[1], *c[2], *c[3], view, loop);
+                else if (!gathered[t])
+                    texel = footprints.pixelAt(*c[0], view);
+                else
+                    texel = glm::vec4(glm::vec3(sum.integral / sum.area), 1.0f);
+            }
         }
     }
 }
@@ -468,16 +613,25 @@ Cubemap equirectToCubemap(const Image& equirect, int faceSize, WorkCounter* prog
     checkEquirectShape(equirect.width, equirect.height);
     Cubemap cubemap = makeCubemap(faceSize); // throws for a face size below 1
     const EquirectFootprints footprints(equirect, faceSize);
+    const std::vector<FaceGroup> groups = faceGroups(equirect.width);
     const int n = faceSize;
     startWork(progress, "resampling, rows", uint64_t(kFaceCount) * uint64_t(n), uint64_t(n));
-    const int tasksPerFace = (n + kRowsPerTask - 1) / kRowsPerTask;
-    forEachItem(kFaceCount * tasksPerFace, threadCount(cubemap.texels.size(), kTexelsPerThread),
-                [&](int task) {
-                    const int face = task / tasksPerFace, firstRow = task % tasksPerFace * kRowsPerTask;
-                    const int rows = std::min(kRowsPerTask, n - firstRow);
-                    resampleRows(footprints, face, firstRow, rows, cubemap);
-                    countWork(progress, uint64_t(rows));
-                });
+    // Tasks group by group, each a few rows of the group's geometry.
+    std::vector<std::pair<size_t, int>> tasks; // group, first row
+    for (size_t g = 0; g < groups.size(); ++g)
+        for (int row = 0; row < groupRows(groups[g], n); row += kRowsPerTask)
+            tasks.emplace_back(g, row);
+    forEachItem(int(tasks.size()), threadCount(cubemap.texels.size(), kTexelsPerThread), [&](int task) {
+        const auto [g, firstRow] = tasks[size_t(task)];
+        const FaceGroup& group = groups[g];
+        const int groupRowCount = groupRows(group, n),
+                  rows = std::min(kRowsPerTask, groupRowCount - firstRow);
+        resampleRows(footprints, group, firstRow, rows, cubemap);
+        // The group's faces' rows, n each, shared out over its tasks.
+        const uint64_t faceRows = uint64_t(n) * (group.faces.size() / (group.fourFold ? 4 : 1));
+        countWork(progress, faceRows * uint64_t(firstRow + rows) / uint64_t(groupRowCount) -
+                                faceRows * uint64_t(firstRow) / uint64_t(groupRowCount));
+    });
     return cubemap;
 }
 
