@@ -913,6 +913,14 @@ TEST_F(SceneCommand, BadOptionsAreRefused) {
                        2,
                        {"faces 4096 and 64 rays a texel", "more than 2^28 rays"},
                        "out.shpv"});
+    // Within 2^28 rays but past the 128 MiB lavapipe binds as one storage buffer (its hit distances,
+    // 4 bytes a ray): the gpu names the device's limit and the options that size it.
+    expectFailure({{"scene", scene, "--grid", "2,2,2", "--face-size", "128", "--rays-per-texel", "1024",
+                    "--backend", "gpu", "-o", "OUT"},
+                   2,
+                   {"faces 128 and 1024 rays a texel", "384 MiB", "llvmpipe", "128 MiB", "--rays-per-texel",
+                    "--backend cpu"},
+                   "out.shpv"});
 }
 
 // The regular files under `folder` and their bytes, to tell that a refused run changed none.

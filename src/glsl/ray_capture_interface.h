@@ -45,8 +45,14 @@
 #define SHPROBE_RAYS_SUNLIT_CELLS 21
 // capture_rays: SunlitPlane[], one per sun, where its rays into the world start.
 #define SHPROBE_RAYS_SUNLIT_PLANES 22
+// capture_rays: uint[], the texels (face N^2 + j N + i) whose strata cast shadow rays to the sky,
+// those whose busiest stratum casts the most first: a sky pass covers the first pass.x of them.
+#define SHPROBE_RAYS_CASTING_TEXELS 23
+// The most strata of a texel one sky pass casts shadow rays of: with one ray each, an invocation's
+// traversals in a dispatch (gpu/ray_capture.cpp, kRaySegmentsPerPass).
+#define SHPROBE_SKY_STRATA_PER_PASS 32u
 // The bindings of capture_rays.
-#define SHPROBE_RAYS_PROBE_BINDINGS 23
+#define SHPROBE_RAYS_PROBE_BINDINGS 24
 // Cells across a sun's plane (SunlitSampler::kCells).
 #define SHPROBE_SUNLIT_CELLS 128u
 // capture_rays' SHPROBE_SPEC_VARIANT for bounces by paths (the default, 0: from the cache).
@@ -109,6 +115,10 @@ struct RayCaptureConstants {
     uvec4 pass;  // x: the first of each texel's s^2 (or point's g^2) rays this pass casts; y: how
                  // many. A pass after the first carries on the sums the one before left in the
                  // output; the last finishes them (gpu/ray_capture.cpp says why there are passes).
+                 // capture_rays' sky passes, before those: x: the texels of
+                 // SHPROBE_RAYS_CASTING_TEXELS covered; y: the first of the
+                 // SHPROBE_SKY_STRATA_PER_PASS strata a texel's (r = sb s + sa) cast; z: the first of
+                 // each stratum's shadow rays to the sky cast; w: how many (0: a pass of the view's rays)
 };
 
 SHPROBE_END

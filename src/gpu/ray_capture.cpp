@@ -39,12 +39,14 @@ enum RayBuffer : size_t {
     kStratumSky,
     kSunlitCells,
     kSunlitPlanes,
+    kCastingTexels,
     kRayBufferCount
 };
 
 constexpr uint32_t kLocalSize = 64;
-// The most bytes of ray distances a batch of probes reads back: with s x s rays per texel a probe
-// holds 4 * 6 N^2 s^2 (25 MB at N = 32, s = 32), so large s bakes fewer probes per batch.
+// The most bytes of ray distances a batch of probes reads back, or the device binds as one storage
+// buffer if less: with s x s rays per texel a probe holds 4 * 6 N^2 s^2 (25 MB at N = 32, s = 32),
+// so large s bakes fewer probes per batch.
 constexpr uint64_t kRayDistanceBytes = uint64_t(256) << 20;
 // Rays per gather submission: a bounded time per command buffer on any device (lavapipe: about 1 s).
 constexpr uint64_t kRaysPerSubmission = uint64_t(1) << 22;
@@ -57,13 +59,20 @@ uint32_t groupsFor(uint64_t threads) {
 }
 
 // Workaround(llvmpipe, Mesa 22.3): llvmpipe ends an invocation's loops after 65535 iterations in
-// all (glsl/dispatch_plan.h), and a texel's or cache point's rays are a loop around traversals whose
-// steps the scene decides, so many rays or long paths left the light short (docs/scene-probes.md).
+// all (glsl/dispatch_plan.h), and a texel's or cache point's rays, or a stratum's shadow rays to
+// the sky, are a loop around traversals whose steps the scene decides, so many rays or long paths
+// left the light short (docs/scene-probes.md).
 // A dispatch has each invocation cast at most this many rays times the traversals each takes in a
 // row (1 + its bounces as a path), carrying the sums from pass to pass, which leaves a ray's segment
 // (its traversal, next-event rays and table searches) 2,000 loop iterations. Other devices spend a
 // dispatch per pass.
 constexpr uint64_t kRaySegmentsPerPass = 32;
+
+// The items (texels or points) each invocation takes when a dispatch spreads `items` over groupsFor's.
+uint64_t itemsPerInvocation(uint64_t items) {
+    const uint64_t invocations = uint64_t(groupsFor(items)) * kLocalSize;
+    return (items + invocations - 1) / invocations;
+}
 
 // Sets constants.pass to each pass over `rays` rays per item (texel or point) and calls
 // dispatchPass: `items` spread over the dispatch's invocations, each ray `segments` traversals in a
@@ -71,14 +80,72 @@ constexpr uint64_t kRaySegmentsPerPass = 32;
 template <typename DispatchPass>
 void forEachPass(glsl::RayCaptureConstants& constants, uint32_t rays, uint64_t segments, uint64_t items,
                  DispatchPass&& dispatchPass) {
-    const uint64_t itemsPerInvocation =
-        (items + uint64_t(groupsFor(items)) * kLocalSize - 1) / (uint64_t(groupsFor(items)) * kLocalSize);
     const uint32_t perPass =
-        uint32_t(std::max<uint64_t>(1, kRaySegmentsPerPass / (segments * itemsPerInvocation)));
+        uint32_t(std::max<uint64_t>(1, kRaySegmentsPerPass / (segments * itemsPerInvocation(items))));
     for (uint32_t first = 0; first < rays; first += perPass) {
         constants.pass = glm::uvec4(first, std::min(perPass, rays - first), 0u, 0u);
         dispatchPass();
     }
+}
+
+// The texels (face n^2 + j n + i) whose strata cast shadow rays to the sky (stratumSkyRays' counts),
+// as (the most one of its strata casts, texel), from the most down; and in `busiest`, for each group
+// of SHPROBE_SKY_STRATA_PER_PASS strata of a texel (r = sb s + sa) and each k, the most that the k-th
+// busiest stratum of the group casts in any texel, so that shadow ray e of a group is cast by at
+// most #{k : busiest[group][k] > e} strata of one texel.
+std::vector<glm::uvec2> texelsCastingToTheSky(std::span<const uint32_t> stratumSky, uint32_t n, uint32_t s,
+                                              std::vector<std::vector<uint32_t>>& busiest) {
+    const uint32_t strata = s * s, perGroup = SHPROBE_SKY_STRATA_PER_PASS;
+    busiest.assign((strata + perGroup - 1) / perGroup, std::vector<uint32_t>(perGroup, 0u));
+    std::vector<glm::uvec2> casting;
+    std::vector<uint32_t> counts;
+    for (uint32_t texel = 0; texel < uint32_t(kFaceCount) * n * n; ++texel) {
+        const uint32_t face = texel / (n * n), i = texel % (n * n) % n, j = texel % (n * n) / n;
+        uint32_t most = 0;
+        for (uint32_t group = 0; group < busiest.size(); ++group) {
+            counts.clear();
+            for (uint32_t r = group * perGroup; r < std::min(strata, (group + 1) * perGroup); ++r)
+                counts.push_back(stratumSky[glsl::stratumIndex(face, i, j, r % s, r / s, n, s)]);
+            std::sort(counts.begin(), counts.end(), std::greater<>());
+            for (size_t k = 0; k < counts.size(); ++k)
+                busiest[group][k] = std::max(busiest[group][k], counts[k]);
+            most = std::max(most, counts[0]);
+        }
+        if (most > 0) casting.push_back({most, texel});
+    }
+    std::stable_sort(casting.begin(), casting.end(), [](glm::uvec2 a, glm::uvec2 b) { return a.x > b.x; });
+    return casting;
+}
+
+// The sky passes of a view of faces n and s x s rays a texel (capture_rays.comp's pass constants),
+// and the texels they cover (SHPROBE_RAYS_CASTING_TEXELS): each pass casts shadow rays [z, z + w) of
+// a group of SHPROBE_SKY_STRATA_PER_PASS strata from y, as many as keep an invocation within
+// kRaySegmentsPerPass traversals (one stratum may cast thousands), over the texels that cast any
+// of them. The first pass starts every such texel's sums; none where no stratum casts any.
+std::vector<glm::uvec4> planSkyPasses(std::span<const uint32_t> stratumSky, uint32_t n, uint32_t s,
+                                      std::vector<uint32_t>& castingTexels) {
+    if (stratumSky.empty()) return {};
+    std::vector<std::vector<uint32_t>> busiest;
+    const std::vector<glm::uvec2> casting = texelsCastingToTheSky(stratumSky, n, s, busiest);
+    for (const glm::uvec2& texel : casting)
+        castingTexels.push_back(texel.y);
+    std::vector<glm::uvec4> passes;
+    for (uint32_t group = 0; group < busiest.size(); ++group) {
+        for (uint32_t first = 0; first < busiest[group][0] || passes.empty();) {
+            const auto beyondFirst = [first](uint32_t count) { return count > first; };
+            const auto texels =
+                uint32_t(std::partition_point(casting.begin(), casting.end(),
+                                              [&](glm::uvec2 texel) { return beyondFirst(texel.x); }) -
+                         casting.begin());
+            const auto strata = std::max<uint64_t>(
+                1, uint64_t(std::count_if(busiest[group].begin(), busiest[group].end(), beyondFirst)));
+            const uint32_t count =
+                uint32_t(std::max<uint64_t>(1, kRaySegmentsPerPass / (strata * itemsPerInvocation(texels))));
+            passes.push_back({texels, group * SHPROBE_SKY_STRATA_PER_PASS, first, count});
+            first += count;
+        }
+    }
+    return passes;
 }
 
 // Every cache point of the world's lattices at `spacing`, side by side (scene/surface_cache.h's
@@ -294,6 +361,7 @@ ProbeRaySet createProbeRaySet(const Context& context, const SceneCapture& captur
     targets.push_back({rays.buffers[kStratumSky].buffer});
     targets.push_back({rays.buffers[kSunlitCells].buffer});
     targets.push_back({rays.buffers[kSunlitPlanes].buffer});
+    targets.push_back({rays.buffers[kCastingTexels].buffer});
     set.set = createDescriptorSet(context, set.pool, rays.probes, targets);
     return set;
 }
@@ -316,6 +384,11 @@ void recordProbeRays(VkCommandBuffer commands, const SceneCapture& capture, cons
     const bool cachedBounce = rays.options.bounces > 0 && rays.options.bounceLight == BounceLight::Cache;
     constants.work = glm::uvec4(uint32_t(positions.size()), 0u, cachedBounce ? 1u : 0u, rays.texelSide);
     const uint64_t texels = 6 * uint64_t(capture.options.faceSize) * uint64_t(capture.options.faceSize);
+    for (const glm::uvec4& sky : rays.skyPasses) {
+        constants.pass = sky;
+        dispatch(commands, rays.probes, set.set, constants, {groupsFor(sky.x), uint32_t(positions.size())});
+        computeWriteBarrier(commands);
+    }
     forEachPass(constants, rays.texelSide * rays.texelSide, 1 + uint64_t(constants.paths.x), texels, [&] {
         dispatch(commands, rays.probes, set.set, constants, {groupsFor(texels), uint32_t(positions.size())});
         computeWriteBarrier(commands);
@@ -342,8 +415,10 @@ void readDistances(const RayCapture& rays, const ProbeRaySet& set, int faceSize,
 std::vector<SceneProbe> bakeViews(const Context& context, const SceneCapture& capture, const RayCapture& rays,
                                   std::span<const glm::dvec3> positions, const SceneBakeOptions& options,
                                   std::vector<NearestHits>& nearest) {
+    const uint64_t distanceBytes =
+        std::min<uint64_t>(kRayDistanceBytes, context.info.limits.maxStorageBufferRange);
     const uint32_t byDistances =
-        uint32_t(std::max<uint64_t>(1, kRayDistanceBytes / rayDistanceBytes(capture, rays)));
+        uint32_t(std::max<uint64_t>(1, distanceBytes / rayDistanceBytes(capture, rays)));
     CaptureTarget target = createCaptureTarget(
         context, capture, std::min(byDistances, capturesPerBatch(context, capture, options.probesPerBatch)));
     ScopeExit releaseTarget([&] { destroyCaptureTarget(context, target); });
@@ -368,12 +443,28 @@ std::vector<SceneProbe> bakeViews(const Context& context, const SceneCapture& ca
     return probes;
 }
 
+// A probe's view is bound whole (its hit distances, its strata's sky rays: a value per ray), so
+// it must fit one storage buffer of the device.
+void requireViewFitsABinding(const Context& context, int faceSize, int raysPerTexel) {
+    const uint64_t s = uint64_t(squareSide(raysPerTexel)), n = uint64_t(faceSize);
+    const uint64_t bytes = sizeof(float) * kFaceCount * n * n * s * s;
+    const uint64_t limit = context.info.limits.maxStorageBufferRange;
+    if (bytes <= limit) return;
+    throw Error(ErrorKind::Input, "scene: faces " + std::to_string(n) + " and " + std::to_string(s * s) +
+                                      " rays a texel make a probe's view of " + std::to_string(bytes >> 20) +
+                                      " MiB of hit distances, more than " + context.info.name +
+                                      " binds as one storage buffer (" + std::to_string(limit >> 20) +
+                                      " MiB); ask fewer --rays-per-texel or a smaller --face-size, or "
+                                      "bake with --backend cpu");
+}
+
 } // namespace
 
 RayCapture createRayCapture(const Context& context, const SceneCapture& capture, const SceneShading& shading,
                             const RayCaptureOptions& options) {
     requireOptions(options);
     requireViewRays(capture.options.faceSize, options.raysPerTexel);
+    requireViewFitsABinding(context, capture.options.faceSize, options.raysPerTexel);
     RayCapture rays;
     OnFailure undo([&] { destroyRayCapture(context, rays); });
     rays.options = options;
@@ -407,12 +498,15 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.buffers[kPickDensities] = createStorage(context, nextEvents.densities, "next-event densities");
     const std::vector<uint32_t> stratumSky =
         stratumSkyRays(shading.sky(), capture.options.faceSize, int(rays.texelSide));
-    rays.stratumSky = !stratumSky.empty();
+    std::vector<uint32_t> castingTexels;
+    rays.skyPasses =
+        planSkyPasses(stratumSky, uint32_t(capture.options.faceSize), rays.texelSide, castingTexels);
     rays.buffers[kStratumSky] = createStorage(context, stratumSky, "strata's sky rays");
     rays.buffers[kSunlitCells] = createStorage(context, nextEvents.sunCells, "sunlit cells");
     rays.buffers[kSunlitPlanes] = createStorage(context, nextEvents.sunPlanes, "sun planes");
+    rays.buffers[kCastingTexels] = createStorage(context, castingTexels, "texels casting to the sky");
     const uint32_t variant = (cached || options.bounces == 0 ? 0u : SHPROBE_RAYS_BY_PATHS) |
-                             (rays.stratumSky ? SHPROBE_RAYS_STRATUM_SKY_RAYS : 0u);
+                             (rays.skyPasses.empty() ? 0u : SHPROBE_RAYS_STRATUM_SKY_RAYS);
     rays.probes = createRayProgram(context, true, variant);
     if (!cached || options.bounces == 0) return rays;
     rays.gather = createRayProgram(context, false);

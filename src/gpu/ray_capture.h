@@ -56,14 +56,15 @@ struct RayCapture {
     uint32_t skyTexels = 0;       // sky texels the paths sample (SkySampler)
     uint32_t sunlitCells = 0;     // suns' plane cells the paths sample (SunlitSampler)
     size_t sunlitSuns = 0;        // the suns those cells belong to
-    bool stratumSky = false;      // the view's strata add shadow rays to the sky (stratumSkyRays;
-                                  // always asked: the gpu bakes no transfer, see skyThroughStrata)
     uint32_t gatherSide = 1;      // g
     uint32_t texelSide = 1;       // s
     double visibilityRange = 1.0; // the farthest distance a visibility map records (visibilityRangeOf)
     glm::vec3 boundsMin{0.0f};    // the world's lower corner, where the probes' paths are named from
+    // The passes of the view's strata's shadow rays to the sky (stratumSkyRays; always asked: the
+    // gpu bakes no transfer, see skyThroughStrata), as their RayCaptureConstants::pass; empty: none.
+    std::vector<glm::uvec4> skyPasses;
     // The hierarchy's three arrays, the lattices, the gather points, two caches, the paths' picks and
-    // densities, the strata's sky rays, the suns' cells and planes.
+    // densities, the strata's sky rays, the suns' cells and planes, the texels the sky passes cover.
     std::vector<Buffer> buffers;
     ComputeProgram probes; // capture_rays.comp
     ComputeProgram gather; // cache_gather.comp
