@@ -294,6 +294,29 @@ TEST_F(SceneCommand, RaysPerTexelAreRoundedUpToASquare) {
     EXPECT_TRUE(bytesOf(file("3.shpv")) == bytesOf(file("4.shpv")));
 }
 
+// A --cache-spacing finer than a triangle's lattice may be (kMaxCacheSubdivisions of its longest
+// edge) is said in one warning line, with the triangles it caps and the spacing they keep, and the
+// bake goes on. The closed box's 12 wall triangles have edges of 2 sqrt 2 = 2.83: at 0.008 they
+// would need 354 subdivisions and keep 2.83 / 256 = 0.011; its inner boxes' longest, 1.34, needs
+// 168. At 0.02 no lattice is capped and nothing is said.
+TEST_F(SceneCommand, CacheSpacingFinerThanALatticeHoldsIsSaid) {
+    const std::string scene = cornellBox();
+    auto bake = [&](const std::string& spacing) {
+        const RunResult result = run({"scene", scene, "--grid", "1,1,1", "--face-size", "2", "--bounces", "1",
+                                      "--bounce-light", "cache", "--gather-rays", "1", "--backend", "cpu",
+                                      "--cache-spacing", spacing, "-q", "-o", file(spacing + ".shpv")});
+        EXPECT_EQ(result.exitCode, 0) << describe(result);
+        return result;
+    };
+    const RunResult capped = bake("0.008");
+    EXPECT_EQ(linesOf(capped.err).size(), 1u) << capped.err;
+    EXPECT_CONTAINS(capped.err, "shprobe: warning: --cache-spacing 0.008: 12 triangles would need more "
+                                "than 256 subdivisions of an edge; they have 256, their points up to 0.011 "
+                                "apart");
+    EXPECT_NO_THROW(readProbeVolume(file("0.008.shpv")));
+    EXPECT_EQ(bake("0.02").err, "");
+}
+
 // A volume written to standard output is the file's bytes alone: scene's, merge's and relight's
 // summaries then go to stderr, as bake's do (they were appended to the stream, which merge then
 // refused as longer than its header says).
@@ -578,6 +601,8 @@ TEST_F(SceneCommand, ScalesFloatCannotHoldAreRefused) {
     point.nodes.push_back({.scale = glm::vec3(0.0f), .children = point.roots});
     point.roots = {int(point.nodes.size() - 1)};
     testing::writeGltf(file("point.glb"), point, testing::GltfContainer::Glb);
+    point.nodes.back().scale = glm::vec3(1.0f, 0.0f, 0.0f); // every corner on the x axis
+    testing::writeGltf(file("line.glb"), point, testing::GltfContainer::Glb);
     // 0.1 across at 1e7, where float's spacing is 1: flat along x by rounding alone, which --bounds
     // would not mend.
     writeScaledCornellBox(file("farther.glb"), 0.1f, glm::vec3(1e7f, 0.0f, 0.0f));
@@ -594,6 +619,12 @@ TEST_F(SceneCommand, ScalesFloatCannotHoldAreRefused) {
         refused(file("huge.glb"), {file("huge.glb") + " (", "reach 2e+11", "1e+10", "scale the scene down"});
         refused(file("far.glb"), {file("far.glb") + " (", "reach 1e+06", "3.46 across", "nearer the origin"});
         refused(file("point.glb"), {file("point.glb") + " (", "all its vertices lie at one point"});
+        // Flat along two axes, it needs --bounds for its grid: then no ray would meet it.
+        expectFailure({{"scene", file("line.glb"), "--grid", "2,2,2", "--bounds", "-1,-1,-1,1,1,1",
+                        "--face-size", "8", "--backend", backend, "-o", "OUT"},
+                       2,
+                       {file("line.glb") + " (", "no triangle has any area"},
+                       "out.shpv"});
         refused(file("farther.glb"), {file("farther.glb") + " (", "reach 1e+07", "nearer the origin"});
     }
 }

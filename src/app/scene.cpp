@@ -19,6 +19,7 @@
 #include "scene/gltf_scene.h"
 #include "scene/probe_grid.h"
 #include "scene/ray_bake.h"
+#include "scene/surface_cache.h"
 #include "scene/volume_bake.h"
 #include "sh/basis.h"
 #include "sh/lights.h"
@@ -501,6 +502,19 @@ void printSceneSummary(const SceneJob& job, const RayBackend& backend, const Pro
     std::fprintf(report, "wrote    %s in %.2f s\n", options.output.c_str(), seconds);
 }
 
+// A --cache-spacing finer than a large triangle's lattice may be is kept where it can be, and said
+// where it cannot: the user asked for a finer cache than they get there.
+void warnOfCappedLattices(const World& world, double spacing) {
+    if (!(spacing > 0.0)) return; // the default, the scene's diagonal / 64, is never capped
+    const CappedLattices capped = cappedLattices(world, spacing);
+    if (capped.triangles == 0) return;
+    std::fprintf(stderr,
+                 "shprobe: warning: --cache-spacing %g: %s would need more than %d subdivisions of an "
+                 "edge; they have %d, their points up to %.3g apart\n",
+                 spacing, counted(capped.triangles, "triangle").c_str(), kMaxCacheSubdivisions,
+                 kMaxCacheSubdivisions, capped.widestSpacing);
+}
+
 } // namespace
 
 void runScene(const SceneOptions& options) {
@@ -520,6 +534,8 @@ void runScene(const SceneOptions& options) {
         throw Error(ErrorKind::Input, "scene: auto chose the gpu backend (" + backend.reason + "), where " +
                                           asked.gpu + "; " + asked.option + " is for the cpu backend");
     const BounceLight bounceLight = chosenBounceLight(options, grid, world);
+    if (bounceLight == BounceLight::Cache && options.bounces > 0)
+        warnOfCappedLattices(world, options.cacheSpacing);
     const SceneJob job{
         options, world, sky, grid, range, bounceLight, bakeSettings(options, backend.name, sky, bounceLight)};
     VolumeBakeReport rays;

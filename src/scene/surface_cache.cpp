@@ -107,6 +107,23 @@ template <typename Corners> bool disagree(const Corners& corners) {
 // The edges' midpoints of a halved cell, AB, BC and CA, that child needs, as a bit mask.
 constexpr std::array<unsigned, 4> kChildMidpoints{0b101, 0b011, 0b110, 0b111};
 
+std::array<glm::dvec3, 3> corners(const World& world, uint32_t triangle) {
+    return {glm::dvec3(world.positions[world.indices[3 * size_t(triangle)]]),
+            glm::dvec3(world.positions[world.indices[3 * size_t(triangle) + 1]]),
+            glm::dvec3(world.positions[world.indices[3 * size_t(triangle) + 2]])};
+}
+
+double longestEdge(const World& world, uint32_t triangle) {
+    const auto [p0, p1, p2] = corners(world, triangle);
+    return std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
+}
+
+// A triangle of no area gathers nothing (no ray meets it), however its lattice is capped.
+bool hasArea(const World& world, uint32_t triangle) {
+    const auto [p0, p1, p2] = corners(world, triangle);
+    return glm::cross(p1 - p0, p2 - p0) != glm::dvec3(0.0);
+}
+
 } // namespace
 
 size_t latticePoints(int m) {
@@ -122,12 +139,19 @@ glm::dvec2 latticeBarycentric(int m, size_t index) {
 }
 
 int latticeSubdivisions(const World& world, uint32_t triangle, double spacing) {
-    const glm::dvec3 p0(world.positions[world.indices[3 * size_t(triangle)]]);
-    const glm::dvec3 p1(world.positions[world.indices[3 * size_t(triangle) + 1]]);
-    const glm::dvec3 p2(world.positions[world.indices[3 * size_t(triangle) + 2]]);
-    const double longest = std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
-    const double cells = std::ceil(longest / spacing);
+    const double cells = std::ceil(longestEdge(world, triangle) / spacing);
     return int(std::clamp(cells, 1.0, double(kMaxCacheSubdivisions)));
+}
+
+CappedLattices cappedLattices(const World& world, double spacing) {
+    CappedLattices capped;
+    for (uint32_t t = 0; t < world.triangleCount(); ++t) {
+        const double longest = longestEdge(world, t);
+        if (longest / spacing <= double(kMaxCacheSubdivisions) || !hasArea(world, t)) continue;
+        ++capped.triangles;
+        capped.widestSpacing = std::max(capped.widestSpacing, longest / kMaxCacheSubdivisions);
+    }
+    return capped;
 }
 
 // The edges' midpoints (AB, BC, CA) of a halved cell and its four children.

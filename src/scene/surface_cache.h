@@ -52,6 +52,13 @@ glm::dvec2 latticeBarycentric(int m, size_t index);
 // The subdivisions m of `triangle`'s lattice: each lattice edge at most `spacing` long, m in
 // 1..kMaxCacheSubdivisions.
 int latticeSubdivisions(const World& world, uint32_t triangle, double spacing);
+// The triangles of some area whose lattice at `spacing` would need more than kMaxCacheSubdivisions,
+// and the largest spacing their capped lattices keep.
+struct CappedLattices {
+    size_t triangles = 0;
+    double widestSpacing = 0.0;
+};
+CappedLattices cappedLattices(const World& world, double spacing);
 
 // The sides a triangle's cache covers: two for a double-sided material, else one.
 int cacheSides(const World& world, uint32_t triangle);

@@ -242,6 +242,10 @@ SceneShading::SceneShading(World world, const Cubemap& sky) {
     requireSky(sky);
     world.suns = normalizedSuns(std::move(world.suns));
     solidTriangles_ = triangleList(world);
+    // Rays never meet a triangle of no area: such a scene would bake the sky alone without a word.
+    if (world.triangleCount() > 0 && solidTriangles_.empty())
+        throw Error(ErrorKind::Input, (world.description.empty() ? "scene" : world.description) +
+                                          ": no triangle has any area (the corners of each lie on a line)");
     offset_ = kOffsetScale * largestCoordinate(world);
     world_ = std::move(world);
     sky_ = sky;
