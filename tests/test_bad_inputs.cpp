@@ -98,14 +98,6 @@ void writePngHeader(const fs::path& path, uint32_t width, uint32_t height) {
                         pngChunk("IEND", ""));
 }
 
-// A probe file of `order` whose coefficients are all distinct.
-ShCoefficients testProbe(int order) {
-    ShCoefficients probe = makeCoefficients(order, Quantity::Radiance);
-    for (size_t i = 0; i < probe.rgb.size(); ++i)
-        probe.rgb[i] = glm::dvec3(1.0 + double(i), 0.5, -0.25 * double(i));
-    return probe;
-}
-
 constexpr double kY00 = 0.28209479177387814; // 1 / (2 sqrt(pi))
 
 // ---- The command line ---------------------------------------------------------------------------
@@ -362,7 +354,7 @@ TEST_F(BadInputs, LightsPastFloatAreRefused) {
 // ---- Options out of range ---------------------------------------------------------------------
 
 TEST_F(BadInputs, OrderAndFaceSizeOutOfRange) {
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     expectFailure({{"bake", "--order", "0", "-o", "OUT"}, 2, {"--order", "0"}});
     expectFailure({{"bake", "--order", "9", "-o", "OUT"}, 2, {"--order", "9"}});
     expectFailure({{"bake", "--face-size", "0", "-o", "OUT"}, 2, {"--face-size", "0"}});
@@ -377,9 +369,10 @@ TEST_F(BadInputs, OrderAndFaceSizeOutOfRange) {
 
 // Every command that reads probe files refuses each bad one, naming the file and what is wrong:
 // malformed and truncated JSON (with where the parser stopped), an empty file, a folder, a missing
-// file, and files of the wrong schema. `view` reads them before opening a window.
+// file, a file of another format (by its first bytes), and files of the wrong schema. `view` reads
+// them before opening a window.
 TEST_F(BadInputs, BadProbeFilesAreRefusedByEveryCommand) {
-    const std::string valid = probeToJson(testProbe(3), {});
+    const std::string valid = probeToJson(testing::distinctProbe(3), {});
     auto edited = [&](const std::string& from, const std::string& to) {
         std::string text = valid;
         size_t at = text.find(from);
@@ -397,7 +390,8 @@ TEST_F(BadInputs, BadProbeFilesAreRefusedByEveryCommand) {
         {"malformed.json", "{\"format\": \"shprobe.sh\",, }", {"not valid JSON", "line 1, column 25"}},
         {"truncated.json", valid.substr(0, valid.size() / 2), {"not valid JSON", "parse error at line"}},
         {"empty.json", "", {"the file is empty"}},
-        {"garbage.json", std::string("\x89PNG\r\n\x1a\n\0\0", 10), {"not valid JSON"}},
+        {"garbage.json", std::string("\x01\x7f\0\0garbage", 11), {"not valid JSON"}},
+        {"image.json", std::string("\x89PNG\r\n\x1a\n\0\0", 10), {"a PNG image, not a probe file"}},
         {"array.json", "[1, 2, 3]", {"JSON object"}},
         {"no_format.json", edited("\"format\": \"shprobe.sh\",", ""), {"missing field \"format\""}},
         {"version.json", edited("\"version\": 1", "\"version\": 2"), {"field \"version\" must be 1"}},
@@ -445,7 +439,7 @@ std::vector<Failure> everyWriter(const std::string& probe) {
 
 // Exit 3 before any work, the message names the missing folder; the folder is not created.
 TEST_F(BadInputs, OutputIntoAMissingFolder) {
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     const fs::path missing = folder() / "no_such_folder";
     for (Failure failure : everyWriter(file("probe.json"))) {
         failure.mentions = {missing.string(), "does not exist"};
@@ -464,7 +458,7 @@ TEST_F(BadInputs, OutputIntoAMissingFolder) {
 // the built-in sky, --out-dir '' wrote into the working folder, --sky '' and --probe '' lit by the
 // built-in sky, bench --json '' wrote nothing.
 TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     const fs::path working = folder() / "working";
     fs::create_directories(working);
     const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
@@ -508,7 +502,7 @@ TEST_F(BadInputs, ListOfABinaryFileIsRefused) {
 // A binary probe file of several probes (a batch's) is not one probe: the readers say so instead
 // of taking the first alone, also where the batch is larger than any JSON probe file (1 MiB).
 TEST_F(BadInputs, ProbeReadersTakeABinaryFileOfOneProbe) {
-    const ShCoefficients probe = testProbe(3);
+    const ShCoefficients probe = testing::distinctProbe(3);
     for (const size_t count : {size_t(2), size_t(20000)}) {
         const std::vector<ShCoefficients> batch(count, probe);
         writeBinaryProbes(file("batch.bin"), batch);
@@ -524,7 +518,7 @@ TEST_F(BadInputs, ProbeReadersTakeABinaryFileOfOneProbe) {
 // A binary probe is known by its magic, not its name: from standard input, under another extension,
 // and as render's and rotate's input it reads back as the float32 values it holds.
 TEST_F(BadInputs, BinaryProbesAreReadByContent) {
-    const ShCoefficients probe = testProbe(3);
+    const ShCoefficients probe = testing::distinctProbe(3);
     writeBinaryProbes(file("probe.bin"), std::span(&probe, 1));
     fs::copy_file(file("probe.bin"), file("probe.dat"));
     const auto expectSameProbe = [&](const std::string& path) {
@@ -549,7 +543,7 @@ TEST_F(BadInputs, BinaryProbesAreReadByContent) {
 // Exit 3, naming the folder; an existing file in it is untouched and nothing is added. Permission
 // bits do not stop root: as root, the program runs as user nobody.
 TEST_F(BadInputs, OutputIntoAReadOnlyFolder) {
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     const fs::path readonly = folder() / "readonly";
     fs::create_directories(readonly);
     const std::string before = "an earlier good output\n";

@@ -229,6 +229,43 @@ TEST_F(Cli, GpuAndCpuBackendsAgree) {
     EXPECT_GT(std::abs(c.rgb[3].r), 0.1 * std::abs(c.rgb[0].r)); // l=1 m=+1, from the x term
 }
 
+// How the projection splits the texels among invocations (bake --workgroup-size, the workgroup's
+// width; --texels-per-invocation, which sets the workgroup count) changes the order the partial sums
+// are added in, not the result: every shape, from one invocation a workgroup to the most lavapipe
+// allows, agrees with the reference within GpuAndCpuBackendsAgree's 2e-6 of |L00|, for the
+// equirect's direct projection and for a cube map's (--face-size): the cube's 1,536 texels are
+// fewer float terms than the equirect's 2,048 pixels, and both paths measure 1e-7 at most.
+TEST_F(Cli, EveryWorkgroupShapeAgreesWithTheReference) {
+    writeImage(file("smooth.exr"), smoothEquirect(64, 32));
+    auto bake = [&](const std::vector<std::string>& extra) {
+        std::vector<std::string> args = {"bake", file("smooth.exr"), "--order", "5", "-q",
+                                         "-o",   file("p.json")};
+        args.insert(args.end(), extra.begin(), extra.end());
+        runOk(args);
+        return readProbeFile(file("p.json"));
+    };
+    for (const std::vector<std::string>& input : {std::vector<std::string>{}, {"--face-size", "16"}}) {
+        std::vector<std::string> referenceArgs = input;
+        referenceArgs.insert(referenceArgs.end(), {"--backend", "reference"});
+        const ShCoefficients reference = bake(referenceArgs);
+        for (const char* width : {"1", "33", "1024"}) {
+            for (const char* texels : {"1", "7"}) {
+                SCOPED_TRACE(joined(input) + " --workgroup-size " + width + " --texels-per-invocation " +
+                             texels);
+                std::vector<std::string> args = input;
+                args.insert(args.end(), {"--backend", "gpu", "--workgroup-size", width,
+                                         "--texels-per-invocation", texels});
+                const ShCoefficients gpu = bake(args);
+                ASSERT_EQ(gpu.rgb.size(), reference.rgb.size());
+                for (size_t i = 0; i < gpu.rgb.size(); ++i)
+                    for (int k = 0; k < 3; ++k)
+                        EXPECT_NEAR(gpu.rgb[i][k], reference.rgb[i][k], 2e-6 * std::abs(reference.rgb[0].r))
+                            << "coefficient " << i << " channel " << k;
+            }
+        }
+    }
+}
+
 // --backend auto, the default: a job whose CPU projection takes less than a Vulkan start-up (the
 // program's constants: 1e9 texel-coefficients per core-second, 20 ms) is baked on the CPU without
 // Vulkan: it bakes with no driver at all. A larger one (an equirect map of 4 times that work at
@@ -446,20 +483,36 @@ TEST_F(CliFailures, NoVulkanDevice) {
     EXPECT_FALSE(fs::exists(file("validated.json")));
 }
 
-// --device picks a device by its index in `shprobe info` or by a case-insensitive part of its name;
-// a request that matches no device is a device error (exit 4) naming what was asked for.
+// --device picks a device by its index in `shprobe info` or by a case-insensitive part of its name,
+// and so does SHPROBE_DEVICE where --device is not given; a request that matches no device is a
+// device error (exit 4) naming what was asked for.
 TEST_F(Cli, DeviceIsChosenByIndexOrName) {
+    const std::vector<std::string> bake = {"bake", "--face-size", "4",  "--backend",
+                                           "gpu",  "-q",          "-o", file("device.json")};
+    auto withDevice = [&](const std::string& device) {
+        std::vector<std::string> args = bake;
+        args.insert(args.end(), {"--device", device});
+        return args;
+    };
     for (const char* device : {"0", "LLVMpipe"}) {
-        RunResult result =
-            runOk({"bake", "--face-size", "4", "--device", device, "-q", "-o", file("device.json")});
-        EXPECT_CONTAINS(result.out, "llvmpipe");
+        EXPECT_CONTAINS(runOk(withDevice(device)).out, "llvmpipe");
+        const RunResult fromEnvironment = run(bake, {.environment = {{"SHPROBE_DEVICE", device}}});
+        EXPECT_EQ(fromEnvironment.exitCode, 0) << describe(fromEnvironment);
+        EXPECT_CONTAINS(fromEnvironment.out, "llvmpipe");
     }
+    const RunResult optionFirst = run(withDevice("0"), {.environment = {{"SHPROBE_DEVICE", "no-such-gpu"}}});
+    EXPECT_EQ(optionFirst.exitCode, 0) << "--device goes before SHPROBE_DEVICE: " << describe(optionFirst);
 }
 
 TEST_F(CliFailures, UnknownDevice) {
     expectFailure({{"bake", "--face-size", "4", "--device", "no-such-gpu", "-o", "OUT"},
                    4,
                    {"no-such-gpu", "shprobe info"}});
+    expectFailure({{"bake", "--face-size", "4", "--backend", "gpu", "-o", "OUT"},
+                   4,
+                   {"no-such-gpu", "shprobe info"},
+                   "out.json",
+                   {{"SHPROBE_DEVICE", "no-such-gpu"}}});
 }
 
 // ---- The toolkit through the program: windows, lights, sun extraction, rotate, light ---------

@@ -236,6 +236,13 @@ TEST(ProbeFile, ReadRefusesWhatIsNotAProbeFile) {
     std::ofstream(folder / "deep.json") << std::string(1 << 20, '[');
     std::string valid = probeToJson(sampleProbe(3, Quantity::Radiance), {});
     std::ofstream(folder / "cut.json") << valid.substr(0, valid.find("\"coefficients\""));
+    // Files of the formats beside probe files, by their first bytes: a volume past the JSON size
+    // limit is named from its magic before its size is looked at.
+    std::ofstream(folder / "volume.json") << "SHPROBEV" << std::string((1 << 20) + 8, '\0');
+    std::ofstream(folder / "exr.json") << std::string("\x76\x2f\x31\x01", 4) << std::string(64, '\0');
+    std::ofstream(folder / "hdr.json") << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n";
+    std::ofstream(folder / "png.json") << "\x89PNG\r\n\x1a\n";
+    std::ofstream(folder / "glb.json") << "glTF" << std::string(16, '\0');
     const std::pair<const char*, const char*> cases[] = {
         {"folder.json", "is a folder"},
         {"empty.json", "the file is empty"},
@@ -243,6 +250,11 @@ TEST(ProbeFile, ReadRefusesWhatIsNotAProbeFile) {
         {"deep.json", "JSON nested deeper than 16 levels"},
         {"cut.json", "not valid JSON (parse error at line"},
         {"absent.json", "no such file"},
+        {"volume.json", "a probe volume, not a probe file (JSON, or binary of one probe)"},
+        {"exr.json", "an OpenEXR image, not a probe file"},
+        {"hdr.json", "a Radiance HDR image, not a probe file"},
+        {"png.json", "a PNG image, not a probe file"},
+        {"glb.json", "a binary glTF scene, not a probe file"},
     };
     for (const auto& [name, problem] : cases) {
         std::string path = (folder / name).string();

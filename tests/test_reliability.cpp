@@ -14,6 +14,7 @@
 #include "image/image_write.h"
 #include "sh/basis.h"
 #include "sh/rotation.h"
+#include "test_support.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -36,13 +37,6 @@ namespace {
 using Reliability = ProgramTest;
 
 constexpr double kY00 = 0.28209479177387814; // 1 / (2 sqrt(pi))
-
-ShCoefficients testProbe(int order) {
-    ShCoefficients probe = makeCoefficients(order, Quantity::Radiance);
-    for (size_t i = 0; i < probe.rgb.size(); ++i)
-        probe.rgb[i] = glm::dvec3(1.0 + double(i), 0.5, -0.25 * double(i));
-    return probe;
-}
 
 bool isCharacterDevice(const char* path) {
     struct stat status {};
@@ -107,7 +101,7 @@ class FullFileSystem {
 // writes and left a truncated file: the program now writes every byte itself.
 TEST_F(Reliability, FullFileSystemLosesNothing) {
     if (geteuid() != 0) GTEST_SKIP() << "mounting a small tmpfs needs root";
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     FullFileSystem full(folder() / "full");
     if (!full.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here: " << full.error();
     const std::string before = "an earlier good output\n";
@@ -224,11 +218,11 @@ TEST_F(Reliability, AnotherUsersLinkInASharedStickyFolderIsNotFollowed) {
 // Probe readers take "-" for standard input; a device or a FIFO in place of a probe file is
 // refused at once, never read (a FIFO would wait for a writer, /dev/zero never end).
 TEST_F(Reliability, ProbeReadersTakeStandardInputAndNoSpecialFiles) {
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     RunResult rotated = run({"rotate", "-", "--euler", "0,0,0", "-o", file("rotated.json")},
                             {.standardInput = file("probe.json")});
     EXPECT_EQ(rotated.exitCode, 0) << describe(rotated);
-    EXPECT_NEAR(readProbeFile(file("rotated.json")).rgb[4].r, testProbe(3).rgb[4].r, 1e-7);
+    EXPECT_NEAR(readProbeFile(file("rotated.json")).rgb[4].r, testing::distinctProbe(3).rgb[4].r, 1e-7);
     RunResult rendered =
         run({"render", "-", "--size", "8", "-o", file("r.png")}, {.standardInput = file("probe.json")});
     EXPECT_EQ(rendered.exitCode, 0) << describe(rendered);
@@ -276,9 +270,9 @@ TEST_F(Reliability, FileSystemErrorsAreOneLine) {
 TEST_F(Reliability, UnreadableInputsSayPermissionDenied) {
     if (geteuid() != 0) GTEST_SKIP() << "needs root to run the program as user nobody";
     writeImage(file("sky.exr"), makeImage(8, 4));
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     fs::create_directories(folder() / "closed");
-    writeProbeFile(file("closed/probe.json"), testProbe(3), {});
+    writeProbeFile(file("closed/probe.json"), testing::distinctProbe(3), {});
     fs::permissions(folder(), fs::perms::all); // nobody may write its outputs here
     fs::permissions(folder() / "sky.exr", fs::perms::none);
     fs::permissions(folder() / "probe.json", fs::perms::none);
@@ -295,7 +289,7 @@ TEST_F(Reliability, UnreadableInputsSayPermissionDenied) {
 }
 
 // The pipeline cache is only an optimization: a FIFO, a link to /dev/zero or a folder in place of
-// the cache file, or a cache folder that is a loop of links or too long a name, costs one warning
+// the cache file, or a cache folder that is a loop of links, too long a name or a file, costs one warning
 // line and nothing else (the probe is written, exit 0, within seconds). Runs sharing one cache
 // folder at once all succeed without a word.
 TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
@@ -333,6 +327,7 @@ TEST_F(Reliability, PipelineCacheNeverHangsNorFails) {
     }
     expectWarning("a loop of links", file("loop_a"));
     expectWarning("too long a name", file(std::string(300, 'c')));
+    expectWarning("a file for its folder", file("first.json"));
 
     const std::string shared = file("shared");
     std::vector<std::unique_ptr<Child>> runs;
@@ -432,7 +427,7 @@ TEST_F(Reliability, PipelineCacheFollowsXdgAndNeverMakesAHome) {
 // Every number option is refused at parse time unless finite and in its range, with a short line
 // that says what is allowed.
 TEST_F(Reliability, NumberOptionsMustBeFiniteAndInRange) {
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     const std::string probe = file("probe.json");
     const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
         {{"render", probe, "--exposure", "nan", "-o", "OUT"},
@@ -458,7 +453,7 @@ TEST_F(Reliability, NumberOptionsMustBeFiniteAndInRange) {
 // Whole-number options and options given twice are refused in the project's words, not CLI11's
 // ("Value 1e9 not in range 1 to 4294967296", "At Most 1 required but received 2").
 TEST_F(Reliability, WholeNumberAndRepeatedOptionsAreRefusedInPlainWords) {
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     const std::string probe = file("probe.json");
     const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
         {{"render", probe, "--max-pixels", "1e9", "-o", "OUT"},
@@ -540,7 +535,7 @@ TEST_F(Reliability, ListMustBeARegularFile) {
 TEST_F(Reliability, RotateTurnsTheSun) {
     ProbeMetadata metadata;
     metadata.sun = ProbeSun{glm::normalize(glm::dvec3(1.0, 2.0, 3.0)), glm::dvec3(100.0, 90.0, 80.0), 0.01};
-    writeProbeFile(file("sun.json"), testProbe(3), metadata);
+    writeProbeFile(file("sun.json"), testing::distinctProbe(3), metadata);
     runOk({"rotate", file("sun.json"), "--euler", "90,30,0", "-o", file("turned.json")});
     Probe turned = readProbe(file("turned.json"));
     ASSERT_TRUE(turned.sun.has_value()) << "the sun was dropped";
@@ -578,7 +573,7 @@ TEST_F(Reliability, OutputNamesFollowTheFormat) {
                    {"names a json file but --format is binary", ".bin"}});
     // An engine's double extension names that engine: another engine's format is refused, while a
     // plain .json (the last part of every engine's extension) takes any of them.
-    writeProbeFile(file("p.json"), testProbe(3), {});
+    writeProbeFile(file("p.json"), testing::distinctProbe(3), {});
     expectFailure({{"convert", file("p.json"), "--format", "unity", "-o", "OUT"},
                    2,
                    {"names a godot file but --format is unity", ".unity.json"},
@@ -592,7 +587,7 @@ TEST_F(Reliability, OutputNamesFollowTheFormat) {
 // in for it; an output that is the open file standard input reads (0<>, >>) is refused before
 // anything is written, and the file stays as it was.
 TEST_F(Reliability, ClosedOrSharedStandardStreamsAreRefused) {
-    writeProbeFile(file("p.json"), testProbe(3), {});
+    writeProbeFile(file("p.json"), testing::distinctProbe(3), {});
     const std::string before = readText(folder() / "p.json");
     const std::vector<std::pair<std::string, std::string>> cases = {
         {"\"$1\" convert p.json --format gltf -o - >&-", "cannot write -: descriptor 1 was closed"},
@@ -622,7 +617,7 @@ TEST_F(Reliability, ClosedOrSharedStandardStreamsAreRefused) {
 TEST_F(Reliability, OutputThatIsAnInputIsRefused) {
     Image sky = makeImage(8, 4);
     writeImage(file("sky.exr"), sky);
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     fs::create_symlink(folder() / "sky.exr", folder() / "alias.exr");
     fs::create_directories(folder() / "list");
     writeText(folder() / "list/sky.json", file("sky.exr") + "\n"); // baked to list/sky.json: the list
@@ -719,7 +714,7 @@ TEST_F(Reliability, BadOptionsAreRefusedBeforeAnyWork) {
     const std::string scene = SHPROBE_GLTF_MODELS_DIR "/BoxTextured-glTF/BoxTextured.gltf";
     if (!fs::exists(sky) || !fs::exists(scene))
         GTEST_SKIP() << "needs " << sky << " (blender-data) and " << scene << " (assimp-testmodels)";
-    writeProbeFile(file("probe.json"), testProbe(3), {});
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     const std::string probe = file("probe.json");
     using Args = std::vector<std::string>;
     auto with = [](Args args, const Args& more) {
@@ -801,7 +796,7 @@ TEST_F(Reliability, BadOptionsAreRefusedBeforeAnyWork) {
 // beyond FLT_MAX, an irradiance map's pixels that could overflow), is refused naming the
 // coefficient, before anything is written: no "inf" in a header, no infinite pixel in a map.
 TEST_F(Reliability, ValuesAFormatCannotHoldAreRefused) {
-    ShCoefficients huge = testProbe(3);
+    ShCoefficients huge = testing::distinctProbe(3);
     huge.rgb[1].r = 1e300; // l=1 m=-1, red: a finite double, far beyond float
     writeProbeFile(file("huge.json"), huge, {});
     for (const ExportFormat& format : exportFormats()) {

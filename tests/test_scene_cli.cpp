@@ -253,7 +253,8 @@ TEST_F(SceneCommand, RelightableVolumesRelightWithoutACapture) {
     writeProbeFile(file("blinding.json"), blinding, {});
     expectFailure({{"relight", file("whole.shpv"), "--probe", file("blinding.json"), "-o", "OUT"},
                    2,
-                   {"overflows float", "the sky " + file("blinding.json") + " is far too strong"},
+                   {"overflows float", "the sky " + file("blinding.json") + ", or the transfer in " +
+                                           file("whole.shpv") + ", is far too strong"},
                    "out.shpv"});
 
     runOk({"scene", scene, "--grid", "1,1,1", "--face-size", "4", "--backend", "cpu", "-q", "-o",

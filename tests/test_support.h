@@ -18,6 +18,14 @@
 
 namespace shprobe::testing {
 
+// A radiance probe of `order` whose coefficients are all distinct, for files the commands read.
+inline ShCoefficients distinctProbe(int order) {
+    ShCoefficients probe = makeCoefficients(order, Quantity::Radiance);
+    for (size_t i = 0; i < probe.rgb.size(); ++i)
+        probe.rgb[i] = glm::dvec3(1.0 + double(i), 0.5, -0.25 * double(i));
+    return probe;
+}
+
 struct QuadratureNode {
     double t;
     double weight;

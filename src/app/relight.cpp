@@ -102,7 +102,7 @@ void runRelight(const RelightOptions& options) {
     relightVolume(volume, sky.radiance);
     const double milliseconds = millisecondsSince(start);
     volume.settings = relitSettings(volume, sky, options);
-    requireFiniteLight(volume, "the sky " + sky.name);
+    requireFiniteLight(volume, "the sky " + sky.name + ", or the transfer in " + options.volume + ",");
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;
     FILE* report = reportStream(options.output);

@@ -89,7 +89,9 @@ void runView(const ViewOptions& options) {
     const std::string shown = showsScene              ? options.scene.scene
                               : options.input.empty() ? std::string("the built-in sky")
                                                       : options.input;
-    DeviceStep step("showing " + shown);
+    // The window is sized by --size; an environment's cube map, uploaded in this step, by --face-size.
+    const bool environment = !showsScene && !isProbeFile(options.input);
+    DeviceStep step("showing " + shown, DeviceWork::Sized, environment ? "--size or --face-size" : "--size");
     runViewer(viewer);
 }
 

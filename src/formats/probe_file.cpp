@@ -8,6 +8,7 @@
 #include "common/scope_exit.h"
 #include "formats/json_reading.h"
 #include "formats/probe_export.h"
+#include "formats/probe_volume.h"
 #include "sh/basis.h"
 
 #include <algorithm>
@@ -210,17 +211,33 @@ Probe parseProbe(std::string_view text, const std::string& name) {
     return probe;
 }
 
-// Whether a regular file begins with the binary magic; false for anything else, which readInputFile
-// then refuses or reads (opened without blocking: a FIFO must not hang the run here).
-bool startsAsBinaryProbes(const std::string& path) {
+// The first bytes of a regular file, up to 16; none for anything else, which readInputFile then
+// refuses or reads (opened without blocking: a FIFO must not hang the run here).
+std::string fileStart(const std::string& path) {
     const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
-    if (fd < 0) return false;
+    if (fd < 0) return {};
     ScopeExit closeFile([&] { close(fd); });
     struct stat status {};
-    char start[4] = {};
-    return fstat(fd, &status) == 0 && S_ISREG(status.st_mode) &&
-           pread(fd, start, sizeof start, 0) == ssize_t(sizeof start) &&
-           isBinaryProbeData(std::string_view(start, sizeof start));
+    char start[16] = {};
+    if (fstat(fd, &status) != 0 || !S_ISREG(status.st_mode)) return {};
+    const ssize_t read = pread(fd, start, sizeof start, 0);
+    return read > 0 ? std::string(start, size_t(read)) : std::string();
+}
+
+// Files of the formats beside probe files, known by their first bytes, are named as what they are
+// rather than refused as JSON that does not parse.
+void refuseOtherFormats(std::string_view start, const std::string& name) {
+    constexpr std::pair<std::string_view, std::string_view> kFormats[] = {
+        {kProbeVolumeMagic, "a probe volume"},
+        {std::string_view("\x76\x2f\x31\x01", 4), "an OpenEXR image"},
+        {"#?RADIANCE", "a Radiance HDR image"},
+        {"#?RGBE", "a Radiance HDR image"},
+        {"\x89PNG", "a PNG image"},
+        {"glTF", "a binary glTF scene"},
+    };
+    for (const auto& [magic, format] : kFormats)
+        if (start.starts_with(magic))
+            fail(name, std::string(format) + ", not a probe file (JSON, or binary of one probe)");
 }
 
 // A batch's binary file may be larger than any JSON probe file: the limit follows the file's first
@@ -229,11 +246,14 @@ bool startsAsBinaryProbes(const std::string& path) {
 // its own is refused before it is parsed.
 Probe readProbe(const std::string& path) {
     const bool standardInput = path == "-";
-    const std::string bytes = standardInput || startsAsBinaryProbes(path)
+    const std::string name = standardInput ? "standard input" : path;
+    const std::string start = standardInput ? std::string() : fileStart(path);
+    refuseOtherFormats(start, name);
+    const std::string bytes = standardInput || isBinaryProbeData(start)
                                   ? readInputFile(path, kMaxBinaryProbeFileBytes, "a binary probe file")
                                   : readInputFile(path, kMaxProbeFileBytes, "a JSON probe file");
-    const std::string name = standardInput ? "standard input" : path;
     if (!isBinaryProbeData(bytes)) {
+        refuseOtherFormats(bytes, name);
         if (bytes.size() > kMaxProbeFileBytes)
             throw Error(ErrorKind::Input,
                         name + ": " + sizeLimitText(bytes.size(), kMaxProbeFileBytes, "a JSON probe file"));

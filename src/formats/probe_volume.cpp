@@ -38,7 +38,6 @@ static_assert(std::endian::native == std::endian::little,
 static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "coefficients are read into glm::vec3 arrays");
 static_assert(sizeof(glm::vec2) == 2 * sizeof(float), "visibility is read into glm::vec2 arrays");
 
-constexpr char kMagic[8] = {'S', 'H', 'P', 'R', 'O', 'B', 'E', 'V'};
 constexpr uint64_t kPreambleBytes = 16; // magic, then the header's length as a uint64
 // The header and the payload start at multiples of 16 bytes, so that a reader may map the file
 // and use the coefficients in place.
@@ -266,7 +265,7 @@ std::string headerText(const ProbeVolume& volume) {
 }
 
 std::string preamble(uint64_t headerBytes) {
-    std::string bytes(kMagic, sizeof(kMagic));
+    std::string bytes(kProbeVolumeMagic);
     for (int i = 0; i < 8; ++i)
         bytes.push_back(char((headerBytes >> (8 * i)) & 0xffu));
     return bytes;
@@ -446,7 +445,7 @@ uint64_t readPreamble(const VolumeBytes& bytes, const std::string& name) {
                        " of a probe volume's preamble");
     char start[kPreambleBytes];
     bytes.read(0, start, sizeof(start));
-    if (std::memcmp(start, kMagic, sizeof(kMagic)) != 0)
+    if (!std::string_view(start, sizeof(start)).starts_with(kProbeVolumeMagic))
         fail(name, "not a probe volume (it does not start with \"SHPROBEV\")");
     uint64_t headerBytes = 0;
     for (int i = 0; i < 8; ++i)

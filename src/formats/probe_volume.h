@@ -21,6 +21,8 @@ namespace shprobe {
 // At most 256^3 probes in one grid: flat indices fit 32 bits with room to spare, and a larger grid
 // is a typing error rather than a bake anyone waits for (each probe is one capture of the scene).
 constexpr uint32_t kMaxGridProbes = 1u << 24;
+// The bytes every probe volume starts with.
+constexpr std::string_view kProbeVolumeMagic = "SHPROBEV";
 
 // counts.x * counts.y * counts.z probes spanning the box [boundsMin, boundsMax], corners included:
 // probe (i, j, k) lies at boundsMin + (boundsMax - boundsMin) * (i, j, k) / (counts - 1), and an

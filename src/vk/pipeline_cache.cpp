@@ -118,15 +118,27 @@ VkPipelineCache loadPipelineCache(const Device& device, const std::string& path)
     return cache;
 }
 
+// The cache's folder, made where missing; a warning where it cannot be (a file of its name, a
+// parent that cannot be written), since every later run would compile its shaders again.
+bool makeCacheFolder(const std::string& path) {
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    std::error_code error;
+    std::filesystem::create_directories(folder, error);
+    if (isFolder(folder.c_str())) return true;
+    struct stat status {};
+    warnOnce(stat(folder.c_str(), &status) == 0
+                 ? folder.string() + " is not a folder"
+                 : "cannot make the folder " + folder.string() + " (" + error.message() + ")");
+    return false;
+}
+
 bool savePipelineCache(const Device& device, VkPipelineCache cache, const std::string& path) {
-    if (path.empty() || !cache || !isReplaceableFile(path)) return false;
+    if (path.empty() || !cache || !makeCacheFolder(path) || !isReplaceableFile(path)) return false;
     size_t size = 0;
     if (vkGetPipelineCacheData(device.device, cache, &size, nullptr) != VK_SUCCESS) return false;
     std::string data(size, '\0');
     if (vkGetPipelineCacheData(device.device, cache, &size, data.data()) != VK_SUCCESS) return false;
     data.resize(size);
-    std::error_code ignored;
-    std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ignored);
     try {
         writeOutputFile(path, data, OutputContent::Binary);
     } catch (const Error& error) {
