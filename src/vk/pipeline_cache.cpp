@@ -83,6 +83,20 @@ bool isReplaceableFile(const std::string& path) {
     return S_ISREG(status.st_mode);
 }
 
+// The cache's folder, made where missing; a warning where it cannot be (a file of its name, a
+// parent that cannot be written), since every later run would compile its shaders again.
+bool makeCacheFolder(const std::string& path) {
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    std::error_code error;
+    std::filesystem::create_directories(folder, error);
+    if (isFolder(folder.c_str())) return true;
+    struct stat status {};
+    warnOnce(stat(folder.c_str(), &status) == 0
+                 ? folder.string() + " is not a folder"
+                 : "cannot make the folder " + folder.string() + " (" + error.message() + ")");
+    return false;
+}
+
 } // namespace
 
 std::string pipelineCachePath(const Device& device) {
@@ -116,20 +130,6 @@ VkPipelineCache loadPipelineCache(const Device& device, const std::string& path)
     info.pInitialData = nullptr;
     VK_CHECK(vkCreatePipelineCache(device.device, &info, nullptr, &cache));
     return cache;
-}
-
-// The cache's folder, made where missing; a warning where it cannot be (a file of its name, a
-// parent that cannot be written), since every later run would compile its shaders again.
-bool makeCacheFolder(const std::string& path) {
-    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-    std::error_code error;
-    std::filesystem::create_directories(folder, error);
-    if (isFolder(folder.c_str())) return true;
-    struct stat status {};
-    warnOnce(stat(folder.c_str(), &status) == 0
-                 ? folder.string() + " is not a folder"
-                 : "cannot make the folder " + folder.string() + " (" + error.message() + ")");
-    return false;
 }
 
 bool savePipelineCache(const Device& device, VkPipelineCache cache, const std::string& path) {
