@@ -15,9 +15,7 @@ namespace shprobe {
 namespace {
 
 double triangleArea(const World& world, uint32_t triangle) {
-    const uint32_t* vertex = &world.indices[3 * size_t(triangle)];
-    const glm::dvec3 p0(world.positions[vertex[0]]), p1(world.positions[vertex[1]]),
-        p2(world.positions[vertex[2]]);
+    const auto [p0, p1, p2] = triangleCorners(world, triangle);
     return 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
 }
 

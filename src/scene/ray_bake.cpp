@@ -145,12 +145,6 @@ struct ProbeLook {
     NearestHits nearest;
 };
 
-std::array<glm::dvec3, 3> triangleCorners(const World& world, uint32_t triangle) {
-    const uint32_t* vertex = &world.indices[3 * size_t(triangle)];
-    return {glm::dvec3(world.positions[vertex[0]]), glm::dvec3(world.positions[vertex[1]]),
-            glm::dvec3(world.positions[vertex[2]])};
-}
-
 // The distance from the point at `barycentric` to its triangle's nearest edge: each barycentric
 // weight times the triangle's height over the opposite edge (0 or NaN for a triangle of no area,
 // which intersect then counts as near an edge).

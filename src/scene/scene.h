@@ -11,7 +11,10 @@
 // previous bounce (none for bounce 0). A back face of a one-sided material leaves nothing: it is
 // the inside of something.
 #pragma once
+#include <array>
+#include <cstddef>
 #include <cstdint>
+#include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -64,5 +67,19 @@ struct World {
 
     size_t triangleCount() const { return indices.size() / 3; }
 };
+
+// Triangle t's corners, in double: areas, normals and edge lengths are taken in double.
+inline std::array<glm::dvec3, 3> triangleCorners(const World& world, size_t triangle) {
+    const uint32_t* vertex = &world.indices[3 * triangle];
+    return {glm::dvec3(world.positions[vertex[0]]), glm::dvec3(world.positions[vertex[1]]),
+            glm::dvec3(world.positions[vertex[2]])};
+}
+
+// Whether triangle t has any area: no ray meets one whose corners lie on a line, so it neither
+// shades nor gathers anything.
+inline bool hasArea(const World& world, size_t triangle) {
+    const auto [p0, p1, p2] = triangleCorners(world, triangle);
+    return glm::cross(p1 - p0, p2 - p0) != glm::dvec3(0.0);
+}
 
 } // namespace shprobe

@@ -107,21 +107,9 @@ template <typename Corners> bool disagree(const Corners& corners) {
 // The edges' midpoints of a halved cell, AB, BC and CA, that child needs, as a bit mask.
 constexpr std::array<unsigned, 4> kChildMidpoints{0b101, 0b011, 0b110, 0b111};
 
-std::array<glm::dvec3, 3> corners(const World& world, uint32_t triangle) {
-    return {glm::dvec3(world.positions[world.indices[3 * size_t(triangle)]]),
-            glm::dvec3(world.positions[world.indices[3 * size_t(triangle) + 1]]),
-            glm::dvec3(world.positions[world.indices[3 * size_t(triangle) + 2]])};
-}
-
 double longestEdge(const World& world, uint32_t triangle) {
-    const auto [p0, p1, p2] = corners(world, triangle);
+    const auto [p0, p1, p2] = triangleCorners(world, triangle);
     return std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
-}
-
-// A triangle of no area gathers nothing (no ray meets it), however its lattice is capped.
-bool hasArea(const World& world, uint32_t triangle) {
-    const auto [p0, p1, p2] = corners(world, triangle);
-    return glm::cross(p1 - p0, p2 - p0) != glm::dvec3(0.0);
 }
 
 } // namespace

@@ -109,12 +109,8 @@ void requireSky(const Cubemap& sky) {
 // Zero-area triangles cover no solid angle and have no normal: they are left out of Embree's scene.
 std::vector<uint32_t> triangleList(const World& world) {
     std::vector<uint32_t> triangles;
-    for (uint32_t t = 0; t < uint32_t(world.triangleCount()); ++t) {
-        const glm::dvec3 p0(world.positions[world.indices[3 * t]]);
-        const glm::dvec3 p1(world.positions[world.indices[3 * t + 1]]);
-        const glm::dvec3 p2(world.positions[world.indices[3 * t + 2]]);
-        if (glm::cross(p1 - p0, p2 - p0) != glm::dvec3(0.0)) triangles.push_back(t);
-    }
+    for (uint32_t t = 0; t < uint32_t(world.triangleCount()); ++t)
+        if (hasArea(world, t)) triangles.push_back(t);
     return triangles;
 }
 
