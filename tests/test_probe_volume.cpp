@@ -69,6 +69,7 @@ void expectSameVolume(const ProbeVolume& a, const ProbeVolume& b) {
     EXPECT_EQ(a.bounces, b.bounces);
     EXPECT_EQ(a.source, b.source);
     EXPECT_EQ(a.sourceHash, b.sourceHash);
+    EXPECT_EQ(a.skySource, b.skySource);
     EXPECT_EQ(a.settings, b.settings);
 }
 
@@ -86,6 +87,7 @@ ProbeVolume sampleVolume(const ProbeGrid& grid, int order, bool radiance = true,
     volume.bounces = 2;
     volume.source = "room.glb (12 triangles, 1 material, 1 sun)";
     volume.sourceHash = "fnv1a64:0123456789abcdef";
+    volume.skySource = "sky.exr (equirect 64x32)";
     volume.settings = R"({"face_size":32,"sky":"uniform 1,1,1"})";
     const size_t perProbe = size_t(coefficientCount(order));
     volume.valid.resize(volume.end);
@@ -701,6 +703,7 @@ TEST(ProbeVolumeFile, EveryHeaderFieldIsChecked) {
         {[](ordered_json& h) { h["bounces"] = -1; }, "field \"bounces\" must be an integer from 0"},
         {[](ordered_json& h) { h.erase("source"); }, "missing field \"source\""},
         {[](ordered_json& h) { h["source_hash"] = 12; }, "field \"source_hash\" must be a string"},
+        {[](ordered_json& h) { h["sky_source"] = true; }, "field \"sky_source\" must be a string"},
         {[](ordered_json& h) { h["settings"] = "face_size=32"; }, "field \"settings\" must be an object"},
     };
     for (const auto& [edit, message] : cases)
@@ -715,6 +718,9 @@ TEST(ProbeVolumeFile, EveryHeaderFieldIsChecked) {
         parseProbeVolume(withHeader(bytes, [](ordered_json& h) { h.erase("source_hash"); }), "v");
     EXPECT_EQ(old.sourceHash, "");
     EXPECT_EQ(old.source, "room.glb (12 triangles, 1 material, 1 sun)");
+    const ProbeVolume unnamedSky =
+        parseProbeVolume(withHeader(bytes, [](ordered_json& h) { h.erase("sky_source"); }), "v");
+    EXPECT_EQ(unnamedSky.skySource, "");
 }
 
 TEST(ProbeVolumeFile, DamagedPayloadsAreRefused) {
@@ -836,15 +842,18 @@ TEST(Merge, RefusesBricksOfDifferentBakes) {
     EXPECT_EQ(mergeProbeVolumes(std::vector{first, reordered}).end, 4u);
 }
 
-// Bricks of one scene baked under two paths (on two machines) have one source hash and two
-// descriptions: they merge, the brick of probe 0 naming the source whatever the order given.
+// Bricks of one scene and sky baked under two paths (on two machines) have one source hash, one
+// sky in their settings and two descriptions of each: they merge, the brick of probe 0 naming the
+// source and the sky whatever the order given.
 // Without hashes (volumes written before them) the descriptions must agree.
 TEST(Merge, OneSceneUnderTwoPathsMerges) {
     const ProbeVolume whole = sampleVolume(testGrid({4, 1, 1}), 2);
     ProbeVolume first = sliceOf(whole, {0, 2}), second = sliceOf(whole, {2, 4});
     second.source = "/farm/7/room.glb (12 triangles, 1 material, 1 sun)";
+    second.skySource = "/farm/7/sky.exr (equirect 64x32)";
     const ProbeVolume merged = mergeProbeVolumes(std::vector{second, first});
     EXPECT_EQ(merged.source, whole.source);
+    EXPECT_EQ(merged.skySource, whole.skySource);
     EXPECT_EQ(merged.sourceHash, whole.sourceHash);
     first.sourceHash.clear();
     second.sourceHash.clear();

@@ -708,6 +708,58 @@ TEST_F(SceneCommand, VolumesKnowTheirSceneByContent) {
                    "out.shpv"});
 }
 
+// A volume knows its sky by content too (settings "sky", the cube map's hash; "sky_source" the path
+// as typed): bricks lit by one sky under two paths merge to the whole bake byte for byte, and bricks
+// lit by two skies under one file name (the file changed between the runs) are refused by merge,
+// whether baked or relit, and so is a --previous bounce lit by another sky.
+TEST_F(SceneCommand, VolumesKnowTheirSkyByContent) {
+    const fs::path here = folder() / "here", there = folder() / "there";
+    fs::create_directories(here);
+    fs::create_directories(there);
+    auto writeSky = [](const fs::path& path, float radiance) {
+        Image sky = makeImage(32, 16);
+        for (int y = 0; y < 8; ++y) // light from above only, so that its strength is not uniform
+            for (int x = 0; x < 32; ++x)
+                sky.at(x, y) = glm::vec4(radiance, radiance, radiance, 1.0f);
+        writeImage(path.string(), sky);
+    };
+    const std::string skyHere = (here / "sky.exr").string(), skyThere = (there / "sky.exr").string();
+    writeSky(skyHere, 1.0f);
+    writeSky(skyThere, 1.0f);
+    const std::string scene = file("open.glb");
+    testing::writeCornellBoxGltf(scene, {.innerBoxes = true});
+    auto bake = [&](const std::string& sky, const std::vector<std::string>& extra,
+                    const std::string& output) {
+        runWithOutput({"scene", scene, "--sky", sky, "--grid", "2,2,2", "--face-size", "8", "--bounces", "0",
+                       "--transfer", "-q"},
+                      extra, output);
+    };
+    bake(skyHere, {}, file("whole.shpv"));
+    const ProbeVolume whole = readProbeVolume(file("whole.shpv"));
+    EXPECT_CONTAINS(whole.skySource, skyHere);
+    EXPECT_CONTAINS(whole.settings, "\"sky\":\"fnv1a64:");
+    bake(skyHere, {"--brick", "0/2"}, file("b0.shpv"));
+    bake(skyThere, {"--brick", "1/2"}, file("b1.shpv"));
+    runOk({"merge", file("b1.shpv"), file("b0.shpv"), "-o", file("merged.shpv")});
+    EXPECT_EQ(bytesOf(file("merged.shpv")), bytesOf(file("whole.shpv")));
+
+    writeSky(skyThere, 2.0f);
+    const std::vector<std::string> refused{"not bricks of one bake: setting \"sky\" is \"fnv1a64:"};
+    bake(skyThere, {"--brick", "1/2"}, file("b1_brighter.shpv"));
+    expectFailure(
+        {{"merge", file("b0.shpv"), file("b1_brighter.shpv"), "-o", "OUT"}, 2, refused, "out.shpv"});
+    runOk({"relight", file("b0.shpv"), "--sky", skyHere, "-q", "-o", file("r0.shpv")});
+    runOk({"relight", file("b1.shpv"), "--sky", skyThere, "-q", "-o", file("r1.shpv")});
+    expectFailure({{"merge", file("r0.shpv"), file("r1.shpv"), "-o", "OUT"}, 2, refused, "out.shpv"});
+    EXPECT_CONTAINS(readProbeVolume(file("r1.shpv")).skySource, skyThere);
+    const std::vector<std::string> gpu{"scene",       scene, "--grid",    "2,2,2",
+                                       "--face-size", "8",   "--backend", "gpu"};
+    runWithOutput(gpu, {"--sky", skyHere, "-q"}, file("g0.shpv"));
+    std::vector<std::string> next = gpu;
+    next.insert(next.end(), {"--sky", skyThere, "--previous", file("g0.shpv"), "-o", "OUT"});
+    expectFailure({next, 2, {"g0.shpv: setting \"sky\" is \"fnv1a64:"}, "out.shpv"});
+}
+
 // The real engine model bakes with the defaults but a small grid; some probes lie inside its parts
 // and are reported invalid, others not.
 TEST_F(SceneCommand, RealSceneBakes) {

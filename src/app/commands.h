@@ -278,6 +278,11 @@ void runRelight(const RelightOptions& options);
 // The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize
 // (0: its own), or the built-in sky (128^2 faces by default).
 Environment loadSceneSky(const std::string& path, int faceSize);
+// A sky by content, whatever path named it, for a volume's settings: "fnv1a64:" and 16 hex digits
+// (common/content_hash.h) over the face size and each texel's red, green and blue floats (alpha
+// carries no light), or over the order and the radiance coefficients' doubles of a probe.
+std::string skyContentHash(const Cubemap& sky);
+std::string skyContentHash(const ShCoefficients& radiance);
 // Refuses, before it is written, a baked or relit volume whose light overflowed float: "PROBE
 // overflows float: LIGHT is far too strong", LIGHT naming what lit it (a bad input, not a failed write).
 void requireFiniteLight(const ProbeVolume& volume, const std::string& light);

@@ -219,9 +219,11 @@ ProbeVolume traceVolume(const ReferenceOptions& options, const World& world, con
     }
     volume.source = world.description;
     volume.sourceHash = gltfSceneHash(options.scene);
-    volume.settings =
-        nlohmann::json{{"reference", "path traced"}, {"samples", options.samples}, {"sky", sky.description}}
-            .dump();
+    volume.skySource = sky.description;
+    volume.settings = nlohmann::json{{"reference", "path traced"},
+                                     {"samples", options.samples},
+                                     {"sky", skyContentHash(sky.cubemap)}}
+                          .dump();
     return volume;
 }
 

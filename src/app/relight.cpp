@@ -24,6 +24,7 @@ namespace {
 
 struct RelightSky {
     std::string name;
+    std::string contentHash; // skyContentHash: the sky before it turns
     ShCoefficients radiance;
 };
 
@@ -31,10 +32,12 @@ struct RelightSky {
 RelightSky relightSky(const RelightOptions& options, int order) {
     RelightSky sky;
     if (!options.probe.empty()) {
-        sky = {options.probe, probeFileRadiance(options.probe, order)};
+        ShCoefficients radiance = probeFileRadiance(options.probe, order);
+        sky = {options.probe, skyContentHash(radiance), std::move(radiance)};
     } else {
         const Environment environment = loadSceneSky(options.sky, 0);
-        sky = {environment.description, projectCubemap(environment.cubemap, order)};
+        sky = {environment.description, skyContentHash(environment.cubemap),
+               projectCubemap(environment.cubemap, order)};
     }
     if (options.yaw != 0.0 || options.pitch != 0.0)
         sky.radiance = rotate(makeShRotation(lightRotation(options.yaw, options.pitch), order), sky.radiance);
@@ -44,7 +47,7 @@ RelightSky relightSky(const RelightOptions& options, int order) {
 // The volume's settings with the sky it is now lit by.
 std::string relitSettings(const ProbeVolume& volume, const RelightSky& sky, const RelightOptions& options) {
     nlohmann::json settings = nlohmann::json::parse(volume.settings);
-    settings["sky"] = sky.name;
+    settings["sky"] = sky.contentHash;
     settings.erase("sky_turn");
     if (options.yaw != 0.0 || options.pitch != 0.0) settings["sky_turn"] = {options.yaw, options.pitch};
     return settings.dump();
@@ -102,6 +105,7 @@ void runRelight(const RelightOptions& options) {
     relightVolume(volume, sky.radiance);
     const double milliseconds = millisecondsSince(start);
     volume.settings = relitSettings(volume, sky, options);
+    volume.skySource = sky.name;
     requireFiniteLight(volume, "the sky " + sky.name + ", or the transfer in " + options.volume + ",");
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;

@@ -8,6 +8,7 @@
 #include "app/bake_steps.h"
 #include "app/progress_line.h"
 #include "app/stopwatch.h"
+#include "common/content_hash.h"
 #include "common/counted.h"
 #include "common/error.h"
 #include "common/output_file.h"
@@ -159,6 +160,22 @@ Environment loadSceneSky(const std::string& path, int faceSize) {
     return loadEnvironment(path, {.faceSize = faceSize});
 }
 
+std::string skyContentHash(const Cubemap& sky) {
+    Fnv1a64 hash;
+    hash.addLength(uint64_t(sky.faceSize));
+    for (const glm::vec4& texel : sky.texels)
+        hash.add({reinterpret_cast<const char*>(&texel), 3 * sizeof(float)});
+    return hash.text();
+}
+
+std::string skyContentHash(const ShCoefficients& radiance) {
+    Fnv1a64 hash;
+    hash.addLength(uint64_t(radiance.order));
+    for (const glm::dvec3& coefficient : radiance.rgb)
+        hash.add({reinterpret_cast<const char*>(&coefficient), sizeof(coefficient)});
+    return hash.text();
+}
+
 SplitSky splitSceneSky(const Environment& sky) {
     SplitSky split{sky.cubemap, {}};
     const SunExtraction sun = extractSun(split.residual);
@@ -255,7 +272,7 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
     nlohmann::json settings{{"backend", backend},
                             {"face_size", options.faceSize},
                             {"invalid_back_faces", options.invalidBackFaces},
-                            {"sky", sky.description}};
+                            {"sky", skyContentHash(sky.cubemap)}};
     settings["cache_spacing"] = options.cacheSpacing;
     settings["gather_rays"] = options.gatherRays;
     if (options.relocationLimit > 0.0) settings["relocation_limit"] = options.relocationLimit;
@@ -542,6 +559,7 @@ void runScene(const SceneOptions& options) {
     ProbeVolume volume = backend.context ? bakeOnGpu(*backend.context, job, rays) : bakeByRays(job, rays);
     volume.source = world.description;
     volume.sourceHash = gltfSceneHash(options.scene);
+    volume.skySource = sky.description;
     volume.settings = job.settings;
     requireFiniteLight(volume,
                        "the light of " + world.description + " and its sky, " + sky.description + ",");

@@ -246,6 +246,7 @@ nlohmann::ordered_json headerJson(const ProbeVolume& volume) {
     header["bounces"] = volume.bounces;
     header["source"] = volume.source;
     if (!volume.sourceHash.empty()) header["source_hash"] = volume.sourceHash;
+    if (!volume.skySource.empty()) header["sky_source"] = volume.skySource;
     header["settings"] = *settingsObject(volume.settings); // keys sorted: one text per value
     return header;
 }
@@ -435,6 +436,7 @@ VolumeHeader parseHeader(std::string_view headerText, const std::string& name) {
     volume.bounces = int(requireInteger(requireField(root, "bounces", name), "bounces", 0, INT_MAX, name));
     volume.source = requireString(root, "source", name);
     if (root.contains("source_hash")) volume.sourceHash = requireString(root, "source_hash", name);
+    if (root.contains("sky_source")) volume.skySource = requireString(root, "sky_source", name);
     volume.settings = requireObject(root, "settings", name).dump();
     return header;
 }
@@ -761,6 +763,7 @@ ProbeVolume mergeProbeVolumes(std::span<const ProbeVolume> bricks, std::span<con
                       .bounces = first.bounces,
                       .source = first.source,
                       .sourceHash = first.sourceHash,
+                      .skySource = first.skySource,
                       .settings = first.settings};
     for (size_t i : sorted) {
         append(whole.radiance, bricks[i].radiance);

@@ -76,6 +76,9 @@ struct ProbeVolume {
     // What was baked, by content, whatever its path: gltfSceneHash (scene/gltf_scene.h),
     // "fnv1a64:..."; empty where unknown (a volume written before volumes held it).
     std::string sourceHash;
+    // The distant sky that lit it, in words, e.g. Environment::description; the settings name it by
+    // content ("sky"), so that one sky under two paths is one sky. Empty where the baker said none.
+    std::string skySource;
     // A JSON object of whatever else decides the bake (face size, sky, window...), set by the
     // baker. Bricks merge only when it is equal, as JSON values.
     std::string settings = "{}";
