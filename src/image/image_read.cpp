@@ -274,7 +274,8 @@ Environment loadFaces(const std::string& source, const LoadOptions& options) {
     checkFaceSizes(faces);
     const int size = faces[0].header().width;
     const size_t faceTexels = size_t(size) * size;
-    Cubemap cubemap{size, std::vector<glm::vec4>(kFaceCount * faceTexels, kBlankTexel)};
+    Cubemap cubemap = makeCubemap(size);
+    std::ranges::fill(cubemap.texels, kBlankTexel);
     // The faces decode side by side, each into its own face: six small files spend much of their
     // time where the decoder's own threads do not help (the file, the header, the NaN count). A
     // failure is the first face's in face order, as one after another.
@@ -325,8 +326,8 @@ struct DecodedImage {
 DecodedImage decodeImage(const std::string& path, int64_t maxPixels) {
     OpenedImage opened = openImage(path, maxPixels);
     const ImageHeader& header = opened.header();
-    DecodedImage decoded{Image{header.width, header.height,
-                               std::vector<glm::vec4>(size_t(header.width) * header.height, kBlankTexel)}};
+    DecodedImage decoded{makeImage(header.width, header.height)};
+    std::ranges::fill(decoded.image.texels, kBlankTexel);
     decoded.nonFinite = readPixels(opened, decoded.image.texels);
     return decoded;
 }
