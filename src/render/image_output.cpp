@@ -1,12 +1,9 @@
 #include "render/image_output.h"
 
 #include "common/error.h"
+#include "common/file_extension.h"
 #include "common/output_file.h"
 #include "image/image_write.h"
-
-#include <algorithm>
-#include <cctype>
-#include <filesystem>
 
 namespace shprobe {
 
@@ -15,11 +12,9 @@ namespace {
 enum class OutputKind { Linear, Display, Unknown };
 
 OutputKind outputKind(const std::string& path) {
-    std::string extension = std::filesystem::path(path).extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    if (extension == ".exr" || extension == ".hdr") return OutputKind::Linear;
-    if (extension == ".png" || extension == ".jpg" || extension == ".jpeg") return OutputKind::Display;
+    if (hasExtension(path, ".exr") || hasExtension(path, ".hdr")) return OutputKind::Linear;
+    if (hasExtension(path, ".png") || hasExtension(path, ".jpg") || hasExtension(path, ".jpeg"))
+        return OutputKind::Display;
     return OutputKind::Unknown;
 }
 

@@ -1,6 +1,7 @@
 #include "render/render_input.h"
 
 #include "common/error.h"
+#include "common/file_extension.h"
 #include "common/scope_exit.h"
 #include "formats/probe_file.h"
 #include "image/environment.h"
@@ -8,7 +9,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <glm/matrix.hpp>
 
 namespace shprobe {
@@ -47,10 +47,7 @@ glm::vec4 sampleCubemap(const Cubemap& cubemap, const glm::dvec3& d) {
 
 bool isProbeFile(const std::string& path) {
     if (path == "-") return true; // a probe on standard input
-    std::string extension = std::filesystem::path(path).extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    return extension == ".json" || extension == ".bin";
+    return hasExtension(path, ".json") || hasExtension(path, ".bin");
 }
 
 ProbeBaker createRenderBaker(const Device& device) {

@@ -71,6 +71,12 @@ TEST_F(RenderCli, ProbeToPngAndExr) {
     EXPECT_EQ(exrInfo.width, 24);
     EXPECT_EQ(exrInfo.height, 24);
     EXPECT_TRUE(exrInfo.floating) << "EXR keeps the linear floats";
+
+    // Extensions are told apart case aside, as the tools that name such files do.
+    fs::copy_file(probe, folder / "PROBE.JSON");
+    RunResult upper = run({"render", folder / "PROBE.JSON", "--size", "8", "-o", folder / "SPHERE.PNG"});
+    ASSERT_EQ(upper.exitCode, 0) << describe(upper);
+    EXPECT_FALSE(imageInfo(folder / "SPHERE.PNG").floating);
 }
 
 TEST_F(RenderCli, EnvironmentIsBakedFirstAndTheGridHasSixCells) {
