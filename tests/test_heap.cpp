@@ -4,7 +4,10 @@
 // touched earlier (the header glibc writes when the heap grows, say) faults 4 KiB at a time: 512
 // faults in place of one. Whether the kernel then has a huge page to give depends on the
 // machine, so that is not checked here; docs/benchmark.md ("Memory faults") counts the faults.
+// Cube maps and images past the heap's advice (glibc maps them apart) are advised where they are
+// made, when the program asks (sh/cubemap.h adviseTexelHugePages).
 #include "app/heap.h"
+#include "sh/cubemap.h"
 
 #include <gtest/gtest.h>
 
@@ -85,6 +88,27 @@ TEST(Heap, LargeBuffersStartOnUntouchedHugePages) {
         touched += flags & 1;
     EXPECT_EQ(touched, 0u) << "of " << resident.size() << " pages";
     std::free(buffer);
+}
+
+// A cube map of 6 x 1024^2 texels (96 MiB, past glibc's mmap threshold of at most 32 MiB, so a
+// mapping of its own) is advised as huge pages when asked, and not otherwise; its fill is kept.
+TEST(Heap, TexelsAreAdvisedWhenAsked) {
+    if (underSanitizer() || hugePagesOff())
+        GTEST_SKIP() << "a sanitizer's allocator, or no transparent huge pages";
+    auto interior = [](const Cubemap& cubemap) { // a 2 MiB boundary inside the texels
+        constexpr uintptr_t kHugePage = uintptr_t(2) << 20;
+        return (reinterpret_cast<uintptr_t>(cubemap.texels.data()) + kHugePage) & ~(kHugePage - 1);
+    };
+    adviseTexelHugePages(false);
+    const Cubemap plain = makeCubemap(1024);
+    EXPECT_EQ(mappingFlags(interior(plain)).find(" hg"), std::string::npos) << mappingFlags(interior(plain));
+    adviseTexelHugePages(true);
+    const Cubemap advised = makeCubemap(1024, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    adviseTexelHugePages(false);
+    EXPECT_NE(mappingFlags(interior(advised)).find(" hg"), std::string::npos)
+        << mappingFlags(interior(advised));
+    EXPECT_EQ(advised.texels.size(), size_t(6) << 20);
+    EXPECT_EQ(advised.texels.back(), glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
 }
 
 } // namespace

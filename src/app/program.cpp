@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "common/output_file.h"
+#include "sh/cubemap.h"
 #include <shprobe/version.h>
 
 #include <csignal>
@@ -101,6 +102,7 @@ int runProgram(CLI::App& app, const char* name, int argc, char** argv, const std
     // of what `shprobe --help` takes (docs/benchmark.md).
     removeTemporaryFilesOnInterrupt(); // Ctrl-C: exit at once, no partial files
     prepareHeap();
+    adviseTexelHugePages(true); // cube maps and images past the heap's advice (96 MiB at faces 1024)
     try {
         run();
     } catch (const Error& e) {

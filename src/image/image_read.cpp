@@ -274,8 +274,7 @@ Environment loadFaces(const std::string& source, const LoadOptions& options) {
     checkFaceSizes(faces);
     const int size = faces[0].header().width;
     const size_t faceTexels = size_t(size) * size;
-    Cubemap cubemap = makeCubemap(size);
-    std::ranges::fill(cubemap.texels, kBlankTexel);
+    Cubemap cubemap = makeCubemap(size, kBlankTexel);
     // The faces decode side by side, each into its own face: six small files spend much of their
     // time where the decoder's own threads do not help (the file, the header, the NaN count). A
     // failure is the first face's in face order, as one after another.
@@ -326,8 +325,7 @@ struct DecodedImage {
 DecodedImage decodeImage(const std::string& path, int64_t maxPixels) {
     OpenedImage opened = openImage(path, maxPixels);
     const ImageHeader& header = opened.header();
-    DecodedImage decoded{makeImage(header.width, header.height)};
-    std::ranges::fill(decoded.image.texels, kBlankTexel);
+    DecodedImage decoded{makeImage(header.width, header.height, kBlankTexel)};
     decoded.nonFinite = readPixels(opened, decoded.image.texels);
     return decoded;
 }

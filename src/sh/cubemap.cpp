@@ -7,6 +7,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -64,10 +65,11 @@ Face majorAxisFace(const glm::dvec3& d) {
     return d.z >= 0.0 ? Face::PositiveZ : Face::NegativeZ;
 }
 
-// Asks the kernel to back [start, start + bytes) with transparent huge pages where it lends them on
-// request: fresh memory then faults in 2 MiB at a time, not 4 KiB. Zeroing a cube map of 6 x 1024^2
-// texels took 25,600 faults, about 250 ms on one thread. Advice only: where it is refused, the
-// pages come as before.
+std::atomic<bool> texelHugePages{false}; // adviseTexelHugePages
+
+// Asks the kernel to back [start, start + bytes) with transparent huge pages. Filling a cube map of
+// 6 x 1024^2 texels (96 MiB) took 24,576 faults of 4 KiB, about 250 ms on one thread. Advice only:
+// where it is refused, the pages come as before.
 void adviseHugePages(void* start, size_t bytes) {
 #ifdef MADV_HUGEPAGE
     constexpr uintptr_t kHugePage = uintptr_t(2) << 20;
@@ -80,10 +82,11 @@ void adviseHugePages(void* start, size_t bytes) {
 #endif
 }
 
-// Zeroed texels, `rows` rows of `rowTexels`; where the machine cannot allocate them, one line saying
+// `rows` rows of `rowTexels`, each `fill`; where the machine cannot allocate them, one line saying
 // what and how much, not a bare std::bad_alloc. The count is checked before it is multiplied out:
 // 6 N^2 passes size_t for N near 2^31.
-std::vector<glm::vec4> allocateTexels(size_t rows, size_t rowTexels, const std::string& what) {
+std::vector<glm::vec4> allocateTexels(size_t rows, size_t rowTexels, glm::vec4 fill,
+                                      const std::string& what) {
     auto outOfMemory = [&] { // the message only where it is needed
         char size[32];
         std::snprintf(size, sizeof(size), "%.1f GiB",
@@ -94,8 +97,8 @@ std::vector<glm::vec4> allocateTexels(size_t rows, size_t rowTexels, const std::
     try {
         std::vector<glm::vec4> texels;
         texels.reserve(rows * rowTexels); // allocated, not yet touched
-        adviseHugePages(texels.data(), rows * rowTexels * sizeof(glm::vec4));
-        texels.resize(rows * rowTexels);
+        if (texelHugePages) adviseHugePages(texels.data(), rows * rowTexels * sizeof(glm::vec4));
+        texels.resize(rows * rowTexels, fill);
         return texels;
     } catch (const std::bad_alloc&) {
         throw outOfMemory();
@@ -114,20 +117,24 @@ void requireFaceSize(int faceSize) {
     requirePositiveSize(faceSize, "cube-map face size");
 }
 
-Cubemap makeCubemap(int faceSize) {
+Cubemap makeCubemap(int faceSize, glm::vec4 fill) {
     requireFaceSize(faceSize);
     const std::string size = std::to_string(faceSize);
-    return Cubemap{faceSize, allocateTexels(size_t(kFaceCount) * size_t(faceSize), size_t(faceSize),
+    return Cubemap{faceSize, allocateTexels(size_t(kFaceCount) * size_t(faceSize), size_t(faceSize), fill,
                                             "a cube map of 6 x " + size + "^2 texels")};
 }
 
-Image makeImage(int width, int height) {
+Image makeImage(int width, int height, glm::vec4 fill) {
     requirePositiveSize(width, "image width");
     requirePositiveSize(height, "image height");
     return Image{
         width, height,
-        allocateTexels(size_t(height), size_t(width),
+        allocateTexels(size_t(height), size_t(width), fill,
                        "an image of " + std::to_string(width) + " x " + std::to_string(height) + " texels")};
+}
+
+void adviseTexelHugePages(bool advise) {
+    texelHugePages = advise;
 }
 
 glm::dvec3 faceDirection(int face, double a, double b) {

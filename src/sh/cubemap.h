@@ -41,7 +41,9 @@ struct Cubemap {
         return texels[(size_t(face) * faceSize + j) * faceSize + i];
     }
 };
-Cubemap makeCubemap(int faceSize);
+// Every texel `fill`; Error(Input) for a face size below 1, Error(Memory) where the machine cannot
+// hold it.
+Cubemap makeCubemap(int faceSize, glm::vec4 fill = glm::vec4(0.0f));
 // Throws Error(Input) for a face size makeCubemap refuses (not positive), so that an option can be
 // checked before any work.
 void requireFaceSize(int faceSize);
@@ -55,7 +57,13 @@ struct Image {
     glm::vec4& at(int x, int y) { return texels[size_t(y) * width + x]; }
     const glm::vec4& at(int x, int y) const { return texels[size_t(y) * width + x]; }
 };
-Image makeImage(int width, int height);
+Image makeImage(int width, int height, glm::vec4 fill = glm::vec4(0.0f));
+
+// Whether makeCubemap and makeImage ask the kernel to back their texels with transparent huge pages
+// (madvise, where the system lends them on request): fresh memory then faults in 2 MiB at a time,
+// not 4 KiB. Off unless asked, so that a program linking the library keeps its allocator's ways;
+// shprobe's programs ask with their heap (app/heap.h).
+void adviseTexelHugePages(bool advise);
 
 // Face-local coordinate of the center of texel i on an N-wide face: 2(i + 0.5)/N - 1.
 inline double texelCenterCoord(int i, int faceSize) {
