@@ -609,7 +609,9 @@ TEST(ForEachItem, EveryItemOnceAndExceptionsReachTheCaller) {
             << failing;
         // The items not yet taken are left: a failure at the first item ends the run within the items
         // the other threads hold, where the 999 others would all sleep their turn.
-        if (failing == 0) EXPECT_LT(done.load(), 500);
+        if (failing == 0) {
+            EXPECT_LT(done.load(), 500);
+        }
     }
 }
 
