@@ -814,7 +814,11 @@ TEST(Merge, RefusesBricksOfDifferentBakes) {
         {[](ProbeVolume& v) { v.settings = R"({"sky":"uniform 1,1,1","face_size":64})"; },
          "a.shpv and b.shpv are not bricks of one bake: setting \"face_size\" is 32 in a.shpv, 64 in b.shpv"},
         {[](ProbeVolume& v) { v.settings = R"({"face_size":32})"; },
-         "setting \"sky\" is \"uniform 1,1,1\" in a.shpv, missing in b.shpv"},
+         "sky \"sky.exr (equirect 64x32)\" (uniform 1,1,1) in a.shpv, \"sky.exr (equirect 64x32)\" (no sky "
+         "setting) in b.shpv"},
+        {[](ProbeVolume& v) { v.settings = R"({"face_size":32,"sky":"fnv1a64:00000000000000ff"})"; },
+         "sky \"sky.exr (equirect 64x32)\" (uniform 1,1,1) in a.shpv, \"sky.exr (equirect 64x32)\" "
+         "(fnv1a64:00000000000000ff) in b.shpv"},
         {[](ProbeVolume& v) { v.bounces = 1; }, "bounces 2 in a.shpv, 1 in b.shpv"},
         {[](ProbeVolume& v) { v.sourceHash = "fnv1a64:00000000000000ff"; },
          "source \"room.glb (12 triangles, 1 material, 1 sun)\" (fnv1a64:0123456789abcdef) in a.shpv, "

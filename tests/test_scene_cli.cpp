@@ -723,9 +723,10 @@ TEST_F(SceneCommand, VolumesKnowTheirSceneByContent) {
 }
 
 // A volume knows its sky by content too (settings "sky", the cube map's hash; "sky_source" the path
-// as typed): bricks lit by one sky under two paths merge to the whole bake byte for byte, and bricks
-// lit by two skies under one file name (the file changed between the runs) are refused by merge,
-// whether baked or relit, and so is a --previous bounce lit by another sky.
+// as typed): bricks lit by one sky under two paths merge to the whole bake byte for byte, and a gpu
+// bounce continues a volume lit by it under another path. Once the sky's file changes, bricks lit
+// by it under its one name are refused by merge, whether baked or relit, and so is a --previous
+// bounce, each naming the skies.
 TEST_F(SceneCommand, VolumesKnowTheirSkyByContent) {
     const fs::path here = folder() / "here", there = folder() / "there";
     fs::create_directories(here);
@@ -737,41 +738,62 @@ TEST_F(SceneCommand, VolumesKnowTheirSkyByContent) {
                 sky.at(x, y) = glm::vec4(radiance, radiance, radiance, 1.0f);
         writeImage(path.string(), sky);
     };
-    const std::string skyHere = (here / "sky.exr").string(), skyThere = (there / "sky.exr").string();
-    writeSky(skyHere, 1.0f);
-    writeSky(skyThere, 1.0f);
+    const std::string sky = (here / "sky.exr").string(), copy = (there / "sky.exr").string();
+    writeSky(sky, 1.0f);
+    writeSky(copy, 1.0f);
     const std::string scene = file("open.glb");
     testing::writeCornellBoxGltf(scene, {.innerBoxes = true});
-    auto bake = [&](const std::string& sky, const std::vector<std::string>& extra,
+    auto bake = [&](const std::string& lit, const std::vector<std::string>& extra,
                     const std::string& output) {
-        runWithOutput({"scene", scene, "--sky", sky, "--grid", "2,2,2", "--face-size", "8", "--bounces", "0",
+        runWithOutput({"scene", scene, "--sky", lit, "--grid", "2,2,2", "--face-size", "8", "--bounces", "0",
                        "--transfer", "-q"},
                       extra, output);
     };
-    bake(skyHere, {}, file("whole.shpv"));
+    bake(sky, {}, file("whole.shpv"));
     const ProbeVolume whole = readProbeVolume(file("whole.shpv"));
-    EXPECT_CONTAINS(whole.skySource, skyHere);
+    EXPECT_CONTAINS(whole.skySource, sky);
     EXPECT_CONTAINS(whole.settings, "\"sky\":\"fnv1a64:");
-    bake(skyHere, {"--brick", "0/2"}, file("b0.shpv"));
-    bake(skyThere, {"--brick", "1/2"}, file("b1.shpv"));
+    bake(sky, {"--brick", "0/2"}, file("b0.shpv"));
+    bake(copy, {"--brick", "1/2"}, file("b1.shpv"));
     runOk({"merge", file("b1.shpv"), file("b0.shpv"), "-o", file("merged.shpv")});
     EXPECT_EQ(bytesOf(file("merged.shpv")), bytesOf(file("whole.shpv")));
-
-    writeSky(skyThere, 2.0f);
-    const std::vector<std::string> refused{"not bricks of one bake: setting \"sky\" is \"fnv1a64:"};
-    bake(skyThere, {"--brick", "1/2"}, file("b1_brighter.shpv"));
-    expectFailure(
-        {{"merge", file("b0.shpv"), file("b1_brighter.shpv"), "-o", "OUT"}, 2, refused, "out.shpv"});
-    runOk({"relight", file("b0.shpv"), "--sky", skyHere, "-q", "-o", file("r0.shpv")});
-    runOk({"relight", file("b1.shpv"), "--sky", skyThere, "-q", "-o", file("r1.shpv")});
-    expectFailure({{"merge", file("r0.shpv"), file("r1.shpv"), "-o", "OUT"}, 2, refused, "out.shpv"});
-    EXPECT_CONTAINS(readProbeVolume(file("r1.shpv")).skySource, skyThere);
+    runOk({"relight", file("b0.shpv"), "--sky", sky, "-q", "-o", file("r0.shpv")});
     const std::vector<std::string> gpu{"scene",       scene, "--grid",    "2,2,2",
                                        "--face-size", "8",   "--backend", "gpu"};
-    runWithOutput(gpu, {"--sky", skyHere, "-q"}, file("g0.shpv"));
-    std::vector<std::string> next = gpu;
-    next.insert(next.end(), {"--sky", skyThere, "--previous", file("g0.shpv"), "-o", "OUT"});
-    expectFailure({next, 2, {"g0.shpv: setting \"sky\" is \"fnv1a64:"}, "out.shpv"});
+    auto onGpu = [&](const std::vector<std::string>& extra) {
+        std::vector<std::string> args = gpu;
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    };
+    runOk(onGpu({"--sky", sky, "-q", "-o", file("g0.shpv")}));
+    runOk(onGpu({"--sky", copy, "--previous", file("g0.shpv"), "-q", "-o", file("g1.shpv")}));
+    // A volume written before volumes held sky_source names its sky by description, and is continued
+    // by it.
+    ProbeVolume old = readProbeVolume(file("g0.shpv"));
+    nlohmann::json oldSettings = nlohmann::json::parse(old.settings);
+    oldSettings["sky"] = old.skySource;
+    old.settings = oldSettings.dump();
+    old.skySource.clear();
+    writeProbeVolume(file("g0_old.shpv"), old);
+    runOk(onGpu({"--sky", sky, "--previous", file("g0_old.shpv"), "-q", "-o", file("g1_old.shpv")}));
+    EXPECT_EQ(readProbeVolume(file("g1_old.shpv")).radiance, readProbeVolume(file("g1.shpv")).radiance);
+
+    writeSky(sky, 2.0f); // the same name, another sky
+    const std::string described = "\"" + sky + " (equirect 32x16)\" (fnv1a64:";
+    bake(sky, {"--brick", "1/2"}, file("b1_brighter.shpv"));
+    expectFailure({{"merge", file("b0.shpv"), file("b1_brighter.shpv"), "-o", "OUT"},
+                   2,
+                   {"not bricks of one bake: sky " + described, "in " + file("b0.shpv") + ", " + described},
+                   "out.shpv"});
+    runOk({"relight", file("b1.shpv"), "--sky", sky, "-q", "-o", file("r1.shpv")});
+    expectFailure({{"merge", file("r0.shpv"), file("r1.shpv"), "-o", "OUT"},
+                   2,
+                   {"not bricks of one bake: sky " + described},
+                   "out.shpv"});
+    expectFailure({onGpu({"--sky", sky, "--previous", file("g0.shpv"), "-o", "OUT"}),
+                   2,
+                   {file("g0.shpv") + ": sky " + described, "in the volume, " + described, "in this bake"},
+                   "out.shpv"});
 }
 
 // The real engine model bakes with the defaults but a small grid; some probes lie inside its parts

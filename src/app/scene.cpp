@@ -288,10 +288,11 @@ std::string bakeSettings(const SceneOptions& options, const std::string& backend
     return settings.dump();
 }
 
-// The previous bounce: the whole volume of this very bake (the same scene, grid, order and
-// settings), with irradiance.
+// The previous bounce: the whole volume of this very bake (the same scene, sky, grid, order and
+// settings), with irradiance. A volume written before volumes held sky_source names its sky by
+// description, and is matched so.
 ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& grid, const World& world,
-                               const std::string& settings) {
+                               const Environment& sky, const std::string& settings) {
     ProbeVolume previous = readProbeVolume(options.previous);
     auto refuse = [&](const std::string& what) {
         throw Error(ErrorKind::Input, options.previous + ": " + what);
@@ -307,8 +308,18 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
     if (const std::string mismatch = sceneMismatch(previous, gltfSceneHash(options.scene), world.description);
         !mismatch.empty())
         refuse(mismatch);
+    BakeSky thisBake{settings, sky.description};
+    if (previous.skySource.empty()) {
+        nlohmann::json described = nlohmann::json::parse(settings);
+        described["sky"] = sky.description;
+        thisBake = {described.dump(), ""};
+    }
     if (const std::string difference =
-            settingsDifference(previous.settings, settings, "the volume", "this bake");
+            skyDifference({previous.settings, previous.skySource}, thisBake, "the volume", "this bake");
+        !difference.empty())
+        refuse(difference);
+    if (const std::string difference =
+            settingsDifference(previous.settings, thisBake.settings, "the volume", "this bake");
         !difference.empty())
         refuse(difference);
     if (previous.irradiance.empty()) refuse("the volume holds no irradiance");
@@ -414,7 +425,7 @@ ProbeVolume bakeOnGpu(const Context& context, const SceneJob& job, VolumeBakeRep
     const auto& [options, world, sky, grid, range, bounceLight, settings] = job;
     const int bounces = options.previous.empty()
                             ? options.bounces
-                            : readPreviousBounce(options, grid, world, settings).bounces + 1;
+                            : readPreviousBounce(options, grid, world, sky, settings).bounces + 1;
     const SplitSky split = splitSceneSky(sky);
     const World lit = withSuns(world, split.suns);
     const Cubemap seen = skySeenByProbes(split.residual, options);

@@ -590,6 +590,9 @@ std::string bakeDifference(const ProbeVolume& a, const ProbeVolume& b, const std
                                 jsonText(b.source) + " (" + hashText(b) + ")");
     if (a.sourceHash.empty() && a.source != b.source)
         return "source " + both(jsonText(a.source), jsonText(b.source));
+    if (std::string sky = skyDifference({a.settings, a.skySource}, {b.settings, b.skySource}, nameA, nameB);
+        !sky.empty())
+        return sky;
     return settingsDifference(a.settings, b.settings, nameA, nameB);
 }
 
@@ -652,6 +655,21 @@ std::string settingsDifference(const std::string& a, const std::string& b, const
             return "setting " + quotedInput(key) + " is " + inEach(shown(first), shown(second), nameA, nameB);
     }
     return "";
+}
+
+std::string skyDifference(const BakeSky& a, const BakeSky& b, const std::string& nameA,
+                          const std::string& nameB) {
+    const std::optional<json> first = settingsObject(a.settings), second = settingsObject(b.settings);
+    if (!first || !second) return "";
+    const json skyA = first->value("sky", json()), skyB = second->value("sky", json());
+    if (skyA == skyB) return "";
+    auto shown = [](const BakeSky& sky, const json& identity) {
+        const std::string named = identity.is_string() ? clipped(identity.get<std::string>())
+                                  : identity.is_null() ? "no sky setting"
+                                                       : clipped(identity.dump());
+        return sky.source.empty() ? named : jsonText(sky.source) + " (" + named + ")";
+    };
+    return "sky " + inEach(shown(a, skyA), shown(b, skyB), nameA, nameB);
 }
 
 void checkProbeGrid(const ProbeGrid& grid, const std::string& what) {

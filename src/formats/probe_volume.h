@@ -105,6 +105,19 @@ std::string gridDifference(const ProbeGrid& a, const ProbeGrid& b, const std::st
 std::string settingsDifference(const std::string& a, const std::string& b, const std::string& nameA,
                                const std::string& nameB);
 
+// A bake's sky: its settings (a JSON object whose "sky" names the sky by content) and the sky in
+// words (ProbeVolume::skySource; empty for a volume written before volumes held it, whose "sky" is
+// then that description).
+struct BakeSky {
+    std::string settings;
+    std::string source;
+};
+// What differs between two bakes' skies, in words naming both: "sky \"sky.exr (...)\" (fnv1a64:...)
+// in A, \"sky.exr (...)\" (fnv1a64:...) in B". Empty where their settings' "sky" agree (or either's
+// settings are not a JSON object, which settingsDifference says).
+std::string skyDifference(const BakeSky& a, const BakeSky& b, const std::string& nameA,
+                          const std::string& nameB);
+
 // Writes atomically (common/output_file.h). Throws Error(Input) "cannot write PATH: PROBLEM" for a
 // volume that is not consistent (sizes, ranges, validity bytes other than 0 and 1, settings that
 // are not a JSON object, a non-finite coefficient of a valid probe), and Error(Output) as
