@@ -753,6 +753,10 @@ TEST_F(SceneCommand, VolumesKnowTheirSkyByContent) {
     const ProbeVolume whole = readProbeVolume(file("whole.shpv"));
     EXPECT_CONTAINS(whole.skySource, sky);
     EXPECT_CONTAINS(whole.settings, "\"sky\":\"fnv1a64:");
+    bake(sky, {"--sky-face-size", "4"}, file("coarse.shpv")); // another light of one file
+    const ProbeVolume coarse = readProbeVolume(file("coarse.shpv"));
+    EXPECT_EQ(coarse.skySource, whole.skySource + " resampled to 4^2 faces");
+    EXPECT_NE(coarse.settings, whole.settings);
     bake(sky, {"--brick", "0/2"}, file("b0.shpv"));
     bake(copy, {"--brick", "1/2"}, file("b1.shpv"));
     runOk({"merge", file("b1.shpv"), file("b0.shpv"), "-o", file("merged.shpv")});

@@ -157,7 +157,10 @@ Environment loadSceneSky(const std::string& path, int faceSize) {
         sky.description = "built-in sky (" + std::to_string(size) + "^2 faces)";
         return sky;
     }
-    return loadEnvironment(path, {.faceSize = faceSize});
+    Environment sky = loadEnvironment(path, {.faceSize = faceSize});
+    // Said, so that two bakes of one file at two sizes (two lights, two hashes) are told apart.
+    if (faceSize > 0) sky.description += " resampled to " + std::to_string(faceSize) + "^2 faces";
+    return sky;
 }
 
 std::string skyContentHash(const Cubemap& sky) {
