@@ -630,6 +630,30 @@ TEST_F(TransferProgram, AttributesAndBinaryFileRoundTrip) {
     EXPECT_EQ(at, binary.size());
 }
 
+// A primitive without normals gets a World vertex per triangle corner, and each POSITION element
+// the mean of its copies. A zero-area triangle (no normal, met by no ray) has no transfer, so its
+// copies count for nothing: on an open plane every element keeps rho Y_00 exactly (each ray sees
+// the sky, so the L_00 sum is g^2 Y_00 whatever the directions), for both models and both files.
+TEST_F(TransferProgram, ZeroAreaTrianglesLeaveTheirCornersAlone) {
+    FixtureMesh plane;
+    addFannedSquare(plane, 1.0f);
+    plane.normals.clear();
+    plane.indices.insert(plane.indices.end(), {0, 1, 1});
+    const float rho = 0.5f;
+    testing::writeGltf(path("flat.glb"), sceneOf({plane}, {{glm::vec3(rho)}}), testing::GltfContainer::Glb);
+    const GltfSceneSource source = loadGltfSceneSource(path("flat.glb"));
+    for (TransferModel model : {TransferModel::Unshadowed, TransferModel::Shadowed}) {
+        const VertexTransfer transfer =
+            computeTransfer(source.world, {.model = model, .order = 3, .rays = 16});
+        const std::vector<PrimitiveTransfer> primitives = primitiveTransfers(source, transfer);
+        ASSERT_EQ(primitives.size(), 1u);
+        ASSERT_EQ(primitives[0].vertexCount, 5u);
+        for (uint32_t v = 0; v < 5; ++v) // grey: one channel, coefficient 0 first
+            EXPECT_NEAR(primitives[0].values[v * 9], rho * 0.282094792, 1e-6)
+                << transferModelName(model) << ", element " << v;
+    }
+}
+
 // The Khronos glTF validator (npm's gltf-validator, installed by scripts/test.sh) finds no error in
 // the .glb: the attributes' names, accessors, buffer views and the joined buffer are valid glTF 2.0.
 TEST_F(TransferProgram, ValidatorFindsNoError) {

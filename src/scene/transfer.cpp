@@ -98,13 +98,19 @@ class TransferBaker {
 
 void TransferBaker::layOutSides() {
     const World& world = shading_.world();
+    // A zero-area triangle has no normal and no ray meets it: a vertex only such triangles use
+    // (a flat primitive's copies of their corners) gets no transfer.
     corner_.assign(world.positions.size(), -1);
-    for (size_t i = world.indices.size(); i-- > 0;)
-        corner_[world.indices[i]] = int64_t(i);
+    for (size_t t = world.triangleCount(); t-- > 0;) {
+        if (!hasArea(world, t)) continue;
+        for (size_t c = 0; c < 3; ++c)
+            corner_[world.indices[3 * t + c]] = int64_t(3 * t + c);
+    }
     scene_.backSides.assign(world.positions.size(), 0);
     for (uint32_t v = 0; v < world.positions.size(); ++v)
         scene_.sides.push_back(makeSide(v, false));
-    if (options_.model == TransferModel::Unshadowed) return;
+    // Back sides are only met by a bounce's rays.
+    if (options_.model != TransferModel::Interreflected || options_.bounces == 0) return;
     for (uint32_t v = 0; v < world.positions.size(); ++v) {
         if (corner_[v] < 0) continue;
         const uint32_t material = world.triangleMaterials[size_t(corner_[v]) / 3];
@@ -253,6 +259,9 @@ VertexTransfer TransferBaker::run(const TransferProgress& progress, const Transf
     VertexTransfer transfer;
     transfer.order = sky_ ? 1 : options_.order; // under a sky: one value per vertex
     transfer.coefficients.assign(vertices * count_, glm::vec3(0.0f));
+    transfer.used.resize(vertices);
+    for (size_t v = 0; v < vertices; ++v)
+        transfer.used[v] = corner_[v] >= 0;
     progress_ = &progress;
     if (options_.model == TransferModel::Unshadowed) {
         Basis basis{};

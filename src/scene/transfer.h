@@ -60,11 +60,12 @@ constexpr int kMaxTransferRays = 1 << 20;
 constexpr int kMaxTransferBounces = 64;
 
 // The transfer of every World vertex: vertex v's coefficient i is coefficients[v * order^2 + i].
-// A vertex no triangle uses has none (zeros).
+// A vertex no triangle with area uses has none (zeros, and used[v] false).
 struct VertexTransfer {
     int order = 3;
     int rays = 0; // per vertex and bounce, as cast (g^2); 0 for unshadowed
     std::vector<glm::vec3> coefficients;
+    std::vector<bool> used;
     uint64_t raysCast = 0;
 
     size_t vertexCount() const { return coefficients.size() / (size_t(order) * size_t(order)); }

@@ -172,6 +172,7 @@ std::vector<PrimitiveTransfer> primitiveTransfers(const GltfSceneSource& source,
         p.values.assign(size_t(placed.positionCount) * floats, 0.0f);
         std::vector<uint32_t> corners(placed.positionCount, 0);
         for (size_t k = 0; k < placed.sourceVertices.size(); ++k) {
+            if (!transfer.used[placed.firstVertex + k]) continue;
             const uint32_t v = placed.sourceVertices[k];
             appendVertex(transfer, placed.firstVertex + k, channels, &p.values[size_t(v) * floats]);
             ++corners[v];

@@ -25,8 +25,8 @@ struct TransferDescription {
 
 // The transfer of one placed primitive's POSITION elements: node, mesh and primitive of the input
 // file, and positionCount x order^2 x channels floats. A primitive without normals (3 World vertices
-// per triangle) gets, at each POSITION element, the mean of its corners; an element no triangle uses
-// gets zeros.
+// per triangle) gets, at each POSITION element, the mean of its corners in triangles with area; an
+// element no such triangle uses gets zeros.
 struct PrimitiveTransfer {
     int node = -1;
     int mesh = -1;
