@@ -6,26 +6,26 @@
 // pass's share of its rays.
 //
 // Interface:
-//   set 0, bindings 0-4, push constants, specialization and dispatch: glsl/transfer_pass.glsl;
+//   set 0, bindings 0-5, push constants, specialization and dispatch: glsl/transfer_pass.glsl;
 //   binding 4 gets U_k
-//   set 0, binding 5: readonly buffer, vec4 previous[]: U_{k-1}, binding 4's layout
-//   set 0, binding 6: readonly buffer, TransferTriangle triangles[]: per World triangle
-//   set 0, binding 7: readonly buffer, TransferMaterial materials[]
-//   set 0, binding 8: readonly buffer, vec2 uvs[]: per World vertex, TEXCOORD_0
-//   set 0, binding 9: readonly buffer, TransferTexture textures[]
-//   set 0, binding 10: readonly buffer, vec4 texels[]: every texture's, one after the other
-//   set 0, binding 11: readonly buffer, uint backSides[]: per World vertex, its back side (0: none)
+//   set 0, binding 6: readonly buffer, vec4 previous[]: U_{k-1}, binding 4's layout
+//   set 0, binding 7: readonly buffer, TransferTriangle triangles[]: per World triangle
+//   set 0, binding 8: readonly buffer, TransferMaterial materials[]
+//   set 0, binding 9: readonly buffer, vec2 uvs[]: per World vertex, TEXCOORD_0
+//   set 0, binding 10: readonly buffer, TransferTexture textures[]
+//   set 0, binding 11: readonly buffer, vec4 texels[]: every texture's, one after the other
+//   set 0, binding 12: readonly buffer, uint backSides[]: per World vertex, its back side (0: none)
 #extension GL_GOOGLE_include_directive : require
 
 #include "transfer_pass.glsl"
 
-layout(set = 0, binding = 5, std430) readonly buffer Previous { vec4 previous[]; };
-layout(set = 0, binding = 6, std430) readonly buffer WorldTriangles { TransferTriangle triangles[]; };
-layout(set = 0, binding = 7, std430) readonly buffer Materials { TransferMaterial materials[]; };
-layout(set = 0, binding = 8, std430) readonly buffer Uvs { vec2 uvs[]; };
-layout(set = 0, binding = 9, std430) readonly buffer Textures { TransferTexture textures[]; };
-layout(set = 0, binding = 10, std430) readonly buffer Texels { vec4 texels[]; };
-layout(set = 0, binding = 11, std430) readonly buffer BackSides { uint backSides[]; };
+layout(set = 0, binding = 6, std430) readonly buffer Previous { vec4 previous[]; };
+layout(set = 0, binding = 7, std430) readonly buffer WorldTriangles { TransferTriangle triangles[]; };
+layout(set = 0, binding = 8, std430) readonly buffer Materials { TransferMaterial materials[]; };
+layout(set = 0, binding = 9, std430) readonly buffer Uvs { vec2 uvs[]; };
+layout(set = 0, binding = 10, std430) readonly buffer Textures { TransferTexture textures[]; };
+layout(set = 0, binding = 11, std430) readonly buffer Texels { vec4 texels[]; };
+layout(set = 0, binding = 12, std430) readonly buffer BackSides { uint backSides[]; };
 
 // glTF's default sampler as scene/surface_shading.cpp reads it: bilinear, repeat, texel (i, j)
 // centred at ((i + 0.5) / w, (j + 0.5) / h); mod() may round up to n, which the clamp takes to n - 1.
@@ -71,7 +71,7 @@ void main() {
     TransferSide side = sides[s];
     vec3 sum[SHPROBE_MAX_COEFFICIENTS];
     for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
-        sum[i] = transferSumSoFar(s, i);
+        sum[i] = vec3(0.0);
     if (transferCasts(side)) {
         uvec2 state = transferRayState(side);
         for (uint k = params.firstRay; k < transferRaysEnd(); ++k) {
@@ -81,7 +81,7 @@ void main() {
                 gather(hit, sum);
         }
     }
-    float scale = transferStoredScale(1.0 / float(params.strata * params.strata));
+    float scale = 1.0 / float(params.strata * params.strata);
     for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
-        transfer[s * SH_COEFFICIENTS + i] = vec4(sum[i] * scale, 0.0);
+        transferStoreSum(s, i, sum[i], scale);
 }

@@ -4,7 +4,7 @@
 // glsl/transfer_rays.glsl. One invocation per side, casting the pass's share of its rays.
 //
 // Interface:
-//   set 0, bindings 0-4, push constants, specialization and dispatch: glsl/transfer_pass.glsl;
+//   set 0, bindings 0-5, push constants, specialization and dispatch: glsl/transfer_pass.glsl;
 //   binding 4 gets U_0, the same value in r, g and b
 #extension GL_GOOGLE_include_directive : require
 
@@ -16,7 +16,7 @@ void main() {
     TransferSide side = sides[s];
     float sum[SH_BASIS_CAPACITY];
     for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
-        sum[i] = transferSumSoFar(s, i).r;
+        sum[i] = 0.0;
     if (transferCasts(side)) {
         uvec2 state = transferRayState(side);
         float y[SH_BASIS_CAPACITY];
@@ -28,7 +28,7 @@ void main() {
                 sum[i] += y[i];
         }
     }
-    float scale = transferStoredScale(3.14159265358979323846 / float(params.strata * params.strata));
+    float scale = 3.14159265358979323846 / float(params.strata * params.strata);
     for (uint i = 0u; i < SH_COEFFICIENTS; ++i)
-        transfer[s * SH_COEFFICIENTS + i] = vec4(vec3(sum[i] * scale), 0.0);
+        transferStoreSum(s, i, vec3(sum[i]), scale);
 }

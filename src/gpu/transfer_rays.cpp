@@ -19,11 +19,12 @@ namespace {
 
 // What the passes read, uploaded once: the hierarchy, the sides, the triangles with their
 // materials, texture coordinates and textures; and U_k, which pass k writes into transfer[k % 2]
-// while a bounce reads U_{k-1} from the other, copied into `readback` after each pass.
+// while a bounce reads U_{k-1} from the other, copied into `readback` after each pass. `carried`
+// holds what rounding took from the sums of the pass in flight (glsl/transfer_pass.glsl).
 struct TransferBuffers {
     Buffer nodes, bvhTriangles, triangleIds, sides, triangles, materials, uvs, textures, texels, backSides;
     std::array<Buffer, 2> transfer;
-    Buffer readback;
+    Buffer carried, readback;
 };
 
 // The two modules and their sets: `direct` writes transfer[0]; bounceSets[p] writes transfer[p]
@@ -36,9 +37,9 @@ struct TransferPrograms {
 };
 
 std::vector<Buffer*> allBuffers(TransferBuffers& b) {
-    return {&b.nodes,       &b.bvhTriangles, &b.triangleIds, &b.sides,  &b.triangles,
-            &b.materials,   &b.uvs,          &b.textures,    &b.texels, &b.backSides,
-            &b.transfer[0], &b.transfer[1],  &b.readback};
+    return {&b.nodes,       &b.bvhTriangles, &b.triangleIds, &b.sides,   &b.triangles,
+            &b.materials,   &b.uvs,          &b.textures,    &b.texels,  &b.backSides,
+            &b.transfer[0], &b.transfer[1],  &b.carried,     &b.readback};
 }
 
 // Throws Error(Device) where `bytes` exceed what one storage-buffer binding of the device holds.
@@ -109,6 +110,8 @@ void uploadScene(const Context& context, const TransferScene& scene, int order, 
         transfer = createBuffer(context, bytes,
                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                 MemoryUse::Device, "transfer vectors");
+    buffers.carried = createBuffer(context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Device,
+                                   "transfer rounding carried");
     buffers.readback = createBuffer(context, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback,
                                     "transfer vectors read back");
 }
@@ -122,8 +125,8 @@ void destroyTransferPrograms(const Device& device, TransferPrograms& programs) {
 
 void createTransferPrograms(const Context& context, const TransferBuffers& b, int order,
                             TransferPrograms& programs) {
-    static constexpr std::array<VkDescriptorType, 12> kBindings = [] {
-        std::array<VkDescriptorType, 12> bindings{};
+    static constexpr std::array<VkDescriptorType, 13> kBindings = [] {
+        std::array<VkDescriptorType, 13> bindings{};
         bindings.fill(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
         return bindings;
     }();
@@ -134,20 +137,19 @@ void createTransferPrograms(const Context& context, const TransferBuffers& b, in
                                               .pushConstantSize = sizeof(glsl::TransferParams),
                                               .order = uint32_t(order)});
     };
-    programs.direct = program("transfer_direct.comp", spirv::transfer_direct_comp, 5);
-    programs.bounce = program("transfer_bounce.comp", spirv::transfer_bounce_comp, 12);
-    programs.pool = createDescriptorPool(context, {.sets = 3, .storageBuffers = 5 + 2 * 12});
-    const BindingTarget direct[] = {{b.nodes.buffer},
-                                    {b.bvhTriangles.buffer},
-                                    {b.triangleIds.buffer},
-                                    {b.sides.buffer},
-                                    {b.transfer[0].buffer}};
+    programs.direct = program("transfer_direct.comp", spirv::transfer_direct_comp, 6);
+    programs.bounce = program("transfer_bounce.comp", spirv::transfer_bounce_comp, kBindings.size());
+    programs.pool =
+        createDescriptorPool(context, {.sets = 3, .storageBuffers = uint32_t(6 + 2 * kBindings.size())});
+    const BindingTarget direct[] = {{b.nodes.buffer}, {b.bvhTriangles.buffer}, {b.triangleIds.buffer},
+                                    {b.sides.buffer}, {b.transfer[0].buffer},  {b.carried.buffer}};
     programs.directSet = createDescriptorSet(context, programs.pool, programs.direct, direct);
     for (int p = 0; p < 2; ++p) {
         const BindingTarget bounce[] = {
-            {b.nodes.buffer},       {b.bvhTriangles.buffer},    {b.triangleIds.buffer}, {b.sides.buffer},
-            {b.transfer[p].buffer}, {b.transfer[1 - p].buffer}, {b.triangles.buffer},   {b.materials.buffer},
-            {b.uvs.buffer},         {b.textures.buffer},        {b.texels.buffer},      {b.backSides.buffer}};
+            {b.nodes.buffer},       {b.bvhTriangles.buffer}, {b.triangleIds.buffer},     {b.sides.buffer},
+            {b.transfer[p].buffer}, {b.carried.buffer},      {b.transfer[1 - p].buffer}, {b.triangles.buffer},
+            {b.materials.buffer},   {b.uvs.buffer},          {b.textures.buffer},        {b.texels.buffer},
+            {b.backSides.buffer}};
         programs.bounceSets[p] = createDescriptorSet(context, programs.pool, programs.bounce, bounce);
     }
 }
