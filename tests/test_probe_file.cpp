@@ -3,6 +3,7 @@
 // offending field.
 #include "common/error.h"
 #include "common/output_file.h"
+#include "formats/json_reading.h"
 #include "formats/probe_file.h"
 
 #include <algorithm>
@@ -268,6 +269,20 @@ TEST(ProbeFile, ReadRefusesWhatIsNotAProbeFile) {
     }
     EXPECT_THROW(readProbeFile("/dev/null"), Error); // not a regular file
     fs::remove_all(folder);
+}
+
+// The nesting bound every JSON reader applies, scanned before the parse: a value inside more than
+// maxDepth arrays and objects is refused, at the depth nlohmann's parse callback gives it (an empty
+// innermost container counts at its parent's), and brackets inside strings, escaped quotes
+// included, are text.
+TEST(JsonReading, DepthIsCountedOutsideStrings) {
+    EXPECT_NO_THROW(parseBoundedJson("[[1]]", 2));
+    EXPECT_THROW(parseBoundedJson("[[[1]]]", 2), JsonTooDeep);
+    EXPECT_NO_THROW(parseBoundedJson(R"({"a":{"b":[]}})", 2));
+    EXPECT_THROW(parseBoundedJson(R"({"a":{"b":[0]}})", 2), JsonTooDeep);
+    EXPECT_EQ(parseBoundedJson(R"(["[[[{{", "\"[[[", "\\"])", 1)[1], "\"[[[");
+    EXPECT_THROW(parseBoundedJson(R"(["\\", [[0]]])", 2), JsonTooDeep);
+    EXPECT_THROW(parseBoundedJson("[1,", 4), nlohmann::json::exception);
 }
 
 // Coefficients that overflowed are not written (no file holds infinity): the error names the
