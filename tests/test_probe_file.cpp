@@ -285,6 +285,15 @@ TEST(JsonReading, DepthIsCountedOutsideStrings) {
     EXPECT_THROW(parseBoundedJson("[1,", 4), nlohmann::json::exception);
 }
 
+// A file name need not be UTF-8 (Linux names are bytes), and the probe's "source" holds it: bytes
+// that are not UTF-8 are written as U+FFFD, so the file is JSON; nlohmann's plain dump threw, which
+// ended the command with an internal error.
+TEST(ProbeFile, SourceThatIsNotUtf8IsWrittenAsReplacement) {
+    const std::string text = probeToJson(sampleProbe(3, Quantity::Radiance), {.source = "caf\xe9.exr"});
+    const nlohmann::json parsed = nlohmann::json::parse(text);
+    EXPECT_EQ(parsed["source"], "caf\xef\xbf\xbd.exr");
+}
+
 // Coefficients that overflowed are not written (no file holds infinity): the error names the
 // output, and neither it nor a temporary file appears.
 TEST(ProbeFile, NonFiniteCoefficientsAreNotWritten) {

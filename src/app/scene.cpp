@@ -13,6 +13,7 @@
 #include "common/error.h"
 #include "common/output_file.h"
 #include "common/scope_exit.h"
+#include "formats/json_reading.h"
 #include "formats/probe_volume.h"
 #include "gpu/ray_capture.h"
 #include "gpu/scene_capture.h"
@@ -315,7 +316,7 @@ ProbeVolume readPreviousBounce(const SceneOptions& options, const ProbeGrid& gri
     if (previous.skySource.empty()) {
         nlohmann::json described = nlohmann::json::parse(settings);
         described["sky"] = sky.description;
-        thisBake = {described.dump(), ""};
+        thisBake = {jsonText(described), ""};
     }
     if (const std::string difference =
             skyDifference({previous.settings, previous.skySource}, thisBake, "the volume", "this bake");

@@ -16,6 +16,15 @@ struct JsonTooDeep {};
 // anything else it refuses (syntax, numbers beyond double's range).
 nlohmann::json parseBoundedJson(std::string_view text, int maxDepth);
 
+// `value` as compact JSON text. A file name need not be UTF-8, which JSON text must be: bytes that
+// are not are written as U+FFFD (nlohmann's plain dump throws at them).
+template <typename Json> std::string jsonText(const Json& value) {
+    return value.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+inline std::string jsonText(const std::string& text) {
+    return jsonText(nlohmann::json(text));
+}
+
 // nlohmann's "[json.exception.parse_error.101] parse error at line 3, column 1: ..." without the
 // bracketed prefix.
 std::string jsonProblem(const nlohmann::json::exception& error);

@@ -151,7 +151,7 @@ std::string probeToJson(const ShCoefficients& coefficients, const ProbeMetadata&
     // One coefficient row per line, so the file reads like the table it is.
     std::string text = "{\n";
     for (const auto& [key, value] : header.items())
-        text += "  " + json(key).dump() + ": " + value.dump() + ",\n";
+        text += "  " + jsonText(json(key)) + ": " + jsonText(value) + ",\n";
     text += "  \"coefficients\": [\n";
     for (size_t i = 0; i < coefficients.rgb.size(); ++i) {
         const glm::dvec3& c = coefficients.rgb[i];

@@ -101,12 +101,6 @@ std::optional<json> settingsObject(const std::string& settings) {
     return value;
 }
 
-// A file name in `source` need not be UTF-8, which JSON text must be: bytes that are not are
-// written as U+FFFD.
-std::string jsonText(const nlohmann::ordered_json& value) {
-    return value.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
-}
-
 // "the QUANTITY of probe P" for the first valid probe with a coefficient that is not finite; empty
 // where there is none. Invalid probes are written as zeros, whatever they hold.
 std::string nonFiniteProbe(const ProbeVolume& volume, const std::vector<glm::vec3>& coefficients,
