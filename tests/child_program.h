@@ -54,6 +54,7 @@ struct RunOptions {
     // starts shprobe, which then runs in a working folder that no longer exists.
     std::string workingFolder;
     bool removeWorkingFolder = false;
+    rlim_t addressSpaceBytes = 0; // RLIMIT_AS for the program, so that a large allocation fails; 0: none
 };
 
 constexpr uid_t kNobody = 65534;
@@ -135,6 +136,8 @@ class Child {
         const char* folder = options.workingFolder.c_str();
         if (*folder && chdir(folder) != 0) _exit(126);
         if (options.removeWorkingFolder && rmdir(folder) != 0) _exit(126);
+        const rlimit limit{options.addressSpaceBytes, options.addressSpaceBytes};
+        if (options.addressSpaceBytes > 0 && setrlimit(RLIMIT_AS, &limit) != 0) _exit(126);
         execve(argv[0], argv, envp);
         _exit(127);
     }

@@ -294,8 +294,9 @@ TEST(ImageFormats, ToldFromTheExtensionWhateverItsCase) {
 
 // Every channel set readImage meets (RGB, RGBA, grey, grey and alpha, OpenImageIO's two-channel
 // R, G, layers with extra channels and an X, Y, Z layer, luminance/chroma), as float and half,
-// scanlines and 16 x 16 tiles, through every compression, on a data window that does not start
-// at 0 (and lies partly outside the display window), 37 x 19 so that the last tiles are partial.
+// scanlines and 16 x 16 tiles, through every compression, on a window that does not start at 0
+// (display and data windows alike: OpenImageIO reads the data window, the decoder the display
+// window, ExrDisplayWindowIsTheImage), 37 x 19 so that the last tiles are partial.
 // OpenImageIO reports the channels in an order of its own (R, G, B, A first in each layer), which
 // the decoder must give too, since planChannels sees them in that order.
 TEST_F(Codecs, ExrFilesOpenImageIoWritesDecodeAsItReadsThem) {
@@ -325,7 +326,8 @@ TEST_F(Codecs, ExrFilesOpenImageIoWritesDecodeAsItReadsThem) {
                           [&](OIIO::ImageSpec& spec) {
                               spec.x = -3;
                               spec.y = 5;
-                              spec.full_x = spec.full_y = 0;
+                              spec.full_x = spec.x;
+                              spec.full_y = spec.y;
                               spec.full_width = w;
                               spec.full_height = h;
                               spec.attribute("compression", compression);
@@ -366,6 +368,41 @@ TEST_F(Codecs, ExrUnsignedChannelsAreNormalizedAsOpenImageIoDid) {
         out.writePixels(h);
     }
     expectSameAsOiio(file("uint.exr"));
+}
+
+// The image is the display window: pixels the data window leaves out of it are black (OpenEXR's
+// definition), and those it holds past it (overscan) are cut off. Here the data window starts
+// inside the display window and reaches two columns past its right edge, in two of its four rows.
+TEST_F(Codecs, ExrDisplayWindowIsTheImage) {
+    const Imath::Box2i display(Imath::V2i(0, 0), Imath::V2i(7, 3)), data(Imath::V2i(2, 1), Imath::V2i(9, 2));
+    Imf::Header header(display, data);
+    for (const char* name : {"R", "G", "B"})
+        header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    const auto value = [](int x, int y, int c) { return float(x + 10 * y + 100 * c + 1); };
+    std::vector<float> stored(8 * 2 * 3);
+    for (int y = 1; y <= 2; ++y)
+        for (int x = 2; x <= 9; ++x)
+            for (int c = 0; c < 3; ++c)
+                stored[size_t(((y - 1) * 8 + (x - 2)) * 3 + c)] = value(x, y, c);
+    {
+        Imf::OutputFile out(file("windows.exr").c_str(), header);
+        Imf::FrameBuffer frame;
+        for (int c = 0; c < 3; ++c)
+            frame.insert(std::string(1, "RGB"[c]), Imf::Slice::Make(Imf::FLOAT, stored.data() + c, data,
+                                                                    3 * sizeof(float), 24 * sizeof(float)));
+        out.setFrameBuffer(frame);
+        out.writePixels(2);
+    }
+    const Decoded decoded = decodeNative(file("windows.exr"));
+    ASSERT_EQ(decoded.header.width, 8);
+    ASSERT_EQ(decoded.header.height, 4);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 8; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const bool inData = y >= 1 && y <= 2 && x >= 2;
+                EXPECT_EQ(decoded.values[size_t((y * 8 + x) * 3 + c)], inData ? value(x, y, c) : 0.0f)
+                    << "pixel " << x << ", " << y << ", channel " << c;
+            }
 }
 
 // A multi-part file: the first part is the image (OpenImageIO's subimage 0).

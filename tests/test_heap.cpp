@@ -8,6 +8,7 @@
 // made, when the program asks (sh/cubemap.h adviseTexelHugePages).
 #include "app/heap.h"
 #include "sh/cubemap.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 
@@ -37,17 +38,6 @@ std::string mappingFlags(uintptr_t address) {
     return "";
 }
 
-bool underSanitizer() {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-    return true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
-    return true;
-#endif
-#endif
-    return false;
-}
-
 // Whether the kernel's transparent huge pages are off ("[never]"), or not there at all.
 bool hugePagesOff() {
     std::ifstream enabled("/sys/kernel/mm/transparent_hugepage/enabled");
@@ -63,7 +53,7 @@ TEST(Heap, LargeBuffersStartOnUntouchedHugePages) {
     if (heap.begin == heap.end) {
         // prepareHeap gives up where a sanitizer's allocator owns the heap or the kernel takes no
         // huge-page advice; anywhere else an empty heap is the failure this test is for.
-        if (underSanitizer() || hugePagesOff())
+        if (testing::underSanitizer() || hugePagesOff())
             GTEST_SKIP() << "a sanitizer's allocator, or no transparent huge pages";
         FAIL() << "prepareHeap advised no heap, with glibc's allocator and transparent huge pages on";
     }
@@ -93,7 +83,7 @@ TEST(Heap, LargeBuffersStartOnUntouchedHugePages) {
 // A cube map of 6 x 1024^2 texels (96 MiB, past glibc's mmap threshold of at most 32 MiB, so a
 // mapping of its own) is advised as huge pages when asked, and not otherwise; its fill is kept.
 TEST(Heap, TexelsAreAdvisedWhenAsked) {
-    if (underSanitizer() || hugePagesOff())
+    if (testing::underSanitizer() || hugePagesOff())
         GTEST_SKIP() << "a sanitizer's allocator, or no transparent huge pages";
     auto interior = [](const Cubemap& cubemap) { // a 2 MiB boundary inside the texels
         constexpr uintptr_t kHugePage = uintptr_t(2) << 20;

@@ -695,6 +695,35 @@ TEST_F(Reliability, MemoryIsBoundedByWhatTheFileHolds) {
     }
 }
 
+// An input too large for the machine's memory is one bad input of a batch: its error names it, the
+// inputs before and after it are baked and written, and the exit code is the memory failure's (1).
+// A constant 8192 x 4096 EXR (a few hundred kilobytes, ZIP) needs 512 MiB of texels, past the
+// address space the program is given (384 MiB, where a small bake needs far less).
+TEST_F(Reliability, AnInputTooLargeForMemoryIsSkippedInABatch) {
+    if (testing::underSanitizer()) GTEST_SKIP() << "a sanitizer reserves more address space than the limit";
+    writeImage(file("a.exr"), makeImage(8, 4));
+    writeImage(file("c.exr"), makeImage(8, 4));
+    {
+        std::unique_ptr<OIIO::ImageOutput> output = OIIO::ImageOutput::create("exr");
+        OIIO::ImageSpec spec(8192, 4096, 3, OIIO::TypeDesc::HALF);
+        spec.attribute("compression", "zip");
+        ASSERT_TRUE(output->open(file("big.exr"), spec)) << output->geterror();
+        const std::vector<float> row(size_t(3) * 8192, 0.5f);
+        for (int y = 0; y < 4096; ++y)
+            ASSERT_TRUE(output->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, row.data()))
+                << output->geterror();
+        ASSERT_TRUE(output->close());
+    }
+    const std::string out = file("probes");
+    RunResult result = run({"bake", file("a.exr"), file("big.exr"), file("c.exr"), "--out-dir", out},
+                           {.addressSpaceBytes = rlim_t(384) << 20});
+    EXPECT_EQ(result.exitCode, 1) << describe(result);
+    EXPECT_NE(result.err.find(file("big.exr") + ": out of memory"), std::string::npos) << result.err;
+    EXPECT_TRUE(fs::exists(out + "/a.json")) << result.err;
+    EXPECT_TRUE(fs::exists(out + "/c.json")) << result.err;
+    EXPECT_FALSE(fs::exists(out + "/big.json"));
+}
+
 // The file an output of each command is named, by its extension.
 std::string outputNameFor(const std::string& command) {
     if (command == "scene") return "out.shpv";

@@ -109,4 +109,17 @@ inline std::string errorOf(ErrorKind kind, const std::function<void()>& f) {
     return {};
 }
 
+// Whether this build runs under a sanitizer (the tests and the program are built alike), whose
+// allocator owns the heap and whose shadow memory reserves terabytes of address space.
+inline bool underSanitizer() {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+    return true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
+    return true;
+#endif
+#endif
+    return false;
+}
+
 } // namespace shprobe::testing

@@ -134,7 +134,8 @@ struct Batch {
     size_t processed = 0;  // baked or failed
     size_t baked = 0;
     size_t failed = 0;
-    bool inputFailed = false; // an input error among the failures (exit code 2, else 3)
+    bool inputFailed = false;  // an input error among the failures (exit code 2)
+    bool memoryFailed = false; // else an input too large for the machine's memory (exit code 1), else 3
     uint64_t texels = 0;
     size_t submissions = 0;
     bool gpu = false; // baked with Vulkan (the summary counts the submissions)
@@ -153,6 +154,7 @@ void reportFailure(Batch& batch, const BatchItem& item, const Error& error) {
     if (message.find(item.input) == std::string::npos) message = item.input + ": " + message;
     ++batch.failed;
     batch.inputFailed = batch.inputFailed || error.kind() == ErrorKind::Input;
+    batch.memoryFailed = batch.memoryFailed || error.kind() == ErrorKind::Memory;
     batch.progress.update(++batch.processed);
     printLine(batch, stderr, "shprobe: error: " + message);
 }
@@ -178,7 +180,8 @@ class InputLoader {
 
     bool done() const { return !pending_.valid(); }
 
-    // The next input; a bad input is reported and skipped (nullopt); any other failure ends the batch.
+    // The next input; a bad input, or one too large for the machine's memory, is reported and skipped
+    // (nullopt); any other failure ends the batch.
     std::optional<Loaded> next(Batch& batch) {
         std::future<Loaded> loading = std::move(pending_);
         const BatchItem& item = items_[next_ - 1];
@@ -186,7 +189,7 @@ class InputLoader {
         try {
             return loading.get();
         } catch (const Error& error) {
-            if (error.kind() != ErrorKind::Input) throw;
+            if (error.kind() != ErrorKind::Input && error.kind() != ErrorKind::Memory) throw;
             reportFailure(batch, item, error);
             return std::nullopt;
         }
@@ -331,7 +334,9 @@ void finishBatch(Batch& batch, size_t count, double seconds) {
                           : batch.baked == 1 ? "the other probe was written to " + batch.options.outDir
                                              : "the other " + std::to_string(batch.baked) +
                                                    " probes were written to " + batch.options.outDir;
-    throw Error(batch.inputFailed ? ErrorKind::Input : ErrorKind::Output,
+    throw Error(batch.inputFailed    ? ErrorKind::Input
+                : batch.memoryFailed ? ErrorKind::Memory
+                                     : ErrorKind::Output,
                 std::to_string(batch.failed) + " of " + counted(count, "input") + " failed (above); " +
                     written);
 }

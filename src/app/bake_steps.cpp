@@ -73,7 +73,12 @@ Environment loadInput(const BakeOptions& options, const std::string& input, Work
         load.maxPixels = options.maxPixels;
         load.keepEquirect = !options.extractSun; // the sun is found on a cube map
         load.keepCross = !options.extractSun;
-        return loadEnvironment(input, load);
+        try {
+            return loadEnvironment(input, load);
+        } catch (const Error& error) { // the allocation does not know the file it is for
+            if (error.kind() != ErrorKind::Memory) throw;
+            throw Error(ErrorKind::Memory, input + ": " + error.what());
+        }
     }
     Environment sky;
     int faceSize = options.faceSize > 0 ? options.faceSize : kDefaultSkyFaceSize;

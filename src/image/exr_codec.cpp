@@ -215,10 +215,12 @@ class ExrDecoder final : public ImageDecoder {
         try {
             file_ = openFile(path, stream_);
             const Imf::Header& header = file_->header(0);
-            const Imath::Box2i window = header.dataWindow();
-            dataWindow_ = window;
-            header_.width = int(std::min<int64_t>(int64_t(window.max.x) - window.min.x + 1, INT32_MAX));
-            header_.height = int(std::min<int64_t>(int64_t(window.max.y) - window.min.y + 1, INT32_MAX));
+            // The image is the display window; the pixels stored (the data window) may cover part
+            // of it, the rest black, as OpenEXR defines it, or reach past it (overscan), cut off.
+            dataWindow_ = header.dataWindow();
+            displayWindow_ = header.displayWindow();
+            header_.width = windowWidth(displayWindow_);
+            header_.height = windowHeight(displayWindow_);
             header_.volumeOrDeep = header.hasType() && Imf::isDeepData(header.type());
             header_.channels = channelsInOpenImageIoOrder(header.channels());
             header_.srgb = false; // OpenEXR holds linear values; OpenImageIO named them "Linear"
@@ -249,34 +251,31 @@ class ExrDecoder final : public ImageDecoder {
         if (begin < 0 || end > int(header_.channels.size()) || begin >= end || end - begin > 4)
             throw Error(ErrorKind::Input, path_ + ": no channels " + std::to_string(begin) + " to " +
                                               std::to_string(end) + " to read");
-        try {
-            const Imf::ChannelList& list = part_->header().channels();
-            constexpr size_t kTexel = 4 * sizeof(float);
-            const size_t row = kTexel * size_t(header_.width);
-            Imf::FrameBuffer frame;
-            std::vector<float*> unsignedChannels;
-            for (int c = begin; c < end; ++c) {
-                const std::string& name = header_.channels[size_t(c)];
-                float* at = first + (c - begin);
-                // Unsigned integers land as they are and are normalized below, as OpenImageIO did
-                // (OpenEXR itself would convert them to float unscaled).
-                const bool isUnsigned = list.findChannel(name)->type == Imf::UINT;
-                if (isUnsigned) unsignedChannels.push_back(at);
-                frame.insert(name, Imf::Slice::Make(isUnsigned ? Imf::UINT : Imf::FLOAT, at, dataWindow_,
-                                                    kTexel, row));
-            }
-            part_->setFrameBuffer(frame);
-            part_->readPixels(dataWindow_.min.y, dataWindow_.max.y);
-            const size_t texels = size_t(header_.width) * size_t(header_.height);
-            for (float* at : unsignedChannels)
-                for (size_t t = 0; t < texels; ++t) {
-                    uint32_t value;
-                    std::memcpy(&value, at + 4 * t, sizeof value);
-                    at[4 * t] = float(value) * (1.0f / 4294967295.0f); // as OpenImageIO's convert_type
-                }
-        } catch (const std::exception& error) {
-            failPixels(error);
+        if (dataWindow_ == displayWindow_) {
+            readRows(begin, end, first, dataWindow_.min.y, dataWindow_.max.y);
+            return;
         }
+        // The rows of the data window within the display window, whole (OpenEXR reads whole rows),
+        // then each texel of the display window taken from them or left black.
+        const int top = std::max(dataWindow_.min.y, displayWindow_.min.y);
+        const int bottom = std::min(dataWindow_.max.y, displayWindow_.max.y);
+        std::vector<float> rows;
+        if (top <= bottom) {
+            rows.resize(size_t(4) * size_t(windowWidth(dataWindow_)) * size_t(bottom - top + 1));
+            readRows(begin, end, rows.data(), top, bottom);
+        }
+        const int channels = end - begin;
+        for (int y = displayWindow_.min.y; y <= displayWindow_.max.y; ++y)
+            for (int x = displayWindow_.min.x; x <= displayWindow_.max.x; ++x) {
+                const bool stored =
+                    y >= top && y <= bottom && x >= dataWindow_.min.x && x <= dataWindow_.max.x;
+                const size_t from =
+                    size_t(y - top) * size_t(windowWidth(dataWindow_)) + size_t(x - dataWindow_.min.x);
+                float* to = first + 4 * (size_t(y - displayWindow_.min.y) * size_t(header_.width) +
+                                         size_t(x - displayWindow_.min.x));
+                for (int c = 0; c < channels; ++c)
+                    to[c] = stored ? rows[4 * from + size_t(c)] : 0.0f;
+            }
     }
 
     // A scanline image's chunks lie in the file in its line order, so a file cut short lacks the
@@ -297,6 +296,48 @@ class ExrDecoder final : public ImageDecoder {
     }
 
   private:
+    static int windowWidth(const Imath::Box2i& window) {
+        return int(std::min<int64_t>(int64_t(window.max.x) - window.min.x + 1, INT32_MAX));
+    }
+    static int windowHeight(const Imath::Box2i& window) {
+        return int(std::min<int64_t>(int64_t(window.max.y) - window.min.y + 1, INT32_MAX));
+    }
+
+    // Channels [begin, end) of the data window's rows top..bottom into texels of 4 floats from
+    // `first` on, a row of the data window's width each.
+    void readRows(int begin, int end, float* first, int top, int bottom) {
+        try {
+            const Imf::ChannelList& list = part_->header().channels();
+            constexpr size_t kTexel = 4 * sizeof(float);
+            const size_t row = kTexel * size_t(windowWidth(dataWindow_));
+            const Imath::Box2i window(Imath::V2i(dataWindow_.min.x, top),
+                                      Imath::V2i(dataWindow_.max.x, bottom));
+            Imf::FrameBuffer frame;
+            std::vector<float*> unsignedChannels;
+            for (int c = begin; c < end; ++c) {
+                const std::string& name = header_.channels[size_t(c)];
+                float* at = first + (c - begin);
+                // Unsigned integers land as they are and are normalized below, as OpenImageIO did
+                // (OpenEXR itself would convert them to float unscaled).
+                const bool isUnsigned = list.findChannel(name)->type == Imf::UINT;
+                if (isUnsigned) unsignedChannels.push_back(at);
+                frame.insert(name,
+                             Imf::Slice::Make(isUnsigned ? Imf::UINT : Imf::FLOAT, at, window, kTexel, row));
+            }
+            part_->setFrameBuffer(frame);
+            part_->readPixels(top, bottom);
+            const size_t texels = size_t(windowWidth(dataWindow_)) * size_t(bottom - top + 1);
+            for (float* at : unsignedChannels)
+                for (size_t t = 0; t < texels; ++t) {
+                    uint32_t value;
+                    std::memcpy(&value, at + 4 * t, sizeof value);
+                    at[4 * t] = float(value) * (1.0f / 4294967295.0f); // as OpenImageIO's convert_type
+                }
+        } catch (const std::exception& error) {
+            failPixels(error);
+        }
+    }
+
     // OpenEXR's message on one line. rawPixelData puts "Error reading pixel data from image file
     // \"X\". " before a message that may begin so already: the sentence is said once.
     [[noreturn]] void failPixels(const std::exception& error) const {
@@ -313,6 +354,7 @@ class ExrDecoder final : public ImageDecoder {
     std::unique_ptr<Imf::MultiPartInputFile> file_;
     std::unique_ptr<Imf::InputPart> part_;
     Imath::Box2i dataWindow_;
+    Imath::Box2i displayWindow_;
 };
 
 // An output stream into a string; OpenEXR seeks back to fill in the offset table at the end.
