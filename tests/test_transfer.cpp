@@ -654,6 +654,50 @@ TEST_F(TransferProgram, ZeroAreaTrianglesLeaveTheirCornersAlone) {
     }
 }
 
+// The scene's extras and extensions are written as its JSON has them: integers past 32 bits,
+// empty objects and arrays, and nulls (tinygltf's own values wrap the first and drop the others),
+// on the scene, a node, a material's extension and a mesh that two nodes draw (and its copy).
+// An asset.extras that is not an object cannot take the transfer's description: refused in one
+// line, before any ray, nothing written.
+TEST_F(TransferProgram, ExtrasAndExtensionsAreKeptAsWritten) {
+    FixtureMesh ground;
+    addFannedSquare(ground, 2.0f);
+    FixtureScene scene = sceneOf({ground}, {{glm::vec3(0.6f)}});
+    scene.nodes.push_back({.mesh = 0, .translation = {5.0f, 0.0f, 0.0f}});
+    scene.roots.push_back(1);
+    nlohmann::json document = nlohmann::json::parse(testing::gltfText(scene));
+    const nlohmann::json extras = {{"id", 3000000000u},
+                                   {"ms", 1700000000123u},
+                                   {"big", 9007199254740993u},
+                                   {"empty", nlohmann::json::object()},
+                                   {"none", nullptr},
+                                   {"list", {nullptr, nlohmann::json::object(), nlohmann::json::array(), 1}}};
+    document["extras"] = extras;
+    document["nodes"][0]["extras"] = extras;
+    document["meshes"][0]["extras"] = extras;
+    document["materials"][0]["extensions"] = {{"VENDOR_thing", {{"id", 4294967296u}}}};
+    document["asset"]["extras"] = {{"author", extras}};
+    testing::writeText(path("extras.gltf"), document.dump());
+    ASSERT_EQ(run("transfer " + path("extras.gltf") + " --model unshadowed -o " + path("out.glb")), 0)
+        << err_;
+    const Glb glb = readGlb(read(path("out.glb")));
+    EXPECT_EQ(glb.json["extras"], extras);
+    EXPECT_EQ(glb.json["nodes"][0]["extras"], extras);
+    ASSERT_EQ(glb.json["meshes"].size(), 2u); // the second node's copy
+    EXPECT_EQ(glb.json["meshes"][0]["extras"], extras);
+    EXPECT_EQ(glb.json["meshes"][1]["extras"], extras);
+    EXPECT_EQ(glb.json["materials"][0]["extensions"]["VENDOR_thing"]["id"], 4294967296u);
+    EXPECT_EQ(glb.json["asset"]["extras"]["author"], extras);
+    EXPECT_EQ(glb.json["asset"]["extras"]["shTransfer"]["model"], "unshadowed");
+
+    document["asset"]["extras"] = "a note";
+    testing::writeText(path("note.gltf"), document.dump());
+    EXPECT_EQ(run("transfer " + path("note.gltf") + " -o " + path("note.glb")), 2);
+    EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << err_;
+    EXPECT_NE(err_.find("asset.extras is not an object"), std::string::npos) << err_;
+    EXPECT_FALSE(fs::exists(path("note.glb")));
+}
+
 // The Khronos glTF validator (npm's gltf-validator, installed by scripts/test.sh) finds no error in
 // the .glb: the attributes' names, accessors, buffer views and the joined buffer are valid glTF 2.0.
 TEST_F(TransferProgram, ValidatorFindsNoError) {

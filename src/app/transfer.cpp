@@ -146,6 +146,7 @@ void runTransfer(const TransferCommandOptions& options) {
     checkTransferOptions(options);
     const Clock::time_point start = Clock::now();
     const GltfSceneSource source = loadGltfSceneSource(options.scene);
+    if (!writesBinary(options)) requireTransferGlbSource(source, options.scene);
     const TransferModel model = parseTransferModel(options.model);
     const TransferOptions transferOptions{.model = model,
                                           .order = options.order,

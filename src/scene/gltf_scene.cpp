@@ -780,7 +780,8 @@ GltfSceneSource readScene(const std::string& path, const GltfLoadOptions& option
     builder.checkTotals(placed);
     for (const PlacedNode& node : placed)
         builder.addNode(node);
-    return {builder.finish(), builder.takePlacedPrimitives(), nullptr};
+    const std::string_view json = isGlb(bytes) ? glbParts(bytes, path).second : std::string_view(bytes);
+    return {builder.finish(), builder.takePlacedPrimitives(), nullptr, std::string(json)};
 }
 
 } // namespace

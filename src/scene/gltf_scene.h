@@ -106,6 +106,7 @@ struct GltfSceneSource {
     World world;
     std::vector<GltfPlacedPrimitive> primitives;
     std::shared_ptr<const tinygltf::Model> model;
+    std::string json; // the file's JSON as written (a .glb's JSON chunk), checked by checkGltfJson
 };
 GltfSceneSource loadGltfSceneSource(const std::string& path, const GltfLoadOptions& options = {});
 

@@ -9,6 +9,7 @@
 #include <bit>
 #include <cstring>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <tiny_gltf.h>
 
@@ -152,7 +153,65 @@ void addAttributes(tinygltf::Model& model, std::vector<unsigned char>& bin, cons
     }
 }
 
+// Every "extras" and "extensions" value of `from` put at the same place in `to`, where `to` has that
+// place: tinygltf keeps them as values of its own, whose integers are 32-bit (3000000000 came back
+// -1294967296) and which drop empty objects, arrays and nulls.
+void keepExtensionData(const nlohmann::json& from, nlohmann::json& to) {
+    if (from.is_object() && to.is_object()) {
+        for (const auto& [key, value] : from.items()) {
+            if (key == "extras" || key == "extensions")
+                to[key] = value;
+            else if (to.contains(key))
+                keepExtensionData(value, to[key]);
+        }
+    }
+    if (from.is_array() && to.is_array())
+        for (size_t i = 0; i < std::min(from.size(), to.size()); ++i)
+            keepExtensionData(from[i], to[i]);
+}
+
+uint32_t littleEndian32(std::string_view bytes, size_t at) {
+    uint32_t value;
+    std::memcpy(&value, bytes.data() + at, 4);
+    return value;
+}
+
+// The .glb tinygltf wrote with the JSON of `source` kept where tinygltf rewrote it: its extras and
+// extensions (the buffers' aside: the .glb has one buffer of its own), a copied mesh's those of the
+// mesh it copies (`copied`: copy -> original), asset.extras.shTransfer added.
+std::string withSourceJson(const std::string& glb, const GltfSceneSource& source,
+                           const std::map<int, int>& copied) {
+    const uint32_t jsonBytes = littleEndian32(glb, 12);
+    nlohmann::json written = nlohmann::json::parse(std::string_view(glb).substr(20, jsonBytes));
+    nlohmann::json original = nlohmann::json::parse(source.json);
+    const nlohmann::json description = written["asset"]["extras"]["shTransfer"];
+    original.erase("buffers");
+    keepExtensionData(original, written);
+    for (const auto& [copy, mesh] : copied)
+        keepExtensionData(original["meshes"][size_t(mesh)], written["meshes"][size_t(copy)]);
+    written["asset"]["extras"]["shTransfer"] = description;
+    std::string text = written.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+    text.resize((text.size() + 3) / 4 * 4, ' '); // a chunk is padded to 4 bytes, JSON's with spaces
+    const std::string_view bin = std::string_view(glb).substr(20 + jsonBytes);
+    std::string out = glb.substr(0, 8);
+    auto put = [&](uint32_t value) { out.append(reinterpret_cast<const char*>(&value), 4); };
+    put(uint32_t(12 + 8 + text.size() + bin.size()));
+    put(uint32_t(text.size()));
+    out += glb.substr(16, 4); // "JSON"
+    out += text;
+    out += bin;
+    return out;
+}
+
 } // namespace
+
+void requireTransferGlbSource(const GltfSceneSource& source, const std::string& path) {
+    const tinygltf::Value& extras = source.model->asset.extras;
+    if (extras.Type() == tinygltf::NULL_TYPE || extras.IsObject()) return;
+    throw Error(ErrorKind::Input,
+                path + ": asset.extras is not an object, so it cannot hold the transfer's description "
+                       "(asset.extras.shTransfer); write the transfer alone (-o FILE.shpt)");
+}
 
 int transferChannels(const VertexTransfer& transfer) {
     return transfer.coloured() ? 3 : 1;
@@ -192,8 +251,11 @@ std::string transferGlb(const GltfSceneSource& source, const VertexTransfer& tra
     const std::vector<PrimitiveTransfer> primitives = primitiveTransfers(source, transfer);
     std::vector<unsigned char> bin = joinBuffers(model);
     const std::map<int, int> meshOfNode = ownMeshes(model, primitives);
-    for (const PrimitiveTransfer& p : primitives)
+    std::map<int, int> copied;
+    for (const PrimitiveTransfer& p : primitives) {
         addAttributes(model, bin, p, meshOfNode.at(p.node), channels, transfer.order);
+        if (meshOfNode.at(p.node) != p.mesh) copied[meshOfNode.at(p.node)] = p.mesh;
+    }
     model.buffers.assign(1, tinygltf::Buffer());
     model.buffers[0].data = std::move(bin);
     tinygltf::Value::Object extras;
@@ -204,7 +266,7 @@ std::string transferGlb(const GltfSceneSource& source, const VertexTransfer& tra
     tinygltf::TinyGLTF writer;
     if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
         throw Error(ErrorKind::Output, "transfer: tinygltf could not write the .glb");
-    return stream.str();
+    return withSourceJson(stream.str(), source, copied);
 }
 
 std::string transferBinary(const GltfSceneSource& source, const VertexTransfer& transfer,

@@ -43,9 +43,14 @@ int transferAttributeCount(int order, int channels);
 std::vector<PrimitiveTransfer> primitiveTransfers(const GltfSceneSource& source,
                                                   const VertexTransfer& transfer);
 
+// Throws Error(Input) "PATH: ..." where the scene's asset.extras is a value other than an object,
+// which transferGlb could not add asset.extras.shTransfer to.
+void requireTransferGlbSource(const GltfSceneSource& source, const std::string& path);
+
 // The .glb: the source's model with one buffer (its buffers joined, its images moved into it), a mesh
-// used by several nodes copied so that each node has its own, and the attributes added. Throws
-// Error(Output) if tinygltf cannot write it.
+// used by several nodes copied so that each node has its own, and the attributes added; every
+// extras and extensions value as the source's JSON has it. Throws Error(Output) if tinygltf cannot
+// write it.
 std::string transferGlb(const GltfSceneSource& source, const VertexTransfer& transfer,
                         const TransferDescription& description);
 
