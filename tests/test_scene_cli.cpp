@@ -23,6 +23,7 @@
 #include <cstdio>
 #include <cstring>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <span>
 #include <sys/stat.h>
@@ -948,6 +949,34 @@ TEST_F(SceneCommand, LightThatOverflowsFloatIsRefused) {
                        2,
                        {"overflows float: the light of " + scene, "is far too strong"},
                        "out.shpv"});
+}
+
+// A sky image is read as bake reads its inputs, with bake's --sanitize and --max-pixels, which the
+// refusals name: a sky with a NaN texel is refused by scene and relight, and taken as 0 with
+// --sanitize (said in the volume's sky_source); a sky past --max-pixels is refused from its header.
+TEST_F(SceneCommand, SkyImagesTakeSanitizeAndMaxPixels) {
+    const std::string scene = file("open.glb");
+    testing::writeCornellBoxGltf(scene, {});
+    Image sky = makeImage(32, 16, glm::vec4(1.0f));
+    sky.texels[40].g = std::numeric_limits<float>::quiet_NaN();
+    writeImage(file("nan.exr"), sky);
+    const std::vector<std::string> bake{"scene",       scene, "--grid",     "1,1,1",
+                                        "--face-size", "4",   "--transfer", "-q"};
+    auto with = [&](std::vector<std::string> args, const std::vector<std::string>& extra) {
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    };
+    expectFailure({with(bake, {"--sky", file("nan.exr"), "-o", "OUT"}), 2, {"use --sanitize"}, "out.shpv"});
+    runWithOutput(bake, {"--sky", file("nan.exr"), "--sanitize"}, file("sane.shpv"));
+    EXPECT_CONTAINS(readProbeVolume(file("sane.shpv")).skySource, "1 NaN/Inf texel replaced with 0");
+    expectFailure({with(bake, {"--sky", file("nan.exr"), "--max-pixels", "511", "-o", "OUT"}),
+                   2,
+                   {"raise it with --max-pixels"},
+                   "out.shpv"});
+    const std::vector<std::string> relight{"relight", file("sane.shpv"), "--sky", file("nan.exr"), "-q"};
+    expectFailure({with(relight, {"-o", "OUT"}), 2, {"use --sanitize"}, "out.shpv"});
+    runOk(with(relight, {"--sanitize", "-o", file("relit.shpv")}));
+    EXPECT_EQ(readProbeVolume(file("relit.shpv")).radiance, readProbeVolume(file("sane.shpv")).radiance);
 }
 
 // A glTF sun whose colour times intensity float cannot hold is refused by the reader, naming the

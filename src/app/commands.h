@@ -140,11 +140,13 @@ struct SceneOptions {
     int order = 3;
     int faceSize = 32;
     int bounces = 1;
-    bool bouncesGiven = false;        // --bounces on the command line (not with --previous)
-    std::string sky;                  // any input bake takes; empty: the built-in sky
-    int skyFaceSize = 0;              // 0: the sky's own (128 for the built-in sky)
-    std::optional<BrickOption> brick; // I/N: one brick of the grid, one bounce
-    std::string previous;             // the previous bounce's whole volume
+    bool bouncesGiven = false;                  // --bounces on the command line (not with --previous)
+    std::string sky;                            // any input bake takes; empty: the built-in sky
+    int skyFaceSize = 0;                        // 0: the sky's own (128 for the built-in sky)
+    bool sanitize = false;                      // the sky's NaN and infinite texels as 0, not refused
+    int64_t maxPixels = kDefaultMaxImagePixels; // larger sky image files are refused from their header
+    std::optional<BrickOption> brick;           // I/N: one brick of the grid, one bounce
+    std::string previous;                       // the previous bounce's whole volume
     uint32_t probesPerBatch = 32;
     std::string backend = "auto";  // auto | gpu (rasterized captures) | cpu (rays: scene/ray_bake.h)
     int raysPerTexel = 0;          // 0: 9 (3 x 3) on both backends; 1: the texel's centre
@@ -190,9 +192,11 @@ struct TransferCommandOptions {
 struct RelightOptions {
     std::string volume;
     std::string output;
-    std::string sky;   // any input bake takes; empty: the built-in sky (unless probe)
-    std::string probe; // a radiance probe file instead of a sky
-    double yaw = 0.0;  // the light's turn, degrees (sh/rotation.h lightRotation)
+    std::string sky;       // any input bake takes; empty: the built-in sky (unless probe)
+    std::string probe;     // a radiance probe file instead of a sky
+    bool sanitize = false; // the sky's NaN and infinite texels as 0, not refused
+    int64_t maxPixels = kDefaultMaxImagePixels; // larger sky image files are refused from their header
+    double yaw = 0.0;                           // the light's turn, degrees (sh/rotation.h lightRotation)
     double pitch = 0.0;
     bool timings = false; // relight timed against reading the transfer's bytes (the bound)
     bool quiet = false;
@@ -275,9 +279,18 @@ void addMergeOptions(CLI::App& command, MergeOptions& options);
 void runMerge(const MergeOptions& options);
 void addRelightOptions(CLI::App& command, RelightOptions& options);
 void runRelight(const RelightOptions& options);
-// The sky of a scene's probes: an environment input as `bake` takes it, as a cube map of faceSize
-// (0: its own), or the built-in sky (128^2 faces by default).
-Environment loadSceneSky(const std::string& path, int faceSize);
+// How a scene's sky is read: as a cube map of faceSize (0: its own; 128 for the built-in sky), and
+// its image files as `bake` reads its inputs (--sanitize, --max-pixels).
+struct SkyReading {
+    int faceSize = 0;
+    bool sanitize = false;
+    int64_t maxPixels = kDefaultMaxImagePixels;
+};
+// The sky of a scene's probes: an environment input as `bake` takes it, or the built-in sky (empty
+// path).
+Environment loadSceneSky(const std::string& path, const SkyReading& reading = {});
+// --sanitize and --max-pixels of the commands that read a sky (scene, relight).
+void addSkyReadingOptions(CLI::App& command, bool& sanitize, int64_t& maxPixels);
 // A sky by content, whatever path named it, for a volume's settings: "fnv1a64:" and 16 hex digits
 // (common/content_hash.h) over the face size and each texel's red, green and blue floats (alpha
 // carries no light), or over the order and the radiance coefficients' doubles of a probe.

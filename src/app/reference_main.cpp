@@ -236,7 +236,7 @@ void run(const ReferenceOptions& options) {
     const World world = loadGltfScene(options.scene);
     const ProbeGrid grid =
         options.bounds ? makeProbeGrid(options.grid, *options.bounds) : probeGridInWorld(options.grid, world);
-    const Environment sky = loadSceneSky(options.sky, 0);
+    const Environment sky = loadSceneSky(options.sky);
     const ProbeVolume volume = traceVolume(options, world, grid, sky);
     writeProbeVolume(options.output, volume);
     if (options.quiet) return;

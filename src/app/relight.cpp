@@ -35,7 +35,8 @@ RelightSky relightSky(const RelightOptions& options, int order) {
         ShCoefficients radiance = probeFileRadiance(options.probe, order);
         sky = {options.probe, skyContentHash(radiance), std::move(radiance)};
     } else {
-        const Environment environment = loadSceneSky(options.sky, 0);
+        const Environment environment =
+            loadSceneSky(options.sky, {.sanitize = options.sanitize, .maxPixels = options.maxPixels});
         sky = {environment.description, skyContentHash(environment.cubemap),
                projectCubemap(environment.cubemap, order)};
     }
@@ -77,11 +78,15 @@ void addRelightOptions(CLI::App& command, RelightOptions& options) {
                            .add_option("--sky", options.sky,
                                        "The new sky: any input `bake` takes (default: the built-in sky)")
                            ->check(nonEmptyName());
-    command
-        .add_option("--probe", options.probe,
-                    "The new sky as a radiance probe file (JSON, or binary of one probe)")
-        ->check(nonEmptyName())
-        ->excludes(sky);
+    CLI::Option* probe =
+        command
+            .add_option("--probe", options.probe,
+                        "The new sky as a radiance probe file (JSON, or binary of one probe)")
+            ->check(nonEmptyName())
+            ->excludes(sky);
+    addSkyReadingOptions(command, options.sanitize, options.maxPixels);
+    for (const char* name : {"--sanitize", "--max-pixels"}) // they read an image, not a probe
+        command.get_option(name)->excludes(probe);
     command.add_option("--yaw", options.yaw, "The sky's turn about +Y, degrees")
         ->check(numberFrom(-360.0, 360.0));
     command.add_option("--pitch", options.pitch, "The sky's turn about +X, degrees")

@@ -108,7 +108,7 @@ LitScene loadLitScene(const LitSceneOptions& options) {
             sceneMismatch(lit.volume, gltfSceneHash(options.scene), lit.world.description);
         !mismatch.empty())
         throw Error(ErrorKind::Input, options.volume + ": " + mismatch);
-    lit.sky = loadSceneSky(options.sky, 0).cubemap;
+    lit.sky = loadSceneSky(options.sky).cubemap;
     return lit;
 }
 

@@ -61,7 +61,7 @@ RelitLight loadRelitLight(const LitSceneOptions& options, int order) {
         requireFloatLight(light, options.probe); // the device relights in float
         return {options.probe, std::move(light), {}};
     }
-    Environment sky = loadSceneSky(options.sky, 0);
+    Environment sky = loadSceneSky(options.sky);
     return {options.sky.empty() ? std::string("the built-in sky") : options.sky, std::nullopt,
             std::move(sky.cubemap)};
 }

@@ -70,6 +70,7 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
         .add_option("--sky-face-size", options.skyFaceSize,
                     "Face size the sky is resampled to (0: its own; 128 for the built-in sky)")
         ->transform(wholeNumberFrom(0, 4096));
+    addSkyReadingOptions(command, options.sanitize, options.maxPixels);
     addParsedOption(command, "--brick", options.brick, parseBrickOption,
                     "Bake only brick I of N (0 <= I < N) of the grid, every bounce of its probes; "
                     "`shprobe merge` joins the bricks");
@@ -150,7 +151,14 @@ void requireFiniteLight(const ProbeVolume& volume, const std::string& light) {
         throw Error(ErrorKind::Input, probe + " overflows float: " + light + " is far too strong");
 }
 
-Environment loadSceneSky(const std::string& path, int faceSize) {
+void addSkyReadingOptions(CLI::App& command, bool& sanitize, int64_t& maxPixels) {
+    command.add_flag("--sanitize", sanitize,
+                     "Replace the sky's NaN and infinite texels with 0 instead of failing");
+    addImageLimitOption(command, maxPixels);
+}
+
+Environment loadSceneSky(const std::string& path, const SkyReading& reading) {
+    const int faceSize = reading.faceSize;
     if (path.empty()) {
         const int size = faceSize > 0 ? faceSize : 128;
         Environment sky;
@@ -158,9 +166,14 @@ Environment loadSceneSky(const std::string& path, int faceSize) {
         sky.description = "built-in sky (" + std::to_string(size) + "^2 faces)";
         return sky;
     }
-    Environment sky = loadEnvironment(path, {.faceSize = faceSize});
+    Environment sky = loadEnvironment(
+        path, {.faceSize = faceSize,
+               .nonFinite = reading.sanitize ? NonFinitePolicy::Replace : NonFinitePolicy::Refuse,
+               .maxPixels = reading.maxPixels});
     // Said, so that two bakes of one file at two sizes (two lights, two hashes) are told apart.
     if (faceSize > 0) sky.description += " resampled to " + std::to_string(faceSize) + "^2 faces";
+    if (sky.replacedTexels > 0)
+        sky.description += ", " + counted(sky.replacedTexels, "NaN/Inf texel") + " replaced with 0";
     return sky;
 }
 
@@ -556,7 +569,9 @@ void runScene(const SceneOptions& options) {
     const ProbeGrid grid = chosenGrid(options, world);
     const ProbeRange range =
         options.brick ? brickRange(grid, options.brick->brick) : ProbeRange{0, grid.probeCount()};
-    const Environment sky = loadSceneSky(options.sky, options.skyFaceSize);
+    const Environment sky = loadSceneSky(
+        options.sky,
+        {.faceSize = options.skyFaceSize, .sanitize = options.sanitize, .maxPixels = options.maxPixels});
 
     RayBackend backend = chooseSceneBackend(options);
     ScopeExit releaseContext([&] {
