@@ -1027,9 +1027,18 @@ TEST_F(SceneCommand, AnEmbreePluginThatCannotBeLoadedIsNamed) {
 
 // Bad options get one line each before any work: a grid that is not three counts, bricks without a
 // whole previous bounce's volume, the cpu's cache refinement for the gpu, a probe's view of more rays
-// than its paths can number (6 x 4096^2 x 64 = 6.4e9 on either backend).
+// than its paths can number (6 x 4096^2 x 64 = 6.4e9 on either backend), a scene on standard input
+// (its buffers lie beside its file, and it is read more than once: it was taken for empty).
 TEST_F(SceneCommand, BadOptionsAreRefused) {
     const std::string scene = cornellBox();
+    expectFailure({{"scene", "-", "--grid", "1,1,1", "-o", "OUT"},
+                   2,
+                   {"-: a scene is read from its file, not standard input"},
+                   "out.shpv"});
+    expectFailure({{"transfer", "-", "-o", "OUT"},
+                   2,
+                   {"-: a scene is read from its file, not standard input"},
+                   "out.glb"});
     expectFailure({{"scene", scene, "--grid", "3,3", "-o", "OUT"}, 2, {"--grid"}, "out.shpv"});
     expectFailure(
         {{"scene", scene, "--grid", "2,2,2", "--brick", "2/2", "-o", "OUT"}, 2, {"--brick"}, "out.shpv"});

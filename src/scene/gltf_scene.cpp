@@ -737,10 +737,18 @@ class SceneBuilder {
     std::vector<GltfPlacedPrimitive> placedPrimitives_;
 };
 
+// The scene file's bytes. Not standard input ("-"): a scene's buffers and images are found beside
+// its file, and its bytes are read more than once (checked, hashed, parsed).
+std::string readGltfFile(const std::string& path) {
+    if (path == "-")
+        fail(path, "a scene is read from its file, not standard input: its buffers and images lie beside it");
+    return readInputFile(path, kMaxGltfFileBytes, "a glTF file");
+}
+
 } // namespace
 
 std::vector<std::string> gltfExternalFiles(const std::string& path) {
-    const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF file");
+    const std::string bytes = readGltfFile(path);
     const std::string_view json = isGlb(bytes) ? glbParts(bytes, path).second : std::string_view(bytes);
     if (!isGlb(bytes) && !looksLikeJson(json)) return {}; // loadGltfScene says what it is
     checkGltfJson(json, path);
@@ -748,7 +756,7 @@ std::vector<std::string> gltfExternalFiles(const std::string& path) {
 }
 
 std::string gltfSceneHash(const std::string& path) {
-    const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF file");
+    const std::string bytes = readGltfFile(path);
     Fnv1a64 hash;
     hash.addLength(bytes.size());
     hash.add(bytes);
@@ -772,7 +780,7 @@ namespace {
 // The World and where its vertices come from; `model` is the model they were read from.
 GltfSceneSource readScene(const std::string& path, const GltfLoadOptions& options,
                           std::shared_ptr<tinygltf::Model>& model) {
-    const std::string bytes = readInputFile(path, kMaxGltfFileBytes, "a glTF file");
+    const std::string bytes = readGltfFile(path);
     model = std::make_shared<tinygltf::Model>(parseModel(path, bytes));
     const std::vector<int> parents = checkedParents(*model, path);
     SceneBuilder builder(*model, path, options);
