@@ -493,7 +493,8 @@ class TransferProgram : public ::testing::Test {
 };
 
 // Each refusal is one line "shprobe: error: ..." (or CLI11's for an option out of range), a non-zero
-// exit, and no output file.
+// exit, and no output file; among them the options of rays given to the unshadowed model, which
+// casts none (they were ignored, --device 7 too).
 TEST_F(TransferProgram, BadInputsAreRefusedWithOneLine) {
     const std::string scene = path("scene.glb"), output = path("bad.glb");
     for (const std::string& args :
@@ -501,6 +502,9 @@ TEST_F(TransferProgram, BadInputsAreRefusedWithOneLine) {
           "transfer " + scene + " --order 9 -o " + output, "transfer " + scene + " --order 0 -o " + output,
           "transfer " + scene + " --model glossy -o " + output,
           "transfer " + scene + " --rays 0 -o " + output, "transfer " + scene + " --bounces 2 -o " + output,
+          "transfer " + scene + " --model unshadowed --rays 64 -o " + output,
+          "transfer " + scene + " --model unshadowed --backend gpu -o " + output,
+          "transfer " + scene + " --model unshadowed --device 0 -o " + output,
           "transfer " + scene + " -o " + scene}) {
         const std::string before = read(scene);
         EXPECT_NE(run(args), 0) << args;
@@ -511,21 +515,22 @@ TEST_F(TransferProgram, BadInputsAreRefusedWithOneLine) {
 }
 
 // What -o names is what is written: a .glb name with --format binary, a .shpt name with --format
-// glb, and a .gltf name (readers expect JSON there; transfer writes binary glTF) are refused in one
-// line that says so, nothing written.
+// glb, a .gltf name (readers expect JSON there; transfer writes binary glTF) and a name of another
+// kind (a .png would have held a .glb) are refused in one line that says so, nothing written.
 TEST_F(TransferProgram, OutputNamesAgreeWithTheFormat) {
     const std::string scene = path("scene.glb");
     const std::vector<std::pair<std::string, std::string>> cases = {
         {"--format binary -o " + path("t.glb"), "names a glb file but --format is binary"},
         {"--format glb -o " + path("t.shpt"), "names a binary file but --format is glb"},
         {"-o " + path("t.gltf"), "names a JSON glTF file"},
+        {"-o " + path("t.png"), "names neither a .glb nor a .shpt file"},
     };
     for (const auto& [args, says] : cases) {
         EXPECT_EQ(run("transfer " + scene + " --model unshadowed " + args), 2) << args;
         EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << args << ": " << err_;
         EXPECT_NE(err_.find(says), std::string::npos) << args << ": " << err_;
     }
-    for (const char* name : {"t.glb", "t.shpt", "t.gltf"})
+    for (const char* name : {"t.glb", "t.shpt", "t.gltf", "t.png"})
         EXPECT_FALSE(fs::exists(path(name))) << name;
 }
 

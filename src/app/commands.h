@@ -181,6 +181,7 @@ struct TransferCommandOptions {
     int rays = 256;
     int bounces = 1;              // interreflected only
     bool bouncesGiven = false;    // --bounces on the command line
+    bool raysGiven = false;       // --rays on the command line
     std::string format;           // glb | binary; empty: binary for a .shpt output, else glb
     std::string backend = "auto"; // auto | gpu | cpu
     std::string device;

@@ -132,6 +132,7 @@ int main(int argc, char** argv) {
          [&](CLI::App& c) { shprobe::addTransferOptions(c, transfer); },
          [&](const CLI::App& c) {
              transfer.bouncesGiven = c.count("--bounces") > 0;
+             transfer.raysGiven = c.count("--rays") > 0;
              shprobe::runTransfer(transfer);
          }},
         {"merge", "Join the bricks of one `shprobe scene` bake into its whole volume",

@@ -44,6 +44,13 @@ void checkOutputName(const TransferCommandOptions& options) {
     const char* named = hasExtension(output, ".shpt")  ? "binary"
                         : hasExtension(output, ".glb") ? "glb"
                                                        : nullptr;
+    const std::string name = output.substr(output.find_last_of('/') + 1);
+    const size_t dot = name.find_last_of('.');
+    if (!named && dot != std::string::npos && dot > 0) // a name without one: a device, or -
+        throw Error(ErrorKind::Input,
+                    "-o " + output +
+                        " names neither a .glb nor a .shpt file; transfer writes binary glTF "
+                        "(.glb) or the transfer alone (.shpt)");
     if (named && !options.format.empty() && options.format != named)
         throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
                                           options.format + "; use the extension " +
@@ -57,6 +64,15 @@ void checkTransferOptions(const TransferCommandOptions& options) {
     if (options.bouncesGiven && model != TransferModel::Interreflected)
         throw Error(ErrorKind::Input,
                     "transfer: --bounces is for the interreflected model, not " + options.model);
+    const char* forRays = options.raysGiven          ? "--rays"
+                          : options.backend == "gpu" ? "--backend gpu"
+                          : !options.device.empty()  ? "--device"
+                          : options.validation       ? "--validation"
+                                                     : nullptr;
+    if (forRays && model == TransferModel::Unshadowed)
+        throw Error(ErrorKind::Input,
+                    std::string("transfer: ") + forRays +
+                        " is for the models that cast rays; the unshadowed model casts none");
     checkOutputName(options);
     checkOutputPath(options.output, OutputContent::Binary);
     std::vector<std::string> inputs{options.scene};
