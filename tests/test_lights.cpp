@@ -529,6 +529,21 @@ TEST(Lights, SunCriteriaLeaveOtherLightsInTheMap) {
 
 // Checks: irradiance coefficients, zero or non-finite directions, radii outside (0, pi] and
 // out-of-range orders are input errors.
+// A direction is any finite non-zero vector, however long or short: (1e300, 1e300, 0), whose
+// length overflows double, and (1e-300, 1e-300, 0), whose squared length underflows, are the
+// direction (1, 1, 0), as the same light.
+TEST(Lights, DirectionsOfAnyLengthAreTheirDirection) {
+    ShCoefficients expected = makeCoefficients(3, Quantity::Radiance);
+    addDirectionalLight(expected, DirectionalLight{glm::dvec3(1, 1, 0), glm::dvec3(1.0)});
+    for (double scale : {1e300, 1e-300}) {
+        ShCoefficients light = makeCoefficients(3, Quantity::Radiance);
+        addDirectionalLight(light, DirectionalLight{glm::dvec3(scale, scale, 0), glm::dvec3(1.0)});
+        EXPECT_LT(maxDifference(light, expected), 1e-15) << scale;
+    }
+    expectInputError([&] { addDirectionalLight(expected, DirectionalLight{glm::dvec3(1e308, INFINITY, 0)}); },
+                     "infinite direction");
+}
+
 TEST(Lights, InvalidInputThrows) {
     ShCoefficients irradiance = makeCoefficients(3, Quantity::Irradiance);
     ShCoefficients radiance = makeCoefficients(3, Quantity::Radiance);

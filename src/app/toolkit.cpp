@@ -53,10 +53,10 @@ glm::dvec3 parseVector(const std::string& text, const std::string& option) {
 }
 
 glm::dvec3 parseDirection(const std::string& text, const std::string& option) {
-    glm::dvec3 direction = parseVector(text, option);
-    double length = std::sqrt(glm::dot(direction, direction));
-    if (length == 0.0) throw Error(ErrorKind::Input, option + ": the direction " + text + " has no length");
-    return direction / length;
+    const glm::dvec3 direction = parseVector(text, option);
+    if (direction == glm::dvec3(0.0))
+        throw Error(ErrorKind::Input, option + ": the direction " + text + " has no length");
+    return unitDirection(direction);
 }
 
 double parseRadiusRadians(const std::string& text, const std::string& option) {

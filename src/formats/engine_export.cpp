@@ -494,8 +494,8 @@ void requireSunFits(const ExportFormat& format, const ExportOptions& options) {
     throw Error(
         ErrorKind::Input,
         name + " has a sun beside its coefficients, which the " + format.name +
-            " format cannot hold; write json (--format json, or an output name ending in .json), or bake "
-            "again without --extract-sun to keep the sun in the coefficients");
+            " format cannot hold; write json (an output name ending in .json, or --format json where the "
+            "command takes it), or bake again without --extract-sun to keep the sun in the coefficients");
 }
 
 void ExportFormat::write(const std::string& path, const ShCoefficients& probe,

@@ -34,14 +34,6 @@ void requireBandCount(int order) {
     if (order < 1) throw Error(ErrorKind::Input, "SH order must be at least 1, got " + std::to_string(order));
 }
 
-glm::dvec3 unitDirection(const glm::dvec3& d) {
-    const double length = glm::length(d);
-    if (!std::isfinite(length) || length == 0.0) {
-        throw Error(ErrorKind::Input, "light direction must be finite and non-zero");
-    }
-    return d / length;
-}
-
 void requireAngle(double angle, const char* what) {
     if (!(angle > 0.0 && angle <= kPi)) {
         throw Error(ErrorKind::Input,
@@ -69,6 +61,15 @@ LegendreValues legendreWithDerivatives(double x, int count) {
 }
 
 } // namespace
+
+// Scaled by its largest component first, so that its length is neither infinite nor zero.
+glm::dvec3 unitDirection(const glm::dvec3& d) {
+    const double largest = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+    if (!std::isfinite(largest) || largest == 0.0)
+        throw Error(ErrorKind::Input, "light direction must be finite and non-zero");
+    const glm::dvec3 scaled = d / largest;
+    return scaled / glm::length(scaled);
+}
 
 void addZonal(ShCoefficients& radiance, const glm::dvec3& direction, std::span<const double> zonal,
               const glm::dvec3& scale) {

@@ -17,6 +17,10 @@
 
 namespace shprobe {
 
+// `d` of unit length, whatever its length: (1e300, 1e300, 0) too, whose length overflows double.
+// Throws Error(Input) for a vector that is zero or not finite.
+glm::dvec3 unitDirection(const glm::dvec3& d);
+
 // --- Zonal building blocks ---------------------------------------------------------------------
 
 // Adds sqrt(4 pi / (2l+1)) zonal[l] y_lm(d) scale to every coefficient, l = 0..order-1.
