@@ -371,38 +371,54 @@ TEST_F(Codecs, ExrUnsignedChannelsAreNormalizedAsOpenImageIoDid) {
 }
 
 // The image is the display window: pixels the data window leaves out of it are black (OpenEXR's
-// definition), and those it holds past it (overscan) are cut off. Here the data window starts
-// inside the display window and reaches two columns past its right edge, in two of its four rows.
+// definition), and those it holds past it (overscan) are cut off. Display window (0, 0) to (7, 69);
+// data window (2, -2) to (15, 67): two black columns on the left, two black rows at the bottom,
+// overscan right and above, and 68 rows read a strip of 64 at a time, so that the strips' edge is
+// crossed. Scanlines and 16 x 16 tiles, float and half (the values are integers below 2048, exact
+// in half). A data window beside the display window stores none of its pixels: refused.
 TEST_F(Codecs, ExrDisplayWindowIsTheImage) {
-    const Imath::Box2i display(Imath::V2i(0, 0), Imath::V2i(7, 3)), data(Imath::V2i(2, 1), Imath::V2i(9, 2));
-    Imf::Header header(display, data);
-    for (const char* name : {"R", "G", "B"})
-        header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-    const auto value = [](int x, int y, int c) { return float(x + 10 * y + 100 * c + 1); };
-    std::vector<float> stored(8 * 2 * 3);
-    for (int y = 1; y <= 2; ++y)
-        for (int x = 2; x <= 9; ++x)
+    const int x0 = 2, y0 = -2, w = 14, h = 70;
+    const auto value = [](int x, int y, int c) { return float(((x - 2) + 14 * ((y + 2) % 45)) * 3 + c + 1); };
+    std::vector<float> data(size_t(w * h * 3));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
             for (int c = 0; c < 3; ++c)
-                stored[size_t(((y - 1) * 8 + (x - 2)) * 3 + c)] = value(x, y, c);
-    {
-        Imf::OutputFile out(file("windows.exr").c_str(), header);
-        Imf::FrameBuffer frame;
-        for (int c = 0; c < 3; ++c)
-            frame.insert(std::string(1, "RGB"[c]), Imf::Slice::Make(Imf::FLOAT, stored.data() + c, data,
-                                                                    3 * sizeof(float), 24 * sizeof(float)));
-        out.setFrameBuffer(frame);
-        out.writePixels(2);
+                data[size_t((y * w + x) * 3 + c)] = value(x + x0, y + y0, c);
+    for (OIIO::TypeDesc type : {OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::HALF})
+        for (bool tiled : {false, true}) {
+            SCOPED_TRACE(std::string(tiled ? "tiled " : "scanlines ") + type.c_str());
+            writeOiio(file("windows.exr"), w, h, {}, 3, type, data, [&](OIIO::ImageSpec& spec) {
+                spec.x = x0;
+                spec.y = y0;
+                spec.full_x = spec.full_y = 0;
+                spec.full_width = 8;
+                spec.full_height = 70;
+                if (tiled) spec.tile_width = spec.tile_height = 16;
+            });
+            const Decoded decoded = decodeNative(file("windows.exr"));
+            ASSERT_EQ(decoded.header.width, 8);
+            ASSERT_EQ(decoded.header.height, 70);
+            for (int y = 0; y < 70; ++y)
+                for (int x = 0; x < 8; ++x)
+                    for (int c = 0; c < 3; ++c)
+                        ASSERT_EQ(decoded.values[size_t((y * 8 + x) * 3 + c)],
+                                  x >= 2 && y <= 67 ? value(x, y, c) : 0.0f)
+                            << "pixel " << x << ", " << y << ", channel " << c;
+        }
+    writeOiio(file("beside.exr"), w, h, {}, 3, OIIO::TypeDesc::FLOAT, data, [](OIIO::ImageSpec& spec) {
+        spec.x = 20;
+        spec.full_x = spec.full_y = spec.y = 0;
+        spec.full_width = 8;
+        spec.full_height = 6;
+    });
+    try {
+        decodeNative(file("beside.exr"));
+        ADD_FAILURE() << "a file that stores no pixel of its image was read";
+    } catch (const Error& error) {
+        EXPECT_EQ(error.kind(), ErrorKind::Input);
+        EXPECT_NE(std::string(error.what()).find("no pixel of the image is stored"), std::string::npos)
+            << error.what();
     }
-    const Decoded decoded = decodeNative(file("windows.exr"));
-    ASSERT_EQ(decoded.header.width, 8);
-    ASSERT_EQ(decoded.header.height, 4);
-    for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 8; ++x)
-            for (int c = 0; c < 3; ++c) {
-                const bool inData = y >= 1 && y <= 2 && x >= 2;
-                EXPECT_EQ(decoded.values[size_t((y * 8 + x) * 3 + c)], inData ? value(x, y, c) : 0.0f)
-                    << "pixel " << x << ", " << y << ", channel " << c;
-            }
 }
 
 // A multi-part file: the first part is the image (OpenImageIO's subimage 0).

@@ -952,8 +952,9 @@ TEST_F(SceneCommand, LightThatOverflowsFloatIsRefused) {
 }
 
 // A sky image is read as bake reads its inputs, with bake's --sanitize and --max-pixels, which the
-// refusals name: a sky with a NaN texel is refused by scene and relight, and taken as 0 with
-// --sanitize (said in the volume's sky_source); a sky past --max-pixels is refused from its header.
+// refusals name: a sky with a NaN texel is refused by scene, relight and render --scene, and taken
+// as 0 with --sanitize (said in the volume's sky_source); a sky past --max-pixels is refused from
+// its header.
 TEST_F(SceneCommand, SkyImagesTakeSanitizeAndMaxPixels) {
     const std::string scene = file("open.glb");
     testing::writeCornellBoxGltf(scene, {});
@@ -977,6 +978,10 @@ TEST_F(SceneCommand, SkyImagesTakeSanitizeAndMaxPixels) {
     expectFailure({with(relight, {"-o", "OUT"}), 2, {"use --sanitize"}, "out.shpv"});
     runOk(with(relight, {"--sanitize", "-o", file("relit.shpv")}));
     EXPECT_EQ(readProbeVolume(file("relit.shpv")).radiance, readProbeVolume(file("sane.shpv")).radiance);
+    const std::vector<std::string> render{"render", "--scene",       scene,    "--volume", file("sane.shpv"),
+                                          "--sky",  file("nan.exr"), "--size", "8"};
+    expectFailure({with(render, {"-o", "OUT"}), 2, {"use --sanitize"}, "out.png"});
+    runOk(with(render, {"--sanitize", "-o", file("render.png")}));
 }
 
 // A glTF sun whose colour times intensity float cannot hold is refused by the reader, naming the

@@ -60,12 +60,13 @@ void subdivide(FixtureMesh& mesh, int n) {
 }
 
 // Where the transfer's rays start (transfer.h): the vertex moved 4 surface offsets into its first
-// triangle, towards its centroid (at most half the way), then one offset along its normal.
+// triangle with area, towards its centroid (at most half the way), then one offset along its normal.
 std::vector<SurfacePoint> vertexPoints(const World& world, std::span<const uint32_t> vertices) {
     const SceneShading shading(world, makeCubemap(1));
     std::vector<int64_t> corner(world.positions.size(), -1);
-    for (size_t i = world.indices.size(); i-- > 0;)
-        corner[world.indices[i]] = int64_t(i);
+    for (size_t t = world.triangleCount(); t-- > 0;)
+        for (size_t c = 0; c < 3 && hasArea(world, t); ++c)
+            corner[world.indices[3 * t + c]] = int64_t(3 * t + c);
     std::vector<SurfacePoint> points;
     for (uint32_t v : vertices) {
         const size_t at = size_t(corner[v]);

@@ -326,7 +326,7 @@ ShCoefficients probeFileRadiance(const std::string& path, int order);
 void runTransferRender(const RenderOptions& options, uint32_t width, uint32_t height);
 // The light of a relit scene: --probe's radiance coefficients (cut or padded with zeros to
 // `order`; Error(Input) for irradiance or a probe with a sun) or --sky (the built-in sky when neither).
-RelitLight loadRelitLight(const LitSceneOptions& options, int order);
+RelitLight loadRelitLight(const LitSceneOptions& options, int order, const SkyReading& sky);
 // --scene, --volume, --sky and --show-probes of render and view; --scene excludes the options of the
 // sphere named in sphereOnly, and the others need --scene.
 void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
@@ -335,7 +335,7 @@ void addLitSceneOptions(CLI::App& command, LitSceneOptions& options,
 std::vector<std::string> litSceneInputs(const LitSceneOptions& options);
 // The scene, its whole volume (baked in that scene) and its sky, for render and view --scene; throws
 // Error(Input) for a missing half, a brick, or a volume of another scene.
-LitScene loadLitScene(const LitSceneOptions& options);
+LitScene loadLitScene(const LitSceneOptions& options, const SkyReading& sky);
 void runRender(const RenderOptions& options);
 
 // The viewer, shprobe-view (view.cpp, view_main.cpp): a program of its own, the only one that links

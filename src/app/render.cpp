@@ -201,7 +201,7 @@ void addRenderOptions(CLI::App& command, RenderOptions& options) {
     addDeviceOptions(command, options.device, options.validation);
     // The scene's own picture: none of the sphere's settings apply to it.
     addLitSceneOptions(command, options.scene,
-                       {"input", "--order", "--mode", "--grid", "--background", "--face-size", "--sanitize"});
+                       {"input", "--order", "--mode", "--grid", "--background", "--face-size"});
 }
 
 CLI::Option* addSizeOption(CLI::App& command, std::optional<ImageSize>& size, const std::string& help) {

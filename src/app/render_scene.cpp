@@ -99,7 +99,7 @@ std::vector<std::string> litSceneInputs(const LitSceneOptions& options) {
     return inputs;
 }
 
-LitScene loadLitScene(const LitSceneOptions& options) {
+LitScene loadLitScene(const LitSceneOptions& options, const SkyReading& sky) {
     if (options.scene.empty() || options.volume.empty())
         throw Error(ErrorKind::Input, "--scene and --volume go together");
     LitScene lit{.volume = readWholeVolume(options.volume)};
@@ -108,13 +108,14 @@ LitScene loadLitScene(const LitSceneOptions& options) {
             sceneMismatch(lit.volume, gltfSceneHash(options.scene), lit.world.description);
         !mismatch.empty())
         throw Error(ErrorKind::Input, options.volume + ": " + mismatch);
-    lit.sky = loadSceneSky(options.sky).cubemap;
+    lit.sky = loadSceneSky(options.sky, sky).cubemap;
     return lit;
 }
 
 void runSceneRender(const RenderOptions& options, uint32_t width, uint32_t height) {
     checkOutputsAreNotInputs({&options.output, 1}, litSceneInputs(options.scene));
-    const LitScene scene = loadLitScene(options.scene);
+    const LitScene scene =
+        loadLitScene(options.scene, {.sanitize = options.sanitize, .maxPixels = options.maxPixels});
     const ProbeVolume& volume = scene.volume;
 
     Context context = createRenderContext(options, {width, height});

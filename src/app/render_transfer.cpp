@@ -55,21 +55,22 @@ ShCoefficients probeFileRadiance(const std::string& path, int order) {
     return light;
 }
 
-RelitLight loadRelitLight(const LitSceneOptions& options, int order) {
+RelitLight loadRelitLight(const LitSceneOptions& options, int order, const SkyReading& sky) {
     if (!options.probe.empty()) {
         ShCoefficients light = probeFileRadiance(options.probe, order);
         requireFloatLight(light, options.probe); // the device relights in float
         return {options.probe, std::move(light), {}};
     }
-    Environment sky = loadSceneSky(options.sky);
+    Environment environment = loadSceneSky(options.sky, sky);
     return {options.sky.empty() ? std::string("the built-in sky") : options.sky, std::nullopt,
-            std::move(sky.cubemap)};
+            std::move(environment.cubemap)};
 }
 
 void runTransferRender(const RenderOptions& options, uint32_t width, uint32_t height) {
     checkOutputsAreNotInputs({&options.output, 1}, litSceneInputs(options.scene));
     const TransferMesh mesh = loadTransferMesh(options.scene.scene);
-    const RelitLight source = loadRelitLight(options.scene, mesh.order);
+    const RelitLight source = loadRelitLight(options.scene, mesh.order,
+                                             {.sanitize = options.sanitize, .maxPixels = options.maxPixels});
 
     Context context = createRenderContext(options, {width, height});
     ScopeExit releaseContext([&] { destroyContext(context); });

@@ -65,7 +65,7 @@ void addViewOptions(CLI::App& command, ViewOptions& options) {
     addEnvironmentInputOptions(command, options.faceSize, options.sanitize, options.maxPixels);
     addDeviceOptions(command, options.device, options.validation);
     // The scene's own view: none of the sphere's settings apply to it. Key P shows or hides the probes.
-    addLitSceneOptions(command, options.scene, {"input", "--order", "--mode", "--face-size", "--sanitize"});
+    addLitSceneOptions(command, options.scene, {"input", "--order", "--mode", "--face-size"});
 }
 
 void runView(const ViewOptions& options) {
@@ -78,11 +78,13 @@ void runView(const ViewOptions& options) {
     // Bad inputs are refused before a window opens (and where there is no display).
     if (options.scene.transfer) {
         viewer.relitMesh = loadTransferMesh(options.scene.scene);
-        viewer.relitLight = loadRelitLight(options.scene, viewer.relitMesh->order);
+        viewer.relitLight = loadRelitLight(options.scene, viewer.relitMesh->order,
+                                           {.sanitize = options.sanitize, .maxPixels = options.maxPixels});
         viewer.lightYaw = options.scene.lightYaw;
         viewer.lightPitch = options.scene.lightPitch;
     } else if (showsScene) {
-        viewer.scene = loadLitScene(options.scene);
+        viewer.scene =
+            loadLitScene(options.scene, {.sanitize = options.sanitize, .maxPixels = options.maxPixels});
     } else if (isProbeFile(options.input)) {
         viewer.probe = readProbeInput(options.input);
     }

@@ -30,6 +30,8 @@ struct ImageHeader {
 // An open image file. Errors are Error(Input) naming the file:
 //   "PATH: not an image the <FORMAT> reader can read (REASON)"            opening, header
 //   "PATH: cannot read the pixels; the file may be truncated or corrupt (REASON)"   pixels
+// or Error(Memory) "PATH: out of memory ..." where the machine could not allocate what a decoder
+// needs (the EXR decoder's).
 class ImageDecoder {
   public:
     virtual ~ImageDecoder() = default;

@@ -4,6 +4,8 @@
 // as shared.
 #include "image/exr_plugin.h"
 
+#include "image/environment.h"
+
 #include <OpenEXR/IexBaseExc.h>
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfChromaticitiesAttribute.h>
@@ -221,6 +223,7 @@ class ExrDecoder final : public ImageDecoder {
             displayWindow_ = header.displayWindow();
             header_.width = windowWidth(displayWindow_);
             header_.height = windowHeight(displayWindow_);
+            checkDataWindow(path);
             header_.volumeOrDeep = header.hasType() && Imf::isDeepData(header.type());
             header_.channels = channelsInOpenImageIoOrder(header.channels());
             header_.srgb = false; // OpenEXR holds linear values; OpenImageIO named them "Linear"
@@ -240,6 +243,8 @@ class ExrDecoder final : public ImageDecoder {
             if (!header_.volumeOrDeep) part_ = std::make_unique<Imf::InputPart>(*file_, 0);
         } catch (const Error&) {
             throw;
+        } catch (const std::bad_alloc&) { // not a bad file: the machine's memory
+            throw Error(ErrorKind::Memory, path + ": out of memory reading its header");
         } catch (const std::exception& error) {
             throw Error(ErrorKind::Input,
                         path + ": not an image the EXR reader can read (" + oneLine(error.what()) + ")");
@@ -255,27 +260,7 @@ class ExrDecoder final : public ImageDecoder {
             readRows(begin, end, first, dataWindow_.min.y, dataWindow_.max.y);
             return;
         }
-        // The rows of the data window within the display window, whole (OpenEXR reads whole rows),
-        // then each texel of the display window taken from them or left black.
-        const int top = std::max(dataWindow_.min.y, displayWindow_.min.y);
-        const int bottom = std::min(dataWindow_.max.y, displayWindow_.max.y);
-        std::vector<float> rows;
-        if (top <= bottom) {
-            rows.resize(size_t(4) * size_t(windowWidth(dataWindow_)) * size_t(bottom - top + 1));
-            readRows(begin, end, rows.data(), top, bottom);
-        }
-        const int channels = end - begin;
-        for (int y = displayWindow_.min.y; y <= displayWindow_.max.y; ++y)
-            for (int x = displayWindow_.min.x; x <= displayWindow_.max.x; ++x) {
-                const bool stored =
-                    y >= top && y <= bottom && x >= dataWindow_.min.x && x <= dataWindow_.max.x;
-                const size_t from =
-                    size_t(y - top) * size_t(windowWidth(dataWindow_)) + size_t(x - dataWindow_.min.x);
-                float* to = first + 4 * (size_t(y - displayWindow_.min.y) * size_t(header_.width) +
-                                         size_t(x - displayWindow_.min.x));
-                for (int c = 0; c < channels; ++c)
-                    to[c] = stored ? rows[4 * from + size_t(c)] : 0.0f;
-            }
+        readWindows(begin, end, first);
     }
 
     // A scanline image's chunks lie in the file in its line order, so a file cut short lacks the
@@ -301,6 +286,61 @@ class ExrDecoder final : public ImageDecoder {
     }
     static int windowHeight(const Imath::Box2i& window) {
         return int(std::min<int64_t>(int64_t(window.max.y) - window.min.y + 1, INT32_MAX));
+    }
+
+    static std::string windowText(const Imath::Box2i& w) {
+        return "(" + std::to_string(w.min.x) + ", " + std::to_string(w.min.y) + ") to (" +
+               std::to_string(w.max.x) + ", " + std::to_string(w.max.y) + ")";
+    }
+
+    // The stored pixels must meet the image, and be no wider or taller than an image may be: they are
+    // read a whole row at a time.
+    void checkDataWindow(const std::string& path) const {
+        if (dataWindow_ == displayWindow_) return;
+        const std::string windows =
+            "its data window " + windowText(dataWindow_) + ", display window " + windowText(displayWindow_);
+        const bool meets =
+            dataWindow_.min.x <= displayWindow_.max.x && dataWindow_.max.x >= displayWindow_.min.x &&
+            dataWindow_.min.y <= displayWindow_.max.y && dataWindow_.max.y >= displayWindow_.min.y;
+        if (!meets)
+            throw Error(ErrorKind::Input, path + ": no pixel of the image is stored (" + windows + ")");
+        if (windowWidth(dataWindow_) > kMaxImageSide || windowHeight(dataWindow_) > kMaxImageSide)
+            throw Error(ErrorKind::Input, path + ": the stored pixels are longer than the limit of " +
+                                              std::to_string(kMaxImageSide) + " pixels per side (" + windows +
+                                              ")");
+    }
+
+    // The display window's texels where the data window differs: black, then the stored pixels
+    // within it, read a strip of rows at a time (OpenEXR reads whole rows of the data window) so that
+    // overscan costs a strip, not a second image.
+    void readWindows(int begin, int end, float* first) {
+        const int channels = end - begin;
+        for (size_t t = 0; t < size_t(header_.width) * size_t(header_.height); ++t)
+            std::fill_n(first + 4 * t, channels, 0.0f);
+        constexpr int kStripRows = 64;
+        const int top = std::max(dataWindow_.min.y, displayWindow_.min.y);
+        const int bottom = std::min(dataWindow_.max.y, displayWindow_.max.y);
+        const int left = std::max(dataWindow_.min.x, displayWindow_.min.x);
+        const int right = std::min(dataWindow_.max.x, displayWindow_.max.x);
+        const size_t dataWidth = size_t(windowWidth(dataWindow_));
+        std::vector<float> strip;
+        try {
+            strip.resize(4 * dataWidth * size_t(std::min(kStripRows, bottom - top + 1)));
+        } catch (const std::bad_alloc&) {
+            throw Error(ErrorKind::Memory, path_ + ": out of memory for a strip of its stored rows");
+        }
+        for (int y0 = top; y0 <= bottom; y0 += kStripRows) {
+            const int y1 = std::min(bottom, y0 + kStripRows - 1);
+            readRows(begin, end, strip.data(), y0, y1);
+            for (int y = y0; y <= y1; ++y)
+                for (int x = left; x <= right; ++x) {
+                    const float* from =
+                        &strip[4 * (size_t(y - y0) * dataWidth + size_t(x - dataWindow_.min.x))];
+                    float* to = first + 4 * (size_t(y - displayWindow_.min.y) * size_t(header_.width) +
+                                             size_t(x - displayWindow_.min.x));
+                    std::copy_n(from, channels, to);
+                }
+        }
     }
 
     // Channels [begin, end) of the data window's rows top..bottom into texels of 4 floats from
@@ -341,6 +381,8 @@ class ExrDecoder final : public ImageDecoder {
     // OpenEXR's message on one line. rawPixelData puts "Error reading pixel data from image file
     // \"X\". " before a message that may begin so already: the sentence is said once.
     [[noreturn]] void failPixels(const std::exception& error) const {
+        if (dynamic_cast<const std::bad_alloc*>(&error)) // not a bad file: the machine's memory
+            throw Error(ErrorKind::Memory, path_ + ": out of memory reading the pixels");
         std::string text = oneLine(error.what());
         const size_t end = text.find(". ");
         if (end != std::string::npos && text.compare(end + 2, end + 2, text, 0, end + 2) == 0)

@@ -5,6 +5,7 @@
 #include "common/content_hash.h"
 #include "common/error.h"
 #include "common/input_file.h"
+#include "common/little_endian.h"
 #include "common/quoted.h"
 #include "common/short_number.h"
 #include "image/codec.h"
@@ -45,12 +46,6 @@ std::string counted(size_t count, const std::string& noun) {
 }
 
 // ---- The file: .glb layout, JSON, tinygltf ------------------------------------------------------
-
-uint32_t littleEndian32(std::string_view bytes, size_t at) {
-    uint32_t value;
-    std::memcpy(&value, bytes.data() + at, 4);
-    return value;
-}
 
 bool isGlb(std::string_view bytes) {
     return bytes.substr(0, 4) == "glTF";
@@ -777,9 +772,10 @@ std::string gltfSceneHash(const std::string& path) {
 
 namespace {
 
-// The World and where its vertices come from; `model` is the model they were read from.
+// The World and where its vertices come from; `model` is the model they were read from. The JSON is
+// kept only where asked (the .glb writer of transfer needs it, and it may be the whole file).
 GltfSceneSource readScene(const std::string& path, const GltfLoadOptions& options,
-                          std::shared_ptr<tinygltf::Model>& model) {
+                          std::shared_ptr<tinygltf::Model>& model, bool keepJson) {
     const std::string bytes = readGltfFile(path);
     model = std::make_shared<tinygltf::Model>(parseModel(path, bytes));
     const std::vector<int> parents = checkedParents(*model, path);
@@ -788,20 +784,21 @@ GltfSceneSource readScene(const std::string& path, const GltfLoadOptions& option
     builder.checkTotals(placed);
     for (const PlacedNode& node : placed)
         builder.addNode(node);
-    const std::string_view json = isGlb(bytes) ? glbParts(bytes, path).second : std::string_view(bytes);
-    return {builder.finish(), builder.takePlacedPrimitives(), nullptr, std::string(json)};
+    GltfSceneSource source{builder.finish(), builder.takePlacedPrimitives(), nullptr, {}};
+    if (keepJson) source.json = isGlb(bytes) ? glbParts(bytes, path).second : std::string_view(bytes);
+    return source;
 }
 
 } // namespace
 
 World loadGltfScene(const std::string& path, const GltfLoadOptions& options) {
     std::shared_ptr<tinygltf::Model> model;
-    return std::move(readScene(path, options, model).world);
+    return std::move(readScene(path, options, model, false).world);
 }
 
 GltfSceneSource loadGltfSceneSource(const std::string& path, const GltfLoadOptions& options) {
     std::shared_ptr<tinygltf::Model> model;
-    GltfSceneSource source = readScene(path, options, model);
+    GltfSceneSource source = readScene(path, options, model, true);
     for (size_t i = 0; i < model->images.size(); ++i) {
         tinygltf::Image& image = model->images[i];
         if (!image.image.empty() || image.bufferView >= 0) continue;

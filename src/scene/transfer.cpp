@@ -88,7 +88,7 @@ class TransferBaker {
     int strata_;
     StratifiedCosineDirections directions_{strata_};
     TransferScene scene_;
-    std::vector<int64_t> corner_; // per vertex: 3 t + c of the first triangle t using it, -1: none
+    std::vector<int64_t> corner_; // per vertex: 3 t + c of the first triangle t with area using it, or -1
     std::atomic<uint64_t> rays_{0};
     std::atomic<uint64_t> done_{0};
     uint64_t total_ = 0;

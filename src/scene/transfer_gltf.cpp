@@ -3,6 +3,8 @@
 #include "scene/transfer_gltf.h"
 
 #include "common/error.h"
+#include "common/little_endian.h"
+#include "formats/json_reading.h"
 #include "sh/basis.h"
 
 #include <algorithm>
@@ -170,12 +172,6 @@ void keepExtensionData(const nlohmann::json& from, nlohmann::json& to) {
             keepExtensionData(from[i], to[i]);
 }
 
-uint32_t littleEndian32(std::string_view bytes, size_t at) {
-    uint32_t value;
-    std::memcpy(&value, bytes.data() + at, 4);
-    return value;
-}
-
 // The .glb tinygltf wrote with the JSON of `source` kept where tinygltf rewrote it: its extras and
 // extensions (the buffers' aside: the .glb has one buffer of its own), a copied mesh's those of the
 // mesh it copies (`copied`: copy -> original), asset.extras.shTransfer added.
@@ -190,13 +186,12 @@ std::string withSourceJson(const std::string& glb, const GltfSceneSource& source
     for (const auto& [copy, mesh] : copied)
         keepExtensionData(original["meshes"][size_t(mesh)], written["meshes"][size_t(copy)]);
     written["asset"]["extras"]["shTransfer"] = description;
-    std::string text = written.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+    std::string text = jsonText(written);
     text.resize((text.size() + 3) / 4 * 4, ' '); // a chunk is padded to 4 bytes, JSON's with spaces
     const std::string_view bin = std::string_view(glb).substr(20 + jsonBytes);
     std::string out = glb.substr(0, 8);
-    auto put = [&](uint32_t value) { out.append(reinterpret_cast<const char*>(&value), 4); };
-    put(uint32_t(12 + 8 + text.size() + bin.size()));
-    put(uint32_t(text.size()));
+    appendLittleEndian32(out, uint32_t(12 + 8 + text.size() + bin.size()));
+    appendLittleEndian32(out, uint32_t(text.size()));
     out += glb.substr(16, 4); // "JSON"
     out += text;
     out += bin;
@@ -206,8 +201,12 @@ std::string withSourceJson(const std::string& glb, const GltfSceneSource& source
 } // namespace
 
 void requireTransferGlbSource(const GltfSceneSource& source, const std::string& path) {
-    const tinygltf::Value& extras = source.model->asset.extras;
-    if (extras.Type() == tinygltf::NULL_TYPE || extras.IsObject()) return;
+    // From the JSON itself: tinygltf takes [], [null] and [{}] for no extras.
+    const nlohmann::json root = nlohmann::json::parse(source.json);
+    const auto asset = root.find("asset");
+    if (asset == root.end() || !asset->contains("extras")) return;
+    const nlohmann::json& extras = (*asset)["extras"];
+    if (extras.is_null() || extras.is_object()) return;
     throw Error(ErrorKind::Input,
                 path + ": asset.extras is not an object, so it cannot hold the transfer's description "
                        "(asset.extras.shTransfer); write the transfer alone (-o FILE.shpt)");
@@ -273,10 +272,7 @@ std::string transferBinary(const GltfSceneSource& source, const VertexTransfer& 
                            const TransferDescription& description) {
     const std::vector<PrimitiveTransfer> primitives = primitiveTransfers(source, transfer);
     std::string bytes(kTransferMagic, sizeof(kTransferMagic));
-    auto put = [&](auto value) {
-        static_assert(sizeof(value) == 4);
-        bytes.append(reinterpret_cast<const char*>(&value), 4);
-    };
+    auto put = [&](auto value) { appendLittleEndian32(bytes, uint32_t(value)); };
     for (uint32_t field : {kTransferVersion, uint32_t(transfer.order), uint32_t(transferChannels(transfer)),
                            uint32_t(description.model), uint32_t(description.bounces),
                            uint32_t(transfer.rays), uint32_t(primitives.size())})
