@@ -911,7 +911,8 @@ TEST_F(CliBatch, BadInputsAreReportedAndTheOthersWritten) {
 // naming it, even with a missing input and without any Vulkan driver (which would be exit 2 or 4
 // had the inputs been loaded or a device opened), at once, and nothing is created. So is a file
 // where the folder should be, and a read-only folder, left as it was (as user nobody where this
-// process is root, whom permission bits do not stop). A missing folder whose parent exists is created.
+// process is root, whom permission bits do not stop). A missing folder whose parent exists is created,
+// and removed again where the batch wrote nothing into it.
 TEST_F(CliBatch, OutputFolderIsCheckedBeforeTheBake) {
     writeInputs();
     EnvironmentChanges noDriver{{"VK_ICD_FILENAMES", file("no_such_icd.json")},
@@ -941,6 +942,16 @@ TEST_F(CliBatch, OutputFolderIsCheckedBeforeTheBake) {
 
     RunResult created = runOk({"bake", a(), "--backend", "cpu", "-q", "--out-dir", file("new")});
     EXPECT_EQ(entriesOf(folder() / "new"), std::vector<std::string>{"a.json"});
+
+    // A batch that writes nothing leaves no folder it made; a folder that was there stays.
+    fs::create_directories(folder() / "kept");
+    for (const char* name : {"none", "kept"}) {
+        RunResult none = run({"bake", file("nowhere.exr"), file("bad.exr"), "-q", "--out-dir", file(name)});
+        EXPECT_EQ(none.exitCode, 2) << describe(none);
+        EXPECT_CONTAINS(none.err, "nothing was written");
+    }
+    EXPECT_FALSE(fs::exists(folder() / "none"));
+    EXPECT_TRUE(fs::is_directory(folder() / "kept"));
 }
 
 // Two inputs that would write one file are refused up front (exit 2, one line naming both and the

@@ -771,6 +771,8 @@ TEST_F(Reliability, BadOptionsAreRefusedBeforeAnyWork) {
         {{"light", "--sphere", "0,1,0", "200", "1,1,1", "-o", "OUT"}, "--sphere: the radius 200"},
         {with(render, {"--size", "64x"}), "--size must be N or WxH with sides 1..16384, not '64x'"},
         {with(render, {"--size", "0"}), "--size must be N or WxH with sides 1..16384, not '0'"},
+        {with(render, {"--grid", "--size", "320x100"}),
+         "--size 320x100 with --grid: the size is the cell width"},
         {{"rotate", probe, "--euler", "0,400,0", "-o", "OUT"},
          "--euler: 400 is not a number from -360 to 360"},
         {{"rotate", probe, "--euler", "0,90", "-o", "OUT"}, "--euler"},

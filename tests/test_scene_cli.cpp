@@ -131,7 +131,7 @@ TEST_F(SceneCommand, InfoSaysWhatAutoRuns) {
 // capture and bake do not depend on which probes share its batch); so must bounce 1 in bricks after
 // the merged bounce 0 (--previous), against the whole --bounces 1 bake.
 // The grid is 3x3x3 inside the box, faces 16^2: small enough for lavapipe, and the bricks cut through batches
-// of 4 probes.
+// of 4 probes. merge reports what it joined, and nothing with -q.
 TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
     const std::string scene = cornellBox();
     const std::vector<std::string> common{
@@ -150,8 +150,12 @@ TEST_F(SceneCommand, BricksMergeToTheWholeBake) {
     }
     std::vector<std::string> args = merge0;
     args.insert(args.end(), {"-o", file("merged0.shpv")});
-    runOk(args);
+    EXPECT_CONTAINS(runOk(args).out, "merged   3 bricks into");
     EXPECT_EQ(bytesOf(file("merged0.shpv")), bytesOf(file("whole0.shpv")));
+    std::vector<std::string> quiet = merge0; // -q: the same volume, no report
+    quiet.insert(quiet.end(), {"-q", "-o", file("quiet0.shpv")});
+    EXPECT_EQ(runOk(quiet).out, "");
+    EXPECT_EQ(bytesOf(file("quiet0.shpv")), bytesOf(file("whole0.shpv")));
     for (const char* brick : {"1/3", "0/3", "2/3"}) {
         const std::string name = file(std::string("b1_") + brick[0] + ".shpv");
         bake({"--brick", brick, "--previous", file("merged0.shpv")}, name);

@@ -6,6 +6,7 @@
 #include "common/counted.h"
 #include "common/input_file.h"
 #include "common/output_file.h"
+#include "common/scope_exit.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -102,13 +103,17 @@ std::vector<BatchItem> planBatch(const BakeOptions& options) {
 
 // The output folder is created when its parent exists; it and every output path are checked here,
 // before any GPU work, so that a bake is never wasted on an output that cannot be written, and
-// no output may be one of the inputs.
-void prepareOutputFolder(const BakeOptions& options, const std::vector<BatchItem>& items) {
+// no output may be one of the inputs. Returns whether it created the folder.
+bool prepareOutputFolder(const BakeOptions& options, const std::vector<BatchItem>& items) {
     const std::string& folder = options.outDir;
-    if (mkdir(folder.c_str(), 0777) != 0 && errno != EEXIST) {
-        if (errno != ENOENT)
-            throw Error(ErrorKind::Output, "cannot create " + folder + ": " + systemReason(errno));
-        std::string parent = fs::path(folder).lexically_normal().parent_path().string();
+    const bool created = mkdir(folder.c_str(), 0777) == 0;
+    if (!created && errno != EEXIST) {
+        const int error = errno;
+        const std::string parent = fs::path(folder).lexically_normal().parent_path().string();
+        struct stat status {};
+        // ENOENT where the parent exists: a file system that takes no new folders (/proc).
+        if (error != ENOENT || stat(parent.empty() ? "." : parent.c_str(), &status) == 0)
+            throw Error(ErrorKind::Output, "cannot create " + folder + ": " + systemReason(error));
         throw Error(ErrorKind::Output, "cannot write to " + folder + ": folder " +
                                            (parent.empty() ? "." : parent) + " does not exist");
     }
@@ -126,6 +131,7 @@ void prepareOutputFolder(const BakeOptions& options, const std::vector<BatchItem
             inputs.push_back(std::move(file));
     }
     checkOutputsAreNotInputs(outputs, inputs);
+    return created;
 }
 
 struct Batch {
@@ -345,11 +351,15 @@ void finishBatch(Batch& batch, size_t count, double seconds) {
 
 void runBatchBake(const BakeOptions& options) {
     std::vector<BatchItem> items = planBatch(options);
-    prepareOutputFolder(options, items);
+    const bool created = prepareOutputFolder(options, items);
 
     Clock::time_point start = Clock::now();
     Batch batch{options,
                 ProgressLine("probes", items.size(), options.quiet, ProgressLine::Style{.bar = true})};
+    // A folder the batch made and wrote nothing into is not left behind (rmdir takes only an empty one).
+    ScopeExit removeUnused([&] {
+        if (created && batch.baked == 0) rmdir(options.outDir.c_str());
+    });
     printBatchStart(options, items.size());
     bakeInChunks(batch, items);
     finishBatch(batch, items.size(), millisecondsSince(start) / 1000.0);

@@ -170,6 +170,7 @@ struct SceneOptions {
 struct MergeOptions {
     std::vector<std::string> bricks;
     std::string output;
+    bool quiet = false;
 };
 
 // `shprobe transfer SCENE -o OUT`: per-vertex radiance transfer written into the scene (transfer.cpp).

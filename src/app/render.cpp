@@ -220,6 +220,10 @@ void addEnvironmentInputOptions(CLI::App& command, int& faceSize, bool& sanitize
 void runRender(const RenderOptions& options) {
     const uint32_t side = options.grid ? kDefaultGridCell : kDefaultSize;
     const ImageSize size = options.size.value_or(ImageSize{side, side});
+    if (options.grid && size.width != size.height) // the cells' shape is the grid's
+        throw Error(ErrorKind::Input, "--size " + std::to_string(size.width) + "x" +
+                                          std::to_string(size.height) +
+                                          " with --grid: the size is the cell width, one number");
     checkRenderOutputPath(options.output); // before any work
     const VkExtent2D picture = pictureExtent(options, size);
     checkRenderOutputSize(options.output, picture.width, picture.height, sizeAsked(options, size));

@@ -144,6 +144,7 @@ void addMergeOptions(CLI::App& command, MergeOptions& options) {
     command.add_option("-o,--output", options.output, "Whole volume to write")
         ->required()
         ->check(nonEmptyName());
+    command.add_flag("-q,--quiet", options.quiet, "No report");
 }
 
 void requireFiniteLight(const ProbeVolume& volume, const std::string& light) {
@@ -605,6 +606,7 @@ void runMerge(const MergeOptions& options) {
         bricks.push_back(readProbeVolume(path));
     const ProbeVolume whole = mergeProbeVolumes(bricks, options.bricks);
     writeProbeVolume(options.output, whole);
+    if (options.quiet) return;
     std::fprintf(reportStream(options.output), "merged   %s into %s (%s)\n",
                  counted(bricks.size(), "brick").c_str(), options.output.c_str(),
                  counted(whole.probeCount(), "probe").c_str());
