@@ -273,6 +273,7 @@ void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool
 void runBake(const BakeOptions& given) {
     const BakeOptions options = withFormatAndOutput(given);
     checkFormatOptions(options);
+    requireDeviceUsed(options.backend, options.device, options.validation);
     if (!options.outDir.empty()) return runBatchBake(options);
     if (options.inputs.size() > 1 || !options.listFile.empty())
         throw Error(ErrorKind::Input,

@@ -3,6 +3,7 @@
 #pragma once
 #include "app/program.h"
 #include "app/toolkit.h"
+#include "common/error.h"
 #include "glsl/dispatch_plan.h"
 #include "image/environment.h"
 #include "scene/probe_grid.h"
@@ -231,6 +232,16 @@ inline CLI::Validator numberFrom(double min, double max) {
 inline void addDeviceOptions(CLI::App& command, std::string& device, bool& validation) {
     command.add_option("--device", device, "Vulkan device index or name part (see `shprobe info`)");
     command.add_flag("--validation", validation, "Enable the Khronos validation layer; fail on messages");
+}
+
+// --device and --validation ask for Vulkan, which a CPU backend never starts: refused with one
+// rather than ignored (SHPROBE_DEVICE and SHPROBE_VALIDATION, set for a whole session, are not).
+inline void requireDeviceUsed(const std::string& backend, const std::string& device, bool validation) {
+    if (backend != "cpu" && backend != "reference") return;
+    const char* option = !device.empty() ? "--device" : validation ? "--validation" : nullptr;
+    if (option)
+        throw Error(ErrorKind::Input, std::string(option) + " is for a Vulkan device, which --backend " +
+                                          backend + " does not use");
 }
 
 // The Vulkan context of the commands that draw (render, scene): a queue that does graphics too

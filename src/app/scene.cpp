@@ -406,6 +406,7 @@ RayBackend chooseSceneBackend(const SceneOptions& options) {
 // one bounce's options, a cpu option for the gpu, bounds that make no grid of these counts, more
 // bricks than probes.
 void checkSceneOptions(const SceneOptions& options) {
+    requireDeviceUsed(options.backend, options.device, options.validation);
     if (options.bouncesGiven && !options.previous.empty())
         throw Error(ErrorKind::Input, "scene: --previous bakes one bounce; --bounces is for whole bakes");
     if (!options.previous.empty() && options.backend == "cpu")

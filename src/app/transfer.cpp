@@ -73,6 +73,7 @@ void checkTransferOptions(const TransferCommandOptions& options) {
         throw Error(ErrorKind::Input,
                     std::string("transfer: ") + forRays +
                         " is for the models that cast rays; the unshadowed model casts none");
+    requireDeviceUsed(options.backend, options.device, options.validation);
     checkOutputName(options);
     checkOutputPath(options.output, OutputContent::Binary);
     std::vector<std::string> inputs{options.scene};
