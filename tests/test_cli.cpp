@@ -391,6 +391,20 @@ TEST_F(CliFailures, TextFileNamedExr) {
     EXPECT_EQ(result.err.find("OpenImageIO"), std::string::npos) << result.err;
 }
 
+// shprobe's own files given where an image is read (a probe where a sky goes, a volume, a scene)
+// are named for what they are, not offered to OpenImageIO's readers ("not an image the JSON reader
+// can read (OpenImageIO could not find a format reader ...)").
+TEST_F(CliFailures, OwnFilesAreNamedWhereAnImageIsRead) {
+    writeText(file("probe.json"), "{\n  \"format\": \"shprobe.sh\"\n}\n");
+    writeText(file("volume.shpv"), std::string("SHPROBEV") + std::string(64, '\0'));
+    writeText(file("scene.glb"), std::string("glTF") + std::string(64, '\0'));
+    for (const auto& [name, kind] : std::vector<std::pair<std::string, std::string>>{
+             {"probe.json", "JSON (a probe file or a glTF scene), not an image"},
+             {"volume.shpv", "a probe volume (shprobe scene), not an image"},
+             {"scene.glb", "a binary glTF scene, not an image"}})
+        expectFailure({{"bake", file(name), "-o", "OUT"}, 2, {file(name) + ": " + kind}});
+}
+
 // A 50x40 PNG matches no layout (2:1, 4:3, 3:4): exit 2, the message names the file and its size.
 TEST_F(CliFailures, AspectRatioMatchingNoLayout) {
     writeImage(file("odd.png"), filledImage(50, 40, [](int, int) { return glm::vec3(0.5f); }));

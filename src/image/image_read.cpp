@@ -40,6 +40,18 @@ std::string sizeText(int width, int height) {
     return std::to_string(width) + "x" + std::to_string(height);
 }
 
+// What a file of shprobe's other kinds is, from its first bytes, for the refusal of an image input;
+// nullptr for any other file (an image, or what OpenImageIO may read).
+const char* otherFileKind(std::string_view start) {
+    if (start.starts_with("SHPROBEV")) return "a probe volume (shprobe scene)";
+    if (start.starts_with("SHPB")) return "a binary probe file";
+    if (start.starts_with("SHPT")) return "a transfer file (shprobe transfer)";
+    if (start.starts_with("glTF")) return "a binary glTF scene";
+    const size_t first = start.find_first_not_of(" \t\r\n");
+    if (first != std::string_view::npos && start[first] == '{') return "JSON (a probe file or a glTF scene)";
+    return nullptr;
+}
+
 // Image readers allocate what a header claims before they find the file shorter (an EXR
 // attribute claiming 2 GiB, a PNG text chunk as long): the header is read within the file's size
 // first (image/channels.h). The format is the one the file's first bytes name.
@@ -56,6 +68,8 @@ ImageFormat checkHeaderAndFormat(const std::string& path) {
     if (got == sizeof start && std::all_of(start, start + got, [](unsigned char b) { return b == 0; }))
         throw Error(ErrorKind::Input,
                     path + ": not an image: its first " + std::to_string(got) + " bytes are all zero");
+    if (const char* kind = otherFileKind({reinterpret_cast<const char*>(start), got}))
+        throw Error(ErrorKind::Input, path + ": " + kind + ", not an image");
     return sniffImageFormat(start, got);
 }
 
