@@ -55,6 +55,7 @@ struct RunOptions {
     std::string workingFolder;
     bool removeWorkingFolder = false;
     rlim_t addressSpaceBytes = 0; // RLIMIT_AS for the program, so that a large allocation fails; 0: none
+    bool errorsToOutput = false;  // stderr into stdout's file, as a terminal shows both: RunResult::out
 };
 
 constexpr uid_t kNobody = 65534;
@@ -120,7 +121,7 @@ class Child {
         constexpr int kWrite = O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC;
         int in = open(options.standardInput.c_str(), O_RDONLY | O_CLOEXEC);
         int out = options.standardOutput >= 0 ? options.standardOutput : open(outPath_.c_str(), kWrite, 0644);
-        int err = open(errPath_.c_str(), kWrite, 0644);
+        int err = options.errorsToOutput ? out : open(errPath_.c_str(), kWrite, 0644);
         if (in < 0 || out < 0 || err < 0 || dup2(in, 0) < 0 || dup2(out, 1) < 0 || dup2(err, 2) < 0)
             _exit(126);
         int peak = open(peakPath_.c_str(), kWrite, 0644); // before any drop

@@ -919,6 +919,17 @@ TEST_F(CliBatch, BadInputsAreReportedAndTheOthersWritten) {
     EXPECT_LT(aLine, bLine) << result.out;
     EXPECT_EQ(entriesOf(folder() / "out"), (std::vector<std::string>{"a.json", "b.json"}));
     EXPECT_EQ(readProbeFile((folder() / "out" / "b.json").string()).rgb.size(), 9u);
+
+    // As a terminal shows both streams: each input's line, written or failed, in input order.
+    RunResult both =
+        run({"bake", a(), file("bad.exr"), "--list", file("list.txt"), "--out-dir", file("both")},
+            {.errorsToOutput = true});
+    std::vector<size_t> at;
+    for (const std::string& mention :
+         {std::string("a.json"), file("bad.exr") + ":", file("nowhere.exr") + ":", std::string("b.json")})
+        at.push_back(both.out.find(mention));
+    EXPECT_NE(at.back(), std::string::npos) << both.out;
+    EXPECT_TRUE(std::is_sorted(at.begin(), at.end())) << both.out;
 }
 
 // The output folder is checked before any GPU work: a folder whose parent is missing is exit 3

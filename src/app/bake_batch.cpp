@@ -165,10 +165,12 @@ void reportFailure(Batch& batch, const BatchItem& item, const Error& error) {
     printLine(batch, stderr, "shprobe: error: " + message);
 }
 
+// An input as loaded, or why it could not be: a failure is reported in its turn among the others.
 struct Loaded {
     const BatchItem* item = nullptr;
     Environment environment;
     std::optional<ProbeSun> sun;
+    std::optional<Error> failure;
 };
 
 // Loads the inputs in order, one ahead: when an input is taken, the next starts loading on a thread
@@ -186,9 +188,9 @@ class InputLoader {
 
     bool done() const { return !pending_.valid(); }
 
-    // The next input; a bad input, or one too large for the machine's memory, is reported and skipped
-    // (nullopt); any other failure ends the batch.
-    std::optional<Loaded> next(Batch& batch) {
+    // The next input; a bad input, or one too large for the machine's memory, comes with its failure
+    // (to be reported and skipped); any other failure ends the batch.
+    Loaded next() {
         std::future<Loaded> loading = std::move(pending_);
         const BatchItem& item = items_[next_ - 1];
         start();
@@ -196,8 +198,7 @@ class InputLoader {
             return loading.get();
         } catch (const Error& error) {
             if (error.kind() != ErrorKind::Input && error.kind() != ErrorKind::Memory) throw;
-            reportFailure(batch, item, error);
-            return std::nullopt;
+            return {&item, {}, std::nullopt, error};
         }
     }
 
@@ -278,31 +279,45 @@ void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
     std::optional<BatchBackend> chosen;
     std::vector<Loaded> chunk;
     VkDeviceSize bytes = 0;
+    // Bakes the chunk's loaded inputs, then writes them and reports its failures, in input order.
     auto flush = [&] {
-        if (chunk.empty()) return;
         std::vector<const Environment*> environments;
         for (const Loaded& loaded : chunk)
-            environments.push_back(&loaded.environment);
-        std::vector<BakeResult> results = bake(batch.options, chosen->backend, environments);
-        // One submission per kind of map in the chunk on the GPU (bakeOnGpu).
-        auto equirect = [](const Loaded& loaded) { return loaded.environment.keptEquirect(); };
-        batch.submissions += size_t(std::any_of(chunk.begin(), chunk.end(), equirect)) +
-                             size_t(!std::all_of(chunk.begin(), chunk.end(), equirect));
-        for (size_t i = 0; i < chunk.size(); ++i)
-            writeItem(batch, chosen->backend, chunk[i], results[i]);
+            if (!loaded.failure) environments.push_back(&loaded.environment);
+        std::vector<BakeResult> results;
+        if (!environments.empty()) {
+            results = bake(batch.options, chosen->backend, environments);
+            // One submission per kind of map in the chunk on the GPU (bakeOnGpu).
+            auto equirect = [](const Environment* environment) { return environment->keptEquirect(); };
+            batch.submissions += size_t(std::any_of(environments.begin(), environments.end(), equirect)) +
+                                 size_t(!std::all_of(environments.begin(), environments.end(), equirect));
+        }
+        size_t baked = 0;
+        for (const Loaded& loaded : chunk) {
+            if (loaded.failure)
+                reportFailure(batch, *loaded.item, *loaded.failure);
+            else
+                writeItem(batch, chosen->backend, loaded, results[baked++]);
+        }
         chunk.clear();
         bytes = 0;
     };
     batch.progress.redraw();
     for (InputLoader loader(batch.options, items); !loader.done();) {
-        std::optional<Loaded> loaded = loader.next(batch);
-        if (!loaded) continue;
-        if (!chosen) chosen = chooseBatchBackend(batch, loaded->environment, items.size());
-        fitBackend(chosen->backend, loaded->environment);
-        VkDeviceSize itemBytes = environmentBytes(loaded->environment);
+        Loaded loaded = loader.next();
+        if (loaded.failure) {
+            if (chunk.empty())
+                reportFailure(batch, *loaded.item, *loaded.failure);
+            else
+                chunk.push_back(std::move(loaded)); // said after the inputs before it
+            continue;
+        }
+        if (!chosen) chosen = chooseBatchBackend(batch, loaded.environment, items.size());
+        fitBackend(chosen->backend, loaded.environment);
+        VkDeviceSize itemBytes = environmentBytes(loaded.environment);
         if (!chunk.empty() && bytes + itemBytes > chosen->chunkBytes) flush();
         bytes += itemBytes;
-        chunk.push_back(std::move(*loaded));
+        chunk.push_back(std::move(loaded));
     }
     flush();
     batch.gpu = chosen && chosen->backend.session;
