@@ -614,6 +614,9 @@ TEST_F(SceneTest, MalformedScenesAreRefused) {
         {"a matrix of 15 numbers",
          [](json& d) { d["nodes"][0]["matrix"] = std::vector<double>(15, 1.0); },
          {"nodes[0].matrix", "16 elements"}},
+        {"a projective matrix",
+         [](json& d) { d["nodes"][0]["matrix"] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 2}; },
+         {"nodes[0].matrix ends in the row 0, 0, 0, 2, not 0, 0, 0, 1"}},
         {"a missing material",
          [](json& d) { d["meshes"][0]["primitives"][0]["material"] = 7; },
          {"material is 7", "1 material"}},
@@ -643,7 +646,16 @@ TEST_F(SceneTest, MalformedScenesAreRefused) {
         {"NORMAL of another count",
          [](json& d) { d["accessors"][1]["count"] = 23; },
          {"NORMAL", "23 elements", "24"}},
-        {"no asset", [](json& d) { d.erase("asset"); }, {"asset"}},
+        {"no asset", [](json& d) { d.erase("asset"); }, {"no asset.version"}},
+        {"glTF 1",
+         [](json& d) { d["asset"]["version"] = "1.0"; },
+         {"asset.version is 1.0", "reads glTF 2.0"}},
+        {"a version of another form",
+         [](json& d) { d["asset"]["version"] = "banana"; },
+         {"asset.version is \"banana\", not <major>.<minor>"}},
+        {"a newer minimum version",
+         [](json& d) { d["asset"]["minVersion"] = "2.1"; },
+         {"asset.minVersion is 2.1", "reads glTF 2.0"}},
     };
     for (const Edit& edit : edits) {
         SCOPED_TRACE(edit.what);

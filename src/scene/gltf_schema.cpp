@@ -4,15 +4,19 @@
 
 #include "common/error.h"
 #include "common/quoted.h"
+#include "common/short_number.h"
 #include "formats/json_reading.h"
 #include "scene/gltf_limits.h"
 
 #include <algorithm>
+#include <cctype>
 #include <climits>
 #include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <span>
+#include <utility>
 
 namespace shprobe {
 
@@ -443,6 +447,58 @@ void checkRequiredExtensions(const json& root, const std::string& path) {
                             "KHR_materials_emissive_strength and KHR_mesh_quantization are)");
 }
 
+// The glTF version an asset states, "<major>.<minor>" (glTF 2.0, "asset"), as two numbers; none for
+// another form.
+std::optional<std::pair<int, int>> gltfVersion(const std::string& text) {
+    const size_t dot = text.find('.');
+    const auto digits = [](std::string_view part) {
+        return !part.empty() && part.size() < 9 && std::all_of(part.begin(), part.end(), ::isdigit);
+    };
+    if (dot == std::string::npos || !digits(std::string_view(text).substr(0, dot)) ||
+        !digits(std::string_view(text).substr(dot + 1)))
+        return std::nullopt;
+    return std::pair{std::stoi(text.substr(0, dot)), std::stoi(text.substr(dot + 1))};
+}
+
+// This reader reads glTF 2.0: asset.version must name glTF 2, and asset.minVersion, where an asset
+// needs more than 2.0 to be read right, no more than 2.0.
+void checkVersion(const json& root, const std::string& path) {
+    const auto asset = root.find("asset");
+    if (asset == root.end() || !asset->contains("version"))
+        throw Error(ErrorKind::Input,
+                    path + ": no asset.version, which every glTF file states; not a glTF file");
+    for (const char* field : {"version", "minVersion"}) {
+        if (!asset->contains(field)) continue;
+        const std::string text = (*asset)[field].get<std::string>();
+        const auto version = gltfVersion(text);
+        if (!version)
+            throw Error(ErrorKind::Input,
+                        path + ": asset." + field + " is " + quotedInput(text) + ", not <major>.<minor>");
+        const bool readable = version->first == 2 && (field[0] == 'v' || version->second == 0);
+        if (!readable)
+            throw Error(ErrorKind::Input,
+                        path + ": asset." + field + " is " + text + "; this reader reads glTF 2.0");
+    }
+}
+
+// A node's matrix is a translation, rotation and scale (glTF 2.0, "Transformations"): its last row,
+// elements 3, 7, 11 and 15 of the column-major array, is 0, 0, 0, 1. Another would be read as if it
+// were (the projective part dropped).
+void checkNodeMatrices(const json& root, const std::string& path) {
+    const json& nodes = arrayOf(root, "nodes");
+    for (size_t n = 0; n < nodes.size(); ++n) {
+        const auto matrix = nodes[n].find("matrix");
+        if (matrix == nodes[n].end()) continue;
+        const double row[4] = {(*matrix)[3], (*matrix)[7], (*matrix)[11], (*matrix)[15]};
+        if (row[0] == 0.0 && row[1] == 0.0 && row[2] == 0.0 && row[3] == 1.0) continue;
+        throw Error(ErrorKind::Input, path + ": nodes[" + std::to_string(n) + "].matrix ends in the row " +
+                                          shortNumber(row[0]) + ", " + shortNumber(row[1]) + ", " +
+                                          shortNumber(row[2]) + ", " + shortNumber(row[3]) +
+                                          ", not 0, 0, 0, 1: glTF's node matrices are translation, "
+                                          "rotation and scale");
+    }
+}
+
 // The parser's problem with the bytes it quotes kept printable (a binary file is not text) and
 // short (it quotes the whole token it stopped in, a string of megabytes perhaps).
 std::string parseProblem(const json::exception& error) {
@@ -469,6 +525,8 @@ void checkGltfJson(std::string_view text, const std::string& path) {
                                           std::string(typeName(root)) + "; not a glTF file");
     Checker checker(path);
     checker.checkObject(root, kRoot, "");
+    checkVersion(root, path);
+    checkNodeMatrices(root, path);
     checkRequiredExtensions(root, path);
     checkBufferViews(root, checker);
     checkAccessors(root, checker);
