@@ -257,6 +257,10 @@ TEST_F(SceneCommand, RelightableVolumesRelightWithoutACapture) {
 
     runOk({"relight", file("whole.shpv"), "-q", "-o", file("same.shpv")});
     EXPECT_EQ(bytesOf(file("same.shpv")), bytesOf(file("whole.shpv")));
+    // --timings on a volume this small: times of microseconds, in significant digits (not "0.00 ms").
+    const RunResult timed = runOk({"relight", file("whole.shpv"), "--timings", "-o", file("timed.shpv")});
+    EXPECT_CONTAINS(timed.out, "of that bound");
+    EXPECT_EQ(timed.out.find(" 0.00 ms"), std::string::npos) << timed.out;
     const RunResult report =
         runOk({"relight", file("whole.shpv"), "--yaw", "90", "--pitch", "-20", "-o", file("turned.shpv")});
     EXPECT_CONTAINS(report.out, "turned yaw 90, pitch -20");

@@ -61,7 +61,7 @@ void printRelightTimings(FILE* report, ProbeVolume& volume, const ShCoefficients
     const std::span<const std::byte> bytes = std::as_bytes(std::span(volume.transfer));
     const double read = memoryReadMilliseconds(bytes, 5);
     std::fprintf(report,
-                 "time     relight %.2f ms (best of 5); reading its transfer's %.1f MB on all cores %.2f ms: "
+                 "time     relight %.3g ms (best of 5); reading its transfer's %.3g MB on all cores %.3g ms: "
                  "%.2f of that bound\n",
                  relight, double(bytes.size()) / 1e6, read, read / relight);
 }
