@@ -456,7 +456,8 @@ TEST_F(BadInputs, OutputIntoAMissingFolder) {
 // exit 3), and nothing appears in the working folder. So does an empty input
 // or file option where a default exists (a script's empty variable): bake '' and render '' baked
 // the built-in sky, --out-dir '' wrote into the working folder, --sky '' and --probe '' lit by the
-// built-in sky, bench --json '' wrote nothing.
+// built-in sky, bench --json '' wrote nothing; scene '', transfer '', merge '' and relight '' said
+// ": no such file".
 TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
     writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
     const fs::path working = folder() / "working";
@@ -478,6 +479,10 @@ TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
         {{"scene", file("s.glb"), "--sky", "", "-o", file("v.shpv")}, "--sky"},
         {{"relight", file("v.shpv"), "--probe", "", "-o", file("w.shpv")}, "--probe"},
         {{"bench", "--json", ""}, "--json"},
+        {{"scene", "", "--grid", "1,1,1", "-o", file("v.shpv")}, "scene"},
+        {{"transfer", "", "-o", file("t.glb")}, "scene"},
+        {{"merge", "", "-o", file("v.shpv")}, "bricks"},
+        {{"relight", "", "-o", file("w.shpv")}, "volume"},
     };
     for (const auto& [args, option] : cases) {
         SCOPED_TRACE(args[0] + " " + option);
@@ -485,7 +490,7 @@ TEST_F(BadInputs, AnEmptyOutputNameIsRefused) {
         expectMessage({args, 2, {option + ": '' names no file"}}, result);
         EXPECT_TRUE(fs::is_empty(working));
     }
-    for (const char* name : {"r.png", "probes", "v.shpv", "w.shpv"})
+    for (const char* name : {"r.png", "probes", "v.shpv", "w.shpv", "t.glb"})
         EXPECT_FALSE(fs::exists(file(name))) << name;
 }
 

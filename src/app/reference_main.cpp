@@ -52,7 +52,7 @@ struct ReferenceOptions {
 };
 
 void addOptions(CLI::App& app, ReferenceOptions& options) {
-    app.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
+    app.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required()->check(nonEmptyName());
     app.add_option("-o,--output", options.output, "Probe volume to write")->capture_default_str();
     addParsedOption(app, "--grid", options.grid, parseGridCounts,
                     "Probes per axis, NX,NY,NZ (required for a volume)");

@@ -70,7 +70,8 @@ void printRelightTimings(FILE* report, ProbeVolume& volume, const ShCoefficients
 
 void addRelightOptions(CLI::App& command, RelightOptions& options) {
     command.add_option("volume", options.volume, "Probe volume baked with `shprobe scene --transfer`")
-        ->required();
+        ->required()
+        ->check(nonEmptyName());
     command.add_option("-o,--output", options.output, "Probe volume to write")
         ->required()
         ->check(nonEmptyName());

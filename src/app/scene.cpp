@@ -46,7 +46,9 @@ BrickOption parseBrickOption(const std::string& text) {
 } // namespace
 
 void addSceneOptions(CLI::App& command, SceneOptions& options) {
-    command.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
+    command.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")
+        ->required()
+        ->check(nonEmptyName());
     command.add_option("-o,--output", options.output, "Probe volume to write (docs/probe-volume.md)")
         ->capture_default_str()
         ->check(nonEmptyName());
@@ -140,7 +142,9 @@ void addSceneOptions(CLI::App& command, SceneOptions& options) {
 }
 
 void addMergeOptions(CLI::App& command, MergeOptions& options) {
-    command.add_option("bricks", options.bricks, "Probe volumes of the bricks, in any order")->required();
+    command.add_option("bricks", options.bricks, "Probe volumes of the bricks, in any order")
+        ->required()
+        ->check(nonEmptyName());
     command.add_option("-o,--output", options.output, "Whole volume to write")
         ->required()
         ->check(nonEmptyName());

@@ -127,7 +127,9 @@ void report(const TransferCommandOptions& options, const GltfSceneSource& source
 } // namespace
 
 void addTransferOptions(CLI::App& command, TransferCommandOptions& options) {
-    command.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")->required();
+    command.add_option("scene", options.scene, "glTF scene (.gltf or .glb)")
+        ->required()
+        ->check(nonEmptyName());
     command
         .add_option("-o,--output", options.output,
                     "The scene with the transfer as vertex attributes (.glb), or the binary file (.shpt)")
