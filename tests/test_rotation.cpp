@@ -343,6 +343,12 @@ TEST(Rotation, InvalidInputThrows) {
     expectInputError([&] { rotationFromRowMajor(notANumber); }, "NaN matrix");
     EXPECT_NO_THROW(rotationFromRowMajor(nearlyIdentity)); // within kRotationTolerance
     expectInputError([] { rotationFromQuaternion(1.0, 0.1, 0.0, 0.0); }, "non-unit quaternion");
+    // A quaternion typed to 4 digits is normalized: the quarter turn about z it means, to 1e-15.
+    const glm::dmat3 typed = rotationFromQuaternion(0.7071, 0.0, 0.0, 0.7071);
+    const glm::dmat3 exact = rotationFromQuaternion(std::sqrt(0.5), 0.0, 0.0, std::sqrt(0.5));
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+            EXPECT_NEAR(typed[c][r], exact[c][r], 1e-15) << c << ", " << r;
     expectInputError([] { rotationFromQuaternion(0.0, 0.0, 0.0, 0.0); }, "zero quaternion");
     expectInputError([] { rotationFromEulerZYZ(std::nan(""), 0.0, 0.0); }, "NaN Euler angle");
     expectInputError([] { makeShRotation(glm::dmat3(2.0), 3); }, "makeShRotation of a scaled matrix");

@@ -153,7 +153,9 @@ void requireOrthonormal(const glm::dmat3& R) {
     }
     if (deviation > kRotationTolerance) {
         throw Error(ErrorKind::Input, "matrix (" + rowMajorText(R) +
-                                          ") is not orthonormal: |R^T R - I| = " + shortNumber(deviation));
+                                          ") is not orthonormal: |R^T R - I| = " + shortNumber(deviation) +
+                                          ", more than " + shortNumber(kRotationTolerance) +
+                                          " (give its entries to 7 digits)");
     }
 }
 
@@ -204,10 +206,11 @@ glm::dmat3 orthogonalFromRowMajor(std::span<const double, 9> rowMajor) {
 // The matrix of v -> q v q* (e.g. Shoemake, "Animating rotation with quaternion curves", 1985).
 glm::dmat3 rotationFromQuaternion(double w, double x, double y, double z) {
     const double norm = std::sqrt(w * w + x * x + y * y + z * z);
-    if (!std::isfinite(norm) || std::abs(norm - 1.0) > kRotationTolerance) {
+    if (!std::isfinite(norm) || std::abs(norm - 1.0) > kQuaternionNormTolerance) {
         throw Error(ErrorKind::Input, "quaternion (w,x,y,z) = (" + shortNumber(w) + "," + shortNumber(x) +
                                           "," + shortNumber(y) + "," + shortNumber(z) +
-                                          ") is not a unit quaternion (norm " + shortNumber(norm) + ")");
+                                          ") is not a unit quaternion (norm " + shortNumber(norm) +
+                                          ", not 1 to " + shortNumber(kQuaternionNormTolerance) + ")");
     }
     w /= norm, x /= norm, y /= norm, z /= norm; // so that R is orthonormal to rounding
     glm::dmat3 R(0.0);                          // R[column][row]

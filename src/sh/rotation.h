@@ -25,6 +25,9 @@ namespace shprobe {
 
 // Largest deviation from orthonormality (|R^T R - I| per element) and from det R = +1 accepted.
 constexpr double kRotationTolerance = 1e-6;
+// Largest deviation of a quaternion's norm from 1 accepted: it is normalized, so a quaternion typed
+// to 4 digits, (0.7071, 0, 0, 0.7071) of norm 0.99999, is the rotation it means.
+constexpr double kQuaternionNormTolerance = 1e-3;
 
 // Band-wise rotation matrices. bands[l] holds D^l row-major: entry (m, n), m, n in -l..l, is at
 // (m + l) * (2l + 1) + (n + l), and the rotated coefficients are c'_lm = sum_n D^l_mn c_ln.
