@@ -617,6 +617,9 @@ TEST_F(SceneTest, MalformedScenesAreRefused) {
         {"a projective matrix",
          [](json& d) { d["nodes"][0]["matrix"] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 2}; },
          {"nodes[0].matrix ends in the row 0, 0, 0, 2, not 0, 0, 0, 1"}},
+        {"a matrix off affine by more than float rounding",
+         [](json& d) { d["nodes"][0]["matrix"] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 1e-5, 0, 0, 0, 1}; },
+         {"nodes[0].matrix ends in the row 0, 0, 1e-05, 1"}},
         {"a missing material",
          [](json& d) { d["meshes"][0]["primitives"][0]["material"] = 7; },
          {"material is 7", "1 material"}},
@@ -664,6 +667,11 @@ TEST_F(SceneTest, MalformedScenesAreRefused) {
         writeText(file("edited.gltf"), document.dump());
         expectRefused(file("edited.gltf"), edit.keywords);
     }
+    // A last row of float rounding away from 0, 0, 0, 1 (an exporter's float32 round trip) is affine.
+    json document = json::parse(gltfText(boxScene()));
+    document["nodes"][0]["matrix"] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0.99999994};
+    writeText(file("rounded.gltf"), document.dump());
+    EXPECT_NO_THROW(loadGltfScene(file("rounded.gltf")));
 }
 
 // A NaN coordinate in the buffer (the BIN chunk edited in place) is refused as infinities are.

@@ -1052,6 +1052,10 @@ TEST_F(SceneCommand, BadOptionsAreRefused) {
                    2,
                    {"-: a scene is read from its file, not standard input"},
                    "out.glb"});
+    expectFailure({{"scene", scene, "--grid", "2,2,2", "--transfer", "--device", "0", "-o", "OUT"},
+                   2,
+                   {"--device is for a Vulkan device, and --transfer bakes on the cpu"},
+                   "out.shpv"});
     expectFailure({{"scene", scene, "--grid", "3,3", "-o", "OUT"}, 2, {"--grid"}, "out.shpv"});
     expectFailure(
         {{"scene", scene, "--grid", "2,2,2", "--brick", "2/2", "-o", "OUT"}, 2, {"--brick"}, "out.shpv"});

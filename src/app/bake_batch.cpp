@@ -117,6 +117,10 @@ bool prepareOutputFolder(const BakeOptions& options, const std::vector<BatchItem
         throw Error(ErrorKind::Output, "cannot write to " + folder + ": folder " +
                                            (parent.empty() ? "." : parent) + " does not exist");
     }
+    // A folder made here is not left behind by a refusal below.
+    OnFailure removeMade([&] {
+        if (created) rmdir(folder.c_str());
+    });
     struct stat status {};
     if (stat(folder.c_str(), &status) != 0)
         throw Error(ErrorKind::Output, "cannot write to " + folder + ": " + systemReason(errno));
@@ -279,6 +283,7 @@ void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
     std::optional<BatchBackend> chosen;
     std::vector<Loaded> chunk;
     VkDeviceSize bytes = 0;
+    size_t said = 0; // the chunk's items written or reported so far
     // Bakes the chunk's loaded inputs, then writes them and reports its failures, in input order.
     auto flush = [&] {
         std::vector<const Environment*> environments;
@@ -293,33 +298,41 @@ void bakeInChunks(Batch& batch, const std::vector<BatchItem>& items) {
                                  size_t(!std::all_of(environments.begin(), environments.end(), equirect));
         }
         size_t baked = 0;
-        for (const Loaded& loaded : chunk) {
+        for (; said < chunk.size(); ++said) {
+            const Loaded& loaded = chunk[said];
             if (loaded.failure)
                 reportFailure(batch, *loaded.item, *loaded.failure);
             else
                 writeItem(batch, chosen->backend, loaded, results[baked++]);
         }
         chunk.clear();
+        said = 0;
         bytes = 0;
     };
     batch.progress.redraw();
-    for (InputLoader loader(batch.options, items); !loader.done();) {
-        Loaded loaded = loader.next();
-        if (loaded.failure) {
-            if (chunk.empty())
-                reportFailure(batch, *loaded.item, *loaded.failure);
-            else
-                chunk.push_back(std::move(loaded)); // said after the inputs before it
-            continue;
+    try {
+        for (InputLoader loader(batch.options, items); !loader.done();) {
+            Loaded loaded = loader.next();
+            if (loaded.failure) {
+                if (chunk.empty())
+                    reportFailure(batch, *loaded.item, *loaded.failure);
+                else
+                    chunk.push_back(std::move(loaded)); // said after the inputs before it
+                continue;
+            }
+            if (!chosen) chosen = chooseBatchBackend(batch, loaded.environment, items.size());
+            fitBackend(chosen->backend, loaded.environment);
+            VkDeviceSize itemBytes = environmentBytes(loaded.environment);
+            if (!chunk.empty() && bytes + itemBytes > chosen->chunkBytes) flush();
+            bytes += itemBytes;
+            chunk.push_back(std::move(loaded));
         }
-        if (!chosen) chosen = chooseBatchBackend(batch, loaded.environment, items.size());
-        fitBackend(chosen->backend, loaded.environment);
-        VkDeviceSize itemBytes = environmentBytes(loaded.environment);
-        if (!chunk.empty() && bytes + itemBytes > chosen->chunkBytes) flush();
-        bytes += itemBytes;
-        chunk.push_back(std::move(loaded));
+        flush();
+    } catch (...) { // an error that ends the batch: the bad inputs waiting in the chunk are still said
+        for (size_t i = said; i < chunk.size(); ++i)
+            if (chunk[i].failure) reportFailure(batch, *chunk[i].item, *chunk[i].failure);
+        throw;
     }
-    flush();
     batch.gpu = chosen && chosen->backend.session;
     if (batch.gpu) chosen->backend.session->finish();
 }

@@ -411,6 +411,9 @@ RayBackend chooseSceneBackend(const SceneOptions& options) {
 // bricks than probes.
 void checkSceneOptions(const SceneOptions& options) {
     requireDeviceUsed(options.backend, options.device, options.validation);
+    if (options.transfer && (!options.device.empty() || options.validation))
+        throw Error(ErrorKind::Input, std::string(options.validation ? "--validation" : "--device") +
+                                          " is for a Vulkan device, and --transfer bakes on the cpu");
     if (options.bouncesGiven && !options.previous.empty())
         throw Error(ErrorKind::Input, "scene: --previous bakes one bounce; --bounces is for whole bakes");
     if (!options.previous.empty() && options.backend == "cpu")

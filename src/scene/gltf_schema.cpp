@@ -452,7 +452,8 @@ void checkRequiredExtensions(const json& root, const std::string& path) {
 std::optional<std::pair<int, int>> gltfVersion(const std::string& text) {
     const size_t dot = text.find('.');
     const auto digits = [](std::string_view part) {
-        return !part.empty() && part.size() < 9 && std::all_of(part.begin(), part.end(), ::isdigit);
+        return !part.empty() && part.size() < 9 &&
+               std::all_of(part.begin(), part.end(), [](char c) { return c >= '0' && c <= '9'; });
     };
     if (dot == std::string::npos || !digits(std::string_view(text).substr(0, dot)) ||
         !digits(std::string_view(text).substr(dot + 1)))
@@ -481,21 +482,23 @@ void checkVersion(const json& root, const std::string& path) {
     }
 }
 
-// A node's matrix is a translation, rotation and scale (glTF 2.0, "Transformations"): its last row,
-// elements 3, 7, 11 and 15 of the column-major array, is 0, 0, 0, 1. Another would be read as if it
-// were (the projective part dropped).
+// A node's matrix is affine (glTF 2.0, "Transformations": translation, rotation and scale): its last
+// row, elements 3, 7, 11 and 15 of the column-major array, is 0, 0, 0, 1, to float rounding (1e-6).
+// Another would be read as if it were (the projective part dropped).
 void checkNodeMatrices(const json& root, const std::string& path) {
     const json& nodes = arrayOf(root, "nodes");
     for (size_t n = 0; n < nodes.size(); ++n) {
         const auto matrix = nodes[n].find("matrix");
         if (matrix == nodes[n].end()) continue;
         const double row[4] = {(*matrix)[3], (*matrix)[7], (*matrix)[11], (*matrix)[15]};
-        if (row[0] == 0.0 && row[1] == 0.0 && row[2] == 0.0 && row[3] == 1.0) continue;
+        constexpr double kRounding = 1e-6;
+        if (std::abs(row[0]) <= kRounding && std::abs(row[1]) <= kRounding && std::abs(row[2]) <= kRounding &&
+            std::abs(row[3] - 1.0) <= kRounding)
+            continue;
         throw Error(ErrorKind::Input, path + ": nodes[" + std::to_string(n) + "].matrix ends in the row " +
                                           shortNumber(row[0]) + ", " + shortNumber(row[1]) + ", " +
                                           shortNumber(row[2]) + ", " + shortNumber(row[3]) +
-                                          ", not 0, 0, 0, 1: glTF's node matrices are translation, "
-                                          "rotation and scale");
+                                          ", not 0, 0, 0, 1: glTF's node matrices are affine");
     }
 }
 
