@@ -12,6 +12,7 @@
 #include <cstring>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <tiny_gltf.h>
 
@@ -56,6 +57,77 @@ std::string imageMimeType(const std::vector<unsigned char>& bytes, const std::st
     if (bytes.size() >= 4 && std::memcmp(bytes.data(), "\x89PNG", 4) == 0) return "image/png";
     if (bytes.size() >= 3 && std::memcmp(bytes.data(), "\xFF\xD8\xFF", 3) == 0) return "image/jpeg";
     return stated.empty() ? "application/octet-stream" : stated;
+}
+
+bool isTransferAttribute(const std::string& name) {
+    return name.starts_with(kTransferAttributePrefix);
+}
+
+// Whether anything of the model but a transfer attribute names an accessor from `first` on.
+bool namesAccessorFrom(const tinygltf::Model& model, int first) {
+    for (const tinygltf::Mesh& mesh : model.meshes)
+        for (const tinygltf::Primitive& primitive : mesh.primitives) {
+            if (primitive.indices >= first) return true;
+            for (const auto& [name, accessor] : primitive.attributes)
+                if (accessor >= first) return true;
+            for (const auto& target : primitive.targets)
+                for (const auto& [name, accessor] : target)
+                    if (accessor >= first) return true;
+        }
+    for (const tinygltf::Skin& skin : model.skins)
+        if (skin.inverseBindMatrices >= first) return true;
+    for (const tinygltf::Animation& animation : model.animations)
+        for (const tinygltf::AnimationSampler& sampler : animation.samplers)
+            if (sampler.input >= first || sampler.output >= first) return true;
+    return false;
+}
+
+// A scene that already holds a transfer (one of ours, baked again) loses it: its attributes go, and
+// so do their accessors, buffer views and bytes where they are the last of each, as this file writes
+// them. Elsewhere, as in a file edited since, they stay, unused, rather than renumber the accessors
+// and views the scene's extensions may name.
+void dropEarlierTransfer(tinygltf::Model& model) {
+    std::set<int> accessors;
+    for (tinygltf::Mesh& mesh : model.meshes)
+        for (tinygltf::Primitive& primitive : mesh.primitives)
+            std::erase_if(primitive.attributes, [&](const auto& attribute) {
+                if (!isTransferAttribute(attribute.first)) return false;
+                accessors.insert(attribute.second);
+                return true;
+            });
+    const size_t firstAccessor = model.accessors.size() - accessors.size();
+    if (accessors.empty() || *accessors.begin() != int(firstAccessor) ||
+        *accessors.rbegin() != int(model.accessors.size() - 1))
+        return;
+    std::set<int> views;
+    for (size_t a = firstAccessor; a < model.accessors.size(); ++a) {
+        const tinygltf::Accessor& accessor = model.accessors[a];
+        if (accessor.sparse.isSparse) return;
+        views.insert(accessor.bufferView);
+    }
+    const size_t firstView = model.bufferViews.size() - views.size();
+    if (*views.begin() != int(firstView) || *views.rbegin() != int(model.bufferViews.size() - 1)) return;
+    if (namesAccessorFrom(model, int(firstAccessor))) return;
+    for (size_t a = 0; a < firstAccessor; ++a)
+        if (model.accessors[a].bufferView >= int(firstView)) return;
+    for (const tinygltf::Image& image : model.images)
+        if (image.bufferView >= int(firstView)) return;
+    // Their bytes go too where they end the buffer: no view left reaches them.
+    const int buffer = model.bufferViews[firstView].buffer;
+    size_t start = SIZE_MAX, end = 0;
+    for (size_t v = 0; v < model.bufferViews.size(); ++v) {
+        const tinygltf::BufferView& view = model.bufferViews[v];
+        if (view.buffer != buffer) continue;
+        if (v >= firstView)
+            start = std::min(start, view.byteOffset);
+        else
+            end = std::max(end, view.byteOffset + view.byteLength);
+    }
+    model.accessors.resize(firstAccessor);
+    model.bufferViews.resize(firstView);
+    if (buffer >= 0 && size_t(buffer) < model.buffers.size() && end <= start &&
+        start <= model.buffers[size_t(buffer)].data.size())
+        model.buffers[size_t(buffer)].data.resize(start);
 }
 
 // Every buffer joined into buffer 0 (the .glb's BIN chunk), and every image's bytes in a buffer view
@@ -131,11 +203,6 @@ void addAttributes(tinygltf::Model& model, std::vector<unsigned char>& bin, cons
     const size_t floats = size_t(order) * size_t(order) * size_t(channels);
     const int attributes = transferAttributeCount(order, channels);
     tinygltf::Primitive& primitive = model.meshes[size_t(mesh)].primitives[size_t(p.primitive)];
-    // A model that already holds a transfer (one of ours, baked again) keeps none of it: left over
-    // past this one's count, its attributes would not match the header.
-    std::erase_if(primitive.attributes, [](const auto& attribute) {
-        return attribute.first.starts_with(kTransferAttributePrefix);
-    });
     std::vector<float> column(size_t(p.vertexCount) * 4);
     for (int a = 0; a < attributes; ++a) {
         for (size_t v = 0; v < p.vertexCount; ++v)
@@ -246,6 +313,7 @@ std::vector<PrimitiveTransfer> primitiveTransfers(const GltfSceneSource& source,
 std::string transferGlb(const GltfSceneSource& source, const VertexTransfer& transfer,
                         const TransferDescription& description) {
     tinygltf::Model model = *source.model;
+    dropEarlierTransfer(model);
     const int channels = transferChannels(transfer);
     const std::vector<PrimitiveTransfer> primitives = primitiveTransfers(source, transfer);
     std::vector<unsigned char> bin = joinBuffers(model);

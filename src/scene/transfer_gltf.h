@@ -48,7 +48,8 @@ std::vector<PrimitiveTransfer> primitiveTransfers(const GltfSceneSource& source,
 void requireTransferGlbSource(const GltfSceneSource& source, const std::string& path);
 
 // The .glb: the source's model with one buffer (its buffers joined, its images moved into it), a mesh
-// used by several nodes copied so that each node has its own, and the attributes added; every
+// used by several nodes copied so that each node has its own, an earlier transfer dropped (its
+// accessors, views and bytes where they come last, as this writes them), the attributes added; every
 // extras and extensions value as the source's JSON has it. Throws Error(Output) if tinygltf cannot
 // write it.
 std::string transferGlb(const GltfSceneSource& source, const VertexTransfer& transfer,
