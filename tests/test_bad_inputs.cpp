@@ -451,6 +451,21 @@ TEST_F(BadInputs, OutputIntoAMissingFolder) {
     }
 }
 
+// An output ending in / (or . or ..) names a folder, even one that is not there: exit 3 before any
+// work, saying why in words, where it said "it is a folder" of a name that was none; nothing made.
+TEST_F(BadInputs, AnOutputEndingInASlashIsRefused) {
+    writeProbeFile(file("probe.json"), testing::distinctProbe(3), {});
+    for (Failure failure : everyWriter(file("probe.json"))) {
+        failure.mentions = {"names a folder, not a file"};
+        SCOPED_TRACE(failure.args[0] + " -> " + failure.output);
+        const std::string output = file("new_" + failure.output);
+        RunResult result = run(withOutput(failure.args, output + "/"));
+        expectMessage(failure, result);
+        EXPECT_LT(result.seconds, 5.0) << "the output must be checked before any work";
+        EXPECT_FALSE(fs::exists(output));
+    }
+}
+
 // "-o ''" names no file: every command refuses it in the same words (exit 2, one line; bake and
 // convert have a default name they must not take instead, the others said "cannot write ''" with
 // exit 3), and nothing appears in the working folder. So does an empty input

@@ -811,7 +811,8 @@ bool hasBatchSummary(const std::string& out, const std::string& counts) {
 
 // The same three inputs and options (order 4, irradiance, on the GPU) baked one by one with -o, as
 // one batch (a single GPU submission) and as a batch forced into chunks (--batch-bytes 17000: a and b in one
-// submission, c in another; c given through --list, between a comment and a blank line) give the
+// submission, c in another; c given through --list, between a comment and a blank line, the list
+// starting with UTF-8's byte-order mark as some editors save it) give the
 // same files, byte for byte and number for number. No progress bar on stderr, which is not a
 // terminal here (runOk: stderr empty); the summary counts probes, texels and submissions.
 TEST_F(CliBatch, BatchEqualsSingleBakesProbeForProbe) {
@@ -826,7 +827,7 @@ TEST_F(CliBatch, BatchEqualsSingleBakesProbeForProbe) {
         << whole.out;
     EXPECT_CONTAINS(whole.out, "shprobe bake: 3 inputs -> " + file("whole"));
 
-    writeText(file("list.txt"), "# the third input\n\n  " + c() + "  \n");
+    writeText(file("list.txt"), "\xEF\xBB\xBF# the third input\n\n  " + c() + "  \n");
     RunResult chunked = runOk(with({"bake", a(), b(), "--list", file("list.txt"), "--out-dir",
                                     file("chunked"), "--batch-bytes", "17000"},
                                    shared));

@@ -190,7 +190,7 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
             "Batch: most texel bytes (16 a texel: 6 x N^2 x 16 per cube map, W x H x 16 per equirect) "
             "one GPU submission bakes; default and upper bound: the device's limit")
         ->type_name("N")
-        ->check(numberFrom(1.0, HUGE_VAL));
+        ->transform(wholeNumberFrom(1, INT64_MAX));
     addRangeOption(command, "--order", options.order, "SH order = number of bands (3: 9 coefficients)", 1,
                    kMaxOrder);
     command.add_option("--layout", options.layout, "Input layout")

@@ -40,6 +40,8 @@ std::vector<std::string> readInputList(const std::string& path) {
     } catch (const Error& error) {
         throw Error(ErrorKind::Input, std::string("--list ") + error.what());
     }
+    // A list saved by an editor that marks UTF-8: the mark is no part of the first path.
+    if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
     std::istringstream in(text);
     std::vector<std::string> inputs;
     int number = 0;

@@ -122,7 +122,8 @@ OutputTarget resolveTarget(const std::string& destination) {
     std::string path = destination;
     for (int links = 0; links <= kMaxLinks; ++links) {
         const std::string folder = folderOf(path), name = nameOf(path);
-        if (name.empty() || name == "." || name == "..") failWrite(destination, "it is a folder");
+        if (name.empty() || name == "." || name == "..")
+            failWrite(destination, "it names a folder, not a file (a file's name does not end in / . or ..)");
         if (name.size() > NAME_MAX) failWriteErrno(destination, ENAMETOOLONG);
         struct stat status {};
         if (lstat(path.c_str(), &status) != 0) {

@@ -21,10 +21,12 @@ OutputKind outputKind(const std::string& path) {
 } // namespace
 
 void checkRenderOutputPath(const std::string& path) {
-    if (outputKind(path) == OutputKind::Unknown)
+    if (outputKind(path) == OutputKind::Unknown) {
+        checkOutputPath(path, OutputContent::Binary); // "out.png/" names a folder, whatever its type
         throw Error(ErrorKind::Input, path +
                                           ": unknown image type; use .exr or .hdr (linear) or .png or .jpg "
                                           "(tonemapped sRGB)");
+    }
     checkOutputPath(path, OutputContent::Binary);
 }
 
