@@ -564,6 +564,20 @@ TEST_F(SceneTest, SparseAccessorsAreApplied) {
     const World world = loadGltfScene(file("sparse.gltf"));
     ASSERT_EQ(world.positions.size(), 3u);
     EXPECT_EQ(world.positions[2], glm::vec3(5.0f, 6.0f, 7.0f));
+
+    // Indices that do not strictly increase (2, then 1) are refused: a repeated one would give an
+    // element two values, whichever an engine takes last.
+    const uint32_t indices[2] = {2, 1};
+    const float values[6] = {5.0f, 6.0f, 7.0f, 8.0f, 9.0f, 10.0f};
+    bytes.assign(reinterpret_cast<const char*>(indices), 8);
+    bytes.append(reinterpret_cast<const char*>(values), 24);
+    document["buffers"][1] = {{"byteLength", bytes.size()}, {"uri", dataUri(bytes)}};
+    document["bufferViews"][views - 2]["byteLength"] = 8;
+    document["bufferViews"][views - 1] = {{"buffer", 1}, {"byteOffset", 8}, {"byteLength", 24}};
+    document["accessors"][0]["sparse"]["count"] = 2;
+    document["accessors"][0]["max"] = {8.0, 9.0, 10.0};
+    writeText(file("unordered.gltf"), document.dump());
+    expectRefused(file("unordered.gltf"), {"sparse index 1 after 2", "strictly increase"});
 }
 
 // One edit of the box fixture's JSON each, and the words its refusal must hold.
@@ -583,7 +597,10 @@ TEST_F(SceneTest, MalformedScenesAreRefused) {
          {"accessors[0] claims 1000000000 elements of 12 bytes", "which has 288"}},
         {"a byte stride past glTF's",
          [](json& d) { d["bufferViews"][0]["byteStride"] = 256; },
-         {"bufferViews[0].byteStride is 256", "multiple of 4 up to 252"}},
+         {"bufferViews[0].byteStride is 256", "multiple of 4 from 4 to 252"}},
+        {"a byte stride of 0, below glTF's 4",
+         [](json& d) { d["bufferViews"][0]["byteStride"] = 0; },
+         {"bufferViews[0].byteStride is 0", "multiple of 4 from 4 to 252"}},
         {"a buffer view past its buffer",
          [](json& d) { d["bufferViews"][0]["byteLength"] = 100000; },
          {"bufferViews[0]", "past the end of buffer 0"}},

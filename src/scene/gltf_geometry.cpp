@@ -269,6 +269,10 @@ std::vector<Out> readAccessor(const AccessorReader& reader, const AllowedFormats
         if (at[i] >= accessor.count)
             reader.fail("has sparse index " + std::to_string(at[i]) + ", past its " +
                         std::to_string(accessor.count) + " elements");
+        // glTF 2.0 3.6.2.3: the indices strictly increase, so no element is given twice.
+        if (i > 0 && at[i] <= at[i - 1])
+            reader.fail("has sparse index " + std::to_string(at[i]) + " after " + std::to_string(at[i - 1]) +
+                        "; sparse indices must strictly increase");
         std::copy_n(substitutes.begin() + ptrdiff_t(i * components), components,
                     values.begin() + ptrdiff_t(at[i] * components));
     }

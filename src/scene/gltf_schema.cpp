@@ -329,10 +329,10 @@ void checkBufferViews(const json& root, const Checker& checker) {
         if (!view.contains("buffer") || !view.contains("byteLength")) continue;
         const uint64_t length = sizeOr(view, "byteLength", 0);
         if (length < 1) checker.fail(where + ".byteLength", "must be at least 1");
-        if (const uint64_t stride = sizeOr(view, "byteStride", 0);
-            stride > uint64_t(kMaxGltfByteStride) || stride % 4 != 0)
+        if (const uint64_t stride = sizeOr(view, "byteStride", 4);
+            stride < 4 || stride > uint64_t(kMaxGltfByteStride) || stride % 4 != 0)
             checker.fail(where + ".byteStride", "is " + std::to_string(stride) +
-                                                    "; it must be a multiple of 4 up to " +
+                                                    "; it must be a multiple of 4 from 4 to " +
                                                     std::to_string(kMaxGltfByteStride));
         const uint64_t buffer = view["buffer"].get<uint64_t>();
         if (buffer >= buffers.size())
