@@ -3,6 +3,7 @@
 #include "app/toolkit.h"
 #include "common/counted.h"
 #include "common/scope_exit.h"
+#include "common/short_number.h"
 #include "common/stopwatch.h"
 #include "formats/engine_export.h"
 #include "image/specular_prefilter.h"
@@ -18,6 +19,7 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <limits>
 #include <thread>
 
 namespace shprobe {
@@ -255,13 +257,32 @@ std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, GpuSession& sessio
     return results;
 }
 
+namespace {
+
+// The largest coefficient's magnitude.
+double largestCoefficient(const ShCoefficients& coefficients) {
+    double largest = 0.0;
+    for (const glm::dvec3& rgb : coefficients.rgb)
+        largest = std::max({largest, std::abs(rgb.r), std::abs(rgb.g), std::abs(rgb.b)});
+    return largest;
+}
+
+} // namespace
+
 void requireUsable(const Backend& backend, const BakeResult& result, const std::string& input) {
     const GpuBake coefficients{result.radiance, result.irradiance};
     if (backend.name == "gpu") return requireFinite(coefficients, input);
-    if (isFinite(coefficients)) return;
-    throw Error(ErrorKind::Input,
-                input + ": CPU bake: the coefficients are not finite (input values too large for " +
-                    (backend.name == "reference" ? "double" : "fp32") + " sums?)");
+    if (!isFinite(coefficients))
+        throw Error(ErrorKind::Input,
+                    input + ": CPU bake: the coefficients are not finite (input values too large for " +
+                        (backend.name == "reference" ? "double" : "fp32") + " sums?)");
+    // The reference sums in double, but every file holds floats: a larger coefficient would be
+    // written as a number no reader of the file takes.
+    const double largest =
+        std::max(largestCoefficient(result.radiance), largestCoefficient(result.irradiance));
+    if (largest <= double(std::numeric_limits<float>::max())) return;
+    throw Error(ErrorKind::Input, input + ": CPU bake: a coefficient is " + shortNumber(largest) +
+                                      ", past the float range (3.4e+38) the probe files hold");
 }
 
 const char* cpuBackendName(const std::string& backend) {
