@@ -221,7 +221,8 @@ std::vector<uint8_t> pngBytes(const std::string& png, const fs::path& folder, in
 // chain's texels, face images flipped about their vertical axes, mip after mip, within RGBD's 8-bit
 // precision: a stored byte v is within 1/2 of 255 (x D)^(1/2.2), so the decoded x is within
 // 2.2 ((v + 1/2) / 255)^1.2 (1/2 / 255) / D of the value (the derivative's largest over that half
-// step; D itself is stored exactly, as k / 255).
+// step; D itself is stored exactly, as k / 255). The asset is JSON, its source a file name that is
+// not UTF-8 included.
 TEST(SpecularChain, RgbdPngsDecodeToTheChain) {
     const fs::path folder = fs::temp_directory_path() / ("shprobe_specular_" + std::to_string(getpid()));
     fs::create_directories(folder);
@@ -231,10 +232,13 @@ TEST(SpecularChain, RgbdPngsDecodeToTheChain) {
     ExportOptions options;
     options.mapSize = 32;
     options.specular = {&environment, "a test environment"};
+    options.metadata.source = "caf\xe9\t.exr"; // a file name's bytes: not UTF-8, a tab in it
     ShCoefficients probe = makeCoefficients(3, Quantity::Radiance);
     addAmbient(probe, glm::dvec3(1.0));
     findExportFormat("gltf")->write((folder / "light.gltf").string(), probe, options);
+    // JSON must be UTF-8 (the validator and nlohmann refused the file): the byte is U+FFFD.
     const nlohmann::json asset = nlohmann::json::parse(std::ifstream(folder / "light.gltf"));
+    EXPECT_EQ(asset["asset"]["extras"]["source"], "caf\xef\xbf\xbd\t.exr");
     const nlohmann::json& light = asset["extensions"]["EXT_lights_image_based"]["lights"][0];
     const std::vector<Cubemap> chain = prefilterSpecular(environment, 32);
     ASSERT_EQ(light["specularImageSize"], 32);

@@ -8,6 +8,7 @@
 
 #include "common/error.h"
 #include "common/file_extension.h"
+#include "formats/json_reading.h"
 #include "formats/probe_export.h"
 #include "sh/basis.h"
 #include "sh/cubemap.h"
@@ -221,19 +222,6 @@ std::string base64(std::string_view bytes) {
     return out;
 }
 
-std::string jsonString(const std::string& text) {
-    std::string out = "\"";
-    for (unsigned char c : text) {
-        if (c == '"' || c == '\\')
-            out += '\\', out += char(c);
-        else if (c < 0x20)
-            out += ' ';
-        else
-            out += char(c);
-    }
-    return out + "\"";
-}
-
 // The probe's radiance at its order; an irradiance probe whose odd bands past 1 were lost (A_l = 0)
 // gives bands 0..2.
 ShCoefficients probeRadiance(const ShCoefficients& probe) {
@@ -295,7 +283,7 @@ std::string gltfText(const ShCoefficients& probe, const EngineCoefficients& c, c
     }
     return "{\n"
            "  \"asset\": {\"version\": \"2.0\", \"generator\": \"shprobe\", \"extras\": {\"source\": " +
-           jsonString(options.metadata.source) + ", \"specularImages\": " + jsonString(what) +
+           jsonText(options.metadata.source) + ", \"specularImages\": " + jsonText(what) +
            "}},\n"
            "  \"extensionsUsed\": [\"EXT_lights_image_based\"],\n"
            "  \"extensions\": {\n"
