@@ -26,24 +26,34 @@ ShCoefficients sampleProbe(int order, Quantity quantity) {
     return probe;
 }
 
-// Values are written with 9 significant digits: the GPU's float coefficients round-trip exactly
-// and doubles to 5e-9 relative.
-constexpr double kWriteRelativePrecision = 5e-9;
-
+// Values are written as text that reads back as themselves: a float in 9 significant digits (the
+// float again), a double in the shortest digits that give it back, at most 17. Near a float
+// rounding midpoint (values of 1 + k / 1000 moved to just past the midpoint to the next float), the
+// 9 digits written before gave the float on the other side of it about half the time, so the JSON
+// and binary files of one bake differed by an ulp.
 TEST(ProbeFile, RoundTripsEveryOrderAndQuantity) {
     for (int order = 1; order <= 8; ++order)
         for (Quantity quantity : {Quantity::Radiance, Quantity::Irradiance}) {
             ShCoefficients probe = sampleProbe(order, quantity);
+            for (size_t i = 0; i < probe.rgb.size(); ++i) {
+                const float f = 1.0f + float(i) / 1000.0f, next = std::nextafter(f, 2.0f);
+                probe.rgb[i].b = (double(f) + double(next)) / 2.0 + (double(next) - double(f)) * 1e-4;
+            }
             ShCoefficients read = parseProbeJson(probeToJson(probe, {}), "probe.json");
             ASSERT_EQ(read.order, order);
             ASSERT_EQ(read.quantity, quantity);
             ASSERT_EQ(read.rgb.size(), probe.rgb.size());
             for (size_t i = 0; i < probe.rgb.size(); ++i)
                 for (int c = 0; c < 3; ++c)
-                    EXPECT_NEAR(read.rgb[i][c], probe.rgb[i][c],
-                                kWriteRelativePrecision * std::abs(probe.rgb[i][c]))
-                        << "order " << order << " coefficient " << i;
+                    EXPECT_EQ(read.rgb[i][c], probe.rgb[i][c])
+                        << "order " << order << " coefficient " << i << " channel " << c;
         }
+    // A float is written in 9 digits, not in the 17 of the double it widens to.
+    ShCoefficients floats = makeCoefficients(1, Quantity::Radiance);
+    floats.rgb[0] = glm::dvec3(double(0.1f), double(-1.0406155f), 0.5);
+    const std::string text = probeToJson(floats, {});
+    EXPECT_NE(text.find("[0.100000001, -1.04061556, 0.5]"), std::string::npos) << text;
+    EXPECT_EQ(float(parseProbeJson(text, "probe.json").rgb[0].g), -1.0406155f);
 }
 
 TEST(ProbeFile, WritesTheRequiredFieldsFirstAndMetadataAfter) {

@@ -12,6 +12,7 @@
 #include "sh/basis.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fcntl.h>
 #include <nlohmann/json.hpp>
@@ -110,11 +111,18 @@ ProbeSun parseSun(const json& sun, const std::string& name) {
     return result;
 }
 
+// A coefficient as text that reads back as itself: a float (the GPU's) in 9 significant digits,
+// which give that float back; a double (the CPU's, a rotation's) in the shortest digits that give
+// the double back, at most 17. Nine digits of a double could fall on the other side of a float
+// rounding midpoint, so that the JSON and binary files of one bake differed by an ulp; the binary
+// file now holds float(JSON value), whichever is written.
 std::string formatNumber(double value) {
-    std::ostringstream out;
-    out.precision(9); // float coefficients round-trip with 9 significant digits
-    out << value;
-    return out.str();
+    char text[32];
+    const bool isFloat = double(float(value)) == value;
+    const auto written = isFloat
+                             ? std::to_chars(text, text + sizeof(text), value, std::chars_format::general, 9)
+                             : std::to_chars(text, text + sizeof(text), value);
+    return std::string(text, written.ptr);
 }
 
 } // namespace
