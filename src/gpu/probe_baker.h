@@ -2,7 +2,7 @@
 // into the caller's command buffer, the coefficients into the caller's buffer. No submission, no
 // wait and no host access happen here; the caller decides when the work runs and what follows it.
 //
-//   Device device = borrowDevice({physicalDevice, device, queueFamily});    // once
+//   Device device = borrowDevice({physicalDevice, vkDevice, queueFamily});  // once
 //   ProbeBaker baker = createProbeBaker(device, {.order = 3});
 //   ProbeBakeSet set = createProbeBakeSet(device, baker, {cubemapsView, 256, probeCount, buffer, 0});
 //   recordProbeBake(commandBuffer, baker, set);                              // per bake
