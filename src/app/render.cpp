@@ -73,17 +73,19 @@ struct RenderResult {
     RenderedImage image;
     RenderInput input;
     Background background = Background::Color;
+    std::string grid; // with --grid: what its cells show
     double renderMilliseconds = 0.0;
 };
 
-// Every band the probe and the renderer share: order 3 uses the first 9 of them.
-int foldOrder(const RenderOptions& options, const ShCoefficients& probe) {
-    return options.grid ? kMaxRenderOrder : std::max(options.order, std::min(probe.order, kMaxRenderOrder));
+// The bands drawn: those of --order, or the grid's 5. Only those: an irradiance probe of order 5 has
+// no radiance at order 5 (A_3 = 0) but has it at order 3, where radiance was refused.
+int foldOrder(const RenderOptions& options) {
+    return options.grid ? kMaxRenderOrder : options.order;
 }
 
 void renderInput(const Context& context, const RenderOptions& options, ImageSize size, RenderResult& result) {
-    ProbeShading probe = foldProbe(result.input.probe, foldOrder(options, result.input.probe),
-                                   result.input.name, result.input.sun);
+    ProbeShading probe =
+        foldProbe(result.input.probe, foldOrder(options), result.input.name, result.input.sun);
     float exposure = autoExposure(result.input.probe, result.input.sun) * std::exp2(options.exposure);
     OffscreenRenderer renderer = createOffscreenRenderer(context);
     ScopeExit releaseRenderer([&] { destroyOffscreenRenderer(context, renderer); });
@@ -92,6 +94,7 @@ void renderInput(const Context& context, const RenderOptions& options, ImageSize
     Clock::time_point start = Clock::now();
     if (options.grid) {
         result.image = renderGrid(context, renderer, {size.width, exposure});
+        result.grid = describeGrid(renderer);
     } else {
         result.background = chooseBackground(options, result.input, probe);
         Scene scene = sphereScene(orbitCamera(options.yaw, options.pitch, 3.2f), options.order,
@@ -107,7 +110,7 @@ RenderResult renderOnDevice(const RenderOptions& options, ImageSize size) {
     RenderResult result;
     if (isProbeFile(options.input)) {
         result.input = readProbeInput(options.input);
-        foldProbe(result.input.probe, foldOrder(options, result.input.probe), result.input.name,
+        foldProbe(result.input.probe, foldOrder(options), result.input.name,
                   result.input.sun); // throws early
     }
     Context context = createRenderContext(options, size);
@@ -133,8 +136,7 @@ void printSummary(const RenderOptions& options, const RenderResult& result) {
     std::printf("shprobe render: %s -> %s (%dx%d)\n", result.input.name.c_str(), options.output.c_str(),
                 result.image.linear.width, result.image.linear.height);
     if (options.grid)
-        std::printf("  grid     environment | order 3 | order 5; spheres: l1-nonlinear | irradiance 3 | "
-                    "irradiance 5\n");
+        std::printf("  grid     %s\n", result.grid.c_str());
     else
         std::printf("  shading  order %d, %s, background %s\n", options.order, options.mode.c_str(),
                     backgroundName(result.background));

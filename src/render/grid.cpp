@@ -7,6 +7,7 @@
 #include <cstring>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
+#include <string>
 
 namespace shprobe {
 
@@ -66,7 +67,22 @@ void placeCell(RenderedImage& grid, const RenderedImage& cell, int x0, int y0) {
     }
 }
 
+// What a panorama cell shows, in the summary's words.
+std::string panoramaName(const Scene& cell) {
+    const std::string order = "order-" + std::to_string(cell.order) + " ";
+    if (cell.background == Background::Environment) return "environment";
+    return order + (cell.background == Background::Radiance ? "radiance" : "E/pi");
+}
+
 } // namespace
+
+std::string describeGrid(const OffscreenRenderer& renderer) {
+    std::string top;
+    for (int column = 0; column < kGridColumns; ++column)
+        top += (column ? " | " : "") + panoramaName(panoramaCell(renderer, column));
+    return top + "; spheres: l1-nonlinear | irradiance 3 | irradiance 5, in front of the " +
+           backgroundName(sphereCell(renderer, 0).background);
+}
 
 VkExtent2D gridCellExtent(uint32_t cellWidth) {
     const uint32_t width = std::max(cellWidth, 2u);

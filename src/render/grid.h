@@ -13,6 +13,8 @@
 #pragma once
 #include "render/offscreen.h"
 
+#include <string>
+
 namespace shprobe {
 
 constexpr int kGridColumns = 3;
@@ -25,6 +27,10 @@ struct GridOptions {
 
 // One cell's pixels: cellWidth (at least 2) x half of it. The picture is kGridColumns x kGridRows cells.
 VkExtent2D gridCellExtent(uint32_t cellWidth);
+
+// What the cells show, as `render --grid` says it: "environment | order-3 radiance | order-5
+// radiance; spheres: ..., in front of the environment", or what stands in for them.
+std::string describeGrid(const OffscreenRenderer& renderer);
 
 // The renderer must hold the probe folded at order 5 (and the environment, if any).
 RenderedImage renderGrid(const Context& context, OffscreenRenderer& renderer, const GridOptions& options);

@@ -92,6 +92,25 @@ TEST_F(RenderCli, EnvironmentIsBakedFirstAndTheGridHasSixCells) {
     ImageInfo info = imageInfo(folder / "grid.png");
     EXPECT_EQ(info.width, 3 * 48) << "three columns of cells 48 wide";
     EXPECT_EQ(info.height, 2 * 24) << "two rows of cells 24 high";
+    EXPECT_CONTAINS(grid.out, "grid     environment | order-3 radiance | order-5 radiance; spheres: "
+                              "l1-nonlinear | irradiance 3 | irradiance 5, in front of the environment");
+}
+
+// The grid's summary names what its cells show where a probe file stands in for the environment:
+// the order-5 E/pi map top left, and E/pi maps for an irradiance probe of order 5, which has no
+// order-5 radiance (A_3 = 0). It said "environment | order 3 | order 5" for every input.
+TEST_F(RenderCli, TheGridSaysWhatItsCellsShow) {
+    const std::string radiance = folder / "radiance5.json", irradiance = folder / "irradiance5.json";
+    writeProbeFile(radiance, testProbe(5), {});
+    writeProbeFile(irradiance, testProbe(5, Quantity::Irradiance), {});
+    RunResult grid = run({"render", radiance, "--grid", "--size", "16", "-o", folder / "grid.png"});
+    ASSERT_EQ(grid.exitCode, 0) << describe(grid);
+    EXPECT_CONTAINS(grid.out, "grid     order-5 E/pi | order-3 radiance | order-5 radiance; spheres: "
+                              "l1-nonlinear | irradiance 3 | irradiance 5, in front of the radiance");
+    grid = run({"render", irradiance, "--grid", "--size", "16", "-o", folder / "grid.png"});
+    ASSERT_EQ(grid.exitCode, 0) << describe(grid);
+    EXPECT_CONTAINS(grid.out, "grid     order-5 E/pi | order-3 E/pi | order-5 E/pi; spheres: "
+                              "l1-nonlinear | irradiance 3 | irradiance 5, in front of the color");
 }
 
 // ---- The sun: bake --extract-sun, then render -------------------------------------------------
@@ -114,6 +133,37 @@ LinearImage readExr(const std::string& path) {
         for (int c = 0; c < 3; ++c)
             image.rgb.push_back(all[p * input->spec().nchannels + c]);
     return image;
+}
+
+// Radiance at order 3 needs bands 0..2, which an irradiance probe of any order gives back (E / A_l,
+// A_l != 0 for l <= 2): an order-5 irradiance probe draws the same picture as its first 9
+// coefficients alone, and as the radiance probe it was made from. It was refused ("band 3 is
+// lost"), which only order 5 needs.
+TEST_F(RenderCli, AnIrradianceProbeOfOrder5HasRadianceAtOrder3) {
+    const ShCoefficients radiance = testProbe(5);
+    ShCoefficients irradiance = convolveIrradiance(radiance), first9 = irradiance;
+    first9.order = 3;
+    first9.rgb.resize(9);
+    const std::string files[] = {folder / "radiance5.json", folder / "irradiance5.json",
+                                 folder / "irradiance3.json"};
+    writeProbeFile(files[0], radiance, {});
+    writeProbeFile(files[1], irradiance, {});
+    writeProbeFile(files[2], first9, {});
+    std::vector<LinearImage> images;
+    for (const std::string& file : files) {
+        const std::string out = file + ".exr";
+        RunResult result =
+            run({"render", file, "--order", "3", "--mode", "radiance", "--size", "24", "-o", out});
+        ASSERT_EQ(result.exitCode, 0) << describe(result);
+        images.push_back(readExr(out));
+    }
+    ASSERT_EQ(images[0].rgb.size(), 24u * 24u * 3u);
+    double worst = 0.0;
+    for (size_t i = 0; i < images[0].rgb.size(); ++i) {
+        EXPECT_EQ(images[1].rgb[i], images[2].rgb[i]) << "float " << i;
+        worst = std::max(worst, double(std::abs(images[1].rgb[i] - images[0].rgb[i])));
+    }
+    EXPECT_LT(worst, 1e-5) << "E / A_l gives the radiance back, to float rounding";
 }
 
 // The largest error, as a fraction of the light's power, of the order-n irradiance of a delta light:
