@@ -531,6 +531,22 @@ TEST_F(Reliability, ListMustBeARegularFile) {
     EXPECT_LT(run({"bake", "--list", "/dev/zero", "--out-dir", file("probes")}).seconds, 5.0);
 }
 
+// The window a probe was baked with (bake --window) is said in what convert and rotate write from
+// it, whose coefficients stay windowed: both dropped it. A window that is not a string is refused.
+TEST_F(Reliability, ConvertAndRotateKeepTheWindow) {
+    ProbeMetadata metadata;
+    metadata.window = "hanning:6";
+    writeProbeFile(file("windowed.json"), testing::distinctProbe(5), metadata);
+    runOk({"convert", file("windowed.json"), "-o", file("converted.json")});
+    runOk({"rotate", file("windowed.json"), "--euler", "0,90,0", "-o", file("turned.json")});
+    for (const char* name : {"converted.json", "turned.json"})
+        EXPECT_EQ(readProbe(file(name)).window, "hanning:6") << name;
+    std::string text = readText(file("windowed.json"));
+    text.replace(text.find("\"hanning:6\""), 11, "6");
+    writeText(file("bad.json"), text);
+    expectFailure({{"convert", file("bad.json"), "-o", "OUT"}, 2, {"field \"window\" must be a string"}});
+}
+
 // `rotate` turns the sun taken out of a probe with its coefficients: a light from d comes from R d.
 TEST_F(Reliability, RotateTurnsTheSun) {
     ProbeMetadata metadata;

@@ -47,6 +47,7 @@ void runConvert(const ConvertOptions& given) {
     ExportOptions exportOptions{.mapSize = options.mapSize, .mirror = options.mirror};
     exportOptions.metadata.source = options.input == "-" ? "standard input" : options.input;
     exportOptions.metadata.sun = probe.sun;
+    exportOptions.metadata.window = probe.window;
     format.write(options.output, probe.coefficients, exportOptions);
 
     FILE* report = reportStream(options.output);

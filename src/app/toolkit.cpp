@@ -284,6 +284,7 @@ void runRotate(const RotateOptions& options) {
     // The sun taken out of the coefficients turns with them: a light from d then comes from R d.
     metadata.sun = probe.sun;
     if (metadata.sun) metadata.sun->direction = glm::normalize(rotation * metadata.sun->direction);
+    metadata.window = probe.window; // a window scales whole bands, which a rotation keeps apart
     const ShCoefficients& coefficients = probe.coefficients;
     writeInFormat(format, options.output, rotate(makeShRotation(rotation, coefficients.order), coefficients),
                   metadata);

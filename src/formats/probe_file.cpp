@@ -214,8 +214,12 @@ Probe parseProbe(std::string_view text, const std::string& name) {
                        (rows.is_array() ? std::to_string(rows.size()) : std::string("a non-array")));
     for (size_t i = 0; i < rows.size(); ++i)
         coefficients.rgb[i] = parseRow(rows[i], i, name);
-    Probe probe{std::move(coefficients), std::nullopt};
+    Probe probe{std::move(coefficients), std::nullopt, {}};
     if (auto sun = root.find("sun"); sun != root.end()) probe.sun = parseSun(*sun, name);
+    if (auto window = root.find("window"); window != root.end()) {
+        if (!window->is_string()) fail(name, "field \"window\" must be a string");
+        probe.window = window->get<std::string>();
+    }
     return probe;
 }
 
@@ -271,7 +275,7 @@ Probe readProbe(const std::string& path) {
     if (count != 1)
         throw Error(ErrorKind::Input, name + ": the binary file holds " + counted(count, "probe") +
                                           "; give a file of one probe");
-    return Probe{std::move(parseBinaryProbes(bytes, name).front()), std::nullopt};
+    return Probe{std::move(parseBinaryProbes(bytes, name).front()), std::nullopt, {}};
 }
 
 ShCoefficients parseProbeJson(std::string_view text, const std::string& name) {

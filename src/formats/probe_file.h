@@ -38,6 +38,7 @@ void writeProbeFile(const std::string& path, const ShCoefficients& coefficients,
 struct Probe {
     ShCoefficients coefficients;
     std::optional<ProbeSun> sun;
+    std::string window; // the file's "window" (bake --window), which convert and rotate keep
 };
 
 // Parses and validates; throws Error(Input) naming `name` and the offending field. The optional
