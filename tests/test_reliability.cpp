@@ -474,13 +474,37 @@ TEST_F(Reliability, WholeNumberAndRepeatedOptionsAreRefusedInPlainWords) {
     }
 }
 
-// --mirror takes on or off, as its help says: not a number or yes, which CLI11 would take for a bool.
+// --mirror takes on or off, as its help says: not a number or yes, which CLI11 would take for a bool
+// (its help showed the default as 1, which it refused).
 TEST_F(Reliability, MirrorTakesOnOrOff) {
-    for (const char* value : {"2", "yes", "maybe"})
+    for (const char* value : {"1", "2", "yes", "maybe"})
         expectFailure({{"bake", "--format", "filament", "--mirror", value, "-o", "OUT"},
                        2,
                        {std::string("--mirror: ") + value + " is not on or off"},
                        "sky.filament.txt"});
+    EXPECT_CONTAINS(run({"convert", "--help"}).out, "--mirror on|off");
+}
+
+// --map-size and --mirror are refused where the format has no map or no mirroring to set: they were
+// ignored, exit 0, so a user asking for a 64-texel map got none and no word of it.
+TEST_F(Reliability, FormatOptionsTheFormatDoesNotUseAreRefused) {
+    writeProbeFile(file("p.json"), testing::distinctProbe(3), {});
+    for (const std::string command : {"bake", "convert"}) {
+        std::vector<std::string> base = {command};
+        if (command == "convert") base.push_back(file("p.json"));
+        auto with = [&](std::vector<std::string> more) {
+            more.insert(more.begin(), base.begin(), base.end());
+            return more;
+        };
+        expectFailure({with({"--map-size", "64", "-o", "OUT"}),
+                       2,
+                       {"--map-size sizes the maps of --format irradiance-equirect, irradiance-cross and "
+                        "gltf; --format json has none"}});
+        expectFailure({with({"--mirror", "off", "-o", "OUT"}),
+                       2,
+                       {"--mirror is for --format filament, not threejs"},
+                       "out.three.json"});
+    }
 }
 
 // A whole number is read in decimal, as it is checked: "08" is eight (CLI11 alone reads a leading 0
@@ -571,8 +595,9 @@ TEST_F(Reliability, OutputNamesFollowTheFormat) {
                                                                        {"irradiance-equirect", "probe.exr"}};
     for (const auto& [format, name] : defaults) {
         fs::create_directories(folder() / format);
-        RunResult result = run({"bake", "--face-size", "4", "-q", "--map-size", "8", "--format", format},
-                               {.workingFolder = file(format)});
+        std::vector<std::string> args = {"bake", "--face-size", "4", "-q", "--format", format};
+        if (format == "irradiance-equirect") args.insert(args.end(), {"--map-size", "8"});
+        RunResult result = run(args, {.workingFolder = file(format)});
         EXPECT_EQ(result.exitCode, 0) << describe(result);
         EXPECT_EQ(entriesOf(folder() / format), std::vector<std::string>{name}) << format;
     }

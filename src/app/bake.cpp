@@ -239,7 +239,7 @@ void addBakeOptions(CLI::App& command, BakeOptions& options) {
     addWindowOption(command, options.window);
 }
 
-void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool& mirror) {
+void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, std::optional<bool>& mirror) {
     std::vector<std::string> names;
     std::string help = "Output format (docs/exports.md):";
     for (const ExportFormat& each : exportFormats()) {
@@ -257,17 +257,26 @@ void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool
                     "gltf: specularImageSize, mip 0's face size (a power of two from 32 to 512; default "
                     "128)")
         ->transform(wholeNumberFrom(1, 16384));
-    command
-        .add_option("--mirror", mirror,
-                    "filament: on (default) matches cmgen's default mirroring of the cube map (x -> -x), "
-                    "off matches cmgen --no-mirror")
-        // CLI11 reads any number, yes and no as a bool too: the help names on and off alone.
-        ->check(CLI::Validator(
-            [](std::string& value) {
-                return value == "on" || value == "off" ? std::string() : value + " is not on or off";
-            },
-            "on or off"))
-        ->capture_default_str();
+    // CLI11 would read any number, yes and no as a bool: on and off alone are taken.
+    addParsedOption(
+        command, "--mirror", mirror,
+        [](const std::string& value) {
+            if (value != "on" && value != "off")
+                throw Error(ErrorKind::Input, "--mirror: " + value + " is not on or off");
+            return value == "on";
+        },
+        "filament: on (default) matches cmgen's default mirroring of the cube map (x -> -x), off matches "
+        "cmgen --no-mirror")
+        ->type_name("on|off");
+}
+
+void requireFormatOptionsUsed(const std::string& format, int mapSize, const std::optional<bool>& mirror) {
+    if (mapSize != 0 && format != "irradiance-equirect" && format != "irradiance-cross" && format != "gltf")
+        throw Error(ErrorKind::Input, "--map-size sizes the maps of --format irradiance-equirect, "
+                                      "irradiance-cross and gltf; --format " +
+                                          format + " has none");
+    if (mirror && format != "filament")
+        throw Error(ErrorKind::Input, "--mirror is for --format filament, not " + format);
 }
 
 void runBake(const BakeOptions& given) {

@@ -368,6 +368,7 @@ void checkFormatOptions(const BakeOptions& options) {
         throw Error(ErrorKind::Input,
                     "--extract-sun: --format " + options.format +
                         " cannot hold the sun; use --format json, which keeps it beside the coefficients");
+    requireFormatOptionsUsed(options.format, options.mapSize, options.mirror);
     requireMapSizeFits(options.format, options.mapSize);
     if (options.format == "gltf" && !options.lights.directional.empty())
         throw Error(ErrorKind::Input,
@@ -402,7 +403,8 @@ std::string lightsDrawnIn(const LightOptions& lights) {
 
 void writeOutput(const BakeOptions& options, const std::string& path, const ShCoefficients& probe,
                  const ProbeMetadata& metadata, const Environment& environment) {
-    ExportOptions exportOptions{.metadata = metadata, .mapSize = options.mapSize, .mirror = options.mirror};
+    ExportOptions exportOptions{
+        .metadata = metadata, .mapSize = options.mapSize, .mirror = options.mirror.value_or(true)};
     Cubemap specular;
     if (options.format == "gltf") {
         specular = specularRadianceOf(options, environment,

@@ -41,15 +41,15 @@ struct BakeOptions {
     bool validation = false;
     uint32_t workgroupSize = glsl::kDefaultWorkgroupWidth;
     uint32_t texelsPerInvocation = glsl::kDefaultTexelsPerInvocation;
-    bool quiet = false;      // no coefficient table
-    bool timings = false;    // single GPU bake: print each phase's time
-    LightOptions lights;     // analytic lights added to the environment's radiance
-    Window window;           // none | hanning:W | lanczos:W | dering | dering-lanczos
-    bool extractSun = false; // take the sun out and write it beside the probe
-    std::string format;      // json | binary | glsl | cpp | irradiance-equirect | irradiance-cross;
-                             // empty: from the output's extension, else json
-    int mapSize = 0;         // irradiance maps: equirect width or face size (0: 512 / 128)
-    bool mirror = true;      // filament: cmgen's default mirroring (off: cmgen --no-mirror)
+    bool quiet = false;         // no coefficient table
+    bool timings = false;       // single GPU bake: print each phase's time
+    LightOptions lights;        // analytic lights added to the environment's radiance
+    Window window;              // none | hanning:W | lanczos:W | dering | dering-lanczos
+    bool extractSun = false;    // take the sun out and write it beside the probe
+    std::string format;         // json | binary | glsl | cpp | irradiance-equirect | irradiance-cross;
+                                // empty: from the output's extension, else json
+    int mapSize = 0;            // irradiance maps: equirect width or face size (0: 512 / 128)
+    std::optional<bool> mirror; // filament: cmgen's default mirroring (off: cmgen --no-mirror); unset: on
 };
 
 // `shprobe convert IN -o OUT [--format F]`: a probe file in, any output format out (convert.cpp).
@@ -58,7 +58,7 @@ struct ConvertOptions {
     std::string output; // empty: "probe" and the format's extension
     std::string format; // empty: from the output's extension, else json
     int mapSize = 0;
-    bool mirror = true;
+    std::optional<bool> mirror;
 };
 
 struct InfoOptions {
@@ -278,7 +278,9 @@ void addBakeOptions(CLI::App& command, BakeOptions& options);
 void runBake(const BakeOptions& options);
 
 // --format (the formats of formats/engine_export.h), --map-size and --mirror, as bake and convert take them.
-void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, bool& mirror);
+void addFormatOptions(CLI::App& command, std::string& format, int& mapSize, std::optional<bool>& mirror);
+// Refuses --map-size and --mirror where `format` has no map or no mirroring to set.
+void requireFormatOptionsUsed(const std::string& format, int mapSize, const std::optional<bool>& mirror);
 
 void addConvertOptions(CLI::App& command, ConvertOptions& options);
 void runConvert(const ConvertOptions& options);

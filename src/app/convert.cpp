@@ -38,13 +38,14 @@ void runConvert(const ConvertOptions& given) {
     ConvertOptions options = given;
     settleFormatAndOutput(options.format, options.output);
     const ExportFormat& format = *findExportFormat(options.format);
+    requireFormatOptionsUsed(options.format, options.mapSize, options.mirror);
     requireMapSizeFits(options.format, options.mapSize);
     checkOutputPath(options.output, format.content);
     checkOutputsAreNotInputs({&options.output, 1}, {&options.input, 1});
     const Probe probe = readProbe(options.input);
     checkProbeFits(probe, format);
 
-    ExportOptions exportOptions{.mapSize = options.mapSize, .mirror = options.mirror};
+    ExportOptions exportOptions{.mapSize = options.mapSize, .mirror = options.mirror.value_or(true)};
     exportOptions.metadata.source = options.input == "-" ? "standard input" : options.input;
     exportOptions.metadata.sun = probe.sun;
     exportOptions.metadata.window = probe.window;

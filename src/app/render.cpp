@@ -204,6 +204,10 @@ void addRenderOptions(CLI::App& command, RenderOptions& options) {
     // The scene's own picture: none of the sphere's settings apply to it.
     addLitSceneOptions(command, options.scene,
                        {"input", "--order", "--mode", "--grid", "--background", "--face-size"});
+    // The grid draws both orders, its own modes and backgrounds, from its own camera.
+    CLI::Option* grid = command.get_option("--grid");
+    for (const char* name : {"--order", "--mode", "--background", "--yaw", "--pitch"})
+        grid->excludes(command.get_option(name));
 }
 
 CLI::Option* addSizeOption(CLI::App& command, std::optional<ImageSize>& size, const std::string& help) {
@@ -232,6 +236,9 @@ void runRender(const RenderOptions& options) {
     if (options.scene.transfer) return runTransferRender(options, size.width, size.height);
     if (options.scene.drawn()) return runSceneRender(options, size.width, size.height);
     checkOutputsAreNotInputs({&options.output, 1}, filesReadBy(options.input));
+    if (options.faceSize != 0 && isProbeFile(options.input))
+        throw Error(ErrorKind::Input, "--face-size sizes the cube map an environment image is baked into; " +
+                                          options.input + " is a probe file");
     RenderResult result = renderOnDevice(options, size);
     writeRenderedImage(options.output, result.image);
     printSummary(options, result);

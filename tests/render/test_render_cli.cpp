@@ -334,6 +334,19 @@ TEST_F(RenderCli, BadOptionsAreRefusedBeforeAnyOutput) {
     expectInputError({"render", folder / "missing.exr", "-o", out}, {"missing.exr"}, out);
     expectInputError({"render", order3, "--size", "0", "-o", out}, {"--size"}, out);
     expectInputError({"render", order3, "--grid", "-o", out}, {"order 5"}, out);
+    // Options the picture would not use were ignored, exit 0: the grid's cells have their own orders,
+    // modes, backgrounds and camera, and a probe file is not baked into a cube map.
+    std::string order5 = folder / "order5.json";
+    writeProbeFile(order5, testProbe(5), {});
+    for (const char* option : {"--order", "--mode", "--background", "--yaw", "--pitch"}) {
+        const std::string value = option == std::string("--order")        ? "3"
+                                  : option == std::string("--mode")       ? "radiance"
+                                  : option == std::string("--background") ? "color"
+                                                                          : "10";
+        expectInputError({"render", order5, "--grid", option, value, "-o", out}, {"--grid", option}, out);
+    }
+    expectInputError({"render", order3, "--face-size", "8", "-o", out}, {"--face-size", order3, "probe file"},
+                     out);
     // A target larger than one allocation may hold (3 GiB at 16384x12288 against lavapipe's 2 GiB,
     // the device the tests run on): the advice names the option that sizes it.
     const std::string exr = folder / "out.exr";
