@@ -611,13 +611,13 @@ TEST_F(Reliability, OutputNamesFollowTheFormat) {
     EXPECT_NO_THROW(readProbeFile(file("chosen.txt"))) << "an extension naming no format: json";
     expectFailure({{"bake", "--format", "binary", "-o", "OUT"},
                    2,
-                   {"names a json file but --format is binary", ".bin"}});
+                   {"names a file of --format json, but --format is binary", ".bin"}});
     // An engine's double extension names that engine: another engine's format is refused, while a
     // plain .json (the last part of every engine's extension) takes any of them.
     writeProbeFile(file("p.json"), testing::distinctProbe(3), {});
     expectFailure({{"convert", file("p.json"), "--format", "unity", "-o", "OUT"},
                    2,
-                   {"names a godot file but --format is unity", ".unity.json"},
+                   {"names a file of --format godot, but --format is unity", ".unity.json"},
                    "x.godot.json"});
     runOk({"convert", file("p.json"), "--format", "unity", "-o", file("x.json")});
     EXPECT_CONTAINS(readText(folder() / "x.json"), "{");

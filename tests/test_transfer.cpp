@@ -520,8 +520,8 @@ TEST_F(TransferProgram, BadInputsAreRefusedWithOneLine) {
 TEST_F(TransferProgram, OutputNamesAgreeWithTheFormat) {
     const std::string scene = path("scene.glb");
     const std::vector<std::pair<std::string, std::string>> cases = {
-        {"--format binary -o " + path("t.glb"), "names a glb file but --format is binary"},
-        {"--format glb -o " + path("t.shpt"), "names a binary file but --format is glb"},
+        {"--format binary -o " + path("t.glb"), "names a file of --format glb, but --format is binary"},
+        {"--format glb -o " + path("t.shpt"), "names a file of --format binary, but --format is glb"},
         {"-o " + path("t.gltf"), "names a JSON glTF file"},
         {"-o " + path("t.png"), "names neither a .glb nor a .shpt file"},
     };

@@ -52,8 +52,8 @@ void checkOutputName(const TransferCommandOptions& options) {
                         " names neither a .glb nor a .shpt file; transfer writes binary glTF "
                         "(.glb) or the transfer alone (.shpt)");
     if (named && !options.format.empty() && options.format != named)
-        throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
-                                          options.format + "; use the extension " +
+        throw Error(ErrorKind::Input, "-o " + output + " names a file of --format " + named +
+                                          ", but --format is " + options.format + "; use the extension " +
                                           (options.format == "binary" ? ".shpt" : ".glb") +
                                           " or leave out --format");
 }

@@ -456,12 +456,13 @@ void requireRepresentable(const ExportFormat& format, const ShCoefficients& prob
         return std::isnan(value) ? std::numeric_limits<double>::infinity() : value;
     };
     bool refused = false;
+    double written = 0.0; // what the format makes of the worst coefficient
     for (const WrittenNumber& number : format.numbersOf(probe, options)) {
         if (representable(number.value, format.type)) continue;
         refused = true;
         for (int i = number.first; i < number.end; ++i)
             if (worstIndex < 0 || magnitude(i, number.channel) > magnitude(worstIndex, worstChannel))
-                worstIndex = i, worstChannel = number.channel;
+                worstIndex = i, worstChannel = number.channel, written = number.value;
     }
     if (!refused) return;
     const std::string name = options.metadata.source.empty() ? "the probe" : options.metadata.source;
@@ -470,10 +471,15 @@ void requireRepresentable(const ExportFormat& format, const ShCoefficients& prob
     if (worstIndex < 0) throw Error(ErrorKind::Input, name + ": a value is " + holds);
     static const char* const kChannels[] = {"red", "green", "blue"};
     const int l = shBand(worstIndex);
+    // 3e38 fits a float, but gltf writes pi times it: say so where the format's scaling is at fault.
+    const double value = probe.rgb[size_t(worstIndex)][worstChannel];
+    const std::string scaled = representable(value, format.type)
+                                   ? " and makes a written value of " + numberText(written)
+                                   : std::string();
     throw Error(ErrorKind::Input, name + ": coefficient l=" + std::to_string(l) +
                                       " m=" + std::to_string(worstIndex - l * (l + 1)) + " (" +
-                                      kChannels[worstChannel] + ") is " +
-                                      numberText(probe.rgb[size_t(worstIndex)][worstChannel]) + ", " + holds);
+                                      kChannels[worstChannel] + ") is " + numberText(value) + scaled + ", " +
+                                      holds);
 }
 
 void requireSunFits(const ExportFormat& format, const ExportOptions& options) {

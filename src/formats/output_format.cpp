@@ -45,9 +45,9 @@ void settleFormatAndOutput(std::string& format, std::string& output) {
     const std::string named = output.empty() ? "" : formatOfExtension(output);
     if (format.empty()) format = named.empty() ? "json" : named;
     if (!extensionAgrees(named, format))
-        throw Error(ErrorKind::Input, "-o " + output + " names a " + named + " file but --format is " +
-                                          format + "; use the extension " + formatExtension(format) +
-                                          " or leave out --format");
+        throw Error(ErrorKind::Input, "-o " + output + " names a file of --format " + named +
+                                          ", but --format is " + format + "; use the extension " +
+                                          formatExtension(format) + " or leave out --format");
     if (output.empty()) output = std::string("probe") + formatExtension(format);
 }
 

@@ -2,6 +2,7 @@
 // and the double references of the shading modes.
 #include "render/probe_shading.h"
 
+#include "common/counted.h"
 #include "common/error.h"
 #include "sh/basis.h"
 #include "sh/irradiance.h"
@@ -105,8 +106,8 @@ ProbeShading foldProbe(const ShCoefficients& probe, int order, const std::string
                                           std::to_string(kMaxRenderOrder));
     if (probe.order < order)
         throw Error(ErrorKind::Input, name + ": the probe has order " + std::to_string(probe.order) + " (" +
-                                          std::to_string(coefficientCount(probe.order)) +
-                                          " coefficients); order " + std::to_string(order) + " needs " +
+                                          counted(coefficientCount(probe.order), "coefficient") +
+                                          "); order " + std::to_string(order) + " needs " +
                                           std::to_string(coefficientCount(order)) +
                                           " (bake it with --order " + std::to_string(order) + ")");
     ProbeShading shading;
