@@ -308,6 +308,22 @@ World furnaceWorld() {
     return furnace;
 }
 
+World furnaceBesideAFarGround() {
+    World world = furnaceWorld();
+    for (const glm::vec3& p : {glm::vec3(-1e5f, -100.0f, -1e5f), glm::vec3(0.0f, -100.0f, 1e5f),
+                               glm::vec3(1e5f, -100.0f, -1e5f)}) {
+        world.indices.push_back(uint32_t(world.positions.size()));
+        world.positions.push_back(p);
+        world.normals.push_back(glm::vec3(0.0f, 1.0f, 0.0f));
+        world.uvs.push_back(glm::vec2(0.0f));
+        world.boundsMin = glm::min(world.boundsMin, p);
+        world.boundsMax = glm::max(world.boundsMax, p);
+    }
+    world.triangleMaterials.push_back(uint32_t(world.materials.size()));
+    world.materials.push_back(SceneMaterial{.albedo = glm::vec3(0.0f)}); // black, one-sided
+    return world;
+}
+
 const World& engineWorld(const std::string& modelsFolder) {
     static const World world =
         loadGltfScene(modelsFolder + "/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");

@@ -132,6 +132,9 @@ World loadCornellBoxWorld(const CornellBoxOptions& options = {});
 // The closed Cornell box as a furnace: every material double-sided, albedo 1/2 and emission 1, so
 // that every ray meets a wall leaving 1 + 1/2 + ... + 1/2^k at bounce k.
 World furnaceWorld();
+// The furnace beside a ground triangle 2e5 across, 100 below it, that no ray from inside meets: rays
+// leaving a wall start off it by the wall's own scale, not the ground's (3 units, past the walls).
+World furnaceBesideAFarGround();
 
 // Loaded once per process and kept, for tests that cast many rays at one scene: 2CylinderEngine.glb
 // (121,496 triangles) from the glTF2 folder of Debian's assimp-testmodels, and the Cornell box with

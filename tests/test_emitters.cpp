@@ -146,7 +146,8 @@ void checkLitPatchIrradiance(const World& world, const char* what) {
     SurfaceHit at;
     at.position = position;
     at.normal = at.shadingNormal = normal;
-    at.rayOrigin = position + shading.offset() * normal;
+    at.offset = kSurfaceOffsetScale * 1.5; // as far off as a triangle reaching 1.5 starts its rays
+    at.rayOrigin = position + at.offset * normal;
     RandomStream random(8, 9, 10);
     Estimate estimate;
     uint64_t rays = 0;

@@ -30,21 +30,25 @@ namespace {
 
 // A closed box of uniform emission E and albedo a, probes inside: every ray meets a wall leaving
 // E (1 + a + ... + a^k) at bounce k, so every gathered point and every probe sees exactly that,
-// whatever the cache's spacing or rays; L00 = 2 sqrt(pi) times it. Float rounding only: 1e-5.
+// whatever the cache's spacing or rays; L00 = 2 sqrt(pi) times it. Float rounding only: 1e-5. The
+// same beside a ground 2e5 across: rays leaving the walls started 3 units off them (256 float steps
+// of the scene's largest coordinate), outside the box, and bounce 1 and 2 saw nothing (L00 at bounce
+// 2 was that of bounce 0); off each triangle by its own coordinates they stay inside.
 TEST(RayBake, FurnaceFollowsTheGeometricSeries) {
-    const World furnace = testing::furnaceWorld();
     const std::vector<glm::dvec3> positions{{0.0, 1.0, 0.0}, {0.5, 0.3, -0.7}};
-    for (int bounces : {0, 1, 2}) {
-        RayBaker baker(furnace, testing::directionalSky(4),
-                       {.order = 2, .faceSize = 8, .bounces = bounces, .gatherRays = 16});
-        const std::vector<RayBakedProbe> probes = baker.bakeProbes(positions);
-        const double series = 2.0 - std::pow(0.5, bounces); // 1 + 1/2 + ... + 1/2^k
-        for (const RayBakedProbe& probe : probes) {
-            EXPECT_NEAR(probe.radiance.rgb[0].g, 2.0 * std::sqrt(std::numbers::pi) * series, 1e-5) << bounces;
-            for (size_t i = 1; i < probe.radiance.rgb.size(); ++i)
-                EXPECT_NEAR(probe.radiance.rgb[i].g, 0.0, 1e-5) << bounces;
+    for (const World& furnace : {testing::furnaceWorld(), testing::furnaceBesideAFarGround()})
+        for (int bounces : {0, 1, 2}) {
+            RayBaker baker(furnace, testing::directionalSky(4),
+                           {.order = 2, .faceSize = 8, .bounces = bounces, .gatherRays = 16});
+            const std::vector<RayBakedProbe> probes = baker.bakeProbes(positions);
+            const double series = 2.0 - std::pow(0.5, bounces); // 1 + 1/2 + ... + 1/2^k
+            for (const RayBakedProbe& probe : probes) {
+                EXPECT_NEAR(probe.radiance.rgb[0].g, 2.0 * std::sqrt(std::numbers::pi) * series, 1e-5)
+                    << bounces;
+                for (size_t i = 1; i < probe.radiance.rgb.size(); ++i)
+                    EXPECT_NEAR(probe.radiance.rgb[i].g, 0.0, 1e-5) << bounces;
+            }
         }
-    }
 }
 
 // The same furnace with bounces by paths: each hit's emission is found both by the path's cosine ray

@@ -78,12 +78,13 @@ std::vector<SurfacePoint> vertexPoints(const World& world, std::span<const uint3
                                    p;
         const double distance = glm::length(towards);
         const glm::dvec3 n(world.normals[v]);
+        const double offset = shading.offset(uint32_t(at / 3));
         const glm::dvec3 moved =
-            distance == 0.0 ? p : p + towards * (std::min(4.0 * shading.offset(), 0.5 * distance) / distance);
+            distance == 0.0 ? p : p + towards * (std::min(4.0 * offset, 0.5 * distance) / distance);
         const int c = int(at % 3);
         const glm::dvec2 barycentric(c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0);
-        points.push_back({moved + shading.offset() * n, n,
-                          shading.surfacePoint(uint32_t(at / 3), barycentric, true).albedo});
+        points.push_back(
+            {moved + offset * n, n, shading.surfacePoint(uint32_t(at / 3), barycentric, true).albedo});
     }
     return points;
 }

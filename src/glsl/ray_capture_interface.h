@@ -106,7 +106,8 @@ struct RayCaptureConstants {
     uvec4 work;  // x: the probes (capture_rays) or points (cache_gather) of the pass; y: the first
                  // point (cache_gather); z: the bounce the cache holds (0: none, reflect no bounce);
                  // w: g, the gather's g x g rays per point, or s, the probes' s x s rays per texel
-    vec4 scale;  // x: how far leaving rays start off a surface (scene/surface_shading.h offset())
+    vec4 scale;  // x: a leaving ray's start off a surface over its triangle's largest coordinate
+                 // (scene/surface_shading.h kSurfaceOffsetScale)
     uvec4 seed;  // x: the random numbers' seed; y: the bounce gathered; zw: the words (low, high)
                  // of the probes' view stream base (scene/view_rays.h viewStreamBase)
     uvec4 paths; // capture_rays: x: the bounces continued as paths from each ray's hit (0: none, the

@@ -119,7 +119,8 @@ vec3 emitterIrradiance(RaySurface at, PathNumbers numbers, uint level) {
     RaySurface light = describeSurface(triangle, barycentric, direction);
     float lightCosine = abs(dot(light.normal, direction));
     if (oneSidedBack(light) || !(lightCosine > 0.0)) return vec3(0.0);
-    if (bvhAnyHit(rc.sizes.w, at.leaving, direction, 0.0, distance - 2.0 * rc.scale.x)) return vec3(0.0);
+    if (bvhAnyHit(rc.sizes.w, at.leaving, direction, 0.0, distance - 2.0 * max(at.offset, light.offset)))
+        return vec3(0.0);
     float density = emitterAreaDensity(triangle) * distance * distance / lightCosine;
     float weight = powerHeuristic(density, cosine * INV_PI);
     return surfaceEmission(light.material, light.uv) * (cosine / density * weight);
@@ -199,7 +200,8 @@ vec3 sunlitIrradiance(RaySurface at, PathNumbers numbers, uint level) {
     float sunCosine = dot(lit.shading, light.direction.xyz);
     float litCosine = abs(dot(lit.normal, direction));
     if (oneSidedBack(lit) || !(sunCosine > 0.0) || !(litCosine > 0.0)) return vec3(0.0);
-    if (bvhAnyHit(rc.sizes.w, at.leaving, direction, 0.0, distance - 2.0 * rc.scale.x)) return vec3(0.0);
+    if (bvhAnyHit(rc.sizes.w, at.leaving, direction, 0.0, distance - 2.0 * max(at.offset, lit.offset)))
+        return vec3(0.0);
     if (bvhAnyHit(rc.sizes.w, lit.leaving, light.direction.xyz, 0.0, RAY_FAR)) return vec3(0.0);
     float area = plane.corner.w * plane.corner.w;
     float density = sunlitCells[index] / area * abs(dot(lit.normal, plane.toSun.xyz)) * distance * distance /

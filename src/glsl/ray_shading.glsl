@@ -93,8 +93,16 @@ struct RaySurface {
     vec3 shading;
     vec2 uv;
     vec3 leaving;
+    float offset; // how far `leaving` is off the surface and back along the ray
     bool front;
 };
+
+// How far leaving rays start off a triangle: kSurfaceOffsetScale (rc.scale.x) times the largest
+// |x|, |y|, |z| of its corners (scene/surface_shading.h SceneShading::offset).
+float surfaceOffset(vec3 p0, vec3 p1, vec3 p2) {
+    vec3 largest = max(max(abs(p0), abs(p1)), abs(p2));
+    return rc.scale.x * max(max(largest.x, largest.y), largest.z);
+}
 
 // Whether the ray met the back of a one-sided material, which leaves nothing.
 bool oneSidedBack(RaySurface surface) {
@@ -119,8 +127,9 @@ RaySurface describeSurface(uint triangle, vec2 barycentric, vec3 direction) {
     // of them alone lies on the other, where rounding (the scene's scale) decides whether its shadow
     // ray leaves the room.
     vec3 shading = side * (length(interpolated) > 0.0 ? normalize(interpolated) : normal);
-    return RaySurface(material, side * normal, shading, uv, position + rc.scale.x * (side * normal - direction),
-                      front);
+    float offset = surfaceOffset(v0.positionU.xyz, v1.positionU.xyz, v2.positionU.xyz);
+    return RaySurface(material, side * normal, shading, uv, position + offset * (side * normal - direction),
+                      offset, front);
 }
 
 // The radiance arriving at `origin` from unit `direction`, the surfaces reflecting the cached

@@ -278,7 +278,7 @@ glsl::RayCaptureConstants rayConstants(const SceneCapture& capture, const RayCap
     glsl::RayCaptureConstants constants{};
     constants.sizes = glm::uvec4(uint32_t(capture.options.faceSize), capture.skyFaceSize,
                                  uint32_t(capture.suns.size()), uint32_t(rays.bvh.nodes.size()));
-    constants.scale = glm::vec4(rays.surfaceOffset, 0.0f, 0.0f, 0.0f);
+    constants.scale = glm::vec4(rays.surfaceOffsetScale, 0.0f, 0.0f, 0.0f);
     const uint64_t viewStream = viewStreamBase(rays.options.seed);
     constants.seed =
         glm::uvec4(uint32_t(rays.options.seed), 0u, uint32_t(viewStream), uint32_t(viewStream >> 32));
@@ -470,7 +470,7 @@ RayCapture createRayCapture(const Context& context, const SceneCapture& capture,
     rays.options = options;
     const World& world = shading.world();
     rays.bvh = buildBvh(world);
-    rays.surfaceOffset = float(shading.offset());
+    rays.surfaceOffsetScale = float(kSurfaceOffsetScale);
     rays.gatherSide = uint32_t(squareSide(options.gatherRays));
     rays.texelSide = uint32_t(squareSide(options.raysPerTexel));
     rays.visibilityRange = visibilityRangeOf(world);

@@ -49,17 +49,17 @@ struct RayCaptureOptions {
 // The hierarchy and the surface cache on the device, with the two compute programs.
 struct RayCapture {
     RayCaptureOptions options;
-    Bvh bvh;                      // on the host too: the sky's suns a probe sees
-    float surfaceOffset = 0.0f;   // SceneShading::offset()
-    uint32_t cachePoints = 0;     // over all lattices and sides; 0 with paths
-    uint32_t emitters = 0;        // emissive triangles the paths sample (EmitterSampler)
-    uint32_t skyTexels = 0;       // sky texels the paths sample (SkySampler)
-    uint32_t sunlitCells = 0;     // suns' plane cells the paths sample (SunlitSampler)
-    size_t sunlitSuns = 0;        // the suns those cells belong to
-    uint32_t gatherSide = 1;      // g
-    uint32_t texelSide = 1;       // s
-    double visibilityRange = 1.0; // the farthest distance a visibility map records (visibilityRangeOf)
-    glm::vec3 boundsMin{0.0f};    // the world's lower corner, where the probes' paths are named from
+    Bvh bvh;                         // on the host too: the sky's suns a probe sees
+    float surfaceOffsetScale = 0.0f; // kSurfaceOffsetScale: a triangle's offset over its largest coordinate
+    uint32_t cachePoints = 0;        // over all lattices and sides; 0 with paths
+    uint32_t emitters = 0;           // emissive triangles the paths sample (EmitterSampler)
+    uint32_t skyTexels = 0;          // sky texels the paths sample (SkySampler)
+    uint32_t sunlitCells = 0;        // suns' plane cells the paths sample (SunlitSampler)
+    size_t sunlitSuns = 0;           // the suns those cells belong to
+    uint32_t gatherSide = 1;         // g
+    uint32_t texelSide = 1;          // s
+    double visibilityRange = 1.0;    // the farthest distance a visibility map records (visibilityRangeOf)
+    glm::vec3 boundsMin{0.0f};       // the world's lower corner, where the probes' paths are named from
     // The passes of the view's strata's shadow rays to the sky (stratumSkyRays; always asked: the
     // gpu bakes no transfer, see skyThroughStrata), as their RayCaptureConstants::pass; empty: none.
     std::vector<glm::uvec4> skyPasses;

@@ -212,7 +212,7 @@ SunlitLight SunlitSampler::reflectedTo(const SurfaceHit& at, double u0, double u
     const double sunCosine = glm::dot(lit.shadingNormal, toSun);
     const double litCosine = std::abs(glm::dot(lit.normal, direction));
     if (lit.backFace || !(sunCosine > 0.0) || !(litCosine > 0.0)) return {};
-    const float reach = float(distance - 2.0 * shading_->offset());
+    const float reach = float(distance - 2.0 * std::max(at.offset, lit.offset));
     ++rays;
     if (caster_->anyHit({glm::vec3(at.rayOrigin), glm::vec3(direction), 0.0f, reach})) return {};
     ++rays;

@@ -168,7 +168,8 @@ glm::dvec2 insideTriangle(const SceneShading& shading, uint32_t triangle, const 
         (1.0 - barycentric.x - barycentric.y) * p0 + barycentric.x * p1 + barycentric.y * p2;
     const double distance = glm::length((p0 + p1 + p2) / 3.0 - point);
     if (distance == 0.0) return barycentric;
-    const double fraction = std::clamp(kInwardOffsets * shading.offset() / distance, leastFraction, 0.5);
+    const double fraction =
+        std::clamp(kInwardOffsets * shading.offset(triangle) / distance, leastFraction, 0.5);
     return barycentric + fraction * (centroid - barycentric);
 }
 
@@ -373,7 +374,8 @@ std::optional<Meeting> RayBaker::State::intersect(const glm::dvec3& origin,
     const glm::dvec2 barycentric(hit->hit.u, hit->hit.v);
     Meeting meeting{shading.describe(hit->triangle, barycentric, direction), 0.0};
     meeting.distance = glm::length(meeting.surface.position - origin);
-    if (!(edgeDistance(shading.world(), hit->triangle, barycentric) >= kInwardOffsets * shading.offset()))
+    if (!(edgeDistance(shading.world(), hit->triangle, barycentric) >=
+          kInwardOffsets * shading.offset(hit->triangle)))
         meeting.surface = shading.describe(
             hit->triangle, insideTriangle(shading, hit->triangle, barycentric, 0.0), direction);
     return meeting;
@@ -476,7 +478,7 @@ glm::dvec3 RayBaker::State::emitterIrradiance(const SurfaceHit& hit, const Probe
     const double lightCosine = std::abs(glm::dot(light.normal, direction));
     if (light.backFace || !(lightCosine > 0.0)) return glm::dvec3(0.0);
     ++rays;
-    const float reach = float(distance - 2.0 * shading.offset());
+    const float reach = float(distance - 2.0 * std::max(hit.offset, light.offset));
     if (caster->anyHit({glm::vec3(hit.rayOrigin), glm::vec3(direction), 0.0f, reach})) return glm::dvec3(0.0);
     const double density = point.areaDensity * distance * distance / lightCosine;
     return light.emission * (cosine / density * powerHeuristic(density, cosine * std::numbers::inv_pi));

@@ -17,10 +17,7 @@ namespace shprobe {
 
 namespace {
 
-// Rays leaving a surface start this far off it along its geometric normal, in units of the scene's
-// largest coordinate: 256 float ulps of it, well above the few ulps by which single-precision hit
-// distances err there, so a leaving ray never meets its own triangle again; 3e-5 of the scene.
-constexpr double kOffsetScale = 256.0 * std::numeric_limits<float>::epsilon();
+static_assert(kSurfaceOffsetScale == 256.0 * std::numeric_limits<float>::epsilon());
 
 // --- World checks ------------------------------------------------------------------------------
 
@@ -220,7 +217,7 @@ void checkSceneScale(const World& world) {
                          number(kMinSceneSize) +
                          " the float ray test and capture resolve (products of three coordinates); scale "
                          "the scene up");
-    const double offset = kOffsetScale * largest;
+    const double offset = kSurfaceOffsetScale * largest;
     if (offset > kMaxSurfaceOffsetShare * size)
         throw scaleError("its coordinates reach " + number(largest) + ", where float's spacing (" +
                          number(largest * std::numeric_limits<float>::epsilon()) +
@@ -242,9 +239,17 @@ SceneShading::SceneShading(World world, const Cubemap& sky) {
     if (world.triangleCount() > 0 && solidTriangles_.empty())
         throw Error(ErrorKind::Input, (world.description.empty() ? "scene" : world.description) +
                                           ": no triangle has any area (the corners of each lie on a line)");
-    offset_ = kOffsetScale * largestCoordinate(world);
     world_ = std::move(world);
     sky_ = sky;
+}
+
+double SceneShading::offset(uint32_t triangle) const {
+    double largest = 0.0;
+    for (int corner = 0; corner < 3; ++corner) {
+        const glm::vec3& p = world_.positions[world_.indices[3 * size_t(triangle) + size_t(corner)]];
+        largest = std::max({largest, double(std::abs(p.x)), double(std::abs(p.y)), double(std::abs(p.z))});
+    }
+    return kSurfaceOffsetScale * largest;
 }
 
 SurfaceHit SceneShading::describe(uint32_t triangle, const glm::dvec2& barycentric,
@@ -259,7 +264,8 @@ SurfaceHit SceneShading::describe(uint32_t triangle, const glm::dvec2& barycentr
     hit.position = interpolate(world_.positions, vertex, weights);
     hit.normal = side * normal;
     hit.shadingNormal = side * shadingNormal(interpolate(world_.normals, vertex, weights), normal);
-    hit.rayOrigin = hit.position + offset_ * hit.normal;
+    hit.offset = offset(triangle);
+    hit.rayOrigin = hit.position + hit.offset * hit.normal;
     const glm::dvec2 uv = interpolate(world_.uvs, vertex, weights);
     hit.albedo = materialColor(world_, material.albedo, material.albedoTexture, uv);
     hit.emission = materialColor(world_, material.emission, material.emissionTexture, uv);

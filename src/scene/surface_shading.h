@@ -23,6 +23,7 @@ struct SurfaceHit {
     glm::dvec3 normal{0.0};        // geometric (from the winding), unit, turned to the ray's side
     glm::dvec3 shadingNormal{0.0}; // interpolated vertex normal, unit, turned with `normal`
     glm::dvec3 rayOrigin{0.0};     // position moved off the surface along `normal`: leaving rays start here
+    double offset = 0.0;           // how far: SceneShading::offset(triangle)
     glm::dvec3 albedo{0.0};        // material factor times texture at TEXCOORD_0
     glm::dvec3 emission{0.0};      // likewise
     uint32_t triangle = 0;         // the World's triangle
@@ -38,12 +39,20 @@ struct SurfaceHit {
 // 1e30; the capture's depth and normals need less.
 constexpr double kMinSceneSize = 1e-10;         // the bounding box's diagonal, at least
 constexpr double kMaxSceneCoordinate = 1e10;    // |x|, |y|, |z| of any vertex, at most
-constexpr double kMaxSurfaceOffsetShare = 0.01; // SceneShading::offset() over the diagonal, at most
+constexpr double kMaxSurfaceOffsetShare = 0.01; // the largest SceneShading::offset() over the diagonal
+
+// Rays leaving a surface start this far off it along its geometric normal, in units of its
+// triangle's largest coordinate: 256 float ulps of it, well above the few ulps by which
+// single-precision hits on that triangle err, so a leaving ray never meets it again. Of the
+// triangle's own coordinates, not the scene's, as Waechter and Binder ("A Fast and Robust Method
+// for Avoiding Self-Intersection", Ray Tracing Gems) offset by the point's: a room by the origin
+// beside a ground reaching 1e5 would otherwise start its rays 3 units off its walls, through them.
+constexpr double kSurfaceOffsetScale = 256.0 * 1.1920928955078125e-7;
 
 // Throws Error(Input) "DESCRIPTION: ..." (world.description, else "scene") naming the scale for a
 // World with triangles whose vertices all lie at one point, that is smaller than kMinSceneSize,
 // whose coordinates reach past kMaxSceneCoordinate, or whose float spacing is too coarse for its
-// size: where rays leaving a surface start (256 float steps of the largest coordinate off it) more
+// size: where rays leaving a surface start (256 float steps of its largest coordinate off it) more
 // than kMaxSurfaceOffsetShare of the scene away, a scene far from the origin for its size. Both
 // backends call it, and probeGridInWorld before it places a grid.
 void checkSceneScale(const World& world);
@@ -70,14 +79,14 @@ class SceneShading {
     std::span<const SceneSun> suns() const { return world_.suns; }
     // The triangles of non-zero area: the others cover no solid angle and have no normal.
     std::span<const uint32_t> solidTriangles() const { return solidTriangles_; }
-    // How far leaving rays start off a surface (SurfaceHit::rayOrigin).
-    double offset() const { return offset_; }
+    // How far leaving rays start off `triangle` (SurfaceHit::rayOrigin): kSurfaceOffsetScale times
+    // the largest |x|, |y|, |z| of its corners.
+    double offset(uint32_t triangle) const;
 
   private:
     World world_;
     std::vector<uint32_t> solidTriangles_;
     Cubemap sky_;
-    double offset_ = 0.0;
 };
 
 // What a front face reflects of the suns (scene.h): albedo / pi times sum_suns E_sun max(0, n.l)

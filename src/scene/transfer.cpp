@@ -71,6 +71,7 @@ class TransferBaker {
     Side makeSide(uint32_t vertex, bool back) const;
     glm::dvec3 albedo(uint32_t vertex) const;
     glm::dvec3 rayOrigin(uint32_t vertex) const;
+    double offset(uint32_t vertex) const;
     template <typename Ray> void forEachRay(const Side& side, Ray&& ray) const;
     void direct(const Side& side, std::span<glm::vec3> out, uint64_t& rays) const;
     void bounce(const Side& side, std::span<const glm::vec3> previous, std::span<glm::vec3> out,
@@ -132,7 +133,7 @@ Side TransferBaker::makeSide(uint32_t vertex, bool back) const {
     }
     const glm::dvec3 n(shading_.world().normals[vertex]);
     const glm::dvec3 normal = back ? -n : n;
-    side.origin = glm::vec4(glm::vec3(rayOrigin(vertex) + shading_.offset() * normal), 0.0f);
+    side.origin = glm::vec4(glm::vec3(rayOrigin(vertex) + offset(vertex) * normal), 0.0f);
     side.normal = glm::vec4(glm::vec3(normal), 0.0f);
     const uint64_t state = RandomStream(options_.seed, back ? 1 : 0, vertex).state();
     side.ids.x = uint32_t(state);
@@ -161,7 +162,12 @@ glm::dvec3 TransferBaker::rayOrigin(uint32_t vertex) const {
                                p;
     const double distance = glm::length(towards);
     if (distance == 0.0) return p;
-    return p + towards * (std::min(4.0 * shading_.offset(), 0.5 * distance) / distance);
+    return p + towards * (std::min(4.0 * offset(vertex), 0.5 * distance) / distance);
+}
+
+// How far the vertex's rays start off its surface: its first triangle's offset.
+double TransferBaker::offset(uint32_t vertex) const {
+    return shading_.offset(uint32_t(corner_[vertex]) / 3);
 }
 
 // Calls ray(origin, direction) for the side's g x g stratified cosine-distributed rays.
