@@ -436,6 +436,22 @@ TEST_F(SceneCommand, ProbesInsideGeometryAreMovedOut) {
     EXPECT_EQ(count, 5);
 }
 
+// Both backends write the capture offsets alike: where relocation can move a probe (a grid with
+// cells), even if none moved, and not for a single probe, which has no cell to move within (the gpu
+// backend wrote them, all zero, where the cpu did not).
+TEST_F(SceneCommand, CaptureOffsetsAreWrittenAlikeByBothBackends) {
+    const std::string scene = cornellBox();
+    for (const char* grid : {"1,1,1", "2,2,2"})
+        for (const char* backend : {"cpu", "gpu"}) {
+            const std::string output = file(std::string("offsets_") + backend + ".shpv");
+            runOk({"scene", scene, "--grid", grid, "--bounds", "-0.3,0.5,-0.3,0.3,1.5,0.3", "--face-size",
+                   "4", "--bounces", "0", "--backend", backend, "-q", "-o", output});
+            EXPECT_EQ(bytesOf(output).find("\"capture_offsets\": true") != std::string::npos,
+                      grid == std::string("2,2,2"))
+                << grid << " on " << backend;
+        }
+}
+
 // The two rooms of scene_fixtures.h (a lit room, a closed one, a 2 cm wall between them) with 5^3
 // probes, 25 of them inside the wall (x = 0; cells 0.9 x 0.4 x 0.4), faces 16^2, one bounce: what the
 // closed room's floor, back wall and ceiling receive as a share of the lit room's, with each measure

@@ -490,7 +490,7 @@ ProbeVolume bakeOnGpu(const Context& context, const SceneJob& job, VolumeBakeRep
     volume.visibilitySize = rays.options.visibilitySize;
     for (const SceneProbe& probe : probes) {
         volume.visibility.insert(volume.visibility.end(), probe.visibility.begin(), probe.visibility.end());
-        if (options.relocationLimit > 0.0) volume.offsets.push_back(probe.offset);
+        if (rays.options.relocation.limit > 0.0) volume.offsets.push_back(probe.offset); // as on the cpu
     }
     storeFilledProbes(volume, baked, filled, float(rays.visibilityRange));
     if (context.validationMessages() > 0)
