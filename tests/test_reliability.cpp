@@ -571,6 +571,17 @@ TEST_F(Reliability, ConvertAndRotateKeepTheWindow) {
     expectFailure({{"convert", file("bad.json"), "-o", "OUT"}, 2, {"field \"window\" must be a string"}});
 }
 
+// A number list takes subnormal numbers, which are numbers: --directional 1e-320,1e-320,0 is the
+// light of (1, 1, 0); it was refused as "not a list of numbers" (std::stod calls them out of range).
+TEST_F(Reliability, SubnormalNumbersAreNumbers) {
+    runOk({"light", "--directional", "1e-320,1e-320,0", "1,1,1", "-o", file("tiny.json")});
+    runOk({"light", "--directional", "1, 1, 0", "1,1,1", "-o", file("unit.json")});
+    const ShCoefficients tiny = readProbeFile(file("tiny.json")), unit = readProbeFile(file("unit.json"));
+    ASSERT_EQ(tiny.rgb.size(), unit.rgb.size());
+    for (size_t i = 0; i < tiny.rgb.size(); ++i)
+        EXPECT_NEAR(tiny.rgb[i].g, unit.rgb[i].g, 1e-12) << i;
+}
+
 // `rotate` turns the sun taken out of a probe with its coefficients: a light from d comes from R d.
 TEST_F(Reliability, RotateTurnsTheSun) {
     ProbeMetadata metadata;

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -33,13 +34,12 @@ std::vector<double> parseNumbers(const std::string& text, size_t count, const st
     std::stringstream stream(text);
     std::string item;
     while (std::getline(stream, item, ',')) {
-        try {
-            size_t used = 0;
-            values.push_back(std::stod(item, &used));
-            if (used != item.size() || !std::isfinite(values.back())) throw std::invalid_argument(item);
-        } catch (const std::exception&) {
+        // strtod, not stod: stod refuses a subnormal such as 1e-320 as out of range.
+        char* end = nullptr;
+        const double value = std::strtod(item.c_str(), &end);
+        if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(value))
             throw Error(ErrorKind::Input, option + ": '" + text + "' is not a list of numbers");
-        }
+        values.push_back(value);
     }
     if (values.size() != count)
         throw Error(ErrorKind::Input,
