@@ -322,8 +322,9 @@ TEST_F(BadInputs, HugeFiniteTexelsAreBaked) {
 // 3e38 is finite too, but the fp32 sums of the GPU and of the fast CPU path overflow: refused
 // (exit 2) with one line naming the input, and nothing is written; at the default backend too.
 // The double reference sums it, but its L00 (3e38 sqrt(4 pi) = 1.06e39) is past the floats every
-// file holds, and so is the irradiance pi L00 = 5.6e38 of 5e37: refused alike, where the JSON took
-// 1.06e39, which render and convert then refused.
+// file holds, and so is the irradiance pi L00 = 5.6e38 of 5e37, written with --irradiance: refused
+// alike, where the JSON took 1.06e39, which render and convert then refused. 5e37's radiance (L00
+// 1.8e38) fits, and is written.
 TEST_F(BadInputs, TexelsOverflowingFp32SumsAreRefused) {
     writeImage(file("overflow.exr"), constantImage(32, 16, glm::vec3(3e38f)));
     for (const char* backend : {"auto", "gpu", "cpu"})
@@ -331,12 +332,19 @@ TEST_F(BadInputs, TexelsOverflowingFp32SumsAreRefused) {
                        2,
                        {file("overflow.exr"), "not finite", "fp32 sums"}});
     writeImage(file("bright.exr"), constantImage(32, 16, glm::vec3(5e37f)));
-    for (const char* input : {"overflow.exr", "bright.exr"})
-        for (const auto& [format, output] : {std::pair{"json", "out.json"}, std::pair{"binary", "out.bin"}})
-            expectFailure({{"bake", file(input), "--backend", "reference", "--format", format, "-o", "OUT"},
-                           2,
-                           {file(input), "past the float range"},
-                           output});
+    for (const auto& [format, output] : {std::pair{"json", "out.json"}, std::pair{"binary", "out.bin"}}) {
+        expectFailure(
+            {{"bake", file("overflow.exr"), "--backend", "reference", "--format", format, "-o", "OUT"},
+             2,
+             {file("overflow.exr"), "past the float range"},
+             output});
+        expectFailure({{"bake", file("bright.exr"), "--backend", "reference", "--irradiance", "--format",
+                        format, "-o", "OUT"},
+                       2,
+                       {file("bright.exr"), "past the float range"},
+                       output});
+    }
+    runOk({"bake", file("bright.exr"), "--backend", "reference", "-q", "-o", file("bright.json")});
 }
 
 // Lights past float added to a finite projection: refused on every backend, naming the lights (the

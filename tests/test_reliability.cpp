@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <sys/mount.h>
@@ -917,6 +918,14 @@ TEST_F(Reliability, ValuesAFormatCannotHoldAreRefused) {
                         "beyond what --format " + format + " holds (float)"},
                        "map.exr"});
     runOk({"convert", file("bright.json"), "--format", "binary", "-o", file("bright.bin")});
+
+    // FLT_MAX itself fits: written as 3.40282347e+38 (9 digits), which reads back a little above it
+    // and was refused by the binary format, yet rounds to it.
+    ShCoefficients largest = testing::distinctProbe(3);
+    largest.rgb[0].r = double(std::numeric_limits<float>::max());
+    writeProbeFile(file("largest.json"), largest, {});
+    EXPECT_CONTAINS(readText(folder() / "largest.json"), "3.40282347e+38");
+    runOk({"convert", file("largest.json"), "--format", "binary", "-o", file("largest.bin")});
 }
 
 // The codec plugins load only from the program's own tree, by absolute path. SHPROBE_EXR_PLUGIN

@@ -139,7 +139,7 @@ void runSingleBake(const BakeOptions& options) {
     if (backend.session) backend.session->finish();
     double bakeMs = millisecondsSince(start);
     progress.stop();
-    requireUsable(backend, result, environment.description);
+    requireUsable(backend, result, options.irradiance, environment.description);
 
     const ShCoefficients& written = options.irradiance ? result.irradiance : result.radiance;
     writeOutput(options, options.output, written, metadataFor(backend, options, environment, result, sun),

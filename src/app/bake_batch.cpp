@@ -228,7 +228,7 @@ class InputLoader {
 void writeItem(Batch& batch, const Backend& backend, const Loaded& loaded, const BakeResult& result) {
     const BakeOptions& options = batch.options;
     try {
-        requireUsable(backend, result, loaded.environment.description);
+        requireUsable(backend, result, options.irradiance, loaded.environment.description);
     } catch (const Error& error) {
         reportFailure(batch, *loaded.item, error);
         return;

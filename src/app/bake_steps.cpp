@@ -269,17 +269,17 @@ double largestCoefficient(const ShCoefficients& coefficients) {
 
 } // namespace
 
-void requireUsable(const Backend& backend, const BakeResult& result, const std::string& input) {
+void requireUsable(const Backend& backend, const BakeResult& result, bool irradiance,
+                   const std::string& input) {
     const GpuBake coefficients{result.radiance, result.irradiance};
     if (backend.name == "gpu") return requireFinite(coefficients, input);
     if (!isFinite(coefficients))
         throw Error(ErrorKind::Input,
                     input + ": CPU bake: the coefficients are not finite (input values too large for " +
                         (backend.name == "reference" ? "double" : "fp32") + " sums?)");
-    // The reference sums in double, but every file holds floats: a larger coefficient would be
-    // written as a number no reader of the file takes.
-    const double largest =
-        std::max(largestCoefficient(result.radiance), largestCoefficient(result.irradiance));
+    // The reference sums in double, but every file holds floats: a larger coefficient written (the
+    // radiance, or the irradiance with --irradiance) would be a number no reader of the file takes.
+    const double largest = largestCoefficient(irradiance ? result.irradiance : result.radiance);
     if (largest <= double(std::numeric_limits<float>::max())) return;
     throw Error(ErrorKind::Input, input + ": CPU bake: a coefficient is " + shortNumber(largest) +
                                       ", past the float range (3.4e+38) the probe files hold");

@@ -122,8 +122,10 @@ std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, GpuSession& sessio
 
 // Throws Error(Input) naming the input when a bake's coefficients are not finite: finite inputs
 // near 1e38 overflow the fp32 sums of the GPU and of the fast CPU path (the reference's double sums
-// only hold more), and no probe file holds infinities.
-void requireUsable(const Backend& backend, const BakeResult& result, const std::string& input);
+// only hold more), and no probe file holds infinities; nor where the reference's written quantity
+// (the irradiance where `irradiance`, else the radiance) is past float.
+void requireUsable(const Backend& backend, const BakeResult& result, bool irradiance,
+                   const std::string& input);
 
 // "cpu": the fast float path on all cores; "reference": the double-precision reference.
 const char* cpuBackendName(const std::string& backend);

@@ -371,9 +371,11 @@ std::vector<WrittenNumber> engineNumbers(const ShCoefficients& probe, const Expo
     return numbers;
 }
 
+// A float holds every value that rounds to a finite float: below the midpoint between FLT_MAX and
+// 2^128 (FLT_MAX written in 9 digits, 3.40282347e+38, reads back a little above it).
 bool representable(double value, NumberType type) {
     if (!std::isfinite(value)) return false;
-    return type == NumberType::Double || std::abs(value) <= double(std::numeric_limits<float>::max());
+    return type == NumberType::Double || std::abs(value) < 0x1.ffffffp127;
 }
 
 std::string numberText(double value) {

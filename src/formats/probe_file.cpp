@@ -15,6 +15,7 @@
 #include <charconv>
 #include <cmath>
 #include <fcntl.h>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <sys/stat.h>
@@ -118,7 +119,8 @@ ProbeSun parseSun(const json& sun, const std::string& name) {
 // file now holds float(JSON value), whichever is written.
 std::string formatNumber(double value) {
     char text[32];
-    const bool isFloat = double(float(value)) == value;
+    const bool isFloat =
+        std::abs(value) <= double(std::numeric_limits<float>::max()) && double(float(value)) == value;
     const auto written = isFloat
                              ? std::to_chars(text, text + sizeof(text), value, std::chars_format::general, 9)
                              : std::to_chars(text, text + sizeof(text), value);
