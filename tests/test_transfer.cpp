@@ -649,6 +649,19 @@ TEST_F(TransferProgram, TransferOfItsOwnOutputReplacesTheEarlierOne) {
     EXPECT_EQ(read(path("again.glb")).size(), bytes.size());
     EXPECT_EQ(read(path("again.glb")), bytes);
     EXPECT_EQ(read(path("thrice.glb")), bytes);
+
+    // A view of the earlier transfer that something else names (here an extension, as another tool
+    // might add) is kept, and what names it still finds it: the old transfer stays, unused.
+    Glb edited = readGlb(bytes);
+    const size_t views = edited.json["bufferViews"].size();
+    edited.json["extensions"]["VENDOR_view"] = {{"bufferView", views - 1}};
+    edited.json["extensionsUsed"] = {"VENDOR_view"};
+    std::ofstream(path("named.glb"), std::ios::binary) << glbOf(edited);
+    ASSERT_EQ(run("transfer " + path("named.glb") + rays + path("renamed.glb")), 0) << err_;
+    const Glb renamed = readGlb(read(path("renamed.glb")));
+    EXPECT_EQ(renamed.json["extensions"]["VENDOR_view"]["bufferView"], views - 1);
+    EXPECT_GT(renamed.json["bufferViews"].size(), views);
+    EXPECT_EQ(renamed.json["bufferViews"][views - 1], edited.json["bufferViews"][views - 1]);
 }
 
 // A primitive without normals gets a World vertex per triangle corner, and each POSITION element

@@ -82,11 +82,38 @@ bool namesAccessorFrom(const tinygltf::Model& model, int first) {
     return false;
 }
 
+// Whether `json` names a buffer view from `first` on ("bufferView" anywhere: an image's, a sparse
+// accessor's, an extension's such as Draco's).
+bool namesViewFrom(const nlohmann::json& json, int first) {
+    if (json.is_object())
+        if (auto view = json.find("bufferView");
+            view != json.end() && view->is_number_integer() && view->get<int64_t>() >= first)
+            return true;
+    if (json.is_structured())
+        for (const nlohmann::json& value : json)
+            if (namesViewFrom(value, first)) return true;
+    return false;
+}
+
+// The same of the scene's JSON, but for the accessors from `firstAccessor` on, whose views they are.
+bool sceneNamesViewFrom(const nlohmann::json& scene, int first, size_t firstAccessor) {
+    for (const auto& [key, value] : scene.items()) {
+        if (key != "accessors") {
+            if (namesViewFrom(value, first)) return true;
+            continue;
+        }
+        for (size_t a = 0; a < std::min(firstAccessor, value.size()); ++a)
+            if (namesViewFrom(value[a], first)) return true;
+    }
+    return false;
+}
+
 // A scene that already holds a transfer (one of ours, baked again) loses it: its attributes go, and
 // so do their accessors, buffer views and bytes where they are the last of each, as this file writes
-// them. Elsewhere, as in a file edited since, they stay, unused, rather than renumber the accessors
-// and views the scene's extensions may name.
-void dropEarlierTransfer(tinygltf::Model& model) {
+// them, and nothing else names them (`source`: the scene's JSON). Elsewhere, as in a file edited
+// since, they stay, unused, rather than renumber the accessors and views the scene's extensions
+// may name.
+void dropEarlierTransfer(tinygltf::Model& model, const nlohmann::json& source) {
     std::set<int> accessors;
     for (tinygltf::Mesh& mesh : model.meshes)
         for (tinygltf::Primitive& primitive : mesh.primitives)
@@ -107,11 +134,9 @@ void dropEarlierTransfer(tinygltf::Model& model) {
     }
     const size_t firstView = model.bufferViews.size() - views.size();
     if (*views.begin() != int(firstView) || *views.rbegin() != int(model.bufferViews.size() - 1)) return;
-    if (namesAccessorFrom(model, int(firstAccessor))) return;
-    for (size_t a = 0; a < firstAccessor; ++a)
-        if (model.accessors[a].bufferView >= int(firstView)) return;
-    for (const tinygltf::Image& image : model.images)
-        if (image.bufferView >= int(firstView)) return;
+    if (namesAccessorFrom(model, int(firstAccessor)) ||
+        sceneNamesViewFrom(source, int(firstView), firstAccessor))
+        return;
     // Their bytes go too where they end the buffer: no view left reaches them.
     const int buffer = model.bufferViews[firstView].buffer;
     size_t start = SIZE_MAX, end = 0;
@@ -239,14 +264,13 @@ void keepExtensionData(const nlohmann::json& from, nlohmann::json& to) {
             keepExtensionData(from[i], to[i]);
 }
 
-// The .glb tinygltf wrote with the JSON of `source` kept where tinygltf rewrote it: its extras and
+// The .glb tinygltf wrote with the scene's JSON (`original`) kept where tinygltf rewrote it: its extras and
 // extensions (the buffers' aside: the .glb has one buffer of its own), a copied mesh's those of the
 // mesh it copies (`copied`: copy -> original), asset.extras.shTransfer added.
-std::string withSourceJson(const std::string& glb, const GltfSceneSource& source,
+std::string withSourceJson(const std::string& glb, nlohmann::json original,
                            const std::map<int, int>& copied) {
     const uint32_t jsonBytes = littleEndian32(glb, 12);
     nlohmann::json written = nlohmann::json::parse(std::string_view(glb).substr(20, jsonBytes));
-    nlohmann::json original = nlohmann::json::parse(source.json);
     const nlohmann::json description = written["asset"]["extras"]["shTransfer"];
     original.erase("buffers");
     keepExtensionData(original, written);
@@ -313,7 +337,8 @@ std::vector<PrimitiveTransfer> primitiveTransfers(const GltfSceneSource& source,
 std::string transferGlb(const GltfSceneSource& source, const VertexTransfer& transfer,
                         const TransferDescription& description) {
     tinygltf::Model model = *source.model;
-    dropEarlierTransfer(model);
+    const nlohmann::json original = nlohmann::json::parse(source.json);
+    dropEarlierTransfer(model, original);
     const int channels = transferChannels(transfer);
     const std::vector<PrimitiveTransfer> primitives = primitiveTransfers(source, transfer);
     std::vector<unsigned char> bin = joinBuffers(model);
@@ -333,7 +358,7 @@ std::string transferGlb(const GltfSceneSource& source, const VertexTransfer& tra
     tinygltf::TinyGLTF writer;
     if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
         throw Error(ErrorKind::Output, "transfer: tinygltf could not write the .glb");
-    return withSourceJson(stream.str(), source, copied);
+    return withSourceJson(stream.str(), original, copied);
 }
 
 std::string transferBinary(const GltfSceneSource& source, const VertexTransfer& transfer,
