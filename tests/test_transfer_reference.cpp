@@ -59,14 +59,19 @@ void subdivide(FixtureMesh& mesh, int n) {
     mesh = std::move(fine);
 }
 
-// Where the transfer's rays start (transfer.h): the vertex moved 4 surface offsets into its first
-// triangle with area, towards its centroid (at most half the way), then one offset along its normal.
+// Where the transfer's rays start (transfer.h): the vertex moved 4 surface offsets (the largest of
+// its triangles with area) into its first triangle with area, towards its centroid (at most half
+// the way), then one offset along its normal.
 std::vector<SurfacePoint> vertexPoints(const World& world, std::span<const uint32_t> vertices) {
     const SceneShading shading(world, makeCubemap(1));
     std::vector<int64_t> corner(world.positions.size(), -1);
+    std::vector<double> offsets(world.positions.size(), 0.0);
     for (size_t t = world.triangleCount(); t-- > 0;)
-        for (size_t c = 0; c < 3 && hasArea(world, t); ++c)
-            corner[world.indices[3 * t + c]] = int64_t(3 * t + c);
+        for (size_t c = 0; c < 3 && hasArea(world, t); ++c) {
+            const uint32_t v = world.indices[3 * t + c];
+            corner[v] = int64_t(3 * t + c);
+            offsets[v] = std::max(offsets[v], shading.offset(uint32_t(t)));
+        }
     std::vector<SurfacePoint> points;
     for (uint32_t v : vertices) {
         const size_t at = size_t(corner[v]);
@@ -78,7 +83,7 @@ std::vector<SurfacePoint> vertexPoints(const World& world, std::span<const uint3
                                    p;
         const double distance = glm::length(towards);
         const glm::dvec3 n(world.normals[v]);
-        const double offset = shading.offset(uint32_t(at / 3));
+        const double offset = offsets[v];
         const glm::dvec3 moved =
             distance == 0.0 ? p : p + towards * (std::min(4.0 * offset, 0.5 * distance) / distance);
         const int c = int(at % 3);

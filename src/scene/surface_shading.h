@@ -42,11 +42,13 @@ constexpr double kMaxSceneCoordinate = 1e10;    // |x|, |y|, |z| of any vertex, 
 constexpr double kMaxSurfaceOffsetShare = 0.01; // the largest SceneShading::offset() over the diagonal
 
 // Rays leaving a surface start this far off it along its geometric normal, in units of its
-// triangle's largest coordinate: 256 float ulps of it, well above the few ulps by which
-// single-precision hits on that triangle err, so a leaving ray never meets it again. Of the
-// triangle's own coordinates, not the scene's, as Waechter and Binder ("A Fast and Robust Method
-// for Avoiding Self-Intersection", Ray Tracing Gems) offset by the point's: a room by the origin
-// beside a ground reaching 1e5 would otherwise start its rays 3 units off its walls, through them.
+// triangle's largest coordinate: 256 float ulps of it, well above the few ulps by which a
+// single-precision test of a ray from that triangle against it errs (its operands are the
+// triangle's corners and a point on it), so a leaving ray never meets it again. Of the triangle's
+// coordinates, not the scene's: a room by the origin beside a ground reaching 1e5 would otherwise
+// start its rays 3 units off its walls, through them. (Waechter and Binder, "A Fast and Robust
+// Method for Avoiding Self-Intersection", Ray Tracing Gems, scale by the point's own; a point near
+// the origin on a triangle reaching 1e5 still meets that triangle's rounding, so the triangle's.)
 constexpr double kSurfaceOffsetScale = 256.0 * 1.1920928955078125e-7;
 
 // Throws Error(Input) "DESCRIPTION: ..." (world.description, else "scene") naming the scale for a

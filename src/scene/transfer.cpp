@@ -71,7 +71,6 @@ class TransferBaker {
     Side makeSide(uint32_t vertex, bool back) const;
     glm::dvec3 albedo(uint32_t vertex) const;
     glm::dvec3 rayOrigin(uint32_t vertex) const;
-    double offset(uint32_t vertex) const;
     template <typename Ray> void forEachRay(const Side& side, Ray&& ray) const;
     void direct(const Side& side, std::span<glm::vec3> out, uint64_t& rays) const;
     void bounce(const Side& side, std::span<const glm::vec3> previous, std::span<glm::vec3> out,
@@ -90,6 +89,9 @@ class TransferBaker {
     StratifiedCosineDirections directions_{strata_};
     TransferScene scene_;
     std::vector<int64_t> corner_; // per vertex: 3 t + c of the first triangle t with area using it, or -1
+    // Per vertex: the largest offset of the triangles with area using it, each of which its rays
+    // could meet again by rounding.
+    std::vector<double> offsets_;
     std::atomic<uint64_t> rays_{0};
     std::atomic<uint64_t> done_{0};
     uint64_t total_ = 0;
@@ -102,10 +104,14 @@ void TransferBaker::layOutSides() {
     // A zero-area triangle has no normal and no ray meets it: a vertex only such triangles use
     // (a flat primitive's copies of their corners) gets no transfer.
     corner_.assign(world.positions.size(), -1);
+    offsets_.assign(world.positions.size(), 0.0);
     for (size_t t = world.triangleCount(); t-- > 0;) {
         if (!hasArea(world, t)) continue;
-        for (size_t c = 0; c < 3; ++c)
-            corner_[world.indices[3 * t + c]] = int64_t(3 * t + c);
+        for (size_t c = 0; c < 3; ++c) {
+            const uint32_t v = world.indices[3 * t + c];
+            corner_[v] = int64_t(3 * t + c);
+            offsets_[v] = std::max(offsets_[v], shading_.offset(uint32_t(t)));
+        }
     }
     scene_.backSides.assign(world.positions.size(), 0);
     for (uint32_t v = 0; v < world.positions.size(); ++v)
@@ -133,7 +139,7 @@ Side TransferBaker::makeSide(uint32_t vertex, bool back) const {
     }
     const glm::dvec3 n(shading_.world().normals[vertex]);
     const glm::dvec3 normal = back ? -n : n;
-    side.origin = glm::vec4(glm::vec3(rayOrigin(vertex) + offset(vertex) * normal), 0.0f);
+    side.origin = glm::vec4(glm::vec3(rayOrigin(vertex) + offsets_[vertex] * normal), 0.0f);
     side.normal = glm::vec4(glm::vec3(normal), 0.0f);
     const uint64_t state = RandomStream(options_.seed, back ? 1 : 0, vertex).state();
     side.ids.x = uint32_t(state);
@@ -162,12 +168,7 @@ glm::dvec3 TransferBaker::rayOrigin(uint32_t vertex) const {
                                p;
     const double distance = glm::length(towards);
     if (distance == 0.0) return p;
-    return p + towards * (std::min(4.0 * offset(vertex), 0.5 * distance) / distance);
-}
-
-// How far the vertex's rays start off its surface: its first triangle's offset.
-double TransferBaker::offset(uint32_t vertex) const {
-    return shading_.offset(uint32_t(corner_[vertex]) / 3);
+    return p + towards * (std::min(4.0 * offsets_[vertex], 0.5 * distance) / distance);
 }
 
 // Calls ray(origin, direction) for the side's g x g stratified cosine-distributed rays.

@@ -16,12 +16,12 @@
 // brings the transfer of its vertices' back sides (their normals turned), computed for that.
 //
 // The integrals are estimated by g x g stratified cosine-distributed rays (one jittered in each
-// stratum of the unit square, scene/sampling.h), from the vertex moved SceneShading::offset(triangle) off
-// the surface along its normal (and 4 offsets into its first triangle, towards the centroid, so that
-// a vertex in a room's corner does not start its rays on the plane of the next wall): pi / g^2 times
-// the sum of the integrand over the rays. The same
-// rays (the seed, the vertex and its side name them) are cast again for each bounce, so that a
-// vertex's transfer depends on nothing else: the same bits for any thread count.
+// stratum of the unit square, scene/sampling.h), from the vertex moved largest SceneShading::offset of its
+// triangles off the surface along its normal (and 4 offsets into its first triangle, towards the centroid, so
+// that a vertex in a room's corner does not start its rays on the plane of the next wall): pi / g^2 times the
+// sum of the integrand over the rays. The same rays (the seed, the vertex and its side name them) are cast
+// again for each bounce, so that a vertex's transfer depends on nothing else: the same bits for any thread
+// count.
 #pragma once
 #include "glsl/transfer_interface.h"
 #include "scene/bvh.h"
