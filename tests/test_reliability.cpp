@@ -557,7 +557,8 @@ TEST_F(Reliability, ListMustBeARegularFile) {
 }
 
 // The window a probe was baked with (bake --window) is said in what convert and rotate write from
-// it, whose coefficients stay windowed: both dropped it. A window that is not a string is refused.
+// it, whose coefficients stay windowed: both dropped it. A window that is not a string is refused;
+// null is no window.
 TEST_F(Reliability, ConvertAndRotateKeepTheWindow) {
     ProbeMetadata metadata;
     metadata.window = "hanning:6";
@@ -570,6 +571,9 @@ TEST_F(Reliability, ConvertAndRotateKeepTheWindow) {
     text.replace(text.find("\"hanning:6\""), 11, "6");
     writeText(file("bad.json"), text);
     expectFailure({{"convert", file("bad.json"), "-o", "OUT"}, 2, {"field \"window\" must be a string"}});
+    text.replace(text.find("\"window\": 6"), 11, "\"window\": null");
+    writeText(file("none.json"), text);
+    EXPECT_EQ(readProbe(file("none.json")).window, "");
 }
 
 // A number list takes subnormal numbers, which are numbers: --directional 1e-320,1e-320,0 is the

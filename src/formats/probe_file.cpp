@@ -218,7 +218,7 @@ Probe parseProbe(std::string_view text, const std::string& name) {
         coefficients.rgb[i] = parseRow(rows[i], i, name);
     Probe probe{std::move(coefficients), std::nullopt, {}};
     if (auto sun = root.find("sun"); sun != root.end()) probe.sun = parseSun(*sun, name);
-    if (auto window = root.find("window"); window != root.end()) {
+    if (auto window = root.find("window"); window != root.end() && !window->is_null()) {
         if (!window->is_string()) fail(name, "field \"window\" must be a string");
         probe.window = window->get<std::string>();
     }
