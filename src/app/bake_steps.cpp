@@ -257,18 +257,6 @@ std::vector<BakeResult> bakeOnGpu(const BakeOptions& options, GpuSession& sessio
     return results;
 }
 
-namespace {
-
-// The largest coefficient's magnitude.
-double largestCoefficient(const ShCoefficients& coefficients) {
-    double largest = 0.0;
-    for (const glm::dvec3& rgb : coefficients.rgb)
-        largest = std::max({largest, std::abs(rgb.r), std::abs(rgb.g), std::abs(rgb.b)});
-    return largest;
-}
-
-} // namespace
-
 void requireUsable(const Backend& backend, const BakeResult& result, bool irradiance,
                    const std::string& input) {
     const GpuBake coefficients{result.radiance, result.irradiance};
@@ -279,7 +267,7 @@ void requireUsable(const Backend& backend, const BakeResult& result, bool irradi
                         (backend.name == "reference" ? "double" : "fp32") + " sums?)");
     // The reference sums in double, but every file holds floats: a larger coefficient written (the
     // radiance, or the irradiance with --irradiance) would be a number no reader of the file takes.
-    const double largest = largestCoefficient(irradiance ? result.irradiance : result.radiance);
+    const double largest = largestMagnitude(irradiance ? result.irradiance : result.radiance);
     if (largest <= double(std::numeric_limits<float>::max())) return;
     throw Error(ErrorKind::Input, input + ": CPU bake: a coefficient is " + shortNumber(largest) +
                                       ", past the float range (3.4e+38) the probe files hold");

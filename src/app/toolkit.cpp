@@ -170,9 +170,6 @@ bool hasLights(const LightOptions& options) {
     return !options.ambient.empty() || !options.directional.empty() || !options.spheres.empty();
 }
 
-namespace {
-
-// The largest magnitude among the probe's coefficients (NaN counts as infinite).
 double largestMagnitude(const ShCoefficients& probe) {
     double largest = 0.0;
     for (const glm::dvec3& coefficient : probe.rgb)
@@ -180,6 +177,8 @@ double largestMagnitude(const ShCoefficients& probe) {
             largest = std::isnan(coefficient[c]) ? HUGE_VAL : std::max(largest, std::abs(coefficient[c]));
     return largest;
 }
+
+namespace {
 
 // The format -o's extension names, as bake and convert choose it (json where it names none); its
 // output checked before any work.

@@ -22,6 +22,8 @@ struct LightOptions {
 // A malformed light is refused while the command line is parsed: Error(Input) naming the option.
 void addLightOptions(CLI::App& command, LightOptions& options);
 bool hasLights(const LightOptions& options);
+// The largest magnitude among the probe's coefficients (NaN counts as infinite).
+double largestMagnitude(const ShCoefficients& probe);
 // Adds the lights; throws Error(Input) naming `name` when they take the probe or its irradiance (pi
 // L00 at most) past float's range, or further past it: neither the GPU nor the files engines read
 // hold it.

@@ -17,8 +17,6 @@ namespace shprobe {
 
 namespace {
 
-static_assert(kSurfaceOffsetScale == 256.0 * std::numeric_limits<float>::epsilon());
-
 // --- World checks ------------------------------------------------------------------------------
 
 Error sceneError(const std::string& message) {
@@ -111,10 +109,14 @@ std::vector<uint32_t> triangleList(const World& world) {
     return triangles;
 }
 
+double largestCoordinate(const glm::vec3& p) {
+    return std::max({double(std::abs(p.x)), double(std::abs(p.y)), double(std::abs(p.z))});
+}
+
 double largestCoordinate(const World& world) {
     double largest = 0.0;
     for (const glm::vec3& p : world.positions)
-        largest = std::max({largest, double(std::abs(p.x)), double(std::abs(p.y)), double(std::abs(p.z))});
+        largest = std::max(largest, largestCoordinate(p));
     return largest;
 }
 
@@ -245,10 +247,10 @@ SceneShading::SceneShading(World world, const Cubemap& sky) {
 
 double SceneShading::offset(uint32_t triangle) const {
     double largest = 0.0;
-    for (int corner = 0; corner < 3; ++corner) {
-        const glm::vec3& p = world_.positions[world_.indices[3 * size_t(triangle) + size_t(corner)]];
-        largest = std::max({largest, double(std::abs(p.x)), double(std::abs(p.y)), double(std::abs(p.z))});
-    }
+    for (int corner = 0; corner < 3; ++corner)
+        largest = std::max(
+            largest,
+            largestCoordinate(world_.positions[world_.indices[3 * size_t(triangle) + size_t(corner)]]));
     return kSurfaceOffsetScale * largest;
 }
 

@@ -11,6 +11,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <span>
 #include <vector>
@@ -49,7 +50,7 @@ constexpr double kMaxSurfaceOffsetShare = 0.01; // the largest SceneShading::off
 // start its rays 3 units off its walls, through them. (Waechter and Binder, "A Fast and Robust
 // Method for Avoiding Self-Intersection", Ray Tracing Gems, scale by the point's own; a point near
 // the origin on a triangle reaching 1e5 still meets that triangle's rounding, so the triangle's.)
-constexpr double kSurfaceOffsetScale = 256.0 * 1.1920928955078125e-7;
+constexpr double kSurfaceOffsetScale = 256.0 * std::numeric_limits<float>::epsilon();
 
 // Throws Error(Input) "DESCRIPTION: ..." (world.description, else "scene") naming the scale for a
 // World with triangles whose vertices all lie at one point, that is smaller than kMinSceneSize,
